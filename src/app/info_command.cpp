@@ -1,0 +1,33 @@
+#include "app/info_command.h"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "io/scene_loader.h"
+
+namespace ferry {
+
+void addInfoCommand(CLI::App& app, InfoOptions& options) {
+  CLI::App* info = app.add_subcommand(
+      "info",
+      "Print a scene's counts (meshes, triangles, instances, textures, lights, bounds) and its\n"
+      "estimated memory by kind. Built-ins are described from their generator's counts without\n"
+      "making geometry, so large scales answer at once.");
+  info->add_option("scene", options.scene,
+                   "Scene file (.obj) or built-in (builtin:island, builtin:landscape, builtin:cornell,\n"
+                   "builtin:furnace; parameters as builtin:island?scale=4&seed=7)")
+      ->capture_default_str();
+  info->add_flag("--json", options.json, "Print JSON instead of a table");
+}
+
+int runInfo(const InfoOptions& options) {
+  SceneSummary summary = describeScene(options.scene);
+  if (options.json)
+    fmt::print("{}\n", summary.toJson().dump(2));
+  else
+    fmt::print("{}", summary.toText());
+  return 0;
+}
+
+}  // namespace ferry

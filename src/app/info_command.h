@@ -1,0 +1,20 @@
+// `ferry info`: what a scene holds and what it would cost in memory.
+#pragma once
+
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+namespace ferry {
+
+struct InfoOptions {
+  std::string scene = "builtin:island";
+  bool json = false;
+};
+
+void addInfoCommand(CLI::App& app, InfoOptions& options);
+int runInfo(const InfoOptions& options);
+
+}  // namespace ferry

@@ -1,0 +1,38 @@
+// The `ferry` command: subcommands render and info.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <exception>
+
+#include "app/info_command.h"
+#include "app/render_command.h"
+#include "core/error.h"
+
+int main(int argc, char** argv) {
+  using namespace ferry;
+  CLI::App app{
+      "Ferry: a data-parallel path tracer. Renders scenes spread over MPI ranks that each hold\n"
+      "part of the scene, forwarding rays between them (Wald and Parker, \"Data Parallel Path\n"
+      "Tracing in Object Space\")."};
+  app.require_subcommand(1);
+  RenderOptions renderOptions;
+  InfoOptions infoOptions;
+  addRenderCommand(app, renderOptions);
+  addInfoCommand(app, infoOptions);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (app.got_subcommand("render")) return runRender(renderOptions);
+    if (app.got_subcommand("info")) return runInfo(infoOptions);
+  } catch (const InputError& e) {
+    fmt::print(stderr, "ferry: error: {}\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "ferry: internal error: {}\n", e.what());
+    return 2;
+  }
+  return 0;
+}

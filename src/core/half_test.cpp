@@ -1,0 +1,42 @@
+#include "core/half.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace ferry {
+
+TEST(Half, ExactValuesRoundTrip) {
+  for (float v : {0.0f, 1.0f, -1.0f, 0.5f, 2.0f, 1024.0f, 65504.0f, -0.25f, 6.103515625e-05f})
+    EXPECT_EQ(halfToFloat(floatToHalf(v)), v) << v;
+}
+
+TEST(Half, EveryHalfRoundTripsThroughFloat) {
+  for (uint32_t h = 0; h < 0x10000; ++h) {
+    if ((h & 0x7c00) == 0x7c00) continue;  // inf / nan
+    float f = halfToFloat(half(h));
+    EXPECT_EQ(floatToHalf(f), half(h)) << h;
+  }
+}
+
+TEST(Half, RelativeErrorWithinHalfUlp) {
+  for (float v = 1e-3f; v < 6e4f; v *= 1.0137f) {
+    float q = quantizeToHalf(v);
+    EXPECT_LE(std::abs(q - v) / v, 1.0f / 2048.0f + 1e-7f) << v;
+  }
+}
+
+TEST(Half, OverflowSaturatesAndNanStaysNan) {
+  EXPECT_EQ(halfToFloat(floatToHalf(1e9f)), 65504.0f);
+  EXPECT_EQ(halfToFloat(floatToHalf(-1e9f)), -65504.0f);
+  EXPECT_TRUE(std::isnan(halfToFloat(floatToHalf(std::nanf("")))));
+}
+
+TEST(Half, SubnormalsRoundToNearest) {
+  float smallest = std::ldexp(1.0f, -24);
+  EXPECT_EQ(halfToFloat(floatToHalf(smallest)), smallest);
+  EXPECT_EQ(halfToFloat(floatToHalf(smallest * 0.49f)), 0.0f);
+  EXPECT_EQ(halfToFloat(floatToHalf(smallest * 3)), smallest * 3);
+}
+
+}  // namespace ferry

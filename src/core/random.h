@@ -1,0 +1,62 @@
+// Counter-based random numbers: every value is a pure function of
+// (pixel, sample, bounce, dimension, seed). No generator state is carried by a
+// path, so the image cannot depend on thread count, rank count, partitioner or
+// the order in which paths are processed.
+#pragma once
+
+#include <cstdint>
+
+namespace ferry {
+
+// 32-bit finalizer from the "lowbias32" family (Chris Wellons): full avalanche.
+inline uint32_t hashMix(uint32_t x) {
+  x ^= x >> 16;
+  x *= 0x21f0aaadu;
+  x ^= x >> 15;
+  x *= 0x735a2d97u;
+  x ^= x >> 15;
+  return x;
+}
+
+inline uint32_t hashCombine(uint32_t seed, uint32_t value) {
+  return hashMix(seed ^ (value + 0x9e3779b9u + (seed << 6) + (seed >> 2)));
+}
+
+// Which random decision a number is for; one dimension per use keeps
+// decisions independent of each other.
+enum class RandomDim : uint32_t {
+  PixelJitterX = 0,
+  PixelJitterY,
+  LightSelect,
+  LightSampleU,
+  LightSampleV,
+  BsdfLobe,
+  BsdfU,
+  BsdfV,
+  Roulette,
+  OwnerPick,
+  Count
+};
+
+struct RandomKey {
+  uint32_t pixel = 0;
+  uint32_t sample = 0;
+  uint32_t bounce = 0;
+  uint32_t seed = 0;
+};
+
+inline uint32_t randomBits(const RandomKey& key, uint32_t dimension) {
+  uint32_t h = hashMix(key.seed + 0x6a09e667u);
+  h = hashCombine(h, key.pixel);
+  h = hashCombine(h, key.sample);
+  h = hashCombine(h, key.bounce);
+  h = hashCombine(h, dimension);
+  return hashMix(h);
+}
+
+// Uniform in [0, 1): the top 24 bits give exactly representable floats.
+inline float random01(const RandomKey& key, RandomDim dim) {
+  return static_cast<float>(randomBits(key, static_cast<uint32_t>(dim)) >> 8) * 0x1p-24f;
+}
+
+}  // namespace ferry

@@ -1,0 +1,50 @@
+// Reading textures and environment images, and writing rendered images.
+// Every writer goes to a temporary file next to the target and renames it, so
+// a failed or interrupted write never replaces a good image with half of one.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+#include "scene/texture.h"
+
+namespace ferry {
+
+// 8-bit images (PNG, JPEG, TGA, BMP) as RGBA; throws InputError naming the file.
+Texture readTexture(const std::string& path);
+// An 8-bit image used as a cut-out mask (MTL map_d): the file's alpha channel
+// when it has one, else its grey value (luma of the encoded RGB) moved into alpha.
+Texture readAlphaTexture(const std::string& path);
+// HDR images (EXR, HDR, PFM) and 8-bit ones (converted to linear) as float RGB.
+// Chosen by extension. Non-finite pixels are an InputError; negative ones are
+// clamped to zero (they are filter ringing, and radiance cannot be negative).
+HdrImage readHdrImage(const std::string& path);
+
+// `rgb` is width*height linear RGB, row 0 at the top.
+// PNG: tone mapped by `toPng`; EXR (half float) and PFM: linear. Chosen by extension;
+// throws InputError for an unknown extension.
+struct LinearImage {
+  int width = 0;
+  int height = 0;
+  std::vector<Vec3f> rgb;
+};
+void writePng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba);
+void writeExr(const std::string& path, const LinearImage& image);
+void writePfm(const std::string& path, const LinearImage& image);
+LinearImage readPfm(const std::string& path);
+
+// The PNG encoding of a linear image: clamped to [0, 1], sRGB-encoded, rounded
+// to 8 bits, alpha 255. No exposure: scale the image first if needed.
+std::vector<uint8_t> toPng(const LinearImage& image);
+// Writes .png (through toPng), .exr or .pfm, chosen by the extension of `path`
+// (case-insensitive).
+void writeImage(const std::string& path, const LinearImage& image);
+
+// Runs `write(tempPath)` and renames the result onto `path`; removes the
+// temporary on failure. Throws InputError if the directory is not writable.
+void writeFileAtomically(const std::string& path, const std::function<void(const std::string&)>& write);
+
+}  // namespace ferry

@@ -1,0 +1,43 @@
+#include "io/scene_loader.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include <fmt/format.h>
+
+#include "builtin/builtin.h"
+#include "core/error.h"
+#include "io/obj_loader.h"
+
+namespace ferry {
+namespace {
+
+std::string lowerExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+}  // namespace
+
+Scene loadScene(const std::string& spec) {
+  if (isBuiltinSpec(spec)) return generateBuiltin(parseBuiltinSpec(spec));
+  if (!std::filesystem::exists(spec)) throw InputError(fmt::format("{}: no such file", spec));
+  std::string ext = lowerExtension(spec);
+  Scene scene;
+  if (ext == ".obj") {
+    scene = loadObj(spec);
+  } else {
+    throw InputError(fmt::format("{}: unsupported scene format '{}' (supported: .obj, builtin:NAME)",
+                                 spec, ext));
+  }
+  scene.validate();
+  return scene;
+}
+
+SceneSummary describeScene(const std::string& spec) {
+  if (isBuiltinSpec(spec)) return describeBuiltin(parseBuiltinSpec(spec));
+  return summarize(loadScene(spec));
+}
+
+}  // namespace ferry

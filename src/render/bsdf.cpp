@@ -1,0 +1,265 @@
+#include "render/bsdf.h"
+
+#include <cmath>
+
+#include "scene/scene.h"
+
+namespace ferry {
+namespace {
+
+// Below this GGX width the lobe is treated as a perfect mirror / window.
+constexpr float kSmoothAlpha = 1e-3f;
+
+float ggxD(Vec3f m, float alpha) {
+  if (m.z <= 0) return 0;
+  float a2 = alpha * alpha;
+  float c2 = m.z * m.z;
+  float d = c2 * (a2 - 1) + 1;
+  return a2 / (kPi * d * d);
+}
+
+float ggxLambda(Vec3f w, float alpha) {
+  float c2 = w.z * w.z;
+  if (c2 >= 1) return 0;
+  float tan2 = (1 - c2) / std::max(c2, 1e-12f);
+  return 0.5f * (-1 + std::sqrt(1 + alpha * alpha * tan2));
+}
+
+float ggxG1(Vec3f w, float alpha) { return 1 / (1 + ggxLambda(w, alpha)); }
+float ggxG2(Vec3f wo, Vec3f wi, float alpha) {
+  return 1 / (1 + ggxLambda(wo, alpha) + ggxLambda(wi, alpha));
+}
+
+// Density of visible normals seen from wo (wo.z > 0).
+float visibleNormalPdf(Vec3f wo, Vec3f m, float alpha) {
+  float cosOM = dot(wo, m);
+  if (cosOM <= 0 || wo.z <= 0) return 0;
+  return ggxG1(wo, alpha) * cosOM * ggxD(m, alpha) / wo.z;
+}
+
+// Heitz 2018, "Sampling the GGX Distribution of Visible Normals".
+Vec3f sampleVisibleNormal(Vec3f wo, float alpha, Vec2f u) {
+  Vec3f vh = normalize(Vec3f(alpha * wo.x, alpha * wo.y, wo.z));
+  float lensq = vh.x * vh.x + vh.y * vh.y;
+  Vec3f t1 = lensq > 0 ? Vec3f(-vh.y, vh.x, 0) * (1 / std::sqrt(lensq)) : Vec3f(1, 0, 0);
+  Vec3f t2 = cross(vh, t1);
+  float r = std::sqrt(u.x);
+  float phi = 2 * kPi * u.y;
+  float p1 = r * std::cos(phi);
+  float p2 = r * std::sin(phi);
+  float s = 0.5f * (1 + vh.z);
+  p2 = (1 - s) * std::sqrt(std::max(0.0f, 1 - p1 * p1)) + s * p2;
+  Vec3f nh = t1 * p1 + t2 * p2 + vh * std::sqrt(std::max(0.0f, 1 - p1 * p1 - p2 * p2));
+  return normalize(Vec3f(alpha * nh.x, alpha * nh.y, std::max(1e-7f, nh.z)));
+}
+
+Vec3f reflect(Vec3f wo, Vec3f m) { return m * (2 * dot(wo, m)) - wo; }
+
+// Refracts wo (on the side m points to) through the interface; eta = n_t / n_i.
+bool refract(Vec3f wo, Vec3f m, float eta, Vec3f& wi) {
+  float cosI = dot(wo, m);
+  float sin2T = (1 - cosI * cosI) / (eta * eta);
+  if (sin2T >= 1) return false;
+  float cosT = std::sqrt(1 - sin2T);
+  wi = -wo * (1 / eta) + m * (cosI / eta - cosT);
+  return true;
+}
+
+Vec3f schlick(Vec3f f0, float cosTheta) {
+  float c = std::clamp(1 - cosTheta, 0.0f, 1.0f);
+  float c5 = c * c * c * c * c;
+  return f0 + (Vec3f(1) - f0) * c5;
+}
+
+}  // namespace
+
+float fresnelDielectric(float cosI, float eta) {
+  cosI = std::clamp(cosI, 0.0f, 1.0f);
+  float sin2T = (1 - cosI * cosI) / (eta * eta);
+  if (sin2T >= 1) return 1;
+  float cosT = std::sqrt(1 - sin2T);
+  float rs = (cosI - eta * cosT) / (cosI + eta * cosT);
+  float rp = (eta * cosI - cosT) / (eta * cosI + cosT);
+  return 0.5f * (rs * rs + rp * rp);
+}
+
+Vec3f sampleCosineHemisphere(Vec2f u) {
+  float r = std::sqrt(u.x);
+  float phi = 2 * kPi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u.x))};
+}
+
+Bsdf Bsdf::diffuse(Vec3f albedo) {
+  Bsdf b;
+  b.kind_ = Kind::Diffuse;
+  b.color_ = albedo;
+  return b;
+}
+
+Bsdf Bsdf::conductor(Vec3f f0, float roughness) {
+  Bsdf b;
+  b.alpha_ = std::max(roughness * roughness, 0.0f);
+  b.kind_ = b.alpha_ < kSmoothAlpha ? Kind::SmoothConductor : Kind::RoughConductor;
+  b.color_ = f0;
+  return b;
+}
+
+Bsdf Bsdf::dielectric(float ior, float roughness, Vec3f tint) {
+  Bsdf b;
+  b.alpha_ = std::max(roughness * roughness, 0.0f);
+  b.kind_ = b.alpha_ < kSmoothAlpha ? Kind::SmoothDielectric : Kind::RoughDielectric;
+  b.ior_ = ior > 0 ? ior : 1.5f;
+  b.color_ = tint;
+  return b;
+}
+
+// One lobe per material, chosen by the dominant parameter; blends are left to
+// the material system of a later version (recorded in docs/path-tracer.md).
+Bsdf Bsdf::fromMaterial(const Material& material, Vec3f color) {
+  if (material.transmission >= 0.5f) return dielectric(material.ior, material.roughness, color);
+  if (material.metallic >= 0.5f) return conductor(color, material.roughness);
+  return diffuse(color);
+}
+
+Vec3f Bsdf::eval(Vec3f wo, Vec3f wi) const {
+  switch (kind_) {
+    case Kind::Diffuse:
+      if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
+      return color_ * (wi.z / kPi);
+    case Kind::RoughConductor: {
+      if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
+      Vec3f m = normalize(wo + wi);
+      float d = ggxD(m, alpha_);
+      float g = ggxG2(wo, wi, alpha_);
+      return schlick(color_, dot(wo, m)) * (d * g / (4 * wo.z));
+    }
+    case Kind::RoughDielectric: {
+      if (wo.z == 0 || wi.z == 0) return Vec3f(0);
+      // Work on the side of wo.
+      bool outside = wo.z > 0;
+      float eta = outside ? ior_ : 1 / ior_;
+      Vec3f o = outside ? wo : -wo;
+      Vec3f i = outside ? wi : -wi;
+      if (i.z > 0) {  // reflection
+        Vec3f m = normalize(o + i);
+        float f = fresnelDielectric(dot(o, m), eta);
+        return Vec3f(f * ggxD(m, alpha_) * ggxG2(o, i, alpha_) / (4 * o.z));
+      }
+      Vec3f m = normalize(o + i * eta) * -1.0f;
+      if (m.z < 0) m = -m;
+      float cosOM = dot(o, m), cosIM = dot(i, m);
+      if (cosOM <= 0 || cosIM >= 0) return Vec3f(0);
+      float f = fresnelDielectric(cosOM, eta);
+      float denom = cosOM + eta * cosIM;
+      float value = std::abs(cosIM) * cosOM * eta * eta * (1 - f) * ggxD(m, alpha_) *
+                    ggxG2(o, i, alpha_) / (o.z * denom * denom);
+      return color_ * value;
+    }
+    default:
+      return Vec3f(0);
+  }
+}
+
+float Bsdf::pdf(Vec3f wo, Vec3f wi) const {
+  switch (kind_) {
+    case Kind::Diffuse:
+      if (wo.z <= 0 || wi.z <= 0) return 0;
+      return wi.z / kPi;
+    case Kind::RoughConductor: {
+      if (wo.z <= 0 || wi.z <= 0) return 0;
+      Vec3f m = normalize(wo + wi);
+      return visibleNormalPdf(wo, m, alpha_) / (4 * dot(wo, m));
+    }
+    case Kind::RoughDielectric: {
+      if (wo.z == 0 || wi.z == 0) return 0;
+      bool outside = wo.z > 0;
+      float eta = outside ? ior_ : 1 / ior_;
+      Vec3f o = outside ? wo : -wo;
+      Vec3f i = outside ? wi : -wi;
+      if (i.z > 0) {
+        Vec3f m = normalize(o + i);
+        float cosOM = dot(o, m);
+        if (cosOM <= 0) return 0;
+        float f = fresnelDielectric(cosOM, eta);
+        return visibleNormalPdf(o, m, alpha_) * f / (4 * cosOM);
+      }
+      Vec3f m = normalize(o + i * eta) * -1.0f;
+      if (m.z < 0) m = -m;
+      float cosOM = dot(o, m), cosIM = dot(i, m);
+      if (cosOM <= 0 || cosIM >= 0) return 0;
+      float f = fresnelDielectric(cosOM, eta);
+      float denom = cosOM + eta * cosIM;
+      return visibleNormalPdf(o, m, alpha_) * (1 - f) * eta * eta * std::abs(cosIM) /
+             (denom * denom);
+    }
+    default:
+      return 0;
+  }
+}
+
+bool Bsdf::sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const {
+  switch (kind_) {
+    case Kind::Diffuse: {
+      if (wo.z <= 0) return false;
+      out.wi = sampleCosineHemisphere(u);
+      if (out.wi.z <= 0) return false;
+      out.pdf = out.wi.z / kPi;
+      out.weight = color_;
+      out.delta = false;
+      return true;
+    }
+    case Kind::SmoothConductor: {
+      if (wo.z <= 0) return false;
+      out.wi = {-wo.x, -wo.y, wo.z};
+      out.pdf = 1;
+      out.weight = schlick(color_, wo.z);
+      out.delta = true;
+      return true;
+    }
+    case Kind::RoughConductor: {
+      if (wo.z <= 0) return false;
+      Vec3f m = sampleVisibleNormal(wo, alpha_, u);
+      out.wi = reflect(wo, m);
+      if (out.wi.z <= 0) return false;
+      out.pdf = visibleNormalPdf(wo, m, alpha_) / (4 * dot(wo, m));
+      out.weight = schlick(color_, dot(wo, m)) * (ggxG2(wo, out.wi, alpha_) / ggxG1(wo, alpha_));
+      out.delta = false;
+      return true;
+    }
+    case Kind::SmoothDielectric:
+    case Kind::RoughDielectric: {
+      if (wo.z == 0) return false;
+      bool outside = wo.z > 0;
+      float eta = outside ? ior_ : 1 / ior_;
+      Vec3f o = outside ? wo : -wo;
+      bool smooth = kind_ == Kind::SmoothDielectric;
+      Vec3f m = smooth ? Vec3f(0, 0, 1) : sampleVisibleNormal(o, alpha_, u);
+      float cosOM = dot(o, m);
+      if (cosOM <= 0) return false;
+      float f = fresnelDielectric(cosOM, eta);
+      Vec3f i;
+      bool reflected = uLobe < f;
+      if (reflected) {
+        i = reflect(o, m);
+        if (i.z <= 0) return false;
+      } else {
+        if (!refract(o, m, eta, i) || i.z >= 0) return false;
+      }
+      out.wi = outside ? i : -i;
+      out.delta = smooth;
+      if (smooth) {
+        out.pdf = 1;
+        out.weight = reflected ? Vec3f(1) : color_;
+      } else {
+        out.pdf = pdf(wo, out.wi);
+        float g = ggxG2(o, i, alpha_) / ggxG1(o, alpha_);
+        out.weight = (reflected ? Vec3f(1) : color_) * g;
+        if (out.pdf <= 0) return false;
+      }
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace ferry

@@ -1,0 +1,60 @@
+// Scattering at a surface point, in the local shading frame (normal = +z).
+// Directions point away from the surface: wo towards where the path came
+// from, wi towards where it goes next.
+//
+// A Material maps to one of five lobes (see Bsdf::fromMaterial): Lambertian
+// diffuse, smooth or rough (GGX) conductor, smooth or rough (GGX, Walter et al.
+// 2007) dielectric. Rough lobes are sampled with Heitz's visible-normal
+// distribution. Transmitted radiance is not scaled by 1/eta^2: the factors
+// cancel for closed objects, and without them a white BSDF never returns more
+// than it receives, which the energy tests check.
+#pragma once
+
+#include "core/math.h"
+
+namespace ferry {
+
+struct Material;
+
+struct BsdfSample {
+  Vec3f wi;
+  Vec3f weight;  // f * |cos(wi)| / pdf
+  float pdf = 0; // solid angle; meaningless for delta lobes
+  bool delta = false;
+};
+
+class Bsdf {
+ public:
+  enum class Kind { Diffuse, SmoothConductor, RoughConductor, SmoothDielectric, RoughDielectric };
+
+  // `color` is the material's base colour times its texture at the hit.
+  static Bsdf fromMaterial(const Material& material, Vec3f color);
+  static Bsdf diffuse(Vec3f albedo);
+  static Bsdf conductor(Vec3f f0, float roughness);
+  static Bsdf dielectric(float ior, float roughness, Vec3f tint = Vec3f(1));
+
+  Kind kind() const { return kind_; }
+  bool isDelta() const { return kind_ == Kind::SmoothConductor || kind_ == Kind::SmoothDielectric; }
+  bool transmits() const { return kind_ == Kind::SmoothDielectric || kind_ == Kind::RoughDielectric; }
+
+  // f(wo, wi) * |cos(wi)|; zero for delta lobes.
+  Vec3f eval(Vec3f wo, Vec3f wi) const;
+  // Solid-angle density with which sample() picks wi; zero for delta lobes.
+  float pdf(Vec3f wo, Vec3f wi) const;
+  // Draws wi from (uLobe, u); false when no direction is produced.
+  bool sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const;
+
+  float alpha() const { return alpha_; }
+
+ private:
+  Kind kind_ = Kind::Diffuse;
+  Vec3f color_{0.8f};
+  float alpha_ = 1;  // GGX width (roughness^2)
+  float ior_ = 1.5f;
+};
+
+// Helpers exposed for tests.
+float fresnelDielectric(float cosThetaI, float eta);  // eta = n_transmitted / n_incident
+Vec3f sampleCosineHemisphere(Vec2f u);
+
+}  // namespace ferry

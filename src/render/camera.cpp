@@ -1,0 +1,36 @@
+#include "render/camera.h"
+
+#include <cmath>
+
+#include "scene/scene.h"
+
+namespace ferry {
+
+Camera::Camera(const CameraView& view, int width, int height)
+    : origin_(view.from), width_(width), height_(height) {
+  forward_ = normalize(view.at - view.from);
+  Vec3f upHint = view.up;
+  if (length(cross(forward_, upHint)) < 1e-6f) upHint = std::abs(forward_.y) < 0.9f ? Vec3f(0, 1, 0) : Vec3f(0, 0, 1);
+  right_ = normalize(cross(forward_, upHint));
+  up_ = cross(right_, forward_);
+  tanHalfY_ = std::tan(0.5f * view.fovY * kPi / 180.0f);
+  tanHalfX_ = tanHalfY_ * float(width) / float(height);
+}
+
+Vec3f Camera::direction(float x, float y) const {
+  float sx = (2 * x / width_ - 1) * tanHalfX_;
+  float sy = (1 - 2 * y / height_) * tanHalfY_;
+  return normalize(forward_ + right_ * sx + up_ * sy);
+}
+
+bool Camera::project(Vec3f d, float& x, float& y) const {
+  float z = dot(d, forward_);
+  if (z <= 0) return false;
+  float sx = dot(d, right_) / z / tanHalfX_;
+  float sy = dot(d, up_) / z / tanHalfY_;
+  x = (sx + 1) * 0.5f * width_;
+  y = (1 - sy) * 0.5f * height_;
+  return true;
+}
+
+}  // namespace ferry

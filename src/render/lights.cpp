@@ -1,0 +1,249 @@
+#include "render/lights.h"
+
+#include <cmath>
+
+#include "render/bsdf.h"
+
+namespace ferry {
+namespace {
+
+// Up to this many emissive triangles are candidates one by one; more are
+// grouped, so a light sample stays cheap however many emitters a scene has.
+constexpr size_t kMaxIndividualTriangles = 64;
+constexpr size_t kTrianglesPerGroup = 256;
+
+// Streaming weighted reservoir sampling with one uniform number: candidate i
+// ends up chosen with probability w_i / sum(w).
+struct Reservoir {
+  float u;
+  float total = 0;
+  int chosen = -1;
+  float chosenWeight = 0;
+  void add(int candidate, float weight) {
+    if (!(weight > 0)) return;
+    total += weight;
+    float p = weight / total;
+    if (u < p) {
+      chosen = candidate;
+      chosenWeight = weight;
+      u = std::min(u / p, 0.99999994f);
+    } else {
+      u = std::min((u - p) / (1 - p), 0.99999994f);
+    }
+  }
+  float probability() const { return chosenWeight / total; }
+};
+
+Vec3f sunRadiance(const SunLight& sun) {
+  float s = std::sin(sun.angularRadius);
+  return sun.irradiance * (1.0f / (kPi * s * s));
+}
+
+float sunConePdf(const SunLight& sun) {
+  return 1.0f / (2 * kPi * (1 - std::cos(sun.angularRadius)));
+}
+
+}  // namespace
+
+LightSampler::LightSampler(const Scene& scene) : suns_(scene.suns), environment_(scene.environment) {
+  if (environment_.image) {
+    const HdrImage& img = *environment_.image;
+    std::vector<float> weights(size_t(img.width) * img.height);
+    double sum = 0;
+    for (int y = 0; y < img.height; ++y) {
+      float sinTheta = std::sin(kPi * (y + 0.5f) / img.height);
+      for (int x = 0; x < img.width; ++x) {
+        float l = luminance(img.at(x, y) * environment_.color);
+        weights[size_t(y) * img.width + x] = l * sinTheta;
+        sum += l * sinTheta;
+      }
+    }
+    environmentDistribution_ = Distribution2D(weights, img.width, img.height);
+    // Average radiance over the sphere: sum(L sin) * dtheta dphi / 4pi.
+    environmentWeight_ = float(sum * (kPi / img.height) * (2 * kPi / img.width) / (4 * kPi)) * kPi;
+  } else {
+    environmentWeight_ = luminance(environment_.color) * kPi;
+  }
+
+  // Emissive triangles in world space, from every instance of every emissive mesh.
+  std::vector<std::vector<int32_t>> emissiveMeshesPerObject(scene.objects.size());
+  for (size_t o = 0; o < scene.objects.size(); ++o)
+    for (int32_t m : scene.objects[o].meshes)
+      if (scene.materials[scene.meshes[m].material].isEmissive()) emissiveMeshesPerObject[o].push_back(m);
+  for (const Instance& inst : scene.instances) {
+    for (int32_t m : emissiveMeshesPerObject[inst.object]) {
+      const Mesh& mesh = scene.meshes[m];
+      Vec3f radiance = scene.materials[mesh.material].emission;
+      for (const Vec3i& tri : mesh.indices) {
+        Vec3f p0 = inst.transform.transformPoint(mesh.positions[tri.x]);
+        Vec3f p1 = inst.transform.transformPoint(mesh.positions[tri.y]);
+        Vec3f p2 = inst.transform.transformPoint(mesh.positions[tri.z]);
+        float area = 0.5f * length(cross(p1 - p0, p2 - p0));
+        if (area > 0) triangles_.push_back({p0, p1 - p0, p2 - p0, radiance, area});
+      }
+    }
+  }
+  if (triangles_.size() > kMaxIndividualTriangles) {
+    for (size_t begin = 0; begin < triangles_.size(); begin += kTrianglesPerGroup) {
+      Group g;
+      std::vector<float> powers;
+      for (size_t i = begin; i < std::min(triangles_.size(), begin + kTrianglesPerGroup); ++i) {
+        const EmissiveTriangle& t = triangles_[i];
+        g.triangles.push_back(uint32_t(i));
+        float power = luminance(t.radiance) * t.area;
+        powers.push_back(power);
+        g.power += power;
+        g.bounds.extend(t.p0);
+        g.bounds.extend(t.p0 + t.e1);
+        g.bounds.extend(t.p0 + t.e2);
+      }
+      g.byPower = Distribution1D(std::move(powers));
+      groups_.push_back(std::move(g));
+    }
+  }
+}
+
+bool LightSampler::empty() const {
+  return suns_.empty() && environment_.isBlack() && triangles_.empty();
+}
+
+Vec2f LightSampler::directionToUv(Vec3f d) const {
+  float theta = std::acos(std::clamp(d.y, -1.0f, 1.0f));
+  float phi = std::atan2(d.z, d.x) + environment_.rotation;
+  float u = phi / (2 * kPi);
+  u -= std::floor(u);
+  return {u, theta / kPi};
+}
+
+Vec3f LightSampler::uvToDirection(Vec2f uv) const {
+  float theta = uv.y * kPi;
+  float phi = uv.x * 2 * kPi - environment_.rotation;
+  float s = std::sin(theta);
+  return {s * std::cos(phi), std::cos(theta), s * std::sin(phi)};
+}
+
+Vec3f LightSampler::environmentRadiance(Vec3f d) const {
+  if (!environment_.image) return environment_.color;
+  Vec2f uv = directionToUv(d);
+  // HdrImage rows go top (theta = 0) to bottom; its sampler takes v = 0 at the bottom.
+  return environment_.image->sampleBilinear({uv.x, 1 - uv.y}) * environment_.color;
+}
+
+Vec3f LightSampler::background(Vec3f d) const {
+  Vec3f l = environmentRadiance(d);
+  for (const SunLight& sun : suns_)
+    if (dot(d, sun.direction) >= std::cos(sun.angularRadius)) l += sunRadiance(sun);
+  return l;
+}
+
+bool LightSampler::sampleEnvironment(Vec3f n, bool twoSided, Vec2f u, LightSample& out) const {
+  if (!environment_.image && twoSided) {
+    // Uniform over the sphere: light arrives from both sides.
+    float z = 1 - 2 * u.x;
+    float r = std::sqrt(std::max(0.0f, 1 - z * z));
+    float phi = 2 * kPi * u.y;
+    out.direction = {r * std::cos(phi), r * std::sin(phi), z};
+    out.pdf = 1 / (4 * kPi);
+    out.radiance = environment_.color;
+  } else if (!environment_.image) {
+    // Constant: cosine-weighted around the normal is the ideal density.
+    Vec3f local = sampleCosineHemisphere(u);
+    out.direction = Frame(n).toWorld(local);
+    out.pdf = local.z / kPi;
+    out.radiance = environment_.color;
+  } else {
+    float pdfUv;
+    Vec2f uv = environmentDistribution_.sample(u, pdfUv);
+    float sinTheta = std::sin(uv.y * kPi);
+    if (sinTheta <= 0 || pdfUv <= 0) return false;
+    out.direction = uvToDirection(uv);
+    out.pdf = pdfUv / (2 * kPi * kPi * sinTheta);
+    out.radiance = environmentRadiance(out.direction);
+  }
+  out.distance = kInfinity;
+  return out.pdf > 0;
+}
+
+bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u, LightSample& out) const {
+  float su = std::sqrt(u.x);
+  float b1 = 1 - su, b2 = u.y * su;
+  Vec3f q = t.p0 + t.e1 * b1 + t.e2 * b2;
+  Vec3f d = q - p;
+  float dist2 = dot(d, d);
+  if (dist2 <= 0) return false;
+  float dist = std::sqrt(dist2);
+  out.direction = d * (1 / dist);
+  Vec3f ng = normalize(cross(t.e1, t.e2));
+  float cosLight = std::abs(dot(ng, out.direction));  // emitters are two-sided
+  if (cosLight <= 1e-7f) return false;
+  out.distance = dist;
+  out.radiance = t.radiance;
+  out.pdf = dist2 / (cosLight * t.area);
+  return true;
+}
+
+bool LightSampler::sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f u, LightSample& out) const {
+  // Candidate weights estimate each light's unshadowed contribution but are
+  // never zero for a light that could contribute, which keeps the estimator
+  // unbiased.
+  Reservoir r{uSelect};
+  int next = 0;
+  const int sunBase = next;
+  for (const SunLight& sun : suns_)
+    r.add(next++, luminance(sun.irradiance) * std::max(std::abs(dot(n, sun.direction)), 1e-3f));
+  const int envIndex = next++;
+  if (!environment_.isBlack()) r.add(envIndex, environmentWeight_);
+  const int triangleBase = next;
+  auto triangleWeight = [&](const Vec3f& center, float power, float area) {
+    Vec3f d = center - p;
+    return power / std::max(dot(d, d), area);
+  };
+  if (groups_.empty()) {
+    for (const EmissiveTriangle& t : triangles_) {
+      Vec3f c = t.p0 + (t.e1 + t.e2) * (1.0f / 3);
+      r.add(next++, triangleWeight(c, luminance(t.radiance) * t.area, t.area));
+    }
+  } else {
+    for (const Group& g : groups_)
+      r.add(next++, triangleWeight(g.bounds.center(), g.power, g.bounds.surfaceArea() * 0.25f));
+  }
+  if (r.chosen < 0) return false;
+  float selection = r.probability();
+
+  if (r.chosen < envIndex) {
+    const SunLight& sun = suns_[r.chosen - sunBase];
+    // Uniform in the sun's cone.
+    float cosMax = std::cos(sun.angularRadius);
+    float cosTheta = 1 - u.x * (1 - cosMax);
+    float sinTheta = std::sqrt(std::max(0.0f, 1 - cosTheta * cosTheta));
+    float phi = 2 * kPi * u.y;
+    out.direction = Frame(sun.direction).toWorld({sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta});
+    out.distance = kInfinity;
+    out.radiance = sunRadiance(sun);
+    out.pdf = sunConePdf(sun) * selection;
+    return true;
+  }
+  if (r.chosen == envIndex) {
+    if (!sampleEnvironment(n, twoSided, u, out)) return false;
+    out.pdf *= selection;
+    return true;
+  }
+  int index = r.chosen - triangleBase;
+  if (groups_.empty()) {
+    if (!sampleTriangle(triangles_[index], p, u, out)) return false;
+    out.pdf *= selection;
+    return true;
+  }
+  const Group& g = groups_[index];
+  // Reuse u.x for the triangle choice, then stretch it back to [0, 1).
+  float probability;
+  int local = g.byPower.sampleDiscrete(u.x, probability);
+  float lo = 0;
+  for (int i = 0; i < local; ++i) lo += g.byPower.discreteProbability(i);
+  Vec2f uTriangle{std::clamp((u.x - lo) / std::max(probability, 1e-12f), 0.0f, 0.99999994f), u.y};
+  if (!sampleTriangle(triangles_[g.triangles[local]], p, uTriangle, out)) return false;
+  out.pdf *= selection * probability;
+  return true;
+}
+
+}  // namespace ferry

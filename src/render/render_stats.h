@@ -1,0 +1,60 @@
+// Counters and timings of a render, kept by the code that does the work (not
+// estimated afterwards). Every field is a sum, so ranks' stats add up.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+namespace ferry {
+
+// One wavefront's distributed traversal (the dist layer fills these).
+struct ExchangeCounters {
+  uint64_t raysForwarded = 0;  // rays sent to another rank
+  uint64_t bytesSent = 0;      // ray payload bytes sent to other ranks
+  uint64_t rounds = 0;         // exchange rounds until no ray moved
+  ExchangeCounters& operator+=(const ExchangeCounters& o);
+};
+
+struct StageTimes {
+  double generate = 0;  // camera rays (and proxy-guided ownership)
+  double trace = 0;     // local traces inside traversal
+  double exchange = 0;  // forwarding decisions, compaction, MPI
+  double shade = 0;     // re-trace, BSDF and light sampling, spawning
+  double accumulate = 0;  // shadow-ray contributions into the frame buffer
+  double composite = 0;   // merging frame buffers
+  StageTimes& operator+=(const StageTimes& o);
+  double total() const { return generate + trace + exchange + shade + accumulate + composite; }
+};
+
+struct FrameStats {
+  int frame = 0;
+  double seconds = 0;        // wall clock of the frame (max over ranks when merged)
+  uint64_t cameraPaths = 0;  // primary rays generated (kept by this rank)
+  uint64_t continuationRays = 0;
+  uint64_t shadowRays = 0;
+  uint64_t closestTraces = 0;    // local closest-hit traces (a forwarded ray counts per rank)
+  uint64_t occlusionTraces = 0;  // local shadow-ray traces
+  uint64_t retraces = 0;         // shading re-traces
+  uint64_t retraceMisses = 0;    // re-traces that did not find the hit again (should be 0)
+  uint64_t proxyQueries = 0;
+  std::vector<ExchangeCounters> perBounce;
+  StageTimes times;
+
+  ExchangeCounters exchangeTotal() const;
+  uint64_t raysTraced() const { return closestTraces + occlusionTraces + retraces; }
+  // Adds another rank's counters (seconds: the maximum).
+  void merge(const FrameStats& other);
+  nlohmann::json toJson() const;
+};
+
+struct RenderStats {
+  std::vector<FrameStats> frames;
+  FrameStats total() const;
+  nlohmann::json toJson() const;
+  std::string summaryText(int ranks) const;
+};
+
+}  // namespace ferry

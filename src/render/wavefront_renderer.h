@@ -1,0 +1,64 @@
+// The path tracer every rank runs, as a wavefront: queues of compact paths,
+// one method per stage, the render loop reading like the algorithm.
+//
+// One wavefront is one sample of every pixel this rank generates. Per bounce:
+// traverse (local trace, and forwarding when distributed), add unoccluded
+// shadow rays to the frame buffer, shade paths (re-trace, emission, one light
+// sample, one continuation). A pixel sample has at most two live rays (its path
+// and its shadow ray), so queues are bounded by the image size.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "render/camera.h"
+#include "render/frame_buffer.h"
+#include "render/lights.h"
+#include "render/ray_traversal.h"
+#include "render/render_stats.h"
+
+namespace ferry {
+
+struct Scene;
+
+struct RenderSettings {
+  int width = 1280;
+  int height = 720;
+  int samplesPerPixel = 1;  // per frame
+  int frames = 1;
+  int maxDepth = 5;         // scattering events; 1 = direct lighting only
+  uint32_t seed = 1;
+  std::string view;         // empty: the scene's first view
+  ToneMapping toneMapping;
+};
+
+// Progress of one frame: (wavefront finished, wavefronts in the frame).
+using ProgressCallback = std::function<void(int done, int total)>;
+
+template <typename Path>
+class WavefrontRenderer {
+ public:
+  WavefrontRenderer(const Scene& scene, const LocalGeometry& geometry, const LightSampler& lights,
+                    RayTraversal<Path>& traversal, const RenderSettings& settings);
+
+  // Adds frame `frame`'s samples to `frameBuffer` (this rank's partial sum).
+  FrameStats renderFrame(int frame, FrameBuffer& frameBuffer, const ProgressCallback& progress = {});
+
+ private:
+  void generateCameraRays(uint32_t sampleIndex, std::vector<Path>& rays, FrameStats& stats);
+  void accumulateShadowRays(const std::vector<Path>& rays, FrameBuffer& frameBuffer, FrameStats& stats);
+  // Shades every non-shadow path; returns the next wavefront (continuations and shadow rays).
+  std::vector<Path> shade(const std::vector<Path>& rays, uint32_t sampleIndex, uint32_t bounce,
+                          FrameBuffer& frameBuffer, FrameStats& stats);
+
+  const Scene& scene_;
+  const LocalGeometry& geometry_;
+  const LightSampler& lights_;
+  RayTraversal<Path>& traversal_;
+  RenderSettings settings_;
+  Camera camera_;
+};
+
+}  // namespace ferry

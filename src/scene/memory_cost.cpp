@@ -1,0 +1,61 @@
+#include "scene/memory_cost.h"
+
+#include "core/math.h"
+#include "scene/scene.h"
+
+namespace ferry {
+
+MemoryCost& MemoryCost::operator+=(const MemoryCost& o) {
+  vertices += o.vertices;
+  normals += o.normals;
+  uvs += o.uvs;
+  indices += o.indices;
+  texels += o.texels;
+  instances += o.instances;
+  accel += o.accel;
+  return *this;
+}
+
+MemoryCost MemoryCost::scaled(uint64_t times) const {
+  MemoryCost c = *this;
+  c.vertices *= times;
+  c.normals *= times;
+  c.uvs *= times;
+  c.indices *= times;
+  c.texels *= times;
+  c.instances *= times;
+  c.accel *= times;
+  return c;
+}
+
+MemoryCost meshCost(uint64_t vertexCount, uint64_t triangleCount, bool hasNormals, bool hasUvs) {
+  MemoryCost c;
+  c.vertices = vertexCount * sizeof(Vec3f);
+  c.normals = hasNormals ? vertexCount * sizeof(Vec3f) : 0;
+  c.uvs = hasUvs ? vertexCount * sizeof(Vec2f) : 0;
+  c.indices = triangleCount * sizeof(Vec3i);
+  c.accel = static_cast<uint64_t>(triangleCount * MemoryModel::kAccelBytesPerTriangle);
+  return c;
+}
+
+MemoryCost meshCost(const Mesh& mesh) {
+  return meshCost(mesh.vertexCount(), mesh.triangleCount(), !mesh.normals.empty(),
+                  !mesh.uvs.empty());
+}
+
+MemoryCost textureCost(uint64_t texelCount) {
+  MemoryCost c;
+  c.texels = texelCount * 4;
+  return c;
+}
+
+MemoryCost textureCost(const Texture& texture) { return textureCost(texture.texelCount()); }
+
+MemoryCost instanceCost(uint64_t instanceCount) {
+  MemoryCost c;
+  c.instances = static_cast<uint64_t>(instanceCount * MemoryModel::kBytesPerInstanceRecord);
+  c.accel = static_cast<uint64_t>(instanceCount * MemoryModel::kAccelBytesPerInstance);
+  return c;
+}
+
+}  // namespace ferry

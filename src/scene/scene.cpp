@@ -1,0 +1,110 @@
+#include "scene/scene.h"
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace ferry {
+
+Box3f Mesh::bounds() const {
+  Box3f b;
+  for (const Vec3f& p : positions) b.extend(p);
+  return b;
+}
+
+int32_t Scene::addSingleInstanceMesh(Mesh mesh) {
+  meshes.push_back(std::move(mesh));
+  Object object;
+  object.name = meshes.back().name;
+  object.meshes.push_back(static_cast<int32_t>(meshes.size() - 1));
+  objects.push_back(std::move(object));
+  int32_t id = static_cast<int32_t>(objects.size() - 1);
+  instances.push_back({id, Affine3f::identity()});
+  return id;
+}
+
+int32_t Scene::addMaterial(Material material) {
+  materials.push_back(std::move(material));
+  return static_cast<int32_t>(materials.size() - 1);
+}
+
+Box3f Scene::objectBounds(int32_t object) const {
+  Box3f b;
+  for (int32_t m : objects[object].meshes) b.extend(meshes[m].bounds());
+  return b;
+}
+
+Box3f Scene::worldBounds() const {
+  std::vector<Box3f> perObject(objects.size());
+  for (size_t i = 0; i < objects.size(); ++i) perObject[i] = objectBounds(int32_t(i));
+  Box3f b;
+  for (const Instance& inst : instances) b.extend(inst.transform.transformBox(perObject[inst.object]));
+  return b;
+}
+
+const CameraView& Scene::view(const std::string& name) const {
+  if (views.empty()) throw InputError(fmt::format("scene '{}' has no camera views", this->name));
+  if (name.empty()) return views.front();
+  std::string known;
+  for (const CameraView& v : views) {
+    if (v.name == name) return v;
+    known += (known.empty() ? "" : ", ") + v.name;
+  }
+  throw InputError(fmt::format("unknown view '{}' in scene '{}' (views: {})", name, this->name, known));
+}
+
+std::vector<uint32_t> Scene::instanceCountPerObject() const {
+  std::vector<uint32_t> counts(objects.size(), 0);
+  for (const Instance& inst : instances) ++counts[inst.object];
+  return counts;
+}
+
+void Scene::validate() const {
+  auto fail = [&](const std::string& what) {
+    throw InputError(fmt::format("scene '{}': {}", name, what));
+  };
+  auto checkTexture = [&](int32_t t, const std::string& who) {
+    if (t != kNoTexture && (t < 0 || size_t(t) >= textures.size()))
+      fail(fmt::format("{} refers to texture {} of {}", who, t, textures.size()));
+  };
+  for (const Material& m : materials) {
+    checkTexture(m.baseColorTexture, "material '" + m.name + "'");
+    checkTexture(m.alphaTexture, "material '" + m.name + "'");
+    if (!isFinite(m.baseColor) || !isFinite(m.emission) || !std::isfinite(m.ior))
+      fail(fmt::format("material '{}' has a non-finite parameter", m.name));
+  }
+  for (const Mesh& mesh : meshes) {
+    if (mesh.material < 0 || size_t(mesh.material) >= materials.size())
+      fail(fmt::format("mesh '{}' refers to material {} of {}", mesh.name, mesh.material,
+                       materials.size()));
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
+      fail(fmt::format("mesh '{}' has {} normals for {} positions", mesh.name,
+                       mesh.normals.size(), mesh.positions.size()));
+    if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
+      fail(fmt::format("mesh '{}' has {} uvs for {} positions", mesh.name, mesh.uvs.size(),
+                       mesh.positions.size()));
+    const auto n = static_cast<int64_t>(mesh.positions.size());
+    for (size_t t = 0; t < mesh.indices.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        if (mesh.indices[t][k] < 0 || mesh.indices[t][k] >= n)
+          fail(fmt::format("mesh '{}' triangle {} uses vertex {} of {}", mesh.name, t,
+                           mesh.indices[t][k], n));
+    for (size_t v = 0; v < mesh.positions.size(); ++v)
+      if (!isFinite(mesh.positions[v]))
+        fail(fmt::format("mesh '{}' vertex {} is not finite", mesh.name, v));
+  }
+  for (const Object& o : objects)
+    for (int32_t m : o.meshes)
+      if (m < 0 || size_t(m) >= meshes.size())
+        fail(fmt::format("object '{}' refers to mesh {} of {}", o.name, m, meshes.size()));
+  for (size_t i = 0; i < instances.size(); ++i) {
+    if (instances[i].object < 0 || size_t(instances[i].object) >= objects.size())
+      fail(fmt::format("instance {} refers to object {} of {}", i, instances[i].object,
+                       objects.size()));
+    if (!std::isfinite(instances[i].transform.determinant()) ||
+        instances[i].transform.determinant() == 0)
+      fail(fmt::format("instance {} has a singular transform", i));
+  }
+}
+
+}  // namespace ferry

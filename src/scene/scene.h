@@ -1,0 +1,112 @@
+// The scene model: what every loader and generator produces and every
+// renderer, partitioner and part file consumes.
+//
+// Geometry is two-level: meshes are grouped into objects, and objects are
+// placed by instances. A non-instanced mesh is an object with one instance
+// (identity transform). Instancing is never flattened, because scenes like the
+// island are only representable that way.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+#include "scene/texture.h"
+
+namespace ferry {
+
+constexpr int32_t kNoTexture = -1;
+
+struct Material {
+  std::string name;
+  Vec3f baseColor{0.8f, 0.8f, 0.8f};
+  int32_t baseColorTexture = kNoTexture;  // multiplies baseColor
+  float roughness = 1.0f;                 // 0: perfectly smooth (delta), 1: very rough
+  float metallic = 0.0f;                  // 1: conductor with baseColor as reflectance
+  float transmission = 0.0f;              // 1: dielectric (glass), refracting with ior
+  float ior = 1.5f;
+  Vec3f emission{0, 0, 0};              // radiance leaving the surface
+  int32_t alphaTexture = kNoTexture;    // cut-out: texel alpha < alphaCutoff is a hole
+  float alphaCutoff = 0.5f;
+
+  bool isEmissive() const { return maxComponent(emission) > 0; }
+};
+
+struct Mesh {
+  std::string name;
+  std::vector<Vec3f> positions;
+  std::vector<Vec3f> normals;  // empty, or one per position
+  std::vector<Vec2f> uvs;      // empty, or one per position
+  std::vector<Vec3i> indices;  // 32-bit triangle indices into positions
+  int32_t material = 0;
+
+  uint64_t triangleCount() const { return indices.size(); }
+  uint64_t vertexCount() const { return positions.size(); }
+  Box3f bounds() const;
+};
+
+// A group of meshes placed together by instances (a tree: trunk + leaf cards).
+struct Object {
+  std::string name;
+  std::vector<int32_t> meshes;  // indices into Scene::meshes
+};
+
+struct Instance {
+  int32_t object = 0;
+  Affine3f transform;
+};
+
+// Sun / directional light: radiance arriving from a small cone around `direction`.
+struct SunLight {
+  Vec3f direction{0, 1, 0};   // unit vector pointing *towards* the sun
+  Vec3f irradiance{3, 3, 3};  // W/m^2 on a surface facing the sun
+  float angularRadius = 0.00465f;  // radians (the real sun: 0.27 degrees)
+};
+
+// Environment: constant colour, or an equirectangular image (y up) scaled by colour.
+struct EnvironmentLight {
+  Vec3f color{0, 0, 0};
+  std::shared_ptr<const HdrImage> image;  // optional
+  float rotation = 0;                     // radians around +y
+
+  bool isBlack() const { return !image && maxComponent(color) <= 0; }
+};
+
+struct CameraView {
+  std::string name;
+  Vec3f from{0, 0, 5};
+  Vec3f at{0, 0, 0};
+  Vec3f up{0, 1, 0};
+  float fovY = 45.0f;  // degrees
+};
+
+struct Scene {
+  std::string name;
+  std::vector<Mesh> meshes;
+  std::vector<Object> objects;
+  std::vector<Instance> instances;
+  std::vector<Material> materials;
+  std::vector<Texture> textures;
+  std::vector<SunLight> suns;
+  EnvironmentLight environment;
+  std::vector<CameraView> views;  // views[0] is the default
+
+  // Adds a mesh as its own object with one identity instance; returns the object.
+  int32_t addSingleInstanceMesh(Mesh mesh);
+  int32_t addMaterial(Material material);
+
+  Box3f objectBounds(int32_t object) const;
+  Box3f worldBounds() const;
+  // Finds a view by name; throws InputError listing the available ones.
+  const CameraView& view(const std::string& name) const;
+  // Number of instances of each object (objects placed more than once are the
+  // "multi-instance" content the partitioners treat as units).
+  std::vector<uint32_t> instanceCountPerObject() const;
+  // Checks indices, references and numbers; throws InputError naming the element.
+  void validate() const;
+};
+
+}  // namespace ferry

@@ -1,0 +1,126 @@
+#include "scene/scene_summary.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "scene/scene.h"
+
+namespace ferry {
+
+SceneSummary summarize(const Scene& scene) {
+  SceneSummary s;
+  s.name = scene.name;
+  s.uniqueMeshes = scene.meshes.size();
+  for (const Mesh& m : scene.meshes) {
+    s.triangles += m.triangleCount();
+    s.vertices += m.vertexCount();
+    s.memory += meshCost(m);
+    if (scene.materials[m.material].isEmissive()) {
+      ++s.emissiveMeshes;
+      s.emissiveTriangles += m.triangleCount();
+    }
+  }
+  s.objects = scene.objects.size();
+  s.instances = scene.instances.size();
+  std::vector<uint64_t> trianglesPerObject(scene.objects.size(), 0);
+  for (size_t o = 0; o < scene.objects.size(); ++o)
+    for (int32_t m : scene.objects[o].meshes) trianglesPerObject[o] += scene.meshes[m].triangleCount();
+  for (const Instance& inst : scene.instances) s.instancedTriangles += trianglesPerObject[inst.object];
+  s.memory += instanceCost(scene.instances.size());
+  s.textures = scene.textures.size();
+  for (const Texture& t : scene.textures) {
+    s.texels += t.texelCount();
+    s.memory += textureCost(t);
+  }
+  s.suns = scene.suns.size();
+  s.environments = scene.environment.isBlack() ? 0 : 1;
+  s.views = scene.views.size();
+  s.bounds = scene.worldBounds();
+  return s;
+}
+
+std::string formatCount(uint64_t n) {
+  if (n < 10000) return fmt::format("{}", n);
+  const char* units[] = {"K", "M", "G", "T", "P"};
+  double v = double(n);
+  int u = -1;
+  while (v >= 1000 && u < 4) {
+    v /= 1000;
+    ++u;
+  }
+  return fmt::format("{:.3g} {}", v, units[u]);
+}
+
+std::string formatBytes(uint64_t bytes) {
+  if (bytes < 1024) return fmt::format("{} B", bytes);
+  const char* units[] = {"KiB", "MiB", "GiB", "TiB", "PiB"};
+  double v = double(bytes);
+  int u = -1;
+  while (v >= 1024 && u < 4) {
+    v /= 1024;
+    ++u;
+  }
+  return fmt::format("{:.2f} {}", v, units[u]);
+}
+
+nlohmann::json SceneSummary::toJson() const {
+  nlohmann::json j;
+  j["name"] = name;
+  j["unique_meshes"] = uniqueMeshes;
+  j["triangles"] = triangles;
+  j["vertices"] = vertices;
+  j["objects"] = objects;
+  j["instances"] = instances;
+  j["instanced_triangles"] = instancedTriangles;
+  j["textures"] = textures;
+  j["texels"] = texels;
+  j["lights"] = {{"total", lights()},
+                 {"suns", suns},
+                 {"environments", environments},
+                 {"emissive_meshes", emissiveMeshes},
+                 {"emissive_triangles", emissiveTriangles}};
+  j["views"] = views;
+  if (!bounds.empty())
+    j["bounds"] = {{bounds.lower.x, bounds.lower.y, bounds.lower.z},
+                   {bounds.upper.x, bounds.upper.y, bounds.upper.z}};
+  j["memory_bytes"] = {{"total", memory.total()},   {"vertices", memory.vertices},
+                       {"normals", memory.normals}, {"uvs", memory.uvs},
+                       {"indices", memory.indices}, {"texels", memory.texels},
+                       {"instances", memory.instances}, {"accel", memory.accel}};
+  return j;
+}
+
+std::string SceneSummary::toText() const {
+  std::string out;
+  auto row = [&](const std::string& label, const std::string& value) {
+    out += fmt::format("  {:<22}{}\n", label, value);
+  };
+  out += fmt::format("scene {}\n", name);
+  row("unique meshes", formatCount(uniqueMeshes));
+  row("triangles", formatCount(triangles));
+  row("vertices", formatCount(vertices));
+  row("objects", formatCount(objects));
+  row("instances", formatCount(instances));
+  row("instanced triangles", formatCount(instancedTriangles));
+  row("textures", fmt::format("{} ({} texels)", textures, formatCount(texels)));
+  row("lights", fmt::format("{} ({} sun, {} environment, {} emissive meshes / {} triangles)",
+                            lights(), suns, environments, emissiveMeshes,
+                            formatCount(emissiveTriangles)));
+  row("views", fmt::format("{}", views));
+  if (!bounds.empty())
+    row("bounds", fmt::format("({:.4g}, {:.4g}, {:.4g}) - ({:.4g}, {:.4g}, {:.4g})", bounds.lower.x,
+                              bounds.lower.y, bounds.lower.z, bounds.upper.x, bounds.upper.y,
+                              bounds.upper.z));
+  out += "  estimated memory\n";
+  row("  total", formatBytes(memory.total()));
+  row("  vertices", formatBytes(memory.vertices));
+  row("  normals", formatBytes(memory.normals));
+  row("  uvs", formatBytes(memory.uvs));
+  row("  indices", formatBytes(memory.indices));
+  row("  texels", formatBytes(memory.texels));
+  row("  instances", formatBytes(memory.instances));
+  row("  acceleration", formatBytes(memory.accel));
+  return out;
+}
+
+}  // namespace ferry

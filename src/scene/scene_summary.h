@@ -1,0 +1,47 @@
+// What `ferry info` reports about a scene: counts and the memory estimate.
+// Computed either from a loaded Scene or, for built-ins at large scales, from
+// the generator's counts alone, without making any geometry.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "core/math.h"
+#include "scene/memory_cost.h"
+
+namespace ferry {
+
+struct Scene;
+
+struct SceneSummary {
+  std::string name;
+  uint64_t uniqueMeshes = 0;
+  uint64_t triangles = 0;  // unique: each mesh counted once
+  uint64_t vertices = 0;
+  uint64_t objects = 0;
+  uint64_t instances = 0;
+  uint64_t instancedTriangles = 0;  // every instance's triangles
+  uint64_t textures = 0;
+  uint64_t texels = 0;
+  uint64_t suns = 0;
+  uint64_t environments = 0;  // 0 or 1
+  uint64_t emissiveMeshes = 0;
+  uint64_t emissiveTriangles = 0;
+  uint64_t views = 0;
+  Box3f bounds;
+  MemoryCost memory;
+
+  uint64_t lights() const { return suns + environments + emissiveMeshes; }
+  nlohmann::json toJson() const;
+  std::string toText() const;  // the human-readable table `ferry info` prints
+};
+
+SceneSummary summarize(const Scene& scene);
+
+// 1234567 -> "1.23 M"; bytes -> "1.18 MiB".
+std::string formatCount(uint64_t n);
+std::string formatBytes(uint64_t bytes);
+
+}  // namespace ferry
