@@ -2,11 +2,13 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <cstdlib>
 #include <exception>
 
 #include "app/info_command.h"
 #include "app/render_command.h"
 #include "core/error.h"
+#include "dist/communicator.h"
 
 int main(int argc, char** argv) {
   using namespace ferry;
@@ -22,10 +24,17 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // Under mpirun every rank parses the same flags: only rank 0 speaks.
+    const char* rank = std::getenv("OMPI_COMM_WORLD_RANK");
+    if (!rank) rank = std::getenv("PMI_RANK");
+    if (rank && std::atoi(rank) != 0) return e.get_exit_code();
     return app.exit(e);
   }
   try {
-    if (app.got_subcommand("render")) return runRender(renderOptions);
+    if (app.got_subcommand("render")) {
+      Communicator comm(&argc, &argv);
+      return runRender(renderOptions, comm);
+    }
     if (app.got_subcommand("info")) return runInfo(infoOptions);
   } catch (const InputError& e) {
     fmt::print(stderr, "ferry: error: {}\n", e.what());

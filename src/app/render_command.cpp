@@ -4,22 +4,25 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include <charconv>
 #include <chrono>
 #include <fstream>
 #include <memory>
+#include <optional>
 
 #include "app/image_output.h"
 #include "app/progress.h"
 #include "core/error.h"
 #include "core/process_memory.h"
+#include "dist/communicator.h"
+#include "dist/compositor.h"
+#include "dist/distributed_traversal.h"
 #include "io/image_io.h"
 #include "io/scene_loader.h"
+#include "partition/partition.h"
 #include "render/lights.h"
 #include "render/path.h"
-#include "render/ray_traversal.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene_summary.h"
 #include "trace/local_geometry.h"
@@ -27,9 +30,8 @@
 namespace ferry {
 namespace {
 
-double secondsSince(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 void validate(const RenderOptions& o) {
   if (o.samplesPerPixel < 1) throw InputError(fmt::format("--spp {}: must be at least 1", o.samplesPerPixel));
@@ -37,6 +39,191 @@ void validate(const RenderOptions& o) {
   if (o.maxDepth < 0) throw InputError(fmt::format("--max-depth {}: must be 0 or more", o.maxDepth));
   if (o.threads < 0) throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
   checkOutputPath(o.output);
+  parseForwardingMode(o.forwarding);
+}
+
+Partition makePartition(const std::string& name, const Scene& scene, int ranks, uint32_t seed) {
+  if (name == "round-robin") return roundRobinPartition(scene, ranks);
+  if (name == "random") return randomPartition(scene, ranks, seed);
+  throw InputError(fmt::format("--partition '{}': expected round-robin or random", name));
+}
+
+// Everything a rank holds once set up.
+struct RankSetup {
+  Scene scene;
+  Partition partition;
+  std::vector<int32_t> owned;
+  std::unique_ptr<LocalGeometry> geometry;
+  std::unique_ptr<LightSampler> lights;
+  SceneSummary summary;  // of the whole scene, before releasing what this rank does not own
+  MemoryCost ownedEstimate;
+  double loadSeconds = 0, buildSeconds = 0;
+};
+
+// Per-rank figures gathered for the stats: what each rank really holds.
+struct RankMemory {
+  std::vector<double> estimated, embree, embreePeak, resident, residentPeak;
+};
+
+RankMemory gatherMemory(const Communicator& comm, const RankSetup& setup) {
+  ProcessMemory m = readProcessMemory();
+  int n = comm.size();
+  auto spread = [&](double mine) {
+    std::vector<double> v(n, 0.0);
+    v[comm.rank()] = mine;
+    return comm.sum(std::span<const double>(v));
+  };
+  return {spread(double(setup.ownedEstimate.total())), spread(double(setup.geometry->embreeBytes())),
+          spread(double(setup.geometry->embreePeakBytes())), spread(double(m.residentBytes)),
+          spread(double(m.peakResidentBytes))};
+}
+
+// Sums every counter over ranks (seconds: the slowest rank).
+FrameStats reduceFrameStats(const Communicator& comm, const FrameStats& mine) {
+  double maxBounces = comm.max(double(mine.perBounce.size()));
+  FrameStats local = mine;
+  local.perBounce.resize(size_t(maxBounces));
+  std::vector<uint64_t> counters = {local.cameraPaths,   local.continuationRays, local.shadowRays,
+                                    local.closestTraces, local.occlusionTraces,  local.retraces,
+                                    local.retraceMisses, local.proxyQueries};
+  for (const ExchangeCounters& c : local.perBounce) {
+    counters.push_back(c.raysForwarded);
+    counters.push_back(c.bytesSent);
+    counters.push_back(c.rounds);
+  }
+  std::vector<uint64_t> s = comm.sum(std::span<const uint64_t>(counters));
+  std::vector<double> times = {local.times.generate, local.times.trace,      local.times.exchange,
+                               local.times.shade,    local.times.accumulate, local.times.composite};
+  std::vector<double> t = comm.sum(std::span<const double>(times));
+  FrameStats out;
+  out.frame = mine.frame;
+  out.seconds = comm.max(mine.seconds);
+  out.cameraPaths = s[0];
+  out.continuationRays = s[1];
+  out.shadowRays = s[2];
+  out.closestTraces = s[3];
+  out.occlusionTraces = s[4];
+  out.retraces = s[5];
+  out.retraceMisses = s[6];
+  out.proxyQueries = s[7];
+  for (size_t b = 0; b < local.perBounce.size(); ++b)
+    out.perBounce.push_back({s[8 + 3 * b], s[9 + 3 * b], s[10 + 3 * b]});
+  out.times = {t[0], t[1], t[2], t[3], t[4], t[5]};
+  return out;
+}
+
+// Fills `s` in place: the Embree structures refer to its scene, so it must not move afterwards.
+void setUp(const RenderOptions& o, const RenderSettings& settings, const Communicator& comm, RankSetup& s) {
+  auto start = Clock::now();
+  s.scene = loadScene(o.scene);
+  s.scene.view(settings.view);  // fail on an unknown view before building anything
+  s.summary = summarize(s.scene);
+  s.partition = makePartition(o.partition, s.scene, comm.size(), o.seed);
+  s.owned = s.partition.instancesOf(comm.rank());
+  s.ownedEstimate = ownedMemory(s.scene, s.owned);
+  // Light data is small and needed everywhere: take it before releasing geometry.
+  s.lights = std::make_unique<LightSampler>(s.scene);
+  s.scene.releaseAllBut(s.owned);
+  s.loadSeconds = secondsSince(start);
+  maybeInjectFailure("load", comm.rank());
+  auto build = Clock::now();
+  s.geometry = std::make_unique<LocalGeometry>(s.scene, s.owned);
+  s.buildSeconds = secondsSince(build);
+}
+
+void writeStats(const RenderOptions& o, const RenderSettings& settings, const RankSetup& setup,
+                const RenderStats& stats, const RankMemory& memory, uint64_t received, uint64_t revisits,
+                uint64_t compositeBytes, int ranks, double totalSeconds) {
+  nlohmann::json j;
+  j["scene"] = setup.summary.toJson();
+  j["settings"] = {{"width", settings.width},         {"height", settings.height},
+                   {"spp", settings.samplesPerPixel}, {"frames", settings.frames},
+                   {"max_depth", settings.maxDepth},  {"seed", settings.seed},
+                   {"view", o.view},                  {"threads", o.threads},
+                   {"ranks", ranks},                  {"forwarding", o.forwarding},
+                   {"partition", o.partition},        {"output", o.output},
+                   {"path_bytes", ranks <= 8 ? sizeof(Path8) : sizeof(Path64)}};
+  j["render"] = stats.toJson();
+  j["render"]["rays_received"] = received;
+  j["render"]["revisits"] = revisits;
+  j["render"]["composite_bytes_sent"] = compositeBytes;
+  nlohmann::json perRank = nlohmann::json::array();
+  for (int r = 0; r < ranks; ++r)
+    perRank.push_back({{"rank", r},
+                       {"estimated_bytes", memory.estimated[r]},
+                       {"embree_bytes", memory.embree[r]},
+                       {"embree_peak_bytes", memory.embreePeak[r]},
+                       {"resident_bytes", memory.resident[r]},
+                       {"peak_resident_bytes", memory.residentPeak[r]}});
+  j["memory"] = {{"scene_estimated_bytes", setup.summary.memory.total()},
+                 {"max_estimated_bytes", *std::max_element(memory.estimated.begin(), memory.estimated.end())},
+                 {"max_embree_bytes", *std::max_element(memory.embree.begin(), memory.embree.end())},
+                 {"max_peak_resident_bytes",
+                  *std::max_element(memory.residentPeak.begin(), memory.residentPeak.end())},
+                 {"per_rank", perRank}};
+  j["seconds"] = {{"load", setup.loadSeconds}, {"build", setup.buildSeconds}, {"total", totalSeconds}};
+  writeFileAtomically(o.statsPath, [&](const std::string& tmp) {
+    std::ofstream out(tmp);
+    out << j.dump(2) << "\n";
+    if (!out) throw InputError(fmt::format("{}: could not write", o.statsPath));
+  });
+}
+
+template <typename Path>
+int renderOnRanks(const RenderOptions& o, const RenderSettings& settings, RankSetup& setup,
+                  const Communicator& comm, Clock::time_point start) {
+  const bool talk = comm.isRoot() && !o.quiet;
+  DistributedTraversal<Path> traversal(comm, *setup.geometry, setup.partition, parseForwardingMode(o.forwarding));
+  WavefrontRenderer<Path> renderer(setup.scene, *setup.geometry, *setup.lights, traversal, settings);
+  FrameBuffer frameBuffer(settings.width, settings.height);
+  RenderStats stats;
+  Progress rendering("render", settings.frames * settings.samplesPerPixel, talk);
+  for (int frame = 0; frame < settings.frames; ++frame) {
+    FrameStats mine = renderer.renderFrame(frame, frameBuffer, [&](int done, int) {
+      rendering.update(frame * settings.samplesPerPixel + done, fmt::format("frame {}", frame + 1));
+    });
+    stats.frames.push_back(reduceFrameStats(comm, mine));
+  }
+  rendering.finish();
+
+  auto compositeStart = Clock::now();
+  const float scale = 1.0f / float(settings.frames * settings.samplesPerPixel);
+  const bool png = o.output.size() >= 4 && (o.output.substr(o.output.size() - 4) == ".png" ||
+                                             o.output.substr(o.output.size() - 4) == ".PNG");
+  uint64_t compositeBytes = 0;
+  std::vector<Vec3f> linear;
+  std::vector<uint8_t> rgba;
+  if (png)
+    rgba = compositeToneMapped(comm, frameBuffer, scale, settings.toneMapping, compositeBytes);
+  else
+    linear = compositeLinear(comm, frameBuffer, scale, compositeBytes);
+  double compositeSeconds = comm.max(secondsSince(compositeStart));
+  if (!stats.frames.empty()) stats.frames.back().times.composite += compositeSeconds;
+  compositeBytes = comm.sum(compositeBytes);
+  RankMemory memory = gatherMemory(comm, setup);
+  uint64_t received = comm.sum(traversal.received());
+  uint64_t revisits = comm.sum(traversal.revisits());
+
+  if (!comm.isRoot()) return 0;
+  if (png)
+    writePng(o.output, settings.width, settings.height, rgba);
+  else
+    writeRenderedImage(o.output, settings.width, settings.height, linear, settings.toneMapping);
+  if (!o.quiet) {
+    fmt::print("{}", stats.summaryText(comm.size()));
+    auto maxOf = [](const std::vector<double>& v) { return uint64_t(*std::max_element(v.begin(), v.end())); };
+    fmt::print("  {:<22}{} of {} estimated, {} Embree, {} peak resident (largest rank)\n", "memory per rank",
+               formatBytes(maxOf(memory.estimated)), formatBytes(setup.summary.memory.total()),
+               formatBytes(maxOf(memory.embree)), formatBytes(maxOf(memory.residentPeak)));
+    fmt::print("  {:<22}{} ({} sent by direct send)\n", "composite", fmt::format("{:.3f} s", compositeSeconds),
+               formatBytes(compositeBytes));
+    if (revisits) fmt::print("  {:<22}{}\n", "REVISITS", revisits);
+    fmt::print("  {:<22}{}\n", "wrote", o.output);
+  }
+  if (!o.statsPath.empty())
+    writeStats(o, settings, setup, stats, memory, received, revisits, compositeBytes, comm.size(),
+               secondsSince(start));
+  return 0;
 }
 
 }  // namespace
@@ -62,8 +249,10 @@ void parseImageSize(const std::string& text, int& width, int& height) {
 void addRenderCommand(CLI::App& app, RenderOptions& o) {
   CLI::App* render = app.add_subcommand(
       "render",
-      "Path trace a scene and write the image.\n"
-      "The image is the same whatever --threads (and, distributed, whatever the rank count).");
+      "Path trace a scene and write the image. Run under mpirun to spread the scene over ranks:\n"
+      "  mpirun -np 4 ferry render builtin:island -o island.png\n"
+      "The image is the same whatever the rank count, --threads, --partition or --forwarding\n"
+      "(up to floating-point summation order).");
   render->add_option("scene", o.scene,
                      "Scene file (.obj) or built-in: builtin:island, builtin:landscape, builtin:cornell,\n"
                      "builtin:furnace, with parameters as builtin:island?scale=4&seed=7")
@@ -79,94 +268,69 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
   render->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   render->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")
       ->capture_default_str();
-  render->add_option("--threads", o.threads, "Worker threads per process (0: all cores)")
-      ->capture_default_str();
+  render->add_option("--threads", o.threads, "Worker threads per rank (0: all cores)")->capture_default_str();
   render->add_option("-o,--output", o.output,
                      "Output image: .png (tone mapped), .exr or .pfm (linear radiance)")
       ->capture_default_str();
-  render->add_option("--stats", o.statsPath, "Write counters, timings and memory as JSON to this file");
+  render->add_option("--stats", o.statsPath,
+                     "Write counters (rays traced, forwarded, bytes sent, rounds per bounce), timings and\n"
+                     "memory per rank as JSON to this file");
   render->add_option("--exposure", o.exposure, "Exposure in stops for the PNG tone mapping")
+      ->capture_default_str();
+  render->add_option("--forwarding", o.forwarding,
+                     "How rays travel between ranks: proxies (the paper: closest proxy of an unvisited\n"
+                     "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
+                     "wins, as Kilauea)")
+      ->capture_default_str();
+  render->add_option("--partition", o.partition,
+                     "How instances are dealt to ranks: round-robin (one proxy per instance) or random\n"
+                     "(random replication and overlapping proxies; for testing)")
       ->capture_default_str();
   render->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
 }
 
-int runRender(const RenderOptions& o) {
-  validate(o);
+int runRender(const RenderOptions& o, const Communicator& comm) {
+  auto start = Clock::now();
   RenderSettings settings;
-  parseImageSize(o.size, settings.width, settings.height);
-  settings.samplesPerPixel = o.samplesPerPixel;
-  settings.frames = o.frames;
-  settings.maxDepth = o.maxDepth;
-  settings.seed = o.seed;
-  settings.view = o.view;
-  settings.toneMapping.exposure = o.exposure;
-
   std::unique_ptr<tbb::global_control> threadLimit;
-  if (o.threads > 0)
-    threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
-
-  auto start = std::chrono::steady_clock::now();
-  Progress loading("load", 2, !o.quiet);
-  loading.update(0, o.scene);
-  Scene scene = loadScene(o.scene);
-  scene.view(settings.view);  // fail on an unknown view before building anything
-  double loadSeconds = secondsSince(start);
-  loading.update(1, "building acceleration structures");
-  auto buildStart = std::chrono::steady_clock::now();
-  LocalGeometry geometry(scene);
-  LightSampler lights(scene);
-  double buildSeconds = secondsSince(buildStart);
-  loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", loadSeconds, buildSeconds));
-
-  LocalTraversal<Path8> traversal(geometry);
-  WavefrontRenderer<Path8> renderer(scene, geometry, lights, traversal, settings);
-  FrameBuffer frameBuffer(settings.width, settings.height);
-  RenderStats stats;
-  Progress rendering("render", settings.frames * settings.samplesPerPixel, !o.quiet);
-  for (int frame = 0; frame < settings.frames; ++frame) {
-    stats.frames.push_back(renderer.renderFrame(frame, frameBuffer, [&](int done, int) {
-      rendering.update(frame * settings.samplesPerPixel + done, fmt::format("frame {}", frame + 1));
-    }));
+  std::optional<RankSetup> setup;
+  std::string error;
+  try {
+    validate(o);
+    if (comm.size() > 64)
+      throw InputError(fmt::format("{} ranks: Ferry supports up to 64 ranks", comm.size()));
+    parseImageSize(o.size, settings.width, settings.height);
+    settings.samplesPerPixel = o.samplesPerPixel;
+    settings.frames = o.frames;
+    settings.maxDepth = o.maxDepth;
+    settings.seed = o.seed;
+    settings.view = o.view;
+    settings.toneMapping.exposure = o.exposure;
+    if (o.threads > 0)
+      threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+    Progress loading("load", 1, comm.isRoot() && !o.quiet);
+    loading.update(0, o.scene);
+    setUp(o, settings, comm, setup.emplace());
+    loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", setup->loadSeconds, setup->buildSeconds));
+  } catch (const std::exception& e) {
+    error = e.what();
   }
-  rendering.finish();
+  // Errors while setting up are usually the same on every rank: report once, exit cleanly.
+  if (comm.agreeOnFailure(!error.empty(), error)) return 1;
 
-  const float scale = 1.0f / float(settings.frames * settings.samplesPerPixel);
-  std::vector<Vec3f> image(frameBuffer.sum());
-  for (Vec3f& v : image) v = v * scale;
-  writeRenderedImage(o.output, settings.width, settings.height, image, settings.toneMapping);
-
-  SceneSummary summary = summarize(scene);
-  ProcessMemory memory = readProcessMemory();
-  if (!o.quiet) {
-    fmt::print("{}", stats.summaryText(1));
-    fmt::print("  {:<22}{} estimated, {} Embree (peak {}), {} resident (peak {})\n", "memory",
-               formatBytes(summary.memory.total()), formatBytes(uint64_t(geometry.embreeBytes())),
-               formatBytes(uint64_t(geometry.embreePeakBytes())), formatBytes(memory.residentBytes),
-               formatBytes(memory.peakResidentBytes));
-    fmt::print("  {:<22}{}\n", "wrote", o.output);
+  try {
+    if (comm.size() <= 8) return renderOnRanks<Path8>(o, settings, *setup, comm, start);
+    return renderOnRanks<Path64>(o, settings, *setup, comm, start);
+  } catch (const InputError& e) {
+    // Only rank 0 writes files, after every collective: the others have finished.
+    if (comm.isRoot()) {
+      fmt::print(stderr, "ferry: error: {}\n", e.what());
+      return 1;
+    }
+    comm.abortAll(e.what());
+  } catch (const std::exception& e) {
+    comm.abortAll(e.what());
   }
-  if (!o.statsPath.empty()) {
-    nlohmann::json j;
-    j["scene"] = summary.toJson();
-    j["settings"] = {{"width", settings.width},     {"height", settings.height},
-                     {"spp", settings.samplesPerPixel}, {"frames", settings.frames},
-                     {"max_depth", settings.maxDepth},  {"seed", settings.seed},
-                     {"view", o.view},                  {"threads", o.threads},
-                     {"ranks", 1},                      {"output", o.output}};
-    j["render"] = stats.toJson();
-    j["memory"] = {{"estimated_bytes", summary.memory.total()},
-                   {"embree_bytes", geometry.embreeBytes()},
-                   {"embree_peak_bytes", geometry.embreePeakBytes()},
-                   {"resident_bytes", memory.residentBytes},
-                   {"peak_resident_bytes", memory.peakResidentBytes}};
-    j["seconds"] = {{"load", loadSeconds}, {"build", buildSeconds}, {"total", secondsSince(start)}};
-    writeFileAtomically(o.statsPath, [&](const std::string& tmp) {
-      std::ofstream out(tmp);
-      out << j.dump(2) << "\n";
-      if (!out) throw InputError(fmt::format("{}: could not write", o.statsPath));
-    });
-  }
-  return 0;
 }
 
 }  // namespace ferry

@@ -10,6 +10,8 @@ class App;
 
 namespace ferry {
 
+class Communicator;
+
 struct RenderOptions {
   std::string scene = "builtin:island";
   std::string size = "1280x720";
@@ -23,11 +25,15 @@ struct RenderOptions {
   std::string statsPath;
   float exposure = 0;
   bool quiet = false;
+  std::string forwarding = "proxies";
+  std::string partition = "round-robin";
 };
 
 void addRenderCommand(CLI::App& app, RenderOptions& options);
-// Returns the process exit code; throws InputError for bad input.
-int runRender(const RenderOptions& options);
+// Renders on every rank of `comm`; returns this rank's exit code. Errors every
+// rank meets while setting up are agreed on and reported once; an error on
+// one rank while rendering ends all ranks (see Communicator).
+int runRender(const RenderOptions& options, const Communicator& comm);
 
 // "1280x720" -> (1280, 720); throws InputError naming the flag.
 void parseImageSize(const std::string& text, int& width, int& height);

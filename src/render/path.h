@@ -19,6 +19,8 @@ enum PathFlags : uint32_t {
   kPathOccluded = 1u << 1,        // shadow ray: an occluder was found
   kPathAfterSpecular = 1u << 2,   // previous vertex was a delta lobe (or the camera):
                                   // emission hit next counts (no light sample covered it)
+  kPathTraversed = 1u << 3,       // traversal is complete: sent to a rank only to be shaded
+  kPathReply = 1u << 4,           // broadcast mode: a copy returning its result to its origin
   kPathFlagMask = 0x3fu,
 };
 constexpr int kPixelBits = 26;  // 67 M pixels, e.g. 8192 x 8192

@@ -59,6 +59,28 @@ std::vector<uint32_t> Scene::instanceCountPerObject() const {
   return counts;
 }
 
+void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
+  std::vector<uint8_t> keepMesh(meshes.size(), 0), keepTexture(textures.size(), 0), keepObject(objects.size(), 0);
+  for (int32_t i : keptInstances) keepObject[instances[i].object] = 1;
+  for (size_t o = 0; o < objects.size(); ++o)
+    if (keepObject[o])
+      for (int32_t m : objects[o].meshes) {
+        keepMesh[m] = 1;
+        const Material& mat = materials[meshes[m].material];
+        if (mat.baseColorTexture != kNoTexture) keepTexture[mat.baseColorTexture] = 1;
+        if (mat.alphaTexture != kNoTexture) keepTexture[mat.alphaTexture] = 1;
+      }
+  for (size_t m = 0; m < meshes.size(); ++m)
+    if (!keepMesh[m]) {
+      std::vector<Vec3f>().swap(meshes[m].positions);
+      std::vector<Vec3f>().swap(meshes[m].normals);
+      std::vector<Vec2f>().swap(meshes[m].uvs);
+      std::vector<Vec3i>().swap(meshes[m].indices);
+    }
+  for (size_t t = 0; t < textures.size(); ++t)
+    if (!keepTexture[t]) std::vector<uint8_t>().swap(textures[t].rgba);
+}
+
 void Scene::validate() const {
   auto fail = [&](const std::string& what) {
     throw InputError(fmt::format("scene '{}': {}", name, what));

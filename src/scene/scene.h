@@ -107,6 +107,9 @@ struct Scene {
   std::vector<uint32_t> instanceCountPerObject() const;
   // Checks indices, references and numbers; throws InputError naming the element.
   void validate() const;
+  // Frees the geometry and texels no listed instance needs (a rank keeps only
+  // what it owns). Indices stay valid; released meshes and textures are empty.
+  void releaseAllBut(const std::vector<int32_t>& keptInstances);
 };
 
 }  // namespace ferry

@@ -39,6 +39,26 @@ SceneSummary summarize(const Scene& scene) {
   return s;
 }
 
+MemoryCost ownedMemory(const Scene& scene, const std::vector<int32_t>& instances) {
+  std::vector<uint8_t> object(scene.objects.size(), 0), mesh(scene.meshes.size(), 0),
+      texture(scene.textures.size(), 0);
+  for (int32_t i : instances) object[scene.instances[i].object] = 1;
+  MemoryCost cost = instanceCost(instances.size());
+  for (size_t o = 0; o < object.size(); ++o)
+    if (object[o])
+      for (int32_t m : scene.objects[o].meshes) mesh[m] = 1;
+  for (size_t m = 0; m < mesh.size(); ++m) {
+    if (!mesh[m]) continue;
+    cost += meshCost(scene.meshes[m]);
+    const Material& mat = scene.materials[scene.meshes[m].material];
+    if (mat.baseColorTexture != kNoTexture) texture[mat.baseColorTexture] = 1;
+    if (mat.alphaTexture != kNoTexture) texture[mat.alphaTexture] = 1;
+  }
+  for (size_t t = 0; t < texture.size(); ++t)
+    if (texture[t]) cost += textureCost(scene.textures[t]);
+  return cost;
+}
+
 std::string formatCount(uint64_t n) {
   if (n < 10000) return fmt::format("{}", n);
   const char* units[] = {"K", "M", "G", "T", "P"};

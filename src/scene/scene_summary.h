@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json_fwd.hpp>
 
@@ -39,6 +40,9 @@ struct SceneSummary {
 };
 
 SceneSummary summarize(const Scene& scene);
+// The memory estimate of only the listed instances and what they reference:
+// what one rank holds.
+MemoryCost ownedMemory(const Scene& scene, const std::vector<int32_t>& instances);
 
 // 1234567 -> "1.23 M"; bytes -> "1.18 MiB".
 std::string formatCount(uint64_t n);

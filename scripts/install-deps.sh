@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs everything Ferry needs to build, test and benchmark, from Debian's
+# packages. Safe to run again: it only calls apt-get when something is missing.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libembree-dev embree-tools      # Embree 3 (and its pathtracer tutorial, our benchmark baseline)
+  libtbb-dev                      # threads inside a rank
+  libopenmpi-dev openmpi-bin      # ranks
+  libstb-dev libtinyobjloader-dev libtinygltf-dev
+  libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
+  libopenexr-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,249 @@
+#include "dist/distributed_traversal.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <bit>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace ferry {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+constexpr int kShadeHere = -1;
+constexpr int kDrop = -2;
+
+// A destination rank, or kShadeHere / kDrop; marks rays sent only to be shaded.
+template <typename Path>
+int decisionToDestination(const ForwardDecision& d, Path& ray, int rank) {
+  if (d.kind == ForwardDecision::Drop) return kDrop;
+  if (d.kind == ForwardDecision::ShadeHere || d.rank == rank) return kShadeHere;
+  if (d.toShade) ray.set(kPathTraversed);
+  return d.rank;
+}
+
+}  // namespace
+
+void maybeInjectFailure(const char* point, int rank) {
+  const char* at = std::getenv("FERRY_FAIL_AT");
+  const char* who = std::getenv("FERRY_FAIL_RANK");
+  if (!at || !who || std::atoi(who) != rank) return;
+  std::string where = at;
+  if (where == point) throw std::runtime_error(fmt::format("injected failure at {}", point));
+  if (where == std::string("signal-") + point) std::raise(SIGSEGV);
+}
+
+template <typename Path>
+DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm, const LocalGeometry& geometry,
+                                                 const Partition& partition, ForwardingMode mode)
+    : comm_(comm),
+      geometry_(geometry),
+      mode_(mode),
+      proxies_(partition.proxies),
+      rankBit_(Mask(Mask(1) << comm.rank())) {
+  FERRY_CHECK(comm.size() <= int(sizeof(Mask) * 8));
+  instanceOwners_.reserve(partition.instanceOwners.size());
+  for (RankMask owners : partition.instanceOwners) instanceOwners_.push_back(Mask(owners));
+}
+
+template <typename Path>
+bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const {
+  const int ranks = comm_.size();
+  if (mode_ != ForwardingMode::Proxies) return int(pixel % uint32_t(ranks)) == comm_.rank();
+  // Proxy-guided: the owner of the closest proxy keeps it (pixel id breaks
+  // ties among replicas); rays that hit no proxy are dealt by pixel id.
+  ++stats.proxyQueries;
+  ProxyBvh::Hit hit = proxies_.closest(ray.origin, ray.direction, ray.tmax, 0);
+  if (!hit.found()) return int(pixel % uint32_t(ranks)) == comm_.rank();
+  RankMask owners = proxies_.proxies()[hit.proxy].owners;
+  int count = std::popcount(owners);
+  int k = int(pixel % uint32_t(count));
+  for (; k > 0; --k) owners &= owners - 1;
+  return std::countr_zero(owners) == comm_.rank();
+}
+
+template <typename Path>
+void DistributedTraversal<Path>::trace(std::vector<Path>& rays, FrameStats& stats) {
+  for (const Path& p : rays)
+    if (Mask(p.visited) & rankBit_) ++revisits_;
+  traceLocally(geometry_, rays, rankBit_, instanceOwners_, stats);
+}
+
+template <typename Path>
+std::vector<Path> DistributedTraversal<Path>::exchange(const std::vector<Path>& rays,
+                                                       const std::vector<int>& destination,
+                                                       ExchangeCounters& counters, FrameStats& stats) {
+  auto start = Clock::now();
+  if (firstExchange_) {
+    maybeInjectFailure("exchange", comm_.rank());
+    firstExchange_ = false;
+  }
+  const int ranks = comm_.size();
+  std::vector<int> counts(ranks, 0);
+  for (int d : destination) ++counts[d];
+  // Compact by destination, keeping each destination's rays in queue order.
+  std::vector<int> offsets(ranks, 0);
+  for (int r = 1; r < ranks; ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
+  std::vector<Path> send(rays.size());
+  std::vector<int> cursor = offsets;
+  for (size_t i = 0; i < rays.size(); ++i) send[cursor[destination[i]]++] = rays[i];
+
+  std::vector<int> receiveCounts = comm_.exchangeCounts(counts);
+  std::vector<int> receiveOffsets(ranks, 0);
+  for (int r = 1; r < ranks; ++r) receiveOffsets[r] = receiveOffsets[r - 1] + receiveCounts[r - 1];
+  size_t total = size_t(receiveOffsets[ranks - 1]) + size_t(receiveCounts[ranks - 1]);
+  std::vector<Path> received(total);
+
+  auto toBytes = [](std::vector<int> v) {
+    for (int& x : v) {
+      if (int64_t(x) * int64_t(sizeof(Path)) > INT32_MAX)
+        throw std::runtime_error("ray exchange exceeds 2 GiB in one message");
+      x *= int(sizeof(Path));
+    }
+    return v;
+  };
+  comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), received.data(), toBytes(receiveCounts),
+                      toBytes(receiveOffsets));
+  counters.raysForwarded += send.size();
+  counters.bytesSent += send.size() * sizeof(Path);
+  if (comm_.isRoot()) ++counters.rounds;  // a round is one collective step; counted once
+  received_ += total;
+  stats.times.exchange += secondsSince(start);
+  return received;
+}
+
+template <typename Path>
+void DistributedTraversal<Path>::traverse(std::vector<Path>& rays, ExchangeCounters& exchange,
+                                          FrameStats& stats) {
+  if (mode_ == ForwardingMode::Broadcast)
+    traverseBroadcast(rays, exchange, stats);
+  else
+    traverseForwarding(rays, exchange, stats);
+}
+
+template <typename Path>
+void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, ExchangeCounters& counters,
+                                                    FrameStats& stats) {
+  const int rank = comm_.rank();
+  const int ranks = comm_.size();
+  std::vector<Path> ready;   // traversal complete here: shade on this rank
+  std::vector<Path> moving = std::move(rays);
+  // Local first: every new ray is traced on the rank that made it.
+  trace(moving, stats);
+  for (;;) {
+    auto start = Clock::now();
+    std::vector<int> destination(moving.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, moving.size(), 1024), [&](const auto& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i) {
+        ForwardDecision d = mode_ == ForwardingMode::Ring ? forwardByRing(moving[i], rank, ranks)
+                                                          : forwardByProxies(proxies_, moving[i], rank);
+        destination[i] = decisionToDestination(d, moving[i], rank);
+      }
+    });
+    // Split: kept, dropped, and leaving.
+    std::vector<Path> leaving;
+    std::vector<int> leavingTo;
+    for (size_t i = 0; i < moving.size(); ++i) {
+      if (destination[i] == kShadeHere) {
+        ready.push_back(moving[i]);
+      } else if (destination[i] >= 0) {
+        leaving.push_back(moving[i]);
+        leavingTo.push_back(destination[i]);
+      }
+    }
+    stats.times.exchange += secondsSince(start);
+    if (comm_.sum(uint64_t(leaving.size())) == 0) break;
+    std::vector<Path> received = exchange(leaving, leavingTo, counters, stats);
+    moving.clear();
+    for (Path& p : received) {
+      if (p.has(kPathTraversed))
+        ready.push_back(p);
+      else
+        moving.push_back(p);
+    }
+    trace(moving, stats);
+  }
+  rays = std::move(ready);
+}
+
+template <typename Path>
+void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, ExchangeCounters& counters,
+                                                   FrameStats& stats) {
+  const int rank = comm_.rank();
+  const int ranks = comm_.size();
+  trace(rays, stats);  // the origin's own answer
+
+  // 1. A copy of every undecided ray to every other rank.
+  std::vector<Path> copies;
+  std::vector<int> copiesTo;
+  for (const Path& p : rays) {
+    if (p.isShadow() && p.has(kPathOccluded)) continue;
+    for (int r = 0; r < ranks; ++r)
+      if (r != rank) {
+        copies.push_back(p);
+        copiesTo.push_back(r);
+      }
+  }
+  std::vector<Path> received = exchange(copies, copiesTo, counters, stats);
+  trace(received, stats);
+
+  // 2. Every copy goes back to its origin (the one visited rank besides this one).
+  std::vector<int> replyTo(received.size());
+  for (size_t i = 0; i < received.size(); ++i) {
+    received[i].set(kPathReply);
+    replyTo[i] = std::countr_zero(RankMask(received[i].visited & Mask(~rankBit_)));
+  }
+  std::vector<Path> replies = exchange(received, replyTo, counters, stats);
+
+  // The closest hit wins; any occluder occludes. A rank makes at most one path
+  // and one shadow ray per pixel per wavefront, so (pixel, kind) finds the original.
+  auto start = Clock::now();
+  std::unordered_map<uint64_t, size_t> original;
+  original.reserve(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i)
+    original[uint64_t(rays[i].pixel()) * 2 + (rays[i].isShadow() ? 1 : 0)] = i;
+  for (const Path& reply : replies) {
+    auto it = original.find(uint64_t(reply.pixel()) * 2 + (reply.isShadow() ? 1 : 0));
+    FERRY_CHECK(it != original.end());
+    Path& p = rays[it->second];
+    p.visited |= reply.visited;
+    if (p.isShadow()) {
+      if (reply.has(kPathOccluded)) p.set(kPathOccluded);
+    } else if (reply.hasHit() && reply.tmax < p.tmax) {
+      p.tmax = reply.tmax;
+      p.hitOwners = reply.hitOwners;
+    }
+  }
+
+  // 3. Shade where the hit is.
+  std::vector<Path> ready, leaving;
+  std::vector<int> leavingTo;
+  for (Path& p : rays) {
+    int d = decisionToDestination(finishTraversal(p, rank), p, rank);
+    if (d == kShadeHere) {
+      ready.push_back(p);
+    } else if (d >= 0) {
+      leaving.push_back(p);
+      leavingTo.push_back(d);
+    }
+  }
+  stats.times.exchange += secondsSince(start);
+  for (Path& p : exchange(leaving, leavingTo, counters, stats)) ready.push_back(p);
+  rays = std::move(ready);
+}
+
+template class DistributedTraversal<Path8>;
+template class DistributedTraversal<Path64>;
+
+}  // namespace ferry

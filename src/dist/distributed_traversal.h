@@ -1,0 +1,59 @@
+// Ray traversal across ranks (paper, Sections 3 and 5.2). Per round: trace
+// the rays that are here on the local geometry, decide each ray's next rank
+// with the forwarding operator, compact by destination, exchange counts then
+// rays (all-to-all, all-to-all-v), until no ray moves on any rank. What is left
+// on each rank is what it shades.
+#pragma once
+
+#include <vector>
+
+#include "dist/communicator.h"
+#include "dist/forwarding.h"
+#include "partition/partition.h"
+#include "render/ray_traversal.h"
+#include "trace/proxy_bvh.h"
+
+namespace ferry {
+
+// Test-only failure injection (FERRY_FAIL_RANK, FERRY_FAIL_AT): throws or
+// raises a signal on the chosen rank at the named point.
+void maybeInjectFailure(const char* point, int rank);
+
+template <typename Path>
+class DistributedTraversal final : public RayTraversal<Path> {
+ public:
+  DistributedTraversal(const Communicator& comm, const LocalGeometry& geometry, const Partition& partition,
+                       ForwardingMode mode);
+  int rank() const override { return comm_.rank(); }
+  int rankCount() const override { return comm_.size(); }
+  bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const override;
+  void traverse(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats) override;
+  bool anyRaysLeft(size_t localRays) override { return comm_.sum(uint64_t(localRays)) > 0; }
+
+  // Rays that arrived for tracing on a rank they had already visited (must stay 0).
+  uint64_t revisits() const { return revisits_; }
+  // Rays received, counted on the receiving side (an independent count of forwards).
+  uint64_t received() const { return received_; }
+
+ private:
+  using Mask = typename Path::Mask;
+  void traverseForwarding(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats);
+  void traverseBroadcast(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats);
+  // Sends each ray to destination[i] (this rank's rays are not in the list);
+  // returns what this rank received, in rank order.
+  std::vector<Path> exchange(const std::vector<Path>& rays, const std::vector<int>& destination,
+                             ExchangeCounters& counters, FrameStats& stats);
+  void trace(std::vector<Path>& rays, FrameStats& stats);
+
+  const Communicator& comm_;
+  const LocalGeometry& geometry_;
+  ForwardingMode mode_;
+  ProxyBvh proxies_;
+  std::vector<Mask> instanceOwners_;
+  Mask rankBit_;
+  bool firstExchange_ = true;
+  uint64_t revisits_ = 0;
+  uint64_t received_ = 0;
+};
+
+}  // namespace ferry

@@ -1,0 +1,45 @@
+// A partition of a scene over ranks: which ranks own each instance, and the
+// proxies, boxes with an owner mask saying "these ranks have content here".
+//
+// The one invariant the forwarding operator relies on: for every instance,
+// its world bounds are covered by proxies whose owners all hold it. Extra
+// proxies (overlapping, conservative) only cost forwarding, never correctness.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+
+namespace ferry {
+
+struct Scene;
+
+using RankMask = uint64_t;  // bit r: rank r (up to 64 ranks)
+
+struct Proxy {
+  Box3f bounds;
+  RankMask owners = 0;
+};
+
+struct Partition {
+  int ranks = 1;
+  std::vector<RankMask> instanceOwners;  // per Scene::instances entry
+  std::vector<Proxy> proxies;
+
+  std::vector<int32_t> instancesOf(int rank) const;
+  // Throws InternalError if an instance has no owner or is not covered by a
+  // proxy owned only by its owners (see the invariant above).
+  void checkCovers(const Scene& scene) const;
+};
+
+// Instances dealt round-robin, one proxy per instance: the simplest partition,
+// for testing the distributed layer before the real partitioners.
+Partition roundRobinPartition(const Scene& scene, int ranks);
+// Random owners (1 to 3 ranks each: replication), proxies inflated at random,
+// plus random large single-owner proxies that overlap everything: a hostile
+// partition for testing that the image does not depend on it.
+Partition randomPartition(const Scene& scene, int ranks, uint32_t seed);
+
+}  // namespace ferry

@@ -1,0 +1,48 @@
+// A BVH over proxies, on every rank, answering the forwarding operator's
+// question: along this ray, before tmax, which is the closest proxy none of
+// whose owners the ray has visited? Ties in entry distance go to the lower
+// proxy index, so every rank answers identically.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/math.h"
+#include "partition/partition.h"
+
+namespace ferry {
+
+class ProxyBvh {
+ public:
+  ProxyBvh() = default;
+  explicit ProxyBvh(std::vector<Proxy> proxies);
+
+  struct Hit {
+    int32_t proxy = -1;
+    float tEnter = kInfinity;
+    bool found() const { return proxy >= 0; }
+  };
+  // Closest proxy entered in [0, tmax) whose owners do not intersect `excluded`.
+  Hit closest(Vec3f origin, Vec3f direction, float tmax, RankMask excluded) const;
+
+  const std::vector<Proxy>& proxies() const { return proxies_; }
+  size_t nodeCount() const { return nodes_.size(); }
+
+ private:
+  struct Node {
+    Box3f bounds;
+    RankMask ownersUnion = 0;  // lets a subtree whose proxies are all excluded be skipped
+    int32_t left = -1, right = -1;  // children; -1 in a leaf
+    int32_t first = 0, count = 0;   // leaf range in order_
+  };
+  int32_t build(int32_t first, int32_t count, int depth);
+
+  std::vector<Proxy> proxies_;
+  std::vector<int32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+// Slab test; entry distance clamped at 0 (origin inside counts as entering at 0).
+bool intersectBox(const Box3f& box, Vec3f origin, Vec3f inverseDirection, float tmax, float& tEnter);
+
+}  // namespace ferry
