@@ -28,7 +28,9 @@ int main(int argc, char** argv) {
     const char* rank = std::getenv("OMPI_COMM_WORLD_RANK");
     if (!rank) rank = std::getenv("PMI_RANK");
     if (rank && std::atoi(rank) != 0) return e.get_exit_code();
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    fmt::print(stderr, "ferry: error: {} (see ferry --help)\n", e.what());
+    return e.get_exit_code();
   }
   try {
     if (app.got_subcommand("render")) {

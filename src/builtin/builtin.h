@@ -15,8 +15,8 @@
 namespace ferry {
 
 struct BuiltinParams {
-  std::string name;     // "island", "landscape", "cornell", "furnace"
-  double scale = 1.0;   // grows the scene; meaning per built-in (see its header)
+  std::string name;    // "island", "landscape", "cornell", "furnace"
+  double scale = 1.0;  // grows the scene; meaning per built-in (see its header)
   uint32_t seed = 1;
 };
 

@@ -14,6 +14,8 @@
 namespace ferry {
 
 // 8-bit images (PNG, JPEG, TGA, BMP) as RGBA; throws InputError naming the file.
+// Sizes are checked from the header before decoding: over 2^28 pixels, or more
+// pixels than any encoding could pack into the file's size, is an InputError.
 Texture readTexture(const std::string& path);
 // An 8-bit image used as a cut-out mask (MTL map_d): the file's alpha channel
 // when it has one, else its grey value (luma of the encoded RGB) moved into alpha.
@@ -21,6 +23,9 @@ Texture readAlphaTexture(const std::string& path);
 // HDR images (EXR, HDR, PFM) and 8-bit ones (converted to linear) as float RGB.
 // Chosen by extension. Non-finite pixels are an InputError; negative ones are
 // clamped to zero (they are filter ringing, and radiance cannot be negative).
+// EXR: any channels RgbaInputFile understands (RGB, RGBA, Y...), any data
+// window; reading sets OpenEXR's process-wide maximum image and tile size to
+// 65536 so that a damaged header cannot make it allocate gigabytes.
 HdrImage readHdrImage(const std::string& path);
 
 // `rgb` is width*height linear RGB, row 0 at the top.
@@ -32,8 +37,13 @@ struct LinearImage {
   std::vector<Vec3f> rgb;
 };
 void writePng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba);
+// Half-float RGB, ZIP compressed, rounded as core/half.h does (saturating at 65504).
 void writeExr(const std::string& path, const LinearImage& image);
+// "PF", little-endian (scale -1), rows bottom to top as the format says.
 void writePfm(const std::string& path, const LinearImage& image);
+// "PF" (RGB) or "Pf" (grey, replicated to RGB), either byte order; the scale's
+// magnitude is ignored. The file size must match the header exactly (checked
+// before allocating). Values are returned as stored, non-finite ones included.
 LinearImage readPfm(const std::string& path);
 
 // The PNG encoding of a linear image: clamped to [0, 1], sRGB-encoded, rounded
@@ -45,6 +55,10 @@ void writeImage(const std::string& path, const LinearImage& image);
 
 // Runs `write(tempPath)` and renames the result onto `path`; removes the
 // temporary on failure. Throws InputError if the directory is not writable.
-void writeFileAtomically(const std::string& path, const std::function<void(const std::string&)>& write);
+// The temporary is ".NAME.tmp.PID.N" in the target's directory (so the rename is
+// atomic), created before `write` runs, and fsync'ed before the rename. Whatever
+// `write` throws is rethrown after the cleanup; the target is then untouched.
+void writeFileAtomically(const std::string& path,
+                         const std::function<void(const std::string&)>& write);
 
 }  // namespace ferry

@@ -129,10 +129,33 @@ std::vector<Path> WavefrontRenderer<Path>::shade(const std::vector<Path>& rays, 
   // in order afterwards, so the next wavefront's order is deterministic.
   std::vector<Path> spawned(rays.size() * 2);
   std::vector<uint8_t> live(rays.size() * 2, 0);
-  std::atomic<uint64_t> retraces{0}, retraceMisses{0};
+  std::atomic<uint64_t> retraceMisses{0};
+
+  // Re-trace every path that hit something, to recover the full hit, as one
+  // batched query (the same kind of query that found it, so the same hit is
+  // found). Embree accepts a hit only somewhat inside tfar, with an error that
+  // scales with the coordinates, not with t (measured: tfar = t, t + 1e-6
+  // relative, or t * 1.001 at t = 0.016 in a 555-unit box can all miss it), so
+  // search past tmax by a margin of both kinds; nothing closer than the
+  // recorded hit exists, so the closest hit found is the same one.
+  std::vector<TraceRay> retrace(rays.size());
+  std::vector<TraceHit> hits(rays.size());
+  std::vector<uint32_t> retraced;
+  for (uint32_t i = 0; i < rays.size(); ++i)
+    if (!rays[i].isShadow() && rays[i].hasHit()) {
+      const Vec3f o = rays[i].origin;
+      const float scale = std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z), 1.0f});
+      retrace[retraced.size()] = {o, rays[i].dir(), 0, rays[i].tmax * 1.001f + 1e-4f * scale};
+      retraced.push_back(i);
+    }
+  {
+    std::vector<TraceHit> found(retraced.size());
+    geometry_.intersect(std::span(retrace.data(), retraced.size()), found);
+    for (size_t k = 0; k < retraced.size(); ++k) hits[retraced[k]] = found[k];
+  }
 
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 256), [&](const auto& range) {
-    uint64_t localRetraces = 0, localMisses = 0;
+    uint64_t localMisses = 0;
     for (size_t i = range.begin(); i != range.end(); ++i) {
       const Path& path = rays[i];
       if (path.isShadow()) continue;
@@ -150,11 +173,7 @@ std::vector<Path> WavefrontRenderer<Path>::shade(const std::vector<Path>& rays, 
         continue;
       }
 
-      // Re-trace to recover the full hit; a few ulps past tmax so the same
-      // surface is found again.
-      ++localRetraces;
-      TraceRay ray{path.origin, dir, 0, std::nextafter(path.tmax, kInfinity) * (1 + 1e-6f)};
-      TraceHit hit = geometry_.intersect(ray);
+      const TraceHit& hit = hits[i];
       if (!hit.valid()) {
         ++localMisses;
         continue;
@@ -219,7 +238,6 @@ std::vector<Path> WavefrontRenderer<Path>::shade(const std::vector<Path>& rays, 
       spawned[2 * i] = makeRay<Path>(origin, wi, kInfinity, next, pixel, bs.delta ? uint32_t(kPathAfterSpecular) : 0u);
       live[2 * i] = 1;
     }
-    retraces += localRetraces;
     retraceMisses += localMisses;
   });
 
@@ -233,7 +251,7 @@ std::vector<Path> WavefrontRenderer<Path>::shade(const std::vector<Path>& rays, 
     else
       ++stats.continuationRays;
   }
-  stats.retraces += retraces;
+  stats.retraces += retraced.size();
   stats.retraceMisses += retraceMisses;
   stats.times.shade += secondsSince(start);
   return next;

@@ -1,0 +1,85 @@
+// A built-in scene as a recipe: every mesh with its exact counts and a
+// function that makes it, every object, every batch of instances with a
+// function that places instance i, every texture with its size and a function
+// that paints it. Describing a plan only adds up numbers, so `ferry info` on
+// a scene of 1e10 instanced triangles is instant; materializing runs all the
+// functions (in parallel, each a pure function of the plan) and yields a
+// Scene whose summary equals the description.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "builtin/shapes.h"
+#include "scene/scene.h"
+#include "scene/scene_summary.h"
+
+namespace ferry::builtin {
+
+struct MeshRecipe {
+  std::string name;
+  int32_t material = 0;
+  MeshCounts counts;
+  bool hasNormals = true;
+  bool hasUvs = true;
+  // Makes positions, normals, uvs and indices; the name and material are set
+  // from the recipe. Must produce exactly `counts`.
+  std::function<Mesh()> build;
+};
+
+struct TextureRecipe {
+  std::string name;
+  int width = 0;
+  int height = 0;
+  std::function<Texture()> build;  // must produce width x height texels
+};
+
+struct ObjectRecipe {
+  std::string name;
+  std::vector<int32_t> meshes;
+};
+
+// `count` instances of one object; `transform(i)` places instance i and must
+// be a pure function of i, so instances can be made in any order or in parallel.
+struct InstanceBatch {
+  int32_t object = 0;
+  uint64_t count = 0;
+  std::function<Affine3f(uint64_t)> transform;
+};
+
+struct ScenePlan {
+  std::string name;
+  std::vector<Material> materials;
+  std::vector<TextureRecipe> textures;
+  std::vector<MeshRecipe> meshes;
+  std::vector<ObjectRecipe> objects;
+  std::vector<InstanceBatch> batches;
+  std::vector<SunLight> suns;
+  Vec3f environmentColor{0, 0, 0};
+  std::function<std::shared_ptr<const HdrImage>()> environmentImage;  // optional
+  std::vector<CameraView> views;
+  // The world bounds of everything the plan makes. Each generator guarantees
+  // by construction that its content spans exactly this box (some vertex
+  // touches each face), without making the content to find out.
+  Box3f bounds;
+
+  int32_t addMaterial(Material m);
+  int32_t addTexture(TextureRecipe t);
+  int32_t addMesh(MeshRecipe m);
+  int32_t addObject(std::string objectName, std::vector<int32_t> meshIndices);
+  void addInstances(int32_t object, uint64_t count, std::function<Affine3f(uint64_t)> transform);
+  // A mesh that is its own object, placed once with the identity transform.
+  int32_t addSingleInstanceMesh(MeshRecipe m);
+
+  MeshCounts objectCounts(int32_t object) const;
+  uint64_t instanceCount() const;
+};
+
+SceneSummary describePlan(const ScenePlan& plan);
+// Throws InternalError if a recipe makes something other than it promised.
+Scene materializePlan(const ScenePlan& plan);
+
+}  // namespace ferry::builtin

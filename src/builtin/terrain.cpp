@@ -1,0 +1,67 @@
+#include "builtin/terrain.h"
+
+#include <vector>
+
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+
+namespace ferry::builtin {
+
+MeshCounts terrainCounts(const TerrainGrid& grid) {
+  return gridCounts(grid.segments, grid.segments);
+}
+
+Mesh buildTerrain(const TerrainGrid& grid, const HeightFunction& height) {
+  FERRY_CHECK(grid.segments >= 1);
+  const int n = grid.segments;
+  const int stride = n + 1;
+  const size_t vertexCount = size_t(stride) * size_t(stride);
+  Mesh mesh;
+  mesh.positions.resize(vertexCount);
+  mesh.normals.resize(vertexCount);
+  mesh.uvs.resize(vertexCount);
+  mesh.indices.resize(2 * size_t(n) * size_t(n));
+
+  tbb::parallel_for(0, stride, [&](int j) {
+    const float z = grid.z(j);
+    for (int i = 0; i < stride; ++i) {
+      const float x = grid.x(i);
+      bool boundary = i == 0 || j == 0 || i == n || j == n;
+      float y = boundary && grid.hasSkirt() ? grid.skirtY : height(x, z);
+      size_t v = size_t(j) * stride + i;
+      mesh.positions[v] = {x, y, z};
+      mesh.uvs[v] = grid.uvAt(x, z);
+    }
+  });
+  tbb::parallel_for(0, stride, [&](int j) {
+    for (int i = 0; i < stride; ++i) {
+      auto at = [&](int ii, int jj) {
+        return mesh.positions[size_t(std::clamp(jj, 0, n)) * stride + std::clamp(ii, 0, n)];
+      };
+      Vec3f dx = at(i + 1, j) - at(i - 1, j);
+      Vec3f dz = at(i, j + 1) - at(i, j - 1);
+      Vec3f normal = cross(dz, dx);  // +y for a flat grid: z x x = y
+      float len = length(normal);
+      mesh.normals[size_t(j) * stride + i] = len > 0 ? normal / len : Vec3f(0, 1, 0);
+    }
+  });
+  tbb::parallel_for(0, n, [&](int j) {
+    for (int i = 0; i < n; ++i) {
+      int32_t v00 = j * stride + i, v01 = v00 + stride;
+      size_t t = 2 * (size_t(j) * n + i);
+      // Counter-clockwise seen from above, so the geometric normal is +y.
+      mesh.indices[t] = {v00, v01, v01 + 1};
+      mesh.indices[t + 1] = {v00, v01 + 1, v00 + 1};
+    }
+  });
+  return mesh;
+}
+
+Vec3f heightNormal(const HeightFunction& height, float x, float z, float eps) {
+  float dhdx = (height(x + eps, z) - height(x - eps, z)) / (2 * eps);
+  float dhdz = (height(x, z + eps) - height(x, z - eps)) / (2 * eps);
+  return normalize(Vec3f(-dhdx, 1, -dhdz));
+}
+
+}  // namespace ferry::builtin
