@@ -6,6 +6,10 @@
 # absolute): the ranks trace bit-identical rays and find the same hits, so
 # only the order in which partial frame buffers are summed differs; with at
 # most a few hundred float additions per pixel that is far below 1e-4.
+# One exception, allowed in at most 0.2% of the pixels: a ray that meets two
+# surfaces at exactly the same distance (seams where instances touch, as in
+# the Cornell box's corners) gets whichever the traversal order finds first,
+# and that order depends on how the content is split over ranks.
 # Also: no ray ever visits a rank twice, and rays forwarded (counted by the
 # senders) equal rays received (counted by the receivers).
 set -euo pipefail
@@ -40,7 +44,7 @@ run_scene() {
         mpirun_n "$ranks" "$ferry" render "$scene" $args --seed 3 -q --threads 1 \
           --forwarding "$forwarding" --partition "$partition" -o "$out" --stats "$out.json"
         echo "ranks $ranks, $forwarding, $partition:"
-        $compare "$work/ref.pfm" "$out"
+        $compare "$work/ref.pfm" "$out" --outliers 0.002
         check_stats "$out.json"
       done
     done

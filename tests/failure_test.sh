@@ -34,10 +34,10 @@ expect_failure() {  # name, expected message fragment, command...
 
 for point in load exchange composite; do
   FERRY_FAIL_RANK=1 FERRY_FAIL_AT=$point expect_failure "exception at $point on rank 1" \
-    "rank 1: injected failure at $point" mpirun_n 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
+    "rank 1: injected failure at $point" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
 done
 FERRY_FAIL_RANK=2 FERRY_FAIL_AT=signal-exchange expect_failure "signal at first exchange on rank 2" \
-  "" mpirun_n 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
+  "process rank 2" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
 
 # Errors every rank meets: one message, not one per rank.
 one_message() {  # name, fragment, command...
@@ -48,12 +48,12 @@ one_message() {  # name, fragment, command...
   n=$(grep -c "ferry: error\|Error:\|ERROR:" "$work/stderr")
   if [ "$n" -ne 1 ]; then fail "$name: $n error messages instead of 1"; cat "$work/stderr"; fi
 }
-one_message "missing scene" "no such file" mpirun_n 3 "$ferry" render "$work/missing.obj" "${args[@]}" -o "$work/out.png"
-one_message "unknown builtin" "builtin" mpirun_n 3 "$ferry" render "builtin:nowhere" "${args[@]}" -o "$work/out.png"
-one_message "unknown view" "view" mpirun_n 3 "$ferry" render "$scene" --view nowhere "${args[@]}" -o "$work/out.png"
-one_message "bad size" "--size" mpirun_n 3 "$ferry" render "$scene" --size 12by3 -q -o "$work/out.png"
-one_message "bad flag" "--no-such-flag" mpirun_n 3 "$ferry" render "$scene" --no-such-flag -o "$work/out.png"
-one_message "bad output format" "unknown image format" mpirun_n 2 "$ferry" render "$scene" "${args[@]}" -o "$work/out.gif"
+one_message "missing scene" "no such file" mpirun --oversubscribe -np 3 "$ferry" render "$work/missing.obj" "${args[@]}" -o "$work/out.png"
+one_message "unknown builtin" "builtin" mpirun --oversubscribe -np 3 "$ferry" render "builtin:nowhere" "${args[@]}" -o "$work/out.png"
+one_message "unknown view" "view" mpirun --oversubscribe -np 3 "$ferry" render "$scene" --view nowhere "${args[@]}" -o "$work/out.png"
+one_message "bad size" "--size" mpirun --oversubscribe -np 3 "$ferry" render "$scene" --size 12by3 -q -o "$work/out.png"
+one_message "bad flag" "--no-such-flag" mpirun --oversubscribe -np 3 "$ferry" render "$scene" --no-such-flag -o "$work/out.png"
+one_message "bad output format" "unknown image format" mpirun --oversubscribe -np 2 "$ferry" render "$scene" "${args[@]}" -o "$work/out.gif"
 
 if [ $failures -ne 0 ]; then echo "failure_test: $failures failures"; exit 1; fi
 echo "failure_test: all passed"

@@ -645,7 +645,10 @@ class ObjBuilder {
     callbacks.group_cb = [](void* self, const char** names, int count) {
       static_cast<ObjBuilder*>(self)->guard([&](ObjBuilder& b) {
         std::string shape;
-        for (int i = 0; i < count; ++i) shape += (i ? " " : "") + std::string(names[i]);
+        for (int i = 0; i < count; ++i) {
+          if (i > 0) shape.push_back(' ');
+          shape.append(names[i]);
+        }
         b.setShape(shape);
       });
     };
