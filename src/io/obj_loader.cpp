@@ -203,7 +203,6 @@ struct TextureRef {
 
 struct MtlMaterial {
   std::string name;
-  SourceLocation where;
   std::set<std::string, std::less<>> keys;  // statements present: values from tinyobj
   bool greyKd = false, greyKs = false, greyKe = false, greyTf = false;  // one value given
   std::optional<TextureRef> mapKd, mapD;
@@ -334,7 +333,6 @@ class MaterialLibrary {
         materials.push_back({});
         current = &materials.back();
         current->name = name;
-        current->where = reader.where();
         // The first definition wins, as in tinyobjloader.
         byName_.emplace(name, int32_t(materials.size() - 1));
         continue;
@@ -625,6 +623,11 @@ class ObjBuilder {
     callbacks.vertex_cb = [](void* self, tinyobj::real_t x, tinyobj::real_t y, tinyobj::real_t z,
                              tinyobj::real_t) {
       static_cast<ObjBuilder*>(self)->guard([&](ObjBuilder& b) {
+        // Validation accepted only finite floats; this guards against the two
+        // number parsers disagreeing.
+        if (!isFinite(Vec3f(x, y, z)))
+          throw InputError(
+              fmt::format("{}: vertex {} is not finite", b.path_, b.positions_.size() + 1));
         b.positions_.push_back({x, y, z});
       });
     };
