@@ -385,7 +385,11 @@ ScenePlan planIsland(double scale, uint32_t seed) {
     water.baseColor = {0.9f, 0.97f, 1.0f};
     water.transmission = 1;
     water.ior = 1.33f;
-    water.roughness = 0;
+    // Slightly rough: light reaches a diffuse seabed under a perfectly smooth
+    // surface only by caustic paths, which a path tracer with light sampling
+    // finds by chance (white speckles on black); a rough surface takes light
+    // samples itself, so the sea reads as sky and sun reflected on dark water.
+    water.roughness = 0.12f;
     mat.ocean = plan.addMaterial(water);
   }
   mat.seabed = material("seabed", kDeepSeabed);
