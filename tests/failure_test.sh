@@ -37,7 +37,7 @@ for point in load exchange composite; do
     "rank 1: injected failure at $point" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
 done
 FERRY_FAIL_RANK=2 FERRY_FAIL_AT=signal-exchange expect_failure "signal at first exchange on rank 2" \
-  "process rank 2" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
+  "ferry: rank 2 died of SIGSEGV" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
 
 # Errors every rank meets: one message, not one per rank.
 one_message() {  # name, fragment, command...

@@ -1,4 +1,4 @@
-// The `ferry` command: subcommands render and info.
+// The `ferry` command: subcommands render, info and partition.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
@@ -6,6 +6,7 @@
 #include <exception>
 
 #include "app/info_command.h"
+#include "app/partition_command.h"
 #include "app/render_command.h"
 #include "core/error.h"
 #include "dist/communicator.h"
@@ -19,8 +20,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   RenderOptions renderOptions;
   InfoOptions infoOptions;
+  PartitionCommandOptions partitionOptions;
   addRenderCommand(app, renderOptions);
   addInfoCommand(app, infoOptions);
+  addPartitionCommand(app, partitionOptions);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -35,9 +38,11 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("render")) {
       Communicator comm(&argc, &argv);
+      comm.reportFatalSignals();
       return runRender(renderOptions, comm);
     }
     if (app.got_subcommand("info")) return runInfo(infoOptions);
+    if (app.got_subcommand("partition")) return runPartition(partitionOptions);
   } catch (const InputError& e) {
     fmt::print(stderr, "ferry: error: {}\n", e.what());
     return 1;

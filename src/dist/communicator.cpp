@@ -4,11 +4,32 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <unistd.h>
 #include <stdexcept>
 
 namespace ferry {
 namespace {
+
+// Written by the signal handler with write(2): no allocation there.
+char gSignalMessage[128];
+
+void onFatalSignal(int signal) {
+  const char* name = signal == SIGSEGV   ? "SIGSEGV"
+                     : signal == SIGBUS  ? "SIGBUS"
+                     : signal == SIGFPE  ? "SIGFPE"
+                     : signal == SIGILL  ? "SIGILL"
+                     : signal == SIGABRT ? "SIGABRT"
+                                         : "a signal";
+  ssize_t ignored = write(STDERR_FILENO, gSignalMessage, strlen(gSignalMessage));
+  ignored = write(STDERR_FILENO, name, strlen(name));
+  ignored = write(STDERR_FILENO, "\n", 1);
+  (void)ignored;
+  std::signal(signal, SIG_DFL);
+  std::raise(signal);
+}
 
 void check(int code, const char* what) {
   if (code != MPI_SUCCESS) throw std::runtime_error(fmt::format("MPI failed in {} (code {})", what, code));
@@ -139,6 +160,11 @@ bool Communicator::agreeOnFailure(bool failed, const std::string& message) const
     std::fflush(stderr);
   }
   return true;
+}
+
+void Communicator::reportFatalSignals() const {
+  std::snprintf(gSignalMessage, sizeof(gSignalMessage), "ferry: rank %d died of ", rank_);
+  for (int s : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) std::signal(s, onFatalSignal);
 }
 
 void Communicator::abortAll(const std::string& message, int code) const {

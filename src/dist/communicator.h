@@ -46,6 +46,10 @@ class Communicator {
   // Collective: true if any rank failed; then rank 0 prints one message (the
   // failing ranks' messages, merged when identical) to stderr.
   bool agreeOnFailure(bool failed, const std::string& message) const;
+  // Makes a fatal signal on this rank (segfault, bus error, abort, ...) print
+  // "ferry: rank R died of SIGNAME" before the default action, so the user
+  // learns which rank failed; mpirun then ends the others.
+  void reportFatalSignals() const;
   // Prints "ferry: error on rank R: message" and ends every rank (MPI_Abort).
   [[noreturn]] void abortAll(const std::string& message, int code = 1) const;
 
