@@ -19,10 +19,14 @@ void addInfoCommand(CLI::App& app, InfoOptions& options) {
                    "builtin:furnace; parameters as builtin:island?scale=4&seed=7)")
       ->capture_default_str();
   info->add_flag("--json", options.json, "Print JSON instead of a table");
+  info->add_flag("--env-fallback", options.envFallback,
+                 "Describe a scene whose environment map is missing (as render --env-fallback)");
 }
 
 int runInfo(const InfoOptions& options) {
-  SceneSummary summary = describeScene(options.scene);
+  LoadOptions load;
+  load.envFallback = options.envFallback;
+  SceneSummary summary = describeScene(options.scene, load);
   if (options.json)
     fmt::print("{}\n", summary.toJson().dump(2));
   else

@@ -12,6 +12,7 @@ namespace ferry {
 struct InfoOptions {
   std::string scene = "builtin:island";
   bool json = false;
+  bool envFallback = false;  // --env-fallback, as for render
 };
 
 void addInfoCommand(CLI::App& app, InfoOptions& options);

@@ -5,13 +5,16 @@
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
 
 #include "app/image_output.h"
+#include "app/partition_command.h"
 #include "app/progress.h"
 #include "core/error.h"
 #include "core/process_memory.h"
@@ -20,7 +23,9 @@
 #include "dist/distributed_traversal.h"
 #include "io/image_io.h"
 #include "io/scene_loader.h"
+#include "partition/part_directory.h"
 #include "partition/partition.h"
+#include "partition/partitioner.h"
 #include "render/lights.h"
 #include "render/path.h"
 #include "render/wavefront_renderer.h"
@@ -40,12 +45,6 @@ void validate(const RenderOptions& o) {
   if (o.threads < 0) throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
   checkOutputPath(o.output);
   parseForwardingMode(o.forwarding);
-}
-
-Partition makePartition(const std::string& name, const Scene& scene, int ranks, uint32_t seed) {
-  if (name == "round-robin") return roundRobinPartition(scene, ranks);
-  if (name == "random") return randomPartition(scene, ranks, seed);
-  throw InputError(fmt::format("--partition '{}': expected round-robin or random", name));
 }
 
 // Everything a rank holds once set up.
@@ -112,18 +111,68 @@ FrameStats reduceFrameStats(const Communicator& comm, const FrameStats& mine) {
   return out;
 }
 
+// How this rank loads a scene file: only rank 0 speaks (warnings, progress).
+LoadOptions sceneLoadOptions(const RenderOptions& o, const Communicator& comm) {
+  LoadOptions l;
+  l.envFallback = o.envFallback;
+  if (!comm.isRoot()) {
+    l.warn = [](const std::string&) {};
+  } else if (!o.quiet) {
+    l.progress = [last = -1](uint64_t done, uint64_t total, const std::string& what) mutable {
+      int tenth = total ? int(10 * done / total) : 10;
+      if (tenth == last) return;
+      last = tenth;
+      fmt::print(stderr, "load: {}% of {}\n", tenth * 10, what);
+    };
+  }
+  return l;
+}
+
+// The image size and file a scene asks for (pbrt's Film) when the command
+// line does not say.
+void applySceneDefaults(const Scene& scene, RenderOptions& o, RenderSettings& settings) {
+  if (!o.sizeGiven && scene.filmWidth && scene.filmHeight) {
+    o.size = fmt::format("{}x{}", *scene.filmWidth, *scene.filmHeight);
+    parseImageSize(o.size, settings.width, settings.height);
+  }
+  if (!o.outputGiven && !scene.filmFilename.empty()) {
+    std::string ext = std::filesystem::path(scene.filmFilename).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".png" || ext == ".exr" || ext == ".pfm") {
+      o.output = scene.filmFilename;
+      checkOutputPath(o.output);
+    } else {
+      fmt::print(stderr, "ferry: warning: the scene's output file {} has an unsupported format; writing {}\n",
+                 scene.filmFilename, o.output);
+    }
+  }
+}
+
 // Fills `s` in place: the Embree structures refer to its scene, so it must not move afterwards.
 void setUp(const RenderOptions& o, const RenderSettings& settings, const Communicator& comm, RankSetup& s) {
   auto start = Clock::now();
-  s.scene = loadScene(o.scene);
-  s.scene.view(settings.view);  // fail on an unknown view before building anything
-  s.summary = summarize(s.scene);
-  s.partition = makePartition(o.partition, s.scene, comm.size(), o.seed);
-  s.owned = s.partition.instancesOf(comm.rank());
+  if (isPartDirectory(o.scene)) {
+    // A part directory: this rank reads only its own part and the shared data.
+    RankPart part = loadRankPart(o.scene, comm.rank(), comm.size());
+    s.scene = std::move(part.scene);
+    s.scene.view(settings.view);
+    s.summary = summaryFromJson(part.manifest.summary);
+    s.partition = std::move(part.partition);
+    s.owned.resize(s.scene.instances.size());
+    for (size_t i = 0; i < s.owned.size(); ++i) s.owned[i] = int32_t(i);
+    s.lights = std::make_unique<LightSampler>(part.lights);
+  } else {
+    s.scene = loadScene(o.scene, sceneLoadOptions(o, comm));
+    s.scene.view(settings.view);  // fail on an unknown view before building anything
+    s.summary = summarize(s.scene);
+    // Light data is small and needed everywhere: take it from the scene as
+    // given, before the partitioner rewrites it and ranks release geometry.
+    s.lights = std::make_unique<LightSampler>(s.scene);
+    s.partition = partitionScene(s.scene, comm.size(), renderPartitionerOptions(o));
+    s.owned = s.partition.instancesOf(comm.rank());
+    s.scene.releaseAllBut(s.owned);
+  }
   s.ownedEstimate = ownedMemory(s.scene, s.owned);
-  // Light data is small and needed everywhere: take it before releasing geometry.
-  s.lights = std::make_unique<LightSampler>(s.scene);
-  s.scene.releaseAllBut(s.owned);
   s.loadSeconds = secondsSince(start);
   maybeInjectFailure("load", comm.rank());
   auto build = Clock::now();
@@ -282,19 +331,37 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
                      "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
                      "wins, as Kilauea)")
       ->capture_default_str();
-  render->add_option("--partition", o.partition,
-                     "How instances are dealt to ranks: round-robin (one proxy per instance) or random\n"
-                     "(random replication and overlapping proxies; for testing)")
+  render->add_option("--partitioner,--partition", o.partition,
+                     "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
+                     "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
+                     "round-robin, random (for testing). Not used for a part directory.")
       ->capture_default_str();
+  render->add_flag("--keep-objects-whole", o.keepObjectsWhole,
+                   "Partitioners keep non-instanced content whole (default: broken into meshes)");
+  render->add_option("--replication-budget", o.replicationBudget,
+                     "best: copies of large, cheap content may add this fraction of the scene's bytes")
+      ->capture_default_str();
+  render->add_flag("--show-partition{-1}", o.showPartition,
+                   "Instead of rendering, draw what each rank owns (replicated content checkerboarded)\n"
+                   "and the proxies as box outlines, to -o (PNG); =N: for N ranks (default: the MPI ranks)");
   render->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
+  render->add_flag("--env-fallback", o.envFallback,
+                   "Render a scene whose environment map is missing with a constant white\n"
+                   "environment instead (the file is named in a warning)");
+  render->callback([&o, render]() {
+    o.sizeGiven = render->get_option("--size")->count() > 0;
+    o.outputGiven = render->get_option("--output")->count() > 0;
+  });
 }
 
 int runRender(const RenderOptions& o, const Communicator& comm) {
+  if (o.showPartition != 0) return runShowPartition(o, comm);
   auto start = Clock::now();
   RenderSettings settings;
   std::unique_ptr<tbb::global_control> threadLimit;
   std::optional<RankSetup> setup;
   std::string error;
+  RenderOptions effective = o;  // with the scene's own size and output file where none was given
   try {
     validate(o);
     if (comm.size() > 64)
@@ -311,6 +378,7 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
     Progress loading("load", 1, comm.isRoot() && !o.quiet);
     loading.update(0, o.scene);
     setUp(o, settings, comm, setup.emplace());
+    applySceneDefaults(setup->scene, effective, settings);
     loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", setup->loadSeconds, setup->buildSeconds));
   } catch (const std::exception& e) {
     error = e.what();
@@ -319,8 +387,8 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
   if (comm.agreeOnFailure(!error.empty(), error)) return 1;
 
   try {
-    if (comm.size() <= 8) return renderOnRanks<Path8>(o, settings, *setup, comm, start);
-    return renderOnRanks<Path64>(o, settings, *setup, comm, start);
+    if (comm.size() <= 8) return renderOnRanks<Path8>(effective, settings, *setup, comm, start);
+    return renderOnRanks<Path64>(effective, settings, *setup, comm, start);
   } catch (const InputError& e) {
     // Only rank 0 writes files, after every collective: the others have finished.
     if (comm.isRoot()) {

@@ -25,8 +25,21 @@ struct RenderOptions {
   std::string statsPath;
   float exposure = 0;
   bool quiet = false;
+  // --env-fallback: a missing environment map becomes a constant light.
+  bool envFallback = false;
+  // Whether --size / -o were given; if not, a scene's own (pbrt's Film) apply.
+  bool sizeGiven = false;
+  bool outputGiven = false;
   std::string forwarding = "proxies";
+  // --partitioner (alias --partition): a name from partition/partitioner.h,
+  // made on the fly (every rank runs the same deterministic partitioner).
+  // Ignored when the scene is a part directory (ferry partition -o DIR).
   std::string partition = "round-robin";
+  bool keepObjectsWhole = false;
+  double replicationBudget = 0.05;
+  // --show-partition[=N]: draw the partition instead of rendering (0: off;
+  // -1: for as many ranks as MPI runs; N: for N ranks).
+  int showPartition = 0;
 };
 
 void addRenderCommand(CLI::App& app, RenderOptions& options);

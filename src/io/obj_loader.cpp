@@ -24,6 +24,7 @@
 #include <tiny_obj_loader.h>
 
 #include "core/error.h"
+#include "io/default_lighting.h"
 #include "io/image_io.h"
 
 namespace ferry {
@@ -919,30 +920,6 @@ class MaterialConverter {
   int32_t defaultMaterial_ = -1;
   std::unordered_map<std::string, int32_t> textures_;
 };
-
-void addDefaultViewAndLights(Scene& scene) {
-  Box3f bounds = scene.worldBounds();
-  CameraView view;
-  view.name = "default";
-  view.fovY = 45.0f;
-  view.at = bounds.center();
-  float radius = 0.5f * length(bounds.size());
-  if (!(radius > 0) || !std::isfinite(radius)) radius = 1;
-  // The bounding sphere fits the vertical field of view.
-  float distance = radius / std::sin(0.5f * view.fovY * kPi / 180.0f);
-  view.from = view.at + Vec3f(0, 0, distance);
-  view.up = {0, 1, 0};
-  scene.views.push_back(view);
-
-  bool emissive = std::any_of(scene.materials.begin(), scene.materials.end(),
-                              [](const Material& m) { return m.isEmissive(); });
-  if (!emissive) {
-    SunLight sun;
-    sun.direction = normalize(Vec3f(0.4f, 1.0f, 0.6f));
-    scene.suns.push_back(sun);
-    scene.environment.color = Vec3f(0.5f);
-  }
-}
 
 }  // namespace
 

@@ -7,7 +7,10 @@
 
 #include "builtin/builtin.h"
 #include "core/error.h"
+#include "io/gltf_loader.h"
 #include "io/obj_loader.h"
+#include "io/pbrt_parser.h"
+#include "io/ply_reader.h"
 
 namespace ferry {
 namespace {
@@ -20,24 +23,31 @@ std::string lowerExtension(const std::string& path) {
 
 }  // namespace
 
-Scene loadScene(const std::string& spec) {
+Scene loadScene(const std::string& spec, const LoadOptions& options) {
   if (isBuiltinSpec(spec)) return generateBuiltin(parseBuiltinSpec(spec));
   if (!std::filesystem::exists(spec)) throw InputError(fmt::format("{}: no such file", spec));
   std::string ext = lowerExtension(spec);
   Scene scene;
   if (ext == ".obj") {
     scene = loadObj(spec);
+  } else if (ext == ".ply") {
+    scene = loadPlyScene(spec, options);
+  } else if (ext == ".pbrt") {
+    scene = loadPbrt(spec, options);
+  } else if (ext == ".gltf" || ext == ".glb") {
+    scene = loadGltf(spec, options);
   } else {
-    throw InputError(fmt::format("{}: unsupported scene format '{}' (supported: .obj, builtin:NAME)",
-                                 spec, ext));
+    throw InputError(fmt::format(
+        "{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, builtin:NAME)",
+        spec, ext));
   }
   scene.validate();
   return scene;
 }
 
-SceneSummary describeScene(const std::string& spec) {
+SceneSummary describeScene(const std::string& spec, const LoadOptions& options) {
   if (isBuiltinSpec(spec)) return describeBuiltin(parseBuiltinSpec(spec));
-  return summarize(loadScene(spec));
+  return summarize(loadScene(spec, options));
 }
 
 }  // namespace ferry

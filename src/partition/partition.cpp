@@ -2,22 +2,115 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
+#include <numeric>
 
 #include "core/error.h"
 #include "core/random.h"
+#include "partition/units.h"
 #include "scene/scene.h"
 
 namespace ferry {
 namespace {
 
-std::vector<Box3f> instanceWorldBounds(const Scene& scene) {
-  std::vector<Box3f> objectBounds(scene.objects.size());
-  for (size_t o = 0; o < scene.objects.size(); ++o) objectBounds[o] = scene.objectBounds(int32_t(o));
-  std::vector<Box3f> bounds(scene.instances.size());
-  for (size_t i = 0; i < scene.instances.size(); ++i)
-    bounds[i] = scene.instances[i].transform.transformBox(objectBounds[scene.instances[i].object]);
-  return bounds;
+// Which proxies overlap a box: a small median-split tree over proxy boxes.
+class ProxyOverlapTree {
+ public:
+  explicit ProxyOverlapTree(const std::vector<Proxy>& proxies) : proxies_(proxies), order_(proxies.size()) {
+    std::iota(order_.begin(), order_.end(), 0u);
+    if (order_.empty()) return;
+    nodes_.resize(1);
+    build(0, 0, uint32_t(order_.size()));
+  }
+  // Indices of proxies overlapping `box` (closed boxes), ascending.
+  std::vector<uint32_t> overlapping(const Box3f& box) const {
+    std::vector<uint32_t> out;
+    if (nodes_.empty()) return out;
+    std::vector<uint32_t> stack = {0};
+    while (!stack.empty()) {
+      const Node& n = nodes_[stack.back()];
+      stack.pop_back();
+      if (!n.bounds.overlaps(box)) continue;
+      if (n.left < 0) {
+        for (uint32_t k = n.first; k < n.first + n.count; ++k)
+          if (proxies_[order_[k]].bounds.overlaps(box)) out.push_back(order_[k]);
+      } else {
+        stack.push_back(uint32_t(n.left));
+        stack.push_back(uint32_t(n.left + 1));
+      }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+
+ private:
+  struct Node {
+    Box3f bounds;
+    int32_t left = -1;  // children at left, left + 1
+    uint32_t first = 0, count = 0;
+  };
+  // Fills nodes_[slot] with the subtree over order_[first, first + count).
+  void build(uint32_t slot, uint32_t first, uint32_t count) {
+    Box3f bounds, centres;
+    for (uint32_t k = first; k < first + count; ++k) {
+      bounds.extend(proxies_[order_[k]].bounds);
+      centres.extend(proxies_[order_[k]].bounds.center());
+    }
+    nodes_[slot].bounds = bounds;
+    if (count <= 8) {
+      nodes_[slot].first = first;
+      nodes_[slot].count = count;
+      return;
+    }
+    const int axis = centres.longestAxis();
+    const uint32_t mid = first + count / 2;
+    std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + first + count,
+                     [&](uint32_t a, uint32_t b) {
+                       float ca = proxies_[a].bounds.center()[axis], cb = proxies_[b].bounds.center()[axis];
+                       return ca < cb || (ca == cb && a < b);
+                     });
+    const int32_t left = int32_t(nodes_.size());
+    nodes_.resize(nodes_.size() + 2);
+    nodes_[slot].left = left;
+    build(uint32_t(left), first, mid - first);
+    build(uint32_t(left + 1), mid, first + count - mid);
+  }
+
+  const std::vector<Proxy>& proxies_;
+  std::vector<uint32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+// Is `box` inside the union of the candidate boxes? Subtracts one overlapping
+// candidate at a time and recurses on the (up to 6) pieces left. `budget`
+// bounds the work; when it runs out the answer is "not shown" (false).
+bool coveredByUnion(const Box3f& box, const std::vector<const Box3f*>& candidates, size_t from, int64_t& budget) {
+  if (--budget < 0) return false;
+  for (size_t k = from; k < candidates.size(); ++k)
+    if (candidates[k]->contains(box)) return true;
+  for (size_t k = from; k < candidates.size(); ++k) {
+    const Box3f& c = *candidates[k];
+    if (!c.overlaps(box)) continue;
+    // box minus c: slabs below and above c along each axis, then narrow.
+    Box3f rest = box;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (rest.lower[axis] < c.lower[axis]) {
+        Box3f piece = rest;
+        piece.upper[axis] = c.lower[axis];
+        if (!coveredByUnion(piece, candidates, k + 1, budget)) return false;
+        rest.lower[axis] = c.lower[axis];
+      }
+      if (rest.upper[axis] > c.upper[axis]) {
+        Box3f piece = rest;
+        piece.lower[axis] = c.upper[axis];
+        if (!coveredByUnion(piece, candidates, k + 1, budget)) return false;
+        rest.upper[axis] = c.upper[axis];
+      }
+    }
+    return true;  // what is left of the box is inside c
+  }
+  return false;
 }
 
 }  // namespace
@@ -31,14 +124,54 @@ std::vector<int32_t> Partition::instancesOf(int rank) const {
 
 void Partition::checkCovers(const Scene& scene) const {
   FERRY_CHECK(instanceOwners.size() == scene.instances.size());
-  std::vector<Box3f> bounds = instanceWorldBounds(scene);
+  FERRY_CHECK(ranks >= 1 && ranks <= 64);
+  const RankMask valid = ranks == 64 ? ~RankMask(0) : (RankMask(1) << ranks) - 1;
+  for (const Proxy& p : proxies)
+    if (p.owners == 0 || (p.owners & ~valid))
+      throw InternalError(fmt::format("a proxy has owners {:#x} outside {} ranks", p.owners, ranks));
+  ProxyOverlapTree tree(proxies);
+  const std::vector<Box3f> bounds = instanceWorldBounds(scene);
+
+  // Proxies a ray may be sent to for content of `owners` near `box`: those
+  // overlapping it whose every owner holds the content.
+  auto eligible = [&](const Box3f& box, RankMask owners) {
+    std::vector<const Box3f*> out;
+    for (uint32_t k : tree.overlapping(box))
+      if ((proxies[k].owners & ~owners) == 0) out.push_back(&proxies[k].bounds);
+    return out;
+  };
+  auto covered = [&](const Box3f& box, const std::vector<const Box3f*>& candidates, int64_t budget) {
+    return coveredByUnion(box, candidates, 0, budget);
+  };
+
   for (size_t i = 0; i < bounds.size(); ++i) {
-    if (instanceOwners[i] == 0) throw InternalError(fmt::format("instance {} has no owner", i));
+    const RankMask owners = instanceOwners[i];
+    if (owners == 0) throw InternalError(fmt::format("instance {} has no owner", i));
+    if (owners & ~valid) throw InternalError(fmt::format("instance {} has owners {:#x} outside {} ranks", i, owners, ranks));
     if (bounds[i].empty()) continue;
-    bool covered = false;
-    for (const Proxy& p : proxies)
-      if ((p.owners & ~instanceOwners[i]) == 0 && p.bounds.contains(bounds[i])) covered = true;
-    if (!covered) throw InternalError(fmt::format("instance {} is not covered by a proxy of its owners", i));
+    const std::vector<const Box3f*> near = eligible(bounds[i], owners);
+    if (covered(bounds[i], near, 20000)) continue;
+    // Proxies that follow the content (braiding, domains) need not cover the
+    // instance's box, only its geometry: check each mesh, then each triangle.
+    const Instance& inst = scene.instances[i];
+    for (int32_t m : scene.objects[inst.object].meshes) {
+      const Mesh& mesh = scene.meshes[m];
+      if (mesh.indices.empty()) continue;
+      const Box3f meshBox = inst.transform.transformBox(mesh.bounds());
+      const std::vector<const Box3f*> meshNear = eligible(meshBox, owners);
+      if (covered(meshBox, meshNear, 20000)) continue;
+      for (size_t t = 0; t < mesh.indices.size(); ++t) {
+        Box3f tri;
+        for (int k = 0; k < 3; ++k) tri.extend(inst.transform.transformPoint(mesh.positions[mesh.indices[t][k]]));
+        std::vector<const Box3f*> triNear;
+        for (const Box3f* b : meshNear)
+          if (b->overlaps(tri)) triNear.push_back(b);
+        if (!covered(tri, triNear, 1000000))
+          throw InternalError(fmt::format(
+              "instance {} (object '{}', mesh '{}', triangle {}) is not covered by proxies of its owners {:#x}", i,
+              scene.objects[inst.object].name, mesh.name, t, owners));
+      }
+    }
   }
 }
 

@@ -1,9 +1,11 @@
 // A partition of a scene over ranks: which ranks own each instance, and the
 // proxies, boxes with an owner mask saying "these ranks have content here".
 //
-// The one invariant the forwarding operator relies on: for every instance,
-// its world bounds are covered by proxies whose owners all hold it. Extra
-// proxies (overlapping, conservative) only cost forwarding, never correctness.
+// The one invariant the forwarding operator relies on: every point of every
+// instance's geometry lies in some proxy whose owners all hold the instance
+// (a ray that would hit it there enters that proxy first, and whichever of
+// its owners it is sent to finds the hit). Extra proxies (overlapping,
+// conservative) only cost forwarding, never correctness.
 #pragma once
 
 #include <cstdint>
@@ -29,8 +31,11 @@ struct Partition {
   std::vector<Proxy> proxies;
 
   std::vector<int32_t> instancesOf(int rank) const;
-  // Throws InternalError if an instance has no owner or is not covered by a
-  // proxy owned only by its owners (see the invariant above).
+  // Throws InternalError if an instance has no owner, or its geometry is not
+  // covered by the union of proxies owned only by its owners (see the
+  // invariant above). Checked on the instance's box first, then, for proxies
+  // that follow the content (spatial domains, braided mesh boxes), on each
+  // mesh's box and finally on each triangle's box.
   void checkCovers(const Scene& scene) const;
 };
 

@@ -113,7 +113,8 @@ CellIntegral gauss3(const Bsdf& bsdf, Vec3f wo, double t0, double t1, double p0,
 }
 
 // Adaptive quadrature: split in four until the four children agree with
-// their parent to `tolerance`. `errorBound` collects |children - parent| of
+// their parent to `tolerance` (absolute) or 1e-5 relative; with a million
+// samples that is far below a cell's counting noise. `errorBound` collects |children - parent| of
 // the accepted splits, a (very) conservative bound on the error of the result.
 CellIntegral integrateAdaptive(const Bsdf& bsdf, Vec3f wo, double t0, double t1, double p0, double p1,
                                const CellIntegral& whole, double tolerance, int depth, double& errorBound) {
@@ -126,7 +127,8 @@ CellIntegral integrateAdaptive(const Bsdf& bsdf, Vec3f wo, double t0, double t1,
     sum.eval += c.eval;
   }
   double diff = std::max(std::abs(sum.pdf - whole.pdf), std::abs(sum.eval - whole.eval));
-  if (diff <= tolerance || depth >= 9) {
+  double size = std::max(std::abs(sum.pdf), std::abs(sum.eval));
+  if (diff <= std::max(tolerance, 1e-5 * size) || depth >= 7) {
     errorBound += diff;
     return sum;
   }
@@ -134,7 +136,7 @@ CellIntegral integrateAdaptive(const Bsdf& bsdf, Vec3f wo, double t0, double t1,
   const double rect[4][4] = {{t0, tm, p0, pm}, {tm, t1, p0, pm}, {t0, tm, pm, p1}, {tm, t1, pm, p1}};
   for (int k = 0; k < 4; ++k) {
     CellIntegral c = integrateAdaptive(bsdf, wo, rect[k][0], rect[k][1], rect[k][2], rect[k][3], q[k],
-                                       tolerance / 4, depth + 1, errorBound);
+                                       tolerance / 2, depth + 1, errorBound);
     r.pdf += c.pdf;
     r.eval += c.eval;
   }

@@ -13,6 +13,8 @@ Camera::Camera(const CameraView& view, int width, int height)
   if (length(cross(forward_, upHint)) < 1e-6f) upHint = std::abs(forward_.y) < 0.9f ? Vec3f(0, 1, 0) : Vec3f(0, 0, 1);
   right_ = normalize(cross(forward_, upHint));
   up_ = cross(right_, forward_);
+  // A left-handed (pbrt) camera sees the same world mirrored left to right.
+  if (view.leftHanded) right_ = -right_;
   tanHalfY_ = std::tan(0.5f * view.fovY * kPi / 180.0f);
   tanHalfX_ = tanHalfY_ * float(width) / float(height);
 }

@@ -5,7 +5,8 @@
 //    1: light leaving it after one bounce never comes back, so L = a * 1
 //    everywhere it is seen (and 1 where the environment is seen);
 //  - a lossless object (smooth glass, a white mirror) in that environment:
-//    every path leaves with throughput 1, so the image is 1 everywhere;
+//    every path leaves with throughput 1, so the image is 1 everywhere
+//    (paths still inside at the depth limit aside);
 //  - the inside of a closed emitter of radiance Le and albedo a: every
 //    direction sees radiance L, so L = Le + a L, L = Le / (1 - a) (truncated
 //    at the depth limit, a^(maxDepth + 1) / (1 - a) relative, negligible
@@ -28,11 +29,11 @@ using namespace ferry::testing;
 
 constexpr double kAlpha = 0.01;
 
-Scene sphereInEnvironment(const Material& material, float fovY) {
+Scene sphereInEnvironment(const Material& material, float fovY, bool smoothNormals = false) {
   Scene scene;
   scene.name = "furnace";
   int32_t m = scene.addMaterial(material);
-  scene.addSingleInstanceMesh(makeSphere({0, 0, 0}, 1, 32, 64, m));
+  scene.addSingleInstanceMesh(makeSphere({0, 0, 0}, 1, 32, 64, m, smoothNormals));
   scene.environment.color = Vec3f(1);
   CameraView view;
   view.name = "front";
@@ -111,11 +112,17 @@ TEST(Furnace, LosslessSpheresAreInvisible) {
   mirror.metallic = 1;
   mirror.roughness = 0;
   for (const Material& m : {glass, mirror}) {
-    Scene scene = sphereInEnvironment(m, 40);
+    // Glass gets smooth normals: in a faceted glass sphere, rays entering
+    // near the silhouette get trapped by total internal reflection between
+    // facets (0.5% of the image at depth 64 with flat 32x64 facets), which is
+    // the depth limit at work, not lost energy. The mirror stays flat: with
+    // smooth normals, reflections about the shading normal that point below
+    // the facet are (rightly) dropped, a known shading-normal loss.
+    Scene scene = sphereInEnvironment(m, 40, m.transmission > 0);
     RenderSettings s;
     s.width = s.height = 32;
     s.samplesPerPixel = 4;
-    s.maxDepth = 64;
+    s.maxDepth = 256;
     s.seed = 5;
     PixelStatistics stats = renderStatistics(scene, s, 8);
     EXPECT_EQ(stats.retraceMisses, 0u);

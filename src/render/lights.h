@@ -19,6 +19,7 @@ namespace ferry {
 struct LightSample {
   Vec3f direction;         // unit, from the shading point to the light
   float distance = kInfinity;  // to the sampled point; infinity for sun and environment
+  Vec3f normal;            // the emitter's unit normal there (either sign); zero at infinity
   Vec3f radiance;          // emitted radiance along -direction
   float pdf = 0;           // solid angle, including the light's selection probability
 };

@@ -67,6 +67,60 @@ inline double regularizedGammaQ(double a, double x) {
 // P(X >= chi2) for a chi-square variable with `dof` degrees of freedom.
 inline double chiSquareSurvival(double chi2, double dof) { return regularizedGammaQ(dof / 2, chi2 / 2); }
 
+// Regularized incomplete beta I_x(a, b) (Numerical Recipes 6.4).
+inline double regularizedIncompleteBeta(double a, double b, double x) {
+  if (x <= 0) return 0;
+  if (x >= 1) return 1;
+  auto continuedFraction = [](double a, double b, double x) {
+    const double tiny = 1e-300;
+    double qab = a + b, qap = a + 1, qam = a - 1, c = 1, d = 1 - qab * x / qap;
+    if (std::abs(d) < tiny) d = tiny;
+    d = 1 / d;
+    double h = d;
+    for (int m = 1; m < 100000; ++m) {
+      int m2 = 2 * m;
+      double aa = m * (b - m) * x / ((qam + m2) * (a + m2));
+      d = 1 + aa * d;
+      if (std::abs(d) < tiny) d = tiny;
+      c = 1 + aa / c;
+      if (std::abs(c) < tiny) c = tiny;
+      d = 1 / d;
+      h *= d * c;
+      aa = -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2));
+      d = 1 + aa * d;
+      if (std::abs(d) < tiny) d = tiny;
+      c = 1 + aa / c;
+      if (std::abs(c) < tiny) c = tiny;
+      d = 1 / d;
+      double delta = d * c;
+      h *= delta;
+      if (std::abs(delta - 1) < 1e-15) break;
+    }
+    return h;
+  };
+  double front = std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) +
+                          b * std::log1p(-x));
+  if (x < (a + 1) / (a + b + 2)) return front * continuedFraction(a, b, x) / a;
+  return 1 - front * continuedFraction(b, a, 1 - x) / b;
+}
+
+// P(|T| >= |t|) for Student's t with `dof` degrees of freedom.
+inline double studentTwoSidedP(double t, double dof) {
+  if (!std::isfinite(t)) return 0;
+  return regularizedIncompleteBeta(dof / 2, 0.5, dof / (dof + t * t));
+}
+
+// Welch's t-test of two means from their estimated variances-of-the-mean
+// (va, vb) and the degrees of freedom of those estimates; returns the
+// two-sided p-value (1 when both variances are zero and the means agree).
+inline double welchP(double meanA, double varMeanA, double dofA, double meanB, double varMeanB, double dofB) {
+  double v = varMeanA + varMeanB;
+  if (v <= 0) return meanA == meanB ? 1.0 : 0.0;
+  double t = (meanA - meanB) / std::sqrt(v);
+  double dof = v * v / (varMeanA * varMeanA / dofA + varMeanB * varMeanB / dofB);
+  return studentTwoSidedP(t, dof);
+}
+
 // z such that P(|Z| > z) = p for a standard normal Z (two-sided), by bisection on erfc.
 inline double twoSidedNormalQuantile(double p) {
   double lo = 0, hi = 40;

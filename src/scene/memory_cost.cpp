@@ -34,7 +34,10 @@ MemoryCost meshCost(uint64_t vertexCount, uint64_t triangleCount, bool hasNormal
   c.normals = hasNormals ? vertexCount * sizeof(Vec3f) : 0;
   c.uvs = hasUvs ? vertexCount * sizeof(Vec2f) : 0;
   c.indices = triangleCount * sizeof(Vec3i);
-  c.accel = static_cast<uint64_t>(triangleCount * MemoryModel::kAccelBytesPerTriangle);
+  // A mesh without triangles is never given to Embree.
+  if (triangleCount > 0)
+    c.accel = static_cast<uint64_t>(double(triangleCount) * MemoryModel::kAccelBytesPerTriangle +
+                                    MemoryModel::kAccelBytesPerMesh);
   return c;
 }
 

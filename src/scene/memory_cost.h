@@ -26,15 +26,23 @@ struct MemoryCost {
   MemoryCost scaled(uint64_t times) const;
 };
 
-// Calibrated constants; see docs/memory.md for how they were measured.
+// Calibrated constants: measured with Embree 3.13.5 (Debian, default build
+// quality, on an AVX-512 CPU) by src/scene/memory_cost_test.cpp, which
+// keeps them honest; docs/memory.md has the measurements. `accel` is what
+// Embree's memory monitor counts (its retained bytes after the build; the
+// peak during a build is higher, see docs/memory.md).
 struct MemoryModel {
-  // Embree 3 BVH4 over triangle4v primitives, as built at the default quality,
-  // retained after the build (the monitor's high-water mark is the peak).
-  static constexpr double kAccelBytesPerTriangle = 60.0;
-  // Top-level BVH bytes per instance in the instancing scene.
-  static constexpr double kAccelBytesPerInstance = 120.0;
-  // Instance record plus Embree's RTCGeometry for the instance.
-  static constexpr double kBytesPerInstanceRecord = 400.0;
+  // BVH nodes and triangle leaves per triangle (55..69 measured, by mesh size).
+  static constexpr double kAccelBytesPerTriangle = 64.0;
+  // Fixed BVH bytes per mesh: Embree allocates in blocks, so even a
+  // two-triangle mesh retains about one block. Matters only for scenes of many
+  // small meshes (the Cornell box: 8 meshes, 32 triangles, 11.5 KB retained).
+  static constexpr double kAccelBytesPerMesh = 1150.0;
+  // Top-level BVH bytes per instance in the instancing scene (66..106 measured).
+  static constexpr double kAccelBytesPerInstance = 100.0;
+  // Ferry's Instance record (52 bytes) plus Embree's instance geometry object
+  // (298 bytes, on the heap but not reported by the memory monitor).
+  static constexpr double kBytesPerInstanceRecord = 350.0;
 };
 
 MemoryCost meshCost(uint64_t vertexCount, uint64_t triangleCount, bool hasNormals, bool hasUvs);

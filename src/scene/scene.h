@@ -81,6 +81,10 @@ struct CameraView {
   Vec3f at{0, 0, 0};
   Vec3f up{0, 1, 0};
   float fovY = 45.0f;  // degrees
+  // pbrt's cameras are left-handed: the image's right is cross(up, forward)
+  // instead of cross(forward, up). Set by the pbrt loader when the camera
+  // transform says so; the picture is then mirrored left to right.
+  bool leftHanded = false;
 };
 
 struct Scene {
@@ -93,6 +97,11 @@ struct Scene {
   std::vector<SunLight> suns;
   EnvironmentLight environment;
   std::vector<CameraView> views;  // views[0] is the default
+  // What the scene file asks for (pbrt's Film), used when the command line
+  // does not say: image size and output file name (relative to the scene file's
+  // directory as written; the caller decides where to put it).
+  std::optional<int> filmWidth, filmHeight;
+  std::string filmFilename;
 
   // Adds a mesh as its own object with one identity instance; returns the object.
   int32_t addSingleInstanceMesh(Mesh mesh);

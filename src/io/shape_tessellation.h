@@ -1,0 +1,74 @@
+// Triangles for pbrt's non-triangle shapes. Ferry traces triangles only (one
+// Embree geometry type, one memory model), so quadrics, patches, subdivision
+// surfaces and curves are turned into triangle meshes when loaded. All in the
+// shape's own space; errors are InputErrors without a location (the caller
+// adds the directive's).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "scene/scene.h"
+
+namespace ferry {
+
+// Angular resolution of the quadrics: 64 segments for a full turn.
+constexpr int kQuadricSegments = 64;
+
+// pbrt's sphere: radius, the part between zmin and zmax (clamped to the
+// radius) and between 0 and phiMax degrees around z. Normals point outwards;
+// uv = (phi / phiMax, (theta - thetaMin) / (thetaMax - thetaMin)).
+Mesh tessellateSphere(float radius, float zMin, float zMax, float phiMaxDegrees,
+                      int segments = kQuadricSegments);
+// A disk (annulus when innerRadius > 0) at z = height, normal +z.
+Mesh tessellateDisk(float height, float radius, float innerRadius, float phiMaxDegrees,
+                    int segments = kQuadricSegments);
+// An open cylinder around z from zMin to zMax.
+Mesh tessellateCylinder(float radius, float zMin, float zMax, float phiMaxDegrees,
+                        int segments = kQuadricSegments);
+// pbrt-v3's heightfield: nu x nv heights over the unit square.
+Mesh tessellateHeightfield(int nu, int nv, const std::vector<float>& heights);
+
+// pbrt-v4's bilinear patches: four vertices each (p00 p10 p01 p11). A planar
+// patch becomes two triangles on its own vertices; a curved one an 8x8 grid
+// of the bilinear surface. `uvs` and `normals` are empty or one per position.
+Mesh tessellateBilinearPatches(const std::vector<Vec3f>& positions,
+                               const std::vector<int32_t>& indices, const std::vector<Vec2f>& uvs,
+                               const std::vector<Vec3f>& normals);
+
+// Loop subdivision, `levels` times, then the vertices moved to their limit
+// positions and given area-weighted normals. Boundaries follow the boundary
+// rules (creases), non-manifold edges are treated as boundaries.
+// The result may not exceed `maxTriangles` (InputError naming the levels).
+Mesh loopSubdivide(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& triangles,
+                   int levels, uint64_t maxTriangles = uint64_t(1) << 27);
+
+// pbrt's curves: cubic or quadratic, Bezier or uniform B-spline control
+// points. Each curve segment becomes `linearPerSegment` straight pieces (3,
+// as the paper did for the island). Flat and cylinder curves become open
+// three-sided tubes whose width matches the curve's on average (pbrt turns
+// flat curves towards each ray; triangles cannot); ribbons become strips
+// turned by the given normals (one per segment end).
+enum class CurveBasis { Bezier, BSpline };
+enum class CurveType { Flat, Cylinder, Ribbon };
+struct CurveDescription {
+  std::vector<Vec3f> points;
+  int degree = 3;
+  CurveBasis basis = CurveBasis::Bezier;
+  CurveType type = CurveType::Flat;
+  float width0 = 1, width1 = 1;
+  std::vector<Vec3f> normals;  // ribbons only: segments + 1
+  int linearPerSegment = 3;
+};
+// Appends the curve to `mesh` (many curves share a mesh: one Embree geometry
+// per curve would cost far more than the curve).
+void appendCurve(const CurveDescription& curve, Mesh& mesh);
+// Segments the control points make; InputError if the count does not fit the basis and degree.
+int curveSegmentCount(const CurveDescription& curve);
+
+// Area-weighted vertex normals from the triangles.
+void computeVertexNormals(Mesh& mesh);
+// Total surface area.
+float meshArea(const Mesh& mesh);
+
+}  // namespace ferry

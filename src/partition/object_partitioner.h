@@ -1,0 +1,39 @@
+// Object-space partitioning (paper, Section 4): a unit is never cut; a split
+// sorts each unit left or right of a plane by the centre of its box (for an
+// object: the box around all its instances), trying 3 axes x 7 equidistant
+// planes across the part's unit centres and keeping the one of least
+// splitCost(). The object partitioners use one unit per object (all its
+// instances on one rank).
+//
+// The hybrid partitioners (bvh-style, best) use the same splitter with one
+// unit per instance, and `groupCandidates`: besides sorting each instance by
+// its own centre, another 3 x 7 planes sort the instances of each object
+// together, by the box around that object's instances in the part. The cost
+// function then chooses between splitting an object's instances over both
+// sides (each side pays for the object's meshes) and keeping them together
+// ("partition based on instances, so some instances can get replicated, if
+// the cost function so chooses"). Without the second family every plane cuts
+// through the spread-out instances of every plant species in a scene like
+// the landscape, and each side pays for nearly all the unique geometry.
+#pragma once
+
+#include "partition/split_loop.h"
+
+namespace ferry {
+
+struct Scene;
+
+class CentroidSplitter final : public PartSplitter {
+ public:
+  CentroidSplitter(const UnitSet& units, bool groupCandidates)
+      : PartSplitter(units), groupCandidates_(groupCandidates) {}
+  bool split(const Part& part, Part& left, Part& right) override;
+
+ private:
+  bool groupCandidates_;
+};
+
+// object-naive: one proxy per unit, its box.
+std::vector<Proxy> unitBoxProxies(const UnitSet& units, const std::vector<RankMask>& owners);
+
+}  // namespace ferry

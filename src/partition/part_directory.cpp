@@ -1,0 +1,130 @@
+#include "partition/part_directory.h"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+
+#include "core/error.h"
+#include "partition/part_file.h"
+#include "scene/scene_summary.h"
+
+namespace ferry {
+namespace {
+
+std::string join(const std::string& directory, const std::string& file) {
+  return (std::filesystem::path(directory) / file).string();
+}
+
+}  // namespace
+
+std::string partFileName(int rank) { return fmt::format("part-{:04d}.fpart", rank); }
+
+Manifest writePartDirectory(const std::string& directory, const Scene& scene, const Partition& partition,
+                            const Scene& lights, const PartDirectoryInfo& info) {
+  FERRY_CHECK(partition.instanceOwners.size() == scene.instances.size());
+  std::error_code ec;
+  std::filesystem::create_directories(directory, ec);
+  if (ec || !std::filesystem::is_directory(directory))
+    throw InputError(fmt::format("{}: cannot create the directory ({})", directory, ec.message()));
+  std::filesystem::remove(join(directory, kManifestName), ec);
+  if (ec) throw InputError(fmt::format("{}: cannot remove the old manifest ({})", directory, ec.message()));
+
+  Manifest m;
+  m.version = kPartFormatVersion;
+  m.scene = info.scene;
+  m.partitioner = info.partitioner;
+  m.options = info.options;
+  m.ranks = partition.ranks;
+  m.summary = info.summary;
+  m.inputBytes = info.inputBytes;
+  m.replicatedBytes = info.replicatedBytes;
+  m.proxies = partition.proxies.size();
+  m.partitionSeconds = info.partitionSeconds;
+  for (int r = 0; r < partition.ranks; ++r) {
+    const std::vector<int32_t> owned = partition.instancesOf(r);
+    ManifestPart p;
+    p.rank = r;
+    p.file = partFileName(r);
+    p.instances = owned.size();
+    p.estimatedBytes = ownedMemory(scene, owned).total();
+    WrittenFile w = writePartFile(join(directory, p.file), scene, owned, partition.instanceOwners, r, partition.ranks);
+    p.bytes = w.bytes;
+    p.hash = w.hash;
+    m.parts.push_back(std::move(p));
+  }
+  SharedData shared;
+  shared.ranks = partition.ranks;
+  shared.views = scene.views;
+  shared.filmWidth = scene.filmWidth;
+  shared.filmHeight = scene.filmHeight;
+  shared.filmFilename = scene.filmFilename;
+  shared.lights = lights;
+  shared.proxies = partition.proxies;
+  m.shared.file = "shared.fpart";
+  WrittenFile w = writeSharedFile(join(directory, m.shared.file), shared);
+  m.shared.bytes = w.bytes;
+  m.shared.hash = w.hash;
+  writeManifest(directory, m);
+  return m;
+}
+
+RankPart loadRankPart(const std::string& directory, int rank, int ranks) {
+  RankPart out;
+  out.manifest = readManifest(directory);
+  const Manifest& m = out.manifest;
+  if (m.ranks != ranks)
+    throw InputError(fmt::format("{}: partitioned for {} ranks, but {} ranks are running (run with mpirun -np {}, "
+                                 "or partition again for {})",
+                                 join(directory, kManifestName), m.ranks, ranks, m.ranks, ranks));
+  SharedData shared = readSharedFile(join(directory, m.shared.file), m.shared.hash);
+  if (shared.ranks != ranks) throw InputError(fmt::format("{}: made for {} ranks", m.shared.file, shared.ranks));
+  LoadedPart part = readPartFile(join(directory, m.parts[rank].file), m.parts[rank].hash);
+  if (part.rank != rank || part.ranks != ranks)
+    throw InputError(fmt::format("{}: holds rank {} of {}, not rank {} of {}", join(directory, m.parts[rank].file),
+                                 part.rank, part.ranks, rank, ranks));
+  out.scene = std::move(part.scene);
+  out.scene.views = std::move(shared.views);
+  out.scene.filmWidth = shared.filmWidth;
+  out.scene.filmHeight = shared.filmHeight;
+  out.scene.filmFilename = shared.filmFilename;
+  out.partition.ranks = ranks;
+  out.partition.instanceOwners = std::move(part.owners);
+  out.partition.proxies = std::move(shared.proxies);
+  out.lights = std::move(shared.lights);
+  return out;
+}
+
+Scene loadAllParts(const std::string& directory, Partition& partition) {
+  const Manifest m = readManifest(directory);
+  SharedData shared = readSharedFile(join(directory, m.shared.file), m.shared.hash);
+  Scene all;
+  all.name = m.summary.value("name", std::string());
+  all.views = shared.views;
+  partition = Partition{};
+  partition.ranks = m.ranks;
+  partition.proxies = shared.proxies;
+  for (const ManifestPart& p : m.parts) {
+    LoadedPart part = readPartFile(join(directory, p.file), p.hash);
+    const int32_t textures = int32_t(all.textures.size()), materials = int32_t(all.materials.size()),
+                  meshes = int32_t(all.meshes.size()), objects = int32_t(all.objects.size());
+    for (Texture& t : part.scene.textures) all.textures.push_back(std::move(t));
+    for (Material mat : part.scene.materials) {
+      if (mat.baseColorTexture != kNoTexture) mat.baseColorTexture += textures;
+      if (mat.alphaTexture != kNoTexture) mat.alphaTexture += textures;
+      all.materials.push_back(std::move(mat));
+    }
+    for (Mesh& mesh : part.scene.meshes) {
+      mesh.material += materials;
+      all.meshes.push_back(std::move(mesh));
+    }
+    for (Object& o : part.scene.objects) {
+      for (int32_t& mesh : o.meshes) mesh += meshes;
+      all.objects.push_back(std::move(o));
+    }
+    for (const Instance& inst : part.scene.instances) all.instances.push_back({inst.object + objects, inst.transform});
+    partition.instanceOwners.insert(partition.instanceOwners.end(), part.owners.begin(), part.owners.end());
+  }
+  return all;
+}
+
+}  // namespace ferry

@@ -1,0 +1,573 @@
+#include "partition/part_file.h"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <type_traits>
+
+#include "core/error.h"
+#include "core/hash64.h"
+#include "io/image_io.h"
+
+namespace ferry {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "part files are little-endian");
+static_assert(std::is_trivially_copyable_v<Vec3f> && sizeof(Vec3f) == 12);
+static_assert(std::is_trivially_copyable_v<Vec2f> && sizeof(Vec2f) == 8);
+static_assert(std::is_trivially_copyable_v<Vec3i> && sizeof(Vec3i) == 12);
+static_assert(std::is_trivially_copyable_v<Proxy> && sizeof(Proxy) == 32);
+static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
+// The writers below list every field of these structs: when one gains a
+// field, these fail so that the part format (and kPartFormatVersion) follows.
+static_assert(sizeof(Material) == 88, "Material changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(Mesh) == 136, "Mesh changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(CameraView) == 80, "CameraView changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(Texture) == 72, "Texture changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(SunLight) == 28, "SunLight changed: update part_file.cpp and kPartFormatVersion");
+
+constexpr char kMagic[8] = {'F', 'E', 'R', 'R', 'Y', 'P', 'R', 'T'};
+constexpr uint32_t kKindPart = 1;
+constexpr uint32_t kKindShared = 2;
+constexpr size_t kHeaderBytes = 64;
+constexpr size_t kHashedHeaderBytes = 40;
+constexpr uint32_t kEndMarker = 0xF0E1D2C3u;
+
+struct Header {
+  char magic[8];
+  uint32_t version;
+  uint32_t kind;
+  uint64_t fileBytes;
+  uint64_t payloadHash;
+  uint32_t rank;
+  uint32_t ranks;
+  uint64_t headerHash;  // of the 40 bytes before it
+  uint8_t reserved[16];
+};
+static_assert(sizeof(Header) == kHeaderBytes && offsetof(Header, headerHash) == kHashedHeaderBytes);
+
+// ------------------------------------------------------------------ writing
+
+class FileWriter {
+ public:
+  explicit FileWriter(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "wb"), &std::fclose) {
+    if (!file_) throw InputError(fmt::format("{}: cannot write ({})", path, std::strerror(errno)));
+    std::setvbuf(file_.get(), nullptr, _IOFBF, 1 << 20);
+    Header blank{};
+    put(&blank, sizeof(blank), false);
+  }
+
+  template <typename T>
+  void pod(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    put(&value, sizeof(T), true);
+  }
+  void str(const std::string& s) {
+    pod(uint32_t(s.size()));
+    put(s.data(), s.size(), true);
+  }
+  // Count, then the elements, 16-byte aligned in the file.
+  template <typename T>
+  void array(const T* data, size_t count) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    pod(uint64_t(count));
+    static const uint8_t zeros[16] = {};
+    if (offset_ % 16) put(zeros, 16 - offset_ % 16, true);
+    put(data, count * sizeof(T), true);
+  }
+  template <typename T>
+  void array(const std::vector<T>& v) {
+    array(v.data(), v.size());
+  }
+
+  WrittenFile finish(uint32_t kind, uint32_t rank, uint32_t ranks) {
+    pod(kEndMarker);
+    Header h{};
+    std::memcpy(h.magic, kMagic, sizeof(kMagic));
+    h.version = kPartFormatVersion;
+    h.kind = kind;
+    h.fileBytes = offset_;
+    h.payloadHash = hash_.digest();
+    h.rank = rank;
+    h.ranks = ranks;
+    h.headerHash = hash64(&h, kHashedHeaderBytes);
+    if (std::fflush(file_.get()) != 0 || std::fseek(file_.get(), 0, SEEK_SET) != 0 ||
+        std::fwrite(&h, sizeof(h), 1, file_.get()) != 1 || std::fflush(file_.get()) != 0)
+      fail();
+    return {h.fileBytes, h.payloadHash};
+  }
+
+ private:
+  void put(const void* data, size_t bytes, bool hashed) {
+    if (bytes == 0) return;
+    if (std::fwrite(data, 1, bytes, file_.get()) != bytes) fail();
+    if (hashed) hash_.update(data, bytes);
+    offset_ += bytes;
+  }
+  [[noreturn]] void fail() { throw InputError(fmt::format("{}: write failed ({})", path_, std::strerror(errno))); }
+
+  std::string path_;
+  std::unique_ptr<FILE, int (*)(FILE*)> file_;
+  Hash64 hash_;
+  uint64_t offset_ = 0;
+};
+
+void writeMaterial(FileWriter& w, const Material& m) {
+  w.str(m.name);
+  w.pod(m.baseColor);
+  w.pod(m.baseColorTexture);
+  w.pod(m.roughness);
+  w.pod(m.metallic);
+  w.pod(m.transmission);
+  w.pod(m.ior);
+  w.pod(m.emission);
+  w.pod(m.alphaTexture);
+  w.pod(m.alphaCutoff);
+}
+
+void writeTexture(FileWriter& w, const Texture& t) {
+  w.str(t.name);
+  w.pod(int32_t(t.width));
+  w.pod(int32_t(t.height));
+  w.pod(uint8_t(t.wrap));
+  w.pod(uint8_t(t.srgb));
+  w.array(t.rgba);
+}
+
+void writeMesh(FileWriter& w, const Mesh& m, int32_t material) {
+  w.str(m.name);
+  w.pod(material);
+  w.array(m.positions);
+  w.array(m.normals);
+  w.array(m.uvs);
+  w.array(m.indices);
+}
+
+// The listed instances of `scene` and what they use, re-indexed; `owners`
+// (per scene instance) written alongside when given.
+void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>& instances,
+                  const std::vector<RankMask>* owners) {
+  std::vector<int32_t> objectIndex(scene.objects.size(), -1), meshIndex(scene.meshes.size(), -1),
+      materialIndex(scene.materials.size(), -1), textureIndex(scene.textures.size(), -1);
+  for (int32_t i : instances) objectIndex[scene.instances[i].object] = 0;
+  for (size_t o = 0; o < scene.objects.size(); ++o)
+    if (objectIndex[o] == 0)
+      for (int32_t m : scene.objects[o].meshes) meshIndex[m] = 0;
+  for (size_t m = 0; m < scene.meshes.size(); ++m)
+    if (meshIndex[m] == 0) materialIndex[scene.meshes[m].material] = 0;
+  for (size_t k = 0; k < scene.materials.size(); ++k)
+    if (materialIndex[k] == 0) {
+      const Material& mat = scene.materials[k];
+      if (mat.baseColorTexture != kNoTexture) textureIndex[mat.baseColorTexture] = 0;
+      if (mat.alphaTexture != kNoTexture) textureIndex[mat.alphaTexture] = 0;
+    }
+  // Kept items get new indices in their original order.
+  auto number = [](std::vector<int32_t>& index) {
+    int32_t next = 0;
+    for (int32_t& x : index)
+      if (x == 0) x = next++;
+    return next;
+  };
+  const int32_t objects = number(objectIndex), meshes = number(meshIndex), materials = number(materialIndex),
+                textures = number(textureIndex);
+
+  w.pod(uint64_t(textures));
+  for (size_t t = 0; t < scene.textures.size(); ++t)
+    if (textureIndex[t] >= 0) writeTexture(w, scene.textures[t]);
+  w.pod(uint64_t(materials));
+  for (size_t k = 0; k < scene.materials.size(); ++k)
+    if (materialIndex[k] >= 0) {
+      Material mat = scene.materials[k];
+      if (mat.baseColorTexture != kNoTexture) mat.baseColorTexture = textureIndex[mat.baseColorTexture];
+      if (mat.alphaTexture != kNoTexture) mat.alphaTexture = textureIndex[mat.alphaTexture];
+      writeMaterial(w, mat);
+    }
+  w.pod(uint64_t(meshes));
+  for (size_t m = 0; m < scene.meshes.size(); ++m)
+    if (meshIndex[m] >= 0) writeMesh(w, scene.meshes[m], materialIndex[scene.meshes[m].material]);
+  w.pod(uint64_t(objects));
+  std::vector<int32_t> list;
+  for (size_t o = 0; o < scene.objects.size(); ++o)
+    if (objectIndex[o] >= 0) {
+      w.str(scene.objects[o].name);
+      list.clear();
+      for (int32_t m : scene.objects[o].meshes) list.push_back(meshIndex[m]);
+      w.array(list);
+    }
+  std::vector<int32_t> instanceObjects;
+  std::vector<Affine3f> transforms;
+  std::vector<RankMask> masks;
+  for (int32_t i : instances) {
+    instanceObjects.push_back(objectIndex[scene.instances[i].object]);
+    transforms.push_back(scene.instances[i].transform);
+    masks.push_back(owners ? (*owners)[i] : RankMask(0));
+  }
+  w.array(instanceObjects);
+  w.array(transforms);
+  w.array(masks);
+}
+
+void writeLights(FileWriter& w, const Scene& lights) {
+  std::vector<int32_t> all(lights.instances.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = int32_t(i);
+  writeContent(w, lights, all, nullptr);
+  w.pod(uint64_t(lights.suns.size()));
+  for (const SunLight& s : lights.suns) {
+    w.pod(s.direction);
+    w.pod(s.irradiance);
+    w.pod(s.angularRadius);
+  }
+  const EnvironmentLight& env = lights.environment;
+  w.pod(env.color);
+  w.pod(env.rotation);
+  w.pod(uint8_t(env.image ? 1 : 0));
+  if (env.image) {
+    w.str(env.image->name);
+    w.pod(int32_t(env.image->width));
+    w.pod(int32_t(env.image->height));
+    w.array(env.image->pixels);
+  }
+}
+
+// ------------------------------------------------------------------ reading
+
+class MappedFile {
+ public:
+  explicit MappedFile(const std::string& path) : path_(path) {
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) {
+      if (errno == ENOENT) throw InputError(fmt::format("{}: no such file", path));
+      throw InputError(fmt::format("{}: cannot open ({})", path, std::strerror(errno)));
+    }
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
+      ::close(fd_);
+      throw InputError(fmt::format("{}: not a regular file", path));
+    }
+    size_ = uint64_t(st.st_size);
+    if (size_ > 0) {
+      void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+      if (p == MAP_FAILED) {
+        ::close(fd_);
+        throw InputError(fmt::format("{}: cannot map ({})", path, std::strerror(errno)));
+      }
+      data_ = static_cast<const uint8_t*>(p);
+      ::madvise(p, size_, MADV_SEQUENTIAL);
+    }
+  }
+  ~MappedFile() {
+    if (data_) ::munmap(const_cast<uint8_t*>(data_), size_);
+    if (fd_ >= 0) ::close(fd_);
+  }
+  MappedFile(const MappedFile&) = delete;
+  MappedFile& operator=(const MappedFile&) = delete;
+
+  const uint8_t* data() const { return data_; }
+  uint64_t size() const { return size_; }
+  // Lets the kernel drop the pages of [begin, end) from this process (they
+  // stay in the page cache): what has been copied need not stay resident.
+  void release(uint64_t begin, uint64_t end) const {
+    const uint64_t page = uint64_t(::sysconf(_SC_PAGESIZE));
+    uint64_t from = (begin + page - 1) / page * page, to = end / page * page;
+    if (data_ && to > from) ::madvise(const_cast<uint8_t*>(data_) + from, to - from, MADV_DONTNEED);
+  }
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  const uint8_t* data_ = nullptr;
+  uint64_t size_ = 0;
+};
+
+// Checks the header and the hashes; returns the header.
+Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind, uint64_t expectedHash) {
+  auto bad = [&](const std::string& what) { return InputError(fmt::format("{}: {}", path, what)); };
+  if (file.size() < kHeaderBytes)
+    throw bad(fmt::format("truncated: {} bytes, less than a part file's header", file.size()));
+  Header h;
+  std::memcpy(&h, file.data(), sizeof(h));
+  if (std::memcmp(h.magic, kMagic, sizeof(kMagic)) != 0) throw bad("not a Ferry part file");
+  if (h.version != kPartFormatVersion)
+    throw bad(fmt::format("made by another version of Ferry (part format {}, this Ferry reads format {}): "
+                          "partition the scene again",
+                          h.version, kPartFormatVersion));
+  if (hash64(&h, kHashedHeaderBytes) != h.headerHash) throw bad("corrupt header (hash mismatch)");
+  if (h.kind != kind)
+    throw bad(kind == kKindPart ? "is a shared file, not a rank's part" : "is a rank's part, not the shared file");
+  if (h.fileBytes != file.size())
+    throw bad(h.fileBytes > file.size() ? fmt::format("truncated: {} of {} bytes", file.size(), h.fileBytes)
+                                        : fmt::format("{} bytes, {} more than written", file.size(),
+                                                      file.size() - h.fileBytes));
+  Hash64 hash;
+  constexpr uint64_t kChunk = 64ull << 20;
+  for (uint64_t at = kHeaderBytes; at < file.size(); at += kChunk) {
+    const uint64_t n = std::min(kChunk, file.size() - at);
+    hash.update(file.data() + at, n);
+    file.release(at, at + n);
+  }
+  if (hash.digest() != h.payloadHash) throw bad("corrupt (hash mismatch: the file changed after it was written)");
+  if (expectedHash != 0 && h.payloadHash != expectedHash)
+    throw bad(fmt::format("does not belong to this manifest (hash {}, the manifest says {})",
+                          hashToHex(h.payloadHash), hashToHex(expectedHash)));
+  return h;
+}
+
+class FileReader {
+ public:
+  FileReader(const MappedFile& file, std::string path) : file_(file), path_(std::move(path)), at_(kHeaderBytes) {}
+
+  template <typename T>
+  T pod() {
+    static_assert(std::is_trivially_copyable_v<T>);
+    need(sizeof(T));
+    T v;
+    std::memcpy(&v, file_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return v;
+  }
+  std::string str() {
+    uint32_t n = pod<uint32_t>();
+    need(n);
+    std::string s(reinterpret_cast<const char*>(file_.data() + at_), n);
+    at_ += n;
+    return s;
+  }
+  template <typename T>
+  std::vector<T> array() {
+    static_assert(std::is_trivially_copyable_v<T>);
+    uint64_t count = pod<uint64_t>();
+    if (at_ % 16) {
+      need(16 - at_ % 16);
+      at_ += 16 - at_ % 16;
+    }
+    if (count > (file_.size() - at_) / sizeof(T)) fail("an array runs past the end");
+    std::vector<T> v;
+    if (count) {
+      // One element of slack: Embree reads 16 bytes at the last vertex.
+      v.reserve(count + 1);
+      v.resize(count);
+      std::memcpy(v.data(), file_.data() + at_, count * sizeof(T));
+    }
+    file_.release(at_, at_ + count * sizeof(T));
+    at_ += count * sizeof(T);
+    return v;
+  }
+  // A count of records that each take at least `minimumBytes`.
+  uint64_t count(size_t minimumBytes) {
+    uint64_t n = pod<uint64_t>();
+    if (n > (file_.size() - at_) / std::max<size_t>(1, minimumBytes)) fail("a count runs past the end");
+    return n;
+  }
+  void end() {
+    if (pod<uint32_t>() != kEndMarker || at_ != file_.size()) fail("the end marker is missing");
+  }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(fmt::format("{}: corrupt ({} at byte {})", path_, what, at_));
+  }
+
+ private:
+  void need(uint64_t n) const {
+    if (n > file_.size() - at_) fail("a record runs past the end");
+  }
+  const MappedFile& file_;
+  std::string path_;
+  uint64_t at_;
+};
+
+Material readMaterial(FileReader& r) {
+  Material m;
+  m.name = r.str();
+  m.baseColor = r.pod<Vec3f>();
+  m.baseColorTexture = r.pod<int32_t>();
+  m.roughness = r.pod<float>();
+  m.metallic = r.pod<float>();
+  m.transmission = r.pod<float>();
+  m.ior = r.pod<float>();
+  m.emission = r.pod<Vec3f>();
+  m.alphaTexture = r.pod<int32_t>();
+  m.alphaCutoff = r.pod<float>();
+  return m;
+}
+
+Texture readTexture(FileReader& r) {
+  Texture t;
+  t.name = r.str();
+  t.width = r.pod<int32_t>();
+  t.height = r.pod<int32_t>();
+  uint8_t wrap = r.pod<uint8_t>();
+  if (wrap > uint8_t(WrapMode::Mirror)) r.fail("bad wrap mode");
+  t.wrap = WrapMode(wrap);
+  t.srgb = r.pod<uint8_t>() != 0;
+  t.rgba = r.array<uint8_t>();
+  if (t.width < 0 || t.height < 0 || t.rgba.size() != t.texelCount() * 4) r.fail("texture size mismatch");
+  return t;
+}
+
+Mesh readMesh(FileReader& r) {
+  Mesh m;
+  m.name = r.str();
+  m.material = r.pod<int32_t>();
+  m.positions = r.array<Vec3f>();
+  m.normals = r.array<Vec3f>();
+  m.uvs = r.array<Vec2f>();
+  m.indices = r.array<Vec3i>();
+  return m;
+}
+
+// Reads what writeContent wrote; checks every index (Scene::validate).
+void readContent(FileReader& r, Scene& scene, std::vector<RankMask>& owners) {
+  for (uint64_t n = r.count(8); n > 0; --n) scene.textures.push_back(readTexture(r));
+  for (uint64_t n = r.count(8); n > 0; --n) scene.materials.push_back(readMaterial(r));
+  for (uint64_t n = r.count(8); n > 0; --n) scene.meshes.push_back(readMesh(r));
+  for (uint64_t n = r.count(8); n > 0; --n) {
+    Object o;
+    o.name = r.str();
+    o.meshes = r.array<int32_t>();
+    scene.objects.push_back(std::move(o));
+  }
+  std::vector<int32_t> objects = r.array<int32_t>();
+  std::vector<Affine3f> transforms = r.array<Affine3f>();
+  owners = r.array<RankMask>();
+  if (transforms.size() != objects.size() || owners.size() != objects.size()) r.fail("instance arrays differ in size");
+  scene.instances.resize(objects.size());
+  for (size_t i = 0; i < objects.size(); ++i) scene.instances[i] = {objects[i], transforms[i]};
+}
+
+void readLights(FileReader& r, Scene& lights) {
+  std::vector<RankMask> unused;
+  readContent(r, lights, unused);
+  for (uint64_t n = r.count(28); n > 0; --n) {
+    SunLight s;
+    s.direction = r.pod<Vec3f>();
+    s.irradiance = r.pod<Vec3f>();
+    s.angularRadius = r.pod<float>();
+    lights.suns.push_back(s);
+  }
+  lights.environment.color = r.pod<Vec3f>();
+  lights.environment.rotation = r.pod<float>();
+  if (r.pod<uint8_t>()) {
+    auto image = std::make_shared<HdrImage>();
+    image->name = r.str();
+    image->width = r.pod<int32_t>();
+    image->height = r.pod<int32_t>();
+    image->pixels = r.array<Vec3f>();
+    if (image->width < 0 || image->height < 0 || image->pixels.size() != size_t(image->width) * size_t(image->height))
+      r.fail("environment image size mismatch");
+    lights.environment.image = std::move(image);
+  }
+}
+
+template <typename Fill>
+void validated(const std::string& path, Scene& scene, Fill&& fill) {
+  fill();
+  try {
+    scene.validate();
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: corrupt ({})", path, e.what()));
+  }
+}
+
+}  // namespace
+
+WrittenFile writePartFile(const std::string& path, const Scene& scene, const std::vector<int32_t>& instances,
+                          const std::vector<RankMask>& owners, int rank, int ranks) {
+  FERRY_CHECK(owners.size() == scene.instances.size());
+  FERRY_CHECK(std::is_sorted(instances.begin(), instances.end()));
+  WrittenFile written;
+  writeFileAtomically(path, [&](const std::string& tmp) {
+    FileWriter w(tmp);
+    w.pod(uint32_t(rank));
+    w.pod(uint32_t(ranks));
+    w.str(scene.name);
+    writeContent(w, scene, instances, &owners);
+    written = w.finish(kKindPart, uint32_t(rank), uint32_t(ranks));
+  });
+  return written;
+}
+
+LoadedPart readPartFile(const std::string& path, uint64_t expectedHash) {
+  MappedFile file(path);
+  Header h = checkFile(file, path, kKindPart, expectedHash);
+  FileReader r(file, path);
+  LoadedPart part;
+  part.rank = int(r.pod<uint32_t>());
+  part.ranks = int(r.pod<uint32_t>());
+  if (uint32_t(part.rank) != h.rank || uint32_t(part.ranks) != h.ranks || part.rank >= part.ranks)
+    r.fail("rank fields disagree");
+  validated(path, part.scene, [&] {
+    part.scene.name = r.str();
+    readContent(r, part.scene, part.owners);
+    r.end();
+  });
+  const RankMask self = RankMask(1) << part.rank;
+  for (RankMask m : part.owners)
+    if (!(m & self)) r.fail("an instance is not owned by the part's own rank");
+  return part;
+}
+
+WrittenFile writeSharedFile(const std::string& path, const SharedData& shared) {
+  WrittenFile written;
+  writeFileAtomically(path, [&](const std::string& tmp) {
+    FileWriter w(tmp);
+    w.pod(uint32_t(shared.ranks));
+    w.pod(uint64_t(shared.views.size()));
+    for (const CameraView& v : shared.views) {
+      w.str(v.name);
+      w.pod(v.from);
+      w.pod(v.at);
+      w.pod(v.up);
+      w.pod(v.fovY);
+      w.pod(uint8_t(v.leftHanded));
+    }
+    w.pod(uint8_t(shared.filmWidth.has_value()));
+    w.pod(int32_t(shared.filmWidth.value_or(0)));
+    w.pod(uint8_t(shared.filmHeight.has_value()));
+    w.pod(int32_t(shared.filmHeight.value_or(0)));
+    w.str(shared.filmFilename);
+    writeLights(w, shared.lights);
+    w.array(shared.proxies);
+    written = w.finish(kKindShared, 0xffffffffu, uint32_t(shared.ranks));
+  });
+  return written;
+}
+
+SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
+  MappedFile file(path);
+  checkFile(file, path, kKindShared, expectedHash);
+  FileReader r(file, path);
+  SharedData shared;
+  shared.ranks = int(r.pod<uint32_t>());
+  for (uint64_t n = r.count(45); n > 0; --n) {
+    CameraView v;
+    v.name = r.str();
+    v.from = r.pod<Vec3f>();
+    v.at = r.pod<Vec3f>();
+    v.up = r.pod<Vec3f>();
+    v.fovY = r.pod<float>();
+    v.leftHanded = r.pod<uint8_t>() != 0;
+    shared.views.push_back(std::move(v));
+  }
+  const bool hasWidth = r.pod<uint8_t>() != 0;
+  const int32_t width = r.pod<int32_t>();
+  const bool hasHeight = r.pod<uint8_t>() != 0;
+  const int32_t height = r.pod<int32_t>();
+  if (hasWidth) shared.filmWidth = width;
+  if (hasHeight) shared.filmHeight = height;
+  shared.filmFilename = r.str();
+  validated(path, shared.lights, [&] {
+    readLights(r, shared.lights);
+    shared.proxies = r.array<Proxy>();
+    r.end();
+  });
+  return shared;
+}
+
+}  // namespace ferry

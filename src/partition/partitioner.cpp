@@ -1,0 +1,163 @@
+#include "partition/partitioner.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+
+#include "core/error.h"
+#include "partition/hybrid_partitioner.h"
+#include "partition/object_partitioner.h"
+#include "partition/proxies.h"
+#include "partition/spatial_partitioner.h"
+#include "partition/split_loop.h"
+#include "partition/units.h"
+#include "scene/scene.h"
+#include "scene/scene_summary.h"
+
+namespace ferry {
+namespace {
+
+bool isPaperPartitioner(const std::string& name) {
+  const auto& six = paperPartitionerNames();
+  return std::find(six.begin(), six.end(), name) != six.end();
+}
+
+// The scene rewritten for `options` and its units.
+struct Prepared {
+  uint64_t inputBytes = 0;
+  SceneSplitReport split;
+  UnitSet units;
+};
+
+Prepared prepare(Scene& scene, const PartitionerOptions& o) {
+  Prepared p;
+  p.inputBytes = summarize(scene).memory.total();
+  SceneSplitOptions split;
+  split.breakSingleInstanceObjects = o.breakObjects;
+  if (o.name == "best")
+    split.maxPieceBytes = o.maxPieceBytes > 0 ? o.maxPieceBytes
+                                              : std::max<uint64_t>(1, p.inputBytes / kBestPiecesPerScene);
+  p.split = splitForPartitioning(scene, split);
+  UnitOptions unitOptions;
+  unitOptions.grouping = o.name == "object-naive" || o.name == "object-proxies" ? UnitGrouping::Objects
+                                                                                  : UnitGrouping::Instances;
+  unitOptions.nonInstancedTogether = !o.breakObjects;
+  p.units = extractUnits(scene, unitOptions);
+  return p;
+}
+
+std::unique_ptr<PartSplitter> makeSplitter(const std::string& name, const UnitSet& units) {
+  if (name == "spatial-simple") return std::make_unique<SpatialSplitter>(units, SpatialSplitRule::Median);
+  if (name == "spatial-sah") return std::make_unique<SpatialSplitter>(units, SpatialSplitRule::CostFunction);
+  const bool hybrid = name == "bvh-style" || name == "best";
+  return std::make_unique<CentroidSplitter>(units, hybrid);
+}
+
+uint64_t replicationBudget(const PartitionerOptions& o, uint64_t inputBytes) {
+  return uint64_t(std::max(0.0, o.replicationBudget) * double(inputBytes));
+}
+
+}  // namespace
+
+uint64_t PartitionStats::maxRankBytes() const {
+  return rankBytes.empty() ? 0 : *std::max_element(rankBytes.begin(), rankBytes.end());
+}
+
+const std::vector<std::string>& partitionerNames() {
+  static const std::vector<std::string> names = {"spatial-simple", "spatial-sah", "object-naive", "object-proxies",
+                                                 "bvh-style",      "best",        "round-robin",  "random"};
+  return names;
+}
+
+const std::vector<std::string>& paperPartitionerNames() {
+  static const std::vector<std::string> names(partitionerNames().begin(), partitionerNames().begin() + 6);
+  return names;
+}
+
+void checkPartitionerName(const std::string& name) {
+  const auto& all = partitionerNames();
+  if (std::find(all.begin(), all.end(), name) != all.end()) return;
+  std::string known;
+  for (const std::string& n : all) known += (known.empty() ? "" : ", ") + n;
+  throw InputError(fmt::format("unknown partitioner '{}' (partitioners: {})", name, known));
+}
+
+Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o, PartitionStats* stats) {
+  const auto start = std::chrono::steady_clock::now();
+  checkPartitionerName(o.name);
+  if (ranks < 1 || ranks > 64) throw InputError(fmt::format("{} ranks: partitions have 1 to 64 ranks", ranks));
+  PartitionStats local;
+  PartitionStats& s = stats ? *stats : local;
+  s = PartitionStats{};
+  s.partitioner = o.name;
+  s.ranks = ranks;
+
+  Partition partition;
+  if (o.name == "round-robin" || o.name == "random") {
+    s.inputBytes = summarize(scene).memory.total();
+    partition = o.name == "round-robin" ? roundRobinPartition(scene, ranks) : randomPartition(scene, ranks, o.seed);
+    s.parts = ranks;
+    s.units = scene.instances.size();
+  } else {
+    Prepared p = prepare(scene, o);
+    s.inputBytes = p.inputBytes;
+    s.split = std::move(p.split);
+    s.units = p.units.units.size();
+    std::unique_ptr<PartSplitter> splitter = makeSplitter(o.name, p.units);
+    std::vector<Part> parts = runSplitLoop(*splitter, ranks);
+    s.parts = int(parts.size());
+    const std::vector<RankMask> partRanks = assignRanks(parts, ranks);
+    std::vector<RankMask> owners = unitOwners(p.units, parts, partRanks);
+    if (o.name == "best") {
+      ReplicationResult r = replicateLargeUnits(p.units, parts, partRanks, owners, replicationBudget(o, p.inputBytes));
+      s.replicatedBytes = r.addedBytes;
+      s.replicatedUnits = r.replicatedUnits;
+    }
+    partition.ranks = ranks;
+    partition.instanceOwners = instanceOwnersOf(p.units, owners);
+    if (o.name == "spatial-simple" || o.name == "spatial-sah")
+      partition.proxies = domainProxies(parts, partRanks);
+    else if (o.name == "object-naive")
+      partition.proxies = unitBoxProxies(p.units, owners);
+    else if (o.name == "object-proxies")
+      partition.proxies = instanceProxies(scene, p.units, owners, o.meshProxies);
+    else
+      partition.proxies = instanceProxies(scene, p.units, owners, 1);
+  }
+  s.proxies = partition.proxies.size();
+  for (int r = 0; r < ranks; ++r) s.rankBytes.push_back(ownedMemory(scene, partition.instancesOf(r)).total());
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return partition;
+}
+
+std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& o, int maxRanks) {
+  if (!isPaperPartitioner(o.name))
+    throw InputError(fmt::format("max-part curves are made for the paper's partitioners, not '{}'", o.name));
+  FERRY_CHECK(maxRanks >= 1);
+  Prepared p = prepare(scene, o);
+  std::unique_ptr<PartSplitter> splitter = makeSplitter(o.name, p.units);
+  std::vector<uint64_t> curve;
+  const uint64_t budget = replicationBudget(o, p.inputBytes);
+  runSplitLoop(*splitter, maxRanks, [&](const std::vector<Part>& parts) {
+    uint64_t largest = 0;
+    if (o.name == "best" && parts.size() > 1) {
+      // One rank per part here (masks only count copies: one bit each).
+      std::vector<Part> copy = parts;
+      std::vector<RankMask> oneRank(copy.size(), 1);
+      std::vector<RankMask> owners(p.units.units.size(), 0);
+      replicateLargeUnits(p.units, copy, oneRank, owners, budget);
+      for (const Part& part : copy) largest = std::max(largest, part.bytes);
+    } else {
+      for (const Part& part : parts) largest = std::max(largest, part.bytes);
+    }
+    curve.push_back(largest);
+  });
+  // The loop stops early when nothing can be split: more ranks hold copies,
+  // and the largest part stays as it is.
+  while (int(curve.size()) < maxRanks) curve.push_back(curve.back());
+  return curve;
+}
+
+}  // namespace ferry

@@ -1,0 +1,83 @@
+// Partitioners by name: the paper's six (Section 4) and the two that test the
+// distributed layer. Every one of the six runs the same loop (split_loop.h)
+// on units (units.h) and differs in how it splits and what proxies it makes:
+//
+//   spatial-simple  domains split at the spatial median of the longest axis;
+//                   straddling content on both sides; proxies: the domains
+//   spatial-sah     the same with the best of 3 x 7 planes by splitCost()
+//   object-naive    whole objects (all instances on one rank) by their box
+//                   centres, 3 x 7 planes; proxies: the objects' boxes
+//   object-proxies  the same parts; proxies: one per instance, and 64 per
+//                   non-instanced mesh by BVH build steps (braiding)
+//   bvh-style       instances as units (objects replicated where instances
+//                   land); one proxy per instance or non-instanced mesh
+//   best            large meshes first cut into tight pieces, then as
+//                   bvh-style, then spatially large but cheap content
+//                   replicated on every rank up to a budget (default 5%)
+//   round-robin     instances dealt in turn (tests)
+//   random          random replication and overlapping proxies (tests)
+//
+// All are deterministic: every rank computing the same partition of the
+// same scene gets the same answer.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "partition/partition.h"
+#include "partition/scene_split.h"
+
+namespace ferry {
+
+struct Scene;
+
+// `best` cuts meshes costing more than the input's bytes / this.
+constexpr int kBestPiecesPerScene = 256;
+
+struct PartitionerOptions {
+  std::string name = "best";
+  // Break non-instanced objects into their meshes (Zellmann et al.); false:
+  // keep all non-instanced content whole, as one unit.
+  bool breakObjects = true;
+  double replicationBudget = 0.05;  // best: copies may add this fraction of the input's bytes
+  int meshProxies = 64;             // object-proxies: boxes per non-instanced mesh
+  uint64_t maxPieceBytes = 0;       // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
+  uint32_t seed = 1;                // random
+};
+
+struct PartitionStats {
+  std::string partitioner;
+  int ranks = 0;
+  int parts = 0;                    // distinct parts; fewer than ranks when units ran out (copies)
+  uint64_t inputBytes = 0;          // memory estimate of the scene as given
+  uint64_t replicatedBytes = 0;     // best: what its copies added, over all ranks
+  uint64_t replicatedUnits = 0;
+  std::vector<uint64_t> rankBytes;  // memory estimate of what each rank holds
+  uint64_t proxies = 0;
+  uint64_t units = 0;
+  SceneSplitReport split;
+  double seconds = 0;
+
+  uint64_t maxRankBytes() const;
+};
+
+// Every name `--partitioner` accepts, and the paper's six among them.
+const std::vector<std::string>& partitionerNames();
+const std::vector<std::string>& paperPartitionerNames();
+// Throws InputError naming the accepted ones.
+void checkPartitionerName(const std::string& name);
+
+// Partitions `scene` over `ranks` (1..64). The six paper partitioners first
+// rewrite the scene in place with splitForPartitioning (same image); the
+// partition refers to the rewritten scene.
+Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& options,
+                         PartitionStats* stats = nullptr);
+
+// For reports (the paper's Figure 4): the largest part's bytes for 1, 2, ...,
+// maxRanks ranks, from one run of the split loop (the loop's states for
+// smaller counts are its first steps). Rewrites `scene` like partitionScene.
+// One of the six only.
+std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& options, int maxRanks);
+
+}  // namespace ferry

@@ -1,0 +1,74 @@
+// The compact path: layout is checked by static_asserts in path.h; here, that
+// what is stored is what is read back, quantized once when the ray is made.
+#include "render/path.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/random.h"
+
+namespace ferry {
+namespace {
+
+template <typename P>
+void checkQuantizedAtCreation() {
+  RandomKey key{0, 0, 0, 99};
+  for (uint32_t i = 0; i < 20000; ++i) {
+    key.pixel = i;
+    // Unit directions all over the sphere, and some unnormalised.
+    float z = 1 - 2 * random01(key, RandomDim::BsdfU), phi = 2 * kPi * random01(key, RandomDim::BsdfV);
+    float r = std::sqrt(std::max(0.0f, 1 - z * z));
+    float scale = i % 7 == 0 ? 3.7f : 1.0f;
+    Vec3f d{r * std::cos(phi) * scale, r * std::sin(phi) * scale, z * scale};
+    Vec3f w{random01(key, RandomDim::LightSampleU) * 100, random01(key, RandomDim::LightSampleV),
+            random01(key, RandomDim::Roulette) * 1e-3f};
+    P p{};
+    p.setDir(d);
+    p.setWeight(w);
+    Vec3f got = p.dir(), weight = p.weight();
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_EQ(got[k], halfToFloat(floatToHalf(d[k]))) << i << " component " << k;
+      ASSERT_EQ(weight[k], halfToFloat(floatToHalf(w[k]))) << i << " component " << k;
+      // Quantizing is idempotent: a ray read and stored again (as when it is
+      // forwarded to another rank) does not move.
+      ASSERT_EQ(quantizeToHalf(got[k]), got[k]);
+    }
+    P copy{};
+    copy.setDir(p.dir());
+    ASSERT_EQ(copy.dir(), p.dir());
+    // And it stays close to what was asked: a half carries 11 significant bits.
+    for (int k = 0; k < 3; ++k) ASSERT_LE(std::abs(got[k] - d[k]), std::abs(d[k]) / 2048 + 1e-7f);
+  }
+}
+
+TEST(Path, DirectionAndThroughputAreQuantizedAtCreation) {
+  checkQuantizedAtCreation<Path8>();
+  checkQuantizedAtCreation<Path64>();
+}
+
+TEST(Path, PixelAndFlagsRoundTrip) {
+  for (uint32_t pixel : {0u, 1u, 12345u, kMaxPixels - 1}) {
+    for (uint32_t flags : {0u, uint32_t(kPathShadow), uint32_t(kPathAfterSpecular),
+                           uint32_t(kPathShadow | kPathOccluded), uint32_t(kPathFlagMask)}) {
+      Path8 p{};
+      p.setPixelAndFlags(pixel, flags);
+      EXPECT_EQ(p.pixel(), pixel);
+      EXPECT_EQ(p.flags(), flags);
+      p.set(kPathOccluded);
+      EXPECT_EQ(p.pixel(), pixel) << "setting a flag must not touch the pixel";
+      EXPECT_TRUE(p.has(kPathOccluded));
+      EXPECT_EQ(p.isShadow(), (flags & kPathShadow) != 0);
+    }
+  }
+}
+
+TEST(Path, HitIsRecordedByOwnerMask) {
+  Path64 p{};
+  EXPECT_FALSE(p.hasHit());
+  p.hitOwners = uint64_t(1) << 63;
+  EXPECT_TRUE(p.hasHit());
+}
+
+}  // namespace
+}  // namespace ferry

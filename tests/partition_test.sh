@@ -1,0 +1,174 @@
+#!/usr/bin/env bash
+# The partitioners and part files (docs/partitioning.md):
+#  1. Every one of the paper's six partitioners, made on the fly by every rank
+#     (--partitioner), renders the same image as one rank, at 2, 3 and 8
+#     ranks: the scene rewrite (meshes broken out, large meshes cut), the
+#     replication and every proxy style keep the image. Same tolerance as
+#     distributed_test.sh (relative 1e-4; at most 0.2% of the pixels may
+#     differ where two surfaces meet a ray at exactly the same distance).
+#  2. Part directories (ferry partition -o DIR; mpirun ferry render DIR): each
+#     rank loads only its part, and the image is again the one-rank image;
+#     the island at 8 ranks goes this way for every partitioner.
+#  3. A wrong rank count, a corrupt, truncated or missing part, a manifest of
+#     another version: a clear error naming the file, a non-zero exit, no hang.
+#  4. --report writes a CSV of the largest part per rank count with a column
+#     per partitioner (and a PNG); --show-partition writes a picture.
+#  5. Partitioning does not hold a second copy of the scene: its peak resident
+#     memory stays below what all the part files hold together.
+set -euo pipefail
+ferry=$1
+source_dir=$2
+source "$source_dir/tests/tools/mpi_env.sh"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+compare="python3 $source_dir/tests/tools/compare_pfm.py"
+partitioners="spatial-simple spatial-sah object-naive object-proxies bvh-style best"
+start=$SECONDS
+
+check_stats() {
+  python3 - "$1" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+r = s["render"]
+fwd = r["total"]["exchange"]["rays_forwarded"]
+assert r["revisits"] == 0, f"{r['revisits']} rays revisited a rank"
+assert r["rays_received"] == fwd, f"forwarded {fwd} but received {r['rays_received']}"
+assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
+print(f"  forwarded {fwd}, max estimated bytes per rank {s['memory']['max_estimated_bytes']:.0f}")
+PY
+}
+
+cornell="builtin:cornell"
+cornell_args="--size 40x40 --spp 2 --max-depth 4 --seed 3 -q"
+island="builtin:island?scale=0.05"
+island_args="--size 48x32 --spp 1 --max-depth 3 --seed 3 -q"
+
+echo "== 1. on the fly"
+"$ferry" render "$cornell" $cornell_args -o "$work/cornell.pfm"
+"$ferry" render "$island" $island_args -o "$work/island.pfm"
+for p in $partitioners; do
+  for ranks in 2 3 8; do
+    out="$work/cornell-$p-$ranks.pfm"
+    mpirun_n "$ranks" "$ferry" render "$cornell" $cornell_args --threads 1 --partitioner "$p" -o "$out" --stats "$out.json"
+    echo "cornell, $p, $ranks ranks:"
+    $compare "$work/cornell.pfm" "$out" --outliers 0.002
+    check_stats "$out.json"
+  done
+  for ranks in 2 3; do
+    out="$work/island-$p-$ranks.pfm"
+    mpirun_n "$ranks" "$ferry" render "$island" $island_args --threads 1 --partitioner "$p" -o "$out" --stats "$out.json"
+    echo "island, $p, $ranks ranks:"
+    $compare "$work/island.pfm" "$out" --outliers 0.002
+    check_stats "$out.json"
+  done
+done
+# The old flag name still works.
+mpirun_n 2 "$ferry" render "$cornell" $cornell_args --threads 1 --partition best -o "$work/alias.pfm"
+$compare "$work/cornell.pfm" "$work/alias.pfm" --outliers 0.002
+echo "  (${SECONDS}s so far)"
+
+echo "== 2. part directories"
+for p in $partitioners; do
+  dir="$work/island-8-$p"
+  "$ferry" partition "$island" --ranks 8 --partitioner "$p" -o "$dir" -q
+  out="$work/island-dir-$p.pfm"
+  mpirun_n 8 "$ferry" render "$dir" $island_args --threads 1 -o "$out" --stats "$out.json"
+  echo "island from $dir, 8 ranks:"
+  $compare "$work/island.pfm" "$out" --outliers 0.002
+  check_stats "$out.json"
+  # Each rank holds what the manifest says its part holds: only its own part.
+  python3 - "$dir/manifest.json" "$out.json" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1])); s = json.load(open(sys.argv[2]))
+want = [p["estimated_bytes"] for p in m["parts"]]
+got = [r["estimated_bytes"] for r in s["memory"]["per_rank"]]
+assert want == got, f"ranks hold {got}, the manifest says {want}"
+assert max(want) < m["input_bytes"], "some rank holds the whole scene"
+PY
+done
+# Landscape too, once (its alpha-cut leaves and textures go through the files).
+landscape="builtin:landscape?scale=0.05"
+"$ferry" render "$landscape" $island_args -o "$work/landscape.pfm"
+"$ferry" partition "$landscape" --ranks 3 --partitioner best -o "$work/landscape-3" -q
+mpirun_n 3 "$ferry" render "$work/landscape-3" $island_args --threads 1 -o "$work/landscape-3.pfm"
+echo "landscape from parts, 3 ranks:"
+$compare "$work/landscape.pfm" "$work/landscape-3.pfm" --outliers 0.002
+echo "  (${SECONDS}s so far)"
+
+echo "== 3. damaged part directories"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+expect_failure() {  # name, expected stderr fragment, command...
+  local name=$1 fragment=$2
+  shift 2
+  local t0=$SECONDS code=0
+  timeout 60 "$@" > "$work/stdout" 2> "$work/stderr" || code=$?
+  if [ $code -eq 124 ]; then fail "$name: hung"; return; fi
+  if [ $code -eq 0 ]; then fail "$name: exited 0"; fi
+  if ! grep -q -- "$fragment" "$work/stderr"; then fail "$name: stderr lacks '$fragment'"; cat "$work/stderr"; fi
+  echo "$name: exit $code after $((SECONDS - t0))s: $(grep -m1 'ferry: error' "$work/stderr" | cut -c1-160)"
+}
+dir="$work/damaged"
+"$ferry" partition "$cornell" --ranks 3 --partitioner bvh-style -o "$dir" -q
+cp -r "$dir" "$work/pristine"
+restore() { rm -rf "$dir"; cp -r "$work/pristine" "$dir"; }
+expect_failure "wrong rank count" "partitioned for 3 ranks" mpirun_n 2 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+python3 - "$dir/part-0001.fpart" <<'PY'
+import sys
+b = bytearray(open(sys.argv[1], "rb").read()); b[len(b) // 2] ^= 0x40; open(sys.argv[1], "wb").write(b)
+PY
+expect_failure "corrupt part" "part-0001.fpart: corrupt" mpirun_n 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+restore
+truncate -s -64 "$dir/part-0002.fpart"
+expect_failure "truncated part" "part-0002.fpart: truncated" mpirun_n 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+restore
+rm "$dir/part-0000.fpart"
+expect_failure "missing part" "part-0000.fpart: no such file" mpirun_n 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+restore
+sed -i 's/"version": [0-9]*/"version": 999/' "$dir/manifest.json"
+expect_failure "manifest of another version" "another version" mpirun_n 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+restore
+expect_failure "unknown partitioner" "unknown partitioner" mpirun_n 2 "$ferry" render "$cornell" $cornell_args --partitioner kd-tree -o "$work/x.pfm"
+expect_failure "partition without output" "give -o DIR" "$ferry" partition "$cornell" --ranks 2
+if [ $failures -ne 0 ]; then echo "partition_test: $failures failures"; exit 1; fi
+
+echo "== 4. report and picture"
+"$ferry" partition "$island" --report "$work/max-part.csv" --ranks 1..24 -q
+test -s "$work/max-part.png"
+python3 - "$work/max-part.csv" <<'PY'
+import csv, sys
+rows = list(csv.reader(open(sys.argv[1])))
+head, body = rows[0], rows[1:]
+six = ["spatial-simple", "spatial-sah", "object-naive", "object-proxies", "bvh-style", "best"]
+assert head == ["ranks"] + [c for p in six for c in (p, p + " (whole)")], head
+assert [int(r[0]) for r in body] == list(range(1, 25))
+cols = {h: [int(r[i]) for r in body] for i, h in enumerate(head) if i}
+for h, v in cols.items():
+    if not h.startswith("best"):
+        assert all(b <= a for a, b in zip(v, v[1:])), f"{h} grows: {v}"
+assert cols["best"][-1] < 0.5 * cols["spatial-simple"][-1], "best should beat spatial at 24 ranks"
+print("  largest part at 24 ranks:", {h: v[-1] for h, v in cols.items()})
+PY
+"$ferry" render "$island" --partitioner best --show-partition=4 --size 96x64 -q -o "$work/picture.png"
+test -s "$work/picture.png"
+echo "  (${SECONDS}s so far)"
+
+echo "== 5. partitioning streams"
+# The island at scale 1 cut by `best` into 8 parts: the scene is several times
+# larger than a part. The parts are written one after another straight from
+# the one copy of the scene in memory: the peak stays near the files' total
+# (the scene's bytes; plus the process's base and, for `best`, the pieces of
+# the mesh being cut), far below two copies.
+"$ferry" partition "builtin:island" --ranks 8 --partitioner best -o "$work/big" > "$work/big.txt"
+python3 - "$work/big.txt" "$work/big" <<'PY'
+import os, re, sys
+text = open(sys.argv[1]).read()
+m = re.search(r"peak resident ([0-9.]+) (KiB|MiB|GiB)", text)
+peak = float(m.group(1)) * {"KiB": 2**10, "MiB": 2**20, "GiB": 2**30}[m.group(2)]
+sizes = [os.path.getsize(os.path.join(sys.argv[2], f)) for f in os.listdir(sys.argv[2])]
+files, largest = sum(sizes), max(sizes)
+print(f"  peak resident {peak / 2**20:.0f} MiB; parts {files / 2**20:.0f} MiB in all, largest {largest / 2**20:.0f} MiB")
+assert files > 3 * largest, "the scene should be several times larger than one part"
+assert peak < 1.5 * files, "partitioning held more than one copy of the scene"
+PY
+echo "partition_test: all passed in ${SECONDS}s"
