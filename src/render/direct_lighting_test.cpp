@@ -98,7 +98,8 @@ TEST(DirectLighting, LambertianPlaneUnderASquareEmitter) {
   emitter.baseColor = Vec3f(0);
   emitter.emission = le;
   int32_t e = scene.addMaterial(emitter);
-  // Facing down (geometric normal -y); emitters are two-sided anyway.
+  // Winding gives a geometric normal of +y (away from the plane); emitters
+  // are two-sided (docs/architecture.md), so the lower side emits.
   scene.addSingleInstanceMesh(makeQuad({-float(half), float(h), -float(half)}, {0, 0, 2 * float(half)},
                                        {2 * float(half), 0, 0}, e));
   // Looking at the centre under the emitter from the side, under its edge,
