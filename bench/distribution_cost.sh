@@ -68,6 +68,16 @@ for n in ranks:
     print(f"  {n} rank(s) x {threads} thread(s): {frame[n]:7.3f} s/frame   ratio {frame[n] / base:5.2f}"
           f"   (frames: {', '.join(f'{f:.2f}' for r in range(1, rounds + 1) for f in [x['seconds'] for x in load(f'time-{n}-{r}')['render']['frames']])})")
 
+print("\nwhere the time goes (round 1, per frame): rays traced and forwarded (exact), stage seconds summed over ranks")
+for n in ranks:
+    s = load(f"time-{n}-1")
+    t, f = s["render"]["total"], len(s["render"]["frames"])
+    st = t["stage_seconds"]
+    print(f"  {n} rank(s): traced {t['traces']['total'] / f:9.0f} (closest {t['traces']['closest'] / f:.0f},"
+          f" shadow {t['traces']['occlusion'] / f:.0f}, re-trace {t['traces']['retrace'] / f:.0f}),"
+          f" forwarded {t['exchange']['rays_forwarded'] / f:8.0f};"
+          f" s: " + ", ".join(f"{k} {st[k] / f:.2f}" for k in ("generate", "trace", "exchange", "shade", "accumulate")))
+
 print("\nrays forwarded per frame (exact counters; bytes and rounds per frame too)")
 frames = lambda s: len(s["render"]["frames"])
 for n in (4, 8):

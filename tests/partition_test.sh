@@ -112,23 +112,23 @@ dir="$work/damaged"
 "$ferry" partition "$cornell" --ranks 3 --partitioner bvh-style -o "$dir" -q
 cp -r "$dir" "$work/pristine"
 restore() { rm -rf "$dir"; cp -r "$work/pristine" "$dir"; }
-expect_failure "wrong rank count" "partitioned for 3 ranks" mpirun_n 2 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+expect_failure "wrong rank count" "partitioned for 3 ranks" mpirun --oversubscribe -np 2 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
 python3 - "$dir/part-0001.fpart" <<'PY'
 import sys
 b = bytearray(open(sys.argv[1], "rb").read()); b[len(b) // 2] ^= 0x40; open(sys.argv[1], "wb").write(b)
 PY
-expect_failure "corrupt part" "part-0001.fpart: corrupt" mpirun_n 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+expect_failure "corrupt part" "part-0001.fpart: corrupt" mpirun --oversubscribe -np 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
 restore
 truncate -s -64 "$dir/part-0002.fpart"
-expect_failure "truncated part" "part-0002.fpart: truncated" mpirun_n 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+expect_failure "truncated part" "part-0002.fpart: truncated" mpirun --oversubscribe -np 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
 restore
 rm "$dir/part-0000.fpart"
-expect_failure "missing part" "part-0000.fpart: no such file" mpirun_n 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+expect_failure "missing part" "part-0000.fpart: no such file" mpirun --oversubscribe -np 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
 restore
 sed -i 's/"version": [0-9]*/"version": 999/' "$dir/manifest.json"
-expect_failure "manifest of another version" "another version" mpirun_n 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
+expect_failure "manifest of another version" "another version" mpirun --oversubscribe -np 3 "$ferry" render "$dir" $cornell_args -o "$work/x.pfm"
 restore
-expect_failure "unknown partitioner" "unknown partitioner" mpirun_n 2 "$ferry" render "$cornell" $cornell_args --partitioner kd-tree -o "$work/x.pfm"
+expect_failure "unknown partitioner" "unknown partitioner" mpirun --oversubscribe -np 2 "$ferry" render "$cornell" $cornell_args --partitioner kd-tree -o "$work/x.pfm"
 expect_failure "partition without output" "give -o DIR" "$ferry" partition "$cornell" --ranks 2
 if [ $failures -ne 0 ]; then echo "partition_test: $failures failures"; exit 1; fi
 

@@ -15,7 +15,7 @@ void addInfoCommand(CLI::App& app, InfoOptions& options) {
       "estimated memory by kind. Built-ins are described from their generator's counts without\n"
       "making geometry, so large scales answer at once.");
   info->add_option("scene", options.scene,
-                   "Scene file (.obj) or built-in (builtin:island, builtin:landscape, builtin:cornell,\n"
+                   "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in (builtin:island, builtin:landscape, builtin:cornell,\n"
                    "builtin:furnace; parameters as builtin:island?scale=4&seed=7)")
       ->capture_default_str();
   info->add_flag("--json", options.json, "Print JSON instead of a table");
@@ -26,6 +26,12 @@ void addInfoCommand(CLI::App& app, InfoOptions& options) {
 int runInfo(const InfoOptions& options) {
   LoadOptions load;
   load.envFallback = options.envFallback;
+  load.progress = [last = -1](uint64_t done, uint64_t total, const std::string& what) mutable {
+    int tenth = total ? int(10 * done / total) : 10;
+    if (tenth == last) return;
+    last = tenth;
+    fmt::print(stderr, "load: {}% of {}\n", tenth * 10, what);
+  };
   SceneSummary summary = describeScene(options.scene, load);
   if (options.json)
     fmt::print("{}\n", summary.toJson().dump(2));

@@ -1,7 +1,7 @@
 #include "app/partition_command.h"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <chrono>
@@ -23,7 +23,9 @@ namespace ferry {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 PartitionerOptions partitionerOptions(const PartitionCommandOptions& o) {
   PartitionerOptions p;
@@ -45,7 +47,8 @@ nlohmann::json optionsJson(const PartitionerOptions& p) {
 void checkPartitionerFlags(const PartitionerOptions& p) {
   checkPartitionerName(p.name);
   if (!(p.replicationBudget >= 0 && p.replicationBudget <= 1))
-    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1", p.replicationBudget));
+    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
+                                 p.replicationBudget));
   if (p.meshProxies < 1 || p.meshProxies > 4096)
     throw InputError(fmt::format("--mesh-proxies {}: expected 1 to 4096", p.meshProxies));
 }
@@ -77,32 +80,37 @@ int writeParts(const PartitionCommandOptions& o, const PartitionerOptions& p, in
   Manifest m = writePartDirectory(o.output, scene, partition, lights, info);
   const double writeSeconds = secondsSince(writeStart);
   if (o.quiet) return 0;
-  fmt::print("partitioned {} ({} estimated) for {} ranks with {}: {} units, {} distinct parts, {} proxies\n",
-             o.scene, formatBytes(stats.inputBytes), ranks, p.name, stats.units, stats.parts, stats.proxies);
+  fmt::print(
+      "partitioned {} ({} estimated) for {} ranks with {}: {} units, {} distinct parts, {} "
+      "proxies\n",
+      o.scene, formatBytes(stats.inputBytes), ranks, p.name, stats.units, stats.parts,
+      stats.proxies);
   if (stats.split.objectsBroken || stats.split.meshesCut)
     fmt::print("  rewritten first: {} objects broken into meshes, {} meshes cut into {} pieces\n",
                stats.split.objectsBroken, stats.split.meshesCut, stats.split.piecesMade);
   if (p.name == "best")
-    fmt::print("  replicated {} units, {} over all ranks (budget {:.1f}% = {})\n", stats.replicatedUnits,
-               formatBytes(stats.replicatedBytes), 100 * p.replicationBudget,
+    fmt::print("  replicated {} units, {} over all ranks (budget {:.1f}% = {})\n",
+               stats.replicatedUnits, formatBytes(stats.replicatedBytes), 100 * p.replicationBudget,
                formatBytes(uint64_t(p.replicationBudget * double(stats.inputBytes))));
   fmt::print("  {:>5} {:>10} {:>12} {:>12}\n", "rank", "instances", "estimated", "file");
   uint64_t fileBytes = m.shared.bytes;
   for (const ManifestPart& part : m.parts) {
-    fmt::print("  {:>5} {:>10} {:>12} {:>12}\n", part.rank, part.instances, formatBytes(part.estimatedBytes),
-               formatBytes(part.bytes));
+    fmt::print("  {:>5} {:>10} {:>12} {:>12}\n", part.rank, part.instances,
+               formatBytes(part.estimatedBytes), formatBytes(part.bytes));
     fileBytes += part.bytes;
   }
-  fmt::print("  largest part {} ({:.1f}% of the scene)\n", formatBytes(stats.maxRankBytes()),
-             100.0 * double(stats.maxRankBytes()) / double(std::max<uint64_t>(1, stats.inputBytes)));
-  fmt::print("  {:.2f} s load, {:.2f} s partition, {:.2f} s write; peak resident {}\n", loadSeconds, stats.seconds,
-             writeSeconds, formatBytes(readProcessMemory().peakResidentBytes));
-  fmt::print("wrote {} ({} files, {}; shared data {})\n", o.output, m.parts.size() + 2, formatBytes(fileBytes),
-             formatBytes(m.shared.bytes));
+  fmt::print(
+      "  largest part {} ({:.1f}% of the scene)\n", formatBytes(stats.maxRankBytes()),
+      100.0 * double(stats.maxRankBytes()) / double(std::max<uint64_t>(1, stats.inputBytes)));
+  fmt::print("  {:.2f} s load, {:.2f} s partition, {:.2f} s write; peak resident {}\n", loadSeconds,
+             stats.seconds, writeSeconds, formatBytes(readProcessMemory().peakResidentBytes));
+  fmt::print("wrote {} ({} files, {}; shared data {})\n", o.output, m.parts.size() + 2,
+             formatBytes(fileBytes), formatBytes(m.shared.bytes));
   return 0;
 }
 
-int writeReport(const PartitionCommandOptions& o, const PartitionerOptions& p, int first, int last) {
+int writeReport(const PartitionCommandOptions& o, const PartitionerOptions& p, int first,
+                int last) {
   Scene scene = loadScene(o.scene);
   const std::string name = scene.name.empty() ? o.scene : scene.name;
   MaxPartReport report = maxPartReport(std::move(scene), name, first, last, p);
@@ -110,10 +118,10 @@ int writeReport(const PartitionCommandOptions& o, const PartitionerOptions& p, i
   const std::string plot = o.plot.empty() ? defaultPlotPath(o.report) : o.plot;
   writeMaxPartPlot(plot, report);
   if (o.quiet) return 0;
-  fmt::print("largest part of {} ({} estimated), {}..{} ranks:\n", o.scene, formatBytes(report.inputBytes), first,
-             last);
-  fmt::print("  {:<26} {:>12} {:>12} {:>9}\n", "partitioner", fmt::format("at {}", first), fmt::format("at {}", last),
-             "seconds");
+  fmt::print("largest part of {} ({} estimated), {}..{} ranks:\n", o.scene,
+             formatBytes(report.inputBytes), first, last);
+  fmt::print("  {:<26} {:>12} {:>12} {:>9}\n", "partitioner", fmt::format("at {}", first),
+             fmt::format("at {}", last), "seconds");
   for (const MaxPartSeries& s : report.series)
     fmt::print("  {:<26} {:>12} {:>12} {:>9.2f}\n", s.label(), formatBytes(s.bytes.front()),
                formatBytes(s.bytes.back()), s.seconds);
@@ -131,21 +139,26 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       "  mpirun -np 8 ferry render island-8 -o island.png\n"
       "or report the largest part for every rank count and partitioner (the paper's Figure 4):\n"
       "  ferry partition builtin:island --report max-part.csv --ranks 1..128");
-  cmd->add_option("scene", o.scene, "Scene file or built-in, as for ferry render")->capture_default_str();
-  cmd->add_option("--ranks", o.ranks, "Rank count (8), or for --report a range (1..128)")->capture_default_str();
+  cmd->add_option("scene", o.scene, "Scene file or built-in, as for ferry render")
+      ->capture_default_str();
+  cmd->add_option("--ranks", o.ranks, "Rank count (8), or for --report a range (1..128)")
+      ->capture_default_str();
   std::string names;
   for (const std::string& n : partitionerNames()) names += (names.empty() ? "" : ", ") + n;
   cmd->add_option("--partitioner", o.partitioner, "Partitioner: " + names)->capture_default_str();
   cmd->add_option("-o,--output", o.output, "Directory to write the parts and manifest.json into");
-  cmd->add_option("--report", o.report,
-                  "Write the largest part's estimated bytes per rank count and partitioner as CSV, and\n"
-                  "a plot of it as PNG (see --plot)");
+  cmd->add_option(
+      "--report", o.report,
+      "Write the largest part's estimated bytes per rank count and partitioner as CSV, and\n"
+      "a plot of it as PNG (see --plot)");
   cmd->add_option("--plot", o.plot, "PNG for --report (default: the report's name with .png)");
-  cmd->add_flag("--keep-objects-whole", o.keepObjectsWhole,
-                "Keep non-instanced content whole, as one unit (default: each mesh of a non-instanced\n"
-                "object is its own unit, after Zellmann et al.)");
+  cmd->add_flag(
+      "--keep-objects-whole", o.keepObjectsWhole,
+      "Keep non-instanced content whole, as one unit (default: each mesh of a non-instanced\n"
+      "object is its own unit, after Zellmann et al.)");
   cmd->add_option("--replication-budget", o.replicationBudget,
-                  "best: copies of spatially large, cheap content may add this fraction of the scene's bytes")
+                  "best: copies of spatially large, cheap content may add this fraction of the "
+                  "scene's bytes")
       ->capture_default_str();
   cmd->add_option("--mesh-proxies", o.meshProxies, "object-proxies: boxes per non-instanced mesh")
       ->capture_default_str();
@@ -156,7 +169,9 @@ int runPartition(const PartitionCommandOptions& o) {
   const PartitionerOptions p = partitionerOptions(o);
   checkPartitionerFlags(p);
   if (o.output.empty() && o.report.empty())
-    throw InputError("ferry partition: give -o DIR (write parts) or --report FILE.csv (largest part per rank count)");
+    throw InputError(
+        "ferry partition: give -o DIR (write parts) or --report FILE.csv (largest part per rank "
+        "count)");
   int first = 0, last = 0;
   parseRankRange(o.ranks, first, last);
   if (!o.report.empty()) {
@@ -166,7 +181,8 @@ int runPartition(const PartitionCommandOptions& o) {
   if (!o.output.empty()) {
     if (o.ranks.find("..") != std::string::npos)
       throw InputError(fmt::format("--ranks '{}': -o needs one rank count", o.ranks));
-    if (last > 64) throw InputError(fmt::format("--ranks {}: parts are made for 1 to 64 ranks", last));
+    if (last > 64)
+      throw InputError(fmt::format("--ranks {}: parts are made for 1 to 64 ranks", last));
     writeParts(o, p, last);
   }
   return 0;
@@ -188,7 +204,8 @@ int runShowPartition(const RenderOptions& o, const Communicator& comm) {
       int width = 0, height = 0;
       parseImageSize(o.size, width, height);
       const std::string& out = o.output;
-      if (out.size() < 4 || (out.substr(out.size() - 4) != ".png" && out.substr(out.size() - 4) != ".PNG"))
+      if (out.size() < 4 ||
+          (out.substr(out.size() - 4) != ".png" && out.substr(out.size() - 4) != ".PNG"))
         throw InputError(fmt::format("{}: --show-partition writes a PNG", out));
       Scene scene;
       Partition partition;
@@ -196,15 +213,16 @@ int runShowPartition(const RenderOptions& o, const Communicator& comm) {
       if (isPartDirectory(o.scene)) {
         scene = loadAllParts(o.scene, partition);
         const Manifest m = readManifest(o.scene);
-        title = fmt::format("{}: {}, {} ranks (from {})", m.summary.value("name", o.scene), m.partitioner, m.ranks,
-                            o.scene);
+        title = fmt::format("{}: {}, {} ranks (from {})", m.summary.value("name", o.scene),
+                            m.partitioner, m.ranks, o.scene);
       } else {
         const int ranks = o.showPartition > 0 ? o.showPartition : comm.size();
         const PartitionerOptions p = renderPartitionerOptions(o);
         checkPartitionerFlags(p);
         scene = loadScene(o.scene);
         partition = partitionScene(scene, ranks, p);
-        title = fmt::format("{}: {}{}, {} ranks", scene.name, p.name, p.breakObjects ? "" : " (objects whole)", ranks);
+        title = fmt::format("{}: {}{}, {} ranks", scene.name, p.name,
+                            p.breakObjects ? "" : " (objects whole)", ranks);
       }
       PictureOptions picture;
       picture.width = width;

@@ -45,6 +45,9 @@ void validate(const RenderOptions& o) {
   if (o.threads < 0) throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
   checkOutputPath(o.output);
   parseForwardingMode(o.forwarding);
+  checkPartitionerName(o.partition);
+  if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
+    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1", o.replicationBudget));
 }
 
 // Everything a rank holds once set up.
@@ -222,8 +225,18 @@ template <typename Path>
 int renderOnRanks(const RenderOptions& o, const RenderSettings& settings, RankSetup& setup,
                   const Communicator& comm, Clock::time_point start) {
   const bool talk = comm.isRoot() && !o.quiet;
-  DistributedTraversal<Path> traversal(comm, *setup.geometry, setup.partition, parseForwardingMode(o.forwarding));
-  WavefrontRenderer<Path> renderer(setup.scene, *setup.geometry, *setup.lights, traversal, settings);
+  // One rank needs no forwarding machinery (no proxy queries, no collectives per round).
+  std::unique_ptr<RayTraversal<Path>> traversal;
+  DistributedTraversal<Path>* distributed = nullptr;
+  if (comm.size() == 1) {
+    traversal = std::make_unique<LocalTraversal<Path>>(*setup.geometry);
+  } else {
+    auto d = std::make_unique<DistributedTraversal<Path>>(comm, *setup.geometry, setup.partition,
+                                                          parseForwardingMode(o.forwarding));
+    distributed = d.get();
+    traversal = std::move(d);
+  }
+  WavefrontRenderer<Path> renderer(setup.scene, *setup.geometry, *setup.lights, *traversal, settings);
   FrameBuffer frameBuffer(settings.width, settings.height);
   RenderStats stats;
   Progress rendering("render", settings.frames * settings.samplesPerPixel, talk);
@@ -250,8 +263,8 @@ int renderOnRanks(const RenderOptions& o, const RenderSettings& settings, RankSe
   if (!stats.frames.empty()) stats.frames.back().times.composite += compositeSeconds;
   compositeBytes = comm.sum(compositeBytes);
   RankMemory memory = gatherMemory(comm, setup);
-  uint64_t received = comm.sum(traversal.received());
-  uint64_t revisits = comm.sum(traversal.revisits());
+  uint64_t received = comm.sum(distributed ? distributed->received() : 0);
+  uint64_t revisits = comm.sum(distributed ? distributed->revisits() : 0);
 
   if (!comm.isRoot()) return 0;
   if (png)
@@ -303,7 +316,7 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
       "The image is the same whatever the rank count, --threads, --partition or --forwarding\n"
       "(up to floating-point summation order).");
   render->add_option("scene", o.scene,
-                     "Scene file (.obj) or built-in: builtin:island, builtin:landscape, builtin:cornell,\n"
+                     "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in: builtin:island, builtin:landscape, builtin:cornell,\n"
                      "builtin:furnace, with parameters as builtin:island?scale=4&seed=7")
       ->capture_default_str();
   render->add_option("--size", o.size, "Image size WIDTHxHEIGHT")->capture_default_str();

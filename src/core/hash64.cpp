@@ -82,7 +82,8 @@ void Hash64::update(const void* data, size_t bytes) {
 uint64_t Hash64::digest() const {
   uint64_t h;
   if (total_ >= 32) {
-    h = std::rotl(lanes_[0], 1) + std::rotl(lanes_[1], 7) + std::rotl(lanes_[2], 12) + std::rotl(lanes_[3], 18);
+    h = std::rotl(lanes_[0], 1) + std::rotl(lanes_[1], 7) + std::rotl(lanes_[2], 12) +
+        std::rotl(lanes_[3], 18);
     for (int i = 0; i < 4; ++i) h = mergeRound(h, lanes_[i]);
   } else {
     h = seed_ + kPrime5;
@@ -119,6 +120,8 @@ uint64_t hash64(const void* data, size_t bytes, uint64_t seed) {
   return h.digest();
 }
 
-std::string hashToHex(uint64_t hash) { return fmt::format("{:016x}", hash); }
+std::string hashToHex(uint64_t hash) {
+  return fmt::format("{:016x}", hash);
+}
 
 }  // namespace ferry

@@ -8,5 +8,8 @@
 #define TINYGLTF_NO_STB_IMAGE_WRITE
 #define TINYGLTF_NO_EXTERNAL_IMAGE
 #define TINYGLTF_NO_INCLUDE_JSON
+// The JSON library must come first.
+// clang-format off
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
+// clang-format on

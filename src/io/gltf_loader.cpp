@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <type_traits>
 
 #include <fmt/format.h>
 #include <stb/stb_image.h>
@@ -92,7 +93,8 @@ bool readRange(std::vector<unsigned char>* out, std::string* err, const std::str
     size_t chunk = size_t(std::min<uint64_t>(length - done, uint64_t(16) << 20));
     size_t n = std::fread(out->data() + done, 1, chunk, f.get());
     if (n == 0) {
-      *err = fmt::format("{}: file ends after {} of {} bytes", path, offset + done, offset + length);
+      *err =
+          fmt::format("{}: file ends after {} of {} bytes", path, offset + done, offset + length);
       return false;
     }
     done += n;
@@ -122,7 +124,8 @@ bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std:
   return readRange(out, err, path, 0, size, *access->options);
 }
 
-bool writeWholeFile(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+bool writeWholeFile(std::string* err, const std::string&, const std::vector<unsigned char>&,
+                    void*) {
   *err = "Ferry does not write glTF files";
   return false;
 }
@@ -148,7 +151,8 @@ tinygltf::Model parseModel(const std::string& path, const LoadOptions& options) 
   if (!fs::is_regular_file(path, ec)) throw InputError(fmt::format("{}: no such file", path));
   const uint64_t fileSize = fs::file_size(path, ec);
   std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   std::string baseDir = fs::path(path).parent_path().string();
   if (baseDir.empty()) baseDir = ".";
 
@@ -159,18 +163,23 @@ tinygltf::Model parseModel(const std::string& path, const LoadOptions& options) 
   ByteStream in = ByteStream::openFile(path);
   if (ext == ".glb") {
     unsigned char header[20];
-    if (in.read(header, 20) != 20) throw InputError(fmt::format("{}: too short for a .glb file", path));
-    if (readLe32(header) != kGlbMagic) throw InputError(fmt::format("{}: not a .glb file (no glTF magic)", path));
+    if (in.read(header, 20) != 20)
+      throw InputError(fmt::format("{}: too short for a .glb file", path));
+    if (readLe32(header) != kGlbMagic)
+      throw InputError(fmt::format("{}: not a .glb file (no glTF magic)", path));
     if (readLe32(header + 4) != 2)
-      throw InputError(fmt::format("{}: .glb version {} (only 2 is supported)", path, readLe32(header + 4)));
+      throw InputError(
+          fmt::format("{}: .glb version {} (only 2 is supported)", path, readLe32(header + 4)));
     uint64_t total = readLe32(header + 8);
     if (total > fileSize)
-      throw InputError(fmt::format("{}: header says {} bytes, the file has {}: truncated?", path, total, fileSize));
+      throw InputError(fmt::format("{}: header says {} bytes, the file has {}: truncated?", path,
+                                   total, fileSize));
     uint64_t jsonLength = readLe32(header + 12);
     if (readLe32(header + 16) != kChunkJson)
       throw InputError(fmt::format("{}: the first chunk is not JSON", path));
     if (20 + jsonLength > total)
-      throw InputError(fmt::format("{}: JSON chunk of {} bytes goes past the end ({} bytes)", path, jsonLength, total));
+      throw InputError(fmt::format("{}: JSON chunk of {} bytes goes past the end ({} bytes)", path,
+                                   jsonLength, total));
     json.resize(size_t(jsonLength));
     if (in.read(json.data(), json.size()) != json.size())
       throw InputError(fmt::format("{}: file ends inside the JSON chunk", path));
@@ -179,12 +188,13 @@ tinygltf::Model parseModel(const std::string& path, const LoadOptions& options) 
     if (next + 8 <= total) {
       in.skip(next - in.offset());
       unsigned char chunk[8];
-      if (in.read(chunk, 8) != 8) throw InputError(fmt::format("{}: file ends inside a chunk header", path));
+      if (in.read(chunk, 8) != 8)
+        throw InputError(fmt::format("{}: file ends inside a chunk header", path));
       uint64_t binLength = readLe32(chunk);
       if (readLe32(chunk + 4) == kChunkBin) {
         if (next + 8 + binLength > total)
-          throw InputError(fmt::format("{}: binary chunk of {} bytes goes past the end ({} bytes)", path,
-                                       binLength, total));
+          throw InputError(fmt::format("{}: binary chunk of {} bytes goes past the end ({} bytes)",
+                                       path, binLength, total));
         access.hasBin = true;
         access.binOffset = next + 8;
         access.binLength = binLength;
@@ -198,23 +208,28 @@ tinygltf::Model parseModel(const std::string& path, const LoadOptions& options) 
       throw InputError(fmt::format("{}: JSON chunk: {}", path, e.what()));
     }
     if (doc.is_object() && doc.contains("buffers") && doc["buffers"].is_array() &&
-        !doc["buffers"].empty() && doc["buffers"][0].is_object() && !doc["buffers"][0].contains("uri")) {
-      if (!access.hasBin) throw InputError(fmt::format("{}: buffer 0 has no uri and the file has no binary chunk", path));
+        !doc["buffers"].empty() && doc["buffers"][0].is_object() &&
+        !doc["buffers"][0].contains("uri")) {
+      if (!access.hasBin)
+        throw InputError(
+            fmt::format("{}: buffer 0 has no uri and the file has no binary chunk", path));
       auto& buffer = doc["buffers"][0];
       if (buffer.contains("byteLength") && buffer["byteLength"].is_number_unsigned()) {
         uint64_t wanted = buffer["byteLength"].get<uint64_t>();
         if (wanted > access.binLength)
-          throw InputError(fmt::format("{}: buffer 0 claims {} bytes, the binary chunk has {}", path, wanted,
-                                       access.binLength));
+          throw InputError(fmt::format("{}: buffer 0 claims {} bytes, the binary chunk has {}",
+                                       path, wanted, access.binLength));
         access.binLength = wanted;
       }
       buffer["uri"] = kGlbBinaryMarker;
     }
     json = doc.dump();
   } else {
-    if (fileSize > kMaxJsonBytes) throw InputError(fmt::format("{}: {} bytes of JSON is too large", path, fileSize));
+    if (fileSize > kMaxJsonBytes)
+      throw InputError(fmt::format("{}: {} bytes of JSON is too large", path, fileSize));
     json.resize(size_t(fileSize));
-    if (in.read(json.data(), json.size()) != json.size()) throw InputError(fmt::format("{}: read error", path));
+    if (in.read(json.data(), json.size()) != json.size())
+      throw InputError(fmt::format("{}: read error", path));
   }
   if (json.size() > UINT32_MAX) throw InputError(fmt::format("{}: JSON too large", path));
 
@@ -225,7 +240,8 @@ tinygltf::Model parseModel(const std::string& path, const LoadOptions& options) 
   std::string err, warn;
   bool ok;
   try {
-    ok = loader.LoadASCIIFromString(&model, &err, &warn, json.data(), unsigned(json.size()), baseDir);
+    ok = loader.LoadASCIIFromString(&model, &err, &warn, json.data(), unsigned(json.size()),
+                                    baseDir);
   } catch (const std::exception& e) {
     throw InputError(fmt::format("{}: {}", path, e.what()));
   }
@@ -240,7 +256,8 @@ tinygltf::Model parseModel(const std::string& path, const LoadOptions& options) 
 
 class Accessors {
  public:
-  Accessors(const tinygltf::Model& model, std::string path) : model_(model), path_(std::move(path)) {}
+  Accessors(const tinygltf::Model& model, std::string path)
+      : model_(model), path_(std::move(path)) {}
 
   [[noreturn]] void fail(const std::string& message) const {
     throw InputError(fmt::format("{}: {}", path_, message));
@@ -248,7 +265,8 @@ class Accessors {
 
   const tinygltf::Accessor& get(int index, const char* what) const {
     if (index < 0 || size_t(index) >= model_.accessors.size())
-      fail(fmt::format("{}: accessor {} does not exist ({} accessors)", what, index, model_.accessors.size()));
+      fail(fmt::format("{}: accessor {} does not exist ({} accessors)", what, index,
+                       model_.accessors.size()));
     return model_.accessors[size_t(index)];
   }
 
@@ -257,55 +275,82 @@ class Accessors {
     const tinygltf::Accessor& a = get(index, what);
     int n = tinygltf::GetNumComponentsInType(uint32_t(a.type));
     if (n != components)
-      fail(fmt::format("{}: accessor {} has {} components per element, {} expected", what, index, n, components));
+      fail(fmt::format("{}: accessor {} has {} components per element, {} expected", what, index, n,
+                       components));
+    check(a, index, what);
     std::vector<float> out(a.count * size_t(n), 0.0f);
-    visit(a, index, what, [&](size_t i, int c, double v) { out[i * size_t(n) + size_t(c)] = float(v); });
+    visit(a, index, what,
+          [&](size_t i, int c, double v) { out[i * size_t(n) + size_t(c)] = float(v); });
     return out;
   }
 
   std::vector<uint32_t> indices(int index, const char* what) const {
     const tinygltf::Accessor& a = get(index, what);
-    if (tinygltf::GetNumComponentsInType(uint32_t(a.type)) != 1) fail(fmt::format("{}: indices must be scalars", what));
+    if (tinygltf::GetNumComponentsInType(uint32_t(a.type)) != 1)
+      fail(fmt::format("{}: indices must be scalars", what));
     if (a.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
         a.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
         a.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
       fail(fmt::format("{}: indices must be unsigned integers", what));
+    check(a, index, what);
     std::vector<uint32_t> out(a.count);
     visit(a, index, what, [&](size_t i, int, double v) { out[i] = uint32_t(v); });
     return out;
   }
 
-  size_t count(int index, const char* what) const { return get(index, what).count; }
+  size_t count(int index, const char* what) const {
+    const tinygltf::Accessor& a = get(index, what);
+    check(a, index, what);
+    return a.count;
+  }
 
  private:
+  // Before anything is allocated for it: does the accessor fit its buffer
+  // view and the view its buffer?
+  void check(const tinygltf::Accessor& a, int index, const char* what) const {
+    visit(a, index, what, nullptr);
+  }
+
   template <typename F>
   void visit(const tinygltf::Accessor& a, int index, const char* what, F&& f) const {
-    if (a.sparse.isSparse) fail(fmt::format("{}: accessor {} is sparse (not supported)", what, index));
-    if (a.count > size_t(INT32_MAX)) fail(fmt::format("{}: accessor {} has {} elements: too many", what, index, a.count));
+    if (a.sparse.isSparse)
+      fail(fmt::format("{}: accessor {} is sparse (not supported)", what, index));
+    if (a.count > size_t(INT32_MAX))
+      fail(fmt::format("{}: accessor {} has {} elements: too many", what, index, a.count));
     const int n = tinygltf::GetNumComponentsInType(uint32_t(a.type));
     const int size = tinygltf::GetComponentSizeInBytes(uint32_t(a.componentType));
     if (n <= 0 || size <= 0) fail(fmt::format("{}: accessor {} has an invalid type", what, index));
     if (a.bufferView < 0) return;  // all zeros
     if (size_t(a.bufferView) >= model_.bufferViews.size())
-      fail(fmt::format("{}: accessor {} uses buffer view {} of {}", what, index, a.bufferView, model_.bufferViews.size()));
+      fail(fmt::format("{}: accessor {} uses buffer view {} of {}", what, index, a.bufferView,
+                       model_.bufferViews.size()));
     const tinygltf::BufferView& view = model_.bufferViews[size_t(a.bufferView)];
     if (view.buffer < 0 || size_t(view.buffer) >= model_.buffers.size())
-      fail(fmt::format("{}: buffer view {} uses buffer {} of {}", what, a.bufferView, view.buffer, model_.buffers.size()));
+      fail(fmt::format("{}: buffer view {} uses buffer {} of {}", what, a.bufferView, view.buffer,
+                       model_.buffers.size()));
     const std::vector<unsigned char>& data = model_.buffers[size_t(view.buffer)].data;
     if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
-      fail(fmt::format("{}: buffer view {} ({} bytes at {}) goes past its buffer ({} bytes)", what, a.bufferView,
-                       view.byteLength, view.byteOffset, data.size()));
+      fail(fmt::format("{}: buffer view {} ({} bytes at {}) goes past its buffer ({} bytes)", what,
+                       a.bufferView, view.byteLength, view.byteOffset, data.size()));
     const uint64_t element = uint64_t(n) * uint64_t(size);
     const uint64_t stride = view.byteStride ? view.byteStride : element;
-    if (stride < element) fail(fmt::format("{}: buffer view {} stride {} is smaller than an element", what, a.bufferView, stride));
-    if (a.count > 0 && (a.byteOffset > view.byteLength ||
-                        (uint64_t(a.count) - 1) * stride + element > view.byteLength - a.byteOffset))
-      fail(fmt::format("{}: accessor {} ({} elements) goes past its buffer view ({} bytes)", what, index, a.count,
-                       view.byteLength));
-    const unsigned char* base = data.data() + view.byteOffset + a.byteOffset;
-    for (size_t i = 0; i < a.count; ++i) {
-      const unsigned char* e = base + i * stride;
-      for (int c = 0; c < n; ++c) f(i, c, component(e + size_t(c) * size_t(size), a.componentType, a.normalized));
+    if (stride < element)
+      fail(fmt::format("{}: buffer view {} stride {} is smaller than an element", what,
+                       a.bufferView, stride));
+    if (a.count > 0 &&
+        (a.byteOffset > view.byteLength ||
+         (uint64_t(a.count) - 1) * stride + element > view.byteLength - a.byteOffset))
+      fail(fmt::format("{}: accessor {} ({} elements) goes past its buffer view ({} bytes)", what,
+                       index, a.count, view.byteLength));
+    if constexpr (std::is_same_v<std::decay_t<F>, std::nullptr_t>) {
+      return;
+    } else {
+      const unsigned char* base = data.data() + view.byteOffset + a.byteOffset;
+      for (size_t i = 0; i < a.count; ++i) {
+        const unsigned char* e = base + i * stride;
+        for (int c = 0; c < n; ++c)
+          f(i, c, component(e + size_t(c) * size_t(size), a.componentType, a.normalized));
+      }
     }
   }
 
@@ -353,7 +398,8 @@ class Accessors {
 
 // ------------------------------------------------------------------- helpers
 
-Affine3f fromTrs(const std::vector<double>& t, const std::vector<double>& r, const std::vector<double>& s) {
+Affine3f fromTrs(const std::vector<double>& t, const std::vector<double>& r,
+                 const std::vector<double>& s) {
   Affine3f m;
   if (r.size() == 4) {
     double x = r[0], y = r[1], z = r[2], w = r[3];
@@ -413,7 +459,8 @@ Texture decodeImage(const unsigned char* bytes, size_t size, const std::string& 
   if (w <= 0 || h <= 0 || uint64_t(w) * uint64_t(h) > kMaxImagePixels)
     throw InputError(fmt::format("{}: image of {} x {} pixels is too large", name, w, h));
   unsigned char* pixels = stbi_load_from_memory(bytes, int(size), &w, &h, &channels, 4);
-  if (!pixels) throw InputError(fmt::format("{}: cannot decode image: {}", name, stbi_failure_reason()));
+  if (!pixels)
+    throw InputError(fmt::format("{}: cannot decode image: {}", name, stbi_failure_reason()));
   Texture t;
   t.name = name;
   t.width = w;
@@ -441,15 +488,22 @@ class GltfBuilder {
           "KHR_materials_emissive_strength", "KHR_lights_punctual", "EXT_mesh_gpu_instancing",
           "KHR_materials_transmission", "KHR_materials_ior"};
       if (!known.count(ext))
-        warnings_.once("ext|" + ext, fmt::format("{}: extension {} is not supported and ignored", path_, ext));
+        warnings_.once("ext|" + ext,
+                       fmt::format("{}: extension {} is not supported and ignored", path_, ext));
     }
     for (const std::string& ext : model_.extensionsRequired)
       if (ext == "KHR_draco_mesh_compression" || ext == "EXT_meshopt_compression" ||
           ext == "KHR_mesh_quantization")
         throw InputError(fmt::format("{}: requires {}, which Ferry does not support", path_, ext));
+    if (!model_.skins.empty() || !model_.animations.empty())
+      warnings_.once("skins", fmt::format("{}: skins and animations are ignored (meshes are in "
+                                          "their bind pose)",
+                                          path_));
     std::vector<int> roots;
     if (!model_.scenes.empty()) {
-      int s = model_.defaultScene >= 0 && size_t(model_.defaultScene) < model_.scenes.size() ? model_.defaultScene : 0;
+      int s = model_.defaultScene >= 0 && size_t(model_.defaultScene) < model_.scenes.size()
+                  ? model_.defaultScene
+                  : 0;
       roots = model_.scenes[size_t(s)].nodes;
     } else {
       // No scene: every node that is nobody's child.
@@ -462,7 +516,8 @@ class GltfBuilder {
     }
     std::vector<uint8_t> onPath(model_.nodes.size(), 0);
     for (int r : roots) visit(r, Affine3f::identity(), onPath, 0);
-    if (scene_.instances.empty()) throw InputError(fmt::format("{}: no triangles in the scene", path_));
+    if (scene_.instances.empty())
+      throw InputError(fmt::format("{}: no triangles in the scene", path_));
     bool lights = !scene_.suns.empty() || !pendingLights_.empty();
     makeLights();
     if (scene_.views.empty()) {
@@ -492,7 +547,8 @@ class GltfBuilder {
   void visit(int index, const Affine3f& parent, std::vector<uint8_t>& onPath, int depth) {
     if (index < 0 || size_t(index) >= model_.nodes.size())
       fail(fmt::format("node {} does not exist ({} nodes)", index, model_.nodes.size()));
-    if (onPath[size_t(index)] || depth > 1000) fail(fmt::format("node {} is its own ancestor", index));
+    if (onPath[size_t(index)] || depth > 1000)
+      fail(fmt::format("node {} is its own ancestor", index));
     onPath[size_t(index)] = 1;
     const tinygltf::Node& node = model_.nodes[size_t(index)];
     Affine3f world = parent * localTransform(node);
@@ -502,7 +558,8 @@ class GltfBuilder {
     auto light = node.extensions.find("KHR_lights_punctual");
     if (light != node.extensions.end() && light->second.IsObject() && light->second.Has("light")) {
       const tinygltf::Value& v = light->second.Get("light");
-      if (!v.IsInt() && !v.IsNumber()) fail(fmt::format("node {}: KHR_lights_punctual light is not an index", index));
+      if (!v.IsInt() && !v.IsNumber())
+        fail(fmt::format("node {}: KHR_lights_punctual light is not an index", index));
       addLight(v.IsInt() ? v.Get<int>() : int(v.GetNumberAsDouble()), world);
     }
     for (int c : node.children) visit(c, world, onPath, depth + 1);
@@ -513,7 +570,8 @@ class GltfBuilder {
     int32_t object = objectFor(node.mesh);
     if (object < 0) return;
     auto inst = node.extensions.find("EXT_mesh_gpu_instancing");
-    if (inst == node.extensions.end() || !inst->second.IsObject() || !inst->second.Has("attributes")) {
+    if (inst == node.extensions.end() || !inst->second.IsObject() ||
+        !inst->second.Has("attributes")) {
       addInstance(object, world, nodeIndex);
       return;
     }
@@ -524,13 +582,17 @@ class GltfBuilder {
       return v.IsInt() ? v.Get<int>() : v.IsNumber() ? int(v.GetNumberAsDouble()) : -2;
     };
     int t = accessorOf("TRANSLATION"), r = accessorOf("ROTATION"), s = accessorOf("SCALE");
-    if (t == -2 || r == -2 || s == -2) fail(fmt::format("node {}: EXT_mesh_gpu_instancing attribute is not an accessor index", nodeIndex));
+    if (t == -2 || r == -2 || s == -2)
+      fail(fmt::format("node {}: EXT_mesh_gpu_instancing attribute is not an accessor index",
+                       nodeIndex));
     size_t count = 0;
     bool any = false;
     for (int a : {t, r, s})
       if (a >= 0) {
         size_t c = accessors_.count(a, "EXT_mesh_gpu_instancing");
-        if (any && c != count) fail(fmt::format("node {}: EXT_mesh_gpu_instancing attributes differ in count", nodeIndex));
+        if (any && c != count)
+          fail(fmt::format("node {}: EXT_mesh_gpu_instancing attributes differ in count",
+                           nodeIndex));
         count = c;
         any = true;
       }
@@ -538,9 +600,12 @@ class GltfBuilder {
       addInstance(object, world, nodeIndex);
       return;
     }
-    std::vector<float> T = t >= 0 ? accessors_.floats(t, 3, "instance TRANSLATION") : std::vector<float>();
-    std::vector<float> R = r >= 0 ? accessors_.floats(r, 4, "instance ROTATION") : std::vector<float>();
-    std::vector<float> S = s >= 0 ? accessors_.floats(s, 3, "instance SCALE") : std::vector<float>();
+    std::vector<float> T =
+        t >= 0 ? accessors_.floats(t, 3, "instance TRANSLATION") : std::vector<float>();
+    std::vector<float> R =
+        r >= 0 ? accessors_.floats(r, 4, "instance ROTATION") : std::vector<float>();
+    std::vector<float> S =
+        s >= 0 ? accessors_.floats(s, 3, "instance SCALE") : std::vector<float>();
     for (size_t i = 0; i < count; ++i) {
       std::vector<double> ti, ri, si;
       if (!T.empty()) ti = {T[3 * i], T[3 * i + 1], T[3 * i + 2]};
@@ -552,9 +617,11 @@ class GltfBuilder {
 
   void addInstance(int32_t object, const Affine3f& transform, int nodeIndex) {
     float det = transform.determinant();
-    if (!isFiniteAffine(transform)) fail(fmt::format("node {}: non-finite instance transform", nodeIndex));
+    if (!isFiniteAffine(transform))
+      fail(fmt::format("node {}: non-finite instance transform", nodeIndex));
     if (det == 0) {
-      warnings_.once("singular", fmt::format("{}: node {} has a zero scale and is skipped", path_, nodeIndex));
+      warnings_.once("singular",
+                     fmt::format("{}: node {} has a zero scale and is skipped", path_, nodeIndex));
       return;
     }
     scene_.instances.push_back({object, transform});
@@ -563,7 +630,8 @@ class GltfBuilder {
   // ------------------------------------------------------------------ meshes
 
   int32_t objectFor(int meshIndex) {
-    if (size_t(meshIndex) >= model_.meshes.size()) fail(fmt::format("mesh {} does not exist ({} meshes)", meshIndex, model_.meshes.size()));
+    if (size_t(meshIndex) >= model_.meshes.size())
+      fail(fmt::format("mesh {} does not exist ({} meshes)", meshIndex, model_.meshes.size()));
     auto it = objects_.find(meshIndex);
     if (it != objects_.end()) return it->second;
     const tinygltf::Mesh& gm = model_.meshes[size_t(meshIndex)];
@@ -589,11 +657,13 @@ class GltfBuilder {
     const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
     if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
         mode != TINYGLTF_MODE_TRIANGLE_FAN) {
-      warnings_.once("mode", fmt::format("{}: points and lines are not rendered (first: {})", path_, name));
+      warnings_.once("mode",
+                     fmt::format("{}: points and lines are not rendered (first: {})", path_, name));
       return {};
     }
     if (!prim.targets.empty())
-      warnings_.once("morph", fmt::format("{}: morph targets are ignored (first: {})", path_, name));
+      warnings_.once("morph",
+                     fmt::format("{}: morph targets are ignored (first: {})", path_, name));
     auto attr = [&](const char* key) {
       auto it = prim.attributes.find(key);
       return it == prim.attributes.end() ? -1 : it->second;
@@ -612,7 +682,8 @@ class GltfBuilder {
       if (!isFinite(mesh.positions[i])) fail(fmt::format("{}: position {} is not finite", name, i));
     if (int normal = attr("NORMAL"); normal >= 0) {
       std::vector<float> v = accessors_.floats(normal, 3, "NORMAL");
-      if (v.size() / 3 != n) fail(fmt::format("{}: {} normals for {} positions", name, v.size() / 3, n));
+      if (v.size() / 3 != n)
+        fail(fmt::format("{}: {} normals for {} positions", name, v.size() / 3, n));
       mesh.normals.resize(n);
       std::memcpy(static_cast<void*>(mesh.normals.data()), v.data(), v.size() * sizeof(float));
       for (size_t i = 0; i < n; ++i)
@@ -621,7 +692,8 @@ class GltfBuilder {
     const tinygltf::Material* material = nullptr;
     if (prim.material >= 0) {
       if (size_t(prim.material) >= model_.materials.size())
-        fail(fmt::format("{}: material {} does not exist ({} materials)", name, prim.material, model_.materials.size()));
+        fail(fmt::format("{}: material {} does not exist ({} materials)", name, prim.material,
+                         model_.materials.size()));
       material = &model_.materials[size_t(prim.material)];
     }
     int texCoordSet = 0;
@@ -629,7 +701,8 @@ class GltfBuilder {
       texCoordSet = material->pbrMetallicRoughness.baseColorTexture.texCoord;
     if (int uv = attr(fmt::format("TEXCOORD_{}", texCoordSet).c_str()); uv >= 0) {
       std::vector<float> v = accessors_.floats(uv, 2, "TEXCOORD");
-      if (v.size() / 2 != n) fail(fmt::format("{}: {} texture coordinates for {} positions", name, v.size() / 2, n));
+      if (v.size() / 2 != n)
+        fail(fmt::format("{}: {} texture coordinates for {} positions", name, v.size() / 2, n));
       mesh.uvs.resize(n);
       for (size_t i = 0; i < n; ++i) {
         if (!std::isfinite(v[2 * i]) || !std::isfinite(v[2 * i + 1]))
@@ -645,15 +718,19 @@ class GltfBuilder {
       for (size_t i = 0; i < n; ++i) idx[i] = uint32_t(i);
     }
     for (size_t i = 0; i < idx.size(); ++i)
-      if (idx[i] >= n) fail(fmt::format("{}: index {} (entry {}) is out of range: {} vertices", name, idx[i], i, n));
+      if (idx[i] >= n)
+        fail(fmt::format("{}: index {} (entry {}) is out of range: {} vertices", name, idx[i], i,
+                         n));
     if (mode == TINYGLTF_MODE_TRIANGLES) {
-      if (idx.size() % 3 != 0) fail(fmt::format("{}: {} indices is not a multiple of 3", name, idx.size()));
+      if (idx.size() % 3 != 0)
+        fail(fmt::format("{}: {} indices is not a multiple of 3", name, idx.size()));
       for (size_t i = 0; i + 2 < idx.size(); i += 3)
         mesh.indices.push_back({int32_t(idx[i]), int32_t(idx[i + 1]), int32_t(idx[i + 2])});
     } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
       for (size_t i = 0; i + 2 < idx.size(); ++i)
-        mesh.indices.push_back(i % 2 == 0 ? Vec3i{int32_t(idx[i]), int32_t(idx[i + 1]), int32_t(idx[i + 2])}
-                                          : Vec3i{int32_t(idx[i + 1]), int32_t(idx[i]), int32_t(idx[i + 2])});
+        mesh.indices.push_back(
+            i % 2 == 0 ? Vec3i{int32_t(idx[i]), int32_t(idx[i + 1]), int32_t(idx[i + 2])}
+                       : Vec3i{int32_t(idx[i + 1]), int32_t(idx[i]), int32_t(idx[i + 2])});
     } else {
       for (size_t i = 1; i + 1 < idx.size(); ++i)
         mesh.indices.push_back({int32_t(idx[0]), int32_t(idx[i]), int32_t(idx[i + 1])});
@@ -689,7 +766,8 @@ class GltfBuilder {
       const Vec3i& tri = mesh.indices[i];
       Vec3f sum(0);
       for (const auto& w : kPoints) {
-        Vec2f uv = mesh.uvs[size_t(tri.x)] * w[0] + mesh.uvs[size_t(tri.y)] * w[1] + mesh.uvs[size_t(tri.z)] * w[2];
+        Vec2f uv = mesh.uvs[size_t(tri.x)] * w[0] + mesh.uvs[size_t(tri.y)] * w[1] +
+                   mesh.uvs[size_t(tri.z)] * w[2];
         sum += t.sample(uv).xyz();
       }
       e[i] = sum * 0.25f * info.emissionFactor;
@@ -698,7 +776,8 @@ class GltfBuilder {
   }
 
   // Splits triangles by quantised emission; `emission` empty: one mesh.
-  std::vector<Mesh> splitByEmission(Mesh mesh, MaterialInfo& info, const std::vector<Vec3f>& emission) {
+  std::vector<Mesh> splitByEmission(Mesh mesh, MaterialInfo& info,
+                                    const std::vector<Vec3f>& emission) {
     std::vector<Mesh> out;
     if (emission.empty()) {
       out.push_back(std::move(mesh));
@@ -714,7 +793,8 @@ class GltfBuilder {
     std::map<std::tuple<int, int, int>, Vec3f> sums;
     for (size_t i = 0; i < emission.size(); ++i) {
       Vec3f q = emission[i] / maxE * float(kEmissionLevels);
-      auto key = std::make_tuple(int(std::lround(q.x)), int(std::lround(q.y)), int(std::lround(q.z)));
+      auto key =
+          std::make_tuple(int(std::lround(q.x)), int(std::lround(q.y)), int(std::lround(q.z)));
       groups[key].push_back(i);
       sums[key] += emission[i];
     }
@@ -742,7 +822,8 @@ class GltfBuilder {
         if (it == info.emitting.end()) {
           Material m = scene_.materials[size_t(info.material)];
           m.emission = sums[key] / float(tris.size());
-          m.name += fmt::format(" (emission {:.3g} {:.3g} {:.3g})", m.emission.x, m.emission.y, m.emission.z);
+          m.name += fmt::format(" (emission {:.3g} {:.3g} {:.3g})", m.emission.x, m.emission.y,
+                                m.emission.z);
           it = info.emitting.emplace(key, scene_.addMaterial(m)).first;
         }
         sub.material = it->second;
@@ -779,42 +860,51 @@ class GltfBuilder {
   int32_t textureFor(int index, const std::string& use, bool srgb) {
     if (index < 0) return kNoTexture;
     if (size_t(index) >= model_.textures.size())
-      fail(fmt::format("{} texture {} does not exist ({} textures)", use, index, model_.textures.size()));
+      fail(fmt::format("{} texture {} does not exist ({} textures)", use, index,
+                       model_.textures.size()));
     auto key = std::make_pair(index, srgb);
     auto it = textures_.find(key);
     if (it != textures_.end()) return it->second;
     const tinygltf::Texture& t = model_.textures[size_t(index)];
     if (!t.extensions.empty())
       for (const auto& [ext, v] : t.extensions)
-        warnings_.once("texext|" + ext, fmt::format("{}: texture extension {} ignored", path_, ext));
+        warnings_.once("texext|" + ext,
+                       fmt::format("{}: texture extension {} ignored", path_, ext));
     if (t.source < 0) {
-      warnings_.once("nosource", fmt::format("{}: texture {} has no image Ferry can read", path_, index));
+      warnings_.once("nosource",
+                     fmt::format("{}: texture {} has no image Ferry can read", path_, index));
       textures_.emplace(key, kNoTexture);
       return kNoTexture;
     }
     if (size_t(t.source) >= model_.images.size())
       fail(fmt::format("texture {} uses image {} of {}", index, t.source, model_.images.size()));
     tinygltf::Image& image = model_.images[size_t(t.source)];
-    std::string label = image.name.empty() ? fmt::format("image {}", t.source) : fmt::format("image {} ({})", t.source, image.name);
+    std::string label = image.name.empty() ? fmt::format("image {}", t.source)
+                                           : fmt::format("image {} ({})", t.source, image.name);
     Texture texture;
     if (image.bufferView >= 0) {
       if (size_t(image.bufferView) >= model_.bufferViews.size())
-        fail(fmt::format("{} uses buffer view {} of {}", label, image.bufferView, model_.bufferViews.size()));
+        fail(fmt::format("{} uses buffer view {} of {}", label, image.bufferView,
+                         model_.bufferViews.size()));
       const tinygltf::BufferView& view = model_.bufferViews[size_t(image.bufferView)];
       if (view.buffer < 0 || size_t(view.buffer) >= model_.buffers.size())
-        fail(fmt::format("{}: buffer view {} uses buffer {} of {}", label, image.bufferView, view.buffer, model_.buffers.size()));
+        fail(fmt::format("{}: buffer view {} uses buffer {} of {}", label, image.bufferView,
+                         view.buffer, model_.buffers.size()));
       const auto& data = model_.buffers[size_t(view.buffer)].data;
       if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
         fail(fmt::format("{}: buffer view {} goes past its buffer", label, image.bufferView));
-      texture = decodeImage(data.data() + view.byteOffset, view.byteLength, fmt::format("{}: {}", path_, label));
+      texture = decodeImage(data.data() + view.byteOffset, view.byteLength,
+                            fmt::format("{}: {}", path_, label));
     } else if (!image.image.empty()) {
-      texture = decodeImage(image.image.data(), image.image.size(), fmt::format("{}: {}", path_, label));
+      texture =
+          decodeImage(image.image.data(), image.image.size(), fmt::format("{}: {}", path_, label));
       std::vector<unsigned char>().swap(image.image);
     } else {
       fs::path file = dir_ / urlDecode(image.uri);
       std::error_code ec;
       if (image.uri.empty() || !fs::is_regular_file(file, ec))
-        fail(fmt::format("{}: file \"{}\" not found (looked for {})", label, image.uri, file.string()));
+        fail(fmt::format("{}: file \"{}\" not found (looked for {})", label, image.uri,
+                         file.string()));
       texture = readTexture(file.string());
     }
     texture.srgb = srgb;
@@ -849,6 +939,11 @@ class GltfBuilder {
     float alphaFactor = pbr.baseColorFactor.size() == 4 ? float(pbr.baseColorFactor[3]) : 1.0f;
     m.baseColor = min(max(base, Vec3f(0)), Vec3f(1));
     m.baseColorTexture = textureFor(pbr.baseColorTexture.index, "baseColor", true);
+    for (const auto* info : {&pbr.baseColorTexture, &g.emissiveTexture})
+      for (const auto& [ext, v] : info->extensions)
+        warnings_.once("texinfo|" + ext, fmt::format("{}: texture extension {} ignored (first: "
+                                                     "material \"{}\")",
+                                                     path_, ext, m.name));
     m.metallic = std::clamp(float(pbr.metallicFactor), 0.0f, 1.0f);
     m.roughness = std::clamp(float(pbr.roughnessFactor), 0.0f, 1.0f);
     if (pbr.metallicRoughnessTexture.index >= 0) {
@@ -865,18 +960,21 @@ class GltfBuilder {
           m.roughness *= float(g / texels / 255.0);
           m.metallic *= float(b / texels / 255.0);
         }
-        warnings_.once("mr texture", fmt::format("{}: metallicRoughness textures are averaged "
-                                                 "(Ferry's metallic and roughness are not textured; "
-                                                 "first: material \"{}\")",
-                                                 path_, m.name));
+        warnings_.once("mr texture",
+                       fmt::format("{}: metallicRoughness textures are averaged "
+                                   "(Ferry's metallic and roughness are not textured; "
+                                   "first: material \"{}\")",
+                                   path_, m.name));
       }
     }
     if (g.normalTexture.index >= 0 || g.occlusionTexture.index >= 0)
-      warnings_.once("normal ao", fmt::format("{}: normal and occlusion textures are ignored", path_));
+      warnings_.once("normal ao",
+                     fmt::format("{}: normal and occlusion textures are ignored", path_));
     if (const tinygltf::Value* tr = extension(g.extensions, "KHR_materials_transmission")) {
       m.transmission = std::clamp(number(*tr, "transmissionFactor", 0), 0.0f, 1.0f);
       if (tr->Has("transmissionTexture"))
-        warnings_.once("transmission texture", fmt::format("{}: transmission textures are ignored", path_));
+        warnings_.once("transmission texture",
+                       fmt::format("{}: transmission textures are ignored", path_));
     }
     if (const tinygltf::Value* ior = extension(g.extensions, "KHR_materials_ior"))
       m.ior = std::max(number(*ior, "ior", 1.5f), 1.0f);
@@ -894,18 +992,21 @@ class GltfBuilder {
     for (const auto& [ext, v] : g.extensions)
       if (ext != "KHR_materials_transmission" && ext != "KHR_materials_ior" &&
           ext != "KHR_materials_emissive_strength")
-        warnings_.once("matext|" + ext, fmt::format("{}: material extension {} ignored", path_, ext));
+        warnings_.once("matext|" + ext,
+                       fmt::format("{}: material extension {} ignored", path_, ext));
     if (g.alphaMode == "MASK" || g.alphaMode == "BLEND") {
       m.alphaCutoff = g.alphaMode == "MASK" ? float(g.alphaCutoff) : 0.5f;
       if (g.alphaMode == "BLEND")
-        warnings_.once("blend", fmt::format("{}: alphaMode BLEND is rendered as a cut-out at 0.5", path_));
+        warnings_.once("blend",
+                       fmt::format("{}: alphaMode BLEND is rendered as a cut-out at 0.5", path_));
       if (m.baseColorTexture != kNoTexture) {
         if (alphaFactor == 1) {
           m.alphaTexture = m.baseColorTexture;
         } else {
           Texture scaled = scene_.textures[size_t(m.baseColorTexture)];
           for (size_t i = 3; i < scaled.rgba.size(); i += 4)
-            scaled.rgba[i] = uint8_t(std::lround(std::clamp(scaled.rgba[i] * alphaFactor, 0.0f, 255.0f)));
+            scaled.rgba[i] =
+                uint8_t(std::lround(std::clamp(scaled.rgba[i] * alphaFactor, 0.0f, 255.0f)));
           scene_.textures.push_back(std::move(scaled));
           m.alphaTexture = int32_t(scene_.textures.size() - 1);
         }
@@ -926,7 +1027,8 @@ class GltfBuilder {
   // ------------------------------------------------------- cameras and lights
 
   void addCamera(int index, const Affine3f& world) {
-    if (size_t(index) >= model_.cameras.size()) fail(fmt::format("camera {} does not exist ({} cameras)", index, model_.cameras.size()));
+    if (size_t(index) >= model_.cameras.size())
+      fail(fmt::format("camera {} does not exist ({} cameras)", index, model_.cameras.size()));
     const tinygltf::Camera& c = model_.cameras[size_t(index)];
     CameraView view;
     std::string base = c.name.empty() ? fmt::format("camera{}", index) : c.name;
@@ -935,16 +1037,18 @@ class GltfBuilder {
     view.from = world.transformPoint(Vec3f(0));
     Vec3f forward = world.transformVector({0, 0, -1});
     Vec3f up = world.transformVector({0, 1, 0});
-    if (!(length(forward) > 0) || !(length(up) > 0)) fail(fmt::format("camera {} has a degenerate transform", index));
+    if (!(length(forward) > 0) || !(length(up) > 0))
+      fail(fmt::format("camera {} has a degenerate transform", index));
     view.at = view.from + normalize(forward);
     view.up = normalize(up);
     if (c.type == "perspective" && c.perspective.yfov > 0 && c.perspective.yfov < kPi) {
       view.fovY = float(c.perspective.yfov * 180 / kPi);
     } else {
       view.fovY = 45;
-      warnings_.once("camtype|" + c.type, fmt::format("{}: {} camera \"{}\" rendered as a perspective camera "
-                                                      "with fov 45",
-                                                      path_, c.type, view.name));
+      warnings_.once("camtype|" + c.type,
+                     fmt::format("{}: {} camera \"{}\" rendered as a perspective camera "
+                                 "with fov 45",
+                                 path_, c.type, view.name));
     }
     scene_.views.push_back(view);
   }
@@ -969,12 +1073,14 @@ class GltfBuilder {
       sun.irradiance = color;
       scene_.suns.push_back(sun);
     } else if (l.type == "point" || l.type == "spot") {
-      PendingLight p{world.transformPoint(Vec3f(0)), length(dir) > 0 ? normalize(dir) : Vec3f(0, 0, -1),
-                     color, 180, name};
-      if (l.type == "spot") p.coneDegrees = float(std::clamp(l.spot.outerConeAngle, 0.01, double(kPi) / 2) * 180 / kPi);
+      PendingLight p{world.transformPoint(Vec3f(0)),
+                     length(dir) > 0 ? normalize(dir) : Vec3f(0, 0, -1), color, 180, name};
+      if (l.type == "spot")
+        p.coneDegrees = float(std::clamp(l.spot.outerConeAngle, 0.01, double(kPi) / 2) * 180 / kPi);
       pendingLights_.push_back(p);
     } else {
-      warnings_.once("lighttype|" + l.type, fmt::format("{}: light type \"{}\" ignored", path_, l.type));
+      warnings_.once("lighttype|" + l.type,
+                     fmt::format("{}: light type \"{}\" ignored", path_, l.type));
     }
   }
 
@@ -987,7 +1093,8 @@ class GltfBuilder {
       if (p.coneDegrees >= 180)
         addPointLightEmitter(scene_, p.position, p.intensity, radius, p.name);
       else
-        addSpotLightEmitter(scene_, p.position, p.direction, p.intensity, p.coneDegrees, radius, p.name);
+        addSpotLightEmitter(scene_, p.position, p.direction, p.intensity, p.coneDegrees, radius,
+                            p.name);
     }
   }
 

@@ -21,6 +21,9 @@ struct LoadOptions {
   // Progress on large inputs (bytes of the current file read, its size, its
   // name). Called at most about a hundred times per file; empty: silent.
   std::function<void(uint64_t done, uint64_t total, const std::string& what)> progress;
+  // The most triangles one generated shape (pbrt's loopsubdiv) may have;
+  // more is an InputError naming the shape, not a huge allocation.
+  uint64_t maxGeneratedTriangles = uint64_t(1) << 26;
 };
 
 // Warnings of one load, each said once: a pbrt file with a million shapes

@@ -25,8 +25,8 @@ struct Look {
 // An image as linear float RGB (and alpha when it has one), for evaluation.
 struct ImageData {
   int width = 0, height = 0;
-  std::vector<Vec3f> rgb;     // row 0 at the top
-  std::vector<float> alpha;   // empty: opaque
+  std::vector<Vec3f> rgb;    // row 0 at the top
+  std::vector<float> alpha;  // empty: opaque
 };
 
 std::string lower(std::string s) {
@@ -244,7 +244,8 @@ struct PbrtMaterials::Impl {
         }
         if (anyAlpha) {
           data->alpha.resize(data->rgb.size());
-          for (size_t i = 0; i < data->alpha.size(); ++i) data->alpha[i] = tex.rgba[4 * i + 3] / 255.0f;
+          for (size_t i = 0; i < data->alpha.size(); ++i)
+            data->alpha[i] = tex.rgba[4 * i + 3] / 255.0f;
         }
       }
     } catch (const InputError& e) {
@@ -291,7 +292,8 @@ struct PbrtMaterials::Impl {
       return {c.x, c.y, c.z, img.alpha.empty() ? 1.0f : img.alpha[i]};
     };
     long ix = long(std::fmod(fx, 1 << 24)), iy = long(std::fmod(fy, 1 << 24));
-    Vec4f a = texel(ix, iy), b = texel(ix + 1, iy), c = texel(ix, iy + 1), d = texel(ix + 1, iy + 1);
+    Vec4f a = texel(ix, iy), b = texel(ix + 1, iy), c = texel(ix, iy + 1),
+          d = texel(ix + 1, iy + 1);
     auto mix = [&](float va, float vb, float vc, float vd) {
       return (va * (1 - tx) + vb * tx) * (1 - ty) + (vc * (1 - tx) + vd * tx) * ty;
     };
@@ -387,13 +389,16 @@ struct PbrtMaterials::Impl {
   }
 
   // The resolution a baked texture needs.
-  void bakeSize(const PbrtTextureDefinition& t, int& width, int& height, float& frequency, int depth) {
+  void bakeSize(const PbrtTextureDefinition& t, int& width, int& height, float& frequency,
+                int depth) {
     if (depth > kMaxDepth) return;
     if (t.className == "imagemap") {
       auto img = image(t);
       Mapping m = mappingOf(t);
-      width = std::max(width, int(std::min<float>(kMaxBakeSide, img->width * std::max(1.0f, std::abs(m.su)))));
-      height = std::max(height, int(std::min<float>(kMaxBakeSide, img->height * std::max(1.0f, std::abs(m.sv)))));
+      width = std::max(
+          width, int(std::min<float>(kMaxBakeSide, img->width * std::max(1.0f, std::abs(m.su)))));
+      height = std::max(
+          height, int(std::min<float>(kMaxBakeSide, img->height * std::max(1.0f, std::abs(m.sv)))));
     }
     if (t.className == "checkerboard") {
       Mapping m = mappingOf(t);
@@ -811,10 +816,11 @@ struct PbrtMaterials::Impl {
       }
       setColor(c);
       p.markAllUsed();
-      warnings.once("material|" + type,
-                    fmt::format("material type \"{}\" is not supported: rendered as diffuse ({:.2g}, "
-                                "{:.2g}, {:.2g}) instead (first at {})",
-                                type, c.value.x, c.value.y, c.value.z, def.where.toString()));
+      warnings.once(
+          "material|" + type,
+          fmt::format("material type \"{}\" is not supported: rendered as diffuse ({:.2g}, "
+                      "{:.2g}, {:.2g}) instead (first at {})",
+                      type, c.value.x, c.value.y, c.value.z, def.where.toString()));
     }
     m.baseColor = min(max(m.baseColor, Vec3f(0)), Vec3f(1));
     return look;
@@ -830,11 +836,11 @@ void PbrtMaterials::defineTexture(PbrtTextureDefinition definition) {
   auto& map = definition.isFloat ? impl_->floatTextures : impl_->colorTextures;
   auto it = map.find(definition.name);
   if (it != map.end()) {
-    impl_->warnings.once("texture redefined|" + definition.name,
-                         fmt::format("{}: texture \"{}\" redefined (first at {}); the new one "
-                                     "applies from here",
-                                     definition.where.toString(), definition.name,
-                                     it->second.where.toString()));
+    impl_->warnings.once(
+        "texture redefined|" + definition.name,
+        fmt::format("{}: texture \"{}\" redefined (first at {}); the new one "
+                    "applies from here",
+                    definition.where.toString(), definition.name, it->second.where.toString()));
     // Shapes that already baked the old one keep it.
     impl_->bakedColor.erase(definition.name);
     impl_->bakedAlpha.erase(definition.name);

@@ -40,6 +40,14 @@ size_t groupSize(const std::string& type) {
   return 1;
 }
 
+// nan, inf, infinity in any case: a value, reported as not finite.
+bool looksNonFinite(std::string_view s) {
+  if (!s.empty() && (s[0] == '-' || s[0] == '+')) s.remove_prefix(1);
+  std::string lower(s);
+  for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return lower == "nan" || lower == "inf" || lower == "infinity";
+}
+
 }  // namespace
 
 std::optional<double> parsePbrtNumber(std::string_view s) {
@@ -86,16 +94,16 @@ PbrtParams PbrtParams::parse(PbrtTokenizer& tokens) {
                                             decl.text));
     auto type = canonicalType(words[0]);
     if (!type)
-      throw InputError(p.where, fmt::format("unknown parameter type '{}' in \"{}\"", words[0],
-                                            decl.text));
+      throw InputError(p.where,
+                       fmt::format("unknown parameter type '{}' in \"{}\"", words[0], decl.text));
     p.type = *type;
     p.name = std::string(words[1]);
     const ValueKind kind = valueKind(p.type);
 
     auto addValue = [&](const PbrtToken& t) {
-      SourceLocation at = tokens.where(t);
+      // The location is made only for an error: values can number millions.
       auto bad = [&](const std::string& what) {
-        throw InputError(at, fmt::format("\"{}\": {}", p.declaration(), what));
+        throw InputError(tokens.where(t), fmt::format("\"{}\": {}", p.declaration(), what));
       };
       if (t.kind == PbrtToken::Kind::String) {
         if (kind == ValueKind::String || kind == ValueKind::NumberOrString) {
@@ -123,7 +131,8 @@ PbrtParams PbrtParams::parse(PbrtTokenizer& tokens) {
           bad(fmt::format("expected true or false, found '{}'", t.text));
         return;
       }
-      if (kind == ValueKind::String) bad(fmt::format("expected a quoted string, found '{}'", t.text));
+      if (kind == ValueKind::String)
+        bad(fmt::format("expected a quoted string, found '{}'", t.text));
       std::optional<double> v = parsePbrtNumber(t.text);
       if (!v) {
         std::string lower = t.text;
@@ -151,13 +160,14 @@ PbrtParams PbrtParams::parse(PbrtTokenizer& tokens) {
         const PbrtToken& t = tokens.next();
         if (t.kind == PbrtToken::Kind::CloseBracket) break;
         if (t.kind == PbrtToken::Kind::End)
-          throw InputError(tokens.where(open),
-                           fmt::format("\"{}\": '[' never closed (the file ends)", p.declaration()));
+          throw InputError(
+              tokens.where(open),
+              fmt::format("\"{}\": '[' never closed (the file ends)", p.declaration()));
         if (t.kind == PbrtToken::Kind::OpenBracket)
           throw InputError(tokens.where(t), fmt::format("\"{}\": '[' inside a list (missing ']'?)",
                                                         p.declaration()));
         if (t.kind == PbrtToken::Kind::Word && !t.isNumber() && t.text != "true" &&
-            t.text != "false" && kind != ValueKind::Bool)
+            t.text != "false" && kind != ValueKind::Bool && !looksNonFinite(t.text))
           throw InputError(tokens.where(t),
                            fmt::format("\"{}\": '{}' in a list of values (missing ']'?)",
                                        p.declaration(), t.text));
@@ -165,7 +175,8 @@ PbrtParams PbrtParams::parse(PbrtTokenizer& tokens) {
       }
     } else if (first.kind == PbrtToken::Kind::String ||
                (first.kind == PbrtToken::Kind::Word &&
-                (first.isNumber() || first.text == "true" || first.text == "false"))) {
+                (first.isNumber() || first.text == "true" || first.text == "false" ||
+                 looksNonFinite(first.text)))) {
       addValue(tokens.next());
     } else {
       throw InputError(p.where, fmt::format("\"{}\" has no value", p.declaration()));
@@ -210,7 +221,8 @@ float PbrtParams::getFloat(std::string_view name, float fallback) const {
   if (!p) return fallback;
   if (p->type == "integer" && p->ints.size() == 1) return float(p->ints[0]);
   if (p->type != "float") fail(*p, "expected a float");
-  if (p->floats.size() != 1) fail(*p, fmt::format("expected one value, found {}", p->floats.size()));
+  if (p->floats.size() != 1)
+    fail(*p, fmt::format("expected one value, found {}", p->floats.size()));
   return p->floats[0];
 }
 
@@ -244,7 +256,8 @@ std::optional<Vec3f> PbrtParams::getPoint3(std::string_view name) const {
   if (!p) return std::nullopt;
   if (p->type != "point3" && p->type != "vector3" && p->type != "normal")
     fail(*p, "expected a point3");
-  if (p->floats.size() != 3) fail(*p, fmt::format("expected one point, found {} numbers", p->floats.size()));
+  if (p->floats.size() != 3)
+    fail(*p, fmt::format("expected one point, found {} numbers", p->floats.size()));
   return Vec3f(p->floats[0], p->floats[1], p->floats[2]);
 }
 
@@ -272,8 +285,13 @@ void PbrtParams::markAllUsed() const {
 }
 
 void PbrtParams::addDefaults(const PbrtParams& defaults) {
+  // Defaults apply where a directive reads them; unread ones are not worth
+  // a warning (one `Attribute "shape"` serves spheres and meshes alike).
   for (const PbrtParam& d : defaults.params_)
-    if (!has(d.name)) params_.push_back(d);
+    if (!has(d.name)) {
+      params_.push_back(d);
+      params_.back().used = true;
+    }
 }
 
 }  // namespace ferry

@@ -23,8 +23,8 @@ struct PbrtParam {
   // -> point3, vector -> vector3, normal3 -> normal, color -> rgb.
   std::string type;
   std::string name;
-  std::vector<float> floats;         // float, point*, vector*, normal, rgb, blackbody, numeric spectrum
-  std::vector<int32_t> ints;         // integer
+  std::vector<float> floats;  // float, point*, vector*, normal, rgb, blackbody, numeric spectrum
+  std::vector<int32_t> ints;  // integer
   std::vector<std::string> strings;  // string, texture, named or file spectrum
   std::vector<uint8_t> bools;        // bool
   SourceLocation where;              // of its "type name" string
@@ -61,7 +61,8 @@ class PbrtParams {
   std::optional<Vec3f> getPoint3(std::string_view name) const;  // point3/vector3/normal, one value
 
   // Arrays; nullptr if absent. `types` lists accepted canonical types.
-  const PbrtParam* getArray(std::string_view name, std::initializer_list<std::string_view> types) const;
+  const PbrtParam* getArray(std::string_view name,
+                            std::initializer_list<std::string_view> types) const;
 
   // Parameters that were never looked up.
   std::vector<const PbrtParam*> unused() const;

@@ -69,7 +69,8 @@ Vec3f bilinear(const HdrImage& img, float x, float y, bool wrapX) {
     return img.at(int(ix), int(iy));
   };
   long ix = long(fx), iy = long(fy);
-  return lerp(lerp(at(ix, iy), at(ix + 1, iy), tx), lerp(at(ix, iy + 1), at(ix + 1, iy + 1), tx), ty);
+  return lerp(lerp(at(ix, iy), at(ix + 1, iy), tx), lerp(at(ix, iy + 1), at(ix + 1, iy + 1), tx),
+              ty);
 }
 
 struct AreaLight {
@@ -88,10 +89,14 @@ enum class BlockKind { Attribute, Transform, Object, Import };
 
 const char* blockName(BlockKind k) {
   switch (k) {
-    case BlockKind::Attribute: return "AttributeBegin";
-    case BlockKind::Transform: return "TransformBegin";
-    case BlockKind::Object: return "ObjectBegin";
-    case BlockKind::Import: return "Import";
+    case BlockKind::Attribute:
+      return "AttributeBegin";
+    case BlockKind::Transform:
+      return "TransformBegin";
+    case BlockKind::Object:
+      return "ObjectBegin";
+    case BlockKind::Import:
+      return "Import";
   }
   return "";
 }
@@ -127,10 +132,9 @@ class Parser {
       : options_(options),
         warnings_(options),
         mainDirectory_(std::move(mainDirectory)),
-        materials_(scene_, warnings_,
-                   [this](const std::string& name, const SourceLocation& where) {
-                     return resolve(name, where, "file");
-                   }) {}
+        materials_(scene_, warnings_, [this](const std::string& name, const SourceLocation& where) {
+          return resolve(name, where, "file");
+        }) {}
 
   void pushFile(const std::string& path, const SourceLocation& includedAt, bool import) {
     std::error_code ec;
@@ -143,7 +147,8 @@ class Parser {
         throw InputError(includedAt, fmt::format("include loop: {}{}", chain, path));
       }
     if (int(inputs_.size()) >= kMaxIncludeDepth)
-      throw InputError(includedAt, fmt::format("includes nested more than {} deep", kMaxIncludeDepth));
+      throw InputError(includedAt,
+                       fmt::format("includes nested more than {} deep", kMaxIncludeDepth));
     pushStream(ByteStream::openFile(path), key, import, includedAt);
   }
 
@@ -167,7 +172,7 @@ class Parser {
         continue;
       }
       if (t.kind != PbrtToken::Kind::Word || t.isNumber()) {
-        std::string what = t.kind == PbrtToken::Kind::String ? "\"" + t.text + "\""
+        std::string what = t.kind == PbrtToken::Kind::String         ? "\"" + t.text + "\""
                            : t.kind == PbrtToken::Kind::OpenBracket  ? "'['"
                            : t.kind == PbrtToken::Kind::CloseBracket ? "']'"
                                                                      : "'" + t.text + "'";
@@ -226,23 +231,30 @@ class Parser {
       if (auto v = parsePbrtNumber(t.text)) return float(*v);
       fail(in.tokens.where(t), fmt::format("{}: '{}' is not a finite number", directive, t.text));
     }
-    fail(in.tokens.where(t), fmt::format("{}: expected a number, found {}", directive, describe(t)));
+    fail(in.tokens.where(t),
+         fmt::format("{}: expected a number, found {}", directive, describe(t)));
   }
 
   std::string describe(const PbrtToken& t) {
     switch (t.kind) {
-      case PbrtToken::Kind::End: return "the end of the file";
-      case PbrtToken::Kind::String: return "\"" + t.text + "\"";
-      case PbrtToken::Kind::OpenBracket: return "'['";
-      case PbrtToken::Kind::CloseBracket: return "']'";
-      default: return "'" + t.text + "'";
+      case PbrtToken::Kind::End:
+        return "the end of the file";
+      case PbrtToken::Kind::String:
+        return "\"" + t.text + "\"";
+      case PbrtToken::Kind::OpenBracket:
+        return "'['";
+      case PbrtToken::Kind::CloseBracket:
+        return "']'";
+      default:
+        return "'" + t.text + "'";
     }
   }
 
   std::string string(Input& in, const char* directive) {
     const PbrtToken& t = in.tokens.next();
     if (t.kind != PbrtToken::Kind::String)
-      fail(in.tokens.where(t), fmt::format("{}: expected a quoted string, found {}", directive, describe(t)));
+      fail(in.tokens.where(t),
+           fmt::format("{}: expected a quoted string, found {}", directive, describe(t)));
     return t.text;
   }
 
@@ -255,8 +267,8 @@ class Parser {
     if (bracket) {
       const PbrtToken& t = in.tokens.next();
       if (t.kind != PbrtToken::Kind::CloseBracket)
-        fail(in.tokens.where(t), fmt::format("{}: expected ']' after {} numbers, found {}", directive, n,
-                                             describe(t)));
+        fail(in.tokens.where(t),
+             fmt::format("{}: expected ']' after {} numbers, found {}", directive, n, describe(t)));
     }
     return v;
   }
@@ -336,9 +348,9 @@ class Parser {
                              (kind == BlockKind::Attribute || kind == BlockKind::Transform);
       if (!interchangeable)
         fail(where, fmt::format("this closes the {} at {}", blockName(b.kind), b.where.toString()));
-      warnings_.once("mismatched block", fmt::format("{}: closes the {} at {} (accepted)",
-                                                     where.toString(), blockName(b.kind),
-                                                     b.where.toString()));
+      warnings_.once("mismatched block",
+                     fmt::format("{}: closes the {} at {} (accepted)", where.toString(),
+                                 blockName(b.kind), b.where.toString()));
     }
     if (b.kind == BlockKind::Transform) {
       state_.ctm = b.saved.ctm;
@@ -439,8 +451,11 @@ class Parser {
       setTransform(it->second);
     } else if (name == "ActiveTransform") {
       const PbrtToken& t = in.tokens.next();
-      if (t.kind != PbrtToken::Kind::Word || (t.text != "StartTime" && t.text != "EndTime" && t.text != "All"))
-        fail(in.tokens.where(t), fmt::format("ActiveTransform: expected StartTime, EndTime or All, found {}", describe(t)));
+      if (t.kind != PbrtToken::Kind::Word ||
+          (t.text != "StartTime" && t.text != "EndTime" && t.text != "All"))
+        fail(in.tokens.where(t),
+             fmt::format("ActiveTransform: expected StartTime, EndTime or All, found {}",
+                         describe(t)));
       activeStart_ = t.text != "EndTime";
       if (t.text != "StartTime")
         warnings_.once("motion", fmt::format("motion blur is not supported: only the start "
@@ -514,8 +529,10 @@ class Parser {
       std::string materialName = string(in, n);
       PbrtParams p = withDefaults(params(in), "material");
       std::string type = p.getString("type", "");
-      if (!p.has("type")) fail(where, fmt::format("MakeNamedMaterial \"{}\" has no \"string type\"", materialName));
-      materials_.nameMaterial(materialName, materials_.addMaterial({type, std::move(p), where, materialName}));
+      if (!p.has("type"))
+        fail(where, fmt::format("MakeNamedMaterial \"{}\" has no \"string type\"", materialName));
+      materials_.nameMaterial(materialName,
+                              materials_.addMaterial({type, std::move(p), where, materialName}));
     } else if (name == "NamedMaterial") {
       std::string materialName = string(in, n);
       auto id = materials_.namedMaterial(materialName);
@@ -557,9 +574,9 @@ class Parser {
   void worldEnd(Input& in, const SourceLocation& where) {
     const PbrtToken& t = in.tokens.peek();
     if (t.kind != PbrtToken::Kind::End || inputs_.size() > 1)
-      warnings_.once("after WorldEnd",
-                     fmt::format("{}: WorldEnd ends the scene; what follows it is ignored",
-                                 where.toString()));
+      warnings_.once(
+          "after WorldEnd",
+          fmt::format("{}: WorldEnd ends the scene; what follows it is ignored", where.toString()));
     ended_ = true;
   }
 
@@ -569,11 +586,13 @@ class Parser {
     c.where = where;
     if (type == "perspective") {
       c.fov = p.getFloat("fov", 90);
-      if (!(c.fov > 0 && c.fov < 180)) fail(where, fmt::format("Camera: fov {} must be between 0 and 180", c.fov));
+      if (!(c.fov > 0 && c.fov < 180))
+        fail(where, fmt::format("Camera: fov {} must be between 0 and 180", c.fov));
       if (p.getFloat("lensradius", 0) > 0)
-        warnings_.once("lens", fmt::format("Camera: lensradius ignored: Ferry's camera is a pinhole "
-                                           "(no depth of field; at {})",
-                                           where.toString()));
+        warnings_.once("lens",
+                       fmt::format("Camera: lensradius ignored: Ferry's camera is a pinhole "
+                                   "(no depth of field; at {})",
+                                   where.toString()));
       p.find("focaldistance");
     } else {
       p.markAllUsed();
@@ -584,24 +603,27 @@ class Parser {
     }
     reportUnused(p, fmt::format("Camera \"{}\"", type));
     camera_ = c;
-    coordinateSystems_["camera"] = state_.ctm.determinant() != 0 ? state_.ctm.inverse() : state_.ctm;
+    coordinateSystems_["camera"] =
+        state_.ctm.determinant() != 0 ? state_.ctm.inverse() : state_.ctm;
   }
 
   void film(const std::string& type, const PbrtParams& p, const SourceLocation& where) {
     int w = p.getInt("xresolution", 1280), h = p.getInt("yresolution", 720);
     if (w < 1 || h < 1 || w > kMaxFilmSide || h > kMaxFilmSide)
-      fail(where, fmt::format("Film: resolution {} x {} must be between 1 and {} per side", w, h, kMaxFilmSide));
+      fail(where, fmt::format("Film: resolution {} x {} must be between 1 and {} per side", w, h,
+                              kMaxFilmSide));
     scene_.filmWidth = w;
     scene_.filmHeight = h;
     filmWidth_ = w;
     filmHeight_ = h;
     std::string file = p.getString("filename", "");
     if (!file.empty()) scene_.filmFilename = file;
-    if (const PbrtParam* scale = p.find("scale"); scale && scale->floats.size() == 1 && scale->floats[0] > 0)
-      warnings_.once("film scale", fmt::format("Film \"float scale\" {} ignored: use --exposure {:.2f} "
-                                               "for the same brightness (at {})",
-                                               scale->floats[0], std::log2(scale->floats[0]),
-                                               where.toString()));
+    if (const PbrtParam* scale = p.find("scale");
+        scale && scale->floats.size() == 1 && scale->floats[0] > 0)
+      warnings_.once("film scale",
+                     fmt::format("Film \"float scale\" {} ignored: use --exposure {:.2f} "
+                                 "for the same brightness (at {})",
+                                 scale->floats[0], std::log2(scale->floats[0]), where.toString()));
     reportUnused(p, fmt::format("Film \"{}\"", type));
   }
 
@@ -614,7 +636,8 @@ class Parser {
     else if (type == "spectrum" || type == "color" || type == "rgb")
       t.isFloat = false;
     else
-      fail(where, fmt::format("Texture \"{}\": type \"{}\" is neither float nor spectrum", t.name, type));
+      fail(where,
+           fmt::format("Texture \"{}\": type \"{}\" is neither float nor spectrum", t.name, type));
     t.className = string(in, "Texture");
     t.params = withDefaults(params(in), "texture");
     t.where = where;
@@ -622,8 +645,9 @@ class Parser {
   }
 
   void objectBegin(const std::string& name, const SourceLocation& where) {
-    if (currentObject_) fail(where, fmt::format("ObjectBegin \"{}\" inside the definition of \"{}\"", name,
-                                                scene_.objects[size_t(*currentObject_)].name));
+    if (currentObject_)
+      fail(where, fmt::format("ObjectBegin \"{}\" inside the definition of \"{}\"", name,
+                              scene_.objects[size_t(*currentObject_)].name));
     pushBlock(BlockKind::Object, where);
     if (objects_.count(name))
       warnings_.once("object redefined|" + name,
@@ -638,9 +662,11 @@ class Parser {
   }
 
   void objectInstance(const std::string& name, const SourceLocation& where) {
-    if (currentObject_) fail(where, fmt::format("ObjectInstance \"{}\" inside an object definition", name));
+    if (currentObject_)
+      fail(where, fmt::format("ObjectInstance \"{}\" inside an object definition", name));
     auto it = objects_.find(name);
-    if (it == objects_.end()) fail(where, fmt::format("ObjectInstance: no object named \"{}\"", name));
+    if (it == objects_.end())
+      fail(where, fmt::format("ObjectInstance: no object named \"{}\"", name));
     if (scene_.objects[size_t(it->second)].meshes.empty()) return;
     checkInvertible(where);
     scene_.instances.push_back({it->second, state_.ctm});
@@ -665,7 +691,8 @@ class Parser {
     const std::string what = fmt::format("LightSource \"{}\"", type);
     if (type == "infinite") {
       if (currentObject_) fail(where, "infinite lights cannot be part of an object");
-      infiniteLights_.push_back({p, state_.ctm.determinant() != 0 ? state_.ctm.inverse() : state_.ctm, where});
+      infiniteLights_.push_back(
+          {p, state_.ctm.determinant() != 0 ? state_.ctm.inverse() : state_.ctm, where});
       return;  // parameters are read (and reported) when the environment is made
     }
     if (type == "distant") {
@@ -694,7 +721,8 @@ class Parser {
       }
       PointEmitter e;
       e.where = where;
-      e.intensity = materials_.constantColor(p, "I", Vec3f(1), SpectrumUse::Illuminant) * lightScale(p);
+      e.intensity =
+          materials_.constantColor(p, "I", Vec3f(1), SpectrumUse::Illuminant) * lightScale(p);
       Vec3f from = p.getPoint3("from").value_or(Vec3f(0, 0, 0));
       e.position = state_.ctm.transformPoint(from);
       if (type == "spot") {
@@ -712,8 +740,9 @@ class Parser {
       pointEmitters_.push_back(e);
     } else {
       p.markAllUsed();
-      warnings_.once("light|" + type,
-                     fmt::format("{} is not supported and was skipped (first at {})", what, where.toString()));
+      warnings_.once(
+          "light|" + type,
+          fmt::format("{} is not supported and was skipped (first at {})", what, where.toString()));
     }
     reportUnused(p, what);
   }
@@ -796,21 +825,24 @@ class Parser {
           fail(where, "bilinearmesh needs \"integer indices\" (or exactly 4 points)");
         std::vector<Vec3f> normals = points(p.getArray("N", {"normal"}));
         if (!normals.empty() && normals.size() != pos.size())
-          fail(where, fmt::format("bilinearmesh: {} normals for {} points", normals.size(), pos.size()));
+          fail(where,
+               fmt::format("bilinearmesh: {} normals for {} points", normals.size(), pos.size()));
         mesh = tessellateBilinearPatches(pos, indices, uvsOf(p, pos.size(), where), normals);
       } else if (type == "loopsubdiv") {
         const PbrtParam* P = p.getArray("P", {"point3"});
         const PbrtParam* idx = p.getArray("indices", {"integer"});
         if (!P || !idx) fail(where, "loopsubdiv needs \"point3 P\" and \"integer indices\"");
         if (idx->ints.size() % 3 != 0)
-          PbrtParams::fail(*idx, fmt::format("{} indices is not a multiple of 3", idx->ints.size()));
+          PbrtParams::fail(*idx,
+                           fmt::format("{} indices is not a multiple of 3", idx->ints.size()));
         std::vector<Vec3i> tris(idx->ints.size() / 3);
         std::memcpy(static_cast<void*>(tris.data()), idx->ints.data(), tris.size() * sizeof(Vec3i));
         int levels = p.has("levels") ? p.getInt("levels", 3) : p.getInt("nlevels", 3);
-        mesh = loopSubdivide(points(P), tris, std::clamp(levels, 0, 8));
+        mesh = loopSubdivide(points(P), tris, std::max(levels, 0), options_.maxGeneratedTriangles);
       } else if (type == "sphere") {
         float r = p.getFloat("radius", 1);
-        mesh = tessellateSphere(r, p.getFloat("zmin", -r), p.getFloat("zmax", r), p.getFloat("phimax", 360));
+        mesh = tessellateSphere(r, p.getFloat("zmin", -r), p.getFloat("zmax", r),
+                                p.getFloat("phimax", 360));
       } else if (type == "disk") {
         mesh = tessellateDisk(p.getFloat("height", 0), p.getFloat("radius", 1),
                               p.getFloat("innerradius", 0), p.getFloat("phimax", 360));
@@ -823,8 +855,9 @@ class Parser {
         mesh = tessellateHeightfield(p.getInt("nu", 0), p.getInt("nv", 0), pz->floats);
       } else {
         p.markAllUsed();
-        warnings_.once("shape|" + type, fmt::format("{} is not supported and was skipped (first at {})",
-                                                    what, where.toString()));
+        warnings_.once("shape|" + type,
+                       fmt::format("{} is not supported and was skipped (first at {})", what,
+                                   where.toString()));
         return;
       }
       const int32_t alpha = materials_.shapeAlpha(p);
@@ -834,14 +867,16 @@ class Parser {
         p.find("displacement");
         p.find("edgelength");
         if (p.has("displacement"))
-          warnings_.once("displacement", fmt::format("plymesh displacement is not supported (first at {})",
-                                                     where.toString()));
+          warnings_.once(
+              "displacement",
+              fmt::format("plymesh displacement is not supported (first at {})", where.toString()));
         reportUnused(p, what);
         addPly(plyPath, material, where);
         return;
       }
       reportUnused(p, what);
       if (mesh.indices.empty()) return;
+      dropUselessNormals(mesh, where);
       mesh.name = type;
       mesh.material = material;
       addMesh(std::move(mesh));
@@ -863,10 +898,11 @@ class Parser {
         PbrtParams::fail(*idx, fmt::format("{} indices is not a multiple of 3", idx->ints.size()));
       for (size_t i = 0; i < idx->ints.size(); ++i)
         if (idx->ints[i] < 0 || size_t(idx->ints[i]) >= m.positions.size())
-          PbrtParams::fail(*idx, fmt::format("index {} (entry {}) is out of range: {} points", idx->ints[i],
-                                             i, m.positions.size()));
+          PbrtParams::fail(*idx, fmt::format("index {} (entry {}) is out of range: {} points",
+                                             idx->ints[i], i, m.positions.size()));
       m.indices.resize(idx->ints.size() / 3);
-      std::memcpy(static_cast<void*>(m.indices.data()), idx->ints.data(), m.indices.size() * sizeof(Vec3i));
+      std::memcpy(static_cast<void*>(m.indices.data()), idx->ints.data(),
+                  m.indices.size() * sizeof(Vec3i));
     } else if (m.positions.size() == 3) {
       m.indices.push_back({0, 1, 2});
     } else {
@@ -875,7 +911,8 @@ class Parser {
     if (const PbrtParam* N = p.getArray("N", {"normal"})) {
       m.normals = points(N);
       if (m.normals.size() != m.positions.size())
-        PbrtParams::fail(*N, fmt::format("{} normals for {} points", m.normals.size(), m.positions.size()));
+        PbrtParams::fail(
+            *N, fmt::format("{} normals for {} points", m.normals.size(), m.positions.size()));
     }
     m.uvs = uvsOf(p, m.positions.size(), where);
     p.find("S");  // tangents: Ferry makes its own frames
@@ -911,9 +948,10 @@ class Parser {
     c.normals = points(p.getArray("N", {"normal"}));
     if (p.has("splitdepth")) {
       p.find("splitdepth");
-      warnings_.once("splitdepth", fmt::format("curves: splitdepth ignored: curves become {} linear "
-                                               "pieces per segment (first at {})",
-                                               c.linearPerSegment, where.toString()));
+      warnings_.once("splitdepth",
+                     fmt::format("curves: splitdepth ignored: curves become {} linear "
+                                 "pieces per segment (first at {})",
+                                 c.linearPerSegment, where.toString()));
     }
     const int32_t alpha = materials_.shapeAlpha(p);
     const int32_t material = materials_.materialFor(
@@ -947,7 +985,8 @@ class Parser {
     int32_t base = int32_t(into.positions.size());
     into.positions.insert(into.positions.end(), piece.positions.begin(), piece.positions.end());
     into.normals.insert(into.normals.end(), piece.normals.begin(), piece.normals.end());
-    for (const Vec3i& t : piece.indices) into.indices.push_back({t.x + base, t.y + base, t.z + base});
+    for (const Vec3i& t : piece.indices)
+      into.indices.push_back({t.x + base, t.y + base, t.z + base});
   }
 
   static void bake(Mesh& mesh, const Affine3f& t) {
@@ -1013,11 +1052,23 @@ class Parser {
   }
 
   Mesh readPlyAt(const std::string& path, const SourceLocation& where) {
+    Mesh mesh;
     try {
-      return readPly(path, options_);
+      mesh = readPly(path, options_);
     } catch (const InputError& e) {
       throw InputError(where, fmt::format("plymesh: {}", e.what()));
     }
+    dropUselessNormals(mesh, where);
+    return mesh;
+  }
+
+  void dropUselessNormals(Mesh& mesh, const SourceLocation& where) {
+    if (!normalsPerpendicularToFaces(mesh)) return;
+    warnings_.once("perpendicular normals|" + where.toString(),
+                   fmt::format("{}: the shape's normals all lie in its faces' planes (they carry "
+                               "no shading information): ignored, the faces' own normals are used",
+                               where.toString()));
+    std::vector<Vec3f>().swap(mesh.normals);
   }
 
   // ----------------------------------------------------------------- finish
@@ -1051,7 +1102,8 @@ class Parser {
         v4map = !map.empty();
       }
       if (const PbrtParam* portal = p.find("portal"); portal)
-        warnings_.once("portal", fmt::format("infinite light portals are ignored (at {})", light.where.toString()));
+        warnings_.once("portal", fmt::format("infinite light portals are ignored (at {})",
+                                             light.where.toString()));
       p.find("samples");
       if (map.empty()) {
         if (p.has("illuminance")) {
@@ -1101,8 +1153,8 @@ class Parser {
         throw InputError(light.where, fmt::format("environment map: {}", e.what()));
       }
       bool square = source.width == source.height;
-      image = std::make_shared<HdrImage>(resampleEnvironment(source, light.lightFromWorld,
-                                                             v4map && square, L));
+      image = std::make_shared<HdrImage>(
+          resampleEnvironment(source, light.lightFromWorld, v4map && square, L));
     }
     if (image) {
       if (maxComponent(constant) > 0)
@@ -1114,7 +1166,9 @@ class Parser {
     }
   }
 
-  static std::string average3(Vec3f c) { return fmt::format("{:.3g} {:.3g} {:.3g}", c.x, c.y, c.z); }
+  static std::string average3(Vec3f c) {
+    return fmt::format("{:.3g} {:.3g} {:.3g}", c.x, c.y, c.z);
+  }
 
   // Ferry's environment: lat-long, y up, row 0 at +y, u = atan2(z, x) / 2 pi.
   HdrImage resampleEnvironment(const HdrImage& source, const Affine3f& lightFromWorld,
@@ -1140,7 +1194,8 @@ class Parser {
           float t = std::acos(std::clamp(l.z, -1.0f, 1.0f));
           float p = std::atan2(l.y, l.x);
           if (p < 0) p += 2 * kPi;
-          c = bilinear(source, p / (2 * kPi) * source.width - 0.5f, t / kPi * source.height - 0.5f, true);
+          c = bilinear(source, p / (2 * kPi) * source.width - 0.5f, t / kPi * source.height - 0.5f,
+                       true);
         }
         out.pixels[size_t(y) * out.width + x] = c * scale;
       }
@@ -1159,7 +1214,8 @@ class Parser {
     Vec3f forward = worldFromCamera.transformVector({0, 0, 1});
     Vec3f up = worldFromCamera.transformVector({0, 1, 0});
     Vec3f right = worldFromCamera.transformVector({1, 0, 0});
-    if (!(length(forward) > 0) || !(length(up) > 0)) fail(c.where, "Camera: degenerate camera transform");
+    if (!(length(forward) > 0) || !(length(up) > 0))
+      fail(c.where, "Camera: degenerate camera transform");
     view.from = from;
     view.at = from + normalize(forward);
     view.up = normalize(up);

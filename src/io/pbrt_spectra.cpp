@@ -138,13 +138,17 @@ Vec3f conductorReflectance(const SampledSpectrum& eta, const SampledSpectrum& k)
 
 std::optional<SampledSpectrum> namedSpectrum(std::string_view name) {
   // 400, 450, 500, 550, 600, 650, 700 nm.
-  if (name == "metal-Ag-eta") return table({0.173f, 0.152f, 0.130f, 0.125f, 0.124f, 0.139f, 0.142f});
+  if (name == "metal-Ag-eta")
+    return table({0.173f, 0.152f, 0.130f, 0.125f, 0.124f, 0.139f, 0.142f});
   if (name == "metal-Ag-k") return table({1.950f, 2.471f, 2.917f, 3.340f, 3.731f, 4.129f, 4.524f});
-  if (name == "metal-Al-eta") return table({0.490f, 0.618f, 0.768f, 0.959f, 1.197f, 1.475f, 1.838f});
+  if (name == "metal-Al-eta")
+    return table({0.490f, 0.618f, 0.768f, 0.959f, 1.197f, 1.475f, 1.838f});
   if (name == "metal-Al-k") return table({4.860f, 5.469f, 6.079f, 6.687f, 7.257f, 7.794f, 8.314f});
-  if (name == "metal-Au-eta") return table({1.658f, 1.509f, 0.850f, 0.350f, 0.220f, 0.167f, 0.160f});
+  if (name == "metal-Au-eta")
+    return table({1.658f, 1.509f, 0.850f, 0.350f, 0.220f, 0.167f, 0.160f});
   if (name == "metal-Au-k") return table({1.956f, 1.879f, 1.887f, 2.715f, 3.000f, 3.138f, 3.964f});
-  if (name == "metal-Cu-eta") return table({1.175f, 1.166f, 1.134f, 0.958f, 0.390f, 0.217f, 0.215f});
+  if (name == "metal-Cu-eta")
+    return table({1.175f, 1.166f, 1.134f, 0.958f, 0.390f, 0.217f, 0.215f});
   if (name == "metal-Cu-k") return table({2.130f, 2.394f, 2.575f, 2.577f, 2.943f, 3.638f, 4.164f});
   if (name == "metal-MgO-eta")
     return table({1.762f, 1.752f, 1.745f, 1.741f, 1.737f, 1.734f, 1.731f});
@@ -181,7 +185,8 @@ SampledSpectrum readSpdFile(const std::string& path) {
   auto flush = [&]() {
     if (word.empty()) return;
     std::optional<double> v = parsePbrtNumber(word);
-    if (!v) throw InputError(SourceLocation{path, wordLine}, fmt::format("'{}' is not a number", word));
+    if (!v)
+      throw InputError(SourceLocation{path, wordLine}, fmt::format("'{}' is not a number", word));
     values.push_back(float(*v));
     word.clear();
   };

@@ -54,7 +54,22 @@ const PbrtToken& PbrtTokenizer::peek() {
 
 void PbrtTokenizer::scan(PbrtToken& token) {
   token.text.clear();
-  // Whitespace and comments.
+  // Whitespace and comments, a buffer at a time.
+  for (;;) {
+    std::string_view b = stream_.buffered();
+    size_t i = 0;
+    while (i < b.size() && isSpace(static_cast<unsigned char>(b[i]))) {
+      if (b[i] == '\n') {
+        ++line_;
+        column_ = 1;
+      } else {
+        ++column_;
+      }
+      ++i;
+    }
+    stream_.consume(i);
+    if (i < b.size() || b.empty()) break;
+  }
   for (;;) {
     int c = stream_.peek();
     if (c < 0) {
@@ -113,16 +128,33 @@ void PbrtTokenizer::scan(PbrtToken& token) {
         int e = stream_.get();
         ++column_;
         switch (e) {
-          case 'b': d = '\b'; break;
-          case 'f': d = '\f'; break;
-          case 'n': d = '\n'; break;
-          case 'r': d = '\r'; break;
-          case 't': d = '\t'; break;
-          case '\\': d = '\\'; break;
-          case '\'': d = '\''; break;
-          case '"': d = '"'; break;
+          case 'b':
+            d = '\b';
+            break;
+          case 'f':
+            d = '\f';
+            break;
+          case 'n':
+            d = '\n';
+            break;
+          case 'r':
+            d = '\r';
+            break;
+          case 't':
+            d = '\t';
+            break;
+          case '\\':
+            d = '\\';
+            break;
+          case '\'':
+            d = '\'';
+            break;
+          case '"':
+            d = '"';
+            break;
           default:
-            if (e < 0) fail(token.line, token.column, "string never closed: the file ends inside it");
+            if (e < 0)
+              fail(token.line, token.column, "string never closed: the file ends inside it");
             fail(line_, column_ - 2,
                  e >= 32 && e < 127 ? fmt::format("unknown escape '\\{}' in a string", char(e))
                                     : fmt::format("unknown escape (byte 0x{:02x}) in a string", e));
@@ -142,13 +174,21 @@ void PbrtTokenizer::scan(PbrtToken& token) {
   token.kind = PbrtToken::Kind::Word;
   token.text.push_back(char(c));
   for (;;) {
-    int d = stream_.peek();
-    if (endsWord(d)) break;
-    if (d < 32 || d == 127)
-      fail(line_, column_, fmt::format("unexpected byte 0x{:02x}: this is not a pbrt text file", d));
-    if (token.text.size() >= kMaxToken) fail(token.line, token.column, "word longer than 1 MiB");
-    token.text.push_back(char(stream_.get()));
-    ++column_;
+    std::string_view b = stream_.buffered();
+    size_t i = 0;
+    while (i < b.size()) {
+      int d = static_cast<unsigned char>(b[i]);
+      if (endsWord(d)) break;
+      if (d < 32 || d == 127)
+        fail(line_, column_ + int(i),
+             fmt::format("unexpected byte 0x{:02x}: this is not a pbrt text file", d));
+      ++i;
+    }
+    if (token.text.size() + i > kMaxToken) fail(token.line, token.column, "word longer than 1 MiB");
+    token.text.append(b.data(), i);
+    column_ += int(i);
+    stream_.consume(i);
+    if (i < b.size() || b.empty()) break;
   }
 }
 

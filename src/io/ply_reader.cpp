@@ -20,7 +20,7 @@ namespace {
 constexpr size_t kMaxHeaderLine = 4096;
 constexpr uint64_t kMaxHeaderBytes = uint64_t(1) << 20;
 constexpr uint64_t kMaxElements = INT32_MAX;  // 32-bit indices
-constexpr int64_t kMaxPolygon = 1 << 16;     // vertices in one face
+constexpr int64_t kMaxPolygon = 1 << 16;      // vertices in one face
 
 enum class Format { Ascii, BinaryLittle, BinaryBig };
 
@@ -279,8 +279,9 @@ class BodyReader {
     if (!vertex) throw InputError(SourceLocation{in_.name(), header_.lines}, "no vertex element");
     vertexCount_ = vertex->count;
     if (vertexCount_ > kMaxElements)
-      throw InputError(SourceLocation{in_.name(), vertex->line},
-                       fmt::format("{} vertices: more than 32-bit indices can address", vertexCount_));
+      throw InputError(
+          SourceLocation{in_.name(), vertex->line},
+          fmt::format("{} vertices: more than 32-bit indices can address", vertexCount_));
     slots_ = findVertexSlots(*vertex);
     if (slots_.x < 0 || slots_.y < 0 || slots_.z < 0)
       throw InputError(SourceLocation{in_.name(), vertex->line},
@@ -313,16 +314,13 @@ class BodyReader {
     long double needed = 0;
     for (const Element& e : header_.elements) {
       long double perElement = 0;
+      // Lists at their shortest: only the count (a face with fewer than
+      // three indices is an error of its own, reported where it is).
       for (const Property& p : e.properties) {
-        bool polygon = !p.isList ? false
-                                 : (e.name == "face" &&
-                                    (p.name == "vertex_indices" || p.name == "vertex_index"));
         if (ascii()) {
-          perElement += 2 * (p.isList ? (polygon ? 4 : 1) : 1);
-        } else if (p.isList) {
-          perElement += sizeOf(p.countType) + (polygon ? 3 * sizeOf(p.type) : 0);
+          perElement += 2;
         } else {
-          perElement += sizeOf(p.type);
+          perElement += p.isList ? sizeOf(p.countType) : sizeOf(p.type);
         }
       }
       long double elementBytes = perElement * (long double)e.count;
@@ -345,7 +343,8 @@ class BodyReader {
     throw InputError(fmt::format("{}: {} (byte offset {})", in_.name(), what, in_.offset()));
   }
 
-  [[noreturn]] void truncated(const Element& e, uint64_t index) const {
+  [[noreturn]] void truncated(const Element& e, uint64_t index) {
+    line_ = lastWordLine_;  // not the line after the last newline
     fail(fmt::format("file ends in {} {} of {}: truncated?", e.name, index, e.count));
   }
 
@@ -357,6 +356,7 @@ class BodyReader {
       if (c == '\n') ++line_;
       in_.get();
     }
+    if (c >= 0) lastWordLine_ = line_;
     while ((c = in_.peek()) >= 0 && !(c == ' ' || c == '\t' || c == '\n' || c == '\r')) {
       if (c == 0) fail("NUL byte in an ASCII PLY body");
       if (out.size() > 64) fail(fmt::format("'{}...' is not a number", out.substr(0, 16)));
@@ -373,7 +373,8 @@ class BodyReader {
     const char* end = b + text_.size();
     if (text_.size() > 1 && text_[0] == '+') ++b;
     auto [ptr, ec] = std::from_chars(b, end, d);
-    if (ec == std::errc::result_out_of_range) d = std::strtod(text_.c_str(), nullptr);
+    if (ec == std::errc::result_out_of_range)
+      d = std::strtod(text_.c_str(), nullptr);
     else if (ec != std::errc() || ptr != end)
       fail(fmt::format("{} {}: property '{}': '{}' is not a number", e.name, index, p.name, text_));
     if (isInteger(t) && std::isfinite(d) && d != std::floor(d))
@@ -395,7 +396,8 @@ class BodyReader {
 
   int64_t listCount(const Element& e, uint64_t index, const Property& p) {
     double c = number(p.countType, e, index, p);
-    if (!(c >= 0)) fail(fmt::format("{} {}: list '{}' has a negative length", e.name, index, p.name));
+    if (!(c >= 0))
+      fail(fmt::format("{} {}: list '{}' has a negative length", e.name, index, p.name));
     // Each item takes at least one byte (binary) or two (ASCII).
     double most = double(in_.remaining()) / (ascii() ? 1.0 : double(sizeOf(p.type)));
     if (c > most + 1)
@@ -436,21 +438,21 @@ class BodyReader {
           }
         }
       }
-      Vec3f position(float(values[size_t(slots_.x)]), float(values[size_t(slots_.y)]),
-                     float(values[size_t(slots_.z)]));
+      Vec3f position{float(values[size_t(slots_.x)]), float(values[size_t(slots_.y)]),
+                     float(values[size_t(slots_.z)])};
       if (!isFinite(position))
         fail(fmt::format("vertex {}: position ({}, {}, {}) is not finite", index,
                          values[size_t(slots_.x)], values[size_t(slots_.y)],
                          values[size_t(slots_.z)]));
       mesh_.positions.push_back(position);
       if (slots_.nx >= 0) {
-        Vec3f normal(float(values[size_t(slots_.nx)]), float(values[size_t(slots_.ny)]),
-                     float(values[size_t(slots_.nz)]));
+        Vec3f normal{float(values[size_t(slots_.nx)]), float(values[size_t(slots_.ny)]),
+                     float(values[size_t(slots_.nz)])};
         if (!isFinite(normal)) fail(fmt::format("vertex {}: normal is not finite", index));
         mesh_.normals.push_back(normal);
       }
       if (slots_.u >= 0) {
-        Vec2f uv(float(values[size_t(slots_.u)]), float(values[size_t(slots_.v)]));
+        Vec2f uv{float(values[size_t(slots_.u)]), float(values[size_t(slots_.v)])};
         if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
           fail(fmt::format("vertex {}: texture coordinate is not finite", index));
         mesh_.uvs.push_back(uv);
@@ -484,7 +486,14 @@ class BodyReader {
     if (!isInteger(e.properties[size_t(list)].type))
       throw InputError(SourceLocation{in_.name(), e.line},
                        fmt::format("{} vertex_indices must be integers", e.name));
-    if (!strips) mesh_.indices.reserve(size_t(std::min<uint64_t>(e.count, kMaxElements)));
+    if (!strips) {
+      // At least one triangle per face, but never more than the bytes left
+      // can hold (three indices each), whatever the header says.
+      const Property& p = e.properties[size_t(list)];
+      uint64_t smallest = ascii() ? 8 : uint64_t(sizeOf(p.countType) + 3 * sizeOf(p.type));
+      mesh_.indices.reserve(
+          size_t(std::min({e.count, kMaxElements, in_.remaining() / smallest + 1})));
+    }
     std::vector<int32_t> polygon;
     for (uint64_t index = 0; index < e.count; ++index) {
       for (size_t i = 0; i < e.properties.size(); ++i) {
@@ -549,7 +558,8 @@ class BodyReader {
     }
     if (!ascii() && fixed) {
       uint64_t bytes = recordSize * e.count;
-      if (in_.skip(bytes) != bytes) truncated(e, (in_.offset()) / std::max<uint64_t>(recordSize, 1));
+      if (in_.skip(bytes) != bytes)
+        truncated(e, (in_.offset()) / std::max<uint64_t>(recordSize, 1));
       return;
     }
     for (uint64_t index = 0; index < e.count; ++index) {
@@ -565,6 +575,7 @@ class BodyReader {
   const Header& header_;
   bool swap_;
   int line_;
+  int lastWordLine_ = 0;
   LoadProgress progress_;
   uint64_t vertexCount_ = 0;
   VertexSlots slots_;

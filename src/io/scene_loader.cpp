@@ -17,7 +17,8 @@ namespace {
 
 std::string lowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
@@ -37,9 +38,10 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
   } else if (ext == ".gltf" || ext == ".glb") {
     scene = loadGltf(spec, options);
   } else {
-    throw InputError(fmt::format(
-        "{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, builtin:NAME)",
-        spec, ext));
+    throw InputError(
+        fmt::format("{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
+                    "builtin:NAME)",
+                    spec, ext));
   }
   scene.validate();
   return scene;

@@ -110,8 +110,7 @@ Mesh tessellateDisk(float height, float radius, float innerRadius, float phiMaxD
   return m;
 }
 
-Mesh tessellateCylinder(float radius, float zMin, float zMax, float phiMaxDegrees,
-                        int segments) {
+Mesh tessellateCylinder(float radius, float zMin, float zMax, float phiMaxDegrees, int segments) {
   checkFinite(radius, "cylinder radius");
   checkFinite(zMin, "cylinder zmin");
   checkFinite(zMax, "cylinder zmax");
@@ -133,7 +132,8 @@ Mesh tessellateCylinder(float radius, float zMin, float zMax, float phiMaxDegree
 }
 
 Mesh tessellateHeightfield(int nu, int nv, const std::vector<float>& heights) {
-  if (nu < 2 || nv < 2) throw InputError(fmt::format("heightfield needs nu, nv >= 2, found {} x {}", nu, nv));
+  if (nu < 2 || nv < 2)
+    throw InputError(fmt::format("heightfield needs nu, nv >= 2, found {} x {}", nu, nv));
   if (heights.size() != size_t(nu) * size_t(nv))
     throw InputError(fmt::format("heightfield needs nu * nv = {} heights, found {}",
                                  uint64_t(nu) * uint64_t(nv), heights.size()));
@@ -168,7 +168,8 @@ Mesh tessellateBilinearPatches(const std::vector<Vec3f>& positions,
         throw InputError(fmt::format("patch {}: index {} out of range ({} vertices)", p / 4, v[k],
                                      positions.size()));
     }
-    Vec3f p00 = positions[v[0]], p10 = positions[v[1]], p01 = positions[v[2]], p11 = positions[v[3]];
+    Vec3f p00 = positions[v[0]], p10 = positions[v[1]], p01 = positions[v[2]],
+          p11 = positions[v[3]];
     Vec3f n = cross(p10 - p00, p01 - p00);
     float size = std::max({length(p10 - p00), length(p01 - p00), length(p11 - p00), 1e-30f});
     float off = length(n) > 0 ? std::abs(dot(p11 - p00, normalize(n))) : 0;
@@ -257,18 +258,21 @@ float loopBeta(size_t valence) {
 Mesh loopSubdivide(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& triangles,
                    int levels, uint64_t maxTriangles) {
   if (levels < 0) throw InputError(fmt::format("subdivision levels {} must be 0 or more", levels));
+  if (triangles.empty()) return Mesh{};
   uint64_t final = triangles.size();
   for (int l = 0; l < levels; ++l) {
     final *= 4;
     if (final > maxTriangles)
-      throw InputError(fmt::format("{} levels of subdivision of {} triangles make more than {} "
-                                   "triangles",
-                                   levels, triangles.size(), maxTriangles));
+      throw InputError(
+          fmt::format("{} levels of subdivision of {} triangles make more than {} "
+                      "triangles",
+                      levels, triangles.size(), maxTriangles));
   }
   for (const Vec3i& t : triangles)
     for (int k = 0; k < 3; ++k)
       if (t[k] < 0 || size_t(t[k]) >= positions.size())
-        throw InputError(fmt::format("index {} out of range ({} vertices)", t[k], positions.size()));
+        throw InputError(
+            fmt::format("index {} out of range ({} vertices)", t[k], positions.size()));
   std::vector<Vec3f> v = positions;
   std::vector<Vec3i> f = triangles;
   for (int level = 0; level < levels; ++level) {
@@ -296,7 +300,8 @@ Mesh loopSubdivide(const std::vector<Vec3f>& positions, const std::vector<Vec3i>
       const EdgeInfo& ed = topo.edges[e];
       Vec3f a = v[size_t(ed.a)], b = v[size_t(ed.b)];
       if (ed.faces == 2)
-        next[v.size() + e] = (a + b) * 0.375f + (v[size_t(ed.opposite[0])] + v[size_t(ed.opposite[1])]) * 0.125f;
+        next[v.size() + e] =
+            (a + b) * 0.375f + (v[size_t(ed.opposite[0])] + v[size_t(ed.opposite[1])]) * 0.125f;
       else
         next[v.size() + e] = (a + b) * 0.5f;
     }
@@ -355,13 +360,15 @@ int curveSegmentCount(const CurveDescription& c) {
   if (c.basis == CurveBasis::Bezier) {
     // Segments share their end points: 4, 7, 10, ... points for cubics.
     if (n < c.degree + 1 || (n - 1) % c.degree != 0)
-      throw InputError(fmt::format("a degree-{} Bezier curve needs {} + {}k control points, found {}",
-                                   c.degree, c.degree + 1, c.degree, n));
+      throw InputError(
+          fmt::format("a degree-{} Bezier curve needs {} + {}k control points, found {}", c.degree,
+                      c.degree + 1, c.degree, n));
     segments = (n - 1) / c.degree;
   } else {
     if (n < c.degree + 1)
-      throw InputError(fmt::format("a degree-{} B-spline needs at least {} control points, found {}",
-                                   c.degree, c.degree + 1, n));
+      throw InputError(
+          fmt::format("a degree-{} B-spline needs at least {} control points, found {}", c.degree,
+                      c.degree + 1, n));
     segments = n - c.degree;
   }
   return segments;
@@ -380,8 +387,8 @@ void appendCurve(const CurveDescription& c, Mesh& mesh) {
 
   // Bezier control points of each segment.
   auto bezierOf = [&](int s, Vec3f out[4]) {
-    const Vec3f* p = c.basis == CurveBasis::Bezier ? &c.points[size_t(s * c.degree)]
-                                                   : &c.points[size_t(s)];
+    const Vec3f* p =
+        c.basis == CurveBasis::Bezier ? &c.points[size_t(s * c.degree)] : &c.points[size_t(s)];
     if (c.degree == 3) {
       if (c.basis == CurveBasis::Bezier) {
         for (int k = 0; k < 4; ++k) out[k] = p[k];
@@ -417,8 +424,10 @@ void appendCurve(const CurveDescription& c, Mesh& mesh) {
     bezierOf(s, b);
     for (int k = (s == 0 ? 0 : 1); k <= pieces; ++k) {
       float t = float(k) / pieces, u = 1 - t;
-      Vec3f p = b[0] * (u * u * u) + b[1] * (3 * u * u * t) + b[2] * (3 * u * t * t) + b[3] * (t * t * t);
-      Vec3f d = (b[1] - b[0]) * (3 * u * u) + (b[2] - b[1]) * (6 * u * t) + (b[3] - b[2]) * (3 * t * t);
+      Vec3f p =
+          b[0] * (u * u * u) + b[1] * (3 * u * u * t) + b[2] * (3 * u * t * t) + b[3] * (t * t * t);
+      Vec3f d =
+          (b[1] - b[0]) * (3 * u * u) + (b[2] - b[1]) * (6 * u * t) + (b[3] - b[2]) * (3 * t * t);
       if (!(length(d) > 0)) d = b[3] - b[0];
       float global = (float(s) + t) / float(segments);
       Vec3f n(0);
@@ -478,7 +487,8 @@ void appendCurve(const CurveDescription& c, Mesh& mesh) {
   }
   for (size_t i = 0; i + 1 < samples.size(); ++i)
     for (int k = 0; k < kSides; ++k) {
-      int32_t a = first + int32_t(i * kSides + k), b = first + int32_t(i * kSides + (k + 1) % kSides);
+      int32_t a = first + int32_t(i * kSides + k),
+              b = first + int32_t(i * kSides + (k + 1) % kSides);
       int32_t d = a + kSides, e = b + kSides;
       mesh.indices.push_back({a, b, e});
       mesh.indices.push_back({a, e, d});
@@ -488,7 +498,8 @@ void appendCurve(const CurveDescription& c, Mesh& mesh) {
 void computeVertexNormals(Mesh& m) {
   m.normals.assign(m.positions.size(), Vec3f(0));
   for (const Vec3i& t : m.indices) {
-    Vec3f p0 = m.positions[size_t(t.x)], p1 = m.positions[size_t(t.y)], p2 = m.positions[size_t(t.z)];
+    Vec3f p0 = m.positions[size_t(t.x)], p1 = m.positions[size_t(t.y)],
+          p2 = m.positions[size_t(t.z)];
     Vec3f n = cross(p1 - p0, p2 - p0);
     for (int k = 0; k < 3; ++k) m.normals[size_t(t[k])] += n;
   }
@@ -501,10 +512,30 @@ void computeVertexNormals(Mesh& m) {
 float meshArea(const Mesh& m) {
   double a = 0;
   for (const Vec3i& t : m.indices) {
-    Vec3f p0 = m.positions[size_t(t.x)], p1 = m.positions[size_t(t.y)], p2 = m.positions[size_t(t.z)];
+    Vec3f p0 = m.positions[size_t(t.x)], p1 = m.positions[size_t(t.y)],
+          p2 = m.positions[size_t(t.z)];
     a += 0.5 * length(cross(p1 - p0, p2 - p0));
   }
   return float(a);
+}
+
+bool normalsPerpendicularToFaces(const Mesh& m) {
+  if (m.normals.empty() || m.normals.size() != m.positions.size() || m.indices.empty())
+    return false;
+  for (const Vec3i& t : m.indices) {
+    Vec3f p0 = m.positions[size_t(t.x)], p1 = m.positions[size_t(t.y)],
+          p2 = m.positions[size_t(t.z)];
+    Vec3f g = cross(p1 - p0, p2 - p0);
+    float lg = length(g);
+    if (!(lg > 0)) continue;
+    for (int k = 0; k < 3; ++k) {
+      Vec3f n = m.normals[size_t(t[k])];
+      float ln = length(n);
+      if (!(ln > 0)) continue;
+      if (std::abs(dot(n, g)) > 0.01f * ln * lg) return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace ferry

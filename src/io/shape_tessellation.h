@@ -41,7 +41,7 @@ Mesh tessellateBilinearPatches(const std::vector<Vec3f>& positions,
 // rules (creases), non-manifold edges are treated as boundaries.
 // The result may not exceed `maxTriangles` (InputError naming the levels).
 Mesh loopSubdivide(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& triangles,
-                   int levels, uint64_t maxTriangles = uint64_t(1) << 27);
+                   int levels, uint64_t maxTriangles = uint64_t(1) << 26);
 
 // pbrt's curves: cubic or quadratic, Bezier or uniform B-spline control
 // points. Each curve segment becomes `linearPerSegment` straight pieces (3,
@@ -70,5 +70,10 @@ int curveSegmentCount(const CurveDescription& curve);
 void computeVertexNormals(Mesh& mesh);
 // Total surface area.
 float meshArea(const Mesh& mesh);
+// True when every corner's normal is perpendicular to its triangle (within
+// about half a degree): normals that carry no shading information, such as
+// N = (0, 1, 0) on a floor in the plane z = 0. A renderer that shades with
+// them sees the surface edge-on everywhere (black); callers drop them.
+bool normalsPerpendicularToFaces(const Mesh& mesh);
 
 }  // namespace ferry

@@ -37,7 +37,8 @@ void Canvas::fillRect(int x0, int y0, int x1, int y1, Rgba c, float opacity) {
     for (int x = std::max(0, x0); x < std::min(width_, x1); ++x) blend(x, y, c, opacity);
 }
 
-void Canvas::line(float x0, float y0, float x1, float y1, Rgba c, float thickness, float opacity, float dash) {
+void Canvas::line(float x0, float y0, float x1, float y1, Rgba c, float thickness, float opacity,
+                  float dash) {
   const float dx = x1 - x0, dy = y1 - y0;
   const float length = std::sqrt(dx * dx + dy * dy);
   const int steps = std::max(1, int(std::ceil(length * 2)));
@@ -59,7 +60,8 @@ void Canvas::line(float x0, float y0, float x1, float y1, Rgba c, float thicknes
 void Canvas::text(int x, int y, const std::string& s, Rgba c, int scale) {
   std::vector<char> buffer(s.size() * 300 + 1024);
   std::string copy = s;
-  const int quads = stb_easy_font_print(0, 0, copy.data(), nullptr, buffer.data(), int(buffer.size()));
+  const int quads =
+      stb_easy_font_print(0, 0, copy.data(), nullptr, buffer.data(), int(buffer.size()));
   const float* v = reinterpret_cast<const float*>(buffer.data());
   for (int q = 0; q < quads; ++q) {
     // 4 vertices of 16 bytes (x, y, z, rgba): take the quad's extent.
@@ -71,8 +73,8 @@ void Canvas::text(int x, int y, const std::string& s, Rgba c, int scale) {
       qy0 = std::min(qy0, quad[k * 4 + 1]);
       qy1 = std::max(qy1, quad[k * 4 + 1]);
     }
-    fillRect(x + int(std::lround(qx0 * scale)), y + int(std::lround(qy0 * scale)), x + int(std::lround(qx1 * scale)),
-             y + int(std::lround(qy1 * scale)), c);
+    fillRect(x + int(std::lround(qx0 * scale)), y + int(std::lround(qy0 * scale)),
+             x + int(std::lround(qx1 * scale)), y + int(std::lround(qy1 * scale)), c);
   }
 }
 

@@ -26,10 +26,11 @@ class Canvas {
   Rgba at(int x, int y) const;
   // Blends `c` (with its alpha scaled by `opacity`) over the pixel.
   void blend(int x, int y, Rgba c, float opacity = 1.0f);
-  void fillRect(int x0, int y0, int x1, int y1, Rgba c, float opacity = 1.0f);  // [x0, x1) x [y0, y1)
+  void fillRect(int x0, int y0, int x1, int y1, Rgba c,
+                float opacity = 1.0f);  // [x0, x1) x [y0, y1)
   // `dash`: 0 solid, else on/off length in pixels.
-  void line(float x0, float y0, float x1, float y1, Rgba c, float thickness = 1.0f, float opacity = 1.0f,
-            float dash = 0);
+  void line(float x0, float y0, float x1, float y1, Rgba c, float thickness = 1.0f,
+            float opacity = 1.0f, float dash = 0);
   // Text with its top-left corner at (x, y); `scale` multiplies the 12-pixel glyphs.
   void text(int x, int y, const std::string& s, Rgba c, int scale = 1);
   static int textWidth(const std::string& s, int scale = 1);

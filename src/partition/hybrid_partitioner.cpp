@@ -24,7 +24,8 @@ struct PartContent {
     std::vector<uint32_t> merged;
     merged.reserve(resources.size() + u.resourceCount);
     std::set_union(resources.begin(), resources.end(), set.resources.begin() + u.firstResource,
-                   set.resources.begin() + u.firstResource + u.resourceCount, std::back_inserter(merged));
+                   set.resources.begin() + u.firstResource + u.resourceCount,
+                   std::back_inserter(merged));
     resources = std::move(merged);
   }
 };
@@ -32,8 +33,8 @@ struct PartContent {
 }  // namespace
 
 ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& parts,
-                                      const std::vector<RankMask>& partRanks, std::vector<RankMask>& owners,
-                                      uint64_t budget) {
+                                      const std::vector<RankMask>& partRanks,
+                                      std::vector<RankMask>& owners, uint64_t budget) {
   ReplicationResult result;
   if (parts.size() < 2) return result;
   Box3f world;

@@ -19,15 +19,18 @@ struct ReplicationResult {
 };
 
 // A unit counts as spatially large when its box's surface area is at least
-// this fraction of the box around everything.
-constexpr double kLargeAreaFraction = 1.0 / 64.0;
+// this fraction of the box around everything. Low on purpose: candidates are
+// taken by area per byte, so the budget goes to the cheapest large things
+// first (the island's ocean and seabed, then terrain pieces); at 1/64 only
+// the sea qualified and most of the budget stayed unused.
+constexpr double kLargeAreaFraction = 1.0 / 4096.0;
 
 // Adds copies of spatially large units to every part, largest surface area per
 // byte first, as long as the bytes added over all ranks stay within `budget`
 // (a unit that does not fit is skipped; smaller ones may still fit). Updates
 // `parts` (units, bytes) and `owners` (per unit).
 ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& parts,
-                                      const std::vector<RankMask>& partRanks, std::vector<RankMask>& owners,
-                                      uint64_t budget);
+                                      const std::vector<RankMask>& partRanks,
+                                      std::vector<RankMask>& owners, uint64_t budget);
 
 }  // namespace ferry

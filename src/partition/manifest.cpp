@@ -96,9 +96,10 @@ Manifest readManifest(const std::string& directory) {
       throw InputError(fmt::format("{}: not a Ferry part manifest", path));
     m.version = j.at("version").get<uint32_t>();
     if (m.version != kPartFormatVersion)
-      throw InputError(fmt::format("{}: made by another version of Ferry (part format {}, this Ferry reads format "
-                                   "{}): partition the scene again",
-                                   path, m.version, kPartFormatVersion));
+      throw InputError(fmt::format(
+          "{}: made by another version of Ferry (part format {}, this Ferry reads format "
+          "{}): partition the scene again",
+          path, m.version, kPartFormatVersion));
     m.scene = j.at("scene").get<std::string>();
     m.partitioner = j.at("partitioner").get<std::string>();
     m.options = j.value("options", nlohmann::json::object());
@@ -111,12 +112,14 @@ Manifest readManifest(const std::string& directory) {
     readFile(j.at("shared"), m.shared, path);
     const nlohmann::json& parts = j.at("parts");
     if (m.ranks < 1 || m.ranks > 64 || !parts.is_array() || parts.size() != size_t(m.ranks))
-      throw InputError(fmt::format("{}: {} parts listed for {} ranks", path, parts.size(), m.ranks));
+      throw InputError(
+          fmt::format("{}: {} parts listed for {} ranks", path, parts.size(), m.ranks));
     for (size_t r = 0; r < parts.size(); ++r) {
       ManifestPart p;
       readFile(parts[r], p, path);
       p.rank = parts[r].at("rank").get<int>();
-      if (p.rank != int(r)) throw InputError(fmt::format("{}: part {} is listed as rank {}", path, r, p.rank));
+      if (p.rank != int(r))
+        throw InputError(fmt::format("{}: part {} is listed as rank {}", path, r, p.rank));
       p.instances = parts[r].value("instances", uint64_t(0));
       p.estimatedBytes = parts[r].value("estimated_bytes", uint64_t(0));
       m.parts.push_back(std::move(p));

@@ -37,7 +37,7 @@ struct Manifest {
   std::string partitioner;  // name
   nlohmann::json options;   // the partitioner's options
   int ranks = 0;
-  nlohmann::json summary;   // SceneSummary::toJson() of the scene as given
+  nlohmann::json summary;  // SceneSummary::toJson() of the scene as given
   uint64_t inputBytes = 0;
   uint64_t replicatedBytes = 0;
   uint64_t proxies = 0;

@@ -64,7 +64,8 @@ bool CentroidSplitter::split(const Part& part, Part& left, Part& right) {
         }
       }
       if (leftCount == 0 || leftCount == n) continue;
-      double cost = splitCost(part.domain, part.bytes, leftBox, leftCost.bytes(), rightBox, rightCost.bytes());
+      double cost = splitCost(part.domain, part.bytes, leftBox, leftCost.bytes(), rightBox,
+                              rightCost.bytes());
       if (cost < best) {
         best = cost;
         chosen = plane;
@@ -78,7 +79,8 @@ bool CentroidSplitter::split(const Part& part, Part& left, Part& right) {
   if (bestFamily >= 0) {
     const std::vector<Vec3f>& key = families[size_t(bestFamily)];
     for (size_t k = 0; k < n; ++k)
-      (!placed[k] || key[k][chosen.axis] < chosen.position ? left : right).units.push_back(part.units[k]);
+      (!placed[k] || key[k][chosen.axis] < chosen.position ? left : right)
+          .units.push_back(part.units[k]);
   } else {
     // Every centre in one place: halve by count, in the order of the centres
     // along the longest axis, then by id.
@@ -89,7 +91,8 @@ bool CentroidSplitter::split(const Part& part, Part& left, Part& right) {
     std::vector<size_t> order(n);
     for (size_t k = 0; k < n; ++k) order[k] = k;
     auto keyOf = [&](size_t k) { return placed[k] ? own[k][axis] : -kInfinity; };
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return keyOf(a) < keyOf(b); });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return keyOf(a) < keyOf(b); });
     for (size_t i = 0; i < n; ++i) (i < n / 2 ? left : right).units.push_back(part.units[order[i]]);
     std::sort(left.units.begin(), left.units.end());
     std::sort(right.units.begin(), right.units.end());

@@ -6,15 +6,18 @@
 // instances on one rank).
 //
 // The hybrid partitioners (bvh-style, best) use the same splitter with one
-// unit per instance, and `groupCandidates`: besides sorting each instance by
-// its own centre, another 3 x 7 planes sort the instances of each object
-// together, by the box around that object's instances in the part. The cost
-// function then chooses between splitting an object's instances over both
-// sides (each side pays for the object's meshes) and keeping them together
-// ("partition based on instances, so some instances can get replicated, if
-// the cost function so chooses"). Without the second family every plane cuts
-// through the spread-out instances of every plant species in a scene like
-// the landscape, and each side pays for nearly all the unique geometry.
+// unit per instance. bvh-style sorts each instance by its own centre, as the
+// paper describes. `best` adds `groupCandidates`: another 3 x 7 planes that
+// sort the instances of each object together, by the box around that
+// object's instances in the part. The cost function then chooses between
+// splitting an object's instances over both sides (each side pays for the
+// object's meshes) and keeping them together ("partition based on instances,
+// so some instances can get replicated, if the cost function so chooses").
+// Without that family every plane cuts through the spread-out instances of
+// every plant species, and each side pays for nearly all the unique
+// geometry: on the landscape at 8 ranks the largest part is 53% of the scene
+// instead of 21% (and rays are forwarded less: 1.5 instead of 3.6 per path;
+// docs/partitioning.md has the measurements).
 #pragma once
 
 #include "partition/split_loop.h"

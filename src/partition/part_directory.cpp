@@ -17,17 +17,22 @@ std::string join(const std::string& directory, const std::string& file) {
 
 }  // namespace
 
-std::string partFileName(int rank) { return fmt::format("part-{:04d}.fpart", rank); }
+std::string partFileName(int rank) {
+  return fmt::format("part-{:04d}.fpart", rank);
+}
 
-Manifest writePartDirectory(const std::string& directory, const Scene& scene, const Partition& partition,
-                            const Scene& lights, const PartDirectoryInfo& info) {
+Manifest writePartDirectory(const std::string& directory, const Scene& scene,
+                            const Partition& partition, const Scene& lights,
+                            const PartDirectoryInfo& info) {
   FERRY_CHECK(partition.instanceOwners.size() == scene.instances.size());
   std::error_code ec;
   std::filesystem::create_directories(directory, ec);
   if (ec || !std::filesystem::is_directory(directory))
     throw InputError(fmt::format("{}: cannot create the directory ({})", directory, ec.message()));
   std::filesystem::remove(join(directory, kManifestName), ec);
-  if (ec) throw InputError(fmt::format("{}: cannot remove the old manifest ({})", directory, ec.message()));
+  if (ec)
+    throw InputError(
+        fmt::format("{}: cannot remove the old manifest ({})", directory, ec.message()));
 
   Manifest m;
   m.version = kPartFormatVersion;
@@ -47,7 +52,8 @@ Manifest writePartDirectory(const std::string& directory, const Scene& scene, co
     p.file = partFileName(r);
     p.instances = owned.size();
     p.estimatedBytes = ownedMemory(scene, owned).total();
-    WrittenFile w = writePartFile(join(directory, p.file), scene, owned, partition.instanceOwners, r, partition.ranks);
+    WrittenFile w = writePartFile(join(directory, p.file), scene, owned, partition.instanceOwners,
+                                  r, partition.ranks);
     p.bytes = w.bytes;
     p.hash = w.hash;
     m.parts.push_back(std::move(p));
@@ -73,15 +79,18 @@ RankPart loadRankPart(const std::string& directory, int rank, int ranks) {
   out.manifest = readManifest(directory);
   const Manifest& m = out.manifest;
   if (m.ranks != ranks)
-    throw InputError(fmt::format("{}: partitioned for {} ranks, but {} ranks are running (run with mpirun -np {}, "
-                                 "or partition again for {})",
-                                 join(directory, kManifestName), m.ranks, ranks, m.ranks, ranks));
+    throw InputError(fmt::format(
+        "{}: partitioned for {} ranks, but {} ranks are running (run with mpirun -np {}, "
+        "or partition again for {})",
+        join(directory, kManifestName), m.ranks, ranks, m.ranks, ranks));
   SharedData shared = readSharedFile(join(directory, m.shared.file), m.shared.hash);
-  if (shared.ranks != ranks) throw InputError(fmt::format("{}: made for {} ranks", m.shared.file, shared.ranks));
+  if (shared.ranks != ranks)
+    throw InputError(fmt::format("{}: made for {} ranks", m.shared.file, shared.ranks));
   LoadedPart part = readPartFile(join(directory, m.parts[rank].file), m.parts[rank].hash);
   if (part.rank != rank || part.ranks != ranks)
-    throw InputError(fmt::format("{}: holds rank {} of {}, not rank {} of {}", join(directory, m.parts[rank].file),
-                                 part.rank, part.ranks, rank, ranks));
+    throw InputError(fmt::format("{}: holds rank {} of {}, not rank {} of {}",
+                                 join(directory, m.parts[rank].file), part.rank, part.ranks, rank,
+                                 ranks));
   out.scene = std::move(part.scene);
   out.scene.views = std::move(shared.views);
   out.scene.filmWidth = shared.filmWidth;
@@ -105,8 +114,9 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
   partition.proxies = shared.proxies;
   for (const ManifestPart& p : m.parts) {
     LoadedPart part = readPartFile(join(directory, p.file), p.hash);
-    const int32_t textures = int32_t(all.textures.size()), materials = int32_t(all.materials.size()),
-                  meshes = int32_t(all.meshes.size()), objects = int32_t(all.objects.size());
+    const int32_t textures = int32_t(all.textures.size()),
+                  materials = int32_t(all.materials.size()), meshes = int32_t(all.meshes.size()),
+                  objects = int32_t(all.objects.size());
     for (Texture& t : part.scene.textures) all.textures.push_back(std::move(t));
     for (Material mat : part.scene.materials) {
       if (mat.baseColorTexture != kNoTexture) mat.baseColorTexture += textures;
@@ -121,8 +131,10 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
       for (int32_t& mesh : o.meshes) mesh += meshes;
       all.objects.push_back(std::move(o));
     }
-    for (const Instance& inst : part.scene.instances) all.instances.push_back({inst.object + objects, inst.transform});
-    partition.instanceOwners.insert(partition.instanceOwners.end(), part.owners.begin(), part.owners.end());
+    for (const Instance& inst : part.scene.instances)
+      all.instances.push_back({inst.object + objects, inst.transform});
+    partition.instanceOwners.insert(partition.instanceOwners.end(), part.owners.begin(),
+                                    part.owners.end());
   }
   return all;
 }

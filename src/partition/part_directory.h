@@ -27,8 +27,9 @@ struct PartDirectoryInfo {
 // Writes the parts of `scene` (as partitioned: the partition refers to it)
 // one after another, straight from the scene. `lights` is lightScene() of the
 // scene as given; views and film settings are taken from `scene`.
-Manifest writePartDirectory(const std::string& directory, const Scene& scene, const Partition& partition,
-                            const Scene& lights, const PartDirectoryInfo& info);
+Manifest writePartDirectory(const std::string& directory, const Scene& scene,
+                            const Partition& partition, const Scene& lights,
+                            const PartDirectoryInfo& info);
 
 // What one rank renders from: its part (scene with views and film settings
 // from the shared file), a partition whose instanceOwners index that part's

@@ -28,11 +28,15 @@ static_assert(std::is_trivially_copyable_v<Proxy> && sizeof(Proxy) == 32);
 static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // The writers below list every field of these structs: when one gains a
 // field, these fail so that the part format (and kPartFormatVersion) follows.
-static_assert(sizeof(Material) == 88, "Material changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(Material) == 88,
+              "Material changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Mesh) == 136, "Mesh changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(CameraView) == 80, "CameraView changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(Texture) == 72, "Texture changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(SunLight) == 28, "SunLight changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(CameraView) == 80,
+              "CameraView changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(Texture) == 72,
+              "Texture changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(SunLight) == 28,
+              "SunLight changed: update part_file.cpp and kPartFormatVersion");
 
 constexpr char kMagic[8] = {'F', 'E', 'R', 'R', 'Y', 'P', 'R', 'T'};
 constexpr uint32_t kKindPart = 1;
@@ -58,7 +62,8 @@ static_assert(sizeof(Header) == kHeaderBytes && offsetof(Header, headerHash) == 
 
 class FileWriter {
  public:
-  explicit FileWriter(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "wb"), &std::fclose) {
+  explicit FileWriter(const std::string& path)
+      : path_(path), file_(std::fopen(path.c_str(), "wb"), &std::fclose) {
     if (!file_) throw InputError(fmt::format("{}: cannot write ({})", path, std::strerror(errno)));
     std::setvbuf(file_.get(), nullptr, _IOFBF, 1 << 20);
     Header blank{};
@@ -112,7 +117,9 @@ class FileWriter {
     if (hashed) hash_.update(data, bytes);
     offset_ += bytes;
   }
-  [[noreturn]] void fail() { throw InputError(fmt::format("{}: write failed ({})", path_, std::strerror(errno))); }
+  [[noreturn]] void fail() {
+    throw InputError(fmt::format("{}: write failed ({})", path_, std::strerror(errno)));
+  }
 
   std::string path_;
   std::unique_ptr<FILE, int (*)(FILE*)> file_;
@@ -176,8 +183,8 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
       if (x == 0) x = next++;
     return next;
   };
-  const int32_t objects = number(objectIndex), meshes = number(meshIndex), materials = number(materialIndex),
-                textures = number(textureIndex);
+  const int32_t objects = number(objectIndex), meshes = number(meshIndex),
+                materials = number(materialIndex), textures = number(textureIndex);
 
   w.pod(uint64_t(textures));
   for (size_t t = 0; t < scene.textures.size(); ++t)
@@ -186,7 +193,8 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
   for (size_t k = 0; k < scene.materials.size(); ++k)
     if (materialIndex[k] >= 0) {
       Material mat = scene.materials[k];
-      if (mat.baseColorTexture != kNoTexture) mat.baseColorTexture = textureIndex[mat.baseColorTexture];
+      if (mat.baseColorTexture != kNoTexture)
+        mat.baseColorTexture = textureIndex[mat.baseColorTexture];
       if (mat.alphaTexture != kNoTexture) mat.alphaTexture = textureIndex[mat.alphaTexture];
       writeMaterial(w, mat);
     }
@@ -288,7 +296,8 @@ class MappedFile {
 };
 
 // Checks the header and the hashes; returns the header.
-Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind, uint64_t expectedHash) {
+Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind,
+                 uint64_t expectedHash) {
   auto bad = [&](const std::string& what) { return InputError(fmt::format("{}: {}", path, what)); };
   if (file.size() < kHeaderBytes)
     throw bad(fmt::format("truncated: {} bytes, less than a part file's header", file.size()));
@@ -296,16 +305,19 @@ Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind,
   std::memcpy(&h, file.data(), sizeof(h));
   if (std::memcmp(h.magic, kMagic, sizeof(kMagic)) != 0) throw bad("not a Ferry part file");
   if (h.version != kPartFormatVersion)
-    throw bad(fmt::format("made by another version of Ferry (part format {}, this Ferry reads format {}): "
-                          "partition the scene again",
-                          h.version, kPartFormatVersion));
+    throw bad(fmt::format(
+        "made by another version of Ferry (part format {}, this Ferry reads format {}): "
+        "partition the scene again",
+        h.version, kPartFormatVersion));
   if (hash64(&h, kHashedHeaderBytes) != h.headerHash) throw bad("corrupt header (hash mismatch)");
   if (h.kind != kind)
-    throw bad(kind == kKindPart ? "is a shared file, not a rank's part" : "is a rank's part, not the shared file");
+    throw bad(kind == kKindPart ? "is a shared file, not a rank's part"
+                                : "is a rank's part, not the shared file");
   if (h.fileBytes != file.size())
-    throw bad(h.fileBytes > file.size() ? fmt::format("truncated: {} of {} bytes", file.size(), h.fileBytes)
-                                        : fmt::format("{} bytes, {} more than written", file.size(),
-                                                      file.size() - h.fileBytes));
+    throw bad(h.fileBytes > file.size()
+                  ? fmt::format("truncated: {} of {} bytes", file.size(), h.fileBytes)
+                  : fmt::format("{} bytes, {} more than written", file.size(),
+                                file.size() - h.fileBytes));
   Hash64 hash;
   constexpr uint64_t kChunk = 64ull << 20;
   for (uint64_t at = kHeaderBytes; at < file.size(); at += kChunk) {
@@ -313,7 +325,8 @@ Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind,
     hash.update(file.data() + at, n);
     file.release(at, at + n);
   }
-  if (hash.digest() != h.payloadHash) throw bad("corrupt (hash mismatch: the file changed after it was written)");
+  if (hash.digest() != h.payloadHash)
+    throw bad("corrupt (hash mismatch: the file changed after it was written)");
   if (expectedHash != 0 && h.payloadHash != expectedHash)
     throw bad(fmt::format("does not belong to this manifest (hash {}, the manifest says {})",
                           hashToHex(h.payloadHash), hashToHex(expectedHash)));
@@ -322,7 +335,8 @@ Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind,
 
 class FileReader {
  public:
-  FileReader(const MappedFile& file, std::string path) : file_(file), path_(std::move(path)), at_(kHeaderBytes) {}
+  FileReader(const MappedFile& file, std::string path)
+      : file_(file), path_(std::move(path)), at_(kHeaderBytes) {}
 
   template <typename T>
   T pod() {
@@ -363,7 +377,8 @@ class FileReader {
   // A count of records that each take at least `minimumBytes`.
   uint64_t count(size_t minimumBytes) {
     uint64_t n = pod<uint64_t>();
-    if (n > (file_.size() - at_) / std::max<size_t>(1, minimumBytes)) fail("a count runs past the end");
+    if (n > (file_.size() - at_) / std::max<size_t>(1, minimumBytes))
+      fail("a count runs past the end");
     return n;
   }
   void end() {
@@ -407,7 +422,8 @@ Texture readTexture(FileReader& r) {
   t.wrap = WrapMode(wrap);
   t.srgb = r.pod<uint8_t>() != 0;
   t.rgba = r.array<uint8_t>();
-  if (t.width < 0 || t.height < 0 || t.rgba.size() != t.texelCount() * 4) r.fail("texture size mismatch");
+  if (t.width < 0 || t.height < 0 || t.rgba.size() != t.texelCount() * 4)
+    r.fail("texture size mismatch");
   return t;
 }
 
@@ -436,7 +452,8 @@ void readContent(FileReader& r, Scene& scene, std::vector<RankMask>& owners) {
   std::vector<int32_t> objects = r.array<int32_t>();
   std::vector<Affine3f> transforms = r.array<Affine3f>();
   owners = r.array<RankMask>();
-  if (transforms.size() != objects.size() || owners.size() != objects.size()) r.fail("instance arrays differ in size");
+  if (transforms.size() != objects.size() || owners.size() != objects.size())
+    r.fail("instance arrays differ in size");
   scene.instances.resize(objects.size());
   for (size_t i = 0; i < objects.size(); ++i) scene.instances[i] = {objects[i], transforms[i]};
 }
@@ -459,7 +476,8 @@ void readLights(FileReader& r, Scene& lights) {
     image->width = r.pod<int32_t>();
     image->height = r.pod<int32_t>();
     image->pixels = r.array<Vec3f>();
-    if (image->width < 0 || image->height < 0 || image->pixels.size() != size_t(image->width) * size_t(image->height))
+    if (image->width < 0 || image->height < 0 ||
+        image->pixels.size() != size_t(image->width) * size_t(image->height))
       r.fail("environment image size mismatch");
     lights.environment.image = std::move(image);
   }
@@ -477,7 +495,8 @@ void validated(const std::string& path, Scene& scene, Fill&& fill) {
 
 }  // namespace
 
-WrittenFile writePartFile(const std::string& path, const Scene& scene, const std::vector<int32_t>& instances,
+WrittenFile writePartFile(const std::string& path, const Scene& scene,
+                          const std::vector<int32_t>& instances,
                           const std::vector<RankMask>& owners, int rank, int ranks) {
   FERRY_CHECK(owners.size() == scene.instances.size());
   FERRY_CHECK(std::is_sorted(instances.begin(), instances.end()));

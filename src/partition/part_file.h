@@ -38,7 +38,8 @@ struct WrittenFile {
 
 // Writes rank `rank`'s part: `instances` (ascending indices into scene) and
 // what they use; `owners` per scene instance.
-WrittenFile writePartFile(const std::string& path, const Scene& scene, const std::vector<int32_t>& instances,
+WrittenFile writePartFile(const std::string& path, const Scene& scene,
+                          const std::vector<int32_t>& instances,
                           const std::vector<RankMask>& owners, int rank, int ranks);
 
 struct LoadedPart {

@@ -5,9 +5,9 @@
 
 #include <bit>
 #include <cstring>
-#include <functional>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "builtin/builtin.h"
 #include "core/error.h"
@@ -25,7 +25,8 @@ namespace fs = std::filesystem;
 struct TempDir {
   fs::path path;
   TempDir() {
-    path = fs::temp_directory_path() / fmt::format("ferry-part-test-{}-{}", ::getpid(), counter()++);
+    path =
+        fs::temp_directory_path() / fmt::format("ferry-part-test-{}-{}", ::getpid(), counter()++);
     fs::remove_all(path);
     fs::create_directories(path);
   }
@@ -39,7 +40,8 @@ struct TempDir {
 
 template <typename T>
 bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Material& b) {
@@ -47,12 +49,13 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
     if ((ta == kNoTexture) != (tb == kNoTexture)) return false;
     if (ta == kNoTexture) return true;
     const Texture &x = sa.textures[ta], &y = sb.textures[tb];
-    return x.name == y.name && x.width == y.width && x.height == y.height && x.wrap == y.wrap && x.srgb == y.srgb &&
-           sameBytes(x.rgba, y.rgba);
+    return x.name == y.name && x.width == y.width && x.height == y.height && x.wrap == y.wrap &&
+           x.srgb == y.srgb && sameBytes(x.rgba, y.rgba);
   };
-  return a.name == b.name && a.baseColor == b.baseColor && a.roughness == b.roughness && a.metallic == b.metallic &&
-         a.transmission == b.transmission && a.ior == b.ior && a.emission == b.emission &&
-         a.alphaCutoff == b.alphaCutoff && sameTexture(a.baseColorTexture, b.baseColorTexture) &&
+  return a.name == b.name && a.baseColor == b.baseColor && a.roughness == b.roughness &&
+         a.metallic == b.metallic && a.transmission == b.transmission && a.ior == b.ior &&
+         a.emission == b.emission && a.alphaCutoff == b.alphaCutoff &&
+         sameTexture(a.baseColorTexture, b.baseColorTexture) &&
          sameTexture(a.alphaTexture, b.alphaTexture);
 }
 
@@ -75,7 +78,8 @@ void expectSameContent(const Scene& scene, const std::vector<int32_t>& owned, co
       ASSERT_TRUE(sameBytes(ma.normals, mb.normals));
       ASSERT_TRUE(sameBytes(ma.uvs, mb.uvs));
       ASSERT_TRUE(sameBytes(ma.indices, mb.indices));
-      ASSERT_TRUE(sameMaterial(scene, scene.materials[ma.material], part, part.materials[mb.material]));
+      ASSERT_TRUE(
+          sameMaterial(scene, scene.materials[ma.material], part, part.materials[mb.material]));
     }
   }
 }
@@ -136,7 +140,8 @@ TEST(PartFiles, EveryRankRoundTripsExactly) {
     RankPart part = loadRankPart(dir.path.string(), r, 3);
     const std::vector<int32_t> owned = w.partition.instancesOf(r);
     expectSameContent(w.scene, owned, part.scene);
-    for (size_t k = 0; k < owned.size(); ++k) EXPECT_EQ(part.partition.instanceOwners[k], w.partition.instanceOwners[owned[k]]);
+    for (size_t k = 0; k < owned.size(); ++k)
+      EXPECT_EQ(part.partition.instanceOwners[k], w.partition.instanceOwners[owned[k]]);
     ASSERT_EQ(part.partition.proxies.size(), w.partition.proxies.size());
     EXPECT_EQ(std::memcmp(part.partition.proxies.data(), w.partition.proxies.data(),
                           w.partition.proxies.size() * sizeof(Proxy)),
@@ -145,14 +150,16 @@ TEST(PartFiles, EveryRankRoundTripsExactly) {
     EXPECT_EQ(part.scene.views[0].name, island().views[0].name);
     EXPECT_TRUE(part.scene.views[0].from == island().views[0].from);
     // Only what the rank owns (plus what it needs) is in its part.
-    EXPECT_EQ(ownedMemory(part.scene, part.partition.instancesOf(r)).total(), w.manifest.parts[r].estimatedBytes);
+    EXPECT_EQ(ownedMemory(part.scene, part.partition.instancesOf(r)).total(),
+              w.manifest.parts[r].estimatedBytes);
     EXPECT_EQ(ownedMemory(w.scene, owned).total(), w.manifest.parts[r].estimatedBytes);
     // Lights survive the trip: the same emitters, environment and suns.
     LightSampler lights(part.lights);
     EXPECT_EQ(lights.emissiveTriangleCount(), reference.emissiveTriangleCount());
     ASSERT_TRUE(part.lights.environment.image != nullptr || island().environment.image == nullptr);
     if (island().environment.image) {
-      EXPECT_TRUE(sameBytes(part.lights.environment.image->pixels, island().environment.image->pixels));
+      EXPECT_TRUE(
+          sameBytes(part.lights.environment.image->pixels, island().environment.image->pixels));
     }
     EXPECT_EQ(part.lights.suns.size(), island().suns.size());
   }
@@ -194,7 +201,8 @@ TEST(PartFiles, DamageIsReportedNamingTheFile) {
   ASSERT_EQ(errorOf(load1), "(no error)");
 
   // Wrong rank count.
-  EXPECT_NE(errorOf([&] { loadRankPart(d, 0, 3); }).find("partitioned for 2 ranks"), std::string::npos);
+  EXPECT_NE(errorOf([&] { loadRankPart(d, 0, 3); }).find("partitioned for 2 ranks"),
+            std::string::npos);
 
   // A flipped byte in the payload: the hash catches it.
   const auto size = fs::file_size(part1);

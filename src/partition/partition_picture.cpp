@@ -24,12 +24,14 @@ int nthRank(RankMask mask, int k) {
 }
 
 Rgba scaled(Rgba c, float s) {
-  return {uint8_t(std::lround(c.r * s)), uint8_t(std::lround(c.g * s)), uint8_t(std::lround(c.b * s)), 255};
+  return {uint8_t(std::lround(c.r * s)), uint8_t(std::lround(c.g * s)),
+          uint8_t(std::lround(c.b * s)), 255};
 }
 
 }  // namespace
 
-std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition, const PictureOptions& o) {
+std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition,
+                                      const PictureOptions& o) {
   FERRY_CHECK(partition.instanceOwners.size() == scene.instances.size());
   const int w = o.width, h = o.height;
   Canvas canvas(w, h, {236, 238, 242, 255});
@@ -38,29 +40,30 @@ std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition, 
   LocalGeometry geometry(scene);
   std::vector<float> depth(size_t(w) * h, kInfinity);
 
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 16, 0, w, 64), [&](const tbb::blocked_range2d<int>& r) {
-    for (int y = r.rows().begin(); y != r.rows().end(); ++y)
-      for (int x = r.cols().begin(); x != r.cols().end(); ++x) {
-        TraceRay ray{camera.origin(), camera.direction(x + 0.5f, y + 0.5f), 0, kInfinity};
-        TraceHit hit = geometry.intersect(ray);
-        if (!hit.valid()) continue;
-        depth[size_t(y) * w + x] = hit.t;
-        const Instance& inst = scene.instances[hit.instance];
-        const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.meshSlot]];
-        const Vec3i& tri = mesh.indices[hit.primitive];
-        Vec3f p0 = inst.transform.transformPoint(mesh.positions[tri.x]);
-        Vec3f p1 = inst.transform.transformPoint(mesh.positions[tri.y]);
-        Vec3f p2 = inst.transform.transformPoint(mesh.positions[tri.z]);
-        Vec3f n = cross(p1 - p0, p2 - p0);
-        float shade = 0.35f;
-        if (length(n) > 0) shade += 0.65f * std::abs(dot(normalize(n), ray.direction));
-        const RankMask owners = partition.instanceOwners[hit.instance];
-        const int count = std::popcount(owners);
-        const int k = count > 1 ? ((x / kCheckerPixels) + (y / kCheckerPixels)) % count : 0;
-        Rgba c = count > 0 ? scaled(rankColor(nthRank(owners, k)), shade) : Rgba{0, 0, 0, 255};
-        canvas.blend(x, y, c);  // each pixel written by one thread only
-      }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range2d<int>(0, h, 16, 0, w, 64), [&](const tbb::blocked_range2d<int>& r) {
+        for (int y = r.rows().begin(); y != r.rows().end(); ++y)
+          for (int x = r.cols().begin(); x != r.cols().end(); ++x) {
+            TraceRay ray{camera.origin(), camera.direction(x + 0.5f, y + 0.5f), 0, kInfinity};
+            TraceHit hit = geometry.intersect(ray);
+            if (!hit.valid()) continue;
+            depth[size_t(y) * w + x] = hit.t;
+            const Instance& inst = scene.instances[hit.instance];
+            const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.meshSlot]];
+            const Vec3i& tri = mesh.indices[hit.primitive];
+            Vec3f p0 = inst.transform.transformPoint(mesh.positions[tri.x]);
+            Vec3f p1 = inst.transform.transformPoint(mesh.positions[tri.y]);
+            Vec3f p2 = inst.transform.transformPoint(mesh.positions[tri.z]);
+            Vec3f n = cross(p1 - p0, p2 - p0);
+            float shade = 0.35f;
+            if (length(n) > 0) shade += 0.65f * std::abs(dot(normalize(n), ray.direction));
+            const RankMask owners = partition.instanceOwners[hit.instance];
+            const int count = std::popcount(owners);
+            const int k = count > 1 ? ((x / kCheckerPixels) + (y / kCheckerPixels)) % count : 0;
+            Rgba c = count > 0 ? scaled(rankColor(nthRank(owners, k)), shade) : Rgba{0, 0, 0, 255};
+            canvas.blend(x, y, c);  // each pixel written by one thread only
+          }
+      });
 
   if (o.proxies) {
     for (const Proxy& p : partition.proxies) {
@@ -68,7 +71,8 @@ std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition, 
       if (count == 0 || p.bounds.empty()) continue;
       const Box3f& b = p.bounds;
       auto corner = [&](int i) {
-        return Vec3f((i & 1) ? b.upper.x : b.lower.x, (i & 2) ? b.upper.y : b.lower.y, (i & 4) ? b.upper.z : b.lower.z);
+        return Vec3f((i & 1) ? b.upper.x : b.lower.x, (i & 2) ? b.upper.y : b.lower.y,
+                     (i & 4) ? b.upper.z : b.lower.z);
       };
       for (int i = 0; i < 8; ++i)
         for (int axis = 0; axis < 3; ++axis) {
@@ -77,7 +81,8 @@ std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition, 
           // Sample the edge in 3D so depth and perspective come out right.
           float ax, ay, ex, ey;
           int steps = 600;
-          if (camera.project(a - camera.origin(), ax, ay) && camera.project(e - camera.origin(), ex, ey))
+          if (camera.project(a - camera.origin(), ax, ay) &&
+              camera.project(e - camera.origin(), ex, ey))
             steps = std::clamp(int(2 * std::hypot(ex - ax, ey - ay)), 2, 8000);
           for (int s = 0; s <= steps; ++s) {
             const Vec3f q = lerp(a, e, float(s) / float(steps));

@@ -25,6 +25,7 @@ struct PictureOptions {
 
 // RGBA, row 0 at the top. `scene` holds all content (LocalGeometry needs it
 // mutable for Embree's vertex slack); `partition` refers to its instances.
-std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition, const PictureOptions& options);
+std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition,
+                                      const PictureOptions& options);
 
 }  // namespace ferry

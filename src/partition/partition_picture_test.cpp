@@ -15,7 +15,8 @@ namespace {
 bool isShadeOf(const uint8_t* c, Rgba r) {
   const float s = float(c[0] + c[1] + c[2]) / float(r.r + r.g + r.b);
   if (s <= 0.05f || s > 1.01f) return false;
-  return std::abs(c[0] - r.r * s) <= 3 && std::abs(c[1] - r.g * s) <= 3 && std::abs(c[2] - r.b * s) <= 3;
+  return std::abs(c[0] - r.r * s) <= 3 && std::abs(c[1] - r.g * s) <= 3 &&
+         std::abs(c[2] - r.b * s) <= 3;
 }
 
 struct Counts {
@@ -72,8 +73,9 @@ TEST(PartitionPicture, DrawsProxyOutlines) {
   o.proxies = true;
   std::vector<uint8_t> with = partitionPicture(scene, p, o);
   size_t changed = 0;
-  for (size_t i = 0; i < with.size(); i += 4) changed += with[i] != without[i] || with[i + 1] != without[i + 1];
-  EXPECT_GT(changed, 96u * 2);  // at least a couple of box edges across the image
+  for (size_t i = 0; i < with.size(); i += 4)
+    changed += with[i] != without[i] || with[i + 1] != without[i + 1];
+  EXPECT_GT(changed, 96u * 2);        // at least a couple of box edges across the image
   EXPECT_LT(changed, 96u * 96u / 2);  // outlines, not filled boxes
 }
 

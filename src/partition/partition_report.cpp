@@ -34,7 +34,8 @@ MaxPartReport maxPartReport(Scene scene, const std::string& sceneName, int minRa
     series.partitioner = name;
     series.whole = whole;
     series.bytes.assign(curve.begin() + (minRanks - 1), curve.end());
-    series.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    series.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report.series.push_back(std::move(series));
   };
   // Kept whole, the five that do not cut meshes leave the scene as it is;
@@ -91,8 +92,9 @@ std::vector<uint8_t> plotMaxPart(const MaxPartReport& report, int width, int hei
   };
   auto yOf = [&](double percent) { return float(top + plotH * (1 - percent / 100.0)); };
 
-  c.text(left, 10, fmt::format("{}: largest part vs. rank count ({} in all)", report.scene,
-                               formatBytes(report.inputBytes)),
+  c.text(left, 10,
+         fmt::format("{}: largest part vs. rank count ({} in all)", report.scene,
+                     formatBytes(report.inputBytes)),
          ink, 2);
   // Grid and axes.
   for (int p = 0; p <= 100; p += 10) {
@@ -130,7 +132,8 @@ std::vector<uint8_t> plotMaxPart(const MaxPartReport& report, int width, int hei
     Rgba color = rankColor(k == 5 ? 9 : k);
     float px = 0, py = 0;
     for (int n = report.minRanks; n <= report.maxRanks; ++n) {
-      double percent = 100.0 * double(s.bytes[n - report.minRanks]) / double(std::max<uint64_t>(1, report.inputBytes));
+      double percent = 100.0 * double(s.bytes[n - report.minRanks]) /
+                       double(std::max<uint64_t>(1, report.inputBytes));
       float x = xOf(n), y = yOf(std::min(percent, 105.0));
       if (n > report.minRanks) c.line(px, py, x, y, color, widths[k], 1.0f, s.whole ? 6.0f : 0.0f);
       px = x;
@@ -143,7 +146,8 @@ std::vector<uint8_t> plotMaxPart(const MaxPartReport& report, int width, int hei
     int k = int(std::find(names.begin(), names.end(), s.partitioner) - names.begin());
     Rgba color = rankColor(k == 5 ? 9 : k);
     int lx = left + plotW + 16;
-    c.line(float(lx), float(ly + 6), float(lx + 34), float(ly + 6), color, widths[k], 1.0f, s.whole ? 6.0f : 0.0f);
+    c.line(float(lx), float(ly + 6), float(lx + 34), float(ly + 6), color, widths[k], 1.0f,
+           s.whole ? 6.0f : 0.0f);
     c.text(lx + 42, ly, s.label(), ink, 1);
     ly += 18;
   }
@@ -174,7 +178,8 @@ void parseRankRange(const std::string& text, int& first, int& last) {
     parse(std::string_view(text).substr(dots + 2), last);
   }
   if (first < 1 || last < first || last > 4096)
-    throw InputError(fmt::format("--ranks '{}': counts must satisfy 1 <= first <= last <= 4096", text));
+    throw InputError(
+        fmt::format("--ranks '{}': counts must satisfy 1 <= first <= last <= 4096", text));
 }
 
 }  // namespace ferry

@@ -39,7 +39,8 @@ void writeMaxPartCsv(const std::string& path, const MaxPartReport& report);
 // Largest part as a percentage of the scene against the rank count (log2
 // axis when the range spans 16x or more); solid: broken into meshes, dashed: whole.
 std::vector<uint8_t> plotMaxPart(const MaxPartReport& report, int width, int height);
-void writeMaxPartPlot(const std::string& path, const MaxPartReport& report, int width = 1000, int height = 640);
+void writeMaxPartPlot(const std::string& path, const MaxPartReport& report, int width = 1000,
+                      int height = 640);
 
 // Parses "N" or "A..B" (1 <= A <= B <= 4096); throws InputError naming --ranks.
 void parseRankRange(const std::string& text, int& first, int& last);

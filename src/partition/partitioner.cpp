@@ -37,22 +37,27 @@ Prepared prepare(Scene& scene, const PartitionerOptions& o) {
   SceneSplitOptions split;
   split.breakSingleInstanceObjects = o.breakObjects;
   if (o.name == "best")
-    split.maxPieceBytes = o.maxPieceBytes > 0 ? o.maxPieceBytes
-                                              : std::max<uint64_t>(1, p.inputBytes / kBestPiecesPerScene);
+    split.maxPieceBytes = o.maxPieceBytes > 0
+                              ? o.maxPieceBytes
+                              : std::max<uint64_t>(1, p.inputBytes / kBestPiecesPerScene);
   p.split = splitForPartitioning(scene, split);
   UnitOptions unitOptions;
-  unitOptions.grouping = o.name == "object-naive" || o.name == "object-proxies" ? UnitGrouping::Objects
-                                                                                  : UnitGrouping::Instances;
+  unitOptions.grouping = o.name == "object-naive" || o.name == "object-proxies"
+                             ? UnitGrouping::Objects
+                             : UnitGrouping::Instances;
   unitOptions.nonInstancedTogether = !o.breakObjects;
   p.units = extractUnits(scene, unitOptions);
   return p;
 }
 
 std::unique_ptr<PartSplitter> makeSplitter(const std::string& name, const UnitSet& units) {
-  if (name == "spatial-simple") return std::make_unique<SpatialSplitter>(units, SpatialSplitRule::Median);
-  if (name == "spatial-sah") return std::make_unique<SpatialSplitter>(units, SpatialSplitRule::CostFunction);
-  const bool hybrid = name == "bvh-style" || name == "best";
-  return std::make_unique<CentroidSplitter>(units, hybrid);
+  if (name == "spatial-simple")
+    return std::make_unique<SpatialSplitter>(units, SpatialSplitRule::Median);
+  if (name == "spatial-sah")
+    return std::make_unique<SpatialSplitter>(units, SpatialSplitRule::CostFunction);
+  // Only `best` also tries keeping each object's instances together (see
+  // object_partitioner.h); bvh-style sorts instances by their own centres.
+  return std::make_unique<CentroidSplitter>(units, name == "best");
 }
 
 uint64_t replicationBudget(const PartitionerOptions& o, uint64_t inputBytes) {
@@ -66,13 +71,15 @@ uint64_t PartitionStats::maxRankBytes() const {
 }
 
 const std::vector<std::string>& partitionerNames() {
-  static const std::vector<std::string> names = {"spatial-simple", "spatial-sah", "object-naive", "object-proxies",
-                                                 "bvh-style",      "best",        "round-robin",  "random"};
+  static const std::vector<std::string> names = {"spatial-simple", "spatial-sah", "object-naive",
+                                                 "object-proxies", "bvh-style",   "best",
+                                                 "round-robin",    "random"};
   return names;
 }
 
 const std::vector<std::string>& paperPartitionerNames() {
-  static const std::vector<std::string> names(partitionerNames().begin(), partitionerNames().begin() + 6);
+  static const std::vector<std::string> names(partitionerNames().begin(),
+                                              partitionerNames().begin() + 6);
   return names;
 }
 
@@ -84,10 +91,12 @@ void checkPartitionerName(const std::string& name) {
   throw InputError(fmt::format("unknown partitioner '{}' (partitioners: {})", name, known));
 }
 
-Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o, PartitionStats* stats) {
+Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
+                         PartitionStats* stats) {
   const auto start = std::chrono::steady_clock::now();
   checkPartitionerName(o.name);
-  if (ranks < 1 || ranks > 64) throw InputError(fmt::format("{} ranks: partitions have 1 to 64 ranks", ranks));
+  if (ranks < 1 || ranks > 64)
+    throw InputError(fmt::format("{} ranks: partitions have 1 to 64 ranks", ranks));
   PartitionStats local;
   PartitionStats& s = stats ? *stats : local;
   s = PartitionStats{};
@@ -97,7 +106,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o, P
   Partition partition;
   if (o.name == "round-robin" || o.name == "random") {
     s.inputBytes = summarize(scene).memory.total();
-    partition = o.name == "round-robin" ? roundRobinPartition(scene, ranks) : randomPartition(scene, ranks, o.seed);
+    partition = o.name == "round-robin" ? roundRobinPartition(scene, ranks)
+                                        : randomPartition(scene, ranks, o.seed);
     s.parts = ranks;
     s.units = scene.instances.size();
   } else {
@@ -111,7 +121,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o, P
     const std::vector<RankMask> partRanks = assignRanks(parts, ranks);
     std::vector<RankMask> owners = unitOwners(p.units, parts, partRanks);
     if (o.name == "best") {
-      ReplicationResult r = replicateLargeUnits(p.units, parts, partRanks, owners, replicationBudget(o, p.inputBytes));
+      ReplicationResult r = replicateLargeUnits(p.units, parts, partRanks, owners,
+                                                replicationBudget(o, p.inputBytes));
       s.replicatedBytes = r.addedBytes;
       s.replicatedUnits = r.replicatedUnits;
     }
@@ -127,14 +138,17 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o, P
       partition.proxies = instanceProxies(scene, p.units, owners, 1);
   }
   s.proxies = partition.proxies.size();
-  for (int r = 0; r < ranks; ++r) s.rankBytes.push_back(ownedMemory(scene, partition.instancesOf(r)).total());
+  if (stats)  // a pass over the scene per rank: only when asked for
+    for (int r = 0; r < ranks; ++r)
+      s.rankBytes.push_back(ownedMemory(scene, partition.instancesOf(r)).total());
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return partition;
 }
 
 std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& o, int maxRanks) {
   if (!isPaperPartitioner(o.name))
-    throw InputError(fmt::format("max-part curves are made for the paper's partitioners, not '{}'", o.name));
+    throw InputError(
+        fmt::format("max-part curves are made for the paper's partitioners, not '{}'", o.name));
   FERRY_CHECK(maxRanks >= 1);
   Prepared p = prepare(scene, o);
   std::unique_ptr<PartSplitter> splitter = makeSplitter(o.name, p.units);

@@ -42,16 +42,16 @@ struct PartitionerOptions {
   bool breakObjects = true;
   double replicationBudget = 0.05;  // best: copies may add this fraction of the input's bytes
   int meshProxies = 64;             // object-proxies: boxes per non-instanced mesh
-  uint64_t maxPieceBytes = 0;       // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
-  uint32_t seed = 1;                // random
+  uint64_t maxPieceBytes = 0;  // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
+  uint32_t seed = 1;           // random
 };
 
 struct PartitionStats {
   std::string partitioner;
   int ranks = 0;
-  int parts = 0;                    // distinct parts; fewer than ranks when units ran out (copies)
-  uint64_t inputBytes = 0;          // memory estimate of the scene as given
-  uint64_t replicatedBytes = 0;     // best: what its copies added, over all ranks
+  int parts = 0;                 // distinct parts; fewer than ranks when units ran out (copies)
+  uint64_t inputBytes = 0;       // memory estimate of the scene as given
+  uint64_t replicatedBytes = 0;  // best: what its copies added, over all ranks
   uint64_t replicatedUnits = 0;
   std::vector<uint64_t> rankBytes;  // memory estimate of what each rank holds
   uint64_t proxies = 0;
@@ -78,6 +78,7 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& opti
 // maxRanks ranks, from one run of the split loop (the loop's states for
 // smaller counts are its first steps). Rewrites `scene` like partitionScene.
 // One of the six only.
-std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& options, int maxRanks);
+std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& options,
+                                        int maxRanks);
 
 }  // namespace ferry

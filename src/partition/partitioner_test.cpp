@@ -49,7 +49,8 @@ std::array<uint64_t, 3> placedTriangles(const Scene& scene) {
       std::vector<float> r;
       for (int v = 0; v < 3; ++v) {
         for (int i = 0; i < 3; ++i) r.push_back(mesh.positions[tri[v]][i]);
-        for (int i = 0; i < 3; ++i) r.push_back(mesh.normals.empty() ? -9.0f : mesh.normals[tri[v]][i]);
+        for (int i = 0; i < 3; ++i)
+          r.push_back(mesh.normals.empty() ? -9.0f : mesh.normals[tri[v]][i]);
         for (int i = 0; i < 2; ++i) r.push_back(mesh.uvs.empty() ? -9.0f : mesh.uvs[tri[v]][i]);
       }
       r.push_back(float(mesh.material));
@@ -136,7 +137,8 @@ TEST(Partitioners, SplitForPartitioningBreaksSingleInstanceObjectsInPlace) {
       ++multiMeshSingles;
       extraInstances += scene.objects[o].meshes.size() - 1;
     }
-  ASSERT_GT(multiMeshSingles, 0u) << "the island's campfire and lanterns are single-instance, multi-mesh";
+  ASSERT_GT(multiMeshSingles, 0u)
+      << "the island's campfire and lanterns are single-instance, multi-mesh";
   const size_t instances = scene.instances.size();
   SceneSplitReport r = splitForPartitioning(scene, {});
   EXPECT_EQ(r.objectsBroken, multiMeshSingles);
@@ -176,7 +178,8 @@ TEST(Partitioners, UnitCostsEqualOwnedMemory) {
     }
     auto instancesOf = [&](const std::vector<uint32_t>& members) {
       std::vector<int32_t> out;
-      for (uint32_t u : members) out.insert(out.end(), units.units[u].instances.begin(), units.units[u].instances.end());
+      for (uint32_t u : members)
+        out.insert(out.end(), units.units[u].instances.begin(), units.units[u].instances.end());
       std::sort(out.begin(), out.end());
       return out;
     };
@@ -258,7 +261,7 @@ TEST(Partitioners, ProxyStylesDifferAsDescribed) {
   Scene scene2;
   Partition bvh = run("bvh-style", 6, s, scene2);
   EXPECT_EQ(naive.instanceOwners, braided.instanceOwners);  // the same parts
-  EXPECT_GT(braided.proxies.size(), bvh.proxies.size());     // 64 boxes per non-instanced mesh
+  EXPECT_GT(braided.proxies.size(), bvh.proxies.size());    // 64 boxes per non-instanced mesh
   // Object partitioners never split an object over ranks.
   std::map<int32_t, RankMask> ownerOfObject;
   for (size_t i = 0; i < scene.instances.size(); ++i) {
@@ -279,7 +282,10 @@ TEST(Partitioners, CheckCoversCatchesAGap) {
     ASSERT_NO_THROW(p.checkCovers(scene));
     // The proxy with the largest volume surely matters.
     size_t largest = 0;
-    auto volume = [](const Box3f& b) { Vec3f s = b.size(); return double(s.x) * s.y * s.z + s.x + s.y + s.z; };
+    auto volume = [](const Box3f& b) {
+      Vec3f s = b.size();
+      return double(s.x) * s.y * s.z + s.x + s.y + s.z;
+    };
     for (size_t k = 1; k < p.proxies.size(); ++k)
       if (volume(p.proxies[k].bounds) > volume(p.proxies[largest].bounds)) largest = k;
     Partition shrunk = p;

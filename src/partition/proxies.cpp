@@ -5,8 +5,8 @@
 
 namespace ferry {
 
-std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units, const std::vector<RankMask>& owners,
-                                   int meshBoxes) {
+std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units,
+                                   const std::vector<RankMask>& owners, int meshBoxes) {
   const std::vector<uint32_t> placements = scene.instanceCountPerObject();
   std::vector<Box3f> objectBounds(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o)

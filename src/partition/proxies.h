@@ -16,7 +16,7 @@ struct Scene;
 
 // `meshBoxes`: boxes per non-instanced mesh (1: the mesh's own box). Each
 // proxy is owned by the owners of the unit holding the instance.
-std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units, const std::vector<RankMask>& owners,
-                                   int meshBoxes);
+std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units,
+                                   const std::vector<RankMask>& owners, int meshBoxes);
 
 }  // namespace ferry

@@ -61,7 +61,8 @@ SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& opt
       if (!placed[m]) continue;
       const uint64_t cost = meshCost(scene.meshes[m]).total();
       if (cost <= options.maxPieceBytes || scene.meshes[m].indices.size() < 2) continue;
-      const int want = int(std::min<uint64_t>(kMaxPiecesPerMesh, (cost + options.maxPieceBytes - 1) / options.maxPieceBytes));
+      const int want = int(std::min<uint64_t>(
+          kMaxPiecesPerMesh, (cost + options.maxPieceBytes - 1) / options.maxPieceBytes));
       std::vector<std::vector<uint32_t>> clusters =
           clusterTriangles(scene.meshes[m], Affine3f::identity(), want);
       if (clusters.size() < 2) continue;

@@ -31,7 +31,7 @@ constexpr int kMaxPiecesPerMesh = 1024;
 struct SceneSplitReport {
   uint64_t objectsBroken = 0;  // single-instance objects split into their meshes
   uint64_t meshesCut = 0;
-  uint64_t piecesMade = 0;     // pieces of the cut meshes, all together
+  uint64_t piecesMade = 0;  // pieces of the cut meshes, all together
   // For each instance of the new scene, the instance of the old scene it came from.
   std::vector<int32_t> originalInstance;
 };

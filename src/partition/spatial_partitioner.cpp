@@ -39,7 +39,8 @@ bool SpatialSplitter::divide(const Part& part, int axis, float position, Part& l
   }
   if (left.units.empty() || right.units.empty()) return false;
   // Both halves holding everything is no progress (the domain would only shrink).
-  if (left.units.size() == part.units.size() && right.units.size() == part.units.size()) return false;
+  if (left.units.size() == part.units.size() && right.units.size() == part.units.size())
+    return false;
   left.domain = intersect(leftHalf, leftContent);
   right.domain = intersect(rightHalf, rightContent);
   return true;
@@ -81,7 +82,8 @@ bool SpatialSplitter::split(const Part& part, Part& left, Part& right) {
   return found;
 }
 
-std::vector<Proxy> domainProxies(const std::vector<Part>& parts, const std::vector<RankMask>& partRanks) {
+std::vector<Proxy> domainProxies(const std::vector<Part>& parts,
+                                 const std::vector<RankMask>& partRanks) {
   std::vector<Proxy> proxies;
   for (size_t k = 0; k < parts.size(); ++k)
     if (!parts[k].domain.empty()) proxies.push_back({parts[k].domain, partRanks[k]});

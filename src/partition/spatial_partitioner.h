@@ -33,6 +33,7 @@ class SpatialSplitter final : public PartSplitter {
 };
 
 // One proxy per part: its domain, owned by the part's ranks.
-std::vector<Proxy> domainProxies(const std::vector<Part>& parts, const std::vector<RankMask>& partRanks);
+std::vector<Proxy> domainProxies(const std::vector<Part>& parts,
+                                 const std::vector<RankMask>& partRanks);
 
 }  // namespace ferry

@@ -39,7 +39,8 @@ std::vector<Part> runSplitLoop(PartSplitter& splitter, int parts,
     // The costliest part that can still be split (ties: the first).
     int chosen = -1;
     for (size_t k = 0; k < current.size(); ++k)
-      if (current[k].splittable && (chosen < 0 || current[k].bytes > current[chosen].bytes)) chosen = int(k);
+      if (current[k].splittable && (chosen < 0 || current[k].bytes > current[chosen].bytes))
+        chosen = int(k);
     if (chosen < 0) break;
     Part left, right;
     if (!splitter.split(current[chosen], left, right)) {
@@ -64,7 +65,8 @@ std::vector<RankMask> assignRanks(const std::vector<Part>& parts, int ranks) {
   std::iota(byCost.begin(), byCost.end(), size_t(0));
   std::stable_sort(byCost.begin(), byCost.end(),
                    [&](size_t a, size_t b) { return parts[a].bytes > parts[b].bytes; });
-  for (int r = int(parts.size()); r < ranks; ++r) mask[byCost[(r - parts.size()) % parts.size()]] |= RankMask(1) << r;
+  for (int r = int(parts.size()); r < ranks; ++r)
+    mask[byCost[(r - parts.size()) % parts.size()]] |= RankMask(1) << r;
   return mask;
 }
 
@@ -89,7 +91,8 @@ double splitCost(const Box3f& parent, uint64_t parentBytes, const Box3f& left, u
   const double lb = double(leftBytes), rb = double(rightBytes);
   const double memory = (lb + rb + std::abs(lb - rb)) / pb;
   const double pa = parent.surfaceArea();
-  const double sah = pa > 0 ? (left.surfaceArea() * lb + right.surfaceArea() * rb) / (pa * pb) : (lb + rb) / pb;
+  const double sah =
+      pa > 0 ? (left.surfaceArea() * lb + right.surfaceArea() * rb) / (pa * pb) : (lb + rb) / pb;
   return 0.5 * sah + 0.5 * memory;
 }
 

@@ -21,8 +21,8 @@ namespace ferry {
 
 struct Part {
   std::vector<uint32_t> units;  // ascending unit ids
-  Box3f domain;                 // spatial partitioners: the (shrunk) domain; others: bounds of the units
-  uint64_t bytes = 0;           // memory estimate, shared content counted once
+  Box3f domain;        // spatial partitioners: the (shrunk) domain; others: bounds of the units
+  uint64_t bytes = 0;  // memory estimate, shared content counted once
   bool splittable = true;
 };
 

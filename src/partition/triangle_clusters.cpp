@@ -47,8 +47,8 @@ std::vector<std::vector<uint32_t>> clusterTriangles(const Mesh& mesh, const Affi
     const size_t mid = r.begin + (r.end - r.begin) / 2;
     // A strict total order (ties by index), so the two halves are the same sets
     // whatever the standard library's nth_element does.
-    std::nth_element(order.begin() + long(r.begin), order.begin() + long(mid), order.begin() + long(r.end),
-                     [&](uint32_t a, uint32_t b) {
+    std::nth_element(order.begin() + long(r.begin), order.begin() + long(mid),
+                     order.begin() + long(r.end), [&](uint32_t a, uint32_t b) {
                        float ca = centroid[a][axis], cb = centroid[b][axis];
                        return ca < cb || (ca == cb && a < b);
                      });
@@ -64,11 +64,13 @@ std::vector<std::vector<uint32_t>> clusterTriangles(const Mesh& mesh, const Affi
     std::sort(c.begin(), c.end());
     out.push_back(std::move(c));
   }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.front() < b.front(); });
+  std::sort(out.begin(), out.end(),
+            [](const auto& a, const auto& b) { return a.front() < b.front(); });
   return out;
 }
 
-Box3f trianglesBounds(const Mesh& mesh, const Affine3f& transform, const std::vector<uint32_t>& triangles) {
+Box3f trianglesBounds(const Mesh& mesh, const Affine3f& transform,
+                      const std::vector<uint32_t>& triangles) {
   Box3f b;
   for (uint32_t t : triangles) {
     const Vec3i& tri = mesh.indices[t];

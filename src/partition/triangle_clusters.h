@@ -21,6 +21,7 @@ std::vector<std::vector<uint32_t>> clusterTriangles(const Mesh& mesh, const Affi
                                                     int maxClusters);
 
 // World bounds (through `transform`) of the listed triangles' vertices.
-Box3f trianglesBounds(const Mesh& mesh, const Affine3f& transform, const std::vector<uint32_t>& triangles);
+Box3f trianglesBounds(const Mesh& mesh, const Affine3f& transform,
+                      const std::vector<uint32_t>& triangles);
 
 }  // namespace ferry

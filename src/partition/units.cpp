@@ -9,7 +9,8 @@ namespace ferry {
 
 std::vector<Box3f> instanceWorldBounds(const Scene& scene) {
   std::vector<Box3f> objectBounds(scene.objects.size());
-  for (size_t o = 0; o < scene.objects.size(); ++o) objectBounds[o] = scene.objectBounds(int32_t(o));
+  for (size_t o = 0; o < scene.objects.size(); ++o)
+    objectBounds[o] = scene.objectBounds(int32_t(o));
   std::vector<Box3f> bounds(scene.instances.size());
   for (size_t i = 0; i < scene.instances.size(); ++i)
     bounds[i] = scene.instances[i].transform.transformBox(objectBounds[scene.instances[i].object]);
@@ -91,7 +92,8 @@ UnitSet extractUnits(const Scene& scene, const UnitOptions& options) {
   return set;
 }
 
-CostCounter::CostCounter(const UnitSet& units) : set_(&units), stamp_(units.resourceBytes.size(), 0) {}
+CostCounter::CostCounter(const UnitSet& units)
+    : set_(&units), stamp_(units.resourceBytes.size(), 0) {}
 
 void CostCounter::clear() {
   bytes_ = 0;

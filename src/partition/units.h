@@ -35,10 +35,10 @@ struct Unit {
   std::vector<int32_t> instances;  // ascending
   Box3f bounds;                    // world space; empty if the unit has no geometry
   uint64_t ownBytes = 0;           // its instance records
-  uint32_t firstResource = 0;      // its meshes and textures: UnitSet::resources[first, first + count)
+  uint32_t firstResource = 0;  // its meshes and textures: UnitSet::resources[first, first + count)
   uint32_t resourceCount = 0;
-  bool nonInstanced = false;       // its object(s) are placed once
-  int32_t object = -1;             // the object all its instances place; -1 if several
+  bool nonInstanced = false;  // its object(s) are placed once
+  int32_t object = -1;        // the object all its instances place; -1 if several
 };
 
 struct UnitSet {

@@ -11,7 +11,8 @@ Scene lightScene(const Scene& scene) {
   std::vector<std::vector<int32_t>> emissiveMeshesPerObject(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o)
     for (int32_t m : scene.objects[o].meshes)
-      if (scene.materials[scene.meshes[m].material].isEmissive()) emissiveMeshesPerObject[o].push_back(m);
+      if (scene.materials[scene.meshes[m].material].isEmissive())
+        emissiveMeshesPerObject[o].push_back(m);
   for (const Instance& inst : scene.instances) {
     for (int32_t m : emissiveMeshesPerObject[inst.object]) {
       const Mesh& source = scene.meshes[m];
@@ -29,7 +30,8 @@ Scene lightScene(const Scene& scene) {
       mesh.indices.reserve(source.indices.size());
       for (const Vec3i& tri : source.indices) {
         const int32_t base = int32_t(mesh.positions.size());
-        for (int k = 0; k < 3; ++k) mesh.positions.push_back(inst.transform.transformPoint(source.positions[tri[k]]));
+        for (int k = 0; k < 3; ++k)
+          mesh.positions.push_back(inst.transform.transformPoint(source.positions[tri[k]]));
         mesh.indices.push_back({base, base + 1, base + 2});
       }
       out.addSingleInstanceMesh(std::move(mesh));

@@ -9,7 +9,9 @@
 namespace ferry {
 namespace {
 
-float uniform(uint32_t a, uint32_t b) { return random01(RandomKey{a, b, 0, 9}, RandomDim::OwnerPick); }
+float uniform(uint32_t a, uint32_t b) {
+  return random01(RandomKey{a, b, 0, 9}, RandomDim::OwnerPick);
+}
 
 }  // namespace
 

@@ -26,7 +26,7 @@ namespace ferry {
 namespace {
 
 // The built-ins' accel + instances estimate must lie within this factor of
-// Embree's retained bytes. Measured: 0.95 .. 1.06 (docs/memory.md). The band
+// Embree's retained bytes. Measured: 0.96 .. 1.29 (docs/memory.md). The band
 // is wide because Embree allocates in blocks whose slack depends on mesh
 // sizes and on the number of build threads (thread-local blocks), so another
 // machine or Embree version moves the ratio by tens of percent; a factor of
