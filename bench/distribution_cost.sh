@@ -16,7 +16,8 @@
 # and independent of timing.
 #
 #   bash bench/distribution_cost.sh [FERRY]             (default build/ferry)
-#   SCENE='builtin:island' SIZE=640x360 SPP=1 FRAMES=3 ROUNDS=3 CORES=$(nproc) bash bench/distribution_cost.sh
+#   SCENE='builtin:island' SIZE=640x360 SPP=1 FRAMES=3 ROUNDS=3 CORES=$(nproc) \
+#     PARTITION=round-robin bash bench/distribution_cost.sh
 set -euo pipefail
 ferry=$(realpath "${1:-build/ferry}")
 SCENE=${SCENE:-builtin:island}
@@ -26,6 +27,7 @@ FRAMES=${FRAMES:-3}
 ROUNDS=${ROUNDS:-3}
 CORES=${CORES:-$(nproc)}
 RANKS=${RANKS:-1 2 4 8}
+PARTITION=${PARTITION:-round-robin}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_mpi_yield_when_idle=1
 
@@ -37,12 +39,13 @@ run() {
   local n=$1 mode=$2 tag=$3 threads=$((CORES / $1))
   [ "$threads" -ge 1 ] || threads=1
   mpirun --oversubscribe -np "$n" "$ferry" render "$SCENE" --size "$SIZE" --spp "$SPP" --frames "$FRAMES" \
-    --threads "$threads" --forwarding "$mode" -q -o "$work/out.pfm" --stats "$work/$tag.json"
+    --threads "$threads" --forwarding "$mode" --partition "$PARTITION" -q -o "$work/out.pfm" --stats "$work/$tag.json"
 }
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
   "$(free -g | awk '/Mem:/ {print $2}') GiB; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
-echo "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $CORES cores for every configuration"
+echo "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $CORES cores for every configuration," \
+  "partition $PARTITION"
 
 for round in $(seq "$ROUNDS"); do
   for n in $RANKS; do run "$n" proxies "time-$n-$round"; done

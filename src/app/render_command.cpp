@@ -6,6 +6,8 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <malloc.h>
+
 #include <charconv>
 #include <chrono>
 #include <filesystem>
@@ -174,6 +176,8 @@ void setUp(const RenderOptions& o, const RenderSettings& settings, const Communi
     s.partition = partitionScene(s.scene, comm.size(), renderPartitionerOptions(o));
     s.owned = s.partition.instancesOf(comm.rank());
     s.scene.releaseAllBut(s.owned);
+    // Hand the freed geometry back to the system, so resident memory shows what the rank holds.
+    malloc_trim(0);
   }
   s.ownedEstimate = ownedMemory(s.scene, s.owned);
   s.loadSeconds = secondsSince(start);

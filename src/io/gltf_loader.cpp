@@ -535,7 +535,7 @@ class GltfBuilder {
  private:
   struct MaterialInfo {
     int32_t material = 0;
-    int32_t emissionTexture = kNoTexture;
+    std::shared_ptr<const Texture> emissionTexture;  // sRGB; only while loading
     Vec3f emissionFactor{0};
     std::map<std::tuple<int, int, int>, int32_t> emitting;  // quantised colour -> material
   };
@@ -742,8 +742,8 @@ class GltfBuilder {
     }
     MaterialInfo& info = materialFor(prim.material);
     mesh.material = info.material;
-    if (info.emissionTexture == kNoTexture || mesh.uvs.empty()) {
-      if (info.emissionTexture != kNoTexture)
+    if (!info.emissionTexture || mesh.uvs.empty()) {
+      if (info.emissionTexture)
         warnings_.once("emission uv", fmt::format("{}: {} has an emissive texture but no texture "
                                                   "coordinates: uses the factor alone",
                                                   path_, name));
@@ -756,7 +756,7 @@ class GltfBuilder {
   // ---------------------------------------------------------------- emission
 
   std::vector<Vec3f> emissionPerTriangle(const Mesh& mesh, const MaterialInfo& info) {
-    const Texture& t = scene_.textures[size_t(info.emissionTexture)];
+    const Texture& t = *info.emissionTexture;
     std::vector<Vec3f> e(mesh.indices.size());
     static constexpr float kPoints[4][3] = {{1.f / 3, 1.f / 3, 1.f / 3},
                                             {2.f / 3, 1.f / 6, 1.f / 6},
@@ -856,15 +856,37 @@ class GltfBuilder {
     return WrapMode::Repeat;
   }
 
-  // The decoded image of texture `index` (cached), or kNoTexture with a warning.
+  // Texture `index` as a scene texture (cached), or kNoTexture with a warning.
   int32_t textureFor(int index, const std::string& use, bool srgb) {
     if (index < 0) return kNoTexture;
-    if (size_t(index) >= model_.textures.size())
-      fail(fmt::format("{} texture {} does not exist ({} textures)", use, index,
-                       model_.textures.size()));
     auto key = std::make_pair(index, srgb);
     auto it = textures_.find(key);
     if (it != textures_.end()) return it->second;
+    std::shared_ptr<Texture> texture = decodeTexture(index, use);
+    int32_t id = kNoTexture;
+    if (texture) {
+      texture->srgb = srgb;
+      scene_.textures.push_back(std::move(*texture));
+      id = int32_t(scene_.textures.size() - 1);
+    }
+    textures_.emplace(key, id);
+    return id;
+  }
+
+  // Texture `index` decoded for use while loading only (averaged, baked):
+  // cached for this load, never part of the scene. Null with a warning.
+  std::shared_ptr<const Texture> temporaryTexture(int index, const std::string& use) {
+    auto it = temporary_.find(index);
+    if (it != temporary_.end()) return it->second;
+    std::shared_ptr<const Texture> texture = decodeTexture(index, use);
+    temporary_.emplace(index, texture);
+    return texture;
+  }
+
+  std::shared_ptr<Texture> decodeTexture(int index, const std::string& use) {
+    if (size_t(index) >= model_.textures.size())
+      fail(fmt::format("{} texture {} does not exist ({} textures)", use, index,
+                       model_.textures.size()));
     const tinygltf::Texture& t = model_.textures[size_t(index)];
     if (!t.extensions.empty())
       for (const auto& [ext, v] : t.extensions)
@@ -873,8 +895,7 @@ class GltfBuilder {
     if (t.source < 0) {
       warnings_.once("nosource",
                      fmt::format("{}: texture {} has no image Ferry can read", path_, index));
-      textures_.emplace(key, kNoTexture);
-      return kNoTexture;
+      return nullptr;
     }
     if (size_t(t.source) >= model_.images.size())
       fail(fmt::format("texture {} uses image {} of {}", index, t.source, model_.images.size()));
@@ -907,12 +928,8 @@ class GltfBuilder {
                          file.string()));
       texture = readTexture(file.string());
     }
-    texture.srgb = srgb;
     texture.wrap = wrapOf(index);
-    scene_.textures.push_back(std::move(texture));
-    int32_t id = int32_t(scene_.textures.size() - 1);
-    textures_.emplace(key, id);
-    return id;
+    return std::make_shared<Texture>(std::move(texture));
   }
 
   MaterialInfo& materialFor(int index) {
@@ -947,9 +964,9 @@ class GltfBuilder {
     m.metallic = std::clamp(float(pbr.metallicFactor), 0.0f, 1.0f);
     m.roughness = std::clamp(float(pbr.roughnessFactor), 0.0f, 1.0f);
     if (pbr.metallicRoughnessTexture.index >= 0) {
-      int32_t t = textureFor(pbr.metallicRoughnessTexture.index, "metallicRoughness", false);
-      if (t != kNoTexture) {
-        const Texture& tex = scene_.textures[size_t(t)];
+      auto mr = temporaryTexture(pbr.metallicRoughnessTexture.index, "metallicRoughness");
+      if (mr) {
+        const Texture& tex = *mr;
         double g = 0, b = 0;
         size_t texels = tex.texelCount();
         for (size_t i = 0; i < texels; ++i) {
@@ -983,9 +1000,9 @@ class GltfBuilder {
       strength = std::max(number(*es, "emissiveStrength", 1), 0.0f);
     Vec3f emissive = max(colorOf(g.emissiveFactor, Vec3f(0)), Vec3f(0)) * strength;
     if (g.emissiveTexture.index >= 0 && maxComponent(emissive) > 0) {
-      info.emissionTexture = textureFor(g.emissiveTexture.index, "emissive", true);
+      info.emissionTexture = temporaryTexture(g.emissiveTexture.index, "emissive");
       info.emissionFactor = emissive;
-      if (info.emissionTexture == kNoTexture) m.emission = emissive;
+      if (!info.emissionTexture) m.emission = emissive;
     } else {
       m.emission = emissive;
     }
@@ -1106,6 +1123,7 @@ class GltfBuilder {
   Scene scene_;
   std::map<int, int32_t> objects_;
   std::map<std::pair<int, bool>, int32_t> textures_;
+  std::map<int, std::shared_ptr<const Texture>> temporary_;
   std::map<int, MaterialInfo> materials_;
   std::map<std::string, int> cameraUses_;
   std::vector<PendingLight> pendingLights_;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -16,6 +17,8 @@ namespace {
 constexpr int kMaxDepth = 32;       // nested textures and mixed materials
 constexpr int kMaxBakeSide = 2048;  // texels per side of a baked texture
 constexpr int kAverageGrid = 64;    // samples per side when averaging a texture
+// Texture-tree evaluations for one bake: 8 per texel of the largest texture.
+constexpr uint64_t kMaxEvaluations = uint64_t(8) * kMaxBakeSide * kMaxBakeSide;
 
 struct Look {
   Material m;
@@ -93,6 +96,7 @@ struct PbrtMaterials::Impl {
   std::map<std::string, float> averages;
   std::map<std::string, SampledSpectrum> spectrumFiles;
   std::map<int, int32_t> constantAlpha;
+  uint64_t evaluations_ = 0;  // of the current bake or average
 
   Impl(Scene& s, LoadWarnings& w, Resolver r) : scene(s), warnings(w), resolve(std::move(r)) {}
 
@@ -109,6 +113,20 @@ struct PbrtMaterials::Impl {
     if (!p.strings.empty()) {
       const std::string& s = p.strings[0];
       if (auto named = namedSpectrum(s)) return *named;
+      // pbrt-v4 knows more named spectra than Ferry tabulates (metal-CuZn,
+      // camera sensors): a plausible stand-in and a warning, not an error.
+      for (auto [prefix, standIn] :
+           {std::pair{"metal-", "metal-Al"}, std::pair{"glass-", "glass-BK7"},
+            std::pair{"stdillum-", "stdillum-D65"}}) {
+        if (!s.starts_with(prefix) || s.find('.') != std::string::npos) continue;
+        std::string name = standIn;
+        if (name.starts_with("metal-")) name += s.ends_with("-k") ? "-k" : "-eta";
+        warnings.once("spectrum|" + s,
+                      fmt::format("named spectrum \"{}\" is not known to Ferry: using \"{}\" "
+                                  "instead (first at {}; known: {})",
+                                  s, name, p.where.toString(), namedSpectrumList()));
+        return *namedSpectrum(name);
+      }
       auto it = spectrumFiles.find(s);
       if (it != spectrumFiles.end()) return it->second;
       std::string path;
@@ -324,6 +342,11 @@ struct PbrtMaterials::Impl {
 
   // A texture's value at uv: linear RGB; float textures give grey.
   Vec3f eval(const PbrtTextureDefinition& t, Vec2f uv, int depth) {
+    // Textures that use one texture twice double at every level: bound the work.
+    if (evaluations_++ > kMaxEvaluations)
+      throw InputError(t.where, fmt::format("texture \"{}\" is too expensive to bake (more than "
+                                            "{} evaluations: textures nested too deeply?)",
+                                            t.name, kMaxEvaluations));
     if (depth > kMaxDepth)
       throw InputError(t.where, fmt::format("texture \"{}\": textures nested more than {} deep "
                                             "(a texture that uses itself?)",
@@ -390,8 +413,8 @@ struct PbrtMaterials::Impl {
 
   // The resolution a baked texture needs.
   void bakeSize(const PbrtTextureDefinition& t, int& width, int& height, float& frequency,
-                int depth) {
-    if (depth > kMaxDepth) return;
+                int depth, std::set<const PbrtTextureDefinition*>& seen) {
+    if (depth > kMaxDepth || !seen.insert(&t).second) return;
     if (t.className == "imagemap") {
       auto img = image(t);
       Mapping m = mappingOf(t);
@@ -407,7 +430,7 @@ struct PbrtMaterials::Impl {
     for (const PbrtParam& p : t.params.all())
       if (p.type == "texture" && p.strings.size() == 1)
         if (const PbrtTextureDefinition* sub = findTexture(p.strings[0], t.isFloat))
-          bakeSize(*sub, width, height, frequency, depth + 1);
+          bakeSize(*sub, width, height, frequency, depth + 1, seen);
   }
 
   // An imagemap that can be baked texel for texel from its file.
@@ -487,7 +510,8 @@ struct PbrtMaterials::Impl {
   void bakeGrid(const PbrtTextureDefinition& t, Texture& out, bool alpha) {
     int width = 0, height = 0;
     float frequency = 0;
-    bakeSize(t, width, height, frequency, 0);
+    std::set<const PbrtTextureDefinition*> seen;
+    bakeSize(t, width, height, frequency, 0, seen);
     if (width == 0 || height == 0) {
       int side = std::clamp(int(std::ceil(32 * frequency)), 256, kMaxBakeSide);
       width = std::max(width, side);
@@ -497,6 +521,7 @@ struct PbrtMaterials::Impl {
     out.height = height;
     out.wrap = WrapMode::Repeat;
     out.rgba.assign(size_t(width) * height * 4, 255);
+    evaluations_ = 0;
     for (int y = 0; y < height; ++y)
       for (int x = 0; x < width; ++x) {
         Vec2f uv((x + 0.5f) / width, 1 - (y + 0.5f) / height);
@@ -572,7 +597,10 @@ struct PbrtMaterials::Impl {
       if (!p) continue;
       if (p->type == "texture") {
         const PbrtTextureDefinition& t = textureOf(*p, false);
-        if (t.className == "constant") return {eval(t, {0.5f, 0.5f}, 0)};
+        if (t.className == "constant") {
+          evaluations_ = 0;
+          return {eval(t, {0.5f, 0.5f}, 0)};
+        }
         return {Vec3f(1), bakeColor(*p)};
       }
       return {colorValue(*p, SpectrumUse::Reflectance)};
@@ -590,6 +618,7 @@ struct PbrtMaterials::Impl {
                                 "textured; first at {})",
                                 p.declaration(), p.name, p.where.toString()));
     double sum = 0;
+    evaluations_ = 0;
     for (int y = 0; y < kAverageGrid; ++y)
       for (int x = 0; x < kAverageGrid; ++x)
         sum += average(eval(t, {(x + 0.5f) / kAverageGrid, (y + 0.5f) / kAverageGrid}, 0));

@@ -448,6 +448,18 @@ TEST(PbrtParser, MismatchedBlockEndsAreAcceptedWithAWarning) {
   EXPECT_TRUE(anyContains(l.warnings, "closes the AttributeBegin"));
 }
 
+TEST(PbrtParser, UnknownNamedSpectraGetAStandIn) {
+  std::vector<std::string> w;
+  Scene s = fromText(R"(WorldBegin
+Material "conductor" "spectrum eta" "metal-CuZn-eta" "spectrum k" "metal-CuZn-k"
+Shape "sphere"
+)",
+                     &w);
+  EXPECT_EQ(s.materials.at(0).metallic, 1);
+  EXPECT_GT(s.materials.at(0).baseColor.z, 0.85f);  // aluminium's neutral grey
+  EXPECT_TRUE(anyContains(w, "\"metal-CuZn-eta\" is not known to Ferry: using \"metal-Al-eta\""));
+}
+
 TEST(PbrtParser, WarningsAreDeduplicated) {
   std::vector<std::string> w;
   std::string text = "WorldBegin\n";
@@ -469,6 +481,21 @@ TEST(PbrtParser, ObjectsOfManyCurvesShareOneMesh) {
   ASSERT_EQ(s.objects[0].meshes.size(), 1u);
   EXPECT_EQ(s.meshes[0].triangleCount(), 50u * 3u * 6u);
   EXPECT_EQ(s.instances.size(), 2u);
+}
+
+TEST(PbrtParser, ExponentialTextureTreesFailInsteadOfHanging) {
+  // Each level mixes the level below with itself: 2^30 evaluations per texel.
+  std::string text = "WorldBegin\nTexture \"t0\" \"spectrum\" \"checkerboard\"\n";
+  for (int i = 1; i <= 30; ++i)
+    text += "Texture \"t" + std::to_string(i) + "\" \"spectrum\" \"mix\" \"texture tex1\" \"t" +
+            std::to_string(i - 1) + "\" \"texture tex2\" \"t" + std::to_string(i - 1) + "\"\n";
+  text += "Material \"diffuse\" \"texture reflectance\" \"t30\"\nShape \"sphere\"\n";
+  try {
+    fromText(text);
+    FAIL() << "baked a texture of 2^30 evaluations per texel";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("too expensive to bake"), std::string::npos) << e.what();
+  }
 }
 
 // ------------------------------------------------------------ malformed files
