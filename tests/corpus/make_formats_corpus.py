@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Regenerates the binary files of the PLY and glTF test corpora
-(tests/corpus/ply/*.ply in binary encodings, tests/corpus/gltf/*) and the
-fuzzing seeds (tests/fuzz/corpus/{ply,pbrt}). Plain Python (struct, json,
+(tests/corpus/ply/*.ply in binary encodings, tests/corpus/gltf/*) and, when
+they are empty, the fuzzing seeds (tests/fuzz/corpus/{ply,pbrt}). Plain Python (struct, json,
 zlib, base64), no packages. The ASCII PLY and pbrt files are text, written by
 hand; the seeds copy the small ones.
 
@@ -322,9 +322,14 @@ def make_glb(doc, binary):
 # ------------------------------------------------------------------ fuzz seeds
 
 def fuzz_seeds():
+    """Seeds for a new fuzzing corpus. The corpus kept in the repository is
+    libFuzzer's minimisation (-merge=1 -use_counters=0) of these seeds and of
+    what the fuzzers found; it is only seeded when empty."""
     for kind, ext in (("ply", ".ply"), ("pbrt", ".pbrt")):
         out = os.path.join(FUZZ, kind)
         os.makedirs(out, exist_ok=True)
+        if os.listdir(out):
+            continue
         src = os.path.join(HERE, kind)
         for name in sorted(os.listdir(src)):
             path = os.path.join(src, name)
