@@ -20,18 +20,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 compare="python3 $source_dir/tests/tools/compare_pfm.py"
 
-check_stats() {
-  python3 - "$1" <<'PY'
-import json, sys
-s = json.load(open(sys.argv[1]))
-r = s["render"]
-fwd = r["total"]["exchange"]["rays_forwarded"]
-assert r["revisits"] == 0, f"{r['revisits']} rays revisited a rank"
-assert r["rays_received"] == fwd, f"forwarded {fwd} but received {r['rays_received']}"
-assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
-print(f"  forwarded {fwd}, rounds {r['total']['exchange']['rounds']}")
-PY
-}
+check_stats() { python3 "$source_dir/tests/tools/check_stats.py" "$1"; }
 
 run_scene() {
   local scene=$1 args=$2

@@ -25,18 +25,7 @@ compare="python3 $source_dir/tests/tools/compare_pfm.py"
 partitioners="spatial-simple spatial-sah object-naive object-proxies bvh-style best"
 start=$SECONDS
 
-check_stats() {
-  python3 - "$1" <<'PY'
-import json, sys
-s = json.load(open(sys.argv[1]))
-r = s["render"]
-fwd = r["total"]["exchange"]["rays_forwarded"]
-assert r["revisits"] == 0, f"{r['revisits']} rays revisited a rank"
-assert r["rays_received"] == fwd, f"forwarded {fwd} but received {r['rays_received']}"
-assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
-print(f"  forwarded {fwd}, max estimated bytes per rank {s['memory']['max_estimated_bytes']:.0f}")
-PY
-}
+check_stats() { python3 "$source_dir/tests/tools/check_stats.py" "$1"; }
 
 cornell="builtin:cornell"
 cornell_args="--size 40x40 --spp 2 --max-depth 4 --seed 3 -q"

@@ -270,25 +270,6 @@ Vec3f groundColour(const IslandShape& shape, float x, float z, uint32_t seed) {
   return c * (0.85f + 0.15f * n);
 }
 
-std::shared_ptr<const HdrImage> skyGradient() {
-  auto sky = std::make_shared<HdrImage>();
-  sky->name = "sky-gradient";
-  sky->width = 128;
-  sky->height = 64;
-  sky->pixels.resize(size_t(sky->width) * sky->height);
-  // Below the horizon: the colour of the open sea, so the ocean's far edge
-  // does not show.
-  const Vec3f zenith{0.16f, 0.34f, 0.8f}, horizon{0.7f, 0.8f, 0.95f}, sea{0.04f, 0.09f, 0.13f};
-  for (int y = 0; y < sky->height; ++y) {
-    float theta = kPi * (float(y) + 0.5f) / float(sky->height);  // row 0 is the zenith
-    float elevation = kPi / 2 - theta;
-    Vec3f c = elevation >= 0 ? lerp(horizon, zenith, std::pow(std::sin(elevation), 0.5f))
-                             : lerp(horizon, sea, smoothstep(0.0f, 0.05f, -elevation));
-    for (int x = 0; x < sky->width; ++x) sky->pixels[size_t(y) * sky->width + x] = c;
-  }
-  return sky;
-}
-
 // Roles to materials for the plants; some species override a role.
 struct IslandMaterials {
   int32_t terrain, sand, rock, ocean, seabed, bark, leaves, palmBark, palmFronds, coconut, fern,
@@ -870,7 +851,10 @@ ScenePlan planIsland(double scale, uint32_t seed) {
   // ------------------------------------------------------------ lights, views, bounds
   plan.suns.push_back({normalize(Vec3f(0.35f, 0.8f, 0.45f)), {5.5f, 5.2f, 4.8f}, 0.00465f});
   plan.environmentColor = {1, 1, 1};
-  plan.environmentImage = [] { return skyGradient(); };
+  // Below the horizon: the colour of the open sea, so the ocean's far edge does not show.
+  plan.environmentImage = [] {
+    return skyGradient({0.16f, 0.34f, 0.8f}, {0.7f, 0.8f, 0.95f}, {0.04f, 0.09f, 0.13f}, 0.05f);
+  };
 
   auto surfaceAt = [&](Vec2f p) { return shape->surface(p.x, p.y); };
   {

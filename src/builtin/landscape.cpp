@@ -122,22 +122,6 @@ Vec3f groundColour(const LandscapeShape& shape, float x, float z, uint32_t seed)
   return c * (0.85f + 0.15f * n);
 }
 
-std::shared_ptr<const HdrImage> skyGradient() {
-  auto sky = std::make_shared<HdrImage>();
-  sky->name = "sky-gradient";
-  sky->width = 128;
-  sky->height = 64;
-  sky->pixels.resize(size_t(sky->width) * sky->height);
-  const Vec3f zenith{0.2f, 0.38f, 0.78f}, horizon{0.75f, 0.82f, 0.92f}, ground{0.28f, 0.27f, 0.24f};
-  for (int y = 0; y < sky->height; ++y) {
-    float elevation = kPi / 2 - kPi * (float(y) + 0.5f) / float(sky->height);
-    Vec3f c = elevation >= 0 ? lerp(horizon, zenith, std::pow(std::sin(elevation), 0.5f))
-                             : lerp(horizon, ground, smoothstep(0.0f, 0.3f, -elevation));
-    for (int x = 0; x < sky->width; ++x) sky->pixels[size_t(y) * sky->width + x] = c;
-  }
-  return sky;
-}
-
 }  // namespace
 
 ScenePlan planLandscape(double scale, uint32_t seed) {
@@ -484,7 +468,9 @@ ScenePlan planLandscape(double scale, uint32_t seed) {
   // ------------------------------------------------------------ lights, views, bounds
   plan.suns.push_back({normalize(Vec3f(0.3f, 0.7f, 0.65f)), {5.5f, 5.2f, 4.8f}, 0.00465f});
   plan.environmentColor = {1, 1, 1};
-  plan.environmentImage = [] { return skyGradient(); };
+  plan.environmentImage = [] {
+    return skyGradient({0.2f, 0.38f, 0.78f}, {0.75f, 0.82f, 0.92f}, {0.28f, 0.27f, 0.24f}, 0.3f);
+  };
 
   auto groundAt = [&](float x, float z) { return shape->height(x, z); };
   {

@@ -260,4 +260,20 @@ Texture bladeTexture(const std::string& name, int width, int height, uint32_t se
   });
 }
 
+std::shared_ptr<const HdrImage> skyGradient(Vec3f zenith, Vec3f horizon, Vec3f below, float belowFade) {
+  auto sky = std::make_shared<HdrImage>();
+  sky->name = "sky-gradient";
+  sky->width = 128;
+  sky->height = 64;
+  sky->pixels.resize(size_t(sky->width) * sky->height);
+  for (int y = 0; y < sky->height; ++y) {
+    float theta = kPi * (float(y) + 0.5f) / float(sky->height);  // row 0 is the zenith
+    float elevation = kPi / 2 - theta;
+    Vec3f c = elevation >= 0 ? lerp(horizon, zenith, std::pow(std::sin(elevation), 0.5f))
+                             : lerp(horizon, below, smoothstep(0.0f, belowFade, -elevation));
+    for (int x = 0; x < sky->width; ++x) sky->pixels[size_t(y) * sky->width + x] = c;
+  }
+  return sky;
+}
+
 }  // namespace ferry::builtin

@@ -1,0 +1,15 @@
+#!/usr/bin/env python3
+"""Checks the invariants of a multi-rank render's --stats JSON: no ray traced
+twice on a rank, rays forwarded (counted by senders) equal rays received
+(counted by receivers), and every shading re-trace found its hit."""
+import json
+import sys
+
+s = json.load(open(sys.argv[1]))
+r = s["render"]
+fwd = r["total"]["exchange"]["rays_forwarded"]
+assert r["revisits"] == 0, f"{r['revisits']} rays revisited a rank"
+assert r["rays_received"] == fwd, f"forwarded {fwd} but received {r['rays_received']}"
+assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
+print(f"  forwarded {fwd}, rounds {r['total']['exchange']['rounds']}, "
+      f"max estimated bytes per rank {s['memory']['max_estimated_bytes']:.0f}")
