@@ -181,8 +181,8 @@ int runPartition(const PartitionCommandOptions& o) {
   if (!o.output.empty()) {
     if (o.ranks.find("..") != std::string::npos)
       throw InputError(fmt::format("--ranks '{}': -o needs one rank count", o.ranks));
-    if (last > 64)
-      throw InputError(fmt::format("--ranks {}: parts are made for 1 to 64 ranks", last));
+    if (last > kMaxRanks)
+      throw InputError(fmt::format("--ranks {}: parts are made for 1 to {} ranks", last, kMaxRanks));
     writeParts(o, p, last);
   }
   return 0;

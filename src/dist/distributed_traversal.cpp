@@ -54,7 +54,10 @@ DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm, const
       rankBit_(Mask(Mask(1) << comm.rank())) {
   FERRY_CHECK(comm.size() <= int(sizeof(Mask) * 8));
   instanceOwners_.reserve(partition.instanceOwners.size());
-  for (RankMask owners : partition.instanceOwners) instanceOwners_.push_back(Mask(owners));
+  for (const RankSet& owners : partition.instanceOwners) {
+    FERRY_CHECK(owners.fitsInMask());
+    instanceOwners_.push_back(Mask(owners.mask()));
+  }
 }
 
 template <typename Path>
@@ -66,7 +69,7 @@ bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ra
   ++stats.proxyQueries;
   ProxyBvh::Hit hit = proxies_.closest(ray.origin, ray.direction, ray.tmax, 0);
   if (!hit.found()) return int(pixel % uint32_t(ranks)) == comm_.rank();
-  RankMask owners = proxies_.proxies()[hit.proxy].owners;
+  RankMask owners = proxies_.proxies()[hit.proxy].owners.mask();
   int count = std::popcount(owners);
   int k = int(pixel % uint32_t(count));
   for (; k > 0; --k) owners &= owners - 1;

@@ -56,7 +56,7 @@ template <typename Path>
 ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank) {
   if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};  // ends at any occluder
   ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, RankMask(ray.visited));
-  if (next.found()) return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
+  if (next.found()) return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners.mask(), ray)};
   return finishTraversal(ray, rank);
 }
 
@@ -78,7 +78,7 @@ RankMask replayVisited(const ProxyBvh& proxies, const Path& ray, int generatingR
     ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, visited);
     if (!next.found()) break;
     Path probe = ray;
-    at = pickOwner(proxies.proxies()[next.proxy].owners, probe);
+    at = pickOwner(proxies.proxies()[next.proxy].owners.mask(), probe);
     visited |= RankMask(1) << at;
   }
   return visited;

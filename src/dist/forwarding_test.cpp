@@ -21,7 +21,7 @@ std::vector<Proxy> randomProxies(int count, int ranks, uint32_t seed) {
     b.extend(Vec3f(uniform(i, 3, seed), uniform(i, 4, seed), uniform(i, 5, seed)) * 10.0f);
     RankMask owners = RankMask(1) << int(uniform(i, 6, seed) * ranks);
     if (uniform(i, 7, seed) < 0.3f) owners |= RankMask(1) << int(uniform(i, 8, seed) * ranks);
-    proxies.push_back({b, owners});
+    proxies.push_back({b, RankSet::fromMask(owners)});
   }
   return proxies;
 }

@@ -33,8 +33,8 @@ struct PartContent {
 }  // namespace
 
 ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& parts,
-                                      const std::vector<RankMask>& partRanks,
-                                      std::vector<RankMask>& owners, uint64_t budget) {
+                                      const std::vector<RankSet>& partRanks,
+                                      std::vector<RankSet>& owners, uint64_t budget) {
   ReplicationResult result;
   if (parts.size() < 2) return result;
   Box3f world;
@@ -75,7 +75,7 @@ ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& p
     for (size_t k = 0; k < parts.size(); ++k) {
       if (std::binary_search(parts[k].units.begin(), parts[k].units.end(), u)) continue;
       missing.push_back(k);
-      cost += content[k].marginal(units, u) * uint64_t(std::popcount(partRanks[k]));
+      cost += content[k].marginal(units, u) * uint64_t(partRanks[k].count());
     }
     if (missing.empty() || cost > left) continue;
     left -= cost;

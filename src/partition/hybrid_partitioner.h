@@ -30,7 +30,7 @@ constexpr double kLargeAreaFraction = 1.0 / 4096.0;
 // (a unit that does not fit is skipped; smaller ones may still fit). Updates
 // `parts` (units, bytes) and `owners` (per unit).
 ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& parts,
-                                      const std::vector<RankMask>& partRanks,
-                                      std::vector<RankMask>& owners, uint64_t budget);
+                                      const std::vector<RankSet>& partRanks,
+                                      std::vector<RankSet>& owners, uint64_t budget);
 
 }  // namespace ferry

@@ -95,11 +95,11 @@ Manifest readManifest(const std::string& directory) {
     if (!j.is_object() || j.value("format", std::string()) != kManifestFormat)
       throw InputError(fmt::format("{}: not a Ferry part manifest", path));
     m.version = j.at("version").get<uint32_t>();
-    if (m.version != kPartFormatVersion)
+    if (m.version < kOldestPartFormatVersion || m.version > kPartFormatVersion)
       throw InputError(fmt::format(
-          "{}: made by another version of Ferry (part format {}, this Ferry reads format "
-          "{}): partition the scene again",
-          path, m.version, kPartFormatVersion));
+          "{}: made by another version of Ferry (part format {}, this Ferry reads formats "
+          "{} to {}): partition the scene again",
+          path, m.version, kOldestPartFormatVersion, kPartFormatVersion));
     m.scene = j.at("scene").get<std::string>();
     m.partitioner = j.at("partitioner").get<std::string>();
     m.options = j.value("options", nlohmann::json::object());
@@ -111,7 +111,7 @@ Manifest readManifest(const std::string& directory) {
     m.partitionSeconds = j.value("partition_seconds", 0.0);
     readFile(j.at("shared"), m.shared, path);
     const nlohmann::json& parts = j.at("parts");
-    if (m.ranks < 1 || m.ranks > 64 || !parts.is_array() || parts.size() != size_t(m.ranks))
+    if (m.ranks < 1 || m.ranks > (m.version == 1 ? 64 : kMaxRanks) || !parts.is_array() || parts.size() != size_t(m.ranks))
       throw InputError(
           fmt::format("{}: {} parts listed for {} ranks", path, parts.size(), m.ranks));
     for (size_t r = 0; r < parts.size(); ++r) {

@@ -2,8 +2,9 @@
 // written last, so a directory with a manifest is complete. It names the
 // scene and partitioner, the rank count, and every file with its size and
 // payload hash (part_file.h), so a rank can tell a stale or foreign file from
-// its own. Its "version" is the part format's: a manifest from another
-// version is refused with a message saying so.
+// its own. Its "version" is the part format's: a manifest of a format this
+// Ferry does not read (kOldestPartFormatVersion .. kPartFormatVersion) is
+// refused with a message saying so.
 #pragma once
 
 #include <cstdint>

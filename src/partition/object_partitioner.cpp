@@ -104,7 +104,7 @@ bool CentroidSplitter::split(const Part& part, Part& left, Part& right) {
   return true;
 }
 
-std::vector<Proxy> unitBoxProxies(const UnitSet& units, const std::vector<RankMask>& owners) {
+std::vector<Proxy> unitBoxProxies(const UnitSet& units, const std::vector<RankSet>& owners) {
   std::vector<Proxy> proxies;
   for (size_t u = 0; u < units.units.size(); ++u)
     if (!units.units[u].bounds.empty()) proxies.push_back({units.units[u].bounds, owners[u]});

@@ -37,6 +37,6 @@ class CentroidSplitter final : public PartSplitter {
 };
 
 // object-naive: one proxy per unit, its box.
-std::vector<Proxy> unitBoxProxies(const UnitSet& units, const std::vector<RankMask>& owners);
+std::vector<Proxy> unitBoxProxies(const UnitSet& units, const std::vector<RankSet>& owners);
 
 }  // namespace ferry

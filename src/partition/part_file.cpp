@@ -24,7 +24,13 @@ static_assert(std::endian::native == std::endian::little, "part files are little
 static_assert(std::is_trivially_copyable_v<Vec3f> && sizeof(Vec3f) == 12);
 static_assert(std::is_trivially_copyable_v<Vec2f> && sizeof(Vec2f) == 8);
 static_assert(std::is_trivially_copyable_v<Vec3i> && sizeof(Vec3i) == 12);
-static_assert(std::is_trivially_copyable_v<Proxy> && sizeof(Proxy) == 32);
+static_assert(std::is_trivially_copyable_v<Box3f> && sizeof(Box3f) == 24);
+// A proxy as format 1 stored it.
+struct ProxyV1 {
+  Box3f bounds;
+  uint64_t owners;
+};
+static_assert(std::is_trivially_copyable_v<ProxyV1> && sizeof(ProxyV1) == 32);
 static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // The writers below list every field of these structs: when one gains a
 // field, these fail so that the part format (and kPartFormatVersion) follows.
@@ -161,7 +167,7 @@ void writeMesh(FileWriter& w, const Mesh& m, int32_t material) {
 // The listed instances of `scene` and what they use, re-indexed; `owners`
 // (per scene instance) written alongside when given.
 void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>& instances,
-                  const std::vector<RankMask>* owners) {
+                  const std::vector<RankSet>* owners, size_t ownerWords) {
   std::vector<int32_t> objectIndex(scene.objects.size(), -1), meshIndex(scene.meshes.size(), -1),
       materialIndex(scene.materials.size(), -1), textureIndex(scene.textures.size(), -1);
   for (int32_t i : instances) objectIndex[scene.instances[i].object] = 0;
@@ -212,11 +218,11 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
     }
   std::vector<int32_t> instanceObjects;
   std::vector<Affine3f> transforms;
-  std::vector<RankMask> masks;
+  std::vector<uint64_t> masks;
   for (int32_t i : instances) {
     instanceObjects.push_back(objectIndex[scene.instances[i].object]);
     transforms.push_back(scene.instances[i].transform);
-    masks.push_back(owners ? (*owners)[i] : RankMask(0));
+    for (size_t k = 0; k < ownerWords; ++k) masks.push_back(owners ? (*owners)[i].word(k) : 0);
   }
   w.array(instanceObjects);
   w.array(transforms);
@@ -226,7 +232,7 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
 void writeLights(FileWriter& w, const Scene& lights) {
   std::vector<int32_t> all(lights.instances.size());
   for (size_t i = 0; i < all.size(); ++i) all[i] = int32_t(i);
-  writeContent(w, lights, all, nullptr);
+  writeContent(w, lights, all, nullptr, 1);
   w.pod(uint64_t(lights.suns.size()));
   for (const SunLight& s : lights.suns) {
     w.pod(s.direction);
@@ -304,11 +310,11 @@ Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind,
   Header h;
   std::memcpy(&h, file.data(), sizeof(h));
   if (std::memcmp(h.magic, kMagic, sizeof(kMagic)) != 0) throw bad("not a Ferry part file");
-  if (h.version != kPartFormatVersion)
+  if (h.version < kOldestPartFormatVersion || h.version > kPartFormatVersion)
     throw bad(fmt::format(
-        "made by another version of Ferry (part format {}, this Ferry reads format {}): "
+        "made by another version of Ferry (part format {}, this Ferry reads formats {} to {}): "
         "partition the scene again",
-        h.version, kPartFormatVersion));
+        h.version, kOldestPartFormatVersion, kPartFormatVersion));
   if (hash64(&h, kHashedHeaderBytes) != h.headerHash) throw bad("corrupt header (hash mismatch)");
   if (h.kind != kind)
     throw bad(kind == kKindPart ? "is a shared file, not a rank's part"
@@ -439,7 +445,7 @@ Mesh readMesh(FileReader& r) {
 }
 
 // Reads what writeContent wrote; checks every index (Scene::validate).
-void readContent(FileReader& r, Scene& scene, std::vector<RankMask>& owners) {
+void readContent(FileReader& r, Scene& scene, std::vector<RankSet>& owners, size_t ownerWords) {
   for (uint64_t n = r.count(8); n > 0; --n) scene.textures.push_back(readTexture(r));
   for (uint64_t n = r.count(8); n > 0; --n) scene.materials.push_back(readMaterial(r));
   for (uint64_t n = r.count(8); n > 0; --n) scene.meshes.push_back(readMesh(r));
@@ -451,16 +457,19 @@ void readContent(FileReader& r, Scene& scene, std::vector<RankMask>& owners) {
   }
   std::vector<int32_t> objects = r.array<int32_t>();
   std::vector<Affine3f> transforms = r.array<Affine3f>();
-  owners = r.array<RankMask>();
-  if (transforms.size() != objects.size() || owners.size() != objects.size())
+  std::vector<uint64_t> words = r.array<uint64_t>();
+  if (transforms.size() != objects.size() || words.size() != objects.size() * ownerWords)
     r.fail("instance arrays differ in size");
+  owners.clear();
+  for (size_t i = 0; i < objects.size(); ++i)
+    owners.push_back(RankSet::fromWords(words.data() + i * ownerWords, ownerWords));
   scene.instances.resize(objects.size());
   for (size_t i = 0; i < objects.size(); ++i) scene.instances[i] = {objects[i], transforms[i]};
 }
 
 void readLights(FileReader& r, Scene& lights) {
-  std::vector<RankMask> unused;
-  readContent(r, lights, unused);
+  std::vector<RankSet> unused;
+  readContent(r, lights, unused, 1);
   for (uint64_t n = r.count(28); n > 0; --n) {
     SunLight s;
     s.direction = r.pod<Vec3f>();
@@ -497,7 +506,7 @@ void validated(const std::string& path, Scene& scene, Fill&& fill) {
 
 WrittenFile writePartFile(const std::string& path, const Scene& scene,
                           const std::vector<int32_t>& instances,
-                          const std::vector<RankMask>& owners, int rank, int ranks) {
+                          const std::vector<RankSet>& owners, int rank, int ranks) {
   FERRY_CHECK(owners.size() == scene.instances.size());
   FERRY_CHECK(std::is_sorted(instances.begin(), instances.end()));
   WrittenFile written;
@@ -506,7 +515,7 @@ WrittenFile writePartFile(const std::string& path, const Scene& scene,
     w.pod(uint32_t(rank));
     w.pod(uint32_t(ranks));
     w.str(scene.name);
-    writeContent(w, scene, instances, &owners);
+    writeContent(w, scene, instances, &owners, rankSetWords(ranks));
     written = w.finish(kKindPart, uint32_t(rank), uint32_t(ranks));
   });
   return written;
@@ -523,12 +532,15 @@ LoadedPart readPartFile(const std::string& path, uint64_t expectedHash) {
     r.fail("rank fields disagree");
   validated(path, part.scene, [&] {
     part.scene.name = r.str();
-    readContent(r, part.scene, part.owners);
+    if (h.version == 1 && part.ranks > 64) r.fail("format 1 holds at most 64 ranks");
+    readContent(r, part.scene, part.owners, h.version == 1 ? 1 : rankSetWords(part.ranks));
     r.end();
   });
-  const RankMask self = RankMask(1) << part.rank;
-  for (RankMask m : part.owners)
-    if (!(m & self)) r.fail("an instance is not owned by the part's own rank");
+  const RankSet all = RankSet::firstN(part.ranks);
+  for (const RankSet& m : part.owners) {
+    if (!m.contains(part.rank)) r.fail("an instance is not owned by the part's own rank");
+    if (!m.isSubsetOf(all)) r.fail("an instance has owners outside the part directory's ranks");
+  }
   return part;
 }
 
@@ -552,7 +564,15 @@ WrittenFile writeSharedFile(const std::string& path, const SharedData& shared) {
     w.pod(int32_t(shared.filmHeight.value_or(0)));
     w.str(shared.filmFilename);
     writeLights(w, shared.lights);
-    w.array(shared.proxies);
+    std::vector<Box3f> boxes;
+    std::vector<uint64_t> owners;
+    const size_t words = rankSetWords(shared.ranks);
+    for (const Proxy& p : shared.proxies) {
+      boxes.push_back(p.bounds);
+      for (size_t k = 0; k < words; ++k) owners.push_back(p.owners.word(k));
+    }
+    w.array(boxes);
+    w.array(owners);
     written = w.finish(kKindShared, 0xffffffffu, uint32_t(shared.ranks));
   });
   return written;
@@ -560,7 +580,7 @@ WrittenFile writeSharedFile(const std::string& path, const SharedData& shared) {
 
 SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
   MappedFile file(path);
-  checkFile(file, path, kKindShared, expectedHash);
+  const Header h = checkFile(file, path, kKindShared, expectedHash);
   FileReader r(file, path);
   SharedData shared;
   shared.ranks = int(r.pod<uint32_t>());
@@ -583,7 +603,16 @@ SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
   shared.filmFilename = r.str();
   validated(path, shared.lights, [&] {
     readLights(r, shared.lights);
-    shared.proxies = r.array<Proxy>();
+    if (h.version == 1) {
+      for (const ProxyV1& p : r.array<ProxyV1>()) shared.proxies.push_back({p.bounds, RankSet::fromMask(p.owners)});
+    } else {
+      const size_t words = rankSetWords(shared.ranks);
+      std::vector<Box3f> boxes = r.array<Box3f>();
+      std::vector<uint64_t> owners = r.array<uint64_t>();
+      if (owners.size() != boxes.size() * words) r.fail("proxy arrays differ in size");
+      for (size_t k = 0; k < boxes.size(); ++k)
+        shared.proxies.push_back({boxes[k], RankSet::fromWords(owners.data() + k * words, words)});
+    }
     r.end();
   });
   return shared;

@@ -29,7 +29,12 @@
 
 namespace ferry {
 
-constexpr uint32_t kPartFormatVersion = 1;
+// Format 2 stores every owner set as rankSetWords(ranks) little-endian 64-bit
+// words (ranks 64k .. 64k+63 in word k) and the proxies as boxes then owner
+// words, so parts can be made for more than 64 ranks. Format 1 (up to 64
+// ranks, one word per set, proxies as 32-byte box+mask records) is still read.
+constexpr uint32_t kPartFormatVersion = 2;
+constexpr uint32_t kOldestPartFormatVersion = 1;
 
 struct WrittenFile {
   uint64_t bytes = 0;
@@ -40,13 +45,13 @@ struct WrittenFile {
 // what they use; `owners` per scene instance.
 WrittenFile writePartFile(const std::string& path, const Scene& scene,
                           const std::vector<int32_t>& instances,
-                          const std::vector<RankMask>& owners, int rank, int ranks);
+                          const std::vector<RankSet>& owners, int rank, int ranks);
 
 struct LoadedPart {
   int rank = 0;
   int ranks = 0;
   Scene scene;                   // this part's content only (no views, no lights)
-  std::vector<RankMask> owners;  // per instance of `scene`
+  std::vector<RankSet> owners;  // per instance of `scene`
 };
 // `expectedHash` (0: not checked) is the payload hash the manifest recorded.
 LoadedPart readPartFile(const std::string& path, uint64_t expectedHash = 0);

@@ -121,38 +121,38 @@ bool coveredByUnion(const Box3f& box, const std::vector<const Box3f*>& candidate
 std::vector<int32_t> Partition::instancesOf(int rank) const {
   std::vector<int32_t> out;
   for (size_t i = 0; i < instanceOwners.size(); ++i)
-    if (instanceOwners[i] & (RankMask(1) << rank)) out.push_back(int32_t(i));
+    if (instanceOwners[i].contains(rank)) out.push_back(int32_t(i));
   return out;
 }
 
 void Partition::checkCovers(const Scene& scene) const {
   FERRY_CHECK(instanceOwners.size() == scene.instances.size());
-  FERRY_CHECK(ranks >= 1 && ranks <= 64);
-  const RankMask valid = ranks == 64 ? ~RankMask(0) : (RankMask(1) << ranks) - 1;
+  FERRY_CHECK(ranks >= 1);
+  const RankSet valid = RankSet::firstN(ranks);
   for (const Proxy& p : proxies)
-    if (p.owners == 0 || (p.owners & ~valid))
+    if (p.owners.empty() || !p.owners.isSubsetOf(valid))
       throw InternalError(
-          fmt::format("a proxy has owners {:#x} outside {} ranks", p.owners, ranks));
+          fmt::format("a proxy has owners {} outside {} ranks", p.owners.toString(), ranks));
   ProxyOverlapTree tree(proxies);
   const std::vector<Box3f> bounds = instanceWorldBounds(scene);
 
   // Proxies a ray may be sent to for content of `owners` near `box`: those
   // overlapping it whose every owner holds the content.
-  auto eligible = [&](const Box3f& box, RankMask owners) {
+  auto eligible = [&](const Box3f& box, const RankSet& owners) {
     std::vector<const Box3f*> out;
     for (uint32_t k : tree.overlapping(box))
-      if ((proxies[k].owners & ~owners) == 0) out.push_back(&proxies[k].bounds);
+      if (proxies[k].owners.isSubsetOf(owners)) out.push_back(&proxies[k].bounds);
     return out;
   };
   auto covered = [&](const Box3f& box, const std::vector<const Box3f*>& candidates,
                      int64_t budget) { return coveredByUnion(box, candidates, 0, budget); };
 
   for (size_t i = 0; i < bounds.size(); ++i) {
-    const RankMask owners = instanceOwners[i];
-    if (owners == 0) throw InternalError(fmt::format("instance {} has no owner", i));
-    if (owners & ~valid)
+    const RankSet& owners = instanceOwners[i];
+    if (owners.empty()) throw InternalError(fmt::format("instance {} has no owner", i));
+    if (!owners.isSubsetOf(valid))
       throw InternalError(
-          fmt::format("instance {} has owners {:#x} outside {} ranks", i, owners, ranks));
+          fmt::format("instance {} has owners {} outside {} ranks", i, owners.toString(), ranks));
     if (bounds[i].empty()) continue;
     const std::vector<const Box3f*> near = eligible(bounds[i], owners);
     if (covered(bounds[i], near, 2000)) continue;
@@ -184,8 +184,8 @@ void Partition::checkCovers(const Scene& scene) const {
         if (!covered(tri, triNear, 1000000))
           throw InternalError(
               fmt::format("instance {} (object '{}', mesh '{}', triangle {}) is not covered by "
-                          "proxies of its owners {:#x}",
-                          i, scene.objects[inst.object].name, mesh.name, t, owners));
+                          "proxies of its owners {}",
+                          i, scene.objects[inst.object].name, mesh.name, t, owners.toString()));
       }
     }
   }
@@ -196,7 +196,7 @@ Partition roundRobinPartition(const Scene& scene, int ranks) {
   p.ranks = ranks;
   std::vector<Box3f> bounds = instanceWorldBounds(scene);
   for (size_t i = 0; i < scene.instances.size(); ++i) {
-    RankMask owner = RankMask(1) << (i % ranks);
+    RankSet owner = RankSet::single(int(i % size_t(ranks)));
     p.instanceOwners.push_back(owner);
     if (!bounds[i].empty()) p.proxies.push_back({bounds[i], owner});
   }
@@ -214,9 +214,9 @@ Partition randomPartition(const Scene& scene, int ranks, uint32_t seed) {
   };
   for (size_t i = 0; i < scene.instances.size(); ++i) {
     int copies = 1 + int(uniform(uint32_t(i), 0) * std::min(3, ranks));
-    RankMask owners = 0;
-    for (int c = 0; owners == 0 || std::popcount(owners) < copies; ++c)
-      owners |= RankMask(1) << int(uniform(uint32_t(i), 1 + c) * ranks);
+    RankSet owners;
+    for (int c = 0; owners.empty() || owners.count() < copies; ++c)
+      owners.insert(int(uniform(uint32_t(i), 1 + c) * ranks));
     p.instanceOwners.push_back(owners);
     if (bounds[i].empty()) continue;
     // Inflated by up to half its size: conservative, overlapping neighbours.
@@ -232,7 +232,7 @@ Partition randomPartition(const Scene& scene, int ranks, uint32_t seed) {
     Box3f box;
     box.extend(a);
     box.extend(b);
-    p.proxies.push_back({box, RankMask(1) << int(uniform(1000000 + k, 7) * ranks)});
+    p.proxies.push_back({box, RankSet::single(int(uniform(1000000 + k, 7) * ranks))});
   }
   return p;
 }

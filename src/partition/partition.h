@@ -1,5 +1,5 @@
 // A partition of a scene over ranks: which ranks own each instance, and the
-// proxies, boxes with an owner mask saying "these ranks have content here".
+// proxies, boxes with a set of owner ranks saying "these ranks have content here".
 //
 // The one invariant the forwarding operator relies on: every point of every
 // instance's geometry lies in some proxy whose owners all hold the instance
@@ -13,21 +13,23 @@
 #include <vector>
 
 #include "core/math.h"
+#include "partition/rank_set.h"
 
 namespace ferry {
 
 struct Scene;
 
-using RankMask = uint64_t;  // bit r: rank r (up to 64 ranks)
+// Rank ids travel in 16 bits in the replay path layout (0xffff: none).
+constexpr int kMaxRanks = 65535;
 
 struct Proxy {
   Box3f bounds;
-  RankMask owners = 0;
+  RankSet owners;
 };
 
 struct Partition {
   int ranks = 1;
-  std::vector<RankMask> instanceOwners;  // per Scene::instances entry
+  std::vector<RankSet> instanceOwners;  // per Scene::instances entry
   std::vector<Proxy> proxies;
 
   std::vector<int32_t> instancesOf(int rank) const;

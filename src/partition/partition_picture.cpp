@@ -17,12 +17,6 @@ namespace {
 
 constexpr int kCheckerPixels = 6;
 
-// The k-th set bit of `mask`.
-int nthRank(RankMask mask, int k) {
-  for (; k > 0; --k) mask &= mask - 1;
-  return std::countr_zero(mask);
-}
-
 Rgba scaled(Rgba c, float s) {
   return {uint8_t(std::lround(c.r * s)), uint8_t(std::lround(c.g * s)),
           uint8_t(std::lround(c.b * s)), 255};
@@ -57,17 +51,17 @@ std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition,
             Vec3f n = cross(p1 - p0, p2 - p0);
             float shade = 0.35f;
             if (length(n) > 0) shade += 0.65f * std::abs(dot(normalize(n), ray.direction));
-            const RankMask owners = partition.instanceOwners[hit.instance];
-            const int count = std::popcount(owners);
+            const RankSet& owners = partition.instanceOwners[hit.instance];
+            const int count = owners.count();
             const int k = count > 1 ? ((x / kCheckerPixels) + (y / kCheckerPixels)) % count : 0;
-            Rgba c = count > 0 ? scaled(rankColor(nthRank(owners, k)), shade) : Rgba{0, 0, 0, 255};
+            Rgba c = count > 0 ? scaled(rankColor(owners.nth(k)), shade) : Rgba{0, 0, 0, 255};
             canvas.blend(x, y, c);  // each pixel written by one thread only
           }
       });
 
   if (o.proxies) {
     for (const Proxy& p : partition.proxies) {
-      const int count = std::popcount(p.owners);
+      const int count = p.owners.count();
       if (count == 0 || p.bounds.empty()) continue;
       const Box3f& b = p.bounds;
       auto corner = [&](int i) {
@@ -92,7 +86,7 @@ std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition,
             const int ix = int(std::floor(px)), iy = int(std::floor(py));
             if (ix < 0 || iy < 0 || ix >= w || iy >= h) continue;
             const bool hidden = length(d) > depth[size_t(iy) * w + ix] * 1.0001f;
-            const Rgba c = rankColor(nthRank(p.owners, count > 1 ? (s / 8) % count : 0));
+            const Rgba c = rankColor(p.owners.nth(count > 1 ? (s / 8) % count : 0));
             canvas.blend(ix, iy, c, hidden ? 0.12f : 0.55f);
           }
         }

@@ -48,13 +48,13 @@ TEST(PartitionPicture, ColoursContentByOwnerAndCheckerboardsReplicas) {
   o.height = 96;
   o.proxies = false;
   Partition p = roundRobinPartition(scene, 4);
-  for (RankMask& m : p.instanceOwners) m = RankMask(1) << 3;
+  for (RankSet& m : p.instanceOwners) m = RankSet::single(3);
   Counts one = classify(partitionPicture(scene, p, o), rankColor(3), rankColor(1));
   EXPECT_GT(one.first, 96 * 96 / 2);  // the box fills most of the view
   EXPECT_EQ(one.second, 0);
   EXPECT_EQ(one.other, 0);
 
-  for (RankMask& m : p.instanceOwners) m = (RankMask(1) << 1) | (RankMask(1) << 2);
+  for (RankSet& m : p.instanceOwners) m = RankSet::single(1) | RankSet::single(2);
   Counts two = classify(partitionPicture(scene, p, o), rankColor(1), rankColor(2));
   EXPECT_EQ(two.other, 0);
   EXPECT_GT(two.first, 96 * 96 / 5);

@@ -95,8 +95,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
                          PartitionStats* stats) {
   const auto start = std::chrono::steady_clock::now();
   checkPartitionerName(o.name);
-  if (ranks < 1 || ranks > 64)
-    throw InputError(fmt::format("{} ranks: partitions have 1 to 64 ranks", ranks));
+  if (ranks < 1 || ranks > kMaxRanks)
+    throw InputError(fmt::format("{} ranks: partitions have 1 to {} ranks", ranks, kMaxRanks));
   PartitionStats local;
   PartitionStats& s = stats ? *stats : local;
   s = PartitionStats{};
@@ -118,8 +118,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
     std::unique_ptr<PartSplitter> splitter = makeSplitter(o.name, p.units);
     std::vector<Part> parts = runSplitLoop(*splitter, ranks);
     s.parts = int(parts.size());
-    const std::vector<RankMask> partRanks = assignRanks(parts, ranks);
-    std::vector<RankMask> owners = unitOwners(p.units, parts, partRanks);
+    const std::vector<RankSet> partRanks = assignRanks(parts, ranks);
+    std::vector<RankSet> owners = unitOwners(p.units, parts, partRanks);
     if (o.name == "best") {
       ReplicationResult r = replicateLargeUnits(p.units, parts, partRanks, owners,
                                                 replicationBudget(o, p.inputBytes));
@@ -159,8 +159,8 @@ std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& 
     if (o.name == "best" && parts.size() > 1) {
       // One rank per part here (masks only count copies: one bit each).
       std::vector<Part> copy = parts;
-      std::vector<RankMask> oneRank(copy.size(), 1);
-      std::vector<RankMask> owners(p.units.units.size(), 0);
+      std::vector<RankSet> oneRank(copy.size(), RankSet::single(0));
+      std::vector<RankSet> owners(p.units.units.size());
       replicateLargeUnits(p.units, copy, oneRank, owners, budget);
       for (const Part& part : copy) largest = std::max(largest, part.bytes);
     } else {

@@ -68,7 +68,7 @@ const std::vector<std::string>& paperPartitionerNames();
 // Throws InputError naming the accepted ones.
 void checkPartitionerName(const std::string& name);
 
-// Partitions `scene` over `ranks` (1..64). The six paper partitioners first
+// Partitions `scene` over `ranks` (1..kMaxRanks). The six paper partitioners first
 // rewrite the scene in place with splitForPartitioning (same image); the
 // partition refers to the rewritten scene.
 Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& options,

@@ -6,14 +6,14 @@
 namespace ferry {
 
 std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units,
-                                   const std::vector<RankMask>& owners, int meshBoxes) {
+                                   const std::vector<RankSet>& owners, int meshBoxes) {
   const std::vector<uint32_t> placements = scene.instanceCountPerObject();
   std::vector<Box3f> objectBounds(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o)
     if (placements[o] > 1) objectBounds[o] = scene.objectBounds(int32_t(o));
   std::vector<Proxy> proxies;
   for (size_t u = 0; u < units.units.size(); ++u) {
-    const RankMask mask = owners[u];
+    const RankSet& mask = owners[u];
     for (int32_t i : units.units[u].instances) {
       const Instance& inst = scene.instances[i];
       if (placements[inst.object] > 1) {

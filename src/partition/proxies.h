@@ -17,6 +17,6 @@ struct Scene;
 // `meshBoxes`: boxes per non-instanced mesh (1: the mesh's own box). Each
 // proxy is owned by the owners of the unit holding the instance.
 std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units,
-                                   const std::vector<RankMask>& owners, int meshBoxes);
+                                   const std::vector<RankSet>& owners, int meshBoxes);
 
 }  // namespace ferry

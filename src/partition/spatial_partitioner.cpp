@@ -83,7 +83,7 @@ bool SpatialSplitter::split(const Part& part, Part& left, Part& right) {
 }
 
 std::vector<Proxy> domainProxies(const std::vector<Part>& parts,
-                                 const std::vector<RankMask>& partRanks) {
+                                 const std::vector<RankSet>& partRanks) {
   std::vector<Proxy> proxies;
   for (size_t k = 0; k < parts.size(); ++k)
     if (!parts[k].domain.empty()) proxies.push_back({parts[k].domain, partRanks[k]});

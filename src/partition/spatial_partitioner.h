@@ -34,6 +34,6 @@ class SpatialSplitter final : public PartSplitter {
 
 // One proxy per part: its domain, owned by the part's ranks.
 std::vector<Proxy> domainProxies(const std::vector<Part>& parts,
-                                 const std::vector<RankMask>& partRanks);
+                                 const std::vector<RankSet>& partRanks);
 
 }  // namespace ferry

@@ -57,29 +57,29 @@ std::vector<Part> runSplitLoop(PartSplitter& splitter, int parts,
   return current;
 }
 
-std::vector<RankMask> assignRanks(const std::vector<Part>& parts, int ranks) {
-  FERRY_CHECK(!parts.empty() && int(parts.size()) <= ranks && ranks <= 64);
-  std::vector<RankMask> mask(parts.size(), 0);
-  for (size_t k = 0; k < parts.size(); ++k) mask[k] = RankMask(1) << k;
+std::vector<RankSet> assignRanks(const std::vector<Part>& parts, int ranks) {
+  FERRY_CHECK(!parts.empty() && int(parts.size()) <= ranks);
+  std::vector<RankSet> mask(parts.size());
+  for (size_t k = 0; k < parts.size(); ++k) mask[k] = RankSet::single(int(k));
   std::vector<size_t> byCost(parts.size());
   std::iota(byCost.begin(), byCost.end(), size_t(0));
   std::stable_sort(byCost.begin(), byCost.end(),
                    [&](size_t a, size_t b) { return parts[a].bytes > parts[b].bytes; });
   for (int r = int(parts.size()); r < ranks; ++r)
-    mask[byCost[(r - parts.size()) % parts.size()]] |= RankMask(1) << r;
+    mask[byCost[(r - parts.size()) % parts.size()]].insert(r);
   return mask;
 }
 
-std::vector<RankMask> unitOwners(const UnitSet& units, const std::vector<Part>& parts,
-                                 const std::vector<RankMask>& partRanks) {
-  std::vector<RankMask> owners(units.units.size(), 0);
+std::vector<RankSet> unitOwners(const UnitSet& units, const std::vector<Part>& parts,
+                                 const std::vector<RankSet>& partRanks) {
+  std::vector<RankSet> owners(units.units.size());
   for (size_t k = 0; k < parts.size(); ++k)
     for (uint32_t u : parts[k].units) owners[u] |= partRanks[k];
   return owners;
 }
 
-std::vector<RankMask> instanceOwnersOf(const UnitSet& units, const std::vector<RankMask>& owners) {
-  std::vector<RankMask> out(units.unitOfInstance.size(), 0);
+std::vector<RankSet> instanceOwnersOf(const UnitSet& units, const std::vector<RankSet>& owners) {
+  std::vector<RankSet> out(units.unitOfInstance.size());
   for (size_t i = 0; i < out.size(); ++i)
     if (units.unitOfInstance[i] >= 0) out[i] = owners[units.unitOfInstance[i]];
   return out;

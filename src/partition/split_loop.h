@@ -52,14 +52,14 @@ std::vector<Part> runSplitLoop(PartSplitter& splitter, int parts,
 
 // Ranks for each part: part k gets rank k; ranks beyond the part count are
 // dealt to the parts in decreasing cost (ties: lower index), as copies.
-std::vector<RankMask> assignRanks(const std::vector<Part>& parts, int ranks);
+std::vector<RankSet> assignRanks(const std::vector<Part>& parts, int ranks);
 
 // Owners of each unit: the ranks of every part holding it.
-std::vector<RankMask> unitOwners(const UnitSet& units, const std::vector<Part>& parts,
-                                 const std::vector<RankMask>& partRanks);
+std::vector<RankSet> unitOwners(const UnitSet& units, const std::vector<Part>& parts,
+                                 const std::vector<RankSet>& partRanks);
 
 // Owners per scene instance, from owners per unit.
-std::vector<RankMask> instanceOwnersOf(const UnitSet& units, const std::vector<RankMask>& owners);
+std::vector<RankSet> instanceOwnersOf(const UnitSet& units, const std::vector<RankSet>& owners);
 
 // The split cost the cost-function partitioners minimize: a 50:50 blend of
 // SAH (each side's surface area times its memory estimate, relative to the

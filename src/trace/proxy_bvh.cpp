@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace ferry {
 namespace {
@@ -25,6 +26,12 @@ bool intersectBox(const Box3f& box, Vec3f origin, Vec3f inv, float tmax, float& 
 }
 
 ProxyBvh::ProxyBvh(std::vector<Proxy> proxies) : proxies_(std::move(proxies)) {
+  bool wide = false;
+  for (const Proxy& p : proxies_) {
+    ownerMasks_.push_back(p.owners.mask());
+    wide = wide || !p.owners.fitsInMask();
+  }
+  if (wide) wideUnion_.push_back({});  // marks the BVH wide; filled per node by build
   order_.resize(proxies_.size());
   for (size_t i = 0; i < order_.size(); ++i) order_[i] = int32_t(i);
   if (!proxies_.empty()) build(0, int32_t(proxies_.size()), 0);
@@ -35,14 +42,20 @@ int32_t ProxyBvh::build(int32_t first, int32_t count, int depth) {
   nodes_.push_back({});
   Box3f bounds, centers;
   RankMask owners = 0;
+  RankSet wideOwners;
   for (int32_t i = first; i < first + count; ++i) {
     const Proxy& p = proxies_[order_[i]];
     bounds.extend(p.bounds);
     centers.extend(p.bounds.center());
-    owners |= p.owners;
+    owners |= p.owners.mask();
+    if (!narrow()) wideOwners |= p.owners;
   }
   nodes_[index].bounds = bounds;
   nodes_[index].ownersUnion = owners;
+  if (!narrow()) {
+    if (wideUnion_.size() <= size_t(index)) wideUnion_.resize(size_t(index) + 1);
+    wideUnion_[size_t(index)] = std::move(wideOwners);
+  }
   if (count <= kLeafSize || depth > 60) {
     nodes_[index].first = first;
     nodes_[index].count = count;
@@ -63,7 +76,31 @@ int32_t ProxyBvh::build(int32_t first, int32_t count, int depth) {
   return index;
 }
 
+namespace {
+// The two ways of asking "are all of these owners excluded / is any excluded".
+struct MaskExclusion {
+  RankMask excluded;
+};
+struct SetExclusion {
+  const RankSet& excluded;
+};
+}  // namespace
+
 ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax, RankMask excluded) const {
+  if (narrow()) return closestImpl(origin, direction, tmax, MaskExclusion{excluded});
+  const RankSet set = RankSet::fromMask(excluded);
+  return closestImpl(origin, direction, tmax, SetExclusion{set});
+}
+
+ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax, const RankSet& excluded) const {
+  // Narrow: owners are all below 64, so only the first word of `excluded` matters.
+  if (narrow()) return closestImpl(origin, direction, tmax, MaskExclusion{excluded.mask()});
+  return closestImpl(origin, direction, tmax, SetExclusion{excluded});
+}
+
+template <typename Excluded>
+ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax, const Excluded& ex) const {
+  constexpr bool kMask = std::is_same_v<Excluded, MaskExclusion>;
   Hit best;
   if (nodes_.empty()) return best;
   Vec3f inv{1 / direction.x, 1 / direction.y, 1 / direction.z};
@@ -71,8 +108,14 @@ ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax, RankM
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const Node& node = nodes_[stack[--top]];
-    if ((node.ownersUnion & ~excluded) == 0) continue;  // every proxy below is excluded
+    const int32_t nodeIndex = stack[--top];
+    const Node& node = nodes_[nodeIndex];
+    // Every proxy below is excluded.
+    if constexpr (kMask) {
+      if ((node.ownersUnion & ~ex.excluded) == 0) continue;
+    } else {
+      if (wideUnion_[size_t(nodeIndex)].isSubsetOf(ex.excluded)) continue;
+    }
     float tNode;
     // Strictly closer, or equally close (a lower index may still win the tie).
     if (!intersectBox(node.bounds, origin, inv, std::min(tmax, std::nextafter(best.tEnter, kInfinity)), tNode))
@@ -81,7 +124,11 @@ ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax, RankM
       for (int32_t i = node.first; i < node.first + node.count; ++i) {
         int32_t id = order_[i];
         const Proxy& p = proxies_[id];
-        if (p.owners & excluded) continue;
+        if constexpr (kMask) {
+          if (ownerMasks_[size_t(id)] & ex.excluded) continue;
+        } else {
+          if (p.owners.intersects(ex.excluded)) continue;
+        }
         float t;
         if (!intersectBox(p.bounds, origin, inv, tmax, t)) continue;
         if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) best = {id, t};

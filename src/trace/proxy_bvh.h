@@ -23,21 +23,35 @@ class ProxyBvh {
     bool found() const { return proxy >= 0; }
   };
   // Closest proxy entered in [0, tmax) whose owners do not intersect `excluded`.
+  // The answer is a pure function of the set of such proxies (least entry
+  // distance, then least index): the entry distance of a proxy does not
+  // depend on tmax, so a smaller tmax only drops candidates from the far end.
+  // The replay layout relies on this (dist/forwarding.h).
   Hit closest(Vec3f origin, Vec3f direction, float tmax, RankMask excluded) const;
+  // The same for any rank count (used by the replay layout; a few words per
+  // test instead of one above 64 ranks).
+  Hit closest(Vec3f origin, Vec3f direction, float tmax, const RankSet& excluded) const;
+  // True when every owner is below rank 64 (the RankMask query is exact).
+  bool narrow() const { return wideUnion_.empty(); }
 
   const std::vector<Proxy>& proxies() const { return proxies_; }
   size_t nodeCount() const { return nodes_.size(); }
 
  private:
+  template <typename Excluded>
+  Hit closestImpl(Vec3f origin, Vec3f direction, float tmax, const Excluded& excluded) const;
+
   struct Node {
     Box3f bounds;
-    RankMask ownersUnion = 0;  // lets a subtree whose proxies are all excluded be skipped
+    RankMask ownersUnion = 0;  // lets a subtree whose proxies are all excluded be skipped (narrow)
     int32_t left = -1, right = -1;  // children; -1 in a leaf
     int32_t first = 0, count = 0;   // leaf range in order_
   };
   int32_t build(int32_t first, int32_t count, int depth);
 
   std::vector<Proxy> proxies_;
+  std::vector<RankMask> ownerMasks_;  // per proxy (narrow)
+  std::vector<RankSet> wideUnion_;    // per node, only when some owner is rank 64 or above
   std::vector<int32_t> order_;
   std::vector<Node> nodes_;
 };

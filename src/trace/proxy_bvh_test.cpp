@@ -15,18 +15,18 @@ std::vector<Proxy> randomProxies(int count, int ranks, uint32_t seed) {
     Box3f b;
     b.extend(Vec3f(uniform(seed + i, 0), uniform(seed + i, 1), uniform(seed + i, 2)) * 10.0f);
     b.extend(Vec3f(uniform(seed + i, 3), uniform(seed + i, 4), uniform(seed + i, 5)) * 10.0f);
-    RankMask owners = RankMask(1) << int(uniform(seed + i, 6) * ranks);
-    if (uniform(seed + i, 7) < 0.3f) owners |= RankMask(1) << int(uniform(seed + i, 8) * ranks);
+    RankSet owners = RankSet::single(int(uniform(seed + i, 6) * ranks));
+    if (uniform(seed + i, 7) < 0.3f) owners.insert(int(uniform(seed + i, 8) * ranks));
     proxies.push_back({b, owners});
   }
   return proxies;
 }
 
-ProxyBvh::Hit bruteForce(const std::vector<Proxy>& proxies, Vec3f o, Vec3f d, float tmax, RankMask excluded) {
+ProxyBvh::Hit bruteForce(const std::vector<Proxy>& proxies, Vec3f o, Vec3f d, float tmax, const RankSet& excluded) {
   ProxyBvh::Hit best;
   Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
   for (size_t i = 0; i < proxies.size(); ++i) {
-    if (proxies[i].owners & excluded) continue;
+    if (proxies[i].owners.intersects(excluded)) continue;
     float t;
     if (intersectBox(proxies[i].bounds, o, inv, tmax, t) && t < best.tEnter) best = {int32_t(i), t};
   }
@@ -46,15 +46,66 @@ TEST(ProxyBvh, MatchesBruteForceOnRandomProxiesAndRays) {
       RankMask excluded = RankMask(randomBits(RandomKey{k, 0, 0, 7}, 0)) & ((ranks == 64) ? ~RankMask(0) : ((RankMask(1) << ranks) - 1));
       excluded &= RankMask(randomBits(RandomKey{k, 1, 0, 7}, 0));
       ProxyBvh::Hit a = bvh.closest(o, d, tmax, excluded);
+      ProxyBvh::Hit b = bruteForce(proxies, o, d, tmax, RankSet::fromMask(excluded));
+      ASSERT_EQ(a.proxy, b.proxy) << "ray " << k << " ranks " << ranks;
+      if (a.found()) {
+        EXPECT_EQ(a.tEnter, b.tEnter);
+      }
+      // The set query answers the same.
+      ProxyBvh::Hit c = bvh.closest(o, d, tmax, RankSet::fromMask(excluded));
+      ASSERT_EQ(c.proxy, a.proxy);
+    }
+  }
+}
+
+// Above 64 ranks the BVH keeps owner sets per node; same answers as brute force.
+TEST(ProxyBvh, WideOwnerSetsMatchBruteForce) {
+  for (int ranks : {65, 130, 1000}) {
+    std::vector<Proxy> proxies = randomProxies(300, ranks, uint32_t(ranks) * 1000);
+    ProxyBvh bvh(proxies);
+    EXPECT_FALSE(bvh.narrow());
+    for (uint32_t k = 0; k < 1000; ++k) {
+      Vec3f o = Vec3f(uniform(k, 10), uniform(k, 11), uniform(k, 12)) * 14.0f - Vec3f(2);
+      Vec3f d = normalize(Vec3f(uniform(k, 13), uniform(k, 14), uniform(k, 15)) - Vec3f(0.5f));
+      float tmax = uniform(k, 16) < 0.3f ? kInfinity : uniform(k, 17) * 20;
+      RankSet excluded;
+      for (int r = 0; r < ranks; ++r)
+        if (uniform(k * 7919 + uint32_t(r), 18) < 0.4f) excluded.insert(r);
+      ProxyBvh::Hit a = bvh.closest(o, d, tmax, excluded);
       ProxyBvh::Hit b = bruteForce(proxies, o, d, tmax, excluded);
       ASSERT_EQ(a.proxy, b.proxy) << "ray " << k << " ranks " << ranks;
-      if (a.found()) EXPECT_EQ(a.tEnter, b.tEnter);
+      if (a.found()) {
+        EXPECT_EQ(a.tEnter, b.tEnter);
+      }
+    }
+  }
+}
+
+// What the replay layout relies on: the answer with a finite tmax is the
+// answer with no limit if that enters before tmax, and nothing otherwise.
+TEST(ProxyBvh, SmallerTmaxOnlyCutsTheFarEnd) {
+  for (int ranks : {3, 8, 70}) {
+    std::vector<Proxy> proxies = randomProxies(300, ranks, uint32_t(ranks) * 77);
+    ProxyBvh bvh(proxies);
+    for (uint32_t k = 0; k < 2000; ++k) {
+      Vec3f o = Vec3f(uniform(k, 20), uniform(k, 21), uniform(k, 22)) * 14.0f - Vec3f(2);
+      Vec3f d = normalize(Vec3f(uniform(k, 23), uniform(k, 24), uniform(k, 25)) - Vec3f(0.5f));
+      RankSet excluded = RankSet::single(int(uniform(k, 26) * ranks));
+      ProxyBvh::Hit far = bvh.closest(o, d, kInfinity, excluded);
+      float tmax = uniform(k, 27) * 20;
+      ProxyBvh::Hit near = bvh.closest(o, d, tmax, excluded);
+      if (far.found() && far.tEnter < tmax) {
+        ASSERT_EQ(near.proxy, far.proxy) << "ray " << k;
+      } else {
+        ASSERT_FALSE(near.found()) << "ray " << k;
+      }
     }
   }
 }
 
 TEST(ProxyBvh, AxisParallelRaysAndOriginInside) {
-  std::vector<Proxy> proxies = {{{{0, 0, 0}, {1, 1, 1}}, 1}, {{{2, 0, 0}, {3, 1, 1}}, 2}};
+  std::vector<Proxy> proxies = {{{{0, 0, 0}, {1, 1, 1}}, RankSet::single(0)},
+                                {{{2, 0, 0}, {3, 1, 1}}, RankSet::single(1)}};
   ProxyBvh bvh(proxies);
   // Inside the first box: enters at 0.
   ProxyBvh::Hit h = bvh.closest({0.5f, 0.5f, 0.5f}, {1, 0, 0}, kInfinity, 0);
