@@ -47,6 +47,8 @@ void validate(const RenderOptions& o) {
   if (o.threads < 0) throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
   checkOutputPath(o.output);
   parseForwardingMode(o.forwarding);
+  if (o.pathLayout != "auto" && o.pathLayout != "mask" && o.pathLayout != "replay")
+    throw InputError(fmt::format("--path-layout '{}': expected auto, mask or replay", o.pathLayout));
   checkPartitionerName(o.partition);
   if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
     throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1", o.replicationBudget));
@@ -89,7 +91,7 @@ FrameStats reduceFrameStats(const Communicator& comm, const FrameStats& mine) {
   local.perBounce.resize(size_t(maxBounces));
   std::vector<uint64_t> counters = {local.cameraPaths,   local.continuationRays, local.shadowRays,
                                     local.closestTraces, local.occlusionTraces,  local.retraces,
-                                    local.retraceMisses, local.proxyQueries};
+                                    local.retraceMisses, local.proxyQueries,  local.replayQueries};
   for (const ExchangeCounters& c : local.perBounce) {
     counters.push_back(c.raysForwarded);
     counters.push_back(c.bytesSent);
@@ -110,8 +112,9 @@ FrameStats reduceFrameStats(const Communicator& comm, const FrameStats& mine) {
   out.retraces = s[5];
   out.retraceMisses = s[6];
   out.proxyQueries = s[7];
+  out.replayQueries = s[8];
   for (size_t b = 0; b < local.perBounce.size(); ++b)
-    out.perBounce.push_back({s[8 + 3 * b], s[9 + 3 * b], s[10 + 3 * b]});
+    out.perBounce.push_back({s[9 + 3 * b], s[10 + 3 * b], s[11 + 3 * b]});
   out.times = {t[0], t[1], t[2], t[3], t[4], t[5]};
   return out;
 }
@@ -189,7 +192,8 @@ void setUp(const RenderOptions& o, const RenderSettings& settings, const Communi
 
 void writeStats(const RenderOptions& o, const RenderSettings& settings, const RankSetup& setup,
                 const RenderStats& stats, const RankMemory& memory, uint64_t received, uint64_t revisits,
-                uint64_t compositeBytes, int ranks, double totalSeconds) {
+                uint64_t compositeBytes, int ranks, double totalSeconds, const std::string& layout,
+                size_t pathBytes) {
   nlohmann::json j;
   j["scene"] = setup.summary.toJson();
   j["settings"] = {{"width", settings.width},         {"height", settings.height},
@@ -198,7 +202,7 @@ void writeStats(const RenderOptions& o, const RenderSettings& settings, const Ra
                    {"view", o.view},                  {"threads", o.threads},
                    {"ranks", ranks},                  {"forwarding", o.forwarding},
                    {"partition", o.partition},        {"output", o.output},
-                   {"path_bytes", ranks <= 8 ? sizeof(Path8) : sizeof(Path64)}};
+                   {"path_layout", layout},           {"path_bytes", pathBytes}};
   j["render"] = stats.toJson();
   j["render"]["rays_received"] = received;
   j["render"]["revisits"] = revisits;
@@ -223,6 +227,14 @@ void writeStats(const RenderOptions& o, const RenderSettings& settings, const Ra
     out << j.dump(2) << "\n";
     if (!out) throw InputError(fmt::format("{}: could not write", o.statsPath));
   });
+}
+
+template <typename Path>
+std::string layoutName() {
+  if constexpr (Path::kReplay)
+    return "replay";
+  else
+    return sizeof(typename Path::Mask) == 1 ? "mask8" : "mask64";
 }
 
 template <typename Path>
@@ -288,7 +300,7 @@ int renderOnRanks(const RenderOptions& o, const RenderSettings& settings, RankSe
   }
   if (!o.statsPath.empty())
     writeStats(o, settings, setup, stats, memory, received, revisits, compositeBytes, comm.size(),
-               secondsSince(start));
+               secondsSince(start), layoutName<Path>(), sizeof(Path));
   return 0;
 }
 
@@ -348,6 +360,11 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
                      "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
                      "wins, as Kilauea)")
       ->capture_default_str();
+  render->add_option("--path-layout", o.pathLayout,
+                     "The path on the wire: auto (8-rank mask, 64-rank mask, replay above 64 ranks),\n"
+                     "mask (visited ranks as a bit mask; up to 64 ranks) or replay (only the generating\n"
+                     "rank; any rank recomputes the visited ranks from the proxies)")
+      ->capture_default_str();
   render->add_option("--partitioner,--partition", o.partition,
                      "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
                      "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
@@ -381,8 +398,11 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
   RenderOptions effective = o;  // with the scene's own size and output file where none was given
   try {
     validate(o);
-    if (comm.size() > 64)
-      throw InputError(fmt::format("{} ranks: Ferry supports up to 64 ranks", comm.size()));
+    if (comm.size() > kMaxRanks)
+      throw InputError(fmt::format("{} ranks: Ferry supports up to {} ranks", comm.size(), kMaxRanks));
+    if (o.pathLayout == "mask" && comm.size() > 64)
+      throw InputError(fmt::format("--path-layout mask: {} ranks do not fit a 64-bit mask (use replay or auto)",
+                                   comm.size()));
     parseImageSize(o.size, settings.width, settings.height);
     settings.samplesPerPixel = o.samplesPerPixel;
     settings.frames = o.frames;
@@ -404,6 +424,9 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
   if (comm.agreeOnFailure(!error.empty(), error)) return 1;
 
   try {
+    // The layout: masks while they fit (8 then 64 ranks), else replay (or as forced).
+    if (o.pathLayout == "replay" || (o.pathLayout == "auto" && comm.size() > 64))
+      return renderOnRanks<PathReplay>(effective, settings, *setup, comm, start);
     if (comm.size() <= 8) return renderOnRanks<Path8>(effective, settings, *setup, comm, start);
     return renderOnRanks<Path64>(effective, settings, *setup, comm, start);
   } catch (const InputError& e) {

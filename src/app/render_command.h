@@ -31,6 +31,9 @@ struct RenderOptions {
   bool sizeGiven = false;
   bool outputGiven = false;
   std::string forwarding = "proxies";
+  // --path-layout: auto (Path8 up to 8 ranks, Path64 up to 64, replay above),
+  // mask (Path8/Path64; at most 64 ranks) or replay (at any rank count).
+  std::string pathLayout = "auto";
   // --partitioner (alias --partition): a name from partition/partitioner.h,
   // made on the fly (every rank runs the same deterministic partitioner).
   // Ignored when the scene is a part directory (ferry partition -o DIR).

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <csignal>
@@ -50,13 +51,15 @@ DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm, const
     : comm_(comm),
       geometry_(geometry),
       mode_(mode),
-      proxies_(partition.proxies),
-      rankBit_(Mask(Mask(1) << comm.rank())) {
-  FERRY_CHECK(comm.size() <= int(sizeof(Mask) * 8));
-  instanceOwners_.reserve(partition.instanceOwners.size());
-  for (const RankSet& owners : partition.instanceOwners) {
-    FERRY_CHECK(owners.fitsInMask());
-    instanceOwners_.push_back(Mask(owners.mask()));
+      proxies_(partition.proxies) {
+  FERRY_CHECK(comm.size() <= kMaxRanks);
+  if constexpr (!Path::kReplay) {
+    FERRY_CHECK(comm.size() <= int(sizeof(typename Path::Mask) * 8));
+    instanceOwners_.reserve(partition.instanceOwners.size());
+    for (const RankSet& owners : partition.instanceOwners) {
+      FERRY_CHECK(owners.fitsInMask());
+      instanceOwners_.push_back(owners.mask());
+    }
   }
 }
 
@@ -69,18 +72,50 @@ bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ra
   ++stats.proxyQueries;
   ProxyBvh::Hit hit = proxies_.closest(ray.origin, ray.direction, ray.tmax, 0);
   if (!hit.found()) return int(pixel % uint32_t(ranks)) == comm_.rank();
-  RankMask owners = proxies_.proxies()[hit.proxy].owners.mask();
-  int count = std::popcount(owners);
-  int k = int(pixel % uint32_t(count));
-  for (; k > 0; --k) owners &= owners - 1;
-  return std::countr_zero(owners) == comm_.rank();
+  const RankSet& owners = proxies_.proxies()[hit.proxy].owners;
+  return owners.nth(int(pixel % uint32_t(owners.count()))) == comm_.rank();
 }
 
 template <typename Path>
 void DistributedTraversal<Path>::trace(std::vector<Path>& rays, FrameStats& stats) {
-  for (const Path& p : rays)
-    if (Mask(p.visited) & rankBit_) ++revisits_;
-  traceLocally(geometry_, rays, rankBit_, instanceOwners_, stats);
+  const int rank = comm_.rank();
+  for (const Path& p : rays) {
+    if constexpr (Path::kReplay) {
+      if (p.generatingRank == rank) ++revisits_;
+    } else {
+      if ((uint64_t(p.visited) >> rank) & 1) ++revisits_;
+    }
+  }
+  traceLocally(geometry_, rays, rank, instanceOwners_, stats);
+}
+
+template <typename Path>
+std::vector<RankSet> DistributedTraversal<Path>::replayArrivals(const std::vector<Path>& rays,
+                                                                FrameStats& stats) {
+  auto start = Clock::now();
+  const int rank = comm_.rank();
+  std::vector<RankSet> visited(rays.size());
+  std::atomic<uint64_t> failed{0}, queries{0};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 256), [&](const auto& range) {
+    uint64_t localFailed = 0, localQueries = 0;
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      if constexpr (Path::kReplay) {
+        ReplayResult r = replayWalk(proxies_, rays[i], rays[i].generatingRank, rank);
+        localQueries += r.queries;
+        if (!r.reached) {
+          ++localFailed;
+          r.visited.insert(rank);
+        }
+        visited[i] = std::move(r.visited);
+      }
+    }
+    failed += localFailed;
+    queries += localQueries;
+  });
+  revisits_ += failed;
+  stats.replayQueries += queries;
+  stats.times.exchange += secondsSince(start);
+  return visited;
 }
 
 template <typename Path>
@@ -142,6 +177,11 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, Exc
   const int ranks = comm_.size();
   std::vector<Path> ready;   // traversal complete here: shade on this rank
   std::vector<Path> moving = std::move(rays);
+  // Replay layout (proxies): the visited set of each ray in `moving`, this rank
+  // included; new rays have visited only this rank.
+  const bool replay = Path::kReplay && mode_ == ForwardingMode::Proxies;
+  std::vector<RankSet> visited;
+  if (replay) visited.assign(moving.size(), RankSet::single(rank));
   // Local first: every new ray is traced on the rank that made it.
   trace(moving, stats);
   for (;;) {
@@ -149,8 +189,13 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, Exc
     std::vector<int> destination(moving.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, moving.size(), 1024), [&](const auto& range) {
       for (size_t i = range.begin(); i != range.end(); ++i) {
-        ForwardDecision d = mode_ == ForwardingMode::Ring ? forwardByRing(moving[i], rank, ranks)
-                                                          : forwardByProxies(proxies_, moving[i], rank);
+        ForwardDecision d;
+        if (mode_ == ForwardingMode::Ring)
+          d = forwardByRing(moving[i], rank, ranks);
+        else if constexpr (Path::kReplay)
+          d = forwardByProxies(proxies_, moving[i], rank, visited[i]);
+        else
+          d = forwardByProxies(proxies_, moving[i], rank);
         destination[i] = decisionToDestination(d, moving[i], rank);
       }
     });
@@ -175,6 +220,8 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, Exc
       else
         moving.push_back(p);
     }
+    // Replay before tracing: the walk is replayed with the tmax the ray arrived with.
+    if (replay) visited = replayArrivals(moving, stats);
     trace(moving, stats);
   }
   rays = std::move(ready);
@@ -205,7 +252,10 @@ void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, Exch
   std::vector<int> replyTo(received.size());
   for (size_t i = 0; i < received.size(); ++i) {
     received[i].set(kPathReply);
-    replyTo[i] = std::countr_zero(RankMask(received[i].visited & Mask(~rankBit_)));
+    if constexpr (Path::kReplay)
+      replyTo[i] = received[i].generatingRank;
+    else
+      replyTo[i] = std::countr_zero(RankMask(received[i].visited) & ~(RankMask(1) << rank));
   }
   std::vector<Path> replies = exchange(received, replyTo, counters, stats);
 
@@ -220,12 +270,15 @@ void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, Exch
     auto it = original.find(uint64_t(reply.pixel()) * 2 + (reply.isShadow() ? 1 : 0));
     FERRY_CHECK(it != original.end());
     Path& p = rays[it->second];
-    p.visited |= reply.visited;
+    if constexpr (!Path::kReplay) p.visited |= reply.visited;
     if (p.isShadow()) {
       if (reply.has(kPathOccluded)) p.set(kPathOccluded);
     } else if (reply.hasHit() && reply.tmax < p.tmax) {
       p.tmax = reply.tmax;
-      p.hitOwners = reply.hitOwners;
+      if constexpr (Path::kReplay)
+        p.hitRank = reply.hitRank;
+      else
+        p.hitOwners = reply.hitOwners;
     }
   }
 
@@ -248,5 +301,6 @@ void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, Exch
 
 template class DistributedTraversal<Path8>;
 template class DistributedTraversal<Path64>;
+template class DistributedTraversal<PathReplay>;
 
 }  // namespace ferry

@@ -30,13 +30,14 @@ class DistributedTraversal final : public RayTraversal<Path> {
   void traverse(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats) override;
   bool anyRaysLeft(size_t localRays) override { return comm_.sum(uint64_t(localRays)) > 0; }
 
-  // Rays that arrived for tracing on a rank they had already visited (must stay 0).
+  // Rays that arrived for tracing on a rank they had already visited (must
+  // stay 0). Replay layout: rays arriving back at their generating rank, or
+  // whose replayed walk does not lead to this rank.
   uint64_t revisits() const { return revisits_; }
   // Rays received, counted on the receiving side (an independent count of forwards).
   uint64_t received() const { return received_; }
 
  private:
-  using Mask = typename Path::Mask;
   void traverseForwarding(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats);
   void traverseBroadcast(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats);
   // Sends each ray to destination[i] (this rank's rays are not in the list);
@@ -44,13 +45,15 @@ class DistributedTraversal final : public RayTraversal<Path> {
   std::vector<Path> exchange(const std::vector<Path>& rays, const std::vector<int>& destination,
                              ExchangeCounters& counters, FrameStats& stats);
   void trace(std::vector<Path>& rays, FrameStats& stats);
+  // Replay layout, proxies mode: the visited set of each ray that arrived
+  // here, recomputed from its generating rank (this rank included).
+  std::vector<RankSet> replayArrivals(const std::vector<Path>& rays, FrameStats& stats);
 
   const Communicator& comm_;
   const LocalGeometry& geometry_;
   ForwardingMode mode_;
   ProxyBvh proxies_;
-  std::vector<Mask> instanceOwners_;
-  Mask rankBit_;
+  std::vector<uint64_t> instanceOwners_;  // mask layouts: owner mask per instance (empty for replay)
   bool firstExchange_ = true;
   uint64_t revisits_ = 0;
   uint64_t received_ = 0;

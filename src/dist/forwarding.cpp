@@ -29,14 +29,18 @@ std::string toString(ForwardingMode mode) {
   return "?";
 }
 
-template <typename Path>
-int pickOwner(RankMask owners, const Path& ray) {
-  int count = std::popcount(owners);
-  FERRY_CHECK(count > 0);
+namespace {
+uint32_t ownerHash(const PathCore& ray) {
   uint32_t bits;
   std::memcpy(&bits, &ray.origin.x, 4);
-  uint32_t h = hashCombine(hashMix(ray.pixelAndFlags & ~uint32_t(kPathTraversed | kPathReply)), bits);
-  int k = int(h % uint32_t(count));
+  return hashCombine(hashMix(ray.pixelAndFlags & ~uint32_t(kPathTraversed | kPathReply)), bits);
+}
+}  // namespace
+
+int pickOwner(RankMask owners, const PathCore& ray) {
+  int count = std::popcount(owners);
+  FERRY_CHECK(count > 0);
+  int k = int(ownerHash(ray) % uint32_t(count));
   for (;; --k) {
     int r = std::countr_zero(owners);
     if (k == 0) return r;
@@ -44,54 +48,83 @@ int pickOwner(RankMask owners, const Path& ray) {
   }
 }
 
+int pickOwner(const RankSet& owners, const PathCore& ray) {
+  if (owners.fitsInMask()) return pickOwner(owners.mask(), ray);
+  int count = owners.count();
+  return owners.nth(int(ownerHash(ray) % uint32_t(count)));
+}
+
 template <typename Path>
 ForwardDecision finishTraversal(const Path& ray, int rank) {
   if (ray.isShadow()) return {ray.has(kPathOccluded) ? ForwardDecision::Drop : ForwardDecision::ShadeHere};
-  RankMask owners = RankMask(ray.hitOwners);
-  if (owners == 0 || (owners & (RankMask(1) << rank))) return {ForwardDecision::ShadeHere};
-  return {ForwardDecision::Send, pickOwner(owners, ray), true};
+  if constexpr (Path::kReplay) {
+    if (!ray.hasHit() || ray.hitRank == rank) return {ForwardDecision::ShadeHere};
+    return {ForwardDecision::Send, int(ray.hitRank), true};
+  } else {
+    RankMask owners = RankMask(ray.hitOwners);
+    if (owners == 0 || (owners & (RankMask(1) << rank))) return {ForwardDecision::ShadeHere};
+    return {ForwardDecision::Send, pickOwner(owners, ray), true};
+  }
 }
 
 template <typename Path>
 ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank) {
   if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};  // ends at any occluder
   ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, RankMask(ray.visited));
-  if (next.found()) return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners.mask(), ray)};
+  if (next.found()) return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
+  return finishTraversal(ray, rank);
+}
+
+template <typename Path>
+ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank, const RankSet& visited) {
+  if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};
+  ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, visited);
+  if (next.found()) return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
   return finishTraversal(ray, rank);
 }
 
 template <typename Path>
 ForwardDecision forwardByRing(const Path& ray, int rank, int ranks) {
   if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};
-  for (int step = 1; step < ranks; ++step) {
-    int next = (rank + step) % ranks;
-    if (!(RankMask(ray.visited) & (RankMask(1) << next))) return {ForwardDecision::Send, next};
+  if constexpr (Path::kReplay) {
+    const int next = (rank + 1) % ranks;
+    if (next != int(ray.generatingRank)) return {ForwardDecision::Send, next};
+  } else {
+    for (int step = 1; step < ranks; ++step) {
+      int next = (rank + step) % ranks;
+      if (!(RankMask(ray.visited) & (RankMask(1) << next))) return {ForwardDecision::Send, next};
+    }
   }
   return finishTraversal(ray, rank);
 }
 
 template <typename Path>
-RankMask replayVisited(const ProxyBvh& proxies, const Path& ray, int generatingRank, int current) {
-  RankMask visited = RankMask(1) << generatingRank;
+ReplayResult replayWalk(const ProxyBvh& proxies, const Path& ray, int generatingRank, int current) {
+  ReplayResult result;
+  result.visited = RankSet::single(generatingRank);
+  const Vec3f dir = ray.dir();
   int at = generatingRank;
   while (at != current) {
-    ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, visited);
-    if (!next.found()) break;
-    Path probe = ray;
-    at = pickOwner(proxies.proxies()[next.proxy].owners.mask(), probe);
-    visited |= RankMask(1) << at;
+    ++result.queries;
+    ProxyBvh::Hit next = proxies.closest(ray.origin, dir, ray.tmax, result.visited);
+    if (!next.found()) return result;
+    at = pickOwner(proxies.proxies()[next.proxy].owners, ray);
+    result.visited.insert(at);
   }
-  return visited;
+  result.reached = true;
+  return result;
 }
 
-#define FERRY_INSTANTIATE(P)                                                            \
-  template int pickOwner<P>(RankMask, const P&);                                        \
-  template ForwardDecision finishTraversal<P>(const P&, int);                           \
-  template ForwardDecision forwardByProxies<P>(const ProxyBvh&, const P&, int);         \
-  template ForwardDecision forwardByRing<P>(const P&, int, int);                        \
-  template RankMask replayVisited<P>(const ProxyBvh&, const P&, int, int);
+#define FERRY_INSTANTIATE(P)                                                                       \
+  template ForwardDecision finishTraversal<P>(const P&, int);                                      \
+  template ForwardDecision forwardByProxies<P>(const ProxyBvh&, const P&, int, const RankSet&);    \
+  template ForwardDecision forwardByRing<P>(const P&, int, int);                                   \
+  template ReplayResult replayWalk<P>(const ProxyBvh&, const P&, int, int);
 FERRY_INSTANTIATE(Path8)
 FERRY_INSTANTIATE(Path64)
+FERRY_INSTANTIATE(PathReplay)
+template ForwardDecision forwardByProxies<Path8>(const ProxyBvh&, const Path8&, int);
+template ForwardDecision forwardByProxies<Path64>(const ProxyBvh&, const Path64&, int);
 #undef FERRY_INSTANTIATE
 
 }  // namespace ferry

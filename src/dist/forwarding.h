@@ -26,26 +26,57 @@ struct ForwardDecision {
   bool toShade = false;  // Send: traversal is complete, the receiver only shades
 };
 
-// One owner among `owners`, picked pseudo-randomly but deterministically from the ray.
-template <typename Path>
-int pickOwner(RankMask owners, const Path& ray);
+// One owner among `owners`, picked pseudo-randomly but deterministically from
+// the ray (its pixel, flags and origin: the same on every rank and in every
+// layout). The two forms pick the same rank for the same set.
+int pickOwner(RankMask owners, const PathCore& ray);
+int pickOwner(const RankSet& owners, const PathCore& ray);
 
 // Traversal done on `rank`: shade here if it holds the hit (or there is none),
-// else send to one of the hit's owners; occluded shadow rays are dropped.
+// else send to one of the hit's owners (replay layout: to the rank that found
+// it); occluded shadow rays are dropped.
 template <typename Path>
 ForwardDecision finishTraversal(const Path& ray, int rank);
 
+// Mask layouts: the visited set is the ray's own mask.
 template <typename Path>
 ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank);
+// Any layout: `visited` holds every rank the ray has been traced on, `rank` included.
+template <typename Path>
+ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank, const RankSet& visited);
 
+// Mask layouts: the first unvisited rank after `rank` in ring order. Replay
+// layout: the ring from the generating rank has visited exactly the ranks from
+// there to `rank`, so the next is rank + 1 unless that is where it started.
 template <typename Path>
 ForwardDecision forwardByRing(const Path& ray, int rank, int ranks);
 
-// The paper's "replay": the set of ranks a ray has visited, recomputed from
-// only the rank that generated it, by re-running the proxy decisions (used
-// above 64 ranks, where a mask per ray no longer fits). Returns the visited
-// set as it would be on arrival at `current`; stops when it reaches `current`.
+// The paper's "replay" (Section 3.3): the set of ranks a ray has visited,
+// recomputed from only the rank that generated it, by re-running the proxy
+// decisions from there until the walk reaches `current`.
+//
+// Why this reproduces the mask exactly (with `ray.tmax` as it arrived at
+// `current`, i.e. before `current` traces it): at each step the forwarding
+// operator takes the closest proxy, by (entry distance, index), with no
+// visited owner and entry before the ray's tmax at the time. Entry distances
+// do not depend on tmax (ProxyBvh::closest), tmax only shrinks and the
+// visited set only grows, so the chosen entries never decrease, and every
+// proxy chosen on the way lies before the entry of the proxy that sent the ray
+// to `current`, which was before the arrival tmax. So with the arrival tmax
+// each replayed step has the same candidate at the front and picks the same
+// proxy and (pickOwner) the same owner. Hits found on the way (tmax updates),
+// the local-first trace on the generating rank (the walk starts with it
+// visited) and primary rays kept by the owner of their closest proxy (they
+// start the same way) need no more state.
+//
+// `reached` is false if the walk ends without reaching `current`: the ray's
+// history is not what the replay says (counted as a revisit; never seen).
+struct ReplayResult {
+  RankSet visited;  // ranks the ray has been traced on before `current`, plus `current` if reached
+  bool reached = false;
+  uint32_t queries = 0;  // proxy queries spent
+};
 template <typename Path>
-RankMask replayVisited(const ProxyBvh& proxies, const Path& ray, int generatingRank, int current);
+ReplayResult replayWalk(const ProxyBvh& proxies, const Path& ray, int generatingRank, int current);
 
 }  // namespace ferry

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 
 #include "core/random.h"
@@ -19,9 +20,10 @@ std::vector<Proxy> randomProxies(int count, int ranks, uint32_t seed) {
     Box3f b;
     b.extend(Vec3f(uniform(i, 0, seed), uniform(i, 1, seed), uniform(i, 2, seed)) * 10.0f);
     b.extend(Vec3f(uniform(i, 3, seed), uniform(i, 4, seed), uniform(i, 5, seed)) * 10.0f);
-    RankMask owners = RankMask(1) << int(uniform(i, 6, seed) * ranks);
-    if (uniform(i, 7, seed) < 0.3f) owners |= RankMask(1) << int(uniform(i, 8, seed) * ranks);
-    proxies.push_back({b, RankSet::fromMask(owners)});
+    RankSet owners = RankSet::single(int(uniform(i, 6, seed) * ranks));
+    if (uniform(i, 7, seed) < 0.3f) owners.insert(int(uniform(i, 8, seed) * ranks));
+    if (uniform(i, 9, seed) < 0.1f) owners.insert(int(uniform(i, 10, seed) * ranks));
+    proxies.push_back({b, owners});
   }
   return proxies;
 }
@@ -111,27 +113,136 @@ TEST(Forwarding, ProxyWalkNeverRevisitsARank) {
   }
 }
 
-// The paper's replay: the visited set recomputed from the generating rank
-// alone equals the mask carried by the ray, at every step of its walk.
-// (Without local hits, tmax stays put, which is when the two must agree exactly;
-// with a shrinking tmax replay returns the visits that still matter.)
-TEST(Forwarding, ReplayReproducesTheVisitedMask) {
-  for (int ranks : {2, 5, 8, 64}) {
-    ProxyBvh bvh(randomProxies(150, ranks, 77 + ranks));
-    for (uint32_t k = 0; k < 400; ++k) {
-      Path64 ray = randomRay(k, 1234);
-      int generating = int(uniform(k, 30, 2) * ranks);
-      ray.visited = RankMask(1) << generating;
-      int rank = generating;
-      for (;;) {
-        ASSERT_EQ(replayVisited(bvh, ray, generating, rank), RankMask(ray.visited))
-            << "ranks " << ranks << " ray " << k;
-        ForwardDecision d = forwardByProxies(bvh, ray, rank);
-        if (d.kind != ForwardDecision::Send || d.toShade) break;
-        rank = d.rank;
-        ray.visited |= RankMask(1) << rank;
+// The paper's replay, property-tested against the mask: random proxies (with
+// replicas), random rays, and at every rank a random local hit that shrinks
+// tmax (anywhere, even before the entry of the proxy that brought the ray
+// there), including on the generating rank before its first decision. At every
+// arrival, the visited set replayed from the generating rank with the arrival
+// tmax equals the carried mask, and the replay layout's next rank equals the
+// mask layout's. Above 64 ranks the reference carries a RankSet instead.
+void checkReplayAgainstCarriedSet(int ranks, uint32_t seed, int rays) {
+  ProxyBvh bvh(randomProxies(150, ranks, seed));
+  int forwards = 0, shrinks = 0;
+  for (uint32_t k = 0; k < uint32_t(rays); ++k) {
+    Path64 mask = randomRay(k, seed * 31);
+    if (k % 3 == 0) mask.setPixelAndFlags(k, kPathShadow);  // shadow rays walk the same way
+    PathReplay replay{};
+    static_cast<PathCore&>(replay) = static_cast<const PathCore&>(mask);
+    replay.clearHistory();
+    const int generating = int(uniform(k, 30, seed) * ranks);
+    replay.markTraced(generating);
+    ASSERT_EQ(int(replay.generatingRank), generating);
+    RankSet carried = RankSet::single(generating);
+    if (ranks <= 64) mask.visited = RankMask(1) << generating;
+    int rank = generating;
+    for (int step = 0;; ++step) {
+      ASSERT_LE(step, ranks);
+      if (rank != generating) {
+        // Arrival: replay with the tmax the ray arrived with.
+        ReplayResult r = replayWalk(bvh, replay, generating, rank);
+        ASSERT_TRUE(r.reached) << "ranks " << ranks << " ray " << k << " step " << step;
+        ASSERT_EQ(r.visited, carried) << "ranks " << ranks << " ray " << k << " step " << step;
+        EXPECT_EQ(r.queries, uint32_t(step));
       }
+      // The local trace: sometimes a hit, which shrinks tmax.
+      if (uniform(k * 64 + uint32_t(step), 31, seed) < 0.4f) {
+        float t = uniform(k * 64 + uint32_t(step), 32, seed) * std::min(mask.tmax, 25.0f);
+        mask.tmax = replay.tmax = t;
+        mask.hitOwners = RankMask(1) << (rank % 64);
+        replay.setHit(rank, 0);
+        ++shrinks;
+      }
+      ForwardDecision byReplay = forwardByProxies(bvh, replay, rank, carried);
+      ForwardDecision bySet = forwardByProxies(bvh, mask, rank, carried);
+      if (ranks <= 64) {
+        ForwardDecision byMask = forwardByProxies(bvh, mask, rank);
+        ASSERT_EQ(byMask.kind, bySet.kind);
+        ASSERT_EQ(byMask.rank, bySet.rank);
+      }
+      const bool forwarded = byReplay.kind == ForwardDecision::Send && !byReplay.toShade;
+      ASSERT_EQ(forwarded, bySet.kind == ForwardDecision::Send && !bySet.toShade) << "ray " << k;
+      if (!forwarded) break;
+      ASSERT_EQ(byReplay.rank, bySet.rank) << "ranks " << ranks << " ray " << k << " step " << step;
+      ASSERT_FALSE(carried.contains(byReplay.rank)) << "a revisit";
+      rank = byReplay.rank;
+      carried.insert(rank);
+      if (ranks <= 64) mask.visited |= RankMask(1) << rank;
+      ++forwards;
     }
+  }
+  // The test means something: rays moved, and tmax shrank on the way.
+  EXPECT_GT(forwards, rays / 2);
+  EXPECT_GT(shrinks, rays / 4);
+}
+
+TEST(Forwarding, ReplayReproducesTheVisitedMaskAndTheNextRank) {
+  for (int ranks : {2, 3, 5, 8, 64}) checkReplayAgainstCarriedSet(ranks, 77 + uint32_t(ranks), 400);
+}
+
+TEST(Forwarding, ReplayReproducesTheVisitedSetAbove64Ranks) {
+  for (int ranks : {65, 100, 300}) checkReplayAgainstCarriedSet(ranks, 5 + uint32_t(ranks), 300);
+}
+
+TEST(Forwarding, PickOwnerFromASetPicksAsFromAMask) {
+  Path8 ray{};
+  ray.origin = {0.25f, 2, 3};
+  for (uint32_t pixel = 0; pixel < 500; ++pixel) {
+    ray.setPixelAndFlags(pixel, 0);
+    RankMask m = RankMask(randomBits(RandomKey{pixel, 1, 0, 3}, 0)) | 1;
+    ASSERT_EQ(pickOwner(RankSet::fromMask(m), ray), pickOwner(m, ray));
+    RankSet wide = RankSet::fromMask(m);
+    wide.insert(64 + int(pixel % 200));
+    int r = pickOwner(wide, ray);
+    ASSERT_TRUE(wide.contains(r));
+  }
+}
+
+TEST(Forwarding, ReplayLayoutFinishesOnTheRankThatFoundTheHit) {
+  PathReplay ray{};
+  ray.setPixelAndFlags(7, 0);
+  ray.clearHistory();
+  ray.markTraced(3);
+  EXPECT_EQ(ray.generatingRank, 3);
+  ray.markTraced(5);  // only the first trace is the generating rank
+  EXPECT_EQ(ray.generatingRank, 3);
+  EXPECT_FALSE(ray.hasHit());
+  EXPECT_EQ(finishTraversal(ray, 9).kind, ForwardDecision::ShadeHere);  // a miss is shaded anywhere
+  ray.setHit(70, 0);
+  EXPECT_TRUE(ray.hasHit());
+  EXPECT_EQ(finishTraversal(ray, 70).kind, ForwardDecision::ShadeHere);
+  ForwardDecision d = finishTraversal(ray, 2);
+  EXPECT_EQ(d.kind, ForwardDecision::Send);
+  EXPECT_EQ(d.rank, 70);
+  EXPECT_TRUE(d.toShade);
+}
+
+TEST(Forwarding, ReplayRingVisitsEveryRankOnceFromTheGeneratingRank) {
+  for (int ranks : {2, 5, 70}) {
+    PathReplay ray{};
+    ray.setPixelAndFlags(1, 0);
+    ray.tmax = kInfinity;
+    ray.clearHistory();
+    const int generating = ranks / 2;
+    ray.markTraced(generating);
+    Path64 mask{};
+    mask.setPixelAndFlags(1, 0);
+    mask.visited = RankMask(1) << generating;
+    RankSet seen = RankSet::single(generating);
+    int rank = generating;
+    for (;;) {
+      ForwardDecision d = forwardByRing(ray, rank, ranks);
+      if (ranks <= 64) {
+        ForwardDecision m = forwardByRing(mask, rank, ranks);
+        ASSERT_EQ(m.kind, d.kind);
+        ASSERT_EQ(m.rank, d.rank);
+      }
+      if (d.kind != ForwardDecision::Send) break;
+      ASSERT_FALSE(seen.contains(d.rank));
+      rank = d.rank;
+      seen.insert(rank);
+      mask.visited |= RankMask(1) << (rank % 64);
+    }
+    EXPECT_EQ(seen.count(), ranks);
   }
 }
 

@@ -2,8 +2,9 @@
 // struct in the queues, on the wire between ranks, and in shading.
 //
 // It is deliberately a *ray plus history*, not a hit record: the closest hit
-// is remembered only as `tmax` and the mask of ranks that own it, and the
-// rank that shades re-traces the ray to recover the full hit.
+// is remembered only as `tmax` and the ranks that own it (a mask, or in the
+// replay layout the one rank that found it), and the rank that shades
+// re-traces the ray to recover the full hit.
 #pragma once
 
 #include <cstdint>
@@ -26,24 +27,18 @@ enum PathFlags : uint32_t {
 constexpr int kPixelBits = 26;  // 67 M pixels, e.g. 8192 x 8192
 constexpr uint32_t kMaxPixels = 1u << kPixelBits;
 
-// RankMask is uint8_t (up to 8 ranks, 36 bytes) or uint64_t (up to 64 ranks).
-template <typename RankMask>
-struct PathT {
+// What every layout shares: the ray, its throughput, and pixel + flags (32 bytes).
+struct PathCore {
   Vec3f origin;
   half direction[3];
   half throughput[3];
   float tmax;
   uint32_t pixelAndFlags;  // pixel id in the high 26 bits, flags in the low 6
-  RankMask visited;        // ranks this ray has been traced on
-  RankMask hitOwners;      // ranks holding the content of the closest hit so far (0: no hit)
-
-  using Mask = RankMask;
 
   uint32_t pixel() const { return pixelAndFlags >> (32 - kPixelBits); }
   uint32_t flags() const { return pixelAndFlags & kPathFlagMask; }
   bool has(PathFlags f) const { return (pixelAndFlags & f) != 0; }
   bool isShadow() const { return has(kPathShadow); }
-  bool hasHit() const { return hitOwners != 0; }
   void set(PathFlags f) { pixelAndFlags |= f; }
   void setPixelAndFlags(uint32_t pixel, uint32_t flags) {
     pixelAndFlags = (pixel << (32 - kPixelBits)) | (flags & kPathFlagMask);
@@ -68,12 +63,68 @@ struct PathT {
     throughput[2] = floatToHalf(w.z);
   }
 };
+static_assert(sizeof(PathCore) == 32);
+
+// The mask layouts: RankMask is uint8_t (up to 8 ranks, 36 bytes) or
+// uint64_t (up to 64 ranks, 48 bytes).
+template <typename RankMask>
+struct PathT : PathCore {
+  RankMask visited;        // ranks this ray has been traced on
+  RankMask hitOwners;      // ranks holding the content of the closest hit so far (0: no hit)
+
+  using Mask = RankMask;
+  static constexpr bool kReplay = false;
+
+  bool hasHit() const { return hitOwners != 0; }
+  void clearHistory() {
+    visited = 0;
+    hitOwners = 0;
+  }
+  // Traced on `rank` (local tracing marks every ray it traces).
+  void markTraced(int rank) { visited |= RankMask(RankMask(1) << rank); }
+  // The closest hit so far was found on `rank`, in content `owners` hold (a mask up to 64 ranks).
+  void setHit(int rank, uint64_t owners) { hitOwners = owners ? RankMask(owners) : RankMask(RankMask(1) << rank); }
+};
+
+// The replay layout, for any rank count (the paper's Section 3.3 "replay"):
+// instead of a mask of visited ranks the ray keeps only the rank that
+// generated it; any rank recomputes the visited set by re-running the
+// forwarding decisions from there (dist/forwarding.h: replayWalk). The hit is
+// kept as the one rank that found it, which therefore holds it (the mask
+// layouts keep every owner of the hit content, so a replica may shade; here
+// the finished ray goes to that one rank). Two 16-bit rank ids replace the
+// two masks, so the path is 36 bytes, the paper's compact size, at any rank
+// count up to 65535 (0xffff means "none"). No more state is needed: the
+// visited ranks are a prefix of the ray's walk through the proxies, which
+// does not depend on tmax (see replayWalk), so the proxy distance reached so
+// far need not travel with the ray.
+struct PathReplay : PathCore {
+  static constexpr uint16_t kNoRank = 0xffff;
+  uint16_t generatingRank;  // where the ray was made and first traced (kNoRank: not yet traced)
+  uint16_t hitRank;         // the rank that found the closest hit so far (kNoRank: no hit)
+
+  static constexpr bool kReplay = true;
+
+  bool hasHit() const { return hitRank != kNoRank; }
+  void clearHistory() {
+    generatingRank = kNoRank;
+    hitRank = kNoRank;
+  }
+  // The first rank that traces a ray is the one that made it (local first).
+  void markTraced(int rank) {
+    if (generatingRank == kNoRank) generatingRank = uint16_t(rank);
+  }
+  void setHit(int rank, uint64_t) { hitRank = uint16_t(rank); }
+};
 
 using Path8 = PathT<uint8_t>;
 using Path64 = PathT<uint64_t>;
 static_assert(sizeof(Path8) == 36, "the paper's compact path is 36 bytes up to 8 ranks");
 static_assert(sizeof(Path64) == 48, "the wide path (up to 64 ranks) is 48 bytes");
-static_assert(std::is_trivially_copyable_v<Path8> && std::is_trivially_copyable_v<Path64>,
+static_assert(sizeof(PathReplay) == 36,
+              "the replay path (any rank count) is 36 bytes: two 16-bit rank ids instead of masks");
+static_assert(std::is_trivially_copyable_v<Path8> && std::is_trivially_copyable_v<Path64> &&
+                  std::is_trivially_copyable_v<PathReplay>,
               "paths are sent over MPI as bytes");
 
 }  // namespace ferry

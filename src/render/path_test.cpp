@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 
 #include "core/random.h"
 
@@ -45,6 +47,7 @@ void checkQuantizedAtCreation() {
 TEST(Path, DirectionAndThroughputAreQuantizedAtCreation) {
   checkQuantizedAtCreation<Path8>();
   checkQuantizedAtCreation<Path64>();
+  checkQuantizedAtCreation<PathReplay>();
 }
 
 TEST(Path, PixelAndFlagsRoundTrip) {
@@ -61,6 +64,45 @@ TEST(Path, PixelAndFlagsRoundTrip) {
       EXPECT_EQ(p.isShadow(), (flags & kPathShadow) != 0);
     }
   }
+}
+
+// The replay layout keeps the mask layouts' shared fields where they are (the
+// first 32 bytes), so the ray itself travels identically in every layout.
+TEST(Path, ReplayLayoutSharesTheRayAndKeepsTwoRankIds) {
+  EXPECT_EQ(sizeof(PathReplay), 36u);
+  auto bytesAt = [](const auto& path, size_t offset) {
+    uint16_t v;
+    std::memcpy(&v, reinterpret_cast<const char*>(&path) + offset, 2);
+    return v;
+  };
+  PathReplay ids{};
+  ids.generatingRank = 0x1234;
+  ids.hitRank = 0x5678;
+  EXPECT_EQ(bytesAt(ids, 32), 0x1234);
+  EXPECT_EQ(bytesAt(ids, 34), 0x5678);
+  Path8 m8{};
+  m8.visited = 0x12;
+  EXPECT_EQ(bytesAt(m8, 32) & 0xff, 0x12);
+  PathReplay p{};
+  p.clearHistory();
+  EXPECT_FALSE(p.hasHit());
+  EXPECT_EQ(p.generatingRank, PathReplay::kNoRank);
+  p.markTraced(65534);  // the largest rank id
+  EXPECT_EQ(p.generatingRank, 65534);
+  p.setHit(1000, 0);
+  EXPECT_TRUE(p.hasHit());
+  EXPECT_EQ(p.hitRank, 1000);
+}
+
+TEST(Path, MaskLayoutsRecordTheHitOwners) {
+  Path8 p{};
+  p.clearHistory();
+  p.setHit(3, 0);  // no owner table: this rank
+  EXPECT_EQ(p.hitOwners, 1u << 3);
+  p.setHit(3, 0b1010);  // replicated content: every owner
+  EXPECT_EQ(p.hitOwners, 0b1010);
+  p.markTraced(5);
+  EXPECT_EQ(p.visited, 1u << 5);
 }
 
 TEST(Path, HitIsRecordedByOwnerMask) {

@@ -7,8 +7,8 @@
 namespace ferry {
 
 template <typename Path>
-void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, typename Path::Mask rankBit,
-                  const std::vector<typename Path::Mask>& instanceOwners, FrameStats& stats) {
+void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int rank,
+                  std::span<const uint64_t> instanceOwners, FrameStats& stats) {
   auto start = std::chrono::steady_clock::now();
   // Split by query kind so each goes to Embree as one stream.
   std::vector<uint32_t> closestIndex, shadowIndex;
@@ -31,22 +31,24 @@ void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, typena
     Path& p = rays[closestIndex[k]];
     if (hits[k].valid() && hits[k].t < p.tmax) {
       p.tmax = hits[k].t;
-      p.hitOwners = instanceOwners.empty() ? rankBit : instanceOwners[hits[k].instance];
+      p.setHit(rank, instanceOwners.empty() ? 0 : instanceOwners[hits[k].instance]);
     }
   }
   std::vector<uint8_t> occluded(shadow.size());
   geometry.occluded(shadow, occluded);
   for (size_t k = 0; k < shadow.size(); ++k)
     if (occluded[k]) rays[shadowIndex[k]].set(kPathOccluded);
-  for (Path& p : rays) p.visited |= rankBit;
+  for (Path& p : rays) p.markTraced(rank);
   stats.closestTraces += closest.size();
   stats.occlusionTraces += shadow.size();
   stats.times.trace += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-template void traceLocally<Path8>(const LocalGeometry&, std::vector<Path8>&, uint8_t,
-                                  const std::vector<uint8_t>&, FrameStats&);
-template void traceLocally<Path64>(const LocalGeometry&, std::vector<Path64>&, uint64_t,
-                                   const std::vector<uint64_t>&, FrameStats&);
+template void traceLocally<Path8>(const LocalGeometry&, std::vector<Path8>&, int, std::span<const uint64_t>,
+                                  FrameStats&);
+template void traceLocally<Path64>(const LocalGeometry&, std::vector<Path64>&, int, std::span<const uint64_t>,
+                                   FrameStats&);
+template void traceLocally<PathReplay>(const LocalGeometry&, std::vector<PathReplay>&, int,
+                                       std::span<const uint64_t>, FrameStats&);
 
 }  // namespace ferry

@@ -9,6 +9,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <vector>
 
 #include "render/render_stats.h"
@@ -32,12 +34,14 @@ class RayTraversal {
 };
 
 // Marks a path's closest hit on this rank or its shadow-ray occlusion, using
-// batched Embree queries, and records the rank as visited. A closer hit sets
-// the hit owners to `instanceOwners[instance]` (every rank holding that
-// content, for replication), or to `rankBit` when no owner table is given.
+// batched Embree queries, and records the rank as visited (Path::markTraced).
+// A closer hit is recorded by Path::setHit: the mask layouts take the hit
+// owners from `instanceOwners[instance]` (every rank holding that content,
+// for replication; this rank alone when the table is empty), the replay
+// layout records this rank.
 template <typename Path>
-void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, typename Path::Mask rankBit,
-                  const std::vector<typename Path::Mask>& instanceOwners, FrameStats& stats);
+void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int rank,
+                  std::span<const uint64_t> instanceOwners, FrameStats& stats);
 
 template <typename Path>
 class LocalTraversal final : public RayTraversal<Path> {
@@ -47,7 +51,7 @@ class LocalTraversal final : public RayTraversal<Path> {
   int rankCount() const override { return 1; }
   bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
   void traverse(std::vector<Path>& rays, ExchangeCounters&, FrameStats& stats) override {
-    traceLocally(geometry_, rays, typename Path::Mask(1), {}, stats);
+    traceLocally(geometry_, rays, 0, {}, stats);
   }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
 

@@ -42,6 +42,7 @@ void FrameStats::merge(const FrameStats& o) {
   retraces += o.retraces;
   retraceMisses += o.retraceMisses;
   proxyQueries += o.proxyQueries;
+  replayQueries += o.replayQueries;
   if (perBounce.size() < o.perBounce.size()) perBounce.resize(o.perBounce.size());
   for (size_t i = 0; i < o.perBounce.size(); ++i) perBounce[i] += o.perBounce[i];
   times += o.times;
@@ -59,6 +60,7 @@ nlohmann::json FrameStats::toJson() const {
                  {"retrace", retraces},
                  {"retrace_misses", retraceMisses},
                  {"proxy_queries", proxyQueries},
+                 {"replay_queries", replayQueries},
                  {"total", raysTraced()}};
   j["rays_per_second"] = seconds > 0 ? double(raysTraced()) / seconds : 0.0;
   ExchangeCounters ex = exchangeTotal();

@@ -33,8 +33,7 @@ Path makeRay(Vec3f origin, Vec3f direction, float tmax, Vec3f weight, uint32_t p
   p.tmax = tmax;
   p.setWeight(weight);
   p.setPixelAndFlags(pixel, flags);
-  p.visited = 0;
-  p.hitOwners = 0;
+  p.clearHistory();
   return p;
 }
 
@@ -271,5 +270,6 @@ std::vector<Path> WavefrontRenderer<Path>::shade(const std::vector<Path>& rays, 
 
 template class WavefrontRenderer<Path8>;
 template class WavefrontRenderer<Path64>;
+template class WavefrontRenderer<PathReplay>;
 
 }  // namespace ferry
