@@ -47,6 +47,8 @@ void validate(const RenderOptions& o) {
   if (o.threads < 0) throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
   checkOutputPath(o.output);
   parseForwardingMode(o.forwarding);
+  if (o.retrace != "remote" && o.retrace != "all")
+    throw InputError(fmt::format("--retrace '{}': expected remote or all", o.retrace));
   checkPartitionerName(o.partition);
   if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
     throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1", o.replicationBudget));
@@ -197,6 +199,7 @@ void writeStats(const RenderOptions& o, const RenderSettings& settings, const Ra
                    {"max_depth", settings.maxDepth},  {"seed", settings.seed},
                    {"view", o.view},                  {"threads", o.threads},
                    {"ranks", ranks},                  {"forwarding", o.forwarding},
+                   {"retrace", o.retrace},
                    {"partition", o.partition},        {"output", o.output},
                    {"path_bytes", ranks <= 8 ? sizeof(Path8) : sizeof(Path64)}};
   j["render"] = stats.toJson();
@@ -348,6 +351,11 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
                      "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
                      "wins, as Kilauea)")
       ->capture_default_str();
+  render->add_option("--retrace", o.retrace,
+                     "Which shaded paths re-trace their ray to recover the hit (the compact path carries\n"
+                     "none): remote (only those whose hit another rank found; a rank keeps the hits it\n"
+                     "found) or all (every one, as the paper). The image is the same.")
+      ->capture_default_str();
   render->add_option("--partitioner,--partition", o.partition,
                      "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
                      "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
@@ -388,6 +396,7 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
     settings.frames = o.frames;
     settings.maxDepth = o.maxDepth;
     settings.seed = o.seed;
+    settings.retraceAll = o.retrace == "all";
     settings.view = o.view;
     settings.toneMapping.exposure = o.exposure;
     if (o.threads > 0)

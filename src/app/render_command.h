@@ -31,6 +31,9 @@ struct RenderOptions {
   bool sizeGiven = false;
   bool outputGiven = false;
   std::string forwarding = "proxies";
+  // --retrace: "remote" re-traces only paths whose hit another rank found;
+  // "all" re-traces every shaded path (the paper). Same image.
+  std::string retrace = "remote";
   // --partitioner (alias --partition): a name from partition/partitioner.h,
   // made on the fly (every rank runs the same deterministic partitioner).
   // Ignored when the scene is a part directory (ferry partition -o DIR).

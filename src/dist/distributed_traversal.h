@@ -27,7 +27,8 @@ class DistributedTraversal final : public RayTraversal<Path> {
   int rank() const override { return comm_.rank(); }
   int rankCount() const override { return comm_.size(); }
   bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const override;
-  void traverse(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats) override;
+  void traverse(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+                FrameStats& stats) override;
   bool anyRaysLeft(size_t localRays) override { return comm_.sum(uint64_t(localRays)) > 0; }
 
   // Rays that arrived for tracing on a rank they had already visited (must stay 0).
@@ -37,13 +38,16 @@ class DistributedTraversal final : public RayTraversal<Path> {
 
  private:
   using Mask = typename Path::Mask;
-  void traverseForwarding(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats);
-  void traverseBroadcast(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats);
+  void traverseForwarding(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+                          FrameStats& stats);
+  void traverseBroadcast(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+                         FrameStats& stats);
   // Sends each ray to destination[i] (this rank's rays are not in the list);
   // returns what this rank received, in rank order.
   std::vector<Path> exchange(const std::vector<Path>& rays, const std::vector<int>& destination,
                              ExchangeCounters& counters, FrameStats& stats);
-  void trace(std::vector<Path>& rays, FrameStats& stats);
+  // With `hits`: resized to rays.size(), the hits that set a ray's tmax here.
+  void trace(std::vector<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits = nullptr);
 
   const Communicator& comm_;
   const LocalGeometry& geometry_;

@@ -234,6 +234,38 @@ void LocalGeometry::occluded(std::span<const TraceRay> rays, std::span<uint8_t> 
                     });
 }
 
+void LocalGeometry::traceBatch(std::span<const TraceRay> rays, std::span<const TraceQuery> queries,
+                               std::span<TraceHit> hits, std::span<uint8_t> occluded) const {
+  FERRY_CHECK(rays.size() == queries.size() && rays.size() == hits.size() && rays.size() == occluded.size());
+  RTCRayHit closest[kStreamBatch];
+  RTCRay shadow[kStreamBatch];
+  uint32_t closestIndex[kStreamBatch], shadowIndex[kStreamBatch];
+  for (size_t begin = 0; begin < rays.size(); begin += kStreamBatch) {
+    const size_t n = std::min(kStreamBatch, rays.size() - begin);
+    unsigned nc = 0, ns = 0;
+    for (size_t i = begin; i < begin + n; ++i) {
+      if (queries[i] == TraceQuery::Closest) {
+        closestIndex[nc] = uint32_t(i);
+        closest[nc++] = toEmbree(rays[i]);
+      } else if (queries[i] == TraceQuery::Occluded) {
+        shadowIndex[ns] = uint32_t(i);
+        shadow[ns++] = toEmbree(rays[i]).ray;
+      }
+    }
+    RTCIntersectContext context;
+    if (nc) {
+      rtcInitIntersectContext(&context);
+      rtcIntersect1M(impl_->top, &context, closest, nc, sizeof(RTCRayHit));
+      for (unsigned k = 0; k < nc; ++k) hits[closestIndex[k]] = fromEmbree(closest[k]);
+    }
+    if (ns) {
+      rtcInitIntersectContext(&context);
+      rtcOccluded1M(impl_->top, &context, shadow, ns, sizeof(RTCRay));
+      for (unsigned k = 0; k < ns; ++k) occluded[shadowIndex[k]] = shadow[k].tfar < 0;
+    }
+  }
+}
+
 Box3f LocalGeometry::bounds() const {
   RTCBounds b;
   rtcGetSceneBounds(impl_->top, &b);
