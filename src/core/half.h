@@ -13,7 +13,7 @@ using half = uint16_t;
 
 // Round-to-nearest-even float -> half; overflow saturates to the largest finite
 // half (65504) rather than infinity, so a bright throughput stays finite.
-inline half floatToHalf(float value) {
+[[gnu::always_inline]] inline half floatToHalf(float value) {
   uint32_t bits;
   std::memcpy(&bits, &value, 4);
   uint32_t sign = (bits >> 16) & 0x8000u;
@@ -44,7 +44,7 @@ inline half floatToHalf(float value) {
 // the exponent is rebased by an integer add, subnormals are renormalized by one
 // exact float subtraction. (The bit-by-bit reference is in half_test.cpp, which
 // checks all 65,536 values against it.)
-inline float halfToFloat(half h) {
+[[gnu::always_inline]] inline float halfToFloat(half h) {
   uint32_t bits = (static_cast<uint32_t>(h) & 0x7fffu) << 13;  // exponent and mantissa
   const uint32_t exponent = bits & 0x0f800000u;
   bits += (127 - 15) << 23;

@@ -86,6 +86,23 @@ TraceHit fromEmbree(const RTCRayHit& rh) {
   return h;
 }
 
+// The ray part of an Embree query written field by field, straight into the
+// batch (no zero-filled temporary copied in; every input field is set).
+void setEmbreeRay(RTCRay& r, const TraceRay& t) {
+  r.org_x = t.origin.x;
+  r.org_y = t.origin.y;
+  r.org_z = t.origin.z;
+  r.tnear = t.tnear;
+  r.dir_x = t.direction.x;
+  r.dir_y = t.direction.y;
+  r.dir_z = t.direction.z;
+  r.time = 0;
+  r.tfar = t.tmax;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+}
+
 // Batches small enough to stay in cache, large enough for the stream API.
 constexpr size_t kStreamBatch = 256;
 
@@ -246,10 +263,12 @@ void LocalGeometry::traceBatch(std::span<const TraceRay> rays, std::span<const T
     for (size_t i = begin; i < begin + n; ++i) {
       if (queries[i] == TraceQuery::Closest) {
         closestIndex[nc] = uint32_t(i);
-        closest[nc++] = toEmbree(rays[i]);
+        setEmbreeRay(closest[nc].ray, rays[i]);
+        closest[nc].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        closest[nc++].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       } else if (queries[i] == TraceQuery::Occluded) {
         shadowIndex[ns] = uint32_t(i);
-        shadow[ns++] = toEmbree(rays[i]).ray;
+        setEmbreeRay(shadow[ns++], rays[i]);
       }
     }
     RTCIntersectContext context;
