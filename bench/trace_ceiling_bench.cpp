@@ -14,6 +14,11 @@
 //                one rtcIntersect1 / rtcOccluded1 per ray
 //   TraceStreamNoRetrace  TraceStream without the re-traces: what keeping
 //                the hit instead of re-tracing would save
+//   RenderRemote the whole frame as Ferry renders it by default (--retrace
+//                remote: on one rank nothing is re-traced); its ceiling is
+//                TraceStreamNoRetrace
+// Render and the recording use --retrace all (the paper: every shaded path
+// re-traced), so the ray counts of Render and TraceStream agree.
 // Every benchmark reports rays/s over the same ray count (closest + shadow +
 // re-trace), so their ratios are the figures in docs/performance.md. The
 // ratios are printed at the end, from the median of the repetitions, which run
@@ -59,20 +64,17 @@ class RecordingTraversal final : public RayTraversal<Path8> {
   int rankCount() const override { return 1; }
   bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
-  void traverse(std::vector<Path8>& rays, ExchangeCounters& exchange, FrameStats& stats) override {
+  void traverse(std::vector<Path8>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+                FrameStats& stats) override {
     Wave& w = waves.emplace_back();
     for (const Path8& p : rays) {
       TraceRay r{p.origin, p.dir(), 0.0f, p.tmax};
       (p.isShadow() ? w.shadow : w.closest).push_back(r);
     }
-    inner_.traverse(rays, exchange, stats);
-    // WavefrontRenderer::shade re-traces every non-shadow ray that hit, searching a little past tmax.
+    inner_.traverse(rays, hits, exchange, stats);
+    // With --retrace all, WavefrontRenderer::shade re-traces every non-shadow ray that hit.
     for (const Path8& p : rays)
-      if (!p.isShadow() && p.hasHit()) {
-        const Vec3f o = p.origin;
-        const float scale = std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z), 1.0f});
-        w.retrace.push_back({o, p.dir(), 0, p.tmax * 1.001f + 1e-4f * scale});
-      }
+      if (!p.isShadow() && p.hasHit()) w.retrace.push_back(retraceQuery(p.origin, p.dir(), p.tmax));
   }
   std::vector<Wave> waves;
 
@@ -105,6 +107,7 @@ Setup& setup(int which) {
   s.settings.height = 360;
   s.settings.samplesPerPixel = 1;
   s.settings.maxDepth = 5;
+  s.settings.retraceAll = true;
   RecordingTraversal recorder(*s.geometry);
   WavefrontRenderer<Path8> renderer(s.scene, *s.geometry, *s.lights, recorder, s.settings);
   FrameBuffer fb(s.settings.width, s.settings.height);
@@ -135,6 +138,24 @@ void BM_Render(benchmark::State& state) {
     benchmark::DoNotOptimize(fb.sum().data());
     if (stats.raysTraced() != s.rays) state.SkipWithError("the frame traced a different number of rays");
   }
+  setLabels(state, s);
+}
+
+// The default renderer (--retrace remote): same frame, no re-traces on one rank.
+void BM_RenderRemote(benchmark::State& state) {
+  Setup& s = setup(int(state.range(0)));
+  RenderSettings settings = s.settings;
+  settings.retraceAll = false;
+  LocalTraversal<Path8> traversal(*s.geometry);
+  WavefrontRenderer<Path8> renderer(s.scene, *s.geometry, *s.lights, traversal, settings);
+  uint64_t retraced = 0;
+  for (auto _ : state) {
+    FrameBuffer fb(settings.width, settings.height);
+    FrameStats stats = renderer.renderFrame(0, fb);
+    benchmark::DoNotOptimize(fb.sum().data());
+    retraced = stats.retraces;
+  }
+  if (retraced != 0) state.SkipWithError("one rank re-traced with --retrace remote");
   setLabels(state, s);
 }
 
@@ -194,6 +215,7 @@ void BM_TraceSingle(benchmark::State& state) {
 
 // Arg 0: island at scale 0.1, arg 1: Cornell box; 640x360, 1 spp, max depth 5.
 BENCHMARK(BM_Render)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderRemote)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_TraceStream)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_TraceSingle)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_TraceStreamNoRetrace)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -235,6 +257,10 @@ class RatioReporter : public benchmark::ConsoleReporter {
                   single, mrays(render), mrays(stream), mrays(single), rays_[arg], times_["BM_Render"][arg].size());
       std::printf("  %-18s re-traces: %.1f ms of the %.1f ms traced (%.0f %% of the render)\n", "", stream - noRetrace,
                   stream, render > 0 ? 100 * (stream - noRetrace) / render : 0.0);
+      double remote = get("BM_RenderRemote");
+      std::printf("  %-18s --retrace remote: render %.1f ms, render/trace-stream-no-retrace %6.2f,"
+                  " render(all)/render(remote) %6.2f\n", "", remote, noRetrace > 0 ? remote / noRetrace : 0.0,
+                  remote > 0 ? render / remote : 0.0);
     }
   }
 

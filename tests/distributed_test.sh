@@ -46,4 +46,16 @@ run_scene "builtin:island?scale=0.05" "--size 48x32 --spp 1 --max-depth 3"
 mpirun_n 1 "$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q -o "$work/one.pfm"
 "$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q -o "$work/plain.pfm"
 $compare "$work/plain.pfm" "$work/one.pfm" --rel 0 --abs 0
+# Keeping the hits a rank found (default, --retrace remote) or re-tracing every
+# shaded path (--retrace all) gives the same image on many ranks, bit for bit.
+for forwarding in proxies broadcast; do
+  for retrace in remote all; do
+    mpirun_n 3 "$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q --threads 1 \
+      --forwarding "$forwarding" --partition random --retrace "$retrace" -o "$work/retrace-$retrace.pfm" \
+      --stats "$work/retrace-$retrace.json"
+    check_stats "$work/retrace-$retrace.json"
+  done
+  echo "3 ranks, $forwarding, --retrace remote against all:"
+  $compare "$work/retrace-all.pfm" "$work/retrace-remote.pfm" --rel 0 --abs 0
+done
 echo "distributed_test: all passed"

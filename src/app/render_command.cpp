@@ -49,6 +49,8 @@ void validate(const RenderOptions& o) {
   parseForwardingMode(o.forwarding);
   if (o.pathLayout != "auto" && o.pathLayout != "mask" && o.pathLayout != "replay")
     throw InputError(fmt::format("--path-layout '{}': expected auto, mask or replay", o.pathLayout));
+  if (o.retrace != "remote" && o.retrace != "all")
+    throw InputError(fmt::format("--retrace '{}': expected remote or all", o.retrace));
   checkPartitionerName(o.partition);
   if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
     throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1", o.replicationBudget));
@@ -201,6 +203,7 @@ void writeStats(const RenderOptions& o, const RenderSettings& settings, const Ra
                    {"max_depth", settings.maxDepth},  {"seed", settings.seed},
                    {"view", o.view},                  {"threads", o.threads},
                    {"ranks", ranks},                  {"forwarding", o.forwarding},
+                   {"retrace", o.retrace},
                    {"partition", o.partition},        {"output", o.output},
                    {"path_layout", layout},           {"path_bytes", pathBytes}};
   j["render"] = stats.toJson();
@@ -365,6 +368,11 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
                      "mask (visited ranks as a bit mask; up to 64 ranks) or replay (only the generating\n"
                      "rank; any rank recomputes the visited ranks from the proxies)")
       ->capture_default_str();
+  render->add_option("--retrace", o.retrace,
+                     "Which shaded paths re-trace their ray to recover the hit (the compact path carries\n"
+                     "none): remote (only those whose hit another rank found; a rank keeps the hits it\n"
+                     "found) or all (every one, as the paper). The image is the same.")
+      ->capture_default_str();
   render->add_option("--partitioner,--partition", o.partition,
                      "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
                      "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
@@ -408,6 +416,7 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
     settings.frames = o.frames;
     settings.maxDepth = o.maxDepth;
     settings.seed = o.seed;
+    settings.retraceAll = o.retrace == "all";
     settings.view = o.view;
     settings.toneMapping.exposure = o.exposure;
     if (o.threads > 0)

@@ -34,6 +34,9 @@ struct RenderOptions {
   // --path-layout: auto (Path8 up to 8 ranks, Path64 up to 64, replay above),
   // mask (Path8/Path64; at most 64 ranks) or replay (at any rank count).
   std::string pathLayout = "auto";
+  // --retrace: "remote" re-traces only paths whose hit another rank found;
+  // "all" re-traces every shaded path (the paper). Same image.
+  std::string retrace = "remote";
   // --partitioner (alias --partition): a name from partition/partitioner.h,
   // made on the fly (every rank runs the same deterministic partitioner).
   // Ignored when the scene is a part directory (ferry partition -o DIR).

@@ -45,18 +45,41 @@ struct RandomKey {
   uint32_t seed = 0;
 };
 
-inline uint32_t randomBits(const RandomKey& key, uint32_t dimension) {
+// The part of the hash shared by every dimension of one key. A path vertex
+// draws up to eight numbers from one key: hashing the key once (RandomStream)
+// instead of per number gives the same numbers for a third of the work.
+inline uint32_t randomKeyHash(const RandomKey& key) {
   uint32_t h = hashMix(key.seed + 0x6a09e667u);
   h = hashCombine(h, key.pixel);
   h = hashCombine(h, key.sample);
-  h = hashCombine(h, key.bounce);
-  h = hashCombine(h, dimension);
-  return hashMix(h);
+  return hashCombine(h, key.bounce);
+}
+
+inline uint32_t randomBitsFromKeyHash(uint32_t keyHash, uint32_t dimension) {
+  return hashMix(hashCombine(keyHash, dimension));
+}
+
+inline uint32_t randomBits(const RandomKey& key, uint32_t dimension) {
+  return randomBitsFromKeyHash(randomKeyHash(key), dimension);
 }
 
 // Uniform in [0, 1): the top 24 bits give exactly representable floats.
+inline float random01FromBits(uint32_t bits) { return static_cast<float>(bits >> 8) * 0x1p-24f; }
+
 inline float random01(const RandomKey& key, RandomDim dim) {
-  return static_cast<float>(randomBits(key, static_cast<uint32_t>(dim)) >> 8) * 0x1p-24f;
+  return random01FromBits(randomBits(key, static_cast<uint32_t>(dim)));
 }
+
+// The numbers of one key, hashed once: stream(dim) == random01(key, dim).
+class RandomStream {
+ public:
+  explicit RandomStream(const RandomKey& key) : keyHash_(randomKeyHash(key)) {}
+  float operator()(RandomDim dim) const {
+    return random01FromBits(randomBitsFromKeyHash(keyHash_, static_cast<uint32_t>(dim)));
+  }
+
+ private:
+  uint32_t keyHash_;
+};
 
 }  // namespace ferry

@@ -16,6 +16,15 @@ TEST(Random, IsAPureFunctionOfItsKey) {
   EXPECT_NE(random01(a, RandomDim::BsdfU), random01(a, RandomDim::BsdfV));
 }
 
+TEST(Random, StreamGivesTheSameNumbersAsRandom01) {
+  for (uint32_t i = 0; i < 2000; ++i) {
+    RandomKey key{i * 7919u, i % 13, i % 6, 1 + i % 3};
+    RandomStream stream(key);
+    for (uint32_t d = 0; d < uint32_t(RandomDim::Count); ++d)
+      ASSERT_EQ(stream(RandomDim(d)), random01(key, RandomDim(d))) << i << " " << d;
+  }
+}
+
 TEST(Random, UniformInUnitIntervalByChiSquare) {
   constexpr int kBins = 64, kSamples = 640000;
   std::vector<int> bins(kBins, 0);

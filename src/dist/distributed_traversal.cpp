@@ -77,7 +77,7 @@ bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ra
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::trace(std::vector<Path>& rays, FrameStats& stats) {
+void DistributedTraversal<Path>::trace(std::vector<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits) {
   const int rank = comm_.rank();
   for (const Path& p : rays) {
     if constexpr (Path::kReplay) {
@@ -86,7 +86,8 @@ void DistributedTraversal<Path>::trace(std::vector<Path>& rays, FrameStats& stat
       if ((uint64_t(p.visited) >> rank) & 1) ++revisits_;
     }
   }
-  traceLocally(geometry_, rays, rank, instanceOwners_, stats);
+  if (hits) hits->resize(rays.size());
+  traceLocally(geometry_, rays, rank, instanceOwners_, stats, hits ? hits->data() : nullptr);
 }
 
 template <typename Path>
@@ -162,20 +163,23 @@ std::vector<Path> DistributedTraversal<Path>::exchange(const std::vector<Path>& 
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverse(std::vector<Path>& rays, ExchangeCounters& exchange,
-                                          FrameStats& stats) {
+void DistributedTraversal<Path>::traverse(std::vector<Path>& rays, std::vector<TraceHit>& hits,
+                                          ExchangeCounters& exchange, FrameStats& stats) {
   if (mode_ == ForwardingMode::Broadcast)
-    traverseBroadcast(rays, exchange, stats);
+    traverseBroadcast(rays, hits, exchange, stats);
   else
-    traverseForwarding(rays, exchange, stats);
+    traverseForwarding(rays, hits, exchange, stats);
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, ExchangeCounters& counters,
-                                                    FrameStats& stats) {
+void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, std::vector<TraceHit>& hits,
+                                                    ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
   std::vector<Path> ready;   // traversal complete here: shade on this rank
+  // The hit of each ready ray when its last trace, here, found it (shading
+  // then need not re-trace it); invalid for rays that arrive to be shaded.
+  std::vector<TraceHit> readyHits, movingHits;
   std::vector<Path> moving = std::move(rays);
   // Replay layout (proxies): the visited set of each ray in `moving`, this rank
   // included; new rays have visited only this rank.
@@ -183,7 +187,7 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, Exc
   std::vector<RankSet> visited;
   if (replay) visited.assign(moving.size(), RankSet::single(rank));
   // Local first: every new ray is traced on the rank that made it.
-  trace(moving, stats);
+  trace(moving, stats, &movingHits);
   for (;;) {
     auto start = Clock::now();
     std::vector<int> destination(moving.size());
@@ -205,6 +209,7 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, Exc
     for (size_t i = 0; i < moving.size(); ++i) {
       if (destination[i] == kShadeHere) {
         ready.push_back(moving[i]);
+        readyHits.push_back(movingHits[i]);
       } else if (destination[i] >= 0) {
         leaving.push_back(moving[i]);
         leavingTo.push_back(destination[i]);
@@ -215,24 +220,28 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, Exc
     std::vector<Path> received = exchange(leaving, leavingTo, counters, stats);
     moving.clear();
     for (Path& p : received) {
-      if (p.has(kPathTraversed))
+      if (p.has(kPathTraversed)) {
         ready.push_back(p);
-      else
+        readyHits.emplace_back();
+      } else {
         moving.push_back(p);
+      }
     }
     // Replay before tracing: the walk is replayed with the tmax the ray arrived with.
     if (replay) visited = replayArrivals(moving, stats);
-    trace(moving, stats);
+    trace(moving, stats, &movingHits);
   }
   rays = std::move(ready);
+  hits = std::move(readyHits);
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, ExchangeCounters& counters,
-                                                   FrameStats& stats) {
+void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, std::vector<TraceHit>& hits,
+                                                   ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
-  trace(rays, stats);  // the origin's own answer
+  std::vector<TraceHit> ownHits;
+  trace(rays, stats, &ownHits);  // the origin's own answer
 
   // 1. A copy of every undecided ray to every other rank.
   std::vector<Path> copies;
@@ -279,24 +288,32 @@ void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, Exch
         p.hitRank = reply.hitRank;
       else
         p.hitOwners = reply.hitOwners;
+      ownHits[it->second] = TraceHit{};  // another rank's hit is closer
     }
   }
 
   // 3. Shade where the hit is.
   std::vector<Path> ready, leaving;
+  std::vector<TraceHit> readyHits;
   std::vector<int> leavingTo;
-  for (Path& p : rays) {
+  for (size_t i = 0; i < rays.size(); ++i) {
+    Path& p = rays[i];
     int d = decisionToDestination(finishTraversal(p, rank), p, rank);
     if (d == kShadeHere) {
       ready.push_back(p);
+      readyHits.push_back(ownHits[i]);
     } else if (d >= 0) {
       leaving.push_back(p);
       leavingTo.push_back(d);
     }
   }
   stats.times.exchange += secondsSince(start);
-  for (Path& p : exchange(leaving, leavingTo, counters, stats)) ready.push_back(p);
+  for (Path& p : exchange(leaving, leavingTo, counters, stats)) {
+    ready.push_back(p);
+    readyHits.emplace_back();
+  }
   rays = std::move(ready);
+  hits = std::move(readyHits);
 }
 
 template class DistributedTraversal<Path8>;

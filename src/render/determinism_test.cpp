@@ -115,10 +115,11 @@ RenderSettings busySettings(uint32_t seed) {
 
 // Builds everything (Embree structures included) and renders, under a thread limit.
 template <typename Path>
-std::vector<Vec3f> render(uint32_t seed, int threads) {
+std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
   Scene scene = busyScene();
   RenderSettings s = busySettings(seed);
+  s.retraceAll = retraceAll;
   LocalGeometry geometry(scene);
   LightSampler lights(scene);
   LocalTraversal<Path> traversal(geometry);
@@ -127,6 +128,11 @@ std::vector<Vec3f> render(uint32_t seed, int threads) {
   for (int f = 0; f < s.frames; ++f) {
     FrameStats stats = renderer.renderFrame(f, fb);
     EXPECT_EQ(stats.retraceMisses, 0u);
+    // One rank keeps every hit it found: nothing to re-trace unless asked to.
+    if (retraceAll)
+      EXPECT_GT(stats.retraces, 0u);
+    else
+      EXPECT_EQ(stats.retraces, 0u);
   }
   return fb.sum();
 }
@@ -158,6 +164,18 @@ TEST(Determinism, ImageIsBitIdenticalAcrossThreadCountsRunsAndMaskWidths) {
   EXPECT_TRUE(bitIdentical(one, two)) << differingPixels(one, two) << " pixels differ between 1 and 2 threads";
   EXPECT_TRUE(bitIdentical(two, again)) << differingPixels(two, again) << " pixels differ between two runs";
   EXPECT_TRUE(bitIdentical(two, wide)) << differingPixels(two, wide) << " pixels differ between Path8 and Path64";
+}
+
+// Keeping the hit (the default) or re-tracing every shaded path (--retrace
+// all, the paper) must give the same image, bit for bit.
+TEST(Determinism, KeepingHitsOrRetracingGivesTheSameImage) {
+  std::vector<Vec3f> kept = render<Path8>(1, 2, false);
+  std::vector<Vec3f> retraced = render<Path8>(1, 2, true);
+  EXPECT_TRUE(bitIdentical(kept, retraced))
+      << differingPixels(kept, retraced) << " pixels differ between --retrace remote and --retrace all";
+  std::vector<Vec3f> retracedOneThread = render<Path64>(1, 1, true);
+  EXPECT_TRUE(bitIdentical(kept, retracedOneThread))
+      << differingPixels(kept, retracedOneThread) << " pixels differ (--retrace all, 1 thread, Path64)";
 }
 
 TEST(Determinism, DifferentSeedsGiveDifferentImages) {

@@ -53,6 +53,9 @@ float sunConePdf(const SunLight& sun) {
 }  // namespace
 
 LightSampler::LightSampler(const Scene& scene) : suns_(scene.suns), environment_(scene.environment) {
+  for (const SunLight& sun : suns_)
+    sunConstants_.push_back({sunRadiance(sun), sunConePdf(sun), oneMinusCos(sun.angularRadius),
+                             2 * std::sin(0.5f * sun.angularRadius), luminance(sun.irradiance)});
   if (environment_.image) {
     const HdrImage& img = *environment_.image;
     std::vector<float> weights(size_t(img.width) * img.height);
@@ -138,9 +141,9 @@ Vec3f LightSampler::environmentRadiance(Vec3f d) const {
 
 Vec3f LightSampler::background(Vec3f d) const {
   Vec3f l = environmentRadiance(d);
-  for (const SunLight& sun : suns_)
+  for (size_t i = 0; i < suns_.size(); ++i)
     // |d - s| <= 2 sin(r / 2) is the cone test without 1 - cos cancellation.
-    if (length(d - sun.direction) <= 2 * std::sin(0.5f * sun.angularRadius)) l += sunRadiance(sun);
+    if (length(d - suns_[i].direction) <= sunConstants_[i].chordRadius) l += sunConstants_[i].radiance;
   return l;
 }
 
@@ -198,8 +201,8 @@ bool LightSampler::sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f 
   Reservoir r{uSelect};
   int next = 0;
   const int sunBase = next;
-  for (const SunLight& sun : suns_)
-    r.add(next++, luminance(sun.irradiance) * std::max(std::abs(dot(n, sun.direction)), 1e-3f));
+  for (size_t i = 0; i < suns_.size(); ++i)
+    r.add(next++, sunConstants_[i].selectionWeight * std::max(std::abs(dot(n, suns_[i].direction)), 1e-3f));
   const int envIndex = next++;
   if (!environment_.isBlack()) r.add(envIndex, environmentWeight_);
   const int triangleBase = next;
@@ -221,16 +224,17 @@ bool LightSampler::sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f 
 
   if (r.chosen < envIndex) {
     const SunLight& sun = suns_[r.chosen - sunBase];
+    const SunConstants& constants = sunConstants_[r.chosen - sunBase];
     // Uniform in the sun's cone, in terms of 1 - cos(theta) so that a small
     // cone keeps its precision.
-    float oneMinusCosTheta = u.x * oneMinusCos(sun.angularRadius);
+    float oneMinusCosTheta = u.x * constants.oneMinusCosRadius;
     float cosTheta = 1 - oneMinusCosTheta;
     float sinTheta = std::sqrt(std::max(0.0f, oneMinusCosTheta * (2 - oneMinusCosTheta)));
     float phi = 2 * kPi * u.y;
     out.direction = Frame(sun.direction).toWorld({sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta});
     out.distance = kInfinity;
-    out.radiance = sunRadiance(sun);
-    out.pdf = sunConePdf(sun) * selection;
+    out.radiance = constants.radiance;
+    out.pdf = constants.conePdf * selection;
     return true;
   }
   if (r.chosen == envIndex) {

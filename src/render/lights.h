@@ -60,6 +60,16 @@ class LightSampler {
   bool sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u, LightSample& out) const;
 
   std::vector<SunLight> suns_;
+  // Per sun, what sampling and background() need, computed once (same values
+  // as computing them per call).
+  struct SunConstants {
+    Vec3f radiance;
+    float conePdf;
+    float oneMinusCosRadius;
+    float chordRadius;  // 2 sin(r / 2): the cone test on |d - s|
+    float selectionWeight;  // luminance(irradiance)
+  };
+  std::vector<SunConstants> sunConstants_;
   EnvironmentLight environment_;
   Distribution2D environmentDistribution_;
   float environmentWeight_ = 0;

@@ -1,6 +1,11 @@
 #include "render/ray_traversal.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
 #include <chrono>
+#include <span>
 
 #include "render/path.h"
 
@@ -8,47 +13,61 @@ namespace ferry {
 
 template <typename Path>
 void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int rank,
-                  std::span<const uint64_t> instanceOwners, FrameStats& stats) {
+                  std::span<const uint64_t> instanceOwners, FrameStats& stats, TraceHit* found) {
   auto start = std::chrono::steady_clock::now();
-  // Split by query kind so each goes to Embree as one stream.
-  std::vector<uint32_t> closestIndex, shadowIndex;
-  std::vector<TraceRay> closest, shadow;
-  for (uint32_t i = 0; i < rays.size(); ++i) {
-    const Path& p = rays[i];
-    if (p.isShadow() && p.has(kPathOccluded)) continue;  // already decided elsewhere
-    TraceRay r{p.origin, p.dir(), 0.0f, p.tmax};
-    if (p.isShadow()) {
-      shadowIndex.push_back(i);
-      shadow.push_back(r);
-    } else {
-      closestIndex.push_back(i);
-      closest.push_back(r);
+  // Batches of closest-hit and shadow queries in queue order, built, traced and
+  // applied on the worker thread that owns them (no whole-wavefront arrays, no
+  // serial pass).
+  constexpr size_t kBatch = 256;
+  std::atomic<uint64_t> closestCount{0}, shadowCount{0};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kBatch), [&](const tbb::blocked_range<size_t>& range) {
+    TraceRay batch[kBatch];
+    TraceQuery queries[kBatch];
+    TraceHit hits[kBatch];
+    uint8_t occluded[kBatch];
+    uint64_t closest = 0, shadow = 0;
+    for (size_t begin = range.begin(); begin < range.end(); begin += kBatch) {
+      const size_t n = std::min(kBatch, range.end() - begin);
+      for (size_t i = 0; i < n; ++i) {
+        const Path& p = rays[begin + i];
+        if (p.isShadow() && p.has(kPathOccluded)) {  // already decided elsewhere
+          queries[i] = TraceQuery::None;
+          continue;
+        }
+        batch[i] = TraceRay{p.origin, p.dir(), 0.0f, p.tmax};
+        queries[i] = p.isShadow() ? TraceQuery::Occluded : TraceQuery::Closest;
+        ++(p.isShadow() ? shadow : closest);
+      }
+      geometry.traceBatch(std::span(batch, n), std::span(queries, n), std::span(hits, n), std::span(occluded, n));
+      for (size_t i = 0; i < n; ++i) {
+        Path& p = rays[begin + i];
+        bool setHere = false;
+        if (queries[i] == TraceQuery::Closest) {
+          if (hits[i].valid() && hits[i].t < p.tmax) {
+            p.tmax = hits[i].t;
+            p.setHit(rank, instanceOwners.empty() ? 0 : instanceOwners[hits[i].instance]);
+            setHere = true;
+          }
+        } else if (queries[i] == TraceQuery::Occluded && occluded[i]) {
+          p.set(kPathOccluded);
+        }
+        p.markTraced(rank);
+        if (found) found[begin + i] = setHere ? hits[i] : TraceHit{};
+      }
     }
-  }
-  std::vector<TraceHit> hits(closest.size());
-  geometry.intersect(closest, hits);
-  for (size_t k = 0; k < closest.size(); ++k) {
-    Path& p = rays[closestIndex[k]];
-    if (hits[k].valid() && hits[k].t < p.tmax) {
-      p.tmax = hits[k].t;
-      p.setHit(rank, instanceOwners.empty() ? 0 : instanceOwners[hits[k].instance]);
-    }
-  }
-  std::vector<uint8_t> occluded(shadow.size());
-  geometry.occluded(shadow, occluded);
-  for (size_t k = 0; k < shadow.size(); ++k)
-    if (occluded[k]) rays[shadowIndex[k]].set(kPathOccluded);
-  for (Path& p : rays) p.markTraced(rank);
-  stats.closestTraces += closest.size();
-  stats.occlusionTraces += shadow.size();
+    closestCount += closest;
+    shadowCount += shadow;
+  });
+  stats.closestTraces += closestCount;
+  stats.occlusionTraces += shadowCount;
   stats.times.trace += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 template void traceLocally<Path8>(const LocalGeometry&, std::vector<Path8>&, int, std::span<const uint64_t>,
-                                  FrameStats&);
+                                  FrameStats&, TraceHit*);
 template void traceLocally<Path64>(const LocalGeometry&, std::vector<Path64>&, int, std::span<const uint64_t>,
-                                   FrameStats&);
+                                   FrameStats&, TraceHit*);
 template void traceLocally<PathReplay>(const LocalGeometry&, std::vector<PathReplay>&, int,
-                                       std::span<const uint64_t>, FrameStats&);
+                                       std::span<const uint64_t>, FrameStats&, TraceHit*);
 
 }  // namespace ferry

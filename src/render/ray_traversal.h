@@ -8,6 +8,8 @@
 // proxies; the renderer does not know which one it has.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -26,9 +28,15 @@ class RayTraversal {
   virtual int rankCount() const = 0;
   // Proxy-guided primary rays: whether this rank generates the camera path of `pixel`.
   virtual bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const = 0;
+  // Whether every camera path is generated here (one rank): then the renderer
+  // skips keepsPrimary and writes the camera rays straight into the queue.
+  virtual bool keepsAllPrimaries() const { return false; }
   // Traces all of `rays` (new rays, made on this rank) to completion; on
-  // return `rays` holds exactly the rays this rank must shade.
-  virtual void traverse(std::vector<Path>& rays, ExchangeCounters& exchange, FrameStats& stats) = 0;
+  // return `rays` holds exactly the rays this rank must shade, and `hits` one
+  // entry per ray: its closest hit when this rank found it in this traversal
+  // (so shading need not re-trace it), else an invalid hit (re-trace).
+  virtual void traverse(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+                        FrameStats& stats) = 0;
   // True while any rank still has rays (a collective in the distributed case).
   virtual bool anyRaysLeft(size_t localRays) = 0;
 };
@@ -38,10 +46,23 @@ class RayTraversal {
 // A closer hit is recorded by Path::setHit: the mask layouts take the hit
 // owners from `instanceOwners[instance]` (every rank holding that content,
 // for replication; this rank alone when the table is empty), the replay
-// layout records this rank.
+// layout records this rank. With `hits` (rays.size() entries), hits[i]
+// becomes the hit that set ray i's tmax here, or an invalid hit when this
+// trace did not set it.
 template <typename Path>
 void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int rank,
-                  std::span<const uint64_t> instanceOwners, FrameStats& stats);
+                  std::span<const uint64_t> instanceOwners, FrameStats& stats, TraceHit* hits = nullptr);
+
+// The query with which shading re-traces a path whose hit it does not have:
+// Embree accepts a hit only somewhat inside tfar, with an error that scales
+// with the coordinates, not with t (measured: tfar = t, t + 1e-6 relative, or
+// t * 1.001 at t = 0.016 in a 555-unit box can all miss it), so it searches
+// past tmax by a margin of both kinds; nothing closer than the recorded hit
+// exists, so the closest hit found is the same one.
+inline TraceRay retraceQuery(Vec3f origin, Vec3f direction, float tmax) {
+  const float scale = std::max({std::abs(origin.x), std::abs(origin.y), std::abs(origin.z), 1.0f});
+  return {origin, direction, 0, tmax * 1.001f + 1e-4f * scale};
+}
 
 template <typename Path>
 class LocalTraversal final : public RayTraversal<Path> {
@@ -50,8 +71,12 @@ class LocalTraversal final : public RayTraversal<Path> {
   int rank() const override { return 0; }
   int rankCount() const override { return 1; }
   bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
-  void traverse(std::vector<Path>& rays, ExchangeCounters&, FrameStats& stats) override {
-    traceLocally(geometry_, rays, 0, {}, stats);
+  bool keepsAllPrimaries() const override { return true; }
+  // Every ray is traced once, here: every hit is known.
+  void traverse(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters&,
+                FrameStats& stats) override {
+    hits.resize(rays.size());
+    traceLocally(geometry_, rays, 0, {}, stats, hits.data());
   }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
 

@@ -7,8 +7,27 @@
 
 namespace ferry {
 
-SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit) {
+namespace {
+
+// Affine3f::transformNormal with the inverse given.
+Vec3f transformNormal(const Affine3f& inv, Vec3f n) {
+  return {inv.l[0][0] * n.x + inv.l[1][0] * n.y + inv.l[2][0] * n.z,
+          inv.l[0][1] * n.x + inv.l[1][1] * n.y + inv.l[2][1] * n.z,
+          inv.l[0][2] * n.x + inv.l[1][2] * n.y + inv.l[2][2] * n.z};
+}
+
+}  // namespace
+
+std::vector<Affine3f> instanceInverses(const Scene& scene) {
+  std::vector<Affine3f> out;
+  out.reserve(scene.instances.size());
+  for (const Instance& inst : scene.instances) out.push_back(inst.transform.inverse());
+  return out;
+}
+
+SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit, const std::vector<Affine3f>* inverses) {
   const Instance& inst = scene.instances[hit.instance];
+  const Affine3f inv = inverses ? (*inverses)[hit.instance] : inst.transform.inverse();
   const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.meshSlot]];
   const Vec3i& tri = mesh.indices[hit.primitive];
   float w = 1 - hit.u - hit.v;
@@ -17,10 +36,10 @@ SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit) {
   // The object-space barycentric point is more precise than origin + t * dir
   // far from the camera.
   s.position = inst.transform.transformPoint(p0 * w + p1 * hit.u + p2 * hit.v);
-  s.geometricNormal = normalize(inst.transform.transformNormal(cross(p1 - p0, p2 - p0)));
+  s.geometricNormal = normalize(transformNormal(inv, cross(p1 - p0, p2 - p0)));
   if (!mesh.normals.empty()) {
     Vec3f n = mesh.normals[tri.x] * w + mesh.normals[tri.y] * hit.u + mesh.normals[tri.z] * hit.v;
-    n = inst.transform.transformNormal(n);
+    n = transformNormal(inv, n);
     float len = length(n);
     s.shadingNormal = len > 0 && std::isfinite(len) ? n * (1 / len) : s.geometricNormal;
     // Keep the shading normal on the geometric side so it cannot flip the surface.

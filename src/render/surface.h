@@ -2,6 +2,8 @@
 // path itself carries no hit data).
 #pragma once
 
+#include <vector>
+
 #include "core/math.h"
 #include "trace/local_geometry.h"
 
@@ -19,7 +21,11 @@ struct SurfacePoint {
   Vec3f baseColor;        // material colour times its texture
 };
 
-SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit);
+// `inverses` (from instanceInverses, one per instance) saves inverting the
+// instance transform for every hit; the result is the same, bit for bit.
+SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
+                                const std::vector<Affine3f>* inverses = nullptr);
+std::vector<Affine3f> instanceInverses(const Scene& scene);
 
 // Moves a ray origin off a surface by a few ulps along the normal (Wächter and
 // Binder, Ray Tracing Gems ch. 6), robust at any distance from the origin.

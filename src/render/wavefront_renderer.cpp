@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -26,15 +27,13 @@ double secondsSince(Clock::time_point t) {
 constexpr uint32_t kRouletteStartBounce = 3;
 
 template <typename Path>
-Path makeRay(Vec3f origin, Vec3f direction, float tmax, Vec3f weight, uint32_t pixel, uint32_t flags) {
-  Path p{};
+void setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, uint32_t pixel, uint32_t flags) {
   p.origin = origin;
   p.setDir(direction);
   p.tmax = tmax;
   p.setWeight(weight);
   p.setPixelAndFlags(pixel, flags);
   p.clearHistory();
-  return p;
 }
 
 // Contributions that cannot be represented are dropped rather than poisoning the image.
@@ -51,7 +50,8 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const LocalGeomet
       lights_(lights),
       traversal_(traversal),
       settings_(settings),
-      camera_(scene.view(settings.view), settings.width, settings.height) {
+      camera_(scene.view(settings.view), settings.width, settings.height),
+      instanceInverses_(instanceInverses(scene)) {
   if (uint64_t(settings.width) * uint64_t(settings.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.width,
                                  settings.height, kMaxPixels));
@@ -63,15 +63,15 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
   FrameStats stats;
   stats.frame = frame;
   auto frameStart = Clock::now();
-  std::vector<Path> rays;
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
-    generateCameraRays(sampleIndex, rays, stats);
-    for (uint32_t bounce = 0; traversal_.anyRaysLeft(rays.size()); ++bounce) {
+    generateCameraRays(sampleIndex, rays_, stats);
+    for (uint32_t bounce = 0; traversal_.anyRaysLeft(rays_.size()); ++bounce) {
       if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
-      traversal_.traverse(rays, stats.perBounce[bounce], stats);
-      accumulateShadowRays(rays, frameBuffer, stats);
-      rays = shade(rays, sampleIndex, bounce, frameBuffer, stats);
+      traversal_.traverse(rays_, hits_, stats.perBounce[bounce], stats);
+      accumulateShadowRays(rays_, frameBuffer, stats);
+      shade(rays_, hits_, sampleIndex, bounce, frameBuffer, next_, stats);
+      std::swap(rays_, next_);
     }
     if (progress) progress(s + 1, settings_.samplesPerPixel);
   }
@@ -79,28 +79,63 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
   return stats;
 }
 
+namespace {
+
+// Deterministic parallel compaction: block b writes its survivors, in queue
+// order, contiguously from staging[b * stride]; the blocks are then
+// concatenated in block order, so the result does not depend on the threads.
+constexpr size_t kBlock = 2048;
+
+template <typename Path>
+void concatenateBlocks(const std::vector<Path>& staging, size_t stride, const std::vector<uint32_t>& counts,
+                       std::vector<Path>& out) {
+  std::vector<size_t> offsets(counts.size() + 1, 0);
+  for (size_t b = 0; b < counts.size(); ++b) offsets[b + 1] = offsets[b] + counts[b];
+  out.resize(offsets.back());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, counts.size(), 4), [&](const auto& range) {
+    for (size_t b = range.begin(); b != range.end(); ++b)
+      std::copy_n(staging.begin() + ptrdiff_t(b * stride), counts[b], out.begin() + ptrdiff_t(offsets[b]));
+  });
+}
+
+}  // namespace
+
 template <typename Path>
 void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, std::vector<Path>& rays,
                                                  FrameStats& stats) {
   auto start = Clock::now();
   const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
-  std::vector<Path> all(pixels);
-  std::vector<uint8_t> kept(pixels);
-  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, pixels, 1024), [&](const auto& range) {
-    FrameStats local;
-    for (uint32_t pixel = range.begin(); pixel != range.end(); ++pixel) {
-      RandomKey key{pixel, sampleIndex, 0, settings_.seed};
-      float x = float(pixel % settings_.width) + random01(key, RandomDim::PixelJitterX);
-      float y = float(pixel / settings_.width) + random01(key, RandomDim::PixelJitterY);
-      all[pixel] = makeRay<Path>(camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
-                                 kPathAfterSpecular);
-      TraceRay ray{all[pixel].origin, all[pixel].dir(), 0, kInfinity};
-      kept[pixel] = traversal_.keepsPrimary(pixel, ray, local);
-    }
-  });
-  rays.clear();
-  for (uint32_t pixel = 0; pixel < pixels; ++pixel)
-    if (kept[pixel]) rays.push_back(all[pixel]);
+  auto cameraRay = [&](uint32_t pixel, Path& p) {
+    RandomStream random(RandomKey{pixel, sampleIndex, 0, settings_.seed});
+    float x = float(pixel % settings_.width) + random(RandomDim::PixelJitterX);
+    float y = float(pixel / settings_.width) + random(RandomDim::PixelJitterY);
+    setRay(p, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel, kPathAfterSpecular);
+  };
+  if (traversal_.keepsAllPrimaries()) {
+    // Every pixel's path is this rank's: straight into the queue, in pixel order.
+    rays.resize(pixels);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, pixels, 4096), [&](const auto& range) {
+      for (uint32_t pixel = range.begin(); pixel != range.end(); ++pixel) cameraRay(pixel, rays[pixel]);
+    });
+  } else {
+    const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
+    staging_.resize(pixels);
+    blockCounts_.assign(blocks, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
+      FrameStats local;
+      for (size_t b = range.begin(); b != range.end(); ++b) {
+        const uint32_t begin = uint32_t(b * kBlock), end = uint32_t(std::min<size_t>(pixels, begin + kBlock));
+        uint32_t kept = 0;
+        for (uint32_t pixel = begin; pixel != end; ++pixel) {
+          Path& p = staging_[begin + kept];
+          cameraRay(pixel, p);
+          kept += traversal_.keepsPrimary(pixel, TraceRay{p.origin, p.dir(), 0, kInfinity}, local);
+        }
+        blockCounts_[b] = kept;
+      }
+    });
+    concatenateBlocks(staging_, kBlock, blockCounts_, rays);
+  }
   stats.cameraPaths += rays.size();
   stats.times.generate += secondsSince(start);
 }
@@ -119,153 +154,167 @@ void WavefrontRenderer<Path>::accumulateShadowRays(const std::vector<Path>& rays
 }
 
 template <typename Path>
-std::vector<Path> WavefrontRenderer<Path>::shade(const std::vector<Path>& rays, uint32_t sampleIndex,
-                                                 uint32_t bounce, FrameBuffer& frameBuffer,
-                                                 FrameStats& stats) {
+void WavefrontRenderer<Path>::shade(const std::vector<Path>& rays, const std::vector<TraceHit>& hits,
+                                    uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
+                                    std::vector<Path>& next, FrameStats& stats) {
   auto start = Clock::now();
-  const uint32_t maxDepth = uint32_t(std::max(settings_.maxDepth, 0));
-  // Slot 2i: the continuation of ray i, slot 2i+1: its shadow ray. Compacted
-  // in order afterwards, so the next wavefront's order is deterministic.
-  std::vector<Path> spawned(rays.size() * 2);
-  std::vector<uint8_t> live(rays.size() * 2, 0);
-  std::atomic<uint64_t> retraceMisses{0};
+  FERRY_CHECK(hits.size() == rays.size());
+  const size_t n = rays.size();
+  const size_t blocks = (n + kBlock - 1) / kBlock;
+  // Each path spawns at most two rays (its continuation, then its shadow ray).
+  staging_.resize(2 * n);
+  blockCounts_.assign(blocks, 0);
+  std::atomic<uint64_t> retraceCount{0}, missCount{0}, shadowCount{0};
 
-  // Re-trace every path that hit something, to recover the full hit, as one
-  // batched query (the same kind of query that found it, so the same hit is
-  // found). Embree accepts a hit only somewhat inside tfar, with an error that
-  // scales with the coordinates, not with t (measured: tfar = t, t + 1e-6
-  // relative, or t * 1.001 at t = 0.016 in a 555-unit box can all miss it), so
-  // search past tmax by a margin of both kinds; nothing closer than the
-  // recorded hit exists, so the closest hit found is the same one.
-  std::vector<TraceRay> retrace(rays.size());
-  std::vector<TraceHit> hits(rays.size());
-  std::vector<uint32_t> retraced;
-  for (uint32_t i = 0; i < rays.size(); ++i)
-    if (!rays[i].isShadow() && rays[i].hasHit()) {
-      const Vec3f o = rays[i].origin;
-      const float scale = std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z), 1.0f});
-      retrace[retraced.size()] = {o, rays[i].dir(), 0, rays[i].tmax * 1.001f + 1e-4f * scale};
-      retraced.push_back(i);
-    }
-  {
-    std::vector<TraceHit> found(retraced.size());
-    geometry_.intersect(std::span(retrace.data(), retraced.size()), found);
-    for (size_t k = 0; k < retraced.size(); ++k) hits[retraced[k]] = found[k];
-  }
-
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 256), [&](const auto& range) {
-    uint64_t localMisses = 0;
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      const Path& path = rays[i];
-      if (path.isShadow()) continue;
-      const uint32_t pixel = path.pixel();
-      const Vec3f throughput = path.weight();
-      const Vec3f dir = path.dir();
-      const bool afterSpecular = path.has(kPathAfterSpecular);
-
-      if (!path.hasHit()) {
-        // Escaped: light from infinity counts only where no light sample covered it.
-        if (afterSpecular) {
-          Vec3f l = throughput * lights_.background(normalize(dir));
-          if (usable(l)) frameBuffer.add(pixel, l);
-        }
-        continue;
-      }
-
-      const TraceHit& hit = hits[i];
-      if (!hit.valid()) {
-        ++localMisses;
-        continue;
-      }
-      SurfacePoint surface = reconstructSurface(scene_, hit);
-      const Material& material = *surface.material;
-      const Vec3f wo = normalize(-dir);
-
-      if (afterSpecular && material.isEmissive()) {
-        Vec3f l = throughput * material.emission;
-        if (usable(l)) frameBuffer.add(pixel, l);
-      }
-      if (bounce >= maxDepth) continue;
-
-      Bsdf bsdf = Bsdf::fromMaterial(material, surface.baseColor);
-      Vec3f ng = surface.geometricNormal, ns = surface.shadingNormal;
-      if (!bsdf.transmits() && dot(ng, wo) < 0) {
-        // Opaque surfaces are two-sided: shade the side the ray arrived on.
-        ng = -ng;
-        ns = -ns;
-      }
-      Frame frame(ns);
-      const Vec3f woLocal = frame.toLocal(wo);
-      RandomKey key{pixel, sampleIndex, bounce, settings_.seed};
-
-      // Next-event estimation: exactly one light sample.
-      if (!bsdf.isDelta()) {
-        LightSample ls;
-        Vec2f u{random01(key, RandomDim::LightSampleU), random01(key, RandomDim::LightSampleV)};
-        if (lights_.sample(surface.position, ns, bsdf.transmits(), random01(key, RandomDim::LightSelect), u, ls)) {
-          Vec3f f = bsdf.eval(woLocal, frame.toLocal(ls.direction));
-          Vec3f contribution = throughput * f * ls.radiance * (1 / ls.pdf);
-          // Only light arriving on the geometric side it is evaluated for.
-          bool sameSide = bsdf.transmits() || dot(ls.direction, ng) > 0;
-          if (sameSide && usable(contribution)) {
-            Vec3f origin = offsetRayOrigin(surface.position, dot(ls.direction, ng) > 0 ? ng : -ng);
-            Path shadow = makeRay<Path>(origin, ls.direction, kInfinity, contribution, pixel, kPathShadow);
-            if (std::isfinite(ls.distance)) {
-              // Stop short of the emitter along the ray as stored: its half-precision
-              // direction is off by up to ~3e-4 rad, so it meets the emitter's plane up
-              // to 3e-4 / cos(theta_light) (relative) before or after the sampled point,
-              // more than the 1e-4 margin; the emitter then shadowed itself (6% too
-              // dark under a square light, 11% inside a closed emitter).
-              Vec3f d = shadow.dir();
-              Vec3f toLight = surface.position + ls.direction * ls.distance - origin;
-              float t = length(toLight) / length(d);
-              float along = dot(d, ls.normal);
-              if (along != 0) {
-                float tPlane = dot(toLight, ls.normal) / along;
-                if (tPlane > 0) t = std::min(t, tPlane);
-              }
-              shadow.tmax = t * (1 - 1e-4f);
-            }
-            spawned[2 * i + 1] = shadow;
-            live[2 * i + 1] = 1;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
+    constexpr size_t kBatch = 256;
+    TraceRay queries[kBatch];
+    TraceQuery kinds[kBatch];
+    TraceHit found[kBatch];
+    uint8_t unused[kBatch];
+    uint64_t retraced = 0, misses = 0, shadows = 0;
+    for (size_t b = range.begin(); b != range.end(); ++b) {
+      const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
+      Path* out = staging_.data() + 2 * begin;
+      uint32_t count = 0;
+      for (size_t batch = begin; batch < end; batch += kBatch) {
+        const size_t m = std::min(kBatch, end - batch);
+        // Re-trace, as one batched query, every path that hit something whose
+        // hit this rank does not have (all of them with --retrace all).
+        size_t needed = 0;
+        for (size_t i = 0; i < m; ++i) {
+          const Path& p = rays[batch + i];
+          const bool retrace = !p.isShadow() && p.hasHit() && (settings_.retraceAll || !hits[batch + i].valid());
+          kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
+          if (retrace) {
+            queries[i] = retraceQuery(p.origin, p.dir(), p.tmax);
+            ++needed;
           }
         }
+        if (needed) {
+          geometry_.traceBatch(std::span(queries, m), std::span(kinds, m), std::span(found, m),
+                               std::span(unused, m));
+          retraced += needed;
+        }
+        for (size_t i = 0; i < m; ++i) {
+          const Path& p = rays[batch + i];
+          if (p.isShadow()) continue;
+          const TraceHit& hit = kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
+          int spawned = shadeOne(p, hit, sampleIndex, bounce, frameBuffer, out + count, misses);
+          for (int k = 0; k < spawned; ++k) shadows += out[count + k].isShadow();
+          count += uint32_t(spawned);
+        }
       }
-
-      // Continuation.
-      BsdfSample bs;
-      Vec2f u{random01(key, RandomDim::BsdfU), random01(key, RandomDim::BsdfV)};
-      if (!bsdf.sample(woLocal, random01(key, RandomDim::BsdfLobe), u, bs)) continue;
-      Vec3f wi = frame.toWorld(bs.wi);
-      if (!bsdf.transmits() && dot(wi, ng) <= 0) continue;  // shading normal sent it below the surface
-      Vec3f next = throughput * bs.weight;
-      if (bounce + 1 >= kRouletteStartBounce) {
-        float q = std::min(1.0f, maxComponent(next));
-        if (random01(key, RandomDim::Roulette) >= q) continue;
-        next = next * (1 / q);
-      }
-      if (!usable(next)) continue;
-      Vec3f origin = offsetRayOrigin(surface.position, dot(wi, ng) > 0 ? ng : -ng);
-      spawned[2 * i] = makeRay<Path>(origin, wi, kInfinity, next, pixel, bs.delta ? uint32_t(kPathAfterSpecular) : 0u);
-      live[2 * i] = 1;
+      blockCounts_[b] = count;
     }
-    retraceMisses += localMisses;
+    retraceCount += retraced;
+    missCount += misses;
+    shadowCount += shadows;
   });
+  concatenateBlocks(staging_, 2 * kBlock, blockCounts_, next);
 
-  std::vector<Path> next;
-  next.reserve(rays.size());
-  for (size_t k = 0; k < spawned.size(); ++k) {
-    if (!live[k]) continue;
-    next.push_back(spawned[k]);
-    if (k & 1)
-      ++stats.shadowRays;
-    else
-      ++stats.continuationRays;
-  }
-  stats.retraces += retraced.size();
-  stats.retraceMisses += retraceMisses;
+  stats.shadowRays += shadowCount;
+  stats.continuationRays += next.size() - shadowCount;
+  stats.retraces += retraceCount;
+  stats.retraceMisses += missCount;
   stats.times.shade += secondsSince(start);
-  return next;
+}
+
+template <typename Path>
+int WavefrontRenderer<Path>::shadeOne(const Path& path, const TraceHit& hit, uint32_t sampleIndex,
+                                      uint32_t bounce, FrameBuffer& frameBuffer, Path* out,
+                                      uint64_t& misses) const {
+  const uint32_t maxDepth = uint32_t(std::max(settings_.maxDepth, 0));
+  const uint32_t pixel = path.pixel();
+  const Vec3f throughput = path.weight();
+  const Vec3f dir = path.dir();
+  const bool afterSpecular = path.has(kPathAfterSpecular);
+
+  if (!path.hasHit()) {
+    // Escaped: light from infinity counts only where no light sample covered it.
+    if (afterSpecular) {
+      Vec3f l = throughput * lights_.background(normalize(dir));
+      if (usable(l)) frameBuffer.add(pixel, l);
+    }
+    return 0;
+  }
+  if (!hit.valid()) {
+    ++misses;
+    return 0;
+  }
+  SurfacePoint surface = reconstructSurface(scene_, hit, &instanceInverses_);
+  const Material& material = *surface.material;
+  const Vec3f wo = normalize(-dir);
+
+  if (afterSpecular && material.isEmissive()) {
+    Vec3f l = throughput * material.emission;
+    if (usable(l)) frameBuffer.add(pixel, l);
+  }
+  if (bounce >= maxDepth) return 0;
+
+  Bsdf bsdf = Bsdf::fromMaterial(material, surface.baseColor);
+  Vec3f ng = surface.geometricNormal, ns = surface.shadingNormal;
+  if (!bsdf.transmits() && dot(ng, wo) < 0) {
+    // Opaque surfaces are two-sided: shade the side the ray arrived on.
+    ng = -ng;
+    ns = -ns;
+  }
+  Frame frame(ns);
+  const Vec3f woLocal = frame.toLocal(wo);
+  const RandomStream random(RandomKey{pixel, sampleIndex, bounce, settings_.seed});
+  int spawned = 0;
+
+  // Continuation, then the shadow ray: the queue order. Each is written in
+  // place (no copy of a half-written path through the stack); the two draw
+  // different random dimensions, so the order of computing them is free.
+  [&] {
+    BsdfSample bs;
+    Vec2f u{random(RandomDim::BsdfU), random(RandomDim::BsdfV)};
+    if (!bsdf.sample(woLocal, random(RandomDim::BsdfLobe), u, bs)) return;
+    Vec3f wi = frame.toWorld(bs.wi);
+    if (!bsdf.transmits() && dot(wi, ng) <= 0) return;  // shading normal sent it below the surface
+    Vec3f next = throughput * bs.weight;
+    if (bounce + 1 >= kRouletteStartBounce) {
+      float q = std::min(1.0f, maxComponent(next));
+      if (random(RandomDim::Roulette) >= q) return;
+      next = next * (1 / q);
+    }
+    if (!usable(next)) return;
+    Vec3f origin = offsetRayOrigin(surface.position, dot(wi, ng) > 0 ? ng : -ng);
+    setRay(out[spawned++], origin, wi, kInfinity, next, pixel, bs.delta ? uint32_t(kPathAfterSpecular) : 0u);
+  }();
+
+  // Next-event estimation: exactly one light sample.
+  if (bsdf.isDelta()) return spawned;
+  LightSample ls;
+  Vec2f u{random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)};
+  if (!lights_.sample(surface.position, ns, bsdf.transmits(), random(RandomDim::LightSelect), u, ls))
+    return spawned;
+  Vec3f f = bsdf.eval(woLocal, frame.toLocal(ls.direction));
+  Vec3f contribution = throughput * f * ls.radiance * (1 / ls.pdf);
+  // Only light arriving on the geometric side it is evaluated for.
+  bool sameSide = bsdf.transmits() || dot(ls.direction, ng) > 0;
+  if (!sameSide || !usable(contribution)) return spawned;
+  Vec3f origin = offsetRayOrigin(surface.position, dot(ls.direction, ng) > 0 ? ng : -ng);
+  Path& shadow = out[spawned++];
+  setRay(shadow, origin, ls.direction, kInfinity, contribution, pixel, kPathShadow);
+  if (std::isfinite(ls.distance)) {
+    // Stop short of the emitter along the ray as stored: its half-precision
+    // direction is off by up to ~3e-4 rad, so it meets the emitter's plane up
+    // to 3e-4 / cos(theta_light) (relative) before or after the sampled point,
+    // more than the 1e-4 margin; the emitter then shadowed itself (6% too
+    // dark under a square light, 11% inside a closed emitter).
+    Vec3f d = shadow.dir();
+    Vec3f toLight = surface.position + ls.direction * ls.distance - origin;
+    float t = length(toLight) / length(d);
+    float along = dot(d, ls.normal);
+    if (along != 0) {
+      float tPlane = dot(toLight, ls.normal) / along;
+      if (tPlane > 0) t = std::min(t, tPlane);
+    }
+    shadow.tmax = t * (1 - 1e-4f);
+  }
+  return spawned;
 }
 
 template class WavefrontRenderer<Path8>;

@@ -31,6 +31,10 @@ struct RenderSettings {
   int maxDepth = 5;         // scattering events; 1 = direct lighting only
   uint32_t seed = 1;
   std::string view;         // empty: the scene's first view
+  // Shading re-traces every path it shades (the paper, whose compact path
+  // carries no hit) instead of only those whose hit was found on another
+  // rank. The image is the same either way (tests check it); only the speed differs.
+  bool retraceAll = false;
   ToneMapping toneMapping;
 };
 
@@ -49,9 +53,14 @@ class WavefrontRenderer {
  private:
   void generateCameraRays(uint32_t sampleIndex, std::vector<Path>& rays, FrameStats& stats);
   void accumulateShadowRays(const std::vector<Path>& rays, FrameBuffer& frameBuffer, FrameStats& stats);
-  // Shades every non-shadow path; returns the next wavefront (continuations and shadow rays).
-  std::vector<Path> shade(const std::vector<Path>& rays, uint32_t sampleIndex, uint32_t bounce,
-                          FrameBuffer& frameBuffer, FrameStats& stats);
+  // Shades every non-shadow path (re-tracing those without a valid hits[i]);
+  // writes the next wavefront (continuations and shadow rays) to `next`.
+  void shade(const std::vector<Path>& rays, const std::vector<TraceHit>& hits, uint32_t sampleIndex,
+             uint32_t bounce, FrameBuffer& frameBuffer, std::vector<Path>& next, FrameStats& stats);
+  // Shades path i given its hit (invalid: escaped or re-trace missed); writes
+  // its continuation and shadow ray, in that order, to out; returns how many.
+  int shadeOne(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
+               FrameBuffer& frameBuffer, Path* out, uint64_t& misses) const;
 
   const Scene& scene_;
   const LocalGeometry& geometry_;
@@ -59,6 +68,11 @@ class WavefrontRenderer {
   RayTraversal<Path>& traversal_;
   RenderSettings settings_;
   Camera camera_;
+  std::vector<Affine3f> instanceInverses_;  // for reconstructSurface
+  // Queues and scratch reused from wavefront to wavefront (no allocation per bounce).
+  std::vector<Path> rays_, next_, staging_;
+  std::vector<TraceHit> hits_;
+  std::vector<uint32_t> blockCounts_;
 };
 
 }  // namespace ferry

@@ -86,6 +86,23 @@ TraceHit fromEmbree(const RTCRayHit& rh) {
   return h;
 }
 
+// The ray part of an Embree query written field by field, straight into the
+// batch (no zero-filled temporary copied in; every input field is set).
+void setEmbreeRay(RTCRay& r, const TraceRay& t) {
+  r.org_x = t.origin.x;
+  r.org_y = t.origin.y;
+  r.org_z = t.origin.z;
+  r.tnear = t.tnear;
+  r.dir_x = t.direction.x;
+  r.dir_y = t.direction.y;
+  r.dir_z = t.direction.z;
+  r.time = 0;
+  r.tfar = t.tmax;
+  r.mask = 0xffffffffu;
+  r.id = 0;
+  r.flags = 0;
+}
+
 // Batches small enough to stay in cache, large enough for the stream API.
 constexpr size_t kStreamBatch = 256;
 
@@ -232,6 +249,40 @@ void LocalGeometry::occluded(std::span<const TraceRay> rays, std::span<uint8_t> 
                         for (size_t i = 0; i < n; ++i) occluded[begin + i] = batch[i].tfar < 0;
                       }
                     });
+}
+
+void LocalGeometry::traceBatch(std::span<const TraceRay> rays, std::span<const TraceQuery> queries,
+                               std::span<TraceHit> hits, std::span<uint8_t> occluded) const {
+  FERRY_CHECK(rays.size() == queries.size() && rays.size() == hits.size() && rays.size() == occluded.size());
+  RTCRayHit closest[kStreamBatch];
+  RTCRay shadow[kStreamBatch];
+  uint32_t closestIndex[kStreamBatch], shadowIndex[kStreamBatch];
+  for (size_t begin = 0; begin < rays.size(); begin += kStreamBatch) {
+    const size_t n = std::min(kStreamBatch, rays.size() - begin);
+    unsigned nc = 0, ns = 0;
+    for (size_t i = begin; i < begin + n; ++i) {
+      if (queries[i] == TraceQuery::Closest) {
+        closestIndex[nc] = uint32_t(i);
+        setEmbreeRay(closest[nc].ray, rays[i]);
+        closest[nc].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        closest[nc++].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      } else if (queries[i] == TraceQuery::Occluded) {
+        shadowIndex[ns] = uint32_t(i);
+        setEmbreeRay(shadow[ns++], rays[i]);
+      }
+    }
+    RTCIntersectContext context;
+    if (nc) {
+      rtcInitIntersectContext(&context);
+      rtcIntersect1M(impl_->top, &context, closest, nc, sizeof(RTCRayHit));
+      for (unsigned k = 0; k < nc; ++k) hits[closestIndex[k]] = fromEmbree(closest[k]);
+    }
+    if (ns) {
+      rtcInitIntersectContext(&context);
+      rtcOccluded1M(impl_->top, &context, shadow, ns, sizeof(RTCRay));
+      for (unsigned k = 0; k < ns; ++k) occluded[shadowIndex[k]] = shadow[k].tfar < 0;
+    }
+  }
 }
 
 Box3f LocalGeometry::bounds() const {

@@ -34,6 +34,13 @@ struct TraceHit {
   bool valid() const { return instance >= 0; }
 };
 
+// What traceBatch asks about one ray.
+enum class TraceQuery : uint8_t {
+  None,     // nothing: the ray is skipped, its answer left unset
+  Closest,  // the closest hit (rtcIntersect)
+  Occluded  // whether anything is hit (rtcOccluded)
+};
+
 class LocalGeometry {
  public:
   // Builds Embree structures over `ownedInstances` of `scene` (all instances
@@ -52,6 +59,13 @@ class LocalGeometry {
   // rtcOccluded1M), see docs/performance.md for why.
   void intersect(std::span<const TraceRay> rays, std::span<TraceHit> hits) const;
   void occluded(std::span<const TraceRay> rays, std::span<uint8_t> occluded) const;
+  // A mixed batch, traced on the calling thread (callers parallelize over
+  // batches; a few hundred rays each keeps the arrays in cache): ray i is
+  // skipped, or its closest hit goes to hits[i], or its occlusion to
+  // occluded[i]. Entries of other kinds are left as they are. Same Embree
+  // stream queries as the parallel calls above, so the same answers.
+  void traceBatch(std::span<const TraceRay> rays, std::span<const TraceQuery> queries,
+                  std::span<TraceHit> hits, std::span<uint8_t> occluded) const;
 
   const Scene& scene() const { return scene_; }
   Box3f bounds() const;
