@@ -203,6 +203,12 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, std
         destination[i] = decisionToDestination(d, moving[i], rank);
       }
     });
+    if (mode_ == ForwardingMode::Proxies) {
+      // One proxy query per decision, except for shadow rays already occluded (dropped without one).
+      uint64_t queries = 0;
+      for (const Path& p : moving) queries += !(p.isShadow() && p.has(kPathOccluded));
+      stats.proxyQueries += queries;
+    }
     // Split: kept, dropped, and leaving.
     std::vector<Path> leaving;
     std::vector<int> leavingTo;

@@ -39,7 +39,7 @@ struct FrameStats {
   uint64_t occlusionTraces = 0;  // local shadow-ray traces
   uint64_t retraces = 0;         // shading re-traces
   uint64_t retraceMisses = 0;    // re-traces that did not find the hit again (should be 0)
-  uint64_t proxyQueries = 0;
+  uint64_t proxyQueries = 0;     // proxy-BVH queries: camera-ray ownership and forwarding decisions
   uint64_t replayQueries = 0;  // replay layout: proxy queries spent recomputing visited sets
   std::vector<ExchangeCounters> perBounce;
   StageTimes times;

@@ -121,6 +121,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, std::vect
     const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
     staging_.resize(pixels);
     blockCounts_.assign(blocks, 0);
+    std::atomic<uint64_t> proxyQueries{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
       FrameStats local;
       for (size_t b = range.begin(); b != range.end(); ++b) {
@@ -133,7 +134,9 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, std::vect
         }
         blockCounts_[b] = kept;
       }
+      proxyQueries += local.proxyQueries;
     });
+    stats.proxyQueries += proxyQueries;
     concatenateBlocks(staging_, kBlock, blockCounts_, rays);
   }
   stats.cameraPaths += rays.size();

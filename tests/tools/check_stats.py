@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Checks the invariants of a multi-rank render's --stats JSON: no ray traced
 twice on a rank, rays forwarded (counted by senders) equal rays received
-(counted by receivers), and every shading re-trace found its hit."""
+(counted by receivers), every shading re-trace found its hit, and, with proxy
+forwarding, every rank asked the proxies about every camera ray."""
 import json
 import sys
 
@@ -11,5 +12,9 @@ fwd = r["total"]["exchange"]["rays_forwarded"]
 assert r["revisits"] == 0, f"{r['revisits']} rays revisited a rank"
 assert r["rays_received"] == fwd, f"forwarded {fwd} but received {r['rays_received']}"
 assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
+if s["settings"]["forwarding"] == "proxies" and s["settings"]["ranks"] > 1:
+    camera = r["total"]["camera_paths"]
+    queries = r["total"]["traces"]["proxy_queries"]
+    assert queries >= s["settings"]["ranks"] * camera, f"{queries} proxy queries for {camera} camera paths"
 print(f"  forwarded {fwd}, rounds {r['total']['exchange']['rounds']}, "
       f"max estimated bytes per rank {s['memory']['max_estimated_bytes']:.0f}")
