@@ -15,12 +15,8 @@
 set -euo pipefail
 ferry=$1
 source_dir=$2
-source "$source_dir/tests/tools/mpi_env.sh"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-compare="python3 $source_dir/tests/tools/compare_pfm.py"
+source "$source_dir/tests/tools/multirank_test_env.sh"
 
-check_stats() { python3 "$source_dir/tests/tools/check_stats.py" "$1"; }
 
 run_scene() {
   local scene=$1 args=$2

@@ -18,14 +18,10 @@
 set -euo pipefail
 ferry=$1
 source_dir=$2
-source "$source_dir/tests/tools/mpi_env.sh"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-compare="python3 $source_dir/tests/tools/compare_pfm.py"
+source "$source_dir/tests/tools/multirank_test_env.sh"
 partitioners="spatial-simple spatial-sah object-naive object-proxies bvh-style best"
 start=$SECONDS
 
-check_stats() { python3 "$source_dir/tests/tools/check_stats.py" "$1"; }
 
 cornell="builtin:cornell"
 cornell_args="--size 40x40 --spp 2 --max-depth 4 --seed 3 -q"

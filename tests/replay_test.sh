@@ -13,11 +13,7 @@
 set -euo pipefail
 ferry=$1
 source_dir=$2
-source "$source_dir/tests/tools/mpi_env.sh"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-compare="python3 $source_dir/tests/tools/compare_pfm.py"
-check_stats() { python3 "$source_dir/tests/tools/check_stats.py" "$1"; }
+source "$source_dir/tests/tools/multirank_test_env.sh"
 start=$SECONDS
 
 cornell="builtin:cornell"
