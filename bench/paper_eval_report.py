@@ -167,7 +167,10 @@ def mrays(x):
 
 
 def rel(x, base):
-    return f"{x / base:.1f}×" if base > 0 else "–"
+    if base <= 0:
+        return "–"
+    r = x / base
+    return f"{r:.1f}×" if r >= 0.95 else f"{r:.2f}×"
 
 
 def mib(x):
@@ -206,6 +209,13 @@ if meta["net"] == "netns":
 else:
     w("**The network.** This run used plain `mpirun` on one host (`NET=local`): no link limits.")
 w("")
+retries = open(f"{work}/retries.txt").read().split() if os.path.exists(f"{work}/retries.txt") else []
+if meta["net"] == "netns" or retries:
+    w(f"Hung runs: {len(retries)} render(s) did not finish within the command's time limit and were ended and "
+      "run again" + (" (" + ", ".join(r.replace("~", " ") for r in retries) + ")" if retries else "")
+      + ". The hang seen while writing this command: mpirun waiting for the daemon of one namespace, which "
+      "never started.")
+    w("")
 if checked:
     w(f"Determinism: the {checked} configurations rendered twice ({' and '.join(rate_name(r) for r in RATES)}) "
       "gave identical counts (rays forwarded, bytes, rounds, rays traced, camera paths) both times; the "
@@ -219,20 +229,27 @@ w("Rays forwarded across all ranks and bounces for one frame, `proxies` forwardi
   "to `best` (as the paper's red factors); the smallest in each row in bold. Below each of our rows, the "
   "paper's (millions at 2560×1080; its island \"top\" is our overview).")
 w("")
-w("| scene | view | " + " | ".join(PARTS) + " |")
-w("|---|---|" + "---:|" * len(PARTS))
-for s in SCENES:
-    for v in VIEWS[s]:
-        row = [runs[s, v, p, "proxies", RATE0]["forwarded"] for p in PARTS]
-        base = row[PARTS.index("best")] if "best" in PARTS else min(row)
-        cells = []
-        for x in row:
-            c = f"{mrays(x)} ({rel(x, base)})"
-            cells.append(f"**{c}**" if x == min(row) else c)
-        w(f"| {s} | {v} | " + " | ".join(cells) + " |")
-        if (s, v) in PAPER_FWD:
-            pr = dict(zip(PAPER_ORDER, PAPER_FWD[s, v]))
-            w(f"| | *paper* | " + " | ".join(f"*{pr[p]}M ({pr[p] / pr['best']:.1f}×)*" for p in PARTS) + " |")
+
+
+def table1(with_paper):
+    t = ["| scene | view | " + " | ".join(PARTS) + " |", "|---|---|" + "---:|" * len(PARTS)]
+    for s in SCENES:
+        for v in VIEWS[s]:
+            row = [runs[s, v, p, "proxies", RATE0]["forwarded"] for p in PARTS]
+            base = row[PARTS.index("best")] if "best" in PARTS else min(row)
+            cells = []
+            for x in row:
+                c = f"{mrays(x)} ({rel(x, base)})"
+                cells.append(f"**{c}**" if x == min(row) else c)
+            t.append(f"| {s} | {v} | " + " | ".join(cells) + " |")
+            if with_paper and (s, v) in PAPER_FWD:
+                pr = dict(zip(PAPER_ORDER, PAPER_FWD[s, v]))
+                t.append("| | *paper* | " + " | ".join(f"*{pr[p]}M ({pr[p] / pr['best']:.1f}×)*" for p in PARTS) + " |")
+    return t
+
+
+for line in table1(True):
+    w(line)
 w("")
 w("![rays forwarded](images/eval/forwarded.png)")
 w("")
@@ -373,6 +390,7 @@ for para in discussion(runs, manifests, SCENES, VIEWS, PARTS, RATES, meta, PAPER
     w("")
 
 # Swap in the images, then the text (each through a temporary name and a rename).
+os.makedirs(out, exist_ok=True)
 md_tmp = f"{out}/evaluation.md.tmp"
 with open(md_tmp, "w") as f:
     f.write("\n".join(L).rstrip() + "\n")
@@ -384,6 +402,20 @@ if os.path.isdir(img_final):
 os.rename(f"{out}/images/eval.tmp", img_final)
 shutil.rmtree(f"{out}/images/eval.old", ignore_errors=True)
 os.replace(md_tmp, f"{out}/evaluation.md")
+
+# The README shows Table 1 between two markers (when given the README).
+if len(sys.argv) > 3 and os.path.exists(sys.argv[3]):
+    readme = open(sys.argv[3]).read()
+    begin, end = "<!-- paper-eval: table 1 -->", "<!-- /paper-eval -->"
+    if begin in readme and end in readme:
+        head, rest = readme.split(begin, 1)
+        _, tail = rest.split(end, 1)
+        snippet = [begin, "", f"Rays forwarded per frame at 8 ranks, {meta['size']}, 1 path per pixel "
+                   f"(relative to `best`; smallest in bold; Ferry {meta['commit']}, {meta['date']}):", ""]
+        snippet += table1(False) + ["", end]
+        with open(sys.argv[3] + ".tmp", "w") as f:
+            f.write(head + "\n".join(snippet) + tail)
+        os.replace(sys.argv[3] + ".tmp", sys.argv[3])
 
 # Table 1 on stdout, for the terminal and the README.
 print("\nrays forwarded per frame, relative to best:")
