@@ -82,8 +82,11 @@ netns_rate() {
 # hosts. Ranks on one host also talk TCP, over the host's own address (that
 # stays inside the namespace, off the limited link): Open MPI's shared-memory
 # transport (vader) crashes ranks started by `ip netns exec` here (SIGSEGV
-# with 2 ranks in one namespace; 1 per namespace and plain mpirun are fine). Ends in `exec mpirun`, so run in the
-# background its process id is mpirun's.
+# with 2 ranks in one namespace; 1 per namespace and plain mpirun are fine).
+# Daemons are started one at a time, and mpirun gives up if they have not all
+# reported within NETNS_STARTUP_TIMEOUT (30) seconds: with concurrent
+# launches, a daemon sometimes never started and mpirun waited forever.
+# Ends in `exec mpirun`, so run in the background its process id is mpirun's.
 netns_mpirun() {
   local np=$1 i hostfile="/tmp/$NETNS_PREFIX-hosts-$1"
   shift
@@ -96,6 +99,7 @@ netns_mpirun() {
     --mca plm rsh --mca plm_rsh_agent "$_netns_dir/netns-agent" --mca plm_rsh_no_tree_spawn 1 \
     --mca btl tcp,self --mca btl_tcp_if_include "$NETNS_SUBNET.0/24" \
     --mca oob_tcp_if_include "$NETNS_SUBNET.0/24" --mca mpi_yield_when_idle 1 \
+    --mca orte_startup_timeout "${NETNS_STARTUP_TIMEOUT:-30}" --mca plm_rsh_num_concurrent 1 \
     "$@"
 }
 

@@ -211,10 +211,11 @@ else:
 w("")
 retries = open(f"{work}/retries.txt").read().split() if os.path.exists(f"{work}/retries.txt") else []
 if meta["net"] == "netns" or retries:
-    w(f"Hung runs: {len(retries)} render(s) did not finish within the command's time limit and were ended and "
-      "run again" + (" (" + ", ".join(r.replace("~", " ") for r in retries) + ")" if retries else "")
-      + ". The hang seen while writing this command: mpirun waiting for the daemon of one namespace, which "
-      "never started.")
+    w(f"Retries: {len(retries)} render(s) failed or hung and were run again"
+      + (" (" + ", ".join(r.replace("~", " ") for r in retries) + ")" if retries else "")
+      + ". Seen while writing this command: mpirun waiting forever for the daemon of one namespace, which "
+      "never started (2 of about 40 launches); with launches one at a time and Open MPI's startup timeout "
+      "(bench/netns.sh) it did not recur in the tries since.")
     w("")
 if checked:
     w(f"Determinism: the {checked} configurations rendered twice ({' and '.join(rate_name(r) for r in RATES)}) "
