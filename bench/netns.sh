@@ -78,15 +78,11 @@ netns_rate() {
 
 # netns_mpirun NP COMMAND...: Open MPI with the ranks on the namespaces, NP /
 # NETNS_HOSTS per host (filled in order): a hostfile of their addresses,
-# daemons started by bench/netns-agent (ip netns exec, no ssh), TCP between
-# hosts. Ranks on one host also talk TCP, over the host's own address (that
-# stays inside the namespace, off the limited link): Open MPI's shared-memory
-# transport (vader) crashes ranks started by `ip netns exec` here (SIGSEGV
-# with 2 ranks in one namespace; 1 per namespace and plain mpirun are fine).
-# Daemons are started one at a time, and mpirun gives up if they have not all
-# reported within NETNS_STARTUP_TIMEOUT (30) seconds: with concurrent
-# launches, a daemon sometimes never started and mpirun waited forever.
-# Ends in `exec mpirun`, so run in the background its process id is mpirun's.
+# daemons started by bench/netns-agent (ip netns exec, no ssh, each host with
+# a host name of its own), TCP between hosts, shared memory within one.
+# mpirun gives up if the daemons have not all reported within
+# NETNS_STARTUP_TIMEOUT (30) seconds. Ends in `exec mpirun`, so run in the
+# background its process id is mpirun's.
 netns_mpirun() {
   local np=$1 i hostfile="/tmp/$NETNS_PREFIX-hosts-$1"
   shift
@@ -97,9 +93,10 @@ netns_mpirun() {
   OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 \
     exec mpirun --hostfile "$hostfile" -np "$np" --map-by slot \
     --mca plm rsh --mca plm_rsh_agent "$_netns_dir/netns-agent" --mca plm_rsh_no_tree_spawn 1 \
-    --mca btl tcp,self --mca btl_tcp_if_include "$NETNS_SUBNET.0/24" \
+    --mca btl "${NETNS_BTL:-tcp,vader,self}" --mca btl_vader_single_copy_mechanism none \
+    --mca btl_tcp_if_include "$NETNS_SUBNET.0/24" \
     --mca oob_tcp_if_include "$NETNS_SUBNET.0/24" --mca mpi_yield_when_idle 1 \
-    --mca orte_startup_timeout "${NETNS_STARTUP_TIMEOUT:-30}" --mca plm_rsh_num_concurrent 1 \
+    --mca orte_startup_timeout "${NETNS_STARTUP_TIMEOUT:-30}" \
     "$@"
 }
 

@@ -228,8 +228,8 @@ def bites(rate, tp):
 if meta["net"] == "netns":
     tp = dict(line.split() for line in open(f"{work}/throughput.txt"))
     w("**The network.** The 8 ranks run as 4 hosts of 2 ranks: 4 network namespaces on this machine, each "
-      "with a veth pair into one bridge, Open MPI 4.1 over TCP between hosts and also within one (Open MPI's "
-      "shared-memory transport crashed with two ranks in one namespace), daemons started by `ip netns exec` instead of ssh (`bench/netns.sh`, `bench/netns-agent`). `tc` "
+      "with a veth pair into one bridge, Open MPI 4.1 over TCP between hosts (shared memory within one), "
+      "daemons started by `ip netns exec` instead of ssh, each host with a host name of its own (`bench/netns.sh`, `bench/netns-agent`). `tc` "
       "token buckets limit every host's link, both directions, to 10 Gbit/s (the paper's network) and to "
       "1 Gbit/s. Measured TCP throughput between two hosts, one Python stream, at each setting: "
       + ", ".join(f"{'no limit' if k == 'none' else rate_name(k)}: **{float(v) / 1000:.2f} Gbit/s**"
@@ -242,10 +242,11 @@ retries = open(f"{work}/retries.txt").read().split() if os.path.exists(f"{work}/
 if meta["net"] == "netns" or retries:
     w(f"Retries: {len(retries)} render(s) failed or hung and were run again"
       + (" (" + ", ".join(r.replace("~", " ") for r in retries) + ")" if retries else "")
-      + ". While this command was written, mpirun sometimes waited forever for the daemon of one namespace, "
-      "which never started (about 2 in 100 launches; launching daemons one at a time and Open MPI's startup "
-      "timeout, bench/netns.sh, did not stop it). The cause is not found; the retried runs are whole "
-      "runs, and their counts are the same as every other run's of that configuration.")
+      + ". A safety net: while this command was written, mpirun sometimes waited forever for a daemon that "
+      "never started (3 in 100 launches), and shared memory between two ranks of one namespace crashed. "
+      "The cause: all 4 \"hosts\" had the same host name, so Open MPI's session directories and "
+      "shared-memory files, named after it, collided on the one /tmp. Since each namespace gets its own "
+      "host name (bench/netns-agent), 150 launches went through without a hang or a failure.")
     w("")
 if checked:
     w(f"Determinism: the {checked} configurations rendered twice ({' and '.join(rate_name(r) for r in RATES)}) "
