@@ -57,8 +57,9 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
     txt = (head + "First, at 8 ranks the spatial partitions hardly partition these scenes: the largest spatial "
            "part holds " + ", ".join(f"{100 * sp_largest[s]:.0f}% of the {s}" for s in scenes)
            + " (`best`: " + ", ".join(f"{100 * best_largest[s]:.0f}%" for s in scenes) + "). "
-           "Each built-in scene has one terrain mesh that is most of its bytes and spans every domain, so "
-           "every spatial rank holds nearly all of it, and its proxies are "
+           "Each built-in scene's largest piece is one terrain mesh (61% of the island's bytes, a third of "
+           "the landscape's; docs/partitioning.md) spanning every domain, so every spatial rank holds "
+           "nearly all of it, and its proxies are "
            + " and ".join(f"{sp_proxies[s]}" for s in scenes) + " disjoint domain boxes: a ray is forwarded "
            "only when it leaves its rank's domain without a hit. `best` has "
            + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (one per instance or terrain "
