@@ -12,7 +12,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libopenexr-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3
+  python3 python3-matplotlib   # python3-matplotlib: the plots of bench/paper-eval
 )
 
 missing=()

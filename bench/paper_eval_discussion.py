@@ -1,0 +1,149 @@
+"""The "against the paper" section of docs/evaluation.md: every number is
+taken from the runs, and the wording follows the numbers (agree / do not)."""
+import statistics
+
+SPATIAL = ["spatial-simple", "spatial-sah"]
+MiB = 2**20
+
+
+def _span(values, fmt="{:.1f}"):
+    lo, hi = min(values), max(values)
+    return fmt.format(lo) if abs(hi - lo) < 0.05 * max(hi, 1e-9) else f"{fmt.format(lo)}–{fmt.format(hi)}"
+
+
+def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, paper_fps, rate_name=str):
+    out = []
+    r0 = rates[0]
+    have = "best" in parts and any(p in parts for p in SPATIAL)
+    if not have:
+        return ["(This run did not include both `best` and a spatial partitioner; no comparison.)"]
+    spatial = [p for p in SPATIAL if p in parts]
+
+    # Rays forwarded: best against the best spatial partitioner, per view.
+    ratios = {}
+    for s in scenes:
+        for v in views[s]:
+            best = runs[s, v, "best", "proxies", r0]["forwarded"]
+            sp = min(runs[s, v, p, "proxies", r0]["forwarded"] for p in spatial)
+            ratios[s, v] = sp / best if best else float("inf")
+    fewer = [k for k, x in ratios.items() if x > 1]
+    more = [k for k, x in ratios.items() if x <= 1]
+    txt = ("**Rays forwarded.** The paper's `best` needs 2–35× fewer forwards than its best spatial partitioner "
+           "on every view (Table 1). ")
+    if fewer:
+        txt += (f"Ferry's `best` needs fewer on {len(fewer)} of {len(ratios)} views ("
+                + ", ".join(f"{s} {v} {ratios[s, v]:.1f}×" for s, v in fewer) + "). ")
+    if more:
+        txt += (f"On {'the other ' if fewer else ''}{len(more)} view{'s' if len(more) > 1 else ''} it needs "
+                "*more* than the best spatial partition: "
+                + ", ".join(f"{s} {v} {1 / ratios[s, v]:.1f}×" for s, v in more) + ". ")
+    if "object-naive" in parts and "object-proxies" in parts:
+        cut = {(s, v): runs[s, v, "object-naive", "proxies", r0]["forwarded"]
+               / max(1, runs[s, v, "object-proxies", "proxies", r0]["forwarded"]) for s in scenes for v in views[s]}
+        txt += ("Proxies against naive object boxes on the same object parts: `object-proxies` forwards "
+                + ", ".join(f"{s} {v} {x:.1f}×" for (s, v), x in cut.items())
+                + " fewer than `object-naive` (the paper: 1.7–2.6× fewer on the island, but 2.4–5.9× *more* "
+                "on the landscape).")
+    out.append(txt)
+
+    # Why: how much of the scene a spatial rank holds.
+    sp_largest = {s: min(manifests[s, p]["largest"] for p in spatial) for s in scenes}
+    best_largest = {s: manifests[s, "best"]["largest"] for s in scenes}
+    per_path = _span([runs[s, v, "best", "proxies", r0]["forwarded"] / runs[s, v, "best", "proxies", r0]["paths"]
+                      for s in scenes for v in views[s]], "{:.2f}")
+    sp_proxies = {s: max(manifests[s, p]["proxies"] for p in spatial) for s in scenes}
+    best_proxies = {s: manifests[s, "best"]["proxies"] for s in scenes}
+    head = "**Why `best` forwards more than spatial here.** " if more else "**Why.** "
+    txt = (head + "First, at 8 ranks the spatial partitions hardly partition these scenes: the largest spatial "
+           "part holds " + ", ".join(f"{100 * sp_largest[s]:.0f}% of the {s}" for s in scenes)
+           + " (`best`: " + ", ".join(f"{100 * best_largest[s]:.0f}%" for s in scenes) + "). "
+           "Each built-in scene's largest piece is one terrain mesh (61% of the island's bytes, a third of "
+           "the landscape's; docs/partitioning.md) spanning every domain, so every spatial rank holds "
+           "nearly all of it, and its proxies are "
+           + " and ".join(f"{sp_proxies[s]}" for s in scenes) + " disjoint domain boxes: a ray is forwarded "
+           "only when it leaves its rank's domain without a hit. `best` has "
+           + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (one per instance or terrain "
+           "piece) that overlap wherever plants of different ranks stand together, and a ray passing such "
+           "proxies in front of its hit must visit each of their owners. ")
+    if more:
+        txt += ("Second, in our scenes every plant species is spread over the whole terrain "
+                "(docs/partitioning.md), so plants of several ranks stand together everywhere; on the landscape, "
+                "keeping each species' instances together (which `best` does to save memory) was measured to "
+                "raise forwards from 1.5 to 3.6 per path (docs/partitioning.md, scale 0.25). The paper's Moana "
+                "island is a different scene (far more geometry above the ground, vegetation that varies by "
+                "region); that its `best` forwards less there is the paper's result, which these stand-in "
+                "scenes do not reproduce (we have not run the real Moana island). ")
+    txt += f"Per camera path, our `best` forwards {per_path} rays, the paper's 0.04–1.0."
+    out.append(txt)
+
+    # Forwarding modes, where run.
+    modes = [(s, v) for s in scenes for v in views[s] if (s, v, "best", "ring", r0) in runs
+             and (s, v, "best", "broadcast", r0) in runs]
+    if modes:
+        ring = [runs[s, v, "best", "ring", r0]["forwarded"] / runs[s, v, "best", "proxies", r0]["forwarded"]
+                for s, v in modes]
+        bc = [runs[s, v, "best", "broadcast", r0]["forwarded"] / runs[s, v, "best", "proxies", r0]["forwarded"]
+              for s, v in modes]
+        rounds = [runs[s, v, "best", "ring", r0]["rounds"] / runs[s, v, "best", "proxies", r0]["rounds"]
+                  for s, v in modes]
+        out.append(
+            "**Proxies against ring and broadcast.** This agrees with the paper's motivation: on the same "
+            f"`best` parts, ring forwarding (barney) sends {_span(ring)}× as many rays as proxies, with "
+            f"{_span(rounds)}× the exchange rounds, and broadcast (Kilauea) {_span(bc)}× as many.")
+
+    # Memory.
+    mem = []
+    for s in scenes:
+        v = views[s][0]
+        b = runs[s, v, "best", "proxies", r0]
+        sp = min((runs[s, v, p, "proxies", r0] for p in spatial), key=lambda x: x["mem_est"])
+        mem.append((s, b, sp))
+    out.append(
+        "**Memory.** The paper's island needs 25 GB on its largest GPU with `best` against 48 GB spatial "
+        "(1.9×); its landscape 3.7 against 4.8 GB (1.3×). Ferry agrees in direction and by more: the largest "
+        "rank's model estimate with `best` against the better spatial partition is "
+        + "; ".join(f"{s} {b['mem_est'] / MiB:.0f} against {sp['mem_est'] / MiB:.0f} MiB "
+                    f"({sp['mem_est'] / b['mem_est']:.1f}×), Embree's own figure {b['mem_embree'] / MiB:.0f} "
+                    f"against {sp['mem_embree'] / MiB:.0f} MiB, peak resident {b['mem_rss'] / MiB:.0f} against "
+                    f"{sp['mem_rss'] / MiB:.0f} MiB" for s, b, sp in mem)
+        + ". The resident figures include what every rank has whatever it owns (proxies, lights, frame "
+        "buffer, ray queues, the MPI library), which narrows the ratio. The reason is the paper's: spatial "
+        "planes cannot split content that straddles them, and `best` cuts the large meshes first.")
+
+    # Frame time and the network.
+    ft = []
+    for s in scenes:
+        for v in views[s]:
+            b = runs[s, v, "best", "proxies", r0]["seconds"]
+            sp = min(runs[s, v, p, "proxies", r0]["seconds"] for p in spatial)
+            ft.append((s, v, sp / b))
+    txt = ("**Frame time.** In the paper `best` renders 1.2–3.0× faster than spatial (Figure 5: e.g. island "
+           "default 7.9 against 3.0 fps), because its network carries fewer rays. Here, at "
+           f"{meta['size']} on 8 ranks time-sliced onto {meta['cores']} cores, `best` against the faster "
+           "spatial partition is " + ", ".join(f"{s} {v} {x:.2f}×" for s, v, x in ft)
+           + " as fast (above 1: `best` faster). ")
+    if len(rates) > 1 and meta["net"] == "netns":
+        slow = rates[-1]
+        ratios = [runs[s, v, p, "proxies", slow]["seconds"] / runs[s, v, p, "proxies", r0]["seconds"]
+                  for s in scenes for v in views[s] for p in parts if (s, v, p, "proxies", slow) in runs]
+        mib = [runs[s, v, p, "proxies", r0]["bytes"] / MiB for s in scenes for v in views[s] for p in parts]
+        frame = [runs[s, v, p, "proxies", r0]["seconds"] for s in scenes for v in views[s] for p in parts]
+        txt += (f"Going from {rate_name(r0)} to {rate_name(slow)} changes frame time by a factor of "
+                f"{min(ratios):.2f}–{max(ratios):.2f} (slower at {rate_name(slow)} in {sum(x > 1 for x in ratios)} of "
+                f"{len(ratios)} configurations, median {statistics.median(ratios):.2f}): "
+                + ("the rate makes no difference that this run can see through the noise of a shared machine."
+                   if 0.9 < statistics.median(ratios) < 1.1 else "mostly the rate, partly the noise of a shared machine.")
+                + f" A frame sends {min(mib):.1f}–{max(mib):.1f} MiB, which even serialized through one "
+                f"1 Gbit/s link takes at most {max(mib) * 8 * MiB / 1e9:.2f} s, against frame times of "
+                f"{min(frame):.1f}–{max(frame):.1f} s. On this machine the network is not the bottleneck: 8 ranks "
+                "share 2 cores, so tracing, shading and the collectives of every exchange round (each waits for "
+                "the slowest, time-sliced rank) take the time. The paper's premise, a 10 Gbit/s network slower "
+                "than 8 GPUs, needs far more compute per rank than this machine has; at the paper's 2560×1080 "
+                "the bytes grow 64×, but so does the tracing.")
+    out.append(txt)
+    out.append(
+        "**Other differences.** The scenes are Ferry's procedural stand-ins for Moana's island and pbrt's "
+        "landscape (docs/partitioning.md), not the originals; 1 path per pixel at a smaller image than the "
+        "paper's, so the absolute counts are smaller by the pixel ratio (the per-path table compares like "
+        "with like); CPU ranks (Embree) instead of GPUs (OptiX); max depth 5.")
+    return out
