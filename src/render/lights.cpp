@@ -55,7 +55,8 @@ float sunConePdf(const SunLight& sun) {
 LightSampler::LightSampler(const Scene& scene) : suns_(scene.suns), environment_(scene.environment) {
   for (const SunLight& sun : suns_)
     sunConstants_.push_back({sunRadiance(sun), sunConePdf(sun), oneMinusCos(sun.angularRadius),
-                             2 * std::sin(0.5f * sun.angularRadius), luminance(sun.irradiance)});
+                             2 * std::sin(0.5f * sun.angularRadius), luminance(sun.irradiance),
+                             Frame(sun.direction)});
   if (environment_.image) {
     const HdrImage& img = *environment_.image;
     std::vector<float> weights(size_t(img.width) * img.height);
@@ -231,7 +232,7 @@ bool LightSampler::sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f 
     float cosTheta = 1 - oneMinusCosTheta;
     float sinTheta = std::sqrt(std::max(0.0f, oneMinusCosTheta * (2 - oneMinusCosTheta)));
     float phi = 2 * kPi * u.y;
-    out.direction = Frame(sun.direction).toWorld({sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta});
+    out.direction = constants.frame.toWorld({sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta});
     out.distance = kInfinity;
     out.radiance = constants.radiance;
     out.pdf = constants.conePdf * selection;

@@ -68,6 +68,7 @@ class LightSampler {
     float oneMinusCosRadius;
     float chordRadius;  // 2 sin(r / 2): the cone test on |d - s|
     float selectionWeight;  // luminance(irradiance)
+    Frame frame;  // Frame(direction), for sampling the cone
   };
   std::vector<SunConstants> sunConstants_;
   EnvironmentLight environment_;

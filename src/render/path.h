@@ -44,10 +44,10 @@ struct PathCore {
     pixelAndFlags = (pixel << (32 - kPixelBits)) | (flags & kPathFlagMask);
   }
 
-  Vec3f dir() const {
+  [[gnu::always_inline]] Vec3f dir() const {
     return {halfToFloat(direction[0]), halfToFloat(direction[1]), halfToFloat(direction[2])};
   }
-  Vec3f weight() const {
+  [[gnu::always_inline]] Vec3f weight() const {
     return {halfToFloat(throughput[0]), halfToFloat(throughput[1]), halfToFloat(throughput[2])};
   }
   // The direction is quantized here, when the ray is made, so every rank

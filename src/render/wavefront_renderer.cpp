@@ -37,7 +37,7 @@ void setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, ui
 }
 
 // Contributions that cannot be represented are dropped rather than poisoning the image.
-bool usable(Vec3f c) { return isFinite(c) && maxComponent(c) > 0; }
+[[gnu::always_inline]] inline bool usable(Vec3f c) { return isFinite(c) && maxComponent(c) > 0; }
 
 }  // namespace
 
