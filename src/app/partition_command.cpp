@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "app/render_command.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/process_memory.h"
 #include "dist/communicator.h"
@@ -22,10 +23,6 @@
 namespace ferry {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 PartitionerOptions partitionerOptions(const PartitionCommandOptions& o) {
   PartitionerOptions p;

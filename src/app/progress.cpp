@@ -9,7 +9,7 @@ namespace ferry {
 
 Progress::Progress(std::string label, int total, bool enabled)
     : label_(std::move(label)), total_(total), enabled_(enabled), terminal_(isatty(STDERR_FILENO) != 0),
-      start_(std::chrono::steady_clock::now()) {}
+      start_(Clock::now()) {}
 
 Progress::~Progress() {
   if (enabled_ && terminal_ && !finished_) fmt::print(stderr, "\n");
@@ -17,7 +17,7 @@ Progress::~Progress() {
 
 void Progress::update(int done, const std::string& detail) {
   if (!enabled_) return;
-  double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  double elapsed = secondsSince(start_);
   double fraction = total_ > 0 ? double(done) / total_ : 1.0;
   if (terminal_) {
     constexpr int kWidth = 30;

@@ -2,8 +2,9 @@
 // line per step when it is not (logs, CI, mpirun without a tty).
 #pragma once
 
-#include <chrono>
 #include <string>
+
+#include "core/clock.h"
 
 namespace ferry {
 
@@ -21,7 +22,7 @@ class Progress {
   bool enabled_;
   bool terminal_;
   bool finished_ = false;
-  std::chrono::steady_clock::time_point start_;
+  Clock::time_point start_;
 };
 
 }  // namespace ferry

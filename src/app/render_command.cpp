@@ -18,6 +18,7 @@
 #include "app/image_output.h"
 #include "app/partition_command.h"
 #include "app/progress.h"
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/process_memory.h"
 #include "dist/communicator.h"
@@ -37,8 +38,6 @@
 namespace ferry {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 void validate(const RenderOptions& o) {
   if (o.samplesPerPixel < 1) throw InputError(fmt::format("--spp {}: must be at least 1", o.samplesPerPixel));

@@ -14,13 +14,12 @@
 
 #include <fmt/format.h>
 
+#include "core/clock.h"
 #include "core/error.h"
 
 namespace ferry {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 constexpr int kShadeHere = -1;
 constexpr int kDrop = -2;
@@ -191,8 +190,11 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, std
   for (;;) {
     auto start = Clock::now();
     std::vector<int> destination(moving.size());
+    std::atomic<uint64_t> proxyQueries{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, moving.size(), 1024), [&](const auto& range) {
+      uint64_t queries = 0;  // one per proxies decision, except for shadow rays already occluded (dropped)
       for (size_t i = range.begin(); i != range.end(); ++i) {
+        if (mode_ == ForwardingMode::Proxies) queries += !(moving[i].isShadow() && moving[i].has(kPathOccluded));
         ForwardDecision d;
         if (mode_ == ForwardingMode::Ring)
           d = forwardByRing(moving[i], rank, ranks);
@@ -202,13 +204,9 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, std
           d = forwardByProxies(proxies_, moving[i], rank);
         destination[i] = decisionToDestination(d, moving[i], rank);
       }
+      proxyQueries += queries;
     });
-    if (mode_ == ForwardingMode::Proxies) {
-      // One proxy query per decision, except for shadow rays already occluded (dropped without one).
-      uint64_t queries = 0;
-      for (const Path& p : moving) queries += !(p.isShadow() && p.has(kPathOccluded));
-      stats.proxyQueries += queries;
-    }
+    stats.proxyQueries += proxyQueries;
     // Split: kept, dropped, and leaving.
     std::vector<Path> leaving;
     std::vector<int> leavingTo;

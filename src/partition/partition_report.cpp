@@ -4,10 +4,10 @@
 
 #include <algorithm>
 #include <charconv>
-#include <chrono>
 #include <cmath>
 #include <fstream>
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "io/image_io.h"
 #include "partition/canvas.h"
@@ -28,14 +28,13 @@ MaxPartReport maxPartReport(Scene scene, const std::string& sceneName, int minRa
     PartitionerOptions o = base;
     o.name = name;
     o.breakObjects = !whole;
-    auto start = std::chrono::steady_clock::now();
+    auto start = Clock::now();
     std::vector<uint64_t> curve = maxPartBytesCurve(s, o, maxRanks);
     MaxPartSeries series;
     series.partitioner = name;
     series.whole = whole;
     series.bytes.assign(curve.begin() + (minRanks - 1), curve.end());
-    series.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    series.seconds = secondsSince(start);
     report.series.push_back(std::move(series));
   };
   // Kept whole, the five that do not cut meshes leave the scene as it is;

@@ -3,9 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <chrono>
 #include <memory>
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "partition/hybrid_partitioner.h"
 #include "partition/object_partitioner.h"
@@ -93,7 +93,7 @@ void checkPartitionerName(const std::string& name) {
 
 Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
                          PartitionStats* stats) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   checkPartitionerName(o.name);
   if (ranks < 1 || ranks > kMaxRanks)
     throw InputError(fmt::format("{} ranks: partitions have 1 to {} ranks", ranks, kMaxRanks));
@@ -141,7 +141,7 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
   if (stats)  // a pass over the scene per rank: only when asked for
     for (int r = 0; r < ranks; ++r)
       s.rankBytes.push_back(ownedMemory(scene, partition.instancesOf(r)).total());
-  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  s.seconds = secondsSince(start);
   return partition;
 }
 

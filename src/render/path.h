@@ -4,7 +4,8 @@
 // It is deliberately a *ray plus history*, not a hit record: the closest hit
 // is remembered only as `tmax` and the ranks that own it (a mask, or in the
 // replay layout the one rank that found it), and the rank that shades
-// re-traces the ray to recover the full hit.
+// re-traces the ray to recover the full hit (unless that rank found the hit
+// itself in this wavefront: ray_traversal.h, --retrace).
 #pragma once
 
 #include <cstdint>

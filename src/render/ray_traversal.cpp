@@ -4,9 +4,9 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
-#include <chrono>
 #include <span>
 
+#include "core/clock.h"
 #include "render/path.h"
 
 namespace ferry {
@@ -14,7 +14,7 @@ namespace ferry {
 template <typename Path>
 void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int rank,
                   std::span<const uint64_t> instanceOwners, FrameStats& stats, TraceHit* found) {
-  auto start = std::chrono::steady_clock::now();
+  auto start = Clock::now();
   // Batches of closest-hit and shadow queries in queue order, built, traced and
   // applied on the worker thread that owns them (no whole-wavefront arrays, no
   // serial pass).
@@ -60,7 +60,7 @@ void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int ra
   });
   stats.closestTraces += closestCount;
   stats.occlusionTraces += shadowCount;
-  stats.times.trace += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.times.trace += secondsSince(start);
 }
 
 template void traceLocally<Path8>(const LocalGeometry&, std::vector<Path8>&, int, std::span<const uint64_t>,

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/clock.h"
 #include "core/error.h"
 #include "core/random.h"
 #include "render/bsdf.h"
@@ -18,10 +19,6 @@
 namespace ferry {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 // Paths whose bounce reaches this start playing Russian roulette.
 constexpr uint32_t kRouletteStartBounce = 3;
