@@ -119,45 +119,42 @@ for s in SCENES:
         key = (s, v, "best", "proxies", RATE0) if "best" in PARTS else (s, v, PARTS[0], "proxies", RATE0)
         shutil.copy(runs[key]["png"], f"{img_tmp}/view-{s}-{v}.png")
 
-# Figure 5: frame time per view and partitioner, at each rate.
 colors = plt.get_cmap("tab10").colors
-fig, axes = plt.subplots(1, len(SCENES), figsize=(6.5 * len(SCENES), 4.2), squeeze=False)
-for ax, s in zip(axes[0], SCENES):
-    groups = [(v, r) for v in VIEWS[s] for r in RATES]
-    width = 0.8 / len(PARTS)
-    for i, p in enumerate(PARTS):
-        xs = [g + (i - (len(PARTS) - 1) / 2) * width for g in range(len(groups))]
-        ys = [runs.get((s, v, p, "proxies", r), {}).get("seconds", 0) for v, r in groups]
-        ax.bar(xs, ys, width, label=p, color=colors[i % 10])
-    ax.set_xticks(range(len(groups)))
-    ax.set_xticklabels([f"{v}\n{rate_name(r)}" for v, r in groups], fontsize=8)
-    ax.set_ylabel("seconds per frame (slowest rank)")
-    ax.set_title(f"builtin:{s}, {meta['size']}, 8 ranks, 1 path/pixel")
-    ax.grid(axis="y", alpha=0.3)
-handles, labels = axes[0][0].get_legend_handles_labels()
-fig.legend(handles, labels, loc="lower center", ncol=len(PARTS), fontsize=8, frameon=False)
-fig.tight_layout(rect=(0, 0.07, 1, 1))
-fig.savefig(f"{img_tmp}/frame-times.png", dpi=90)
-plt.close(fig)
+
+
+def bar_chart(name, height, groups_of, value, tick_label, ylabel, title, tick_size=None):
+    """One panel per scene, a group of bars per entry of groups_of(scene), a bar
+    per partitioner (value(scene, group, partitioner)); one shared legend."""
+    fig, axes = plt.subplots(1, len(SCENES), figsize=(6.5 * len(SCENES), height), squeeze=False)
+    for ax, s in zip(axes[0], SCENES):
+        groups = groups_of(s)
+        width = 0.8 / len(PARTS)
+        for i, p in enumerate(PARTS):
+            xs = [g + (i - (len(PARTS) - 1) / 2) * width for g in range(len(groups))]
+            ys = [value(s, g, p) for g in groups]
+            ax.bar(xs, ys, width, label=p, color=colors[i % 10])
+        ax.set_xticks(range(len(groups)))
+        ax.set_xticklabels([tick_label(g) for g in groups], fontsize=tick_size)
+        ax.set_ylabel(ylabel)
+        ax.set_title(title(s))
+        ax.grid(axis="y", alpha=0.3)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(PARTS), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.savefig(f"{img_tmp}/{name}.png", dpi=90)
+    plt.close(fig)
+
+
+# Figure 5: frame time per view and partitioner, at each rate.
+bar_chart("frame-times", 4.2, lambda s: [(v, r) for v in VIEWS[s] for r in RATES],
+          lambda s, g, p: runs.get((s, g[0], p, "proxies", g[1]), {}).get("seconds", 0),
+          lambda g: f"{g[0]}\n{rate_name(g[1])}", "seconds per frame (slowest rank)",
+          lambda s: f"builtin:{s}, {meta['size']}, 8 ranks, 1 path/pixel", tick_size=8)
 
 # Table 1 as a chart too: rays forwarded per frame.
-fig, axes = plt.subplots(1, len(SCENES), figsize=(6.5 * len(SCENES), 3.8), squeeze=False)
-for ax, s in zip(axes[0], SCENES):
-    width = 0.8 / len(PARTS)
-    for i, p in enumerate(PARTS):
-        xs = [g + (i - (len(PARTS) - 1) / 2) * width for g in range(len(VIEWS[s]))]
-        ys = [runs[s, v, p, "proxies", RATE0]["forwarded"] / 1e6 for v in VIEWS[s]]
-        ax.bar(xs, ys, width, label=p, color=colors[i % 10])
-    ax.set_xticks(range(len(VIEWS[s])))
-    ax.set_xticklabels(VIEWS[s])
-    ax.set_ylabel("million rays forwarded per frame")
-    ax.set_title(f"builtin:{s}, {meta['size']}, 8 ranks")
-    ax.grid(axis="y", alpha=0.3)
-handles, labels = axes[0][0].get_legend_handles_labels()
-fig.legend(handles, labels, loc="lower center", ncol=len(PARTS), fontsize=8, frameon=False)
-fig.tight_layout(rect=(0, 0.07, 1, 1))
-fig.savefig(f"{img_tmp}/forwarded.png", dpi=90)
-plt.close(fig)
+bar_chart("forwarded", 3.8, lambda s: VIEWS[s],
+          lambda s, v, p: runs[s, v, p, "proxies", RATE0]["forwarded"] / 1e6,
+          lambda v: v, "million rays forwarded per frame", lambda s: f"builtin:{s}, {meta['size']}, 8 ranks")
 
 
 # ---------------------------------------------------------------- text
