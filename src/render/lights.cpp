@@ -224,7 +224,6 @@ bool LightSampler::sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f 
   float selection = r.probability();
 
   if (r.chosen < envIndex) {
-    const SunLight& sun = suns_[r.chosen - sunBase];
     const SunConstants& constants = sunConstants_[r.chosen - sunBase];
     // Uniform in the sun's cone, in terms of 1 - cos(theta) so that a small
     // cone keeps its precision.

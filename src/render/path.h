@@ -46,23 +46,19 @@ struct PathCore {
   }
 
   [[gnu::always_inline]] Vec3f dir() const {
-    return {halfToFloat(direction[0]), halfToFloat(direction[1]), halfToFloat(direction[2])};
+    Vec3f d;
+    halves3ToFloats(direction, &d.x);
+    return d;
   }
   [[gnu::always_inline]] Vec3f weight() const {
-    return {halfToFloat(throughput[0]), halfToFloat(throughput[1]), halfToFloat(throughput[2])};
+    Vec3f w;
+    halves3ToFloats(throughput, &w.x);
+    return w;
   }
   // The direction is quantized here, when the ray is made, so every rank
   // traces exactly the same ray whatever the rank count.
-  void setDir(Vec3f d) {
-    direction[0] = floatToHalf(d.x);
-    direction[1] = floatToHalf(d.y);
-    direction[2] = floatToHalf(d.z);
-  }
-  void setWeight(Vec3f w) {
-    throughput[0] = floatToHalf(w.x);
-    throughput[1] = floatToHalf(w.y);
-    throughput[2] = floatToHalf(w.z);
-  }
+  [[gnu::always_inline]] void setDir(Vec3f d) { floatsToHalves3(d.x, d.y, d.z, direction); }
+  [[gnu::always_inline]] void setWeight(Vec3f w) { floatsToHalves3(w.x, w.y, w.z, throughput); }
 };
 static_assert(sizeof(PathCore) == 32);
 
