@@ -65,7 +65,8 @@ TEST(Half, HardwareHalfToFloatEqualsSoftwareForEveryHalf) {
     ASSERT_EQ(bitsOf(halfToFloat(half(h))), bitsOf(halfToFloatSoftware(half(h)))) << "half 0x" << std::hex << h;
     half three[3] = {half(h), half(h ^ 0x8000u), half(h ^ 0x0155u)};
     float out[3];
-    halves3ToFloats(three, out);
+    halves3ToFloats(uint64_t(three[0]) | uint64_t(three[1]) << 16 | uint64_t(three[2]) << 32 | uint64_t(0xabcd) << 48,
+                    out);
     for (int k = 0; k < 3; ++k) ASSERT_EQ(bitsOf(out[k]), bitsOf(halfToFloatSoftware(three[k])));
   }
 }
@@ -84,6 +85,15 @@ TEST(Half, HardwareFloatToHalfEqualsSoftwareOnEveryRoundingCase) {
       ASSERT_EQ(floatToHalf(f), expected) << "float bits 0x" << std::hex << bitsOf(f);
       half three[3];
       floatsToHalves3(f, -f, 0.5f, three);
+      const float a[3] = {0.25f, f, -f}, b[3] = {f, 1e9f, -0.0f};
+      half six[6];
+      float back[3];
+      floatsToHalves6(a, b, six, back);
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_EQ(six[k], floatToHalfSoftware(a[k]));
+        ASSERT_EQ(six[3 + k], floatToHalfSoftware(b[k]));
+        ASSERT_EQ(bitsOf(back[k]), bitsOf(halfToFloatSoftware(six[k])));
+      }
       ASSERT_EQ(three[0], expected);
       ASSERT_EQ(three[1], floatToHalfSoftware(-f));
       ASSERT_EQ(three[2], floatToHalfSoftware(0.5f));

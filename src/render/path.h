@@ -8,7 +8,9 @@
 // itself in this wavefront: ray_traversal.h, --retrace).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <type_traits>
 
 #include "core/half.h"
@@ -45,20 +47,30 @@ struct PathCore {
     pixelAndFlags = (pixel << (32 - kPixelBits)) | (flags & kPathFlagMask);
   }
 
-  [[gnu::always_inline]] Vec3f dir() const {
-    Vec3f d;
-    halves3ToFloats(direction, &d.x);
-    return d;
-  }
-  [[gnu::always_inline]] Vec3f weight() const {
-    Vec3f w;
-    halves3ToFloats(throughput, &w.x);
-    return w;
-  }
+  [[gnu::always_inline]] Vec3f dir() const { return unpack(offsetof(PathCore, direction)); }
+  [[gnu::always_inline]] Vec3f weight() const { return unpack(offsetof(PathCore, throughput)); }
   // The direction is quantized here, when the ray is made, so every rank
   // traces exactly the same ray whatever the rank count.
   [[gnu::always_inline]] void setDir(Vec3f d) { floatsToHalves3(d.x, d.y, d.z, direction); }
   [[gnu::always_inline]] void setWeight(Vec3f w) { floatsToHalves3(w.x, w.y, w.z, throughput); }
+  // Both at once (what a new ray needs); returns dir() without reading it back.
+  [[gnu::always_inline]] Vec3f setDirAndWeight(Vec3f d, Vec3f w) {
+    static_assert(offsetof(PathCore, throughput) == offsetof(PathCore, direction) + 6);
+    Vec3f quantized;
+    floatsToHalves6(&d.x, &w.x, direction, &quantized.x);
+    return quantized;
+  }
+
+ private:
+  // The three halves at `offset` and the two bytes after them (still inside
+  // the path: throughput follows direction, tmax follows throughput) in one load.
+  [[gnu::always_inline]] Vec3f unpack(size_t offset) const {
+    uint64_t packed;
+    std::memcpy(&packed, reinterpret_cast<const unsigned char*>(this) + offset, 8);
+    Vec3f v;
+    halves3ToFloats(packed, &v.x);
+    return v;
+  }
 };
 static_assert(sizeof(PathCore) == 32);
 

@@ -23,14 +23,15 @@ namespace {
 // Paths whose bounce reaches this start playing Russian roulette.
 constexpr uint32_t kRouletteStartBounce = 3;
 
+// Returns the ray's direction as stored (quantized to halves).
 template <typename Path>
-void setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, uint32_t pixel, uint32_t flags) {
+Vec3f setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, uint32_t pixel, uint32_t flags) {
   p.origin = origin;
-  p.setDir(direction);
+  Vec3f stored = p.setDirAndWeight(direction, weight);
   p.tmax = tmax;
-  p.setWeight(weight);
   p.setPixelAndFlags(pixel, flags);
   p.clearHistory();
+  return stored;
 }
 
 // Contributions that cannot be represented are dropped rather than poisoning the image.
@@ -297,14 +298,13 @@ int WavefrontRenderer<Path>::shadeOne(const Path& path, const TraceHit& hit, uin
   if (!sameSide || !usable(contribution)) return spawned;
   Vec3f origin = offsetRayOrigin(surface.position, dot(ls.direction, ng) > 0 ? ng : -ng);
   Path& shadow = out[spawned++];
-  setRay(shadow, origin, ls.direction, kInfinity, contribution, pixel, kPathShadow);
+  const Vec3f d = setRay(shadow, origin, ls.direction, kInfinity, contribution, pixel, kPathShadow);
   if (std::isfinite(ls.distance)) {
     // Stop short of the emitter along the ray as stored: its half-precision
     // direction is off by up to ~3e-4 rad, so it meets the emitter's plane up
     // to 3e-4 / cos(theta_light) (relative) before or after the sampled point,
     // more than the 1e-4 margin; the emitter then shadowed itself (6% too
     // dark under a square light, 11% inside a closed emitter).
-    Vec3f d = shadow.dir();
     Vec3f toLight = surface.position + ls.direction * ls.distance - origin;
     float t = length(toLight) / length(d);
     float along = dot(d, ls.normal);
