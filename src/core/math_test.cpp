@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace ferry {
 
 TEST(Affine, InverseUndoesTransform) {
@@ -42,6 +45,25 @@ TEST(Frame, IsOrthonormal) {
     Vec3f back = f.toWorld(f.toLocal(v));
     EXPECT_NEAR(back.x, v.x, 1e-5f);
   }
+}
+
+TEST(Math, SinCosTwoPiIsWithinTwoTenMillionthsOfTheTrueValues) {
+  double worst = 0;
+  auto check = [&](float u) {
+    float s, c;
+    sinCosTwoPi(u, s, c);
+    const double angle = 2 * 3.14159265358979323846 * double(u);
+    worst = std::max({worst, std::abs(s - std::sin(angle)), std::abs(c - std::cos(angle))});
+  };
+  for (uint32_t i = 0; i <= (1u << 24); ++i) check(float(i) * 0x1p-24f);  // every sampler input
+  check(1.0f);
+  EXPECT_LT(worst, 2e-7);
+  float s, c;
+  sinCosTwoPi(0.25f, s, c);
+  EXPECT_EQ(s, 1.0f);
+  EXPECT_EQ(c, 0.0f);
+  sinCosTwoPi(0.5f, s, c);
+  EXPECT_EQ(c, -1.0f);
 }
 
 }  // namespace ferry

@@ -40,6 +40,19 @@ TEST(Random, UniformInUnitIntervalByChiSquare) {
   EXPECT_LT(chi2, 103.4);
 }
 
+TEST(Random, DimensionsOfOneKeyAreUncorrelated) {
+  // The numbers of one vertex (lobe, direction, light) must not move together.
+  for (uint32_t d = 0; d + 1 < uint32_t(RandomDim::Count); ++d) {
+    double sum = 0;
+    constexpr int n = 100000;
+    for (int i = 0; i < n; ++i) {
+      RandomStream stream(RandomKey{uint32_t(i) * 31u, uint32_t(i) % 7, uint32_t(i) % 5, 1});
+      sum += (stream(RandomDim(d)) - 0.5) * (stream(RandomDim(d + 1)) - 0.5);
+    }
+    EXPECT_LT(std::abs(sum / n * 12.0), 0.02) << "dimensions " << d << " and " << d + 1;
+  }
+}
+
 TEST(Random, NeighbouringKeysAreUncorrelated) {
   // Adjacent pixels' numbers must not be correlated (a weak hash shows up as patterns).
   double sum = 0;

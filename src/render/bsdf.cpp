@@ -44,9 +44,10 @@ Vec3f sampleVisibleNormal(Vec3f wo, float alpha, Vec2f u) {
   Vec3f t1 = lensq > 0 ? Vec3f(-vh.y, vh.x, 0) * (1 / std::sqrt(lensq)) : Vec3f(1, 0, 0);
   Vec3f t2 = cross(vh, t1);
   float r = std::sqrt(u.x);
-  float phi = 2 * kPi * u.y;
-  float p1 = r * std::cos(phi);
-  float p2 = r * std::sin(phi);
+  float sinPhi, cosPhi;
+  sinCosTwoPi(u.y, sinPhi, cosPhi);
+  float p1 = r * cosPhi;
+  float p2 = r * sinPhi;
   float s = 0.5f * (1 + vh.z);
   p2 = (1 - s) * std::sqrt(std::max(0.0f, 1 - p1 * p1)) + s * p2;
   Vec3f nh = t1 * p1 + t2 * p2 + vh * std::sqrt(std::max(0.0f, 1 - p1 * p1 - p2 * p2));
@@ -85,8 +86,9 @@ float fresnelDielectric(float cosI, float eta) {
 
 Vec3f sampleCosineHemisphere(Vec2f u) {
   float r = std::sqrt(u.x);
-  float phi = 2 * kPi * u.y;
-  return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1 - u.x))};
+  float sinPhi, cosPhi;
+  sinCosTwoPi(u.y, sinPhi, cosPhi);
+  return {r * cosPhi, r * sinPhi, std::sqrt(std::max(0.0f, 1 - u.x))};
 }
 
 Bsdf Bsdf::diffuse(Vec3f albedo) {

@@ -17,12 +17,8 @@ Camera::Camera(const CameraView& view, int width, int height)
   if (view.leftHanded) right_ = -right_;
   tanHalfY_ = std::tan(0.5f * view.fovY * kPi / 180.0f);
   tanHalfX_ = tanHalfY_ * float(width) / float(height);
-}
-
-Vec3f Camera::direction(float x, float y) const {
-  float sx = (2 * x / width_ - 1) * tanHalfX_;
-  float sy = (1 - 2 * y / height_) * tanHalfY_;
-  return normalize(forward_ + right_ * sx + up_ * sy);
+  xScale_ = 2 * tanHalfX_ / float(width);
+  yScale_ = 2 * tanHalfY_ / float(height);
 }
 
 bool Camera::project(Vec3f d, float& x, float& y) const {

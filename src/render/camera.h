@@ -12,7 +12,13 @@ class Camera {
   Camera(const CameraView& view, int width, int height);
   Vec3f origin() const { return origin_; }
   // Unit direction through the image-plane point (x, y) in pixels, y down.
-  Vec3f direction(float x, float y) const;
+  // (Inline, with the pixel-to-plane scales precomputed: it runs once per
+  // camera ray.)
+  Vec3f direction(float x, float y) const {
+    const float sx = x * xScale_ - tanHalfX_;
+    const float sy = tanHalfY_ - y * yScale_;
+    return normalize(forward_ + right_ * sx + up_ * sy);
+  }
   // Inverse: the image position a world direction projects to; false if behind.
   bool project(Vec3f direction, float& x, float& y) const;
 
@@ -20,6 +26,7 @@ class Camera {
   Vec3f origin_;
   Vec3f forward_, right_, up_;
   float tanHalfY_ = 0, tanHalfX_ = 0;
+  float xScale_ = 0, yScale_ = 0;  // 2 tan(half angle) / pixels
   int width_ = 1, height_ = 1;
 };
 

@@ -12,28 +12,6 @@ namespace {
 constexpr size_t kMaxIndividualTriangles = 64;
 constexpr size_t kTrianglesPerGroup = 256;
 
-// Streaming weighted reservoir sampling with one uniform number: candidate i
-// ends up chosen with probability w_i / sum(w).
-struct Reservoir {
-  float u;
-  float total = 0;
-  int chosen = -1;
-  float chosenWeight = 0;
-  void add(int candidate, float weight) {
-    if (!(weight > 0)) return;
-    total += weight;
-    float p = weight / total;
-    if (u < p) {
-      chosen = candidate;
-      chosenWeight = weight;
-      u = std::min(u / p, 0.99999994f);
-    } else {
-      u = std::min((u - p) / (1 - p), 0.99999994f);
-    }
-  }
-  float probability() const { return chosenWeight / total; }
-};
-
 Vec3f sunRadiance(const SunLight& sun) {
   float s = std::sin(sun.angularRadius);
   return sun.irradiance * (1.0f / (kPi * s * s));
@@ -153,8 +131,9 @@ bool LightSampler::sampleEnvironment(Vec3f n, bool twoSided, Vec2f u, LightSampl
     // Uniform over the sphere: light arrives from both sides.
     float z = 1 - 2 * u.x;
     float r = std::sqrt(std::max(0.0f, 1 - z * z));
-    float phi = 2 * kPi * u.y;
-    out.direction = {r * std::cos(phi), r * std::sin(phi), z};
+    float sinPhi, cosPhi;
+    sinCosTwoPi(u.y, sinPhi, cosPhi);
+    out.direction = {r * cosPhi, r * sinPhi, z};
     out.pdf = 1 / (4 * kPi);
     out.radiance = environment_.color;
   } else if (!environment_.image) {
@@ -198,51 +177,73 @@ bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u, L
 bool LightSampler::sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f u, LightSample& out) const {
   // Candidate weights estimate each light's unshadowed contribution but are
   // never zero for a light that could contribute, which keeps the estimator
-  // unbiased.
-  Reservoir r{uSelect};
-  int next = 0;
-  const int sunBase = next;
-  for (size_t i = 0; i < suns_.size(); ++i)
-    r.add(next++, sunConstants_[i].selectionWeight * std::max(std::abs(dot(n, suns_[i].direction)), 1e-3f));
-  const int envIndex = next++;
-  if (!environment_.isBlack()) r.add(envIndex, environmentWeight_);
-  const int triangleBase = next;
+  // unbiased. Candidate i is chosen with probability w_i / sum(w): one pass
+  // sums the weights, a second stops at the first candidate whose running sum
+  // passes uSelect * sum (two cheap passes instead of a division per
+  // candidate, which a streaming reservoir needs).
+  const int sunCount = int(suns_.size());
+  const int envIndex = sunCount;
+  const int triangleBase = envIndex + 1;
   auto triangleWeight = [&](const Vec3f& center, float power, float area) {
     Vec3f d = center - p;
     return power / std::max(dot(d, d), area);
   };
-  if (groups_.empty()) {
-    for (const EmissiveTriangle& t : triangles_) {
-      Vec3f c = t.p0 + (t.e1 + t.e2) * (1.0f / 3);
-      r.add(next++, triangleWeight(c, luminance(t.radiance) * t.area, t.area));
+  // Calls visit(index, weight) for each candidate in order until it returns true.
+  auto forEachCandidate = [&](auto&& visit) {
+    for (int i = 0; i < sunCount; ++i)
+      if (visit(i, sunConstants_[i].selectionWeight * std::max(std::abs(dot(n, suns_[i].direction)), 1e-3f)))
+        return;
+    if (!environment_.isBlack() && visit(envIndex, environmentWeight_)) return;
+    int next = triangleBase;
+    if (groups_.empty()) {
+      for (const EmissiveTriangle& t : triangles_) {
+        Vec3f c = t.p0 + (t.e1 + t.e2) * (1.0f / 3);
+        if (visit(next++, triangleWeight(c, luminance(t.radiance) * t.area, t.area))) return;
+      }
+    } else {
+      for (const Group& g : groups_)
+        if (visit(next++, triangleWeight(g.bounds.center(), g.power, g.bounds.surfaceArea() * 0.25f))) return;
     }
-  } else {
-    for (const Group& g : groups_)
-      r.add(next++, triangleWeight(g.bounds.center(), g.power, g.bounds.surfaceArea() * 0.25f));
-  }
-  if (r.chosen < 0) return false;
-  float selection = r.probability();
+  };
+  float total = 0;
+  forEachCandidate([&](int, float w) {
+    if (w > 0) total += w;
+    return false;
+  });
+  if (!(total > 0)) return false;
+  const float target = uSelect * total;
+  float running = 0, chosenWeight = 0;
+  int chosen = -1;
+  forEachCandidate([&](int i, float w) {
+    if (!(w > 0)) return false;
+    running += w;
+    chosen = i;  // the last positive one if rounding keeps running <= target
+    chosenWeight = w;
+    return running > target;
+  });
+  const float selection = chosenWeight / total;
 
-  if (r.chosen < envIndex) {
-    const SunConstants& constants = sunConstants_[r.chosen - sunBase];
+  if (chosen < envIndex) {
+    const SunConstants& constants = sunConstants_[chosen];
     // Uniform in the sun's cone, in terms of 1 - cos(theta) so that a small
     // cone keeps its precision.
     float oneMinusCosTheta = u.x * constants.oneMinusCosRadius;
     float cosTheta = 1 - oneMinusCosTheta;
     float sinTheta = std::sqrt(std::max(0.0f, oneMinusCosTheta * (2 - oneMinusCosTheta)));
-    float phi = 2 * kPi * u.y;
-    out.direction = constants.frame.toWorld({sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta});
+    float sinPhi, cosPhi;
+    sinCosTwoPi(u.y, sinPhi, cosPhi);
+    out.direction = constants.frame.toWorld({sinTheta * cosPhi, sinTheta * sinPhi, cosTheta});
     out.distance = kInfinity;
     out.radiance = constants.radiance;
     out.pdf = constants.conePdf * selection;
     return true;
   }
-  if (r.chosen == envIndex) {
+  if (chosen == envIndex) {
     if (!sampleEnvironment(n, twoSided, u, out)) return false;
     out.pdf *= selection;
     return true;
   }
-  int index = r.chosen - triangleBase;
+  int index = chosen - triangleBase;
   if (groups_.empty()) {
     if (!sampleTriangle(triangles_[index], p, u, out)) return false;
     out.pdf *= selection;

@@ -2,9 +2,10 @@
 // environment's sampling tables, the emissive triangles in world space) and
 // lives on every rank, whatever part of the geometry the rank owns.
 //
-// One light sample per path vertex: the light is chosen by weighted reservoir
-// sampling over all candidates (each sun, the environment, each emissive
-// triangle or, past a threshold, groups of them) with a single uniform number,
+// One light sample per path vertex: the light is chosen by weighted sampling
+// over all candidates (each sun, the environment, each emissive triangle or,
+// past a threshold, groups of them), candidate i with probability w_i / sum(w)
+// (what a one-sample weighted reservoir gives), with a single uniform number,
 // so the choice is a pure function of the path's random key.
 #pragma once
 

@@ -103,17 +103,30 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, std::vect
                                                  FrameStats& stats) {
   auto start = Clock::now();
   const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
-  auto cameraRay = [&](uint32_t pixel, Path& p) {
+  const uint32_t width = uint32_t(settings_.width);
+  auto cameraRay = [&](uint32_t pixel, uint32_t px, uint32_t py, Path& p) {
     RandomStream random(RandomKey{pixel, sampleIndex, 0, settings_.seed});
-    float x = float(pixel % settings_.width) + random(RandomDim::PixelJitterX);
-    float y = float(pixel / settings_.width) + random(RandomDim::PixelJitterY);
+    float x = float(px) + random(RandomDim::PixelJitterX);
+    float y = float(py) + random(RandomDim::PixelJitterY);
     setRay(p, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel, kPathAfterSpecular);
+  };
+  // Calls f(pixel, x, y) for pixels [begin, end), one division per range.
+  auto forPixels = [width](uint32_t begin, uint32_t end, auto&& f) {
+    uint32_t px = begin % width, py = begin / width;
+    for (uint32_t pixel = begin; pixel != end; ++pixel) {
+      f(pixel, px, py);
+      if (++px == width) {
+        px = 0;
+        ++py;
+      }
+    }
   };
   if (traversal_.keepsAllPrimaries()) {
     // Every pixel's path is this rank's: straight into the queue, in pixel order.
     rays.resize(pixels);
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, pixels, 4096), [&](const auto& range) {
-      for (uint32_t pixel = range.begin(); pixel != range.end(); ++pixel) cameraRay(pixel, rays[pixel]);
+      forPixels(range.begin(), range.end(),
+                [&](uint32_t pixel, uint32_t px, uint32_t py) { cameraRay(pixel, px, py, rays[pixel]); });
     });
   } else {
     const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
@@ -125,11 +138,11 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, std::vect
       for (size_t b = range.begin(); b != range.end(); ++b) {
         const uint32_t begin = uint32_t(b * kBlock), end = uint32_t(std::min<size_t>(pixels, begin + kBlock));
         uint32_t kept = 0;
-        for (uint32_t pixel = begin; pixel != end; ++pixel) {
+        forPixels(begin, end, [&](uint32_t pixel, uint32_t px, uint32_t py) {
           Path& p = staging_[begin + kept];
-          cameraRay(pixel, p);
+          cameraRay(pixel, px, py, p);
           kept += traversal_.keepsPrimary(pixel, TraceRay{p.origin, p.dir(), 0, kInfinity}, local);
-        }
+        });
         blockCounts_[b] = kept;
       }
       proxyQueries += local.proxyQueries;
