@@ -64,7 +64,7 @@ class RecordingTraversal final : public RayTraversal<Path8> {
   int rankCount() const override { return 1; }
   bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
-  void traverse(std::vector<Path8>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+  void traverse(PathQueue<Path8>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
                 FrameStats& stats) override {
     Wave& w = waves.emplace_back();
     for (const Path8& p : rays) {

@@ -49,10 +49,17 @@ struct RandomKey {
 // draws up to eight numbers from one key: hashing the key once (RandomStream)
 // and each dimension with one more mix keeps the numbers cheap.
 [[gnu::always_inline]] inline uint32_t randomKeyHash(const RandomKey& key) {
-  uint32_t h = hashMix(key.seed + 0x6a09e667u);
-  h = hashCombine(h, key.pixel);
-  h = hashCombine(h, key.sample);
-  return hashCombine(h, key.bounce);
+  // Two 64-bit mixes (the splitmix64 finalizer, a bijection): (pixel, sample),
+  // then (bounce, seed) added; half the work of combining four 32-bit hashes.
+  auto mix64 = [](uint64_t x) {
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ull;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+  };
+  const uint64_t h = mix64((uint64_t(key.pixel) << 32) | key.sample);
+  return uint32_t(mix64(h + ((uint64_t(key.bounce) << 32) | key.seed) * 0x9e3779b97f4a7c15ull) >> 32);
 }
 
 // One full-avalanche mix of the key's hash and a per-dimension constant: a

@@ -76,7 +76,7 @@ bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ra
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::trace(std::vector<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits) {
+void DistributedTraversal<Path>::trace(PathQueue<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits) {
   const int rank = comm_.rank();
   for (const Path& p : rays) {
     if constexpr (Path::kReplay) {
@@ -90,7 +90,7 @@ void DistributedTraversal<Path>::trace(std::vector<Path>& rays, FrameStats& stat
 }
 
 template <typename Path>
-std::vector<RankSet> DistributedTraversal<Path>::replayArrivals(const std::vector<Path>& rays,
+std::vector<RankSet> DistributedTraversal<Path>::replayArrivals(const PathQueue<Path>& rays,
                                                                 FrameStats& stats) {
   auto start = Clock::now();
   const int rank = comm_.rank();
@@ -119,7 +119,7 @@ std::vector<RankSet> DistributedTraversal<Path>::replayArrivals(const std::vecto
 }
 
 template <typename Path>
-std::vector<Path> DistributedTraversal<Path>::exchange(const std::vector<Path>& rays,
+PathQueue<Path> DistributedTraversal<Path>::exchange(const PathQueue<Path>& rays,
                                                        const std::vector<int>& destination,
                                                        ExchangeCounters& counters, FrameStats& stats) {
   auto start = Clock::now();
@@ -133,7 +133,7 @@ std::vector<Path> DistributedTraversal<Path>::exchange(const std::vector<Path>& 
   // Compact by destination, keeping each destination's rays in queue order.
   std::vector<int> offsets(ranks, 0);
   for (int r = 1; r < ranks; ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
-  std::vector<Path> send(rays.size());
+  PathQueue<Path> send(rays.size());
   std::vector<int> cursor = offsets;
   for (size_t i = 0; i < rays.size(); ++i) send[cursor[destination[i]]++] = rays[i];
 
@@ -141,7 +141,7 @@ std::vector<Path> DistributedTraversal<Path>::exchange(const std::vector<Path>& 
   std::vector<int> receiveOffsets(ranks, 0);
   for (int r = 1; r < ranks; ++r) receiveOffsets[r] = receiveOffsets[r - 1] + receiveCounts[r - 1];
   size_t total = size_t(receiveOffsets[ranks - 1]) + size_t(receiveCounts[ranks - 1]);
-  std::vector<Path> received(total);
+  PathQueue<Path> received(total);
 
   auto toBytes = [](std::vector<int> v) {
     for (int& x : v) {
@@ -162,7 +162,7 @@ std::vector<Path> DistributedTraversal<Path>::exchange(const std::vector<Path>& 
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverse(std::vector<Path>& rays, std::vector<TraceHit>& hits,
+void DistributedTraversal<Path>::traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
                                           ExchangeCounters& exchange, FrameStats& stats) {
   if (mode_ == ForwardingMode::Broadcast)
     traverseBroadcast(rays, hits, exchange, stats);
@@ -171,15 +171,15 @@ void DistributedTraversal<Path>::traverse(std::vector<Path>& rays, std::vector<T
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, std::vector<TraceHit>& hits,
+void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
                                                     ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
-  std::vector<Path> ready;   // traversal complete here: shade on this rank
+  PathQueue<Path> ready;   // traversal complete here: shade on this rank
   // The hit of each ready ray when its last trace, here, found it (shading
   // then need not re-trace it); invalid for rays that arrive to be shaded.
   std::vector<TraceHit> readyHits, movingHits;
-  std::vector<Path> moving = std::move(rays);
+  PathQueue<Path> moving = std::move(rays);
   // Replay layout (proxies): the visited set of each ray in `moving`, this rank
   // included; new rays have visited only this rank.
   const bool replay = Path::kReplay && mode_ == ForwardingMode::Proxies;
@@ -208,7 +208,7 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, std
     });
     stats.proxyQueries += proxyQueries;
     // Split: kept, dropped, and leaving.
-    std::vector<Path> leaving;
+    PathQueue<Path> leaving;
     std::vector<int> leavingTo;
     for (size_t i = 0; i < moving.size(); ++i) {
       if (destination[i] == kShadeHere) {
@@ -221,7 +221,7 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, std
     }
     stats.times.exchange += secondsSince(start);
     if (comm_.sum(uint64_t(leaving.size())) == 0) break;
-    std::vector<Path> received = exchange(leaving, leavingTo, counters, stats);
+    PathQueue<Path> received = exchange(leaving, leavingTo, counters, stats);
     moving.clear();
     for (Path& p : received) {
       if (p.has(kPathTraversed)) {
@@ -240,7 +240,7 @@ void DistributedTraversal<Path>::traverseForwarding(std::vector<Path>& rays, std
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, std::vector<TraceHit>& hits,
+void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
                                                    ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
@@ -248,7 +248,7 @@ void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, std:
   trace(rays, stats, &ownHits);  // the origin's own answer
 
   // 1. A copy of every undecided ray to every other rank.
-  std::vector<Path> copies;
+  PathQueue<Path> copies;
   std::vector<int> copiesTo;
   for (const Path& p : rays) {
     if (p.isShadow() && p.has(kPathOccluded)) continue;
@@ -258,7 +258,7 @@ void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, std:
         copiesTo.push_back(r);
       }
   }
-  std::vector<Path> received = exchange(copies, copiesTo, counters, stats);
+  PathQueue<Path> received = exchange(copies, copiesTo, counters, stats);
   trace(received, stats);
 
   // 2. Every copy goes back to its origin (the one visited rank besides this one).
@@ -270,7 +270,7 @@ void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, std:
     else
       replyTo[i] = std::countr_zero(RankMask(received[i].visited) & ~(RankMask(1) << rank));
   }
-  std::vector<Path> replies = exchange(received, replyTo, counters, stats);
+  PathQueue<Path> replies = exchange(received, replyTo, counters, stats);
 
   // The closest hit wins; any occluder occludes. A rank makes at most one path
   // and one shadow ray per pixel per wavefront, so (pixel, kind) finds the original.
@@ -297,7 +297,7 @@ void DistributedTraversal<Path>::traverseBroadcast(std::vector<Path>& rays, std:
   }
 
   // 3. Shade where the hit is.
-  std::vector<Path> ready, leaving;
+  PathQueue<Path> ready, leaving;
   std::vector<TraceHit> readyHits;
   std::vector<int> leavingTo;
   for (size_t i = 0; i < rays.size(); ++i) {

@@ -27,7 +27,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   int rank() const override { return comm_.rank(); }
   int rankCount() const override { return comm_.size(); }
   bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const override;
-  void traverse(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
                 FrameStats& stats) override;
   bool anyRaysLeft(size_t localRays) override { return comm_.sum(uint64_t(localRays)) > 0; }
 
@@ -39,19 +39,19 @@ class DistributedTraversal final : public RayTraversal<Path> {
   uint64_t received() const { return received_; }
 
  private:
-  void traverseForwarding(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+  void traverseForwarding(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
                           FrameStats& stats);
-  void traverseBroadcast(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+  void traverseBroadcast(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
                          FrameStats& stats);
   // Sends each ray to destination[i] (this rank's rays are not in the list);
   // returns what this rank received, in rank order.
-  std::vector<Path> exchange(const std::vector<Path>& rays, const std::vector<int>& destination,
+  PathQueue<Path> exchange(const PathQueue<Path>& rays, const std::vector<int>& destination,
                              ExchangeCounters& counters, FrameStats& stats);
   // With `hits`: resized to rays.size(), the hits that set a ray's tmax here.
-  void trace(std::vector<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits = nullptr);
+  void trace(PathQueue<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits = nullptr);
   // Replay layout, proxies mode: the visited set of each ray that arrived
   // here, recomputed from its generating rank (this rank included).
-  std::vector<RankSet> replayArrivals(const std::vector<Path>& rays, FrameStats& stats);
+  std::vector<RankSet> replayArrivals(const PathQueue<Path>& rays, FrameStats& stats);
 
   const Communicator& comm_;
   const LocalGeometry& geometry_;

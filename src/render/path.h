@@ -11,7 +11,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "core/half.h"
 #include "core/math.h"
@@ -135,5 +138,28 @@ static_assert(sizeof(PathReplay) == 36,
 static_assert(std::is_trivially_copyable_v<Path8> && std::is_trivially_copyable_v<Path64> &&
                   std::is_trivially_copyable_v<PathReplay>,
               "paths are sent over MPI as bytes");
+
+// A wavefront's queue of paths. Every path in a queue is written before it is
+// read, so growing a queue need not zero it (value-initializing the new paths
+// was a memset of the whole image's queue per sample): the allocator leaves
+// default-constructed paths uninitialized. Paths are aggregates of trivially
+// copyable parts (implicit-lifetime types), so the storage is their object.
+template <typename T>
+struct UninitializedAllocator : std::allocator<T> {
+  using value_type = T;
+  template <typename U>
+  struct rebind {
+    using other = UninitializedAllocator<U>;
+  };
+  UninitializedAllocator() = default;
+  template <typename U>
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) > 0) ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <typename Path>
+using PathQueue = std::vector<Path, UninitializedAllocator<Path>>;
 
 }  // namespace ferry

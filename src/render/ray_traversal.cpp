@@ -12,48 +12,44 @@
 namespace ferry {
 
 template <typename Path>
-void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int rank,
+void traceLocally(const LocalGeometry& geometry, PathQueue<Path>& rays, int rank,
                   std::span<const uint64_t> instanceOwners, FrameStats& stats, TraceHit* found) {
   auto start = Clock::now();
   // Batches of closest-hit and shadow queries in queue order, built, traced and
   // applied on the worker thread that owns them (no whole-wavefront arrays, no
-  // serial pass).
-  constexpr size_t kBatch = 256;
+  // serial pass), each ray written once in Embree's layout (RayBatch).
+  constexpr size_t kBatch = RayBatch::kCapacity;
   std::atomic<uint64_t> closestCount{0}, shadowCount{0};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kBatch), [&](const tbb::blocked_range<size_t>& range) {
-    TraceRay batch[kBatch];
-    TraceQuery queries[kBatch];
-    TraceHit hits[kBatch];
-    uint8_t occluded[kBatch];
+    RayBatch batch;
     uint64_t closest = 0, shadow = 0;
     for (size_t begin = range.begin(); begin < range.end(); begin += kBatch) {
       const size_t n = std::min(kBatch, range.end() - begin);
-      for (size_t i = 0; i < n; ++i) {
-        const Path& p = rays[begin + i];
-        if (p.isShadow() && p.has(kPathOccluded)) {  // already decided elsewhere
-          queries[i] = TraceQuery::None;
-          continue;
-        }
-        batch[i] = TraceRay{p.origin, p.dir(), 0.0f, p.tmax};
-        queries[i] = p.isShadow() ? TraceQuery::Occluded : TraceQuery::Closest;
-        ++(p.isShadow() ? shadow : closest);
-      }
-      geometry.traceBatch(std::span(batch, n), std::span(queries, n), std::span(hits, n), std::span(occluded, n));
-      for (size_t i = 0; i < n; ++i) {
-        Path& p = rays[begin + i];
-        bool setHere = false;
-        if (queries[i] == TraceQuery::Closest) {
-          if (hits[i].valid() && hits[i].t < p.tmax) {
-            p.tmax = hits[i].t;
-            p.setHit(rank, instanceOwners.empty() ? 0 : instanceOwners[hits[i].instance]);
-            setHere = true;
-          }
-        } else if (queries[i] == TraceQuery::Occluded && occluded[i]) {
-          p.set(kPathOccluded);
-        }
+      batch.clear();
+      for (size_t i = begin; i < begin + n; ++i) {
+        Path& p = rays[i];
         p.markTraced(rank);
-        if (found) found[begin + i] = setHere ? hits[i] : TraceHit{};
+        if (found) found[i] = TraceHit{};
+        if (!p.isShadow())
+          batch.addClosest(uint32_t(i), p.origin, p.dir(), p.tmax);
+        else if (!p.has(kPathOccluded))  // else already decided elsewhere
+          batch.addOccluded(uint32_t(i), p.origin, p.dir(), p.tmax);
       }
+      geometry.trace(batch);
+      closest += batch.closestCount();
+      shadow += batch.occludedCount();
+      for (size_t k = 0; k < batch.closestCount(); ++k) {
+        if (!batch.hitFound(k)) continue;
+        const uint32_t i = batch.closestIndex(k);
+        Path& p = rays[i];
+        if (!(batch.hitDistance(k) < p.tmax)) continue;
+        const TraceHit hit = batch.hit(k);
+        p.tmax = hit.t;
+        p.setHit(rank, instanceOwners.empty() ? 0 : instanceOwners[hit.instance]);
+        if (found) found[i] = hit;  // this trace set tmax: shading need not re-trace
+      }
+      for (size_t k = 0; k < batch.occludedCount(); ++k)
+        if (batch.isOccluded(k)) rays[batch.occludedIndex(k)].set(kPathOccluded);
     }
     closestCount += closest;
     shadowCount += shadow;
@@ -63,11 +59,11 @@ void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int ra
   stats.times.trace += secondsSince(start);
 }
 
-template void traceLocally<Path8>(const LocalGeometry&, std::vector<Path8>&, int, std::span<const uint64_t>,
+template void traceLocally<Path8>(const LocalGeometry&, PathQueue<Path8>&, int, std::span<const uint64_t>,
                                   FrameStats&, TraceHit*);
-template void traceLocally<Path64>(const LocalGeometry&, std::vector<Path64>&, int, std::span<const uint64_t>,
+template void traceLocally<Path64>(const LocalGeometry&, PathQueue<Path64>&, int, std::span<const uint64_t>,
                                    FrameStats&, TraceHit*);
-template void traceLocally<PathReplay>(const LocalGeometry&, std::vector<PathReplay>&, int,
+template void traceLocally<PathReplay>(const LocalGeometry&, PathQueue<PathReplay>&, int,
                                        std::span<const uint64_t>, FrameStats&, TraceHit*);
 
 }  // namespace ferry

@@ -15,6 +15,7 @@
 #include <span>
 #include <vector>
 
+#include "render/path.h"
 #include "render/render_stats.h"
 #include "trace/local_geometry.h"
 
@@ -35,7 +36,7 @@ class RayTraversal {
   // return `rays` holds exactly the rays this rank must shade, and `hits` one
   // entry per ray: its closest hit when this rank found it in this traversal
   // (so shading need not re-trace it), else an invalid hit (re-trace).
-  virtual void traverse(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+  virtual void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
                         FrameStats& stats) = 0;
   // True while any rank still has rays (a collective in the distributed case).
   virtual bool anyRaysLeft(size_t localRays) = 0;
@@ -50,7 +51,7 @@ class RayTraversal {
 // becomes the hit that set ray i's tmax here, or an invalid hit when this
 // trace did not set it.
 template <typename Path>
-void traceLocally(const LocalGeometry& geometry, std::vector<Path>& rays, int rank,
+void traceLocally(const LocalGeometry& geometry, PathQueue<Path>& rays, int rank,
                   std::span<const uint64_t> instanceOwners, FrameStats& stats, TraceHit* hits = nullptr);
 
 // The query with which shading re-traces a path whose hit it does not have:
@@ -73,7 +74,7 @@ class LocalTraversal final : public RayTraversal<Path> {
   bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
   bool keepsAllPrimaries() const override { return true; }
   // Every ray is traced once, here: every hit is known.
-  void traverse(std::vector<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters&,
+  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters&,
                 FrameStats& stats) override {
     hits.resize(rays.size());
     traceLocally(geometry_, rays, 0, {}, stats, hits.data());

@@ -44,7 +44,7 @@ size_t checkScene(const std::string& spec, int width, int height) {
   LocalGeometry geometry(scene);
   const std::vector<Affine3f> inverses = instanceInverses(scene);
   Camera camera(scene.view(""), width, height);
-  std::vector<Path8> rays;
+  PathQueue<Path8> rays;
   for (uint32_t pixel = 0; pixel < uint32_t(width * height); ++pixel) {
     Path8 p{};
     p.origin = camera.origin();
@@ -68,7 +68,7 @@ size_t checkScene(const std::string& spec, int width, int height) {
     std::vector<TraceHit> batched(rays.size());
     std::vector<uint8_t> unused(rays.size());
     geometry.traceBatch(queries, kinds, batched, unused);
-    std::vector<Path8> next;
+    PathQueue<Path8> next;
     for (size_t i = 0; i < rays.size(); ++i) {
       const Path8& p = rays[i];
       EXPECT_EQ(kept[i].valid(), p.hasHit()) << spec << " ray " << i;

@@ -36,16 +36,19 @@ SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit, const s
   // The object-space barycentric point is more precise than origin + t * dir
   // far from the camera.
   s.position = inst.transform.transformPoint(p0 * w + p1 * hit.u + p2 * hit.v);
-  s.geometricNormal = normalize(transformNormal(inv, cross(p1 - p0, p2 - p0)));
+  // Both normals are set from registers (copying one member to the other read
+  // back a value still in the store buffer, which the CPU cannot forward).
+  const Vec3f ng = normalize(transformNormal(inv, cross(p1 - p0, p2 - p0)));
+  s.geometricNormal = ng;
   if (!mesh.normals.empty()) {
     Vec3f n = mesh.normals[tri.x] * w + mesh.normals[tri.y] * hit.u + mesh.normals[tri.z] * hit.v;
     n = transformNormal(inv, n);
     float len = length(n);
-    s.shadingNormal = len > 0 && std::isfinite(len) ? n * (1 / len) : s.geometricNormal;
+    Vec3f ns = len > 0 && std::isfinite(len) ? n * (1 / len) : ng;
     // Keep the shading normal on the geometric side so it cannot flip the surface.
-    if (dot(s.shadingNormal, s.geometricNormal) < 0) s.shadingNormal = -s.shadingNormal;
+    s.shadingNormal = dot(ns, ng) < 0 ? -ns : ns;
   } else {
-    s.shadingNormal = s.geometricNormal;
+    s.shadingNormal = ng;
   }
   s.uv = mesh.uvs.empty() ? Vec2f{hit.u, hit.v}
                           : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;

@@ -85,8 +85,8 @@ namespace {
 constexpr size_t kBlock = 2048;
 
 template <typename Path>
-void concatenateBlocks(const std::vector<Path>& staging, size_t stride, const std::vector<uint32_t>& counts,
-                       std::vector<Path>& out) {
+void concatenateBlocks(const PathQueue<Path>& staging, size_t stride, const std::vector<uint32_t>& counts,
+                       PathQueue<Path>& out) {
   std::vector<size_t> offsets(counts.size() + 1, 0);
   for (size_t b = 0; b < counts.size(); ++b) offsets[b + 1] = offsets[b] + counts[b];
   out.resize(offsets.back());
@@ -99,7 +99,7 @@ void concatenateBlocks(const std::vector<Path>& staging, size_t stride, const st
 }  // namespace
 
 template <typename Path>
-void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, std::vector<Path>& rays,
+void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, PathQueue<Path>& rays,
                                                  FrameStats& stats) {
   auto start = Clock::now();
   const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
@@ -155,7 +155,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, std::vect
 }
 
 template <typename Path>
-void WavefrontRenderer<Path>::accumulateShadowRays(const std::vector<Path>& rays, FrameBuffer& frameBuffer,
+void WavefrontRenderer<Path>::accumulateShadowRays(const PathQueue<Path>& rays, FrameBuffer& frameBuffer,
                                                    FrameStats& stats) {
   auto start = Clock::now();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const auto& range) {
@@ -168,9 +168,9 @@ void WavefrontRenderer<Path>::accumulateShadowRays(const std::vector<Path>& rays
 }
 
 template <typename Path>
-void WavefrontRenderer<Path>::shade(const std::vector<Path>& rays, const std::vector<TraceHit>& hits,
+void WavefrontRenderer<Path>::shade(const PathQueue<Path>& rays, const std::vector<TraceHit>& hits,
                                     uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
-                                    std::vector<Path>& next, FrameStats& stats) {
+                                    PathQueue<Path>& next, FrameStats& stats) {
   auto start = Clock::now();
   FERRY_CHECK(hits.size() == rays.size());
   const size_t n = rays.size();

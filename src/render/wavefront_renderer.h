@@ -51,12 +51,12 @@ class WavefrontRenderer {
   FrameStats renderFrame(int frame, FrameBuffer& frameBuffer, const ProgressCallback& progress = {});
 
  private:
-  void generateCameraRays(uint32_t sampleIndex, std::vector<Path>& rays, FrameStats& stats);
-  void accumulateShadowRays(const std::vector<Path>& rays, FrameBuffer& frameBuffer, FrameStats& stats);
+  void generateCameraRays(uint32_t sampleIndex, PathQueue<Path>& rays, FrameStats& stats);
+  void accumulateShadowRays(const PathQueue<Path>& rays, FrameBuffer& frameBuffer, FrameStats& stats);
   // Shades every non-shadow path (re-tracing those without a valid hits[i]);
   // writes the next wavefront (continuations and shadow rays) to `next`.
-  void shade(const std::vector<Path>& rays, const std::vector<TraceHit>& hits, uint32_t sampleIndex,
-             uint32_t bounce, FrameBuffer& frameBuffer, std::vector<Path>& next, FrameStats& stats);
+  void shade(const PathQueue<Path>& rays, const std::vector<TraceHit>& hits, uint32_t sampleIndex,
+             uint32_t bounce, FrameBuffer& frameBuffer, PathQueue<Path>& next, FrameStats& stats);
   // Shades path i given its hit (invalid: escaped or re-trace missed); writes
   // its continuation and shadow ray, in that order, to out; returns how many.
   int shadeOne(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
@@ -70,7 +70,7 @@ class WavefrontRenderer {
   Camera camera_;
   std::vector<Affine3f> instanceInverses_;  // for reconstructSurface
   // Queues and scratch reused from wavefront to wavefront (no allocation per bounce).
-  std::vector<Path> rays_, next_, staging_;
+  PathQueue<Path> rays_, next_, staging_;
   std::vector<TraceHit> hits_;
   std::vector<uint32_t> blockCounts_;
 };

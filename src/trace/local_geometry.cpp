@@ -86,24 +86,6 @@ TraceHit fromEmbree(const RTCRayHit& rh) {
   return h;
 }
 
-// The ray part of an Embree query written field by field, straight into the
-// batch (no zero-filled temporary copied in; every input field is set).
-void setEmbreeRay(RTCRay& r, const TraceRay& t) {
-  r.org_x = t.origin.x;
-  r.org_y = t.origin.y;
-  r.org_z = t.origin.z;
-  r.tnear = t.tnear;
-  r.dir_x = t.direction.x;
-  r.dir_y = t.direction.y;
-  r.dir_z = t.direction.z;
-  r.time = 0;
-  r.tfar = t.tmax;
-  r.mask = 0xffffffffu;
-  r.id = 0;
-  r.flags = 0;
-}
-
-// Batches small enough to stay in cache, large enough for the stream API.
 constexpr size_t kStreamBatch = 256;
 
 }  // namespace
@@ -251,37 +233,59 @@ void LocalGeometry::occluded(std::span<const TraceRay> rays, std::span<uint8_t> 
                     });
 }
 
+void LocalGeometry::trace(RayBatch& batch) const {
+  // RayBatch::EmbreeRay must be RTCRayHit exactly (one instance level).
+#define FERRY_SAME_OFFSET(ours, theirs)                                                          \
+    static_assert(offsetof(RayBatch::EmbreeRay, ours) == offsetof(RTCRayHit, theirs), #ours);
+  static_assert(RTC_MAX_INSTANCE_LEVEL_COUNT == 1);
+  static_assert(sizeof(RayBatch::EmbreeRay) == sizeof(RTCRayHit));
+  static_assert(alignof(RayBatch::EmbreeRay) >= alignof(RTCRayHit));
+  static_assert(RayBatch::kNoGeometry == RTC_INVALID_GEOMETRY_ID);
+  FERRY_SAME_OFFSET(orgX, ray.org_x)
+  FERRY_SAME_OFFSET(tnear, ray.tnear)
+  FERRY_SAME_OFFSET(dirX, ray.dir_x)
+  FERRY_SAME_OFFSET(time, ray.time)
+  FERRY_SAME_OFFSET(tfar, ray.tfar)
+  FERRY_SAME_OFFSET(mask, ray.mask)
+  FERRY_SAME_OFFSET(id, ray.id)
+  FERRY_SAME_OFFSET(flags, ray.flags)
+  FERRY_SAME_OFFSET(ngX, hit.Ng_x)
+  FERRY_SAME_OFFSET(u, hit.u)
+  FERRY_SAME_OFFSET(v, hit.v)
+  FERRY_SAME_OFFSET(primID, hit.primID)
+  FERRY_SAME_OFFSET(geomID, hit.geomID)
+  FERRY_SAME_OFFSET(instID, hit.instID)
+#undef FERRY_SAME_OFFSET
+  RTCIntersectContext context;
+  if (batch.closestCount_) {
+    rtcInitIntersectContext(&context);
+    rtcIntersect1M(impl_->top, &context, reinterpret_cast<RTCRayHit*>(batch.closest_),
+                   unsigned(batch.closestCount_), sizeof(RTCRayHit));
+  }
+  if (batch.occludedCount_) {
+    rtcInitIntersectContext(&context);
+    rtcOccluded1M(impl_->top, &context, reinterpret_cast<RTCRay*>(batch.occluded_),
+                  unsigned(batch.occludedCount_), sizeof(RTCRayHit));
+  }
+}
+
 void LocalGeometry::traceBatch(std::span<const TraceRay> rays, std::span<const TraceQuery> queries,
                                std::span<TraceHit> hits, std::span<uint8_t> occluded) const {
   FERRY_CHECK(rays.size() == queries.size() && rays.size() == hits.size() && rays.size() == occluded.size());
-  RTCRayHit closest[kStreamBatch];
-  RTCRay shadow[kStreamBatch];
-  uint32_t closestIndex[kStreamBatch], shadowIndex[kStreamBatch];
-  for (size_t begin = 0; begin < rays.size(); begin += kStreamBatch) {
-    const size_t n = std::min(kStreamBatch, rays.size() - begin);
-    unsigned nc = 0, ns = 0;
+  RayBatch batch;
+  for (size_t begin = 0; begin < rays.size(); begin += RayBatch::kCapacity) {
+    const size_t n = std::min(RayBatch::kCapacity, rays.size() - begin);
+    batch.clear();
     for (size_t i = begin; i < begin + n; ++i) {
-      if (queries[i] == TraceQuery::Closest) {
-        closestIndex[nc] = uint32_t(i);
-        setEmbreeRay(closest[nc].ray, rays[i]);
-        closest[nc].hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        closest[nc++].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      } else if (queries[i] == TraceQuery::Occluded) {
-        shadowIndex[ns] = uint32_t(i);
-        setEmbreeRay(shadow[ns++], rays[i]);
-      }
+      const TraceRay& r = rays[i];
+      if (queries[i] == TraceQuery::Closest)
+        batch.addClosest(uint32_t(i), r.origin, r.direction, r.tmax, r.tnear);
+      else if (queries[i] == TraceQuery::Occluded)
+        batch.addOccluded(uint32_t(i), r.origin, r.direction, r.tmax, r.tnear);
     }
-    RTCIntersectContext context;
-    if (nc) {
-      rtcInitIntersectContext(&context);
-      rtcIntersect1M(impl_->top, &context, closest, nc, sizeof(RTCRayHit));
-      for (unsigned k = 0; k < nc; ++k) hits[closestIndex[k]] = fromEmbree(closest[k]);
-    }
-    if (ns) {
-      rtcInitIntersectContext(&context);
-      rtcOccluded1M(impl_->top, &context, shadow, ns, sizeof(RTCRay));
-      for (unsigned k = 0; k < ns; ++k) occluded[shadowIndex[k]] = shadow[k].tfar < 0;
-    }
+    trace(batch);
+    for (size_t k = 0; k < batch.closestCount(); ++k) hits[batch.closestIndex(k)] = batch.hit(k);
+    for (size_t k = 0; k < batch.occludedCount(); ++k) occluded[batch.occludedIndex(k)] = batch.isOccluded(k);
   }
 }
 

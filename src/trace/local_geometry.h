@@ -41,6 +41,66 @@ enum class TraceQuery : uint8_t {
   Occluded  // whether anything is hit (rtcOccluded)
 };
 
+// A batch of queries written once, in the layout Embree's stream API reads
+// and answers in place (RTCRayHit; the .cpp checks every offset), so a caller
+// that has its rays in another form (the compact path) converts each ray once
+// and reads each answer where Embree wrote it: no intermediate TraceRay or
+// TraceHit arrays. Closest-hit and occlusion queries go to two lists; each
+// query keeps the caller's index. Traced on the calling thread by
+// LocalGeometry::trace.
+class RayBatch {
+ public:
+  static constexpr size_t kCapacity = 256;
+
+  void clear() { closestCount_ = occludedCount_ = 0; }
+  bool full() const { return closestCount_ + occludedCount_ == kCapacity; }
+  void addClosest(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float tnear = 0) {
+    closestIndex_[closestCount_] = index;
+    closest_[closestCount_++].set(origin, direction, tnear, tmax);
+  }
+  void addOccluded(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float tnear = 0) {
+    occludedIndex_[occludedCount_] = index;
+    occluded_[occludedCount_++].set(origin, direction, tnear, tmax);
+  }
+
+  size_t closestCount() const { return closestCount_; }
+  size_t occludedCount() const { return occludedCount_; }
+  uint32_t closestIndex(size_t k) const { return closestIndex_[k]; }
+  uint32_t occludedIndex(size_t k) const { return occludedIndex_[k]; }
+  // Answers, after LocalGeometry::trace.
+  bool hitFound(size_t k) const { return closest_[k].geomID != kNoGeometry; }
+  float hitDistance(size_t k) const { return closest_[k].tfar; }
+  TraceHit hit(size_t k) const {
+    const EmbreeRay& r = closest_[k];
+    if (r.geomID == kNoGeometry) return {};
+    return {r.tfar, int32_t(r.instID), int32_t(r.geomID), r.primID, r.u, r.v};
+  }
+  bool isOccluded(size_t k) const { return occluded_[k].tfar < 0; }  // Embree sets tfar = -inf
+
+ private:
+  friend class LocalGeometry;
+  static constexpr uint32_t kNoGeometry = 0xffffffffu;  // RTC_INVALID_GEOMETRY_ID
+  // RTCRayHit, field for field (one instance level).
+  struct alignas(16) EmbreeRay {
+    float orgX, orgY, orgZ, tnear;
+    float dirX, dirY, dirZ, time;
+    float tfar;
+    uint32_t mask, id, flags;
+    float ngX, ngY, ngZ, u, v;
+    uint32_t primID, geomID, instID;
+    void set(Vec3f o, Vec3f d, float tmin, float tmax) {
+      orgX = o.x, orgY = o.y, orgZ = o.z, tnear = tmin;
+      dirX = d.x, dirY = d.y, dirZ = d.z, time = 0;
+      tfar = tmax, mask = 0xffffffffu, id = 0, flags = 0;
+      geomID = kNoGeometry, instID = kNoGeometry;
+    }
+  };
+  EmbreeRay closest_[kCapacity];
+  EmbreeRay occluded_[kCapacity];  // only the ray part is used
+  uint32_t closestIndex_[kCapacity], occludedIndex_[kCapacity];
+  size_t closestCount_ = 0, occludedCount_ = 0;
+};
+
 class LocalGeometry {
  public:
   // Builds Embree structures over `ownedInstances` of `scene` (all instances
@@ -66,6 +126,8 @@ class LocalGeometry {
   // stream queries as the parallel calls above, so the same answers.
   void traceBatch(std::span<const TraceRay> rays, std::span<const TraceQuery> queries,
                   std::span<TraceHit> hits, std::span<uint8_t> occluded) const;
+  // Traces both lists of `batch` on the calling thread (rtcIntersect1M, rtcOccluded1M).
+  void trace(RayBatch& batch) const;
 
   const Scene& scene() const { return scene_; }
   Box3f bounds() const;
