@@ -54,4 +54,13 @@ for forwarding in proxies broadcast; do
   echo "3 ranks, $forwarding, --retrace remote against all:"
   $compare "$work/retrace-all.pfm" "$work/retrace-remote.pfm" --rel 0 --abs 0
 done
+# The instance level is a speed choice: objects placed once at the top level
+# (default, --instancing shared) or under instances (always), same image on
+# 3 ranks (the island mixes both kinds: terrain placed once, plants instanced).
+for instancing in shared always; do
+  mpirun_n 3 "$ferry" render "builtin:island?scale=0.05" --size 48x32 --spp 1 --max-depth 3 -q --threads 1 \
+    --partition spatial-sah --instancing "$instancing" -o "$work/instancing-$instancing.pfm"
+done
+echo "3 ranks, --instancing shared against always:"
+$compare "$work/instancing-always.pfm" "$work/instancing-shared.pfm" --rel 0 --abs 0
 echo "distributed_test: all passed"

@@ -50,6 +50,8 @@ void validate(const RenderOptions& o) {
     throw InputError(fmt::format("--path-layout '{}': expected auto, mask or replay", o.pathLayout));
   if (o.retrace != "remote" && o.retrace != "all")
     throw InputError(fmt::format("--retrace '{}': expected remote or all", o.retrace));
+  if (o.instancing != "shared" && o.instancing != "always")
+    throw InputError(fmt::format("--instancing '{}': expected shared or always", o.instancing));
   checkPartitionerName(o.partition);
   if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
     throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1", o.replicationBudget));
@@ -187,7 +189,8 @@ void setUp(const RenderOptions& o, const RenderSettings& settings, const Communi
   s.loadSeconds = secondsSince(start);
   maybeInjectFailure("load", comm.rank());
   auto build = Clock::now();
-  s.geometry = std::make_unique<LocalGeometry>(s.scene, s.owned);
+  s.geometry = std::make_unique<LocalGeometry>(
+      s.scene, s.owned, o.instancing == "always" ? Instancing::Always : Instancing::Shared);
   s.buildSeconds = secondsSince(build);
 }
 
@@ -202,7 +205,7 @@ void writeStats(const RenderOptions& o, const RenderSettings& settings, const Ra
                    {"max_depth", settings.maxDepth},  {"seed", settings.seed},
                    {"view", o.view},                  {"threads", o.threads},
                    {"ranks", ranks},                  {"forwarding", o.forwarding},
-                   {"retrace", o.retrace},
+                   {"retrace", o.retrace},            {"instancing", o.instancing},
                    {"partition", o.partition},        {"output", o.output},
                    {"path_layout", layout},           {"path_bytes", pathBytes}};
   j["render"] = stats.toJson();
@@ -371,6 +374,12 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
                      "Which shaded paths re-trace their ray to recover the hit (the compact path carries\n"
                      "none): remote (only those whose hit another rank found; a rank keeps the hits it\n"
                      "found) or all (every one, as the paper). The image is the same.")
+      ->capture_default_str();
+  render->add_option("--instancing", o.instancing,
+                     "Which objects get an Embree instance level: shared (objects placed more than once\n"
+                     "or transformed; an object placed once, untransformed, is put in the top-level BVH,\n"
+                     "which saves every ray an instance transform) or always (every object). Instanced\n"
+                     "objects are never flattened either way. The image is the same.")
       ->capture_default_str();
   render->add_option("--partitioner,--partition", o.partition,
                      "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"

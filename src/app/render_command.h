@@ -37,6 +37,9 @@ struct RenderOptions {
   // --retrace: "remote" re-traces only paths whose hit another rank found;
   // "all" re-traces every shaded path (the paper). Same image.
   std::string retrace = "remote";
+  // --instancing: "shared" gives an Embree instance level only to objects a
+  // rank places more than once or transformed; "always" to every object.
+  std::string instancing = "shared";
   // --partitioner (alias --partition): a name from partition/partitioner.h,
   // made on the fly (every rank runs the same deterministic partitioner).
   // Ignored when the scene is a part directory (ferry partition -o DIR).

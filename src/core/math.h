@@ -140,6 +140,12 @@ struct Affine3f {
   Vec3f t{0, 0, 0};
 
   static Affine3f identity() { return {}; }
+  bool isIdentity() const {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        if (l[r][c] != (r == c ? 1.0f : 0.0f)) return false;
+    return t == Vec3f(0, 0, 0);
+  }
   static Affine3f translate(Vec3f d) {
     Affine3f a;
     a.t = d;

@@ -26,6 +26,11 @@ struct MemoryCost {
   MemoryCost scaled(uint64_t times) const;
 };
 
+// The model assumes every object has its own BVH under an instance
+// (LocalGeometry with Instancing::Always); the default build puts an object a
+// rank places once, untransformed, into the top-level BVH, which retains no
+// more (tested), so for it the model is an upper bound (by a few KB per such
+// object; Cornell's 8 meshes: 14.8 KB estimated, 3.5 KB retained).
 // Calibrated constants: measured with Embree 3.13.5 (Debian, default build
 // quality, on an AVX-512 CPU) by src/scene/memory_cost_test.cpp, which
 // keeps them honest; docs/memory.md has the measurements. `accel` is what

@@ -75,6 +75,7 @@ RTCRayHit toEmbree(const TraceRay& r) {
 }
 
 TraceHit fromEmbree(const RTCRayHit& rh) {
+  // (LocalGeometry::Impl::nameHit has rewritten a top-level mesh's ids.)
   TraceHit h;
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
   h.t = rh.ray.tfar;
@@ -94,6 +95,14 @@ struct LocalGeometry::Impl {
   RTCDevice device = nullptr;
   RTCScene top = nullptr;
   std::unordered_map<int32_t, RTCScene> objectScenes;
+  // Meshes attached straight to the top-level scene, by top-level geometry id
+  // minus topLevelBase: the instance and mesh slot a hit on them names.
+  struct TopLevelMesh {
+    int32_t instance, meshSlot;
+  };
+  std::vector<TopLevelMesh> topLevelMeshes;
+  uint32_t topLevelBase = 0;
+  uint64_t topLevelObjects = 0;
   std::vector<std::unique_ptr<AlphaContext>> alphaContexts;
   std::atomic<int64_t> memory[2] = {0, 0};  // current, peak
   uint64_t instanceCount = 0;
@@ -104,6 +113,15 @@ struct LocalGeometry::Impl {
     if (device) rtcReleaseDevice(device);
   }
 
+  // A hit on a top-level mesh has no instance id and its top-level geometry
+  // id: rewrite both to what a hit through an instance would have said.
+  void nameHit(uint32_t& geomID, uint32_t& instID) const {
+    if (geomID == RTC_INVALID_GEOMETRY_ID || instID != RTC_INVALID_GEOMETRY_ID) return;
+    const TopLevelMesh& m = topLevelMeshes[geomID - topLevelBase];
+    instID = uint32_t(m.instance);
+    geomID = uint32_t(m.meshSlot);
+  }
+
   void check(const char* what) {
     RTCError e = rtcGetDeviceError(device);
     if (e != RTC_ERROR_NONE)
@@ -112,7 +130,7 @@ struct LocalGeometry::Impl {
   }
 };
 
-LocalGeometry::LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstances)
+LocalGeometry::LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstances, Instancing instancing)
     : scene_(scene), impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
   im.device = rtcNewDevice(nullptr);
@@ -127,11 +145,9 @@ LocalGeometry::LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstanc
     ownedInstances = all;
   }
 
-  auto objectScene = [&](int32_t objectId) -> RTCScene {
-    auto it = im.objectScenes.find(objectId);
-    if (it != im.objectScenes.end()) return it->second;
-    RTCScene s = rtcNewScene(im.device);
-    const Object& object = scene.objects[objectId];
+  // Embree geometries for the meshes of `object`, each attached to `target`
+  // by the id attach(slot) returns.
+  auto attachMeshes = [&](const Object& object, RTCScene target, auto&& idForSlot) {
     for (size_t slot = 0; slot < object.meshes.size(); ++slot) {
       Mesh& mesh = scene.meshes[object.meshes[slot]];
       if (mesh.indices.empty()) continue;
@@ -154,18 +170,43 @@ LocalGeometry::LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstanc
         im.alphaContexts.push_back(std::move(ctx));
       }
       rtcCommitGeometry(g);
-      rtcAttachGeometryByID(s, g, static_cast<unsigned>(slot));
+      rtcAttachGeometryByID(target, g, idForSlot(int32_t(slot)));
       rtcReleaseGeometry(g);
     }
+  };
+
+  auto objectScene = [&](int32_t objectId) -> RTCScene {
+    auto it = im.objectScenes.find(objectId);
+    if (it != im.objectScenes.end()) return it->second;
+    RTCScene s = rtcNewScene(im.device);
+    attachMeshes(scene.objects[objectId], s, [](int32_t slot) { return unsigned(slot); });
     rtcCommitScene(s);
     im.check("building an object");
     im.objectScenes.emplace(objectId, s);
     return s;
   };
 
+  // Objects placed once on this rank, untransformed: their meshes go to the top level.
+  std::unordered_map<int32_t, int> placements;
+  for (int32_t instanceId : ownedInstances) ++placements[scene.instances[instanceId].object];
+  auto atTopLevel = [&](const Instance& inst) {
+    return instancing == Instancing::Shared && placements[inst.object] == 1 &&
+           inst.transform.isIdentity();
+  };
+  im.topLevelBase = uint32_t(scene.instances.size());  // instances keep their own ids below
+
   im.top = rtcNewScene(im.device);
   for (int32_t instanceId : ownedInstances) {
     const Instance& inst = scene.instances[instanceId];
+    if (atTopLevel(inst)) {
+      attachMeshes(scene.objects[inst.object], im.top, [&](int32_t slot) {
+        im.topLevelMeshes.push_back({instanceId, slot});
+        return unsigned(im.topLevelBase + im.topLevelMeshes.size() - 1);
+      });
+      ++im.topLevelObjects;
+      ++im.instanceCount;
+      continue;
+    }
     RTCGeometry g = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, objectScene(inst.object));
     float xfm[12];
@@ -190,6 +231,7 @@ TraceHit LocalGeometry::intersect(const TraceRay& ray) const {
   rtcInitIntersectContext(&context);
   RTCRayHit rh = toEmbree(ray);
   rtcIntersect1(impl_->top, &context, &rh);
+  impl_->nameHit(rh.hit.geomID, rh.hit.instID[0]);
   return fromEmbree(rh);
 }
 
@@ -212,7 +254,10 @@ void LocalGeometry::intersect(std::span<const TraceRay> rays, std::span<TraceHit
                         RTCIntersectContext context;
                         rtcInitIntersectContext(&context);
                         rtcIntersect1M(impl_->top, &context, batch, unsigned(n), sizeof(RTCRayHit));
-                        for (size_t i = 0; i < n; ++i) hits[begin + i] = fromEmbree(batch[i]);
+                        for (size_t i = 0; i < n; ++i) {
+                          impl_->nameHit(batch[i].hit.geomID, batch[i].hit.instID[0]);
+                          hits[begin + i] = fromEmbree(batch[i]);
+                        }
                       }
                     });
 }
@@ -261,6 +306,9 @@ void LocalGeometry::trace(RayBatch& batch) const {
     rtcInitIntersectContext(&context);
     rtcIntersect1M(impl_->top, &context, reinterpret_cast<RTCRayHit*>(batch.closest_),
                    unsigned(batch.closestCount_), sizeof(RTCRayHit));
+    if (!impl_->topLevelMeshes.empty())
+      for (size_t k = 0; k < batch.closestCount_; ++k)
+        impl_->nameHit(batch.closest_[k].geomID, batch.closest_[k].instID);
   }
   if (batch.occludedCount_) {
     rtcInitIntersectContext(&context);
@@ -302,7 +350,8 @@ Box3f LocalGeometry::bounds() const {
 
 int64_t LocalGeometry::embreeBytes() const { return impl_->memory[0].load(); }
 int64_t LocalGeometry::embreePeakBytes() const { return impl_->memory[1].load(); }
-uint64_t LocalGeometry::builtObjectCount() const { return impl_->objectScenes.size(); }
+uint64_t LocalGeometry::builtObjectCount() const { return impl_->objectScenes.size() + impl_->topLevelObjects; }
+uint64_t LocalGeometry::topLevelObjectCount() const { return impl_->topLevelObjects; }
 uint64_t LocalGeometry::builtInstanceCount() const { return impl_->instanceCount; }
 
 }  // namespace ferry

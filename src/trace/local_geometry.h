@@ -1,6 +1,13 @@
 // The rank-local tracer: Embree structures for the content this rank owns.
-// Two-level: one Embree scene per object, placed by instance geometries in a
-// top-level scene (instancing is never flattened). Alpha cut-outs are applied
+// Two-level: one Embree scene per instanced object, placed by instance
+// geometries in a top-level scene (instancing is never flattened: an object's
+// triangles exist once however often it is placed). An object this rank
+// places exactly once, untransformed, instances nothing: by default
+// (Instancing::Shared) its meshes go straight into the top-level scene, as a
+// production renderer keeps unique geometry, which saves every ray an
+// instance transform and a second BVH root (15 % of Embree's own tutorial
+// frame on the bunny, docs/performance.md). Instancing::Always gives every
+// object an instance level. Alpha cut-outs are applied
 // in Embree intersection/occlusion filters. Embree's headers stay in the .cpp
 // so a second backend touches only this folder.
 #pragma once
@@ -101,6 +108,12 @@ class RayBatch {
   size_t closestCount_ = 0, occludedCount_ = 0;
 };
 
+// Which objects get an instance level (see the top of this file).
+enum class Instancing : uint8_t {
+  Shared,  // objects placed more than once, or transformed; unique geometry at the top level
+  Always   // every object, even one placed once
+};
+
 class LocalGeometry {
  public:
   // Builds Embree structures over `ownedInstances` of `scene` (all instances
@@ -108,7 +121,8 @@ class LocalGeometry {
   // The scene is shared with Embree, not copied, and must outlive this object;
   // its vertex arrays may get one element of spare capacity (Embree reads 16
   // bytes at the last vertex).
-  explicit LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstances = {});
+  explicit LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstances = {},
+                         Instancing instancing = Instancing::Shared);
   ~LocalGeometry();
   LocalGeometry(const LocalGeometry&) = delete;
   LocalGeometry& operator=(const LocalGeometry&) = delete;
@@ -134,9 +148,11 @@ class LocalGeometry {
   // Bytes Embree holds now and at its peak, from its memory-monitor callback.
   int64_t embreeBytes() const;
   int64_t embreePeakBytes() const;
-  // Objects and instances actually built on this rank.
+  // Objects and instances actually built on this rank (an object placed at
+  // the top level counts as both), and of those how many are at the top level.
   uint64_t builtObjectCount() const;
   uint64_t builtInstanceCount() const;
+  uint64_t topLevelObjectCount() const;
 
  private:
   struct Impl;
