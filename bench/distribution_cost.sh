@@ -79,7 +79,7 @@ for n in ranks:
     print(f"  {n} rank(s): traced {t['traces']['total'] / f:9.0f} (closest {t['traces']['closest'] / f:.0f},"
           f" shadow {t['traces']['occlusion'] / f:.0f}, re-trace {t['traces']['retrace'] / f:.0f}),"
           f" forwarded {t['exchange']['rays_forwarded'] / f:8.0f};"
-          f" s: " + ", ".join(f"{k} {st[k] / f:.2f}" for k in ("generate", "trace", "exchange", "shade", "accumulate")))
+          f" s: " + ", ".join(f"{k} {st[k] / f:.2f}" for k in ("generate", "trace", "exchange", "shade")))
 
 print("\nrays forwarded per frame (exact counters; bytes and rounds per frame too)")
 frames = lambda s: len(s["render"]["frames"])

@@ -101,8 +101,8 @@ FrameStats reduceFrameStats(const Communicator& comm, const FrameStats& mine) {
     counters.push_back(c.rounds);
   }
   std::vector<uint64_t> s = comm.sum(std::span<const uint64_t>(counters));
-  std::vector<double> times = {local.times.generate, local.times.trace,      local.times.exchange,
-                               local.times.shade,    local.times.accumulate, local.times.composite};
+  std::vector<double> times = {local.times.generate, local.times.trace, local.times.exchange,
+                               local.times.shade, local.times.composite};
   std::vector<double> t = comm.sum(std::span<const double>(times));
   FrameStats out;
   out.frame = mine.frame;
@@ -118,7 +118,7 @@ FrameStats reduceFrameStats(const Communicator& comm, const FrameStats& mine) {
   out.replayQueries = s[8];
   for (size_t b = 0; b < local.perBounce.size(); ++b)
     out.perBounce.push_back({s[9 + 3 * b], s[10 + 3 * b], s[11 + 3 * b]});
-  out.times = {t[0], t[1], t[2], t[3], t[4], t[5]};
+  out.times = {t[0], t[1], t[2], t[3], t[4]};
   return out;
 }
 

@@ -303,6 +303,25 @@ INSTANTIATE_TEST_SUITE_P(BsdfLobes, BsdfLobeTest, ::testing::ValuesIn(roughCases
 
 // ------------------------------------------------------------------ delta lobes
 
+// The frame buffer relies on this (frame_buffer.h): a sample is delta exactly
+// when its lobe is, so a path that counts emission after a delta bounce never
+// has a shadow ray in the same wavefront.
+TEST(BsdfDelta, ASampleIsDeltaExactlyWhenItsLobeIs) {
+  const Bsdf lobes[] = {Bsdf::diffuse(Vec3f(0.5f)),         Bsdf::conductor(Vec3f(0.9f), 0),
+                        Bsdf::conductor(Vec3f(0.9f), 0.3f), Bsdf::dielectric(1.5f, 0),
+                        Bsdf::dielectric(1.5f, 0.3f)};
+  for (const Bsdf& b : lobes) {
+    for (float t : {10.0f, 60.0f, 120.0f, 170.0f}) {
+      for (float uLobe : {0.01f, 0.5f, 0.99f}) {
+        BsdfSample bs;
+        if (b.sample(direction(t), uLobe, {0.3f, 0.7f}, bs)) {
+          EXPECT_EQ(bs.delta, b.isDelta()) << t;
+        }
+      }
+    }
+  }
+}
+
 TEST(BsdfDelta, SmoothConductorIsAMirrorWithSchlickFresnel) {
   for (float f0 : {1.0f, 0.5f, 0.04f}) {
     Bsdf b = Bsdf::conductor(Vec3f(f0), 0);

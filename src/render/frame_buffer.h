@@ -2,10 +2,11 @@
 // computed, for any pixel. The distributed layer sums the ranks' buffers by
 // direct send; on one rank it is the image.
 //
-// Writes are not atomic: a wavefront stage touches each pixel at most once
-// (one path and one shadow ray per pixel sample, shaded in separate passes),
-// which also makes the summation order, and so the image, independent of the
-// thread count.
+// Writes are not atomic: a wavefront touches each pixel at most once (one
+// path and one shadow ray per pixel sample, and the path adds light only after
+// a delta vertex, which spawns no shadow ray; Bsdf tests that a sample is
+// delta exactly when its lobe is), which also makes the summation order, and
+// so the image, independent of the thread count.
 #pragma once
 
 #include <cstdint>

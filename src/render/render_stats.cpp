@@ -21,7 +21,6 @@ StageTimes& StageTimes::operator+=(const StageTimes& o) {
   trace += o.trace;
   exchange += o.exchange;
   shade += o.shade;
-  accumulate += o.accumulate;
   composite += o.composite;
   return *this;
 }
@@ -71,7 +70,7 @@ nlohmann::json FrameStats::toJson() const {
   j["exchange_per_bounce"] = bounces;
   j["stage_seconds"] = {{"generate", times.generate}, {"trace", times.trace},
                         {"exchange", times.exchange}, {"shade", times.shade},
-                        {"accumulate", times.accumulate}, {"composite", times.composite}};
+                        {"composite", times.composite}};
   return j;
 }
 
@@ -116,9 +115,9 @@ std::string RenderStats::summaryText(int ranks) const {
   row("bytes sent", formatBytes(ex.bytesSent));
   row("exchange rounds", fmt::format("{}", ex.rounds));
   row("stage seconds", fmt::format("generate {:.2f}, trace {:.2f}, exchange {:.2f}, shade {:.2f}, "
-                                   "accumulate {:.2f}, composite {:.2f} (summed over ranks)",
+                                   "composite {:.2f} (summed over ranks)",
                                    t.times.generate, t.times.trace, t.times.exchange, t.times.shade,
-                                   t.times.accumulate, t.times.composite));
+                                   t.times.composite));
   if (t.retraceMisses) row("re-trace misses", fmt::format("{}", t.retraceMisses));
   return out;
 }

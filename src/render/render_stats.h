@@ -22,11 +22,10 @@ struct StageTimes {
   double generate = 0;  // camera rays (and proxy-guided ownership)
   double trace = 0;     // local traces inside traversal
   double exchange = 0;  // forwarding decisions, compaction, MPI
-  double shade = 0;     // re-trace, BSDF and light sampling, spawning
-  double accumulate = 0;  // shadow-ray contributions into the frame buffer
+  double shade = 0;     // shadow-ray contributions, re-trace, BSDF and light sampling, spawning
   double composite = 0;   // merging frame buffers
   StageTimes& operator+=(const StageTimes& o);
-  double total() const { return generate + trace + exchange + shade + accumulate + composite; }
+  double total() const { return generate + trace + exchange + shade + composite; }
 };
 
 struct FrameStats {

@@ -67,7 +67,6 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
     for (uint32_t bounce = 0; traversal_.anyRaysLeft(rays_.size()); ++bounce) {
       if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
       traversal_.traverse(rays_, hits_, stats.perBounce[bounce], stats);
-      accumulateShadowRays(rays_, frameBuffer, stats);
       shade(rays_, hits_, sampleIndex, bounce, frameBuffer, next_, stats);
       std::swap(rays_, next_);
     }
@@ -155,19 +154,6 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, PathQueue
 }
 
 template <typename Path>
-void WavefrontRenderer<Path>::accumulateShadowRays(const PathQueue<Path>& rays, FrameBuffer& frameBuffer,
-                                                   FrameStats& stats) {
-  auto start = Clock::now();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const auto& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      const Path& p = rays[i];
-      if (p.isShadow() && !p.has(kPathOccluded)) frameBuffer.add(p.pixel(), p.weight());
-    }
-  });
-  stats.times.accumulate += secondsSince(start);
-}
-
-template <typename Path>
 void WavefrontRenderer<Path>::shade(const PathQueue<Path>& rays, const std::vector<TraceHit>& hits,
                                     uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
                                     PathQueue<Path>& next, FrameStats& stats) {
@@ -212,7 +198,11 @@ void WavefrontRenderer<Path>::shade(const PathQueue<Path>& rays, const std::vect
         }
         for (size_t i = 0; i < m; ++i) {
           const Path& p = rays[batch + i];
-          if (p.isShadow()) continue;
+          if (p.isShadow()) {
+            // Its light arrives unless something was in the way.
+            if (!p.has(kPathOccluded)) frameBuffer.add(p.pixel(), p.weight());
+            continue;
+          }
           const TraceHit& hit = kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
           int spawned = shadeOne(p, hit, sampleIndex, bounce, frameBuffer, out + count, misses);
           for (int k = 0; k < spawned; ++k) shadows += out[count + k].isShadow();
@@ -266,6 +256,9 @@ int WavefrontRenderer<Path>::shadeOne(const Path& path, const TraceHit& hit, uin
   }
   if (bounce >= maxDepth) return 0;
 
+  // (Emission above counted only after a delta vertex, which spawns no shadow
+  // ray: a pixel's path and shadow ray never both write the frame buffer in
+  // one wavefront, which lets shade() add shadow rays in the same pass.)
   Bsdf bsdf = Bsdf::fromMaterial(material, surface.baseColor);
   Vec3f ng = surface.geometricNormal, ns = surface.shadingNormal;
   if (!bsdf.transmits() && dot(ng, wo) < 0) {

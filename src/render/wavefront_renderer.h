@@ -52,9 +52,11 @@ class WavefrontRenderer {
 
  private:
   void generateCameraRays(uint32_t sampleIndex, PathQueue<Path>& rays, FrameStats& stats);
-  void accumulateShadowRays(const PathQueue<Path>& rays, FrameBuffer& frameBuffer, FrameStats& stats);
-  // Shades every non-shadow path (re-tracing those without a valid hits[i]);
-  // writes the next wavefront (continuations and shadow rays) to `next`.
+  // Adds each unoccluded shadow ray's contribution and shades every other
+  // path (re-tracing those without a valid hits[i]); writes the next
+  // wavefront (continuations and shadow rays) to `next`. One pass: within a
+  // wavefront no pixel is written twice (a pixel sample's shadow ray comes
+  // from a non-delta vertex, so its path does not count emission there).
   void shade(const PathQueue<Path>& rays, const std::vector<TraceHit>& hits, uint32_t sampleIndex,
              uint32_t bounce, FrameBuffer& frameBuffer, PathQueue<Path>& next, FrameStats& stats);
   // Shades path i given its hit (invalid: escaped or re-trace missed); writes
