@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <memory>
 
 #include "render/render_test_util.h"
 
@@ -114,15 +115,39 @@ RenderSettings busySettings(uint32_t seed) {
 }
 
 // Builds everything (Embree structures included) and renders, under a thread limit.
+// LocalTraversal, except that it does not say it keeps every primary: the
+// renderer then sends the whole image through one wavefront (as on many ranks).
 template <typename Path>
-std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false) {
+struct WholeImageTraversal final : RayTraversal<Path> {
+  explicit WholeImageTraversal(const LocalGeometry& geometry) : local(geometry) {}
+  int rank() const override { return 0; }
+  int rankCount() const override { return 1; }
+  bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
+  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& e, FrameStats& s) override {
+    local.traverse(rays, hits, e, s);
+  }
+  bool anyRaysLeft(size_t n) override { return n > 0; }
+  LocalTraversal<Path> local;
+};
+
+// Builds everything (Embree structures included) and renders, under a thread
+// limit; chunk > 0 sets the pixels per thread of a one-rank wavefront, -1
+// sends the whole image through each wavefront.
+template <typename Path>
+std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false, int chunk = 0) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
   Scene scene = busyScene();
   RenderSettings s = busySettings(seed);
   s.retraceAll = retraceAll;
+  if (chunk > 0) s.chunkPixelsPerThread = uint32_t(chunk);
   LocalGeometry geometry(scene);
   LightSampler lights(scene);
-  LocalTraversal<Path> traversal(geometry);
+  std::unique_ptr<RayTraversal<Path>> traversalHolder;
+  if (chunk < 0)
+    traversalHolder = std::make_unique<WholeImageTraversal<Path>>(geometry);
+  else
+    traversalHolder = std::make_unique<LocalTraversal<Path>>(geometry);
+  RayTraversal<Path>& traversal = *traversalHolder;
   WavefrontRenderer<Path> renderer(scene, geometry, lights, traversal, s);
   FrameBuffer fb(s.width, s.height);
   for (int f = 0; f < s.frames; ++f) {
@@ -176,6 +201,16 @@ TEST(Determinism, KeepingHitsOrRetracingGivesTheSameImage) {
   std::vector<Vec3f> retracedOneThread = render<Path64>(1, 1, true);
   EXPECT_TRUE(bitIdentical(kept, retracedOneThread))
       << differingPixels(kept, retracedOneThread) << " pixels differ (--retrace all, 1 thread, Path64)";
+}
+
+// One rank sends its pixels through the wavefront in chunks (for the cache);
+// the chunk size must not show in the image.
+TEST(Determinism, PixelChunksDoNotChangeTheImage) {
+  std::vector<Vec3f> whole = render<Path8>(1, 2, false, -1);
+  for (int chunk : {100, 700}) {  // 48 x 32 pixels: many chunks, and chunks that split rows
+    std::vector<Vec3f> chunked = render<Path8>(1, 2, false, chunk);
+    EXPECT_TRUE(bitIdentical(whole, chunked)) << differingPixels(whole, chunked) << " pixels differ, chunk " << chunk;
+  }
 }
 
 TEST(Determinism, DifferentSeedsGiveDifferentImages) {

@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -61,14 +62,18 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
   FrameStats stats;
   stats.frame = frame;
   auto frameStart = Clock::now();
+  const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
+  const uint32_t chunk = pixelChunk();
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
-    generateCameraRays(sampleIndex, rays_, stats);
-    for (uint32_t bounce = 0; traversal_.anyRaysLeft(rays_.size()); ++bounce) {
-      if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
-      traversal_.traverse(rays_, hits_, stats.perBounce[bounce], stats);
-      shade(rays_, hits_, sampleIndex, bounce, frameBuffer, next_, stats);
-      std::swap(rays_, next_);
+    for (uint32_t begin = 0; begin < pixels; begin += chunk) {
+      generateCameraRays(sampleIndex, begin, std::min(pixels, begin + chunk), rays_, stats);
+      for (uint32_t bounce = 0; traversal_.anyRaysLeft(rays_.size()); ++bounce) {
+        if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
+        traversal_.traverse(rays_, hits_, stats.perBounce[bounce], stats);
+        shade(rays_, hits_, sampleIndex, bounce, frameBuffer, next_, stats);
+        std::swap(rays_, next_);
+      }
     }
     if (progress) progress(s + 1, settings_.samplesPerPixel);
   }
@@ -98,10 +103,19 @@ void concatenateBlocks(const PathQueue<Path>& staging, size_t stride, const std:
 }  // namespace
 
 template <typename Path>
-void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, PathQueue<Path>& rays,
-                                                 FrameStats& stats) {
-  auto start = Clock::now();
+uint32_t WavefrontRenderer<Path>::pixelChunk() const {
   const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
+  if (!traversal_.keepsAllPrimaries()) return pixels;
+  const uint64_t chunk = uint64_t(std::max(1u, settings_.chunkPixelsPerThread)) *
+                         uint64_t(std::max(1, tbb::this_task_arena::max_concurrency()));
+  return uint32_t(std::min<uint64_t>(pixels, chunk));
+}
+
+template <typename Path>
+void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last,
+                                                 PathQueue<Path>& rays, FrameStats& stats) {
+  auto start = Clock::now();
+  const uint32_t pixels = last - first;
   const uint32_t width = uint32_t(settings_.width);
   auto cameraRay = [&](uint32_t pixel, uint32_t px, uint32_t py, Path& p) {
     RandomStream random(RandomKey{pixel, sampleIndex, 0, settings_.seed});
@@ -123,9 +137,9 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, PathQueue
   if (traversal_.keepsAllPrimaries()) {
     // Every pixel's path is this rank's: straight into the queue, in pixel order.
     rays.resize(pixels);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, pixels, 4096), [&](const auto& range) {
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, 4096), [&](const auto& range) {
       forPixels(range.begin(), range.end(),
-                [&](uint32_t pixel, uint32_t px, uint32_t py) { cameraRay(pixel, px, py, rays[pixel]); });
+                [&](uint32_t pixel, uint32_t px, uint32_t py) { cameraRay(pixel, px, py, rays[pixel - first]); });
     });
   } else {
     const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
@@ -137,7 +151,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, PathQueue
       for (size_t b = range.begin(); b != range.end(); ++b) {
         const uint32_t begin = uint32_t(b * kBlock), end = uint32_t(std::min<size_t>(pixels, begin + kBlock));
         uint32_t kept = 0;
-        forPixels(begin, end, [&](uint32_t pixel, uint32_t px, uint32_t py) {
+        forPixels(first + begin, first + end, [&](uint32_t pixel, uint32_t px, uint32_t py) {
           Path& p = staging_[begin + kept];
           cameraRay(pixel, px, py, p);
           kept += traversal_.keepsPrimary(pixel, TraceRay{p.origin, p.dir(), 0, kInfinity}, local);

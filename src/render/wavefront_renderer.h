@@ -1,11 +1,12 @@
 // The path tracer every rank runs, as a wavefront: queues of compact paths,
 // one method per stage, the render loop reading like the algorithm.
 //
-// One wavefront is one sample of every pixel this rank generates. Per bounce:
-// traverse (local trace, and forwarding when distributed), add unoccluded
-// shadow rays to the frame buffer, shade paths (re-trace, emission, one light
-// sample, one continuation). A pixel sample has at most two live rays (its path
-// and its shadow ray), so queues are bounded by the image size.
+// One wavefront is one sample of every pixel this rank generates (on one
+// rank: of a chunk of pixels, see pixelChunk). Per bounce: traverse (local
+// trace, and forwarding when distributed), then one shading pass (add
+// unoccluded shadow rays to the frame buffer; shade paths: re-trace, emission,
+// one light sample, one continuation). A pixel sample has at most two live
+// rays (its path and its shadow ray), so queues are bounded by the image size.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +36,9 @@ struct RenderSettings {
   // carries no hit) instead of only those whose hit was found on another
   // rank. The image is the same either way (tests check it); only the speed differs.
   bool retraceAll = false;
+  // One rank: pixels per worker thread that go through the wavefront together
+  // (WavefrontRenderer::pixelChunk). Any value gives the same image.
+  uint32_t chunkPixelsPerThread = 8192;
   ToneMapping toneMapping;
 };
 
@@ -51,7 +55,18 @@ class WavefrontRenderer {
   FrameStats renderFrame(int frame, FrameBuffer& frameBuffer, const ProgressCallback& progress = {});
 
  private:
-  void generateCameraRays(uint32_t sampleIndex, PathQueue<Path>& rays, FrameStats& stats);
+  // How many pixels go through the wavefront together. Many ranks: all of
+  // them (every wavefront is a collective exchange). One rank: chunks of
+  // 8 K pixels per worker thread, so that a chunk's queues (paths, kept hits,
+  // spawned rays: ~130 bytes a pixel) stay in cache from stage to stage
+  // instead of streaming the whole image through memory at every stage
+  // (docs/performance.md). The image does not depend on it: each pixel sample
+  // is the same computation, and its contributions reach the frame buffer in
+  // the same order (sample by sample, bounce by bounce).
+  uint32_t pixelChunk() const;
+  // The camera rays of pixels [begin, end) for this sample.
+  void generateCameraRays(uint32_t sampleIndex, uint32_t begin, uint32_t end, PathQueue<Path>& rays,
+                          FrameStats& stats);
   // Adds each unoccluded shadow ray's contribution and shades every other
   // path (re-tracing those without a valid hits[i]); writes the next
   // wavefront (continuations and shadow rays) to `next`. One pass: within a
