@@ -139,7 +139,7 @@ std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false, i
   Scene scene = busyScene();
   RenderSettings s = busySettings(seed);
   s.retraceAll = retraceAll;
-  if (chunk > 0) s.chunkPixelsPerThread = uint32_t(chunk);
+  if (chunk > 0) s.chunkPixels = uint32_t(chunk);
   LocalGeometry geometry(scene);
   LightSampler lights(scene);
   std::unique_ptr<RayTraversal<Path>> traversalHolder;

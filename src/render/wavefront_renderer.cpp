@@ -63,22 +63,53 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
   stats.frame = frame;
   auto frameStart = Clock::now();
   const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
-  const uint32_t chunk = pixelChunk();
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
-    for (uint32_t begin = 0; begin < pixels; begin += chunk) {
-      generateCameraRays(sampleIndex, begin, std::min(pixels, begin + chunk), rays_, stats);
-      for (uint32_t bounce = 0; traversal_.anyRaysLeft(rays_.size()); ++bounce) {
-        if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
-        traversal_.traverse(rays_, hits_, stats.perBounce[bounce], stats);
-        shade(rays_, hits_, sampleIndex, bounce, frameBuffer, next_, stats);
-        std::swap(rays_, next_);
-      }
+    if (!traversal_.keepsAllPrimaries()) {
+      // Many ranks: the whole image in one wavefront (each bounce is a
+      // collective exchange), every stage parallel inside the rank.
+      runWavefront(sampleIndex, 0, pixels, workspace_, frameBuffer, stats);
+    } else {
+      // One rank: chunks of pixels, each taken from camera ray to last bounce
+      // by one thread, so that its queues (paths, kept hits, spawned rays:
+      // ~130 bytes a pixel) stay in that core's cache from stage to stage and
+      // no thread waits for another at the end of every stage (the whole
+      // image per wavefront streamed ~17 MB through memory at each stage of a
+      // 512x512 frame; docs/performance.md). Chunks are disjoint pixel ranges
+      // and each pixel sample is the same computation, adding to the frame
+      // buffer in the same order: the image does not depend on the chunks.
+      // (Stage times are then summed over the threads.)
+      const uint32_t chunk = std::max(1u, settings_.chunkPixels);
+      const uint32_t chunks = (pixels + chunk - 1) / chunk;
+      tbb::enumerable_thread_specific<FrameStats> chunkStats;
+      tbb::parallel_for(tbb::blocked_range<uint32_t>(0, chunks, 1), [&](const auto& range) {
+        for (uint32_t c = range.begin(); c != range.end(); ++c) {
+          // Isolated: while its stages wait, this thread takes no other chunk,
+          // which would reuse its workspace.
+          tbb::this_task_arena::isolate([&] {
+            runWavefront(sampleIndex, c * chunk, std::min(pixels, (c + 1) * chunk), chunkWorkspaces_.local(),
+                         frameBuffer, chunkStats.local());
+          });
+        }
+      });
+      for (const FrameStats& local : chunkStats) stats.merge(local);  // counters and stage times summed
     }
     if (progress) progress(s + 1, settings_.samplesPerPixel);
   }
   stats.seconds = secondsSince(frameStart);
   return stats;
+}
+
+template <typename Path>
+void WavefrontRenderer<Path>::runWavefront(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
+                                           FrameBuffer& frameBuffer, FrameStats& stats) {
+  generateCameraRays(sampleIndex, first, last, ws, stats);
+  for (uint32_t bounce = 0; traversal_.anyRaysLeft(ws.rays.size()); ++bounce) {
+    if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
+    traversal_.traverse(ws.rays, ws.hits, stats.perBounce[bounce], stats);
+    shade(ws, sampleIndex, bounce, frameBuffer, stats);
+    std::swap(ws.rays, ws.next);
+  }
 }
 
 namespace {
@@ -103,17 +134,9 @@ void concatenateBlocks(const PathQueue<Path>& staging, size_t stride, const std:
 }  // namespace
 
 template <typename Path>
-uint32_t WavefrontRenderer<Path>::pixelChunk() const {
-  const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
-  if (!traversal_.keepsAllPrimaries()) return pixels;
-  const uint64_t chunk = uint64_t(std::max(1u, settings_.chunkPixelsPerThread)) *
-                         uint64_t(std::max(1, tbb::this_task_arena::max_concurrency()));
-  return uint32_t(std::min<uint64_t>(pixels, chunk));
-}
-
-template <typename Path>
 void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last,
-                                                 PathQueue<Path>& rays, FrameStats& stats) {
+                                                 Workspace& ws, FrameStats& stats) {
+  PathQueue<Path>& rays = ws.rays;
   auto start = Clock::now();
   const uint32_t pixels = last - first;
   const uint32_t width = uint32_t(settings_.width);
@@ -143,8 +166,8 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     });
   } else {
     const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
-    staging_.resize(pixels);
-    blockCounts_.assign(blocks, 0);
+    ws.staging.resize(pixels);
+    ws.blockCounts.assign(blocks, 0);
     std::atomic<uint64_t> proxyQueries{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
       FrameStats local;
@@ -152,32 +175,33 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
         const uint32_t begin = uint32_t(b * kBlock), end = uint32_t(std::min<size_t>(pixels, begin + kBlock));
         uint32_t kept = 0;
         forPixels(first + begin, first + end, [&](uint32_t pixel, uint32_t px, uint32_t py) {
-          Path& p = staging_[begin + kept];
+          Path& p = ws.staging[begin + kept];
           cameraRay(pixel, px, py, p);
           kept += traversal_.keepsPrimary(pixel, TraceRay{p.origin, p.dir(), 0, kInfinity}, local);
         });
-        blockCounts_[b] = kept;
+        ws.blockCounts[b] = kept;
       }
       proxyQueries += local.proxyQueries;
     });
     stats.proxyQueries += proxyQueries;
-    concatenateBlocks(staging_, kBlock, blockCounts_, rays);
+    concatenateBlocks(ws.staging, kBlock, ws.blockCounts, rays);
   }
   stats.cameraPaths += rays.size();
   stats.times.generate += secondsSince(start);
 }
 
 template <typename Path>
-void WavefrontRenderer<Path>::shade(const PathQueue<Path>& rays, const std::vector<TraceHit>& hits,
-                                    uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
-                                    PathQueue<Path>& next, FrameStats& stats) {
+void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
+                                    FrameStats& stats) {
+  const PathQueue<Path>& rays = ws.rays;
+  const std::vector<TraceHit>& hits = ws.hits;
   auto start = Clock::now();
   FERRY_CHECK(hits.size() == rays.size());
   const size_t n = rays.size();
   const size_t blocks = (n + kBlock - 1) / kBlock;
   // Each path spawns at most two rays (its continuation, then its shadow ray).
-  staging_.resize(2 * n);
-  blockCounts_.assign(blocks, 0);
+  ws.staging.resize(2 * n);
+  ws.blockCounts.assign(blocks, 0);
   std::atomic<uint64_t> retraceCount{0}, missCount{0}, shadowCount{0};
 
   tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
@@ -189,7 +213,7 @@ void WavefrontRenderer<Path>::shade(const PathQueue<Path>& rays, const std::vect
     uint64_t retraced = 0, misses = 0, shadows = 0;
     for (size_t b = range.begin(); b != range.end(); ++b) {
       const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
-      Path* out = staging_.data() + 2 * begin;
+      Path* out = ws.staging.data() + 2 * begin;
       uint32_t count = 0;
       for (size_t batch = begin; batch < end; batch += kBatch) {
         const size_t m = std::min(kBatch, end - batch);
@@ -223,13 +247,14 @@ void WavefrontRenderer<Path>::shade(const PathQueue<Path>& rays, const std::vect
           count += uint32_t(spawned);
         }
       }
-      blockCounts_[b] = count;
+      ws.blockCounts[b] = count;
     }
     retraceCount += retraced;
     missCount += misses;
     shadowCount += shadows;
   });
-  concatenateBlocks(staging_, 2 * kBlock, blockCounts_, next);
+  PathQueue<Path>& next = ws.next;
+  concatenateBlocks(ws.staging, 2 * kBlock, ws.blockCounts, next);
 
   stats.shadowRays += shadowCount;
   stats.continuationRays += next.size() - shadowCount;

@@ -2,7 +2,7 @@
 // one method per stage, the render loop reading like the algorithm.
 //
 // One wavefront is one sample of every pixel this rank generates (on one
-// rank: of a chunk of pixels, see pixelChunk). Per bounce: traverse (local
+// rank: of a chunk of pixels, each chunk on one thread, see renderFrame). Per bounce: traverse (local
 // trace, and forwarding when distributed), then one shading pass (add
 // unoccluded shadow rays to the frame buffer; shade paths: re-trace, emission,
 // one light sample, one continuation). A pixel sample has at most two live
@@ -13,6 +13,8 @@
 #include <functional>
 #include <string>
 #include <vector>
+
+#include <tbb/enumerable_thread_specific.h>
 
 #include "render/camera.h"
 #include "render/frame_buffer.h"
@@ -36,9 +38,9 @@ struct RenderSettings {
   // carries no hit) instead of only those whose hit was found on another
   // rank. The image is the same either way (tests check it); only the speed differs.
   bool retraceAll = false;
-  // One rank: pixels per worker thread that go through the wavefront together
-  // (WavefrontRenderer::pixelChunk). Any value gives the same image.
-  uint32_t chunkPixelsPerThread = 8192;
+  // One rank: pixels that go through the wavefront together, on one thread
+  // (WavefrontRenderer::renderFrame). Any value gives the same image.
+  uint32_t chunkPixels = 8192;
   ToneMapping toneMapping;
 };
 
@@ -55,25 +57,26 @@ class WavefrontRenderer {
   FrameStats renderFrame(int frame, FrameBuffer& frameBuffer, const ProgressCallback& progress = {});
 
  private:
-  // How many pixels go through the wavefront together. Many ranks: all of
-  // them (every wavefront is a collective exchange). One rank: chunks of
-  // 8 K pixels per worker thread, so that a chunk's queues (paths, kept hits,
-  // spawned rays: ~130 bytes a pixel) stay in cache from stage to stage
-  // instead of streaming the whole image through memory at every stage
-  // (docs/performance.md). The image does not depend on it: each pixel sample
-  // is the same computation, and its contributions reach the frame buffer in
-  // the same order (sample by sample, bounce by bounce).
-  uint32_t pixelChunk() const;
-  // The camera rays of pixels [begin, end) for this sample.
-  void generateCameraRays(uint32_t sampleIndex, uint32_t begin, uint32_t end, PathQueue<Path>& rays,
+  // A wavefront's queues and scratch, reused from wavefront to wavefront (no
+  // allocation per bounce).
+  struct Workspace {
+    PathQueue<Path> rays, next, staging;
+    std::vector<TraceHit> hits;
+    std::vector<uint32_t> blockCounts;
+  };
+  // One sample of pixels [first, last) from camera rays to the last bounce.
+  void runWavefront(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
+                    FrameBuffer& frameBuffer, FrameStats& stats);
+  // The camera rays of pixels [first, last) for this sample, into ws.rays.
+  void generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
                           FrameStats& stats);
   // Adds each unoccluded shadow ray's contribution and shades every other
-  // path (re-tracing those without a valid hits[i]); writes the next
-  // wavefront (continuations and shadow rays) to `next`. One pass: within a
+  // path (re-tracing those without a valid hit); writes the next wavefront
+  // (continuations and shadow rays). One pass: within a
   // wavefront no pixel is written twice (a pixel sample's shadow ray comes
   // from a non-delta vertex, so its path does not count emission there).
-  void shade(const PathQueue<Path>& rays, const std::vector<TraceHit>& hits, uint32_t sampleIndex,
-             uint32_t bounce, FrameBuffer& frameBuffer, PathQueue<Path>& next, FrameStats& stats);
+  // Reads ws.rays and ws.hits, writes ws.next.
+  void shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer, FrameStats& stats);
   // Shades path i given its hit (invalid: escaped or re-trace missed); writes
   // its continuation and shadow ray, in that order, to out; returns how many.
   int shadeOne(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
@@ -86,10 +89,8 @@ class WavefrontRenderer {
   RenderSettings settings_;
   Camera camera_;
   std::vector<Affine3f> instanceInverses_;  // for reconstructSurface
-  // Queues and scratch reused from wavefront to wavefront (no allocation per bounce).
-  PathQueue<Path> rays_, next_, staging_;
-  std::vector<TraceHit> hits_;
-  std::vector<uint32_t> blockCounts_;
+  Workspace workspace_;  // many ranks: the one whole-image wavefront
+  tbb::enumerable_thread_specific<Workspace> chunkWorkspaces_;  // one rank: one per thread
 };
 
 }  // namespace ferry
