@@ -84,12 +84,6 @@ float fresnelDielectric(float cosI, float eta) {
   return 0.5f * (rs * rs + rp * rp);
 }
 
-Vec3f sampleCosineHemisphere(Vec2f u) {
-  float r = std::sqrt(u.x);
-  float sinPhi, cosPhi;
-  sinCosTwoPi(u.y, sinPhi, cosPhi);
-  return {r * cosPhi, r * sinPhi, std::sqrt(std::max(0.0f, 1 - u.x))};
-}
 
 Bsdf Bsdf::diffuse(Vec3f albedo) {
   Bsdf b;

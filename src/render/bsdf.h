@@ -55,6 +55,13 @@ class Bsdf {
 
 // Helpers exposed for tests.
 float fresnelDielectric(float cosThetaI, float eta);  // eta = n_transmitted / n_incident
-Vec3f sampleCosineHemisphere(Vec2f u);
+// A cosine-weighted direction about +z (inline: every diffuse bounce and
+// constant-sky light sample takes one).
+[[gnu::always_inline]] inline Vec3f sampleCosineHemisphere(Vec2f u) {
+  float r = std::sqrt(u.x);
+  float sinPhi, cosPhi;
+  sinCosTwoPi(u.y, sinPhi, cosPhi);
+  return {r * cosPhi, r * sinPhi, std::sqrt(std::max(0.0f, 1 - u.x))};
+}
 
 }  // namespace ferry

@@ -2,15 +2,15 @@
 // path itself carries no hit data).
 #pragma once
 
+#include <bit>
+#include <cmath>
 #include <vector>
 
 #include "core/math.h"
+#include "scene/scene.h"
 #include "trace/local_geometry.h"
 
 namespace ferry {
-
-struct Scene;
-struct Material;
 
 struct SurfacePoint {
   Vec3f position;
@@ -23,6 +23,9 @@ struct SurfacePoint {
 
 // `inverses` (from instanceInverses, one per instance) saves inverting the
 // instance transform for every hit; the result is the same, bit for bit.
+// (Inline, as offsetRayOrigin: both run at every path vertex, and inlined
+// the compiler interleaves their loads and square roots with the shading
+// around them.)
 SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
                                 const std::vector<Affine3f>* inverses = nullptr);
 std::vector<Affine3f> instanceInverses(const Scene& scene);
@@ -30,5 +33,64 @@ std::vector<Affine3f> instanceInverses(const Scene& scene);
 // Moves a ray origin off a surface by a few ulps along the normal (Wächter and
 // Binder, Ray Tracing Gems ch. 6), robust at any distance from the origin.
 Vec3f offsetRayOrigin(Vec3f p, Vec3f n);
+
+// ------------------------------------------------------------------ inline definitions
+
+// Affine3f::transformNormal with the inverse given.
+inline Vec3f transformNormalByInverse(const Affine3f& inv, Vec3f n) {
+  return {inv.l[0][0] * n.x + inv.l[1][0] * n.y + inv.l[2][0] * n.z,
+          inv.l[0][1] * n.x + inv.l[1][1] * n.y + inv.l[2][1] * n.z,
+          inv.l[0][2] * n.x + inv.l[1][2] * n.y + inv.l[2][2] * n.z};
+}
+
+inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
+                                       const std::vector<Affine3f>* inverses) {
+  const Instance& inst = scene.instances[hit.instance];
+  const Affine3f inv = inverses ? (*inverses)[hit.instance] : inst.transform.inverse();
+  const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.meshSlot]];
+  const Vec3i& tri = mesh.indices[hit.primitive];
+  float w = 1 - hit.u - hit.v;
+  SurfacePoint s;
+  Vec3f p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
+  // The object-space barycentric point is more precise than origin + t * dir
+  // far from the camera.
+  s.position = inst.transform.transformPoint(p0 * w + p1 * hit.u + p2 * hit.v);
+  // Both normals are set from registers (copying one member to the other read
+  // back a value still in the store buffer, which the CPU cannot forward).
+  const Vec3f ng = normalize(transformNormalByInverse(inv, cross(p1 - p0, p2 - p0)));
+  s.geometricNormal = ng;
+  if (!mesh.normals.empty()) {
+    Vec3f n = mesh.normals[tri.x] * w + mesh.normals[tri.y] * hit.u + mesh.normals[tri.z] * hit.v;
+    n = transformNormalByInverse(inv, n);
+    float len = length(n);
+    Vec3f ns = len > 0 && std::isfinite(len) ? n * (1 / len) : ng;
+    // Keep the shading normal on the geometric side so it cannot flip the surface.
+    s.shadingNormal = dot(ns, ng) < 0 ? -ns : ns;
+  } else {
+    s.shadingNormal = ng;
+  }
+  s.uv = mesh.uvs.empty() ? Vec2f{hit.u, hit.v}
+                          : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
+  s.material = &scene.materials[mesh.material];
+  s.baseColor = s.material->baseColor;
+  if (s.material->baseColorTexture != kNoTexture)
+    s.baseColor *= scene.textures[s.material->baseColorTexture].sample(s.uv).xyz();
+  return s;
+}
+
+inline Vec3f offsetRayOrigin(Vec3f p, Vec3f n) {
+  constexpr float kOrigin = 1.0f / 32.0f;
+  constexpr float kFloatScale = 1.0f / 65536.0f;
+  constexpr float kIntScale = 256.0f;
+  Vec3f out;
+  for (int k = 0; k < 3; ++k) {
+    int offset = static_cast<int>(kIntScale * n[k]);
+    int bits = std::bit_cast<int>(p[k]);
+    float moved = std::bit_cast<float>(bits + (p[k] < 0 ? -offset : offset));
+    out[k] = std::abs(p[k]) < kOrigin ? p[k] + kFloatScale * n[k] : moved;
+  }
+  return out;
+}
+
 
 }  // namespace ferry
