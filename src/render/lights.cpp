@@ -126,7 +126,7 @@ Vec3f LightSampler::background(Vec3f d) const {
   return l;
 }
 
-bool LightSampler::sampleEnvironment(Vec3f n, bool twoSided, Vec2f u, LightSample& out) const {
+bool LightSampler::sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u, LightSample& out) const {
   if (!environment_.image && twoSided) {
     // Uniform over the sphere: light arrives from both sides.
     float z = 1 - 2 * u.x;
@@ -139,7 +139,7 @@ bool LightSampler::sampleEnvironment(Vec3f n, bool twoSided, Vec2f u, LightSampl
   } else if (!environment_.image) {
     // Constant: cosine-weighted around the normal is the ideal density.
     Vec3f local = sampleCosineHemisphere(u);
-    out.direction = Frame(n).toWorld(local);
+    out.direction = frame.toWorld(local);
     out.pdf = local.z / kPi;
     out.radiance = environment_.color;
   } else {
@@ -174,7 +174,9 @@ bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u, L
   return true;
 }
 
-bool LightSampler::sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f u, LightSample& out) const {
+bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u,
+                          LightSample& out) const {
+  const Vec3f n = frame.n;
   // Candidate weights estimate each light's unshadowed contribution but are
   // never zero for a light that could contribute, which keeps the estimator
   // unbiased. Candidate i is chosen with probability w_i / sum(w): one pass
@@ -239,7 +241,7 @@ bool LightSampler::sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f 
     return true;
   }
   if (chosen == envIndex) {
-    if (!sampleEnvironment(n, twoSided, u, out)) return false;
+    if (!sampleEnvironment(frame, twoSided, u, out)) return false;
     out.pdf *= selection;
     return true;
   }

@@ -32,7 +32,11 @@ class LightSampler {
   // Samples a light as seen from `p` (with normal `n` for the selection
   // weights). `twoSided` surfaces (dielectrics) receive light from both
   // hemispheres. False when the scene has no light or the sample is useless.
-  bool sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f u, LightSample& out) const;
+  bool sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f u, LightSample& out) const {
+    return sample(p, Frame(n), twoSided, uSelect, u, out);
+  }
+  // The same, given the frame about n (shading has built it already).
+  bool sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u, LightSample& out) const;
 
   // Radiance arriving along `direction` from infinitely far away: environment
   // plus any sun whose disk `direction` falls in.
@@ -57,7 +61,7 @@ class LightSampler {
   Vec3f environmentRadiance(Vec3f direction) const;
   Vec2f directionToUv(Vec3f d) const;
   Vec3f uvToDirection(Vec2f uv) const;
-  bool sampleEnvironment(Vec3f n, bool twoSided, Vec2f u, LightSample& out) const;
+  bool sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u, LightSample& out) const;
   bool sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u, LightSample& out) const;
 
   std::vector<SunLight> suns_;

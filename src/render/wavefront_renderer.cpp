@@ -203,6 +203,9 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
   ws.staging.resize(2 * n);
   ws.blockCounts.assign(blocks, 0);
   std::atomic<uint64_t> retraceCount{0}, missCount{0}, shadowCount{0};
+  // One rank traced every ray itself and kept every hit: nothing to re-trace
+  // unless asked to (--retrace all).
+  const bool mayRetrace = settings_.retraceAll || !traversal_.keepsAllPrimaries();
 
   tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
     constexpr size_t kBatch = 256;
@@ -220,7 +223,7 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
         // Re-trace, as one batched query, every path that hit something whose
         // hit this rank does not have (all of them with --retrace all).
         size_t needed = 0;
-        for (size_t i = 0; i < m; ++i) {
+        for (size_t i = 0; mayRetrace && i < m; ++i) {
           const Path& p = rays[batch + i];
           const bool retrace = !p.isShadow() && p.hasHit() && (settings_.retraceAll || !hits[batch + i].valid());
           kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
@@ -241,7 +244,7 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
             if (!p.has(kPathOccluded)) frameBuffer.add(p.pixel(), p.weight());
             continue;
           }
-          const TraceHit& hit = kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
+          const TraceHit& hit = needed && kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
           int spawned = shadeOne(p, hit, sampleIndex, bounce, frameBuffer, out + count, misses);
           for (int k = 0; k < spawned; ++k) shadows += out[count + k].isShadow();
           count += uint32_t(spawned);
@@ -334,7 +337,7 @@ int WavefrontRenderer<Path>::shadeOne(const Path& path, const TraceHit& hit, uin
   if (bsdf.isDelta()) return spawned;
   LightSample ls;
   Vec2f u{random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)};
-  if (!lights_.sample(surface.position, ns, bsdf.transmits(), random(RandomDim::LightSelect), u, ls))
+  if (!lights_.sample(surface.position, frame, bsdf.transmits(), random(RandomDim::LightSelect), u, ls))
     return spawned;
   Vec3f f = bsdf.eval(woLocal, frame.toLocal(ls.direction));
   Vec3f contribution = throughput * f * ls.radiance * (1 / ls.pdf);
