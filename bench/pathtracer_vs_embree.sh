@@ -12,6 +12,11 @@
 #   BASELINE=old/ferry ...     also run another Ferry build (without --retrace,
 #                        which older builds lack) in the same rounds: before/after
 #                        figures under the same load
+#   FERRY_ARGS="--instancing always" ...  more arguments for Ferry (this build)
+#   EMBREE_INSTANCING=geometry ...  Embree's --instancing (default: its own
+#                        default, none: the whole OBJ flattened into one BVH;
+#                        geometry: each mesh its own instanced scene, the
+#                        structure of Ferry's --instancing always)
 #
 # Scenes:
 #   cornell  /usr/share/doc/embree3/models/cornell_box.obj, turned 180 degrees
@@ -53,6 +58,8 @@ ROUNDS=${ROUNDS:-3}
 THREADS=${THREADS:-0}
 RETRACE=${RETRACE:-remote}
 BASELINE=${BASELINE:-}
+FERRY_ARGS=${FERRY_ARGS:-}
+EMBREE_INSTANCING=${EMBREE_INSTANCING:-}
 modes=$RETRACE
 if [ -n "$BASELINE" ]; then BASELINE=$(realpath "$BASELINE"); modes="baseline $RETRACE"; fi
 width=${SIZE%x*}
@@ -71,6 +78,10 @@ echo "settings: ${width}x${height}, $SPP spp, max path length $DEPTH, $FRAMES fr
   "threads $THREADS (0: all), Ferry --retrace $RETRACE"
 thread_args=()
 if [ "$THREADS" -gt 0 ]; then thread_args=(--threads "$THREADS"); fi
+read -r -a ferry_extra <<< "$FERRY_ARGS"
+embree_extra=()
+if [ -n "$EMBREE_INSTANCING" ]; then embree_extra=(--instancing "$EMBREE_INSTANCING"); fi
+echo "extra: Ferry ${FERRY_ARGS:-(none)}; Embree ${embree_extra[*]:-(none)}"
 
 # Embree's filter on frames/s: drop the slowest quarter, average the rest.
 filtered_mean='
@@ -90,14 +101,15 @@ d = 0.5 * math.dist(lo, hi) / math.sin(math.radians(22.5))
 print(",".join(f"{x:.9g}" for x in (c[0], c[1], c[2] + d)), ",".join(f"{x:.9g}" for x in c))')"
   embree_args=(-i "$obj" --vp ${vp//,/ } --vi ${vi//,/ } --vu 0 1 0 --fov 45 --righthanded
                --size "$width" "$height" --spp "$SPP" --max-path-length "$DEPTH"
-               --directionallight -0.4 -1 -0.6 3 3 3 --ambientlight 0.5 0.5 0.5 "${thread_args[@]}")
+               --directionallight -0.4 -1 -0.6 3 3 3 --ambientlight 0.5 0.5 0.5 "${thread_args[@]}"
+               "${embree_extra[@]}")
   for retrace in $modes; do : > "$work/$scene.$retrace.rounds"; done
   for round in $(seq "$ROUNDS"); do
     for retrace in $modes; do
       if [ "$retrace" = baseline ]; then
         mode_args=(); binary=$BASELINE
       else
-        mode_args=(--retrace "$retrace"); binary=$ferry
+        mode_args=(--retrace "$retrace" "${ferry_extra[@]}"); binary=$ferry
       fi
       "$binary" render "$obj" --size "$SIZE" --spp "$SPP" --max-depth "$DEPTH" --frames $((WARMUP + FRAMES)) \
         "${mode_args[@]}" "${thread_args[@]}" -q -o "$work/ferry-$retrace.pfm" --stats "$work/ferry-$retrace.json"
