@@ -87,8 +87,10 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
           // Isolated: while its stages wait, this thread takes no other chunk,
           // which would reuse its workspace.
           tbb::this_task_arena::isolate([&] {
-            runWavefront(sampleIndex, c * chunk, std::min(pixels, (c + 1) * chunk), chunkWorkspaces_.local(),
-                         frameBuffer, chunkStats.local());
+            Workspace& ws = chunkWorkspaces_.local();
+            ws.serial = true;
+            runWavefront(sampleIndex, c * chunk, std::min(pixels, (c + 1) * chunk), ws, frameBuffer,
+                         chunkStats.local());
           });
         }
       });
@@ -160,10 +162,14 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
   if (traversal_.keepsAllPrimaries()) {
     // Every pixel's path is this rank's: straight into the queue, in pixel order.
     rays.resize(pixels);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, 4096), [&](const auto& range) {
-      forPixels(range.begin(), range.end(),
-                [&](uint32_t pixel, uint32_t px, uint32_t py) { cameraRay(pixel, px, py, rays[pixel - first]); });
-    });
+    auto cameraRays = [&](uint32_t begin, uint32_t end) {
+      forPixels(begin, end, [&](uint32_t pixel, uint32_t px, uint32_t py) { cameraRay(pixel, px, py, rays[pixel - first]); });
+    };
+    if (ws.serial)
+      cameraRays(first, last);
+    else
+      tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, 4096),
+                        [&](const auto& range) { cameraRays(range.begin(), range.end()); });
   } else {
     const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
     ws.staging.resize(pixels);
@@ -200,64 +206,80 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
   const size_t n = rays.size();
   const size_t blocks = (n + kBlock - 1) / kBlock;
   // Each path spawns at most two rays (its continuation, then its shadow ray).
-  ws.staging.resize(2 * n);
-  ws.blockCounts.assign(blocks, 0);
   std::atomic<uint64_t> retraceCount{0}, missCount{0}, shadowCount{0};
   // One rank traced every ray itself and kept every hit: nothing to re-trace
   // unless asked to (--retrace all).
   const bool mayRetrace = settings_.retraceAll || !traversal_.keepsAllPrimaries();
 
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
+  // Shades rays [begin, end) in batches, writing their new rays from `out`
+  // on; returns how many.
+  auto shadeRange = [&](size_t begin, size_t end, Path* out, uint64_t& retraced, uint64_t& misses,
+                        uint64_t& shadows) {
     constexpr size_t kBatch = 256;
     TraceRay queries[kBatch];
     TraceQuery kinds[kBatch];
     TraceHit found[kBatch];
     uint8_t unused[kBatch];
-    uint64_t retraced = 0, misses = 0, shadows = 0;
-    for (size_t b = range.begin(); b != range.end(); ++b) {
-      const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
-      Path* out = ws.staging.data() + 2 * begin;
-      uint32_t count = 0;
-      for (size_t batch = begin; batch < end; batch += kBatch) {
-        const size_t m = std::min(kBatch, end - batch);
-        // Re-trace, as one batched query, every path that hit something whose
-        // hit this rank does not have (all of them with --retrace all).
-        size_t needed = 0;
-        for (size_t i = 0; mayRetrace && i < m; ++i) {
-          const Path& p = rays[batch + i];
-          const bool retrace = !p.isShadow() && p.hasHit() && (settings_.retraceAll || !hits[batch + i].valid());
-          kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
-          if (retrace) {
-            queries[i] = retraceQuery(p.origin, p.dir(), p.tmax);
-            ++needed;
-          }
-        }
-        if (needed) {
-          geometry_.traceBatch(std::span(queries, m), std::span(kinds, m), std::span(found, m),
-                               std::span(unused, m));
-          retraced += needed;
-        }
-        for (size_t i = 0; i < m; ++i) {
-          const Path& p = rays[batch + i];
-          if (p.isShadow()) {
-            // Its light arrives unless something was in the way.
-            if (!p.has(kPathOccluded)) frameBuffer.add(p.pixel(), p.weight());
-            continue;
-          }
-          const TraceHit& hit = needed && kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
-          int spawned = shadeOne(p, hit, sampleIndex, bounce, frameBuffer, out + count, misses);
-          for (int k = 0; k < spawned; ++k) shadows += out[count + k].isShadow();
-          count += uint32_t(spawned);
+    uint32_t count = 0;
+    for (size_t batch = begin; batch < end; batch += kBatch) {
+      const size_t m = std::min(kBatch, end - batch);
+      // Re-trace, as one batched query, every path that hit something whose
+      // hit this rank does not have (all of them with --retrace all).
+      size_t needed = 0;
+      for (size_t i = 0; mayRetrace && i < m; ++i) {
+        const Path& p = rays[batch + i];
+        const bool retrace = !p.isShadow() && p.hasHit() && (settings_.retraceAll || !hits[batch + i].valid());
+        kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
+        if (retrace) {
+          queries[i] = retraceQuery(p.origin, p.dir(), p.tmax);
+          ++needed;
         }
       }
-      ws.blockCounts[b] = count;
+      if (needed) {
+        geometry_.traceBatch(std::span(queries, m), std::span(kinds, m), std::span(found, m), std::span(unused, m));
+        retraced += needed;
+      }
+      for (size_t i = 0; i < m; ++i) {
+        const Path& p = rays[batch + i];
+        if (p.isShadow()) {
+          // Its light arrives unless something was in the way.
+          if (!p.has(kPathOccluded)) frameBuffer.add(p.pixel(), p.weight());
+          continue;
+        }
+        const TraceHit& hit = needed && kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
+        int spawned = shadeOne(p, hit, sampleIndex, bounce, frameBuffer, out + count, misses);
+        for (int k = 0; k < spawned; ++k) shadows += out[count + k].isShadow();
+        count += uint32_t(spawned);
+      }
     }
+    return count;
+  };
+
+  PathQueue<Path>& next = ws.next;
+  if (ws.serial) {
+    // One thread has this wavefront: new rays go straight into the next
+    // queue, in the same order as the blocks would give.
+    uint64_t retraced = 0, misses = 0, shadows = 0;
+    next.resize(2 * n);
+    next.resize(shadeRange(0, n, next.data(), retraced, misses, shadows));
     retraceCount += retraced;
     missCount += misses;
     shadowCount += shadows;
-  });
-  PathQueue<Path>& next = ws.next;
-  concatenateBlocks(ws.staging, 2 * kBlock, ws.blockCounts, next);
+  } else {
+    ws.staging.resize(2 * n);
+    ws.blockCounts.assign(blocks, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
+      uint64_t retraced = 0, misses = 0, shadows = 0;
+      for (size_t b = range.begin(); b != range.end(); ++b) {
+        const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
+        ws.blockCounts[b] = shadeRange(begin, end, ws.staging.data() + 2 * begin, retraced, misses, shadows);
+      }
+      retraceCount += retraced;
+      missCount += misses;
+      shadowCount += shadows;
+    });
+    concatenateBlocks(ws.staging, 2 * kBlock, ws.blockCounts, next);
+  }
 
   stats.shadowRays += shadowCount;
   stats.continuationRays += next.size() - shadowCount;

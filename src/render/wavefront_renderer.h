@@ -60,6 +60,9 @@ class WavefrontRenderer {
   // A wavefront's queues and scratch, reused from wavefront to wavefront (no
   // allocation per bounce).
   struct Workspace {
+    // One thread runs this wavefront (a one-rank chunk): its stages loop
+    // instead of splitting into parallel blocks.
+    bool serial = false;
     PathQueue<Path> rays, next, staging;
     std::vector<TraceHit> hits;
     std::vector<uint32_t> blockCounts;
