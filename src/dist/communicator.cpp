@@ -153,7 +153,10 @@ bool Communicator::agreeOnFailure(bool failed, const std::string& message) const
         fmt::print(stderr, "ferry: error: {}\n", m);
       } else {
         std::string list;
-        for (int r : ranks) list += (list.empty() ? "" : ",") + std::to_string(r);
+        for (int r : ranks) {
+          if (!list.empty()) list += ',';
+          list += std::to_string(r);
+        }
         fmt::print(stderr, "ferry: error on rank {}: {}\n", list, m);
       }
     }
