@@ -115,7 +115,7 @@ std::string RenderStats::summaryText(int ranks) const {
   row("bytes sent", formatBytes(ex.bytesSent));
   row("exchange rounds", fmt::format("{}", ex.rounds));
   row("stage seconds", fmt::format("generate {:.2f}, trace {:.2f}, exchange {:.2f}, shade {:.2f}, "
-                                   "composite {:.2f} (summed over ranks)",
+                                   "composite {:.2f} (summed over ranks, and on one rank over threads)",
                                    t.times.generate, t.times.trace, t.times.exchange, t.times.shade,
                                    t.times.composite));
   if (t.retraceMisses) row("re-trace misses", fmt::format("{}", t.retraceMisses));

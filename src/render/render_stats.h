@@ -18,6 +18,8 @@ struct ExchangeCounters {
   ExchangeCounters& operator+=(const ExchangeCounters& o);
 };
 
+// Seconds per stage: summed over ranks when merged; on one rank the chunks
+// run in parallel, so there they are summed over threads too.
 struct StageTimes {
   double generate = 0;  // camera rays (and proxy-guided ownership)
   double trace = 0;     // local traces inside traversal
