@@ -30,6 +30,28 @@ SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
                                 const std::vector<Affine3f>* inverses = nullptr);
 std::vector<Affine3f> instanceInverses(const Scene& scene);
 
+// What reconstructSurface reads for a hit, gathered once per render (the
+// renderer's): per instance its inverse transform and where its object's
+// meshes start in `meshes`; per (object, mesh slot) the mesh's arrays and
+// material. A hit then reaches its triangle's vertices in three dependent
+// loads instead of six (instance, object, mesh list, mesh, indices,
+// positions), which were the critical path of every vertex. Same result, bit
+// for bit.
+struct SurfaceTable {
+  struct MeshArrays {
+    const Vec3i* indices;
+    const Vec3f* positions;
+    const Vec3f* normals;  // null: none
+    const Vec2f* uvs;      // null: none
+    const Material* material;
+  };
+  std::vector<Affine3f> inverses;       // per instance
+  std::vector<uint32_t> instanceMeshes;  // per instance: its object's slot 0 in `meshes`
+  std::vector<MeshArrays> meshes;
+  explicit SurfaceTable(const Scene& scene);
+};
+SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table, const TraceHit& hit);
+
 // Moves a ray origin off a surface by a few ulps along the normal (Wächter and
 // Binder, Ray Tracing Gems ch. 6), robust at any distance from the origin.
 Vec3f offsetRayOrigin(Vec3f p, Vec3f n);
@@ -43,23 +65,21 @@ inline Vec3f transformNormalByInverse(const Affine3f& inv, Vec3f n) {
           inv.l[0][2] * n.x + inv.l[1][2] * n.y + inv.l[2][2] * n.z};
 }
 
-inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
-                                       const std::vector<Affine3f>* inverses) {
-  const Instance& inst = scene.instances[hit.instance];
-  const Affine3f inv = inverses ? (*inverses)[hit.instance] : inst.transform.inverse();
-  const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.meshSlot]];
+// The one computation behind both reconstructSurface overloads.
+inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, const Affine3f& inv,
+                              const SurfaceTable::MeshArrays& mesh, const TraceHit& hit) {
   const Vec3i& tri = mesh.indices[hit.primitive];
   float w = 1 - hit.u - hit.v;
   SurfacePoint s;
   Vec3f p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
   // The object-space barycentric point is more precise than origin + t * dir
   // far from the camera.
-  s.position = inst.transform.transformPoint(p0 * w + p1 * hit.u + p2 * hit.v);
+  s.position = transform.transformPoint(p0 * w + p1 * hit.u + p2 * hit.v);
   // Both normals are set from registers (copying one member to the other read
   // back a value still in the store buffer, which the CPU cannot forward).
   const Vec3f ng = normalize(transformNormalByInverse(inv, cross(p1 - p0, p2 - p0)));
   s.geometricNormal = ng;
-  if (!mesh.normals.empty()) {
+  if (mesh.normals) {
     Vec3f n = mesh.normals[tri.x] * w + mesh.normals[tri.y] * hit.u + mesh.normals[tri.z] * hit.v;
     n = transformNormalByInverse(inv, n);
     float len = length(n);
@@ -69,13 +89,30 @@ inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
   } else {
     s.shadingNormal = ng;
   }
-  s.uv = mesh.uvs.empty() ? Vec2f{hit.u, hit.v}
-                          : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
-  s.material = &scene.materials[mesh.material];
+  s.uv = !mesh.uvs ? Vec2f{hit.u, hit.v} : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
+  s.material = mesh.material;
   s.baseColor = s.material->baseColor;
   if (s.material->baseColorTexture != kNoTexture)
     s.baseColor *= scene.textures[s.material->baseColorTexture].sample(s.uv).xyz();
   return s;
+}
+
+inline SurfaceTable::MeshArrays meshArrays(const Scene& scene, const Mesh& mesh) {
+  return {mesh.indices.data(), mesh.positions.data(), mesh.normals.empty() ? nullptr : mesh.normals.data(),
+          mesh.uvs.empty() ? nullptr : mesh.uvs.data(), &scene.materials[mesh.material]};
+}
+
+inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
+                                       const std::vector<Affine3f>* inverses) {
+  const Instance& inst = scene.instances[hit.instance];
+  const Affine3f inv = inverses ? (*inverses)[hit.instance] : inst.transform.inverse();
+  const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.meshSlot]];
+  return surfaceAt(scene, inst.transform, inv, meshArrays(scene, mesh), hit);
+}
+
+inline SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table, const TraceHit& hit) {
+  return surfaceAt(scene, scene.instances[hit.instance].transform, table.inverses[hit.instance],
+                   table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.meshSlot)], hit);
 }
 
 inline Vec3f offsetRayOrigin(Vec3f p, Vec3f n) {

@@ -50,7 +50,7 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const LocalGeomet
       traversal_(traversal),
       settings_(settings),
       camera_(scene.view(settings.view), settings.width, settings.height),
-      instanceInverses_(instanceInverses(scene)) {
+      surfaces_(scene) {
   if (uint64_t(settings.width) * uint64_t(settings.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.width,
                                  settings.height, kMaxPixels));
@@ -310,7 +310,7 @@ int WavefrontRenderer<Path>::shadeOne(const Path& path, const TraceHit& hit, uin
     ++misses;
     return 0;
   }
-  SurfacePoint surface = reconstructSurface(scene_, hit, &instanceInverses_);
+  SurfacePoint surface = reconstructSurface(scene_, surfaces_, hit);
   const Material& material = *surface.material;
   const Vec3f wo = normalize(-dir);
 

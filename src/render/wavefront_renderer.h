@@ -21,6 +21,7 @@
 #include "render/lights.h"
 #include "render/ray_traversal.h"
 #include "render/render_stats.h"
+#include "render/surface.h"
 
 namespace ferry {
 
@@ -91,7 +92,7 @@ class WavefrontRenderer {
   RayTraversal<Path>& traversal_;
   RenderSettings settings_;
   Camera camera_;
-  std::vector<Affine3f> instanceInverses_;  // for reconstructSurface
+  SurfaceTable surfaces_;  // for reconstructSurface
   Workspace workspace_;  // many ranks: the one whole-image wavefront
   tbb::enumerable_thread_specific<Workspace> chunkWorkspaces_;  // one rank: one per thread
 };
