@@ -81,11 +81,22 @@ constexpr bool kHardwareHalf = true;
 
 // The saturation of floatToHalfSoftware (the instruction rounds overflow to
 // infinity): |v| > 65504 becomes +-65504 (infinities too); NaN stays NaN.
+// Four lanes, or eight (two triples at once).
+[[gnu::always_inline]] inline __m256 saturateForHalf(__m256 v) {
+  const __m256 signMask = _mm256_set1_ps(-0.0f);
+  const __m256 big = _mm256_cmp_ps(_mm256_andnot_ps(signMask, v), _mm256_set1_ps(65504.0f), _CMP_GT_OQ);  // false for NaN
+  const __m256 saturated = _mm256_or_ps(_mm256_and_ps(v, signMask), _mm256_set1_ps(65504.0f));
+  return _mm256_blendv_ps(v, saturated, big);
+}
 [[gnu::always_inline]] inline __m128 saturateForHalf(__m128 v) {
-  const __m128 signMask = _mm_set1_ps(-0.0f);
-  const __m128 big = _mm_cmpgt_ps(_mm_andnot_ps(signMask, v), _mm_set1_ps(65504.0f));  // false for NaN
-  const __m128 saturated = _mm_or_ps(_mm_and_ps(v, signMask), _mm_set1_ps(65504.0f));
-  return _mm_blendv_ps(v, saturated, big);
+  return _mm256_castps256_ps128(saturateForHalf(_mm256_castps128_ps256(v)));
+}
+
+// Lanes 0..2 of v.
+[[gnu::always_inline]] inline void firstThreeLanes(__m128 v, float out[3]) {
+  out[0] = _mm_cvtss_f32(v);
+  out[1] = _mm_cvtss_f32(_mm_shuffle_ps(v, v, 1));
+  out[2] = _mm_cvtss_f32(_mm_movehl_ps(v, v));
 }
 
 [[gnu::always_inline]] inline half floatToHalf(float value) {
@@ -105,19 +116,13 @@ constexpr bool kHardwareHalf = true;
 // (without reading memory just written).
 [[gnu::always_inline]] inline void floatsToHalves6(const float a[3], const float b[3], half out[6],
                                                    float aQuantized[3]) {
-  __m256 v = _mm256_setr_ps(a[0], a[1], a[2], b[0], b[1], b[2], 0, 0);
-  const __m256 signMask = _mm256_set1_ps(-0.0f);
-  const __m256 big = _mm256_cmp_ps(_mm256_andnot_ps(signMask, v), _mm256_set1_ps(65504.0f), _CMP_GT_OQ);
-  v = _mm256_blendv_ps(v, _mm256_or_ps(_mm256_and_ps(v, signMask), _mm256_set1_ps(65504.0f)), big);
+  const __m256 v = saturateForHalf(_mm256_setr_ps(a[0], a[1], a[2], b[0], b[1], b[2], 0, 0));
   __m128i h = _mm256_cvtps_ph(v, _MM_FROUND_TO_NEAREST_INT);
   const uint64_t low = uint64_t(_mm_cvtsi128_si64(h));
   const uint32_t high = uint32_t(_mm_extract_epi32(h, 2));
   std::memcpy(out, &low, 8);
   std::memcpy(out + 4, &high, 4);
-  __m128 back = _mm_cvtph_ps(h);
-  aQuantized[0] = _mm_cvtss_f32(back);
-  aQuantized[1] = _mm_cvtss_f32(_mm_shuffle_ps(back, back, 1));
-  aQuantized[2] = _mm_cvtss_f32(_mm_movehl_ps(back, back));
+  firstThreeLanes(_mm_cvtph_ps(h), aQuantized);
 }
 
 // `packed` holds three halves in its low 48 bits (the top 16 are ignored):
@@ -125,10 +130,7 @@ constexpr bool kHardwareHalf = true;
 // the processor forwards from earlier stores (a 6-byte copy into a zeroed
 // word is three stores and one load, and stalled shading by ~15 cycles).
 [[gnu::always_inline]] inline void halves3ToFloats(uint64_t packed, float out[3]) {
-  __m128 f = _mm_cvtph_ps(_mm_cvtsi64_si128(int64_t(packed)));
-  out[0] = _mm_cvtss_f32(f);
-  out[1] = _mm_cvtss_f32(_mm_shuffle_ps(f, f, 1));
-  out[2] = _mm_cvtss_f32(_mm_movehl_ps(f, f));
+  firstThreeLanes(_mm_cvtph_ps(_mm_cvtsi64_si128(int64_t(packed))), out);
 }
 #else
 constexpr bool kHardwareHalf = false;

@@ -65,7 +65,7 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
   const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
-    if (!traversal_.keepsAllPrimaries()) {
+    if (!chunked()) {
       // Many ranks: the whole image in one wavefront (each bounce is a
       // collective exchange), every stage parallel inside the rank.
       runWavefront(sampleIndex, 0, pixels, workspace_, frameBuffer, stats);
@@ -87,10 +87,8 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
           // Isolated: while its stages wait, this thread takes no other chunk,
           // which would reuse its workspace.
           tbb::this_task_arena::isolate([&] {
-            Workspace& ws = chunkWorkspaces_.local();
-            ws.serial = true;
-            runWavefront(sampleIndex, c * chunk, std::min(pixels, (c + 1) * chunk), ws, frameBuffer,
-                         chunkStats.local());
+            runWavefront(sampleIndex, c * chunk, std::min(pixels, (c + 1) * chunk), chunkWorkspaces_.local(),
+                         frameBuffer, chunkStats.local());
           });
         }
       });
@@ -159,17 +157,12 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
       }
     }
   };
-  if (traversal_.keepsAllPrimaries()) {
-    // Every pixel's path is this rank's: straight into the queue, in pixel order.
+  if (chunked()) {
+    // Every pixel's path is this rank's, and this chunk this thread's:
+    // straight into the queue, in pixel order.
     rays.resize(pixels);
-    auto cameraRays = [&](uint32_t begin, uint32_t end) {
-      forPixels(begin, end, [&](uint32_t pixel, uint32_t px, uint32_t py) { cameraRay(pixel, px, py, rays[pixel - first]); });
-    };
-    if (ws.serial)
-      cameraRays(first, last);
-    else
-      tbb::parallel_for(tbb::blocked_range<uint32_t>(first, last, 4096),
-                        [&](const auto& range) { cameraRays(range.begin(), range.end()); });
+    forPixels(first, last,
+              [&](uint32_t pixel, uint32_t px, uint32_t py) { cameraRay(pixel, px, py, rays[pixel - first]); });
   } else {
     const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
     ws.staging.resize(pixels);
@@ -209,7 +202,7 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
   std::atomic<uint64_t> retraceCount{0}, missCount{0}, shadowCount{0};
   // One rank traced every ray itself and kept every hit: nothing to re-trace
   // unless asked to (--retrace all).
-  const bool mayRetrace = settings_.retraceAll || !traversal_.keepsAllPrimaries();
+  const bool mayRetrace = settings_.retraceAll || !chunked();
 
   // Shades rays [begin, end) in batches, writing their new rays from `out`
   // on; returns how many.
@@ -256,7 +249,7 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
   };
 
   PathQueue<Path>& next = ws.next;
-  if (ws.serial) {
+  if (chunked()) {
     // One thread has this wavefront: new rays go straight into the next
     // queue, in the same order as the blocks would give.
     uint64_t retraced = 0, misses = 0, shadows = 0;

@@ -2,10 +2,10 @@
 // one method per stage, the render loop reading like the algorithm.
 //
 // One wavefront is one sample of every pixel this rank generates (on one
-// rank: of a chunk of pixels, each chunk on one thread, see renderFrame). Per bounce: traverse (local
-// trace, and forwarding when distributed), then one shading pass (add
-// unoccluded shadow rays to the frame buffer; shade paths: re-trace, emission,
-// one light sample, one continuation). A pixel sample has at most two live
+// rank: of a chunk of pixels, each chunk on one thread, see renderFrame). Per
+// bounce: traverse (local trace, and forwarding when distributed), then one
+// shading pass (add unoccluded shadow rays to the frame buffer; shade paths:
+// re-trace, emission, one light sample, one continuation). A pixel sample has at most two live
 // rays (its path and its shadow ray), so queues are bounded by the image size.
 #pragma once
 
@@ -61,13 +61,14 @@ class WavefrontRenderer {
   // A wavefront's queues and scratch, reused from wavefront to wavefront (no
   // allocation per bounce).
   struct Workspace {
-    // One thread runs this wavefront (a one-rank chunk): its stages loop
-    // instead of splitting into parallel blocks.
-    bool serial = false;
     PathQueue<Path> rays, next, staging;
     std::vector<TraceHit> hits;
     std::vector<uint32_t> blockCounts;
   };
+  // One rank (the traversal keeps every primary): the image goes through in
+  // chunks, each wavefront on one thread, whose stages then loop instead of
+  // splitting into parallel blocks. Many ranks: one whole-image wavefront.
+  bool chunked() const { return traversal_.keepsAllPrimaries(); }
   // One sample of pixels [first, last) from camera rays to the last bounce.
   void runWavefront(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
                     FrameBuffer& frameBuffer, FrameStats& stats);
@@ -75,11 +76,11 @@ class WavefrontRenderer {
   void generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
                           FrameStats& stats);
   // Adds each unoccluded shadow ray's contribution and shades every other
-  // path (re-tracing those without a valid hit); writes the next wavefront
-  // (continuations and shadow rays). One pass: within a
-  // wavefront no pixel is written twice (a pixel sample's shadow ray comes
-  // from a non-delta vertex, so its path does not count emission there).
-  // Reads ws.rays and ws.hits, writes ws.next.
+  // path (re-tracing those without a valid hit); reads ws.rays and ws.hits,
+  // writes the next wavefront (continuations and shadow rays) to ws.next.
+  // One pass: within a wavefront no pixel is written twice (a pixel sample's
+  // shadow ray comes from a non-delta vertex, so its path does not count
+  // emission there).
   void shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer, FrameStats& stats);
   // Shades path i given its hit (invalid: escaped or re-trace missed); writes
   // its continuation and shadow ray, in that order, to out; returns how many.

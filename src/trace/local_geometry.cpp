@@ -74,8 +74,9 @@ RTCRayHit toEmbree(const TraceRay& r) {
   return rh;
 }
 
+// (Called through LocalGeometry::Impl::hitOf, which first names a hit on a
+// top-level mesh as a hit through an instance.)
 TraceHit fromEmbree(const RTCRayHit& rh) {
-  // (LocalGeometry::Impl::nameHit has rewritten a top-level mesh's ids.)
   TraceHit h;
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
   h.t = rh.ray.tfar;
@@ -87,7 +88,8 @@ TraceHit fromEmbree(const RTCRayHit& rh) {
   return h;
 }
 
-constexpr size_t kStreamBatch = 256;
+// Batches small enough to stay in cache, large enough for the stream API.
+constexpr size_t kStreamBatch = RayBatch::kCapacity;
 
 }  // namespace
 
@@ -120,6 +122,10 @@ struct LocalGeometry::Impl {
     const TopLevelMesh& m = topLevelMeshes[geomID - topLevelBase];
     instID = uint32_t(m.instance);
     geomID = uint32_t(m.meshSlot);
+  }
+  TraceHit hitOf(RTCRayHit rh) const {
+    nameHit(rh.hit.geomID, rh.hit.instID[0]);
+    return fromEmbree(rh);
   }
 
   void check(const char* what) {
@@ -231,8 +237,7 @@ TraceHit LocalGeometry::intersect(const TraceRay& ray) const {
   rtcInitIntersectContext(&context);
   RTCRayHit rh = toEmbree(ray);
   rtcIntersect1(impl_->top, &context, &rh);
-  impl_->nameHit(rh.hit.geomID, rh.hit.instID[0]);
-  return fromEmbree(rh);
+  return impl_->hitOf(rh);
 }
 
 bool LocalGeometry::occluded(const TraceRay& ray) const {
@@ -254,10 +259,7 @@ void LocalGeometry::intersect(std::span<const TraceRay> rays, std::span<TraceHit
                         RTCIntersectContext context;
                         rtcInitIntersectContext(&context);
                         rtcIntersect1M(impl_->top, &context, batch, unsigned(n), sizeof(RTCRayHit));
-                        for (size_t i = 0; i < n; ++i) {
-                          impl_->nameHit(batch[i].hit.geomID, batch[i].hit.instID[0]);
-                          hits[begin + i] = fromEmbree(batch[i]);
-                        }
+                        for (size_t i = 0; i < n; ++i) hits[begin + i] = impl_->hitOf(batch[i]);
                       }
                     });
 }
