@@ -27,9 +27,9 @@
 //   build/bench/trace_ceiling_bench                    (5 repetitions)
 //   build/bench/trace_ceiling_bench --benchmark_repetitions=9
 #include <benchmark/benchmark.h>
-#include <unistd.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -125,7 +125,8 @@ Setup& setup(int which) {
 void setLabels(benchmark::State& state, const Setup& s) {
   state.SetLabel(s.spec);
   state.counters["rays"] = double(s.rays);
-  state.counters["rays/s"] = benchmark::Counter(double(s.rays), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["rays/s"] =
+      benchmark::Counter(double(s.rays), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 void BM_Render(benchmark::State& state) {
@@ -136,7 +137,8 @@ void BM_Render(benchmark::State& state) {
     FrameBuffer fb(s.settings.width, s.settings.height);
     FrameStats stats = renderer.renderFrame(0, fb);
     benchmark::DoNotOptimize(fb.sum().data());
-    if (stats.raysTraced() != s.rays) state.SkipWithError("the frame traced a different number of rays");
+    if (stats.raysTraced() != s.rays)
+      state.SkipWithError("the frame traced a different number of rays");
   }
   setLabels(state, s);
 }
@@ -180,14 +182,20 @@ void traceStream(benchmark::State& state, bool retrace) {
   setLabels(state, s);
 }
 
-void BM_TraceStream(benchmark::State& state) { traceStream(state, true); }
-// What the re-traces cost: the same without them (rays/s still over all rays, so read its time only).
-void BM_TraceStreamNoRetrace(benchmark::State& state) { traceStream(state, false); }
+void BM_TraceStream(benchmark::State& state) {
+  traceStream(state, true);
+}
+// What the re-traces cost: the same without them (rays/s still over all rays, so read its time
+// only).
+void BM_TraceStreamNoRetrace(benchmark::State& state) {
+  traceStream(state, false);
+}
 
 // Same batches and grain as LocalGeometry's stream calls (256 rays), single-ray Embree calls.
 constexpr size_t kGrain = 256;
 
-void intersectSingle(const LocalGeometry& g, const std::vector<TraceRay>& rays, std::vector<TraceHit>& hits) {
+void intersectSingle(const LocalGeometry& g, const std::vector<TraceRay>& rays,
+                     std::vector<TraceHit>& hits) {
   hits.resize(rays.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kGrain), [&](const auto& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) hits[i] = g.intersect(rays[i]);
@@ -203,7 +211,8 @@ void BM_TraceSingle(benchmark::State& state) {
       intersectSingle(*s.geometry, w.closest, hits);
       occluded.resize(w.shadow.size());
       tbb::parallel_for(tbb::blocked_range<size_t>(0, w.shadow.size(), kGrain), [&](const auto& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) occluded[i] = s.geometry->occluded(w.shadow[i]);
+        for (size_t i = r.begin(); i != r.end(); ++i)
+          occluded[i] = s.geometry->occluded(w.shadow[i]);
       });
       intersectSingle(*s.geometry, w.retrace, hits);
       benchmark::DoNotOptimize(hits.data());
@@ -247,20 +256,25 @@ class RatioReporter : public benchmark::ConsoleReporter {
         if (it == times_.end() || !it->second.count(arg)) return 0;
         return median(it->second.at(arg));
       };
-      double render = get("BM_Render"), stream = get("BM_TraceStream"), single = get("BM_TraceSingle"),
-             noRetrace = get("BM_TraceStreamNoRetrace");
+      double render = get("BM_Render"), stream = get("BM_TraceStream"),
+             single = get("BM_TraceSingle"), noRetrace = get("BM_TraceStreamNoRetrace");
       const char* name = arg[0] == '0' ? "island?scale=0.1" : "cornell";
       auto mrays = [&](double ms) { return ms > 0 ? rays_[arg] / ms / 1e3 : 0.0; };
-      std::printf("  %-18s render/trace-stream %6.2f   trace-single/trace-stream %6.3f   (medians %.1f / %.1f / %.1f ms,"
-                  " %.2f / %.2f / %.2f Mrays/s, %.0f rays, n=%zu)\n",
-                  name, stream > 0 ? render / stream : 0.0, stream > 0 ? single / stream : 0.0, render, stream,
-                  single, mrays(render), mrays(stream), mrays(single), rays_[arg], times_["BM_Render"][arg].size());
-      std::printf("  %-18s re-traces: %.1f ms of the %.1f ms traced (%.0f %% of the render)\n", "", stream - noRetrace,
-                  stream, render > 0 ? 100 * (stream - noRetrace) / render : 0.0);
+      std::printf(
+          "  %-18s render/trace-stream %6.2f   trace-single/trace-stream %6.3f   (medians %.1f / "
+          "%.1f / %.1f ms,"
+          " %.2f / %.2f / %.2f Mrays/s, %.0f rays, n=%zu)\n",
+          name, stream > 0 ? render / stream : 0.0, stream > 0 ? single / stream : 0.0, render,
+          stream, single, mrays(render), mrays(stream), mrays(single), rays_[arg],
+          times_["BM_Render"][arg].size());
+      std::printf("  %-18s re-traces: %.1f ms of the %.1f ms traced (%.0f %% of the render)\n", "",
+                  stream - noRetrace, stream,
+                  render > 0 ? 100 * (stream - noRetrace) / render : 0.0);
       double remote = get("BM_RenderRemote");
-      std::printf("  %-18s --retrace remote: render %.1f ms, render/trace-stream-no-retrace %6.2f,"
-                  " render(all)/render(remote) %6.2f\n", "", remote, noRetrace > 0 ? remote / noRetrace : 0.0,
-                  remote > 0 ? render / remote : 0.0);
+      std::printf(
+          "  %-18s --retrace remote: render %.1f ms, render/trace-stream-no-retrace %6.2f,"
+          " render(all)/render(remote) %6.2f\n",
+          "", remote, noRetrace > 0 ? remote / noRetrace : 0.0, remote > 0 ? render / remote : 0.0);
     }
   }
 
@@ -273,9 +287,11 @@ class RatioReporter : public benchmark::ConsoleReporter {
 }  // namespace ferry
 
 int main(int argc, char** argv) {
-  // Defaults that make one run a fair comparison on a shared machine; any flag given overrides them.
+  // Defaults that make one run a fair comparison on a shared machine; any flag given overrides
+  // them.
   std::vector<char*> args(argv, argv + argc);
-  std::string reps = "--benchmark_repetitions=5", interleave = "--benchmark_enable_random_interleaving=true";
+  std::string reps = "--benchmark_repetitions=5",
+              interleave = "--benchmark_enable_random_interleaving=true";
   auto given = [&](const char* prefix) {
     for (int i = 1; i < argc; ++i)
       if (std::string(argv[i]).rfind(prefix, 0) == 0) return true;

@@ -12,6 +12,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libopenexr-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang-format                    # tests/format_test.sh keeps the tree clean under .clang-format
   python3 python3-matplotlib   # python3-matplotlib: the plots of bench/paper-eval
 )
 

@@ -13,7 +13,8 @@ namespace {
 
 std::string extensionOf(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
@@ -22,14 +23,15 @@ std::string extensionOf(const std::string& path) {
 void checkOutputPath(const std::string& path) {
   std::string ext = extensionOf(path);
   if (ext != ".png" && ext != ".exr" && ext != ".pfm")
-    throw InputError(fmt::format("-o {}: unknown image format '{}' (use .png, .exr or .pfm)", path, ext));
+    throw InputError(
+        fmt::format("-o {}: unknown image format '{}' (use .png, .exr or .pfm)", path, ext));
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   if (!dir.empty() && !std::filesystem::is_directory(dir))
     throw InputError(fmt::format("-o {}: directory '{}' does not exist", path, dir.string()));
 }
 
-void writeRenderedImage(const std::string& path, int width, int height, const std::vector<Vec3f>& linear,
-                        const ToneMapping& toneMapping) {
+void writeRenderedImage(const std::string& path, int width, int height,
+                        const std::vector<Vec3f>& linear, const ToneMapping& toneMapping) {
   std::string ext = extensionOf(path);
   if (ext == ".png") {
     writePng(path, width, height, toneMapToRgba8(linear, toneMapping));

@@ -13,7 +13,7 @@ namespace ferry {
 // Throws InputError before any rendering if `path` cannot be written
 // (unknown extension, missing directory).
 void checkOutputPath(const std::string& path);
-void writeRenderedImage(const std::string& path, int width, int height, const std::vector<Vec3f>& linear,
-                        const ToneMapping& toneMapping);
+void writeRenderedImage(const std::string& path, int width, int height,
+                        const std::vector<Vec3f>& linear, const ToneMapping& toneMapping);
 
 }  // namespace ferry

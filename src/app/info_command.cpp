@@ -1,7 +1,7 @@
 #include "app/info_command.h"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "io/scene_loader.h"
@@ -15,7 +15,8 @@ void addInfoCommand(CLI::App& app, InfoOptions& options) {
       "estimated memory by kind. Built-ins are described from their generator's counts without\n"
       "making geometry, so large scales answer at once.");
   info->add_option("scene", options.scene,
-                   "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in (builtin:island, builtin:landscape, builtin:cornell,\n"
+                   "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in (builtin:island, "
+                   "builtin:landscape, builtin:cornell,\n"
                    "builtin:furnace; parameters as builtin:island?scale=4&seed=7)")
       ->capture_default_str();
   info->add_flag("--json", options.json, "Print JSON instead of a table");

@@ -1,6 +1,6 @@
 // The `ferry` command: subcommands render, info and partition.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdlib>
 #include <exception>

@@ -23,7 +23,6 @@
 namespace ferry {
 namespace {
 
-
 PartitionerOptions partitionerOptions(const PartitionCommandOptions& o) {
   PartitionerOptions p;
   p.name = o.partitioner;
@@ -179,7 +178,8 @@ int runPartition(const PartitionCommandOptions& o) {
     if (o.ranks.find("..") != std::string::npos)
       throw InputError(fmt::format("--ranks '{}': -o needs one rank count", o.ranks));
     if (last > kMaxRanks)
-      throw InputError(fmt::format("--ranks {}: parts are made for 1 to {} ranks", last, kMaxRanks));
+      throw InputError(
+          fmt::format("--ranks {}: parts are made for 1 to {} ranks", last, kMaxRanks));
     writeParts(o, p, last);
   }
   return 0;

@@ -8,7 +8,10 @@
 namespace ferry {
 
 Progress::Progress(std::string label, int total, bool enabled)
-    : label_(std::move(label)), total_(total), enabled_(enabled), terminal_(isatty(STDERR_FILENO) != 0),
+    : label_(std::move(label)),
+      total_(total),
+      enabled_(enabled),
+      terminal_(isatty(STDERR_FILENO) != 0),
       start_(Clock::now()) {}
 
 Progress::~Progress() {
@@ -24,8 +27,8 @@ void Progress::update(int done, const std::string& detail) {
     int filled = int(fraction * kWidth + 0.5);
     double eta = fraction > 0 ? elapsed / fraction - elapsed : 0;
     fmt::print(stderr, "\r{} [{}{}] {:3.0f}% {:.1f}s (eta {:.1f}s) {}\033[K", label_,
-               std::string(filled, '#'), std::string(kWidth - filled, '.'), fraction * 100, elapsed, eta,
-               detail);
+               std::string(filled, '#'), std::string(kWidth - filled, '.'), fraction * 100, elapsed,
+               eta, detail);
   } else {
     fmt::print(stderr, "{}: {}/{} ({:.1f}s) {}\n", label_, done, total_, elapsed, detail);
   }

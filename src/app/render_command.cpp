@@ -1,12 +1,12 @@
 #include "app/render_command.h"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
-#include <algorithm>
 #include <malloc.h>
+#include <algorithm>
 
 #include <charconv>
 #include <chrono>
@@ -38,23 +38,27 @@
 namespace ferry {
 namespace {
 
-
 void validate(const RenderOptions& o) {
-  if (o.samplesPerPixel < 1) throw InputError(fmt::format("--spp {}: must be at least 1", o.samplesPerPixel));
+  if (o.samplesPerPixel < 1)
+    throw InputError(fmt::format("--spp {}: must be at least 1", o.samplesPerPixel));
   if (o.frames < 1) throw InputError(fmt::format("--frames {}: must be at least 1", o.frames));
-  if (o.maxDepth < 0) throw InputError(fmt::format("--max-depth {}: must be 0 or more", o.maxDepth));
-  if (o.threads < 0) throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
+  if (o.maxDepth < 0)
+    throw InputError(fmt::format("--max-depth {}: must be 0 or more", o.maxDepth));
+  if (o.threads < 0)
+    throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
   checkOutputPath(o.output);
   parseForwardingMode(o.forwarding);
   if (o.pathLayout != "auto" && o.pathLayout != "mask" && o.pathLayout != "replay")
-    throw InputError(fmt::format("--path-layout '{}': expected auto, mask or replay", o.pathLayout));
+    throw InputError(
+        fmt::format("--path-layout '{}': expected auto, mask or replay", o.pathLayout));
   if (o.retrace != "remote" && o.retrace != "all")
     throw InputError(fmt::format("--retrace '{}': expected remote or all", o.retrace));
   if (o.instancing != "shared" && o.instancing != "always")
     throw InputError(fmt::format("--instancing '{}': expected shared or always", o.instancing));
   checkPartitionerName(o.partition);
   if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
-    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1", o.replicationBudget));
+    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
+                                 o.replicationBudget));
 }
 
 // Everything a rank holds once set up.
@@ -82,7 +86,8 @@ RankMemory gatherMemory(const Communicator& comm, const RankSetup& setup) {
     v[comm.rank()] = mine;
     return comm.sum(std::span<const double>(v));
   };
-  return {spread(double(setup.ownedEstimate.total())), spread(double(setup.geometry->embreeBytes())),
+  return {spread(double(setup.ownedEstimate.total())),
+          spread(double(setup.geometry->embreeBytes())),
           spread(double(setup.geometry->embreePeakBytes())), spread(double(m.residentBytes)),
           spread(double(m.peakResidentBytes))};
 }
@@ -92,9 +97,10 @@ FrameStats reduceFrameStats(const Communicator& comm, const FrameStats& mine) {
   double maxBounces = comm.max(double(mine.perBounce.size()));
   FrameStats local = mine;
   local.perBounce.resize(size_t(maxBounces));
-  std::vector<uint64_t> counters = {local.cameraPaths,   local.continuationRays, local.shadowRays,
-                                    local.closestTraces, local.occlusionTraces,  local.retraces,
-                                    local.retraceMisses, local.proxyQueries,  local.replayQueries};
+  std::vector<uint64_t> counters = {
+      local.cameraPaths,   local.continuationRays, local.shadowRays,
+      local.closestTraces, local.occlusionTraces,  local.retraces,
+      local.retraceMisses, local.proxyQueries,     local.replayQueries};
   for (const ExchangeCounters& c : local.perBounce) {
     counters.push_back(c.raysForwarded);
     counters.push_back(c.bytesSent);
@@ -148,19 +154,23 @@ void applySceneDefaults(const Scene& scene, RenderOptions& o, RenderSettings& se
   }
   if (!o.outputGiven && !scene.filmFilename.empty()) {
     std::string ext = std::filesystem::path(scene.filmFilename).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
     if (ext == ".png" || ext == ".exr" || ext == ".pfm") {
       o.output = scene.filmFilename;
       checkOutputPath(o.output);
     } else {
-      fmt::print(stderr, "ferry: warning: the scene's output file {} has an unsupported format; writing {}\n",
-                 scene.filmFilename, o.output);
+      fmt::print(
+          stderr,
+          "ferry: warning: the scene's output file {} has an unsupported format; writing {}\n",
+          scene.filmFilename, o.output);
     }
   }
 }
 
 // Fills `s` in place: the Embree structures refer to its scene, so it must not move afterwards.
-void setUp(const RenderOptions& o, const RenderSettings& settings, const Communicator& comm, RankSetup& s) {
+void setUp(const RenderOptions& o, const RenderSettings& settings, const Communicator& comm,
+           RankSetup& s) {
   auto start = Clock::now();
   if (isPartDirectory(o.scene)) {
     // A part directory: this rank reads only its own part and the shared data.
@@ -195,19 +205,27 @@ void setUp(const RenderOptions& o, const RenderSettings& settings, const Communi
 }
 
 void writeStats(const RenderOptions& o, const RenderSettings& settings, const RankSetup& setup,
-                const RenderStats& stats, const RankMemory& memory, uint64_t received, uint64_t revisits,
-                uint64_t compositeBytes, int ranks, double totalSeconds, const std::string& layout,
-                size_t pathBytes) {
+                const RenderStats& stats, const RankMemory& memory, uint64_t received,
+                uint64_t revisits, uint64_t compositeBytes, int ranks, double totalSeconds,
+                const std::string& layout, size_t pathBytes) {
   nlohmann::json j;
   j["scene"] = setup.summary.toJson();
-  j["settings"] = {{"width", settings.width},         {"height", settings.height},
-                   {"spp", settings.samplesPerPixel}, {"frames", settings.frames},
-                   {"max_depth", settings.maxDepth},  {"seed", settings.seed},
-                   {"view", o.view},                  {"threads", o.threads},
-                   {"ranks", ranks},                  {"forwarding", o.forwarding},
-                   {"retrace", o.retrace},            {"instancing", o.instancing},
-                   {"partition", o.partition},        {"output", o.output},
-                   {"path_layout", layout},           {"path_bytes", pathBytes}};
+  j["settings"] = {{"width", settings.width},
+                   {"height", settings.height},
+                   {"spp", settings.samplesPerPixel},
+                   {"frames", settings.frames},
+                   {"max_depth", settings.maxDepth},
+                   {"seed", settings.seed},
+                   {"view", o.view},
+                   {"threads", o.threads},
+                   {"ranks", ranks},
+                   {"forwarding", o.forwarding},
+                   {"retrace", o.retrace},
+                   {"instancing", o.instancing},
+                   {"partition", o.partition},
+                   {"output", o.output},
+                   {"path_layout", layout},
+                   {"path_bytes", pathBytes}};
   j["render"] = stats.toJson();
   j["render"]["rays_received"] = received;
   j["render"]["revisits"] = revisits;
@@ -220,13 +238,15 @@ void writeStats(const RenderOptions& o, const RenderSettings& settings, const Ra
                        {"embree_peak_bytes", memory.embreePeak[r]},
                        {"resident_bytes", memory.resident[r]},
                        {"peak_resident_bytes", memory.residentPeak[r]}});
-  j["memory"] = {{"scene_estimated_bytes", setup.summary.memory.total()},
-                 {"max_estimated_bytes", *std::max_element(memory.estimated.begin(), memory.estimated.end())},
-                 {"max_embree_bytes", *std::max_element(memory.embree.begin(), memory.embree.end())},
-                 {"max_peak_resident_bytes",
-                  *std::max_element(memory.residentPeak.begin(), memory.residentPeak.end())},
-                 {"per_rank", perRank}};
-  j["seconds"] = {{"load", setup.loadSeconds}, {"build", setup.buildSeconds}, {"total", totalSeconds}};
+  j["memory"] = {
+      {"scene_estimated_bytes", setup.summary.memory.total()},
+      {"max_estimated_bytes", *std::max_element(memory.estimated.begin(), memory.estimated.end())},
+      {"max_embree_bytes", *std::max_element(memory.embree.begin(), memory.embree.end())},
+      {"max_peak_resident_bytes",
+       *std::max_element(memory.residentPeak.begin(), memory.residentPeak.end())},
+      {"per_rank", perRank}};
+  j["seconds"] = {
+      {"load", setup.loadSeconds}, {"build", setup.buildSeconds}, {"total", totalSeconds}};
   writeFileAtomically(o.statsPath, [&](const std::string& tmp) {
     std::ofstream out(tmp);
     out << j.dump(2) << "\n";
@@ -257,7 +277,8 @@ int renderOnRanks(const RenderOptions& o, const RenderSettings& settings, RankSe
     distributed = d.get();
     traversal = std::move(d);
   }
-  WavefrontRenderer<Path> renderer(setup.scene, *setup.geometry, *setup.lights, *traversal, settings);
+  WavefrontRenderer<Path> renderer(setup.scene, *setup.geometry, *setup.lights, *traversal,
+                                   settings);
   FrameBuffer frameBuffer(settings.width, settings.height);
   RenderStats stats;
   Progress rendering("render", settings.frames * settings.samplesPerPixel, talk);
@@ -272,7 +293,7 @@ int renderOnRanks(const RenderOptions& o, const RenderSettings& settings, RankSe
   auto compositeStart = Clock::now();
   const float scale = 1.0f / float(settings.frames * settings.samplesPerPixel);
   const bool png = o.output.size() >= 4 && (o.output.substr(o.output.size() - 4) == ".png" ||
-                                             o.output.substr(o.output.size() - 4) == ".PNG");
+                                            o.output.substr(o.output.size() - 4) == ".PNG");
   uint64_t compositeBytes = 0;
   std::vector<Vec3f> linear;
   std::vector<uint8_t> rgba;
@@ -294,12 +315,15 @@ int renderOnRanks(const RenderOptions& o, const RenderSettings& settings, RankSe
     writeRenderedImage(o.output, settings.width, settings.height, linear, settings.toneMapping);
   if (!o.quiet) {
     fmt::print("{}", stats.summaryText(comm.size()));
-    auto maxOf = [](const std::vector<double>& v) { return uint64_t(*std::max_element(v.begin(), v.end())); };
-    fmt::print("  {:<22}{} of {} estimated, {} Embree, {} peak resident (largest rank)\n", "memory per rank",
-               formatBytes(maxOf(memory.estimated)), formatBytes(setup.summary.memory.total()),
-               formatBytes(maxOf(memory.embree)), formatBytes(maxOf(memory.residentPeak)));
-    fmt::print("  {:<22}{} ({} sent by direct send)\n", "composite", fmt::format("{:.3f} s", compositeSeconds),
-               formatBytes(compositeBytes));
+    auto maxOf = [](const std::vector<double>& v) {
+      return uint64_t(*std::max_element(v.begin(), v.end()));
+    };
+    fmt::print("  {:<22}{} of {} estimated, {} Embree, {} peak resident (largest rank)\n",
+               "memory per rank", formatBytes(maxOf(memory.estimated)),
+               formatBytes(setup.summary.memory.total()), formatBytes(maxOf(memory.embree)),
+               formatBytes(maxOf(memory.residentPeak)));
+    fmt::print("  {:<22}{} ({} sent by direct send)\n", "composite",
+               fmt::format("{:.3f} s", compositeSeconds), formatBytes(compositeBytes));
     if (revisits) fmt::print("  {:<22}{}\n", "REVISITS", revisits);
     fmt::print("  {:<22}{}\n", "wrote", o.output);
   }
@@ -336,64 +360,83 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
       "  mpirun -np 4 ferry render builtin:island -o island.png\n"
       "The image is the same whatever the rank count, --threads, --partition or --forwarding\n"
       "(up to floating-point summation order).");
-  render->add_option("scene", o.scene,
-                     "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in: builtin:island, builtin:landscape, builtin:cornell,\n"
-                     "builtin:furnace, with parameters as builtin:island?scale=4&seed=7")
+  render
+      ->add_option("scene", o.scene,
+                   "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in: builtin:island, "
+                   "builtin:landscape, builtin:cornell,\n"
+                   "builtin:furnace, with parameters as builtin:island?scale=4&seed=7")
       ->capture_default_str();
   render->add_option("--size", o.size, "Image size WIDTHxHEIGHT")->capture_default_str();
   render->add_option("--spp", o.samplesPerPixel, "Samples (paths) per pixel in each frame")
       ->capture_default_str();
   render->add_option("--frames", o.frames, "Frames to render and accumulate progressively")
       ->capture_default_str();
-  render->add_option("--max-depth", o.maxDepth,
-                     "Maximum scattering events per path (1: direct light only, 0: emitters only)")
+  render
+      ->add_option("--max-depth", o.maxDepth,
+                   "Maximum scattering events per path (1: direct light only, 0: emitters only)")
       ->capture_default_str();
   render->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   render->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")
       ->capture_default_str();
-  render->add_option("--threads", o.threads, "Worker threads per rank (0: all cores)")->capture_default_str();
-  render->add_option("-o,--output", o.output,
-                     "Output image: .png (tone mapped), .exr or .pfm (linear radiance)")
+  render->add_option("--threads", o.threads, "Worker threads per rank (0: all cores)")
       ->capture_default_str();
-  render->add_option("--stats", o.statsPath,
-                     "Write counters (rays traced, forwarded, bytes sent, rounds per bounce), timings and\n"
-                     "memory per rank as JSON to this file");
+  render
+      ->add_option("-o,--output", o.output,
+                   "Output image: .png (tone mapped), .exr or .pfm (linear radiance)")
+      ->capture_default_str();
+  render->add_option(
+      "--stats", o.statsPath,
+      "Write counters (rays traced, forwarded, bytes sent, rounds per bounce), timings and\n"
+      "memory per rank as JSON to this file");
   render->add_option("--exposure", o.exposure, "Exposure in stops for the PNG tone mapping")
       ->capture_default_str();
-  render->add_option("--forwarding", o.forwarding,
-                     "How rays travel between ranks: proxies (the paper: closest proxy of an unvisited\n"
-                     "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
-                     "wins, as Kilauea)")
+  render
+      ->add_option(
+          "--forwarding", o.forwarding,
+          "How rays travel between ranks: proxies (the paper: closest proxy of an unvisited\n"
+          "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
+          "wins, as Kilauea)")
       ->capture_default_str();
-  render->add_option("--path-layout", o.pathLayout,
-                     "The path on the wire: auto (8-rank mask, 64-rank mask, replay above 64 ranks),\n"
-                     "mask (visited ranks as a bit mask; up to 64 ranks) or replay (only the generating\n"
-                     "rank; any rank recomputes the visited ranks from the proxies)")
+  render
+      ->add_option(
+          "--path-layout", o.pathLayout,
+          "The path on the wire: auto (8-rank mask, 64-rank mask, replay above 64 ranks),\n"
+          "mask (visited ranks as a bit mask; up to 64 ranks) or replay (only the generating\n"
+          "rank; any rank recomputes the visited ranks from the proxies)")
       ->capture_default_str();
-  render->add_option("--retrace", o.retrace,
-                     "Which shaded paths re-trace their ray to recover the hit (the compact path carries\n"
-                     "none): remote (only those whose hit another rank found; a rank keeps the hits it\n"
-                     "found) or all (every one, as the paper). The image is the same.")
+  render
+      ->add_option(
+          "--retrace", o.retrace,
+          "Which shaded paths re-trace their ray to recover the hit (the compact path carries\n"
+          "none): remote (only those whose hit another rank found; a rank keeps the hits it\n"
+          "found) or all (every one, as the paper). The image is the same.")
       ->capture_default_str();
-  render->add_option("--instancing", o.instancing,
-                     "Which objects get an Embree instance level: shared (objects placed more than once\n"
-                     "or transformed; an object placed once, untransformed, is put in the top-level BVH,\n"
-                     "which saves every ray an instance transform) or always (every object). Instanced\n"
-                     "objects are never flattened either way. The image is the same.")
+  render
+      ->add_option(
+          "--instancing", o.instancing,
+          "Which objects get an Embree instance level: shared (objects placed more than once\n"
+          "or transformed; an object placed once, untransformed, is put in the top-level BVH,\n"
+          "which saves every ray an instance transform) or always (every object). Instanced\n"
+          "objects are never flattened either way. The image is the same.")
       ->capture_default_str();
-  render->add_option("--partitioner,--partition", o.partition,
-                     "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
-                     "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
-                     "round-robin, random (for testing). Not used for a part directory.")
+  render
+      ->add_option(
+          "--partitioner,--partition", o.partition,
+          "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
+          "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
+          "round-robin, random (for testing). Not used for a part directory.")
       ->capture_default_str();
   render->add_flag("--keep-objects-whole", o.keepObjectsWhole,
                    "Partitioners keep non-instanced content whole (default: broken into meshes)");
-  render->add_option("--replication-budget", o.replicationBudget,
-                     "best: copies of large, cheap content may add this fraction of the scene's bytes")
+  render
+      ->add_option(
+          "--replication-budget", o.replicationBudget,
+          "best: copies of large, cheap content may add this fraction of the scene's bytes")
       ->capture_default_str();
-  render->add_flag("--show-partition{-1}", o.showPartition,
-                   "Instead of rendering, draw what each rank owns (replicated content checkerboarded)\n"
-                   "and the proxies as box outlines, to -o (PNG); =N: for N ranks (default: the MPI ranks)");
+  render->add_flag(
+      "--show-partition{-1}", o.showPartition,
+      "Instead of rendering, draw what each rank owns (replicated content checkerboarded)\n"
+      "and the proxies as box outlines, to -o (PNG); =N: for N ranks (default: the MPI ranks)");
   render->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
   render->add_flag("--env-fallback", o.envFallback,
                    "Render a scene whose environment map is missing with a constant white\n"
@@ -415,10 +458,12 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
   try {
     validate(o);
     if (comm.size() > kMaxRanks)
-      throw InputError(fmt::format("{} ranks: Ferry supports up to {} ranks", comm.size(), kMaxRanks));
+      throw InputError(
+          fmt::format("{} ranks: Ferry supports up to {} ranks", comm.size(), kMaxRanks));
     if (o.pathLayout == "mask" && comm.size() > 64)
-      throw InputError(fmt::format("--path-layout mask: {} ranks do not fit a 64-bit mask (use replay or auto)",
-                                   comm.size()));
+      throw InputError(
+          fmt::format("--path-layout mask: {} ranks do not fit a 64-bit mask (use replay or auto)",
+                      comm.size()));
     parseImageSize(o.size, settings.width, settings.height);
     settings.samplesPerPixel = o.samplesPerPixel;
     settings.frames = o.frames;
@@ -428,12 +473,14 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
     settings.view = o.view;
     settings.toneMapping.exposure = o.exposure;
     if (o.threads > 0)
-      threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+      threadLimit = std::make_unique<tbb::global_control>(
+          tbb::global_control::max_allowed_parallelism, o.threads);
     Progress loading("load", 1, comm.isRoot() && !o.quiet);
     loading.update(0, o.scene);
     setUp(o, settings, comm, setup.emplace());
     applySceneDefaults(setup->scene, effective, settings);
-    loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", setup->loadSeconds, setup->buildSeconds));
+    loading.finish(
+        fmt::format("{:.2f} s load, {:.2f} s build", setup->loadSeconds, setup->buildSeconds));
   } catch (const std::exception& e) {
     error = e.what();
   }

@@ -260,7 +260,8 @@ Texture bladeTexture(const std::string& name, int width, int height, uint32_t se
   });
 }
 
-std::shared_ptr<const HdrImage> skyGradient(Vec3f zenith, Vec3f horizon, Vec3f below, float belowFade) {
+std::shared_ptr<const HdrImage> skyGradient(Vec3f zenith, Vec3f horizon, Vec3f below,
+                                            float belowFade) {
   auto sky = std::make_shared<HdrImage>();
   sky->name = "sky-gradient";
   sky->width = 128;

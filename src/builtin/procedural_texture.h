@@ -18,7 +18,8 @@ namespace ferry::builtin {
 // evaluated at texel centres with v = 0 at the bottom row, rows in parallel.
 // A vertical sky for an equirectangular environment: horizon to zenith above,
 // fading to `below` under the horizon over `belowFade` radians.
-std::shared_ptr<const HdrImage> skyGradient(Vec3f zenith, Vec3f horizon, Vec3f below, float belowFade);
+std::shared_ptr<const HdrImage> skyGradient(Vec3f zenith, Vec3f horizon, Vec3f below,
+                                            float belowFade);
 
 Texture paintTexture(const std::string& name, int width, int height, WrapMode wrap,
                      const std::function<Vec4f(Vec2f)>& colourAt);

@@ -7,6 +7,8 @@ namespace ferry {
 
 using Clock = std::chrono::steady_clock;
 
-inline double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+inline double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 }  // namespace ferry

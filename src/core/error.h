@@ -26,8 +26,7 @@ class InputError : public std::runtime_error {
  public:
   explicit InputError(const std::string& message) : std::runtime_error(message) {}
   InputError(const SourceLocation& where, const std::string& message)
-      : std::runtime_error(where.toString().empty() ? message
-                                                     : where.toString() + ": " + message),
+      : std::runtime_error(where.toString().empty() ? message : where.toString() + ": " + message),
         where_(where) {}
   const SourceLocation& where() const { return where_; }
 
@@ -44,9 +43,9 @@ class InternalError : public std::logic_error {
 }  // namespace ferry
 
 // Checks an invariant and reports the expression and location when it fails.
-#define FERRY_CHECK(cond)                                                                   \
-  do {                                                                                      \
-    if (!(cond))                                                                            \
-      throw ::ferry::InternalError(fmt::format("check failed: {} ({}:{})", #cond, __FILE__, \
-                                               __LINE__));                                  \
+#define FERRY_CHECK(cond)                                                      \
+  do {                                                                         \
+    if (!(cond))                                                               \
+      throw ::ferry::InternalError(                                            \
+          fmt::format("check failed: {} ({}:{})", #cond, __FILE__, __LINE__)); \
   } while (0)

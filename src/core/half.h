@@ -27,10 +27,11 @@ using half = uint16_t;
   uint32_t sign = (bits >> 16) & 0x8000u;
   uint32_t absBits = bits & 0x7fffffffu;
   if (absBits >= 0x7f800000u) {  // inf or nan
-    return static_cast<half>(sign | (absBits > 0x7f800000u ? 0x7e00u | ((absBits & 0x007fffffu) >> 13) : 0x7bffu));
+    return static_cast<half>(
+        sign | (absBits > 0x7f800000u ? 0x7e00u | ((absBits & 0x007fffffu) >> 13) : 0x7bffu));
   }
   if (absBits >= 0x477ff000u) return static_cast<half>(sign | 0x7bffu);  // >= 65520: saturate
-  if (absBits < 0x38800000u) {                                          // subnormal or zero
+  if (absBits < 0x38800000u) {                                           // subnormal or zero
     if (absBits < 0x33000000u) return static_cast<half>(sign);
     uint32_t mantissa = (absBits & 0x007fffffu) | 0x00800000u;
     int shift = 113 - static_cast<int>(absBits >> 23);
@@ -84,7 +85,8 @@ constexpr bool kHardwareHalf = true;
 // Four lanes, or eight (two triples at once).
 [[gnu::always_inline]] inline __m256 saturateForHalf(__m256 v) {
   const __m256 signMask = _mm256_set1_ps(-0.0f);
-  const __m256 big = _mm256_cmp_ps(_mm256_andnot_ps(signMask, v), _mm256_set1_ps(65504.0f), _CMP_GT_OQ);  // false for NaN
+  const __m256 big = _mm256_cmp_ps(_mm256_andnot_ps(signMask, v), _mm256_set1_ps(65504.0f),
+                                   _CMP_GT_OQ);  // false for NaN
   const __m256 saturated = _mm256_or_ps(_mm256_and_ps(v, signMask), _mm256_set1_ps(65504.0f));
   return _mm256_blendv_ps(v, saturated, big);
 }
@@ -100,10 +102,12 @@ constexpr bool kHardwareHalf = true;
 }
 
 [[gnu::always_inline]] inline half floatToHalf(float value) {
-  return static_cast<half>(
-      _mm_extract_epi16(_mm_cvtps_ph(saturateForHalf(_mm_set_ss(value)), _MM_FROUND_TO_NEAREST_INT), 0));
+  return static_cast<half>(_mm_extract_epi16(
+      _mm_cvtps_ph(saturateForHalf(_mm_set_ss(value)), _MM_FROUND_TO_NEAREST_INT), 0));
 }
-[[gnu::always_inline]] inline float halfToFloat(half h) { return _cvtsh_ss(h); }
+[[gnu::always_inline]] inline float halfToFloat(half h) {
+  return _cvtsh_ss(h);
+}
 
 // Three halves at once (a direction or a throughput), one instruction each way.
 [[gnu::always_inline]] inline void floatsToHalves3(float x, float y, float z, half out[3]) {
@@ -144,8 +148,12 @@ constexpr bool kHardwareHalf = false;
   }
 }
 
-[[gnu::always_inline]] inline half floatToHalf(float value) { return floatToHalfSoftware(value); }
-[[gnu::always_inline]] inline float halfToFloat(half h) { return halfToFloatSoftware(h); }
+[[gnu::always_inline]] inline half floatToHalf(float value) {
+  return floatToHalfSoftware(value);
+}
+[[gnu::always_inline]] inline float halfToFloat(half h) {
+  return halfToFloatSoftware(h);
+}
 [[gnu::always_inline]] inline void floatsToHalves3(float x, float y, float z, half out[3]) {
   out[0] = floatToHalfSoftware(x);
   out[1] = floatToHalfSoftware(y);
@@ -158,6 +166,8 @@ constexpr bool kHardwareHalf = false;
 }
 #endif
 
-inline float quantizeToHalf(float v) { return halfToFloat(floatToHalf(v)); }
+inline float quantizeToHalf(float v) {
+  return halfToFloat(floatToHalf(v));
+}
 
 }  // namespace ferry

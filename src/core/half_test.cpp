@@ -26,7 +26,8 @@ float referenceHalfToFloat(half h) {
       bits = sign | ((112 - e) << 23) | ((mantissa & 0x3ffu) << 13);
     }
   } else if (exponent == 31) {
-    bits = sign | 0x7f800000u | (mantissa << 13) | (mantissa ? 0x00400000u : 0);  // NaNs come out quiet
+    bits = sign | 0x7f800000u | (mantissa << 13) |
+           (mantissa ? 0x00400000u : 0);  // NaNs come out quiet
   } else {
     bits = sign | ((exponent + 112) << 23) | (mantissa << 13);
   }
@@ -62,10 +63,12 @@ float floatOf(uint32_t b) {
 TEST(Half, HardwareHalfToFloatEqualsSoftwareForEveryHalf) {
   if (!kHardwareHalf) GTEST_SKIP() << "software conversion only in this build";
   for (uint32_t h = 0; h < 0x10000; ++h) {
-    ASSERT_EQ(bitsOf(halfToFloat(half(h))), bitsOf(halfToFloatSoftware(half(h)))) << "half 0x" << std::hex << h;
+    ASSERT_EQ(bitsOf(halfToFloat(half(h))), bitsOf(halfToFloatSoftware(half(h))))
+        << "half 0x" << std::hex << h;
     half three[3] = {half(h), half(h ^ 0x8000u), half(h ^ 0x0155u)};
     float out[3];
-    halves3ToFloats(uint64_t(three[0]) | uint64_t(three[1]) << 16 | uint64_t(three[2]) << 32 | uint64_t(0xabcd) << 48,
+    halves3ToFloats(uint64_t(three[0]) | uint64_t(three[1]) << 16 | uint64_t(three[2]) << 32 |
+                        uint64_t(0xabcd) << 48,
                     out);
     for (int k = 0; k < 3; ++k) ASSERT_EQ(bitsOf(out[k]), bitsOf(halfToFloatSoftware(three[k])));
   }
@@ -77,7 +80,8 @@ TEST(Half, HardwareHalfToFloatEqualsSoftwareForEveryHalf) {
 // (All 2^32 floats were also compared once, when this was written.)
 TEST(Half, HardwareFloatToHalfEqualsSoftwareOnEveryRoundingCase) {
   if (!kHardwareHalf) GTEST_SKIP() << "software conversion only in this build";
-  const uint32_t lows[] = {0, 1, 2, 0x7ff, 0xfff, 0x1000, 0x1001, 0x17ff, 0x1fff, 0x0800, 0x1800, 0x0abc};
+  const uint32_t lows[] = {0,      1,      2,      0x7ff,  0xfff,  0x1000,
+                           0x1001, 0x17ff, 0x1fff, 0x0800, 0x1800, 0x0abc};
   for (uint32_t prefix = 0; prefix < (1u << 19); ++prefix) {
     for (uint32_t low : lows) {
       const float f = floatOf((prefix << 13) | low);

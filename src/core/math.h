@@ -21,10 +21,18 @@ struct Vec2f {
   float operator[](int i) const { return (&x)[i]; }
   float& operator[](int i) { return (&x)[i]; }
 };
-inline Vec2f operator+(Vec2f a, Vec2f b) { return {a.x + b.x, a.y + b.y}; }
-inline Vec2f operator-(Vec2f a, Vec2f b) { return {a.x - b.x, a.y - b.y}; }
-inline Vec2f operator*(Vec2f a, float s) { return {a.x * s, a.y * s}; }
-inline Vec2f operator*(float s, Vec2f a) { return {a.x * s, a.y * s}; }
+inline Vec2f operator+(Vec2f a, Vec2f b) {
+  return {a.x + b.x, a.y + b.y};
+}
+inline Vec2f operator-(Vec2f a, Vec2f b) {
+  return {a.x - b.x, a.y - b.y};
+}
+inline Vec2f operator*(Vec2f a, float s) {
+  return {a.x * s, a.y * s};
+}
+inline Vec2f operator*(float s, Vec2f a) {
+  return {a.x * s, a.y * s};
+}
 
 struct Vec3f {
   float x = 0, y = 0, z = 0;
@@ -34,25 +42,57 @@ struct Vec3f {
   float operator[](int i) const { return (&x)[i]; }
   float& operator[](int i) { return (&x)[i]; }
 };
-inline Vec3f operator+(Vec3f a, Vec3f b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-inline Vec3f operator-(Vec3f a, Vec3f b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline Vec3f operator-(Vec3f a) { return {-a.x, -a.y, -a.z}; }
-inline Vec3f operator*(Vec3f a, Vec3f b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
-inline Vec3f operator*(Vec3f a, float s) { return {a.x * s, a.y * s, a.z * s}; }
-inline Vec3f operator*(float s, Vec3f a) { return {a.x * s, a.y * s, a.z * s}; }
-inline Vec3f operator/(Vec3f a, float s) { return a * (1.0f / s); }
-inline Vec3f operator/(Vec3f a, Vec3f b) { return {a.x / b.x, a.y / b.y, a.z / b.z}; }
-inline Vec3f& operator+=(Vec3f& a, Vec3f b) { return a = a + b; }
-inline Vec3f& operator-=(Vec3f& a, Vec3f b) { return a = a - b; }
-inline Vec3f& operator*=(Vec3f& a, Vec3f b) { return a = a * b; }
-inline Vec3f& operator*=(Vec3f& a, float s) { return a = a * s; }
-inline bool operator==(Vec3f a, Vec3f b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
-inline float dot(Vec3f a, Vec3f b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline Vec3f operator+(Vec3f a, Vec3f b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+inline Vec3f operator-(Vec3f a, Vec3f b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+inline Vec3f operator-(Vec3f a) {
+  return {-a.x, -a.y, -a.z};
+}
+inline Vec3f operator*(Vec3f a, Vec3f b) {
+  return {a.x * b.x, a.y * b.y, a.z * b.z};
+}
+inline Vec3f operator*(Vec3f a, float s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+inline Vec3f operator*(float s, Vec3f a) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+inline Vec3f operator/(Vec3f a, float s) {
+  return a * (1.0f / s);
+}
+inline Vec3f operator/(Vec3f a, Vec3f b) {
+  return {a.x / b.x, a.y / b.y, a.z / b.z};
+}
+inline Vec3f& operator+=(Vec3f& a, Vec3f b) {
+  return a = a + b;
+}
+inline Vec3f& operator-=(Vec3f& a, Vec3f b) {
+  return a = a - b;
+}
+inline Vec3f& operator*=(Vec3f& a, Vec3f b) {
+  return a = a * b;
+}
+inline Vec3f& operator*=(Vec3f& a, float s) {
+  return a = a * s;
+}
+inline bool operator==(Vec3f a, Vec3f b) {
+  return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+inline float dot(Vec3f a, Vec3f b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 inline Vec3f cross(Vec3f a, Vec3f b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-inline float length(Vec3f a) { return std::sqrt(dot(a, a)); }
-inline Vec3f normalize(Vec3f a) { return a * (1.0f / length(a)); }
+inline float length(Vec3f a) {
+  return std::sqrt(dot(a, a));
+}
+inline Vec3f normalize(Vec3f a) {
+  return a * (1.0f / length(a));
+}
 
 // sin and cos of the angle 2 pi u, for u in [0, 1] (the azimuth of every
 // direction sampler). The quarter turn is taken from u exactly (u * 4 and its
@@ -66,8 +106,11 @@ inline void sinCosTwoPi(float u, float& sinOut, float& cosOut) {
   const uint32_t k = uint32_t(quarters + 0.5f);       // nearest quarter turn, 0..4
   const float a = (quarters - float(k)) * (kPi / 2);  // |a| <= pi / 4
   const float a2 = a * a;
-  const float s = a + a * a2 * (-0.16666637361049652f + a2 * (0.008331584744155407f + a2 * -0.00019462115596979856f));
-  const float c = 1 + a2 * (-0.4999985694885254f + a2 * (0.041655026376247406f + a2 * -0.0013585907872766256f));
+  const float s = a + a * a2 *
+                          (-0.16666637361049652f +
+                           a2 * (0.008331584744155407f + a2 * -0.00019462115596979856f));
+  const float c =
+      1 + a2 * (-0.4999985694885254f + a2 * (0.041655026376247406f + a2 * -0.0013585907872766256f));
   // Rotate (c, s) by k quarter turns: swap on odd k, then the signs, in bits.
   const uint32_t swap = 0u - (k & 1u);
   const uint32_t sBits = std::bit_cast<uint32_t>(s), cBits = std::bit_cast<uint32_t>(c);
@@ -82,12 +125,18 @@ inline Vec3f min(Vec3f a, Vec3f b) {
 inline Vec3f max(Vec3f a, Vec3f b) {
   return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
 }
-inline float maxComponent(Vec3f a) { return std::max(a.x, std::max(a.y, a.z)); }
-inline float luminance(Vec3f c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+inline float maxComponent(Vec3f a) {
+  return std::max(a.x, std::max(a.y, a.z));
+}
+inline float luminance(Vec3f c) {
+  return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
+}
 inline bool isFinite(Vec3f a) {
   return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
-inline Vec3f lerp(Vec3f a, Vec3f b, float t) { return a * (1 - t) + b * t; }
+inline Vec3f lerp(Vec3f a, Vec3f b, float t) {
+  return a * (1 - t) + b * t;
+}
 
 struct Vec3i {
   int32_t x = 0, y = 0, z = 0;

@@ -36,7 +36,8 @@ TEST(Box, TransformedBoxContainsTransformedCorners) {
 }
 
 TEST(Frame, IsOrthonormal) {
-  for (Vec3f n : {Vec3f(0, 0, 1), Vec3f(0, 0, -1), normalize(Vec3f(1, 2, 3)), normalize(Vec3f(-1, 0.001f, -1))}) {
+  for (Vec3f n : {Vec3f(0, 0, 1), Vec3f(0, 0, -1), normalize(Vec3f(1, 2, 3)),
+                  normalize(Vec3f(-1, 0.001f, -1))}) {
     Frame f(n);
     EXPECT_NEAR(dot(f.s, f.t), 0, 1e-5f);
     EXPECT_NEAR(dot(f.s, f.n), 0, 1e-5f);

@@ -59,7 +59,8 @@ struct RandomKey {
     return x ^ (x >> 31);
   };
   const uint64_t h = mix64((uint64_t(key.pixel) << 32) | key.sample);
-  return uint32_t(mix64(h + ((uint64_t(key.bounce) << 32) | key.seed) * 0x9e3779b97f4a7c15ull) >> 32);
+  return uint32_t(mix64(h + ((uint64_t(key.bounce) << 32) | key.seed) * 0x9e3779b97f4a7c15ull) >>
+                  32);
 }
 
 // One full-avalanche mix of the key's hash and a per-dimension constant: a
@@ -74,7 +75,9 @@ inline uint32_t randomBits(const RandomKey& key, uint32_t dimension) {
 }
 
 // Uniform in [0, 1): the top 24 bits give exactly representable floats.
-[[gnu::always_inline]] inline float random01FromBits(uint32_t bits) { return static_cast<float>(bits >> 8) * 0x1p-24f; }
+[[gnu::always_inline]] inline float random01FromBits(uint32_t bits) {
+  return static_cast<float>(bits >> 8) * 0x1p-24f;
+}
 
 inline float random01(const RandomKey& key, RandomDim dim) {
   return random01FromBits(randomBits(key, static_cast<uint32_t>(dim)));

@@ -3,11 +3,11 @@
 #include <fmt/format.h>
 #include <mpi.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <unistd.h>
 #include <stdexcept>
 
 namespace ferry {
@@ -32,7 +32,8 @@ void onFatalSignal(int signal) {
 }
 
 void check(int code, const char* what) {
-  if (code != MPI_SUCCESS) throw std::runtime_error(fmt::format("MPI failed in {} (code {})", what, code));
+  if (code != MPI_SUCCESS)
+    throw std::runtime_error(fmt::format("MPI failed in {} (code {})", what, code));
 }
 
 }  // namespace
@@ -55,7 +56,9 @@ Communicator::~Communicator() {
   if (ownsMpi_) MPI_Finalize();
 }
 
-void Communicator::barrier() const { check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
+void Communicator::barrier() const {
+  check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+}
 
 uint64_t Communicator::sum(uint64_t value) const {
   uint64_t out = 0;
@@ -71,21 +74,24 @@ double Communicator::max(double value) const {
 
 std::vector<uint64_t> Communicator::sum(std::span<const uint64_t> values) const {
   std::vector<uint64_t> out(values.size());
-  check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD),
+  check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_UINT64_T, MPI_SUM,
+                      MPI_COMM_WORLD),
         "MPI_Allreduce");
   return out;
 }
 
 std::vector<double> Communicator::sum(std::span<const double> values) const {
   std::vector<double> out(values.size());
-  check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD),
+  check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_DOUBLE, MPI_SUM,
+                      MPI_COMM_WORLD),
         "MPI_Allreduce");
   return out;
 }
 
 std::vector<double> Communicator::max(std::span<const double> values) const {
   std::vector<double> out(values.size());
-  check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD),
+  check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_DOUBLE, MPI_MAX,
+                      MPI_COMM_WORLD),
         "MPI_Allreduce");
   return out;
 }
@@ -101,12 +107,13 @@ void Communicator::exchangeBytes(const void* send, const std::vector<int>& sendC
                                  const std::vector<int>& sendOffsets, void* receive,
                                  const std::vector<int>& receiveCounts,
                                  const std::vector<int>& receiveOffsets) const {
-  check(MPI_Alltoallv(send, sendCounts.data(), sendOffsets.data(), MPI_BYTE, receive, receiveCounts.data(),
-                      receiveOffsets.data(), MPI_BYTE, MPI_COMM_WORLD),
+  check(MPI_Alltoallv(send, sendCounts.data(), sendOffsets.data(), MPI_BYTE, receive,
+                      receiveCounts.data(), receiveOffsets.data(), MPI_BYTE, MPI_COMM_WORLD),
         "MPI_Alltoallv");
 }
 
-void Communicator::gatherBytes(const void* send, int sendBytes, void* receive, const std::vector<int>& counts,
+void Communicator::gatherBytes(const void* send, int sendBytes, void* receive,
+                               const std::vector<int>& counts,
                                const std::vector<int>& offsets) const {
   check(MPI_Gatherv(send, sendBytes, MPI_BYTE, receive, counts.data(), offsets.data(), MPI_BYTE, 0,
                     MPI_COMM_WORLD),
@@ -142,7 +149,8 @@ bool Communicator::agreeOnFailure(bool failed, const std::string& message) const
     for (int r = 0; r < size_; ++r) {
       if (lengths[r] == 0) continue;
       std::string m = all.substr(offsets[r], lengths[r]);
-      auto it = std::find_if(distinct.begin(), distinct.end(), [&](const auto& d) { return d.first == m; });
+      auto it = std::find_if(distinct.begin(), distinct.end(),
+                             [&](const auto& d) { return d.first == m; });
       if (it == distinct.end())
         distinct.push_back({m, {r}});
       else

@@ -35,8 +35,9 @@ class Communicator {
   // counts[r]: items for rank r; returns how many each rank sends to us.
   std::vector<int> exchangeCounts(const std::vector<int>& sendCounts) const;
   // All-to-all-v of raw bytes; counts and displacements in bytes.
-  void exchangeBytes(const void* send, const std::vector<int>& sendCounts, const std::vector<int>& sendOffsets,
-                     void* receive, const std::vector<int>& receiveCounts,
+  void exchangeBytes(const void* send, const std::vector<int>& sendCounts,
+                     const std::vector<int>& sendOffsets, void* receive,
+                     const std::vector<int>& receiveCounts,
                      const std::vector<int>& receiveOffsets) const;
   // Gathers variable-size byte blocks on rank 0 (receive ignored elsewhere).
   void gatherBytes(const void* send, int sendBytes, void* receive, const std::vector<int>& counts,

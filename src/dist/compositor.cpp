@@ -10,7 +10,8 @@ std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& part
                                uint64_t& bytesSent) {
   maybeInjectFailure("composite", comm.rank());
   const int ranks = comm.size(), width = partial.width(), height = partial.height();
-  std::vector<int> sendCounts(ranks), sendOffsets(ranks), receiveCounts(ranks), receiveOffsets(ranks);
+  std::vector<int> sendCounts(ranks), sendOffsets(ranks), receiveCounts(ranks),
+      receiveOffsets(ranks);
   int myFirst, myLast;
   compositeSlice(height, ranks, comm.rank(), myFirst, myLast);
   const int slicePixels = (myLast - myFirst) * width;
@@ -36,8 +37,8 @@ std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& part
 
 // `elementsPerPixel`: 1 for Vec3f pixels, 4 for RGBA8 bytes.
 template <typename T>
-std::vector<T> gatherSlices(const Communicator& comm, const std::vector<T>& slice, int width, int height,
-                            int elementsPerPixel) {
+std::vector<T> gatherSlices(const Communicator& comm, const std::vector<T>& slice, int width,
+                            int height, int elementsPerPixel) {
   const int bytesPerRow = width * elementsPerPixel * int(sizeof(T));
   std::vector<int> counts(comm.size()), offsets(comm.size());
   for (int r = 0; r < comm.size(); ++r) {
@@ -58,16 +59,18 @@ void compositeSlice(int height, int ranks, int rank, int& firstRow, int& lastRow
   lastRow = int(int64_t(height) * (rank + 1) / ranks);
 }
 
-std::vector<Vec3f> compositeLinear(const Communicator& comm, const FrameBuffer& partial, float scale,
-                                   uint64_t& bytesSent) {
+std::vector<Vec3f> compositeLinear(const Communicator& comm, const FrameBuffer& partial,
+                                   float scale, uint64_t& bytesSent) {
   std::vector<Vec3f> slice = sumOwnSlice(comm, partial, scale, bytesSent);
   if (!comm.isRoot()) bytesSent += slice.size() * sizeof(Vec3f);
   return gatherSlices(comm, slice, partial.width(), partial.height(), 1);
 }
 
-std::vector<uint8_t> compositeToneMapped(const Communicator& comm, const FrameBuffer& partial, float scale,
-                                         const ToneMapping& toneMapping, uint64_t& bytesSent) {
-  std::vector<uint8_t> slice = toneMapToRgba8(sumOwnSlice(comm, partial, scale, bytesSent), toneMapping);
+std::vector<uint8_t> compositeToneMapped(const Communicator& comm, const FrameBuffer& partial,
+                                         float scale, const ToneMapping& toneMapping,
+                                         uint64_t& bytesSent) {
+  std::vector<uint8_t> slice =
+      toneMapToRgba8(sumOwnSlice(comm, partial, scale, bytesSent), toneMapping);
   if (!comm.isRoot()) bytesSent += slice.size();
   return gatherSlices(comm, slice, partial.width(), partial.height(), 4);
 }

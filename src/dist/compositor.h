@@ -19,10 +19,11 @@ void compositeSlice(int height, int ranks, int rank, int& firstRow, int& lastRow
 
 // The full linear image (sum of all ranks' buffers times `scale`) on rank 0;
 // empty on the other ranks. Also returns bytes this rank sent.
-std::vector<Vec3f> compositeLinear(const Communicator& comm, const FrameBuffer& partial, float scale,
-                                   uint64_t& bytesSent);
+std::vector<Vec3f> compositeLinear(const Communicator& comm, const FrameBuffer& partial,
+                                   float scale, uint64_t& bytesSent);
 // The same, tone mapped to RGBA8 on the slice owners before gathering.
-std::vector<uint8_t> compositeToneMapped(const Communicator& comm, const FrameBuffer& partial, float scale,
-                                         const ToneMapping& toneMapping, uint64_t& bytesSent);
+std::vector<uint8_t> compositeToneMapped(const Communicator& comm, const FrameBuffer& partial,
+                                         float scale, const ToneMapping& toneMapping,
+                                         uint64_t& bytesSent);
 
 }  // namespace ferry

@@ -20,7 +20,6 @@
 namespace ferry {
 namespace {
 
-
 constexpr int kShadeHere = -1;
 constexpr int kDrop = -2;
 
@@ -45,12 +44,10 @@ void maybeInjectFailure(const char* point, int rank) {
 }
 
 template <typename Path>
-DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm, const LocalGeometry& geometry,
+DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,
+                                                 const LocalGeometry& geometry,
                                                  const Partition& partition, ForwardingMode mode)
-    : comm_(comm),
-      geometry_(geometry),
-      mode_(mode),
-      proxies_(partition.proxies) {
+    : comm_(comm), geometry_(geometry), mode_(mode), proxies_(partition.proxies) {
   FERRY_CHECK(comm.size() <= kMaxRanks);
   if constexpr (!Path::kReplay) {
     FERRY_CHECK(comm.size() <= int(sizeof(typename Path::Mask) * 8));
@@ -63,7 +60,8 @@ DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm, const
 }
 
 template <typename Path>
-bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const {
+bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ray,
+                                              FrameStats& stats) const {
   const int ranks = comm_.size();
   if (mode_ != ForwardingMode::Proxies) return int(pixel % uint32_t(ranks)) == comm_.rank();
   // Proxy-guided: the owner of the closest proxy keeps it (pixel id breaks
@@ -76,7 +74,8 @@ bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ra
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::trace(PathQueue<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits) {
+void DistributedTraversal<Path>::trace(PathQueue<Path>& rays, FrameStats& stats,
+                                       std::vector<TraceHit>* hits) {
   const int rank = comm_.rank();
   for (const Path& p : rays) {
     if constexpr (Path::kReplay) {
@@ -120,8 +119,9 @@ std::vector<RankSet> DistributedTraversal<Path>::replayArrivals(const PathQueue<
 
 template <typename Path>
 PathQueue<Path> DistributedTraversal<Path>::exchange(const PathQueue<Path>& rays,
-                                                       const std::vector<int>& destination,
-                                                       ExchangeCounters& counters, FrameStats& stats) {
+                                                     const std::vector<int>& destination,
+                                                     ExchangeCounters& counters,
+                                                     FrameStats& stats) {
   auto start = Clock::now();
   if (firstExchange_) {
     maybeInjectFailure("exchange", comm_.rank());
@@ -151,8 +151,8 @@ PathQueue<Path> DistributedTraversal<Path>::exchange(const PathQueue<Path>& rays
     }
     return v;
   };
-  comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), received.data(), toBytes(receiveCounts),
-                      toBytes(receiveOffsets));
+  comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), received.data(),
+                      toBytes(receiveCounts), toBytes(receiveOffsets));
   counters.raysForwarded += send.size();
   counters.bytesSent += send.size() * sizeof(Path);
   if (comm_.isRoot()) ++counters.rounds;  // a round is one collective step; counted once
@@ -171,11 +171,12 @@ void DistributedTraversal<Path>::traverse(PathQueue<Path>& rays, std::vector<Tra
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
+void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays,
+                                                    std::vector<TraceHit>& hits,
                                                     ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
-  PathQueue<Path> ready;   // traversal complete here: shade on this rank
+  PathQueue<Path> ready;  // traversal complete here: shade on this rank
   // The hit of each ready ray when its last trace, here, found it (shading
   // then need not re-trace it); invalid for rays that arrive to be shaded.
   std::vector<TraceHit> readyHits, movingHits;
@@ -192,9 +193,11 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays, std::
     std::vector<int> destination(moving.size());
     std::atomic<uint64_t> proxyQueries{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, moving.size(), 1024), [&](const auto& range) {
-      uint64_t queries = 0;  // one per proxies decision, except for shadow rays already occluded (dropped)
+      uint64_t queries =
+          0;  // one per proxies decision, except for shadow rays already occluded (dropped)
       for (size_t i = range.begin(); i != range.end(); ++i) {
-        if (mode_ == ForwardingMode::Proxies) queries += !(moving[i].isShadow() && moving[i].has(kPathOccluded));
+        if (mode_ == ForwardingMode::Proxies)
+          queries += !(moving[i].isShadow() && moving[i].has(kPathOccluded));
         ForwardDecision d;
         if (mode_ == ForwardingMode::Ring)
           d = forwardByRing(moving[i], rank, ranks);
@@ -240,7 +243,8 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays, std::
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
+void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path>& rays,
+                                                   std::vector<TraceHit>& hits,
                                                    ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();

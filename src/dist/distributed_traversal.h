@@ -22,8 +22,8 @@ void maybeInjectFailure(const char* point, int rank);
 template <typename Path>
 class DistributedTraversal final : public RayTraversal<Path> {
  public:
-  DistributedTraversal(const Communicator& comm, const LocalGeometry& geometry, const Partition& partition,
-                       ForwardingMode mode);
+  DistributedTraversal(const Communicator& comm, const LocalGeometry& geometry,
+                       const Partition& partition, ForwardingMode mode);
   int rank() const override { return comm_.rank(); }
   int rankCount() const override { return comm_.size(); }
   bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const override;
@@ -39,14 +39,14 @@ class DistributedTraversal final : public RayTraversal<Path> {
   uint64_t received() const { return received_; }
 
  private:
-  void traverseForwarding(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
-                          FrameStats& stats);
-  void traverseBroadcast(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
-                         FrameStats& stats);
+  void traverseForwarding(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
+                          ExchangeCounters& exchange, FrameStats& stats);
+  void traverseBroadcast(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
+                         ExchangeCounters& exchange, FrameStats& stats);
   // Sends each ray to destination[i] (this rank's rays are not in the list);
   // returns what this rank received, in rank order.
   PathQueue<Path> exchange(const PathQueue<Path>& rays, const std::vector<int>& destination,
-                             ExchangeCounters& counters, FrameStats& stats);
+                           ExchangeCounters& counters, FrameStats& stats);
   // With `hits`: resized to rays.size(), the hits that set a ray's tmax here.
   void trace(PathQueue<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits = nullptr);
   // Replay layout, proxies mode: the visited set of each ray that arrived
@@ -57,7 +57,8 @@ class DistributedTraversal final : public RayTraversal<Path> {
   const LocalGeometry& geometry_;
   ForwardingMode mode_;
   ProxyBvh proxies_;
-  std::vector<uint64_t> instanceOwners_;  // mask layouts: owner mask per instance (empty for replay)
+  std::vector<uint64_t>
+      instanceOwners_;  // mask layouts: owner mask per instance (empty for replay)
   bool firstExchange_ = true;
   uint64_t revisits_ = 0;
   uint64_t received_ = 0;

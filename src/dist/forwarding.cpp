@@ -56,7 +56,8 @@ int pickOwner(const RankSet& owners, const PathCore& ray) {
 
 template <typename Path>
 ForwardDecision finishTraversal(const Path& ray, int rank) {
-  if (ray.isShadow()) return {ray.has(kPathOccluded) ? ForwardDecision::Drop : ForwardDecision::ShadeHere};
+  if (ray.isShadow())
+    return {ray.has(kPathOccluded) ? ForwardDecision::Drop : ForwardDecision::ShadeHere};
   if constexpr (Path::kReplay) {
     if (!ray.hasHit() || ray.hitRank == rank) return {ForwardDecision::ShadeHere};
     return {ForwardDecision::Send, int(ray.hitRank), true};
@@ -69,17 +70,21 @@ ForwardDecision finishTraversal(const Path& ray, int rank) {
 
 template <typename Path>
 ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank) {
-  if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};  // ends at any occluder
+  if (ray.isShadow() && ray.has(kPathOccluded))
+    return {ForwardDecision::Drop};  // ends at any occluder
   ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, RankMask(ray.visited));
-  if (next.found()) return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
+  if (next.found())
+    return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
   return finishTraversal(ray, rank);
 }
 
 template <typename Path>
-ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank, const RankSet& visited) {
+ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank,
+                                 const RankSet& visited) {
   if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};
   ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, visited);
-  if (next.found()) return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
+  if (next.found())
+    return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
   return finishTraversal(ray, rank);
 }
 
@@ -115,10 +120,10 @@ ReplayResult replayWalk(const ProxyBvh& proxies, const Path& ray, int generating
   return result;
 }
 
-#define FERRY_INSTANTIATE(P)                                                                       \
-  template ForwardDecision finishTraversal<P>(const P&, int);                                      \
-  template ForwardDecision forwardByProxies<P>(const ProxyBvh&, const P&, int, const RankSet&);    \
-  template ForwardDecision forwardByRing<P>(const P&, int, int);                                   \
+#define FERRY_INSTANTIATE(P)                                                                    \
+  template ForwardDecision finishTraversal<P>(const P&, int);                                   \
+  template ForwardDecision forwardByProxies<P>(const ProxyBvh&, const P&, int, const RankSet&); \
+  template ForwardDecision forwardByRing<P>(const P&, int, int);                                \
   template ReplayResult replayWalk<P>(const ProxyBvh&, const P&, int, int);
 FERRY_INSTANTIATE(Path8)
 FERRY_INSTANTIATE(Path64)

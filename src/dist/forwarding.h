@@ -43,7 +43,8 @@ template <typename Path>
 ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank);
 // Any layout: `visited` holds every rank the ray has been traced on, `rank` included.
 template <typename Path>
-ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank, const RankSet& visited);
+ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank,
+                                 const RankSet& visited);
 
 // Mask layouts: the first unvisited rank after `rank` in ring order. Replay
 // layout: the ring from the generating rank has visited exactly the ranks from

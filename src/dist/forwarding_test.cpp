@@ -31,7 +31,8 @@ std::vector<Proxy> randomProxies(int count, int ranks, uint32_t seed) {
 Path64 randomRay(uint32_t k, uint32_t seed) {
   Path64 p{};
   p.origin = Vec3f(uniform(k, 10, seed), uniform(k, 11, seed), uniform(k, 12, seed)) * 10.0f;
-  p.setDir(normalize(Vec3f(uniform(k, 13, seed), uniform(k, 14, seed), uniform(k, 15, seed)) - Vec3f(0.5f)));
+  p.setDir(normalize(Vec3f(uniform(k, 13, seed), uniform(k, 14, seed), uniform(k, 15, seed)) -
+                     Vec3f(0.5f)));
   p.tmax = kInfinity;
   p.setPixelAndFlags(k, 0);
   p.setWeight(Vec3f(1));
@@ -44,7 +45,8 @@ TEST(Forwarding, PickOwnerIsDeterministicAndPicksAnOwner) {
   Path8 ray{};
   ray.setPixelAndFlags(1234, 0);
   ray.origin = {1, 2, 3};
-  for (RankMask owners : {RankMask(0b1), RankMask(0b1010), RankMask(0b11111111), RankMask(1) << 63}) {
+  for (RankMask owners :
+       {RankMask(0b1), RankMask(0b1010), RankMask(0b11111111), RankMask(1) << 63}) {
     int r = pickOwner(owners, ray);
     EXPECT_TRUE(owners & (RankMask(1) << r));
     EXPECT_EQ(r, pickOwner(owners, ray));

@@ -111,7 +111,8 @@ Manifest readManifest(const std::string& directory) {
     m.partitionSeconds = j.value("partition_seconds", 0.0);
     readFile(j.at("shared"), m.shared, path);
     const nlohmann::json& parts = j.at("parts");
-    if (m.ranks < 1 || m.ranks > (m.version == 1 ? 64 : kMaxRanks) || !parts.is_array() || parts.size() != size_t(m.ranks))
+    if (m.ranks < 1 || m.ranks > (m.version == 1 ? 64 : kMaxRanks) || !parts.is_array() ||
+        parts.size() != size_t(m.ranks))
       throw InputError(
           fmt::format("{}: {} parts listed for {} ranks", path, parts.size(), m.ranks));
     for (size_t r = 0; r < parts.size(); ++r) {

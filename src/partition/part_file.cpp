@@ -505,8 +505,8 @@ void validated(const std::string& path, Scene& scene, Fill&& fill) {
 }  // namespace
 
 WrittenFile writePartFile(const std::string& path, const Scene& scene,
-                          const std::vector<int32_t>& instances,
-                          const std::vector<RankSet>& owners, int rank, int ranks) {
+                          const std::vector<int32_t>& instances, const std::vector<RankSet>& owners,
+                          int rank, int ranks) {
   FERRY_CHECK(owners.size() == scene.instances.size());
   FERRY_CHECK(std::is_sorted(instances.begin(), instances.end()));
   WrittenFile written;
@@ -604,7 +604,8 @@ SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
   validated(path, shared.lights, [&] {
     readLights(r, shared.lights);
     if (h.version == 1) {
-      for (const ProxyV1& p : r.array<ProxyV1>()) shared.proxies.push_back({p.bounds, RankSet::fromMask(p.owners)});
+      for (const ProxyV1& p : r.array<ProxyV1>())
+        shared.proxies.push_back({p.bounds, RankSet::fromMask(p.owners)});
     } else {
       const size_t words = rankSetWords(shared.ranks);
       std::vector<Box3f> boxes = r.array<Box3f>();

@@ -44,13 +44,13 @@ struct WrittenFile {
 // Writes rank `rank`'s part: `instances` (ascending indices into scene) and
 // what they use; `owners` per scene instance.
 WrittenFile writePartFile(const std::string& path, const Scene& scene,
-                          const std::vector<int32_t>& instances,
-                          const std::vector<RankSet>& owners, int rank, int ranks);
+                          const std::vector<int32_t>& instances, const std::vector<RankSet>& owners,
+                          int rank, int ranks);
 
 struct LoadedPart {
   int rank = 0;
   int ranks = 0;
-  Scene scene;                   // this part's content only (no views, no lights)
+  Scene scene;                  // this part's content only (no views, no lights)
   std::vector<RankSet> owners;  // per instance of `scene`
 };
 // `expectedHash` (0: not checked) is the payload hash the manifest recorded.

@@ -112,6 +112,8 @@ std::string RankSet::toString() const {
   return s + "}";
 }
 
-std::ostream& operator<<(std::ostream& out, const RankSet& s) { return out << s.toString(); }
+std::ostream& operator<<(std::ostream& out, const RankSet& s) {
+  return out << s.toString();
+}
 
 }  // namespace ferry

@@ -52,7 +52,9 @@ class RankSet {
   bool fitsInMask() const { return high_.empty(); }
   RankMask mask() const { return low_; }  // ranks 0..63 only
   // Word k (ranks 64k .. 64k+63); 0 past the last stored word.
-  uint64_t word(size_t k) const { return k == 0 ? low_ : (k - 1 < high_.size() ? high_[k - 1] : 0); }
+  uint64_t word(size_t k) const {
+    return k == 0 ? low_ : (k - 1 < high_.size() ? high_[k - 1] : 0);
+  }
   size_t wordCount() const { return 1 + high_.size(); }
 
   std::vector<int> ranks() const;
@@ -67,6 +69,8 @@ class RankSet {
 std::ostream& operator<<(std::ostream& out, const RankSet& s);
 
 // Words needed to store any set of `ranks` ranks (part files).
-inline size_t rankSetWords(int ranks) { return ranks <= 64 ? 1 : size_t(ranks + 63) / 64; }
+inline size_t rankSetWords(int ranks) {
+  return ranks <= 64 ? 1 : size_t(ranks + 63) / 64;
+}
 
 }  // namespace ferry

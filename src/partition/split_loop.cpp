@@ -71,7 +71,7 @@ std::vector<RankSet> assignRanks(const std::vector<Part>& parts, int ranks) {
 }
 
 std::vector<RankSet> unitOwners(const UnitSet& units, const std::vector<Part>& parts,
-                                 const std::vector<RankSet>& partRanks) {
+                                const std::vector<RankSet>& partRanks) {
   std::vector<RankSet> owners(units.units.size());
   for (size_t k = 0; k < parts.size(); ++k)
     for (uint32_t u : parts[k].units) owners[u] |= partRanks[k];

@@ -56,7 +56,7 @@ std::vector<RankSet> assignRanks(const std::vector<Part>& parts, int ranks);
 
 // Owners of each unit: the ranks of every part holding it.
 std::vector<RankSet> unitOwners(const UnitSet& units, const std::vector<Part>& parts,
-                                 const std::vector<RankSet>& partRanks);
+                                const std::vector<RankSet>& partRanks);
 
 // Owners per scene instance, from owners per unit.
 std::vector<RankSet> instanceOwnersOf(const UnitSet& units, const std::vector<RankSet>& owners);

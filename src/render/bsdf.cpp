@@ -25,7 +25,9 @@ float ggxLambda(Vec3f w, float alpha) {
   return 0.5f * (-1 + std::sqrt(1 + alpha * alpha * tan2));
 }
 
-float ggxG1(Vec3f w, float alpha) { return 1 / (1 + ggxLambda(w, alpha)); }
+float ggxG1(Vec3f w, float alpha) {
+  return 1 / (1 + ggxLambda(w, alpha));
+}
 float ggxG2(Vec3f wo, Vec3f wi, float alpha) {
   return 1 / (1 + ggxLambda(wo, alpha) + ggxLambda(wi, alpha));
 }
@@ -54,7 +56,9 @@ Vec3f sampleVisibleNormal(Vec3f wo, float alpha, Vec2f u) {
   return normalize(Vec3f(alpha * nh.x, alpha * nh.y, std::max(1e-7f, nh.z)));
 }
 
-Vec3f reflect(Vec3f wo, Vec3f m) { return m * (2 * dot(wo, m)) - wo; }
+Vec3f reflect(Vec3f wo, Vec3f m) {
+  return m * (2 * dot(wo, m)) - wo;
+}
 
 // Refracts wo (on the side m points to) through the interface; eta = n_t / n_i.
 bool refract(Vec3f wo, Vec3f m, float eta, Vec3f& wi) {
@@ -83,7 +87,6 @@ float fresnelDielectric(float cosI, float eta) {
   float rp = (eta * cosI - cosT) / (eta * cosI + cosT);
   return 0.5f * (rs * rs + rp * rp);
 }
-
 
 Bsdf Bsdf::diffuse(Vec3f albedo) {
   Bsdf b;

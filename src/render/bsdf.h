@@ -18,8 +18,8 @@ struct Material;
 
 struct BsdfSample {
   Vec3f wi;
-  Vec3f weight;  // f * |cos(wi)| / pdf
-  float pdf = 0; // solid angle; meaningless for delta lobes
+  Vec3f weight;   // f * |cos(wi)| / pdf
+  float pdf = 0;  // solid angle; meaningless for delta lobes
   bool delta = false;
 };
 
@@ -35,7 +35,9 @@ class Bsdf {
 
   Kind kind() const { return kind_; }
   bool isDelta() const { return kind_ == Kind::SmoothConductor || kind_ == Kind::SmoothDielectric; }
-  bool transmits() const { return kind_ == Kind::SmoothDielectric || kind_ == Kind::RoughDielectric; }
+  bool transmits() const {
+    return kind_ == Kind::SmoothDielectric || kind_ == Kind::RoughDielectric;
+  }
 
   // f(wo, wi) * |cos(wi)|; zero for delta lobes.
   Vec3f eval(Vec3f wo, Vec3f wi) const;

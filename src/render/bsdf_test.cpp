@@ -43,13 +43,16 @@ struct LobeCase {
   Vec3f wo;
 };
 
-std::string degrees(float d) { return std::to_string(int(std::lround(d))); }
+std::string degrees(float d) {
+  return std::to_string(int(std::lround(d)));
+}
 
 // Every non-delta lobe at several incident directions.
 std::vector<LobeCase> roughCases() {
   std::vector<LobeCase> cases;
   const float outside[] = {0, 30, 60, 85};
-  for (float t : outside) cases.push_back({"diffuse_wo" + degrees(t), Bsdf::diffuse(Vec3f(1)), direction(t)});
+  for (float t : outside)
+    cases.push_back({"diffuse_wo" + degrees(t), Bsdf::diffuse(Vec3f(1)), direction(t)});
   for (float r : {0.2f, 0.5f, 1.0f})
     for (float t : outside)
       cases.push_back({"conductor_r" + std::to_string(int(r * 10)) + "_wo" + degrees(t),
@@ -116,8 +119,9 @@ CellIntegral gauss3(const Bsdf& bsdf, Vec3f wo, double t0, double t1, double p0,
 // their parent to `tolerance` (absolute) or 1e-5 relative; with a million
 // samples that is far below a cell's counting noise. `errorBound` collects |children - parent| of
 // the accepted splits, a (very) conservative bound on the error of the result.
-CellIntegral integrateAdaptive(const Bsdf& bsdf, Vec3f wo, double t0, double t1, double p0, double p1,
-                               const CellIntegral& whole, double tolerance, int depth, double& errorBound) {
+CellIntegral integrateAdaptive(const Bsdf& bsdf, Vec3f wo, double t0, double t1, double p0,
+                               double p1, const CellIntegral& whole, double tolerance, int depth,
+                               double& errorBound) {
   double tm = 0.5 * (t0 + t1), pm = 0.5 * (p0 + p1);
   CellIntegral q[4] = {gauss3(bsdf, wo, t0, tm, p0, pm), gauss3(bsdf, wo, tm, t1, p0, pm),
                        gauss3(bsdf, wo, t0, tm, pm, p1), gauss3(bsdf, wo, tm, t1, pm, p1)};
@@ -133,10 +137,11 @@ CellIntegral integrateAdaptive(const Bsdf& bsdf, Vec3f wo, double t0, double t1,
     return sum;
   }
   CellIntegral r;
-  const double rect[4][4] = {{t0, tm, p0, pm}, {tm, t1, p0, pm}, {t0, tm, pm, p1}, {tm, t1, pm, p1}};
+  const double rect[4][4] = {
+      {t0, tm, p0, pm}, {tm, t1, p0, pm}, {t0, tm, pm, p1}, {tm, t1, pm, p1}};
   for (int k = 0; k < 4; ++k) {
-    CellIntegral c = integrateAdaptive(bsdf, wo, rect[k][0], rect[k][1], rect[k][2], rect[k][3], q[k],
-                                       tolerance / 2, depth + 1, errorBound);
+    CellIntegral c = integrateAdaptive(bsdf, wo, rect[k][0], rect[k][1], rect[k][2], rect[k][3],
+                                       q[k], tolerance / 2, depth + 1, errorBound);
     r.pdf += c.pdf;
     r.eval += c.eval;
   }
@@ -170,11 +175,13 @@ struct ChiSquareResult {
 
 // Pearson's test with cells of expected count < 5 pooled (pbrt, Mitsuba).
 // `expected` and `observed` include the failure cell.
-ChiSquareResult chiSquare(const std::vector<double>& expected, const std::vector<double>& observed) {
+ChiSquareResult chiSquare(const std::vector<double>& expected,
+                          const std::vector<double>& observed) {
   ChiSquareResult r;
   std::vector<size_t> order(expected.size());
   for (size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return expected[a] < expected[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return expected[a] < expected[b]; });
   double pooledExpected = 0, pooledObserved = 0;
   int cells = 0;
   for (size_t k : order) {
@@ -238,10 +245,10 @@ SampleStatistics sampleLobe(const Bsdf& bsdf, Vec3f wo, uint64_t seed) {
               std::abs(bs.weight.x - f.x / p) <= 1e-3f * bs.weight.x + 1e-6f &&
               std::abs(std::abs(length(bs.wi)) - 1) < 1e-4f;
     if (!ok && s.inconsistent++ == 0)
-      s.firstInconsistency = "wi=(" + std::to_string(bs.wi.x) + "," + std::to_string(bs.wi.y) + "," +
-                             std::to_string(bs.wi.z) + ") sample pdf " + std::to_string(bs.pdf) +
-                             " pdf() " + std::to_string(p) + " weight " + std::to_string(bs.weight.x) +
-                             " eval/pdf " + std::to_string(f.x / p);
+      s.firstInconsistency = "wi=(" + std::to_string(bs.wi.x) + "," + std::to_string(bs.wi.y) +
+                             "," + std::to_string(bs.wi.z) + ") sample pdf " +
+                             std::to_string(bs.pdf) + " pdf() " + std::to_string(p) + " weight " +
+                             std::to_string(bs.weight.x) + " eval/pdf " + std::to_string(f.x / p);
   }
   return s;
 }
@@ -267,9 +274,11 @@ TEST_P(BsdfLobeTest, SamplingMatchesPdfEnergyAndEval) {
   for (int k = 0; k < kCells; ++k) expected[k] = pdfCells[k] * kSamples;
   expected[kCells] = std::max(0.0, 1 - pdfTotal) * kSamples;
   ChiSquareResult chi = chiSquare(expected, s.histogram);
-  std::printf("[ chi2     ] %-32s chi2 %9.1f dof %5d p %.4f (threshold %.2e)  pdf integral %.5f  fail %.4f\n",
-              c.name.c_str(), chi.chi2, chi.dof, chi.pValue, alphaChi, pdfTotal,
-              s.histogram[kCells] / kSamples);
+  std::printf(
+      "[ chi2     ] %-32s chi2 %9.1f dof %5d p %.4f (threshold %.2e)  pdf integral %.5f  fail "
+      "%.4f\n",
+      c.name.c_str(), chi.chi2, chi.dof, chi.pValue, alphaChi, pdfTotal,
+      s.histogram[kCells] / kSamples);
   EXPECT_TRUE(chi.error.empty()) << chi.error;
   EXPECT_GT(chi.pValue, alphaChi) << c.name << ": sample() does not follow pdf(): chi2 " << chi.chi2
                                   << " with " << chi.dof << " dof";
@@ -284,12 +293,14 @@ TEST_P(BsdfLobeTest, SamplingMatchesPdfEnergyAndEval) {
   const double zOne = testing::oneSidedNormalQuantile(alphaChi);
   const double zTwo = testing::twoSidedNormalQuantile(alphaChi);
   std::printf("[ albedo   ] %-32s MC %.5f +- %.5f  quadrature of eval %.5f (error bound %.1e)\n",
-              c.name.c_str(), s.albedo.mean, s.albedo.standardError(), albedoQuadrature, quadratureError);
+              c.name.c_str(), s.albedo.mean, s.albedo.standardError(), albedoQuadrature,
+              quadratureError);
   EXPECT_LE(s.albedo.mean, 1 + zOne * s.albedo.standardError() + 1e-6) << c.name;
   // All of eval()'s energy is reachable by sample(): the quadrature of eval
   // equals the Monte Carlo mean of the weights (to the statistical error, the
   // quadrature's error bound, and float evaluation of eval(), ~1e-6).
-  EXPECT_NEAR(s.albedo.mean, albedoQuadrature, zTwo * s.albedo.standardError() + quadratureError + 1e-6)
+  EXPECT_NEAR(s.albedo.mean, albedoQuadrature,
+              zTwo * s.albedo.standardError() + quadratureError + 1e-6)
       << c.name;
 }
 
@@ -307,7 +318,7 @@ INSTANTIATE_TEST_SUITE_P(BsdfLobes, BsdfLobeTest, ::testing::ValuesIn(roughCases
 // when its lobe is, so a path that counts emission after a delta bounce never
 // has a shadow ray in the same wavefront.
 TEST(BsdfDelta, ASampleIsDeltaExactlyWhenItsLobeIs) {
-  const Bsdf lobes[] = {Bsdf::diffuse(Vec3f(0.5f)),         Bsdf::conductor(Vec3f(0.9f), 0),
+  const Bsdf lobes[] = {Bsdf::diffuse(Vec3f(0.5f)), Bsdf::conductor(Vec3f(0.9f), 0),
                         Bsdf::conductor(Vec3f(0.9f), 0.3f), Bsdf::dielectric(1.5f, 0),
                         Bsdf::dielectric(1.5f, 0.3f)};
   for (const Bsdf& b : lobes) {
@@ -341,7 +352,8 @@ TEST(BsdfDelta, SmoothConductorIsAMirrorWithSchlickFresnel) {
       EXPECT_EQ(maxComponent(b.eval(wo, bs.wi)), 0.0f);
     }
     BsdfSample bs;
-    EXPECT_FALSE(b.sample(direction(120), 0.5f, {0.5f, 0.5f}, bs)) << "an opaque lobe seen from below";
+    EXPECT_FALSE(b.sample(direction(120), 0.5f, {0.5f, 0.5f}, bs))
+        << "an opaque lobe seen from below";
   }
 }
 
@@ -378,8 +390,10 @@ TEST(BsdfDelta, SmoothDielectricFollowsFresnelAndSnell) {
           float sinO = std::sqrt(std::max(0.0f, 1 - wo.z * wo.z));
           float sinI = std::sqrt(std::max(0.0f, 1 - bs.wi.z * bs.wi.z));
           ASSERT_NEAR(sinO, eta * sinI, 1e-5f) << t << " " << ior;
-          ASSERT_NEAR(bs.wi.x * wo.y - bs.wi.y * wo.x, 0.0f, 1e-5f) << "out of the plane of incidence";
-          ASSERT_LE(bs.wi.x * wo.x + bs.wi.y * wo.y, 1e-6f) << "must cross to the other side of the normal";
+          ASSERT_NEAR(bs.wi.x * wo.y - bs.wi.y * wo.x, 0.0f, 1e-5f)
+              << "out of the plane of incidence";
+          ASSERT_LE(bs.wi.x * wo.x + bs.wi.y * wo.y, 1e-6f)
+              << "must cross to the other side of the normal";
           ASSERT_EQ(bs.weight, Vec3f(0.9f, 0.8f, 0.7f));
         }
       }
@@ -406,7 +420,7 @@ TEST(BsdfReciprocity, EvalIsSymmetricUpToTheRefractiveIndexFactor) {
       {"dielectric 0.67 0.5", Bsdf::dielectric(1 / 1.5f, 0.5f)}};
   TestRng rng(7);
   for (const auto& [name, bsdf] : lobes) {
-    const float ior = bsdf.transmits() ? (name.find("1.33") != std::string::npos ? 1.33f
+    const float ior = bsdf.transmits() ? (name.find("1.33") != std::string::npos   ? 1.33f
                                           : name.find("0.67") != std::string::npos ? 1 / 1.5f
                                                                                    : 1.5f)
                                        : 1.0f;
@@ -430,9 +444,9 @@ TEST(BsdfReciprocity, EvalIsSymmetricUpToTheRefractiveIndexFactor) {
       // far tails (below 1e-5, against peaks of 1 to 100) are float noise.
       float difference = std::abs(fab - fba), largest = std::max(fab, fba);
       if (difference > 1e-3f * largest + 1e-5f) ++loose;
-      ASSERT_LE(difference, 2e-2f * largest + 1e-5f) << name << " a=(" << a.x << "," << a.y << "," << a.z
-                                                     << ") b=(" << b.x << "," << b.y << "," << b.z
-                                                     << "): " << fab << " vs " << fba;
+      ASSERT_LE(difference, 2e-2f * largest + 1e-5f)
+          << name << " a=(" << a.x << "," << a.y << "," << a.z << ") b=(" << b.x << "," << b.y
+          << "," << b.z << "): " << fab << " vs " << fba;
     }
     EXPECT_LE(loose, compared / 200) << name;
     EXPECT_GT(compared, 1000) << name;
@@ -455,14 +469,16 @@ TEST(BsdfFresnel, MatchesClosedForms) {
     EXPECT_EQ(fresnelDielectric(cosCritical * 0.99f, 1 / n), 1.0f);
     EXPECT_EQ(fresnelDielectric(0.01f, 1 / n), 1.0f);
     EXPECT_LT(fresnelDielectric(cosCritical * 1.01f, 1 / n), 1.0f);
-    EXPECT_GT(fresnelDielectric(cosCritical * 1.01f, 1 / n), fresnelDielectric(cosCritical * 1.1f, 1 / n));
+    EXPECT_GT(fresnelDielectric(cosCritical * 1.01f, 1 / n),
+              fresnelDielectric(cosCritical * 1.1f, 1 / n));
     // Grazing incidence reflects everything.
     EXPECT_NEAR(fresnelDielectric(0, n), 1.0f, 1e-6f);
     // The same interface seen from both sides: F(theta_i, n) = F(theta_t, 1/n).
     for (float cosI = 0.05f; cosI <= 1; cosI += 0.05f) {
       float sinT = std::sqrt(1 - cosI * cosI) / n;
       float cosT = std::sqrt(1 - sinT * sinT);
-      EXPECT_NEAR(fresnelDielectric(cosI, n), fresnelDielectric(cosT, 1 / n), 1e-5f) << n << " " << cosI;
+      EXPECT_NEAR(fresnelDielectric(cosI, n), fresnelDielectric(cosT, 1 / n), 1e-5f)
+          << n << " " << cosI;
       float f = fresnelDielectric(cosI, n);
       EXPECT_GE(f, 0.0f);
       EXPECT_LE(f, 1.0f);

@@ -10,7 +10,8 @@ Camera::Camera(const CameraView& view, int width, int height)
     : origin_(view.from), width_(width), height_(height) {
   forward_ = normalize(view.at - view.from);
   Vec3f upHint = view.up;
-  if (length(cross(forward_, upHint)) < 1e-6f) upHint = std::abs(forward_.y) < 0.9f ? Vec3f(0, 1, 0) : Vec3f(0, 0, 1);
+  if (length(cross(forward_, upHint)) < 1e-6f)
+    upHint = std::abs(forward_.y) < 0.9f ? Vec3f(0, 1, 0) : Vec3f(0, 0, 1);
   right_ = normalize(cross(forward_, upHint));
   up_ = cross(right_, forward_);
   // A left-handed (pbrt) camera sees the same world mirrored left to right.

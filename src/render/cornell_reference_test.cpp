@@ -110,8 +110,8 @@ MeanAndVariance renderCornell(uint32_t seed, int spp, int batches) {
 double binomialUpperTail(int n, double p, int k) {
   double sum = 0;
   for (int i = std::max(k, 0); i <= n; ++i)
-    sum += std::exp(std::lgamma(n + 1.0) - std::lgamma(i + 1.0) - std::lgamma(n - i + 1.0) + i * std::log(p) +
-                    (n - i) * std::log1p(-p));
+    sum += std::exp(std::lgamma(n + 1.0) - std::lgamma(i + 1.0) - std::lgamma(n - i + 1.0) +
+                    i * std::log(p) + (n - i) * std::log1p(-p));
   return sum;
 }
 
@@ -121,9 +121,11 @@ TEST(CornellReference, DISABLED_GenerateCornellReference) {
   writePfm(referenceDir() + "/cornell_64_mean.pfm", ref.mean);
   writePfm(referenceDir() + "/cornell_64_variance.pfm", ref.variance);
   std::ofstream info(referenceDir() + "/cornell_64.txt");
-  info << "builtin:cornell width " << kSize << " height " << kSize << " maxDepth " << kMaxDepth << " seed "
-       << kReferenceSeed << " spp " << kReferenceSpp << " batches " << kReferenceBatches << "\n";
-  std::printf("wrote the reference (%.0f samples per pixel) to %s\n", ref.samples(), referenceDir().c_str());
+  info << "builtin:cornell width " << kSize << " height " << kSize << " maxDepth " << kMaxDepth
+       << " seed " << kReferenceSeed << " spp " << kReferenceSpp << " batches " << kReferenceBatches
+       << "\n";
+  std::printf("wrote the reference (%.0f samples per pixel) to %s\n", ref.samples(),
+              referenceDir().c_str());
 }
 
 TEST(CornellReference, MatchesReferencePerPixel) {
@@ -135,9 +137,9 @@ TEST(CornellReference, MatchesReferencePerPixel) {
   std::stringstream info;
   info << infoFile.rdbuf();
   std::ostringstream expectedInfo;
-  expectedInfo << "builtin:cornell width " << kSize << " height " << kSize << " maxDepth " << kMaxDepth
-               << " seed " << kReferenceSeed << " spp " << kReferenceSpp << " batches " << kReferenceBatches
-               << "\n";
+  expectedInfo << "builtin:cornell width " << kSize << " height " << kSize << " maxDepth "
+               << kMaxDepth << " seed " << kReferenceSeed << " spp " << kReferenceSpp << " batches "
+               << kReferenceBatches << "\n";
   ASSERT_EQ(info.str(), expectedInfo.str()) << "reference made with other settings: regenerate it";
   MeanAndVariance ref;
   ref.mean = readPfm(dir + "/cornell_64_mean.pfm");
@@ -185,7 +187,8 @@ TEST(CornellReference, MatchesReferencePerPixel) {
       const Block &t = testBlocks[b], &r = refBlocks[b];
       testSum += t.mean[k];
       refSum += r.mean[k];
-      double p = welchP(t.mean[k], t.varianceOfMean[k], test.dof(), r.mean[k], r.varianceOfMean[k], ref.dof());
+      double p = welchP(t.mean[k], t.varianceOfMean[k], test.dof(), r.mean[k], r.varianceOfMean[k],
+                        ref.dof());
       pImage.rgb[b][k] = float(-std::log10(std::max(p, 1e-300)));
       if (p < pBlock) reject = true;
       if (p < worstP) {
@@ -199,10 +202,11 @@ TEST(CornellReference, MatchesReferencePerPixel) {
   // to the count whose upper tail is below 0.01.
   int allowed = 0;
   while (binomialUpperTail(blocks, kAlpha, allowed + 1) > kAlpha) ++allowed;
-  std::printf("[ cornell  ] image mean test %.5f reference %.5f; smallest p %.2e at block (%d, %d) (Sidak "
-              "threshold %.2e); %d of %d blocks rejected at 0.01 (expected %.1f, allowed %d)\n",
-              testSum / (3.0 * blocks), refSum / (3.0 * blocks), worstP, worstBlock % blocksPerSide,
-              worstBlock / blocksPerSide, pSidak, rejected, blocks, kAlpha * blocks, allowed);
+  std::printf(
+      "[ cornell  ] image mean test %.5f reference %.5f; smallest p %.2e at block (%d, %d) (Sidak "
+      "threshold %.2e); %d of %d blocks rejected at 0.01 (expected %.1f, allowed %d)\n",
+      testSum / (3.0 * blocks), refSum / (3.0 * blocks), worstP, worstBlock % blocksPerSide,
+      worstBlock / blocksPerSide, pSidak, rejected, blocks, kAlpha * blocks, allowed);
   bool ok = worstP >= pSidak && rejected <= allowed;
   if (!ok) {
     // For a person to look at: the test image and -log10(p) per pixel.
@@ -211,8 +215,9 @@ TEST(CornellReference, MatchesReferencePerPixel) {
     writePfm(out + "_log10p.pfm", pImage);
     std::printf("[ cornell  ] wrote %s_mean.pfm and %s_log10p.pfm\n", out.c_str(), out.c_str());
   }
-  EXPECT_GE(worstP, pSidak) << "block (" << worstBlock % blocksPerSide << ", " << worstBlock / blocksPerSide
-                            << ") of " << kBlock << "x" << kBlock << " pixels differs from the reference";
+  EXPECT_GE(worstP, pSidak) << "block (" << worstBlock % blocksPerSide << ", "
+                            << worstBlock / blocksPerSide << ") of " << kBlock << "x" << kBlock
+                            << " pixels differs from the reference";
   EXPECT_LE(rejected, allowed) << "too many blocks differ from the reference";
 }
 

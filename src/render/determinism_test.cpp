@@ -67,26 +67,30 @@ Scene busyScene() {
   glass.baseColor = Vec3f(1);
   glass.transmission = 1;
   glass.roughness = 0;
-  scene.addSingleInstanceMesh(makeSphere({0.4f, 0.5f, 0.3f}, 0.5f, 16, 32, scene.addMaterial(glass), true));
+  scene.addSingleInstanceMesh(
+      makeSphere({0.4f, 0.5f, 0.3f}, 0.5f, 16, 32, scene.addMaterial(glass), true));
 
   Material frosted = glass;
   frosted.name = "frosted";
   frosted.roughness = 0.4f;
   frosted.baseColor = {0.9f, 0.95f, 1};
-  scene.addSingleInstanceMesh(makeSphere({-0.6f, 0.35f, 0.8f}, 0.35f, 12, 24, scene.addMaterial(frosted)));
+  scene.addSingleInstanceMesh(
+      makeSphere({-0.6f, 0.35f, 0.8f}, 0.35f, 12, 24, scene.addMaterial(frosted)));
 
   Material metal;
   metal.name = "metal";
   metal.baseColor = {0.95f, 0.7f, 0.4f};
   metal.metallic = 1;
   metal.roughness = 0.3f;
-  scene.addSingleInstanceMesh(makeSphere({1.3f, 0.4f, -0.4f}, 0.4f, 12, 24, scene.addMaterial(metal), true));
+  scene.addSingleInstanceMesh(
+      makeSphere({1.3f, 0.4f, -0.4f}, 0.4f, 12, 24, scene.addMaterial(metal), true));
 
   Material lamp;
   lamp.name = "lamp";
   lamp.baseColor = Vec3f(0);
   lamp.emission = {6, 5, 4};
-  scene.addSingleInstanceMesh(makeQuad({-0.5f, 2.2f, -0.5f}, {0, 0, 1}, {1, 0, 0}, scene.addMaterial(lamp)));
+  scene.addSingleInstanceMesh(
+      makeQuad({-0.5f, 2.2f, -0.5f}, {0, 0, 1}, {1, 0, 0}, scene.addMaterial(lamp)));
 
   SunLight sun;
   sun.direction = normalize(Vec3f{0.4f, 0.8f, 0.3f});
@@ -123,7 +127,8 @@ struct WholeImageTraversal final : RayTraversal<Path> {
   int rank() const override { return 0; }
   int rankCount() const override { return 1; }
   bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
-  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& e, FrameStats& s) override {
+  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& e,
+                FrameStats& s) override {
     local.traverse(rays, hits, e, s);
   }
   bool anyRaysLeft(size_t n) override { return n > 0; }
@@ -186,9 +191,12 @@ TEST(Determinism, ImageIsBitIdenticalAcrossThreadCountsRunsAndMaskWidths) {
   }
   EXPECT_GT(lit, one.size() * 9 / 10);
 
-  EXPECT_TRUE(bitIdentical(one, two)) << differingPixels(one, two) << " pixels differ between 1 and 2 threads";
-  EXPECT_TRUE(bitIdentical(two, again)) << differingPixels(two, again) << " pixels differ between two runs";
-  EXPECT_TRUE(bitIdentical(two, wide)) << differingPixels(two, wide) << " pixels differ between Path8 and Path64";
+  EXPECT_TRUE(bitIdentical(one, two))
+      << differingPixels(one, two) << " pixels differ between 1 and 2 threads";
+  EXPECT_TRUE(bitIdentical(two, again))
+      << differingPixels(two, again) << " pixels differ between two runs";
+  EXPECT_TRUE(bitIdentical(two, wide))
+      << differingPixels(two, wide) << " pixels differ between Path8 and Path64";
 }
 
 // Keeping the hit (the default) or re-tracing every shaded path (--retrace
@@ -197,10 +205,12 @@ TEST(Determinism, KeepingHitsOrRetracingGivesTheSameImage) {
   std::vector<Vec3f> kept = render<Path8>(1, 2, false);
   std::vector<Vec3f> retraced = render<Path8>(1, 2, true);
   EXPECT_TRUE(bitIdentical(kept, retraced))
-      << differingPixels(kept, retraced) << " pixels differ between --retrace remote and --retrace all";
+      << differingPixels(kept, retraced)
+      << " pixels differ between --retrace remote and --retrace all";
   std::vector<Vec3f> retracedOneThread = render<Path64>(1, 1, true);
   EXPECT_TRUE(bitIdentical(kept, retracedOneThread))
-      << differingPixels(kept, retracedOneThread) << " pixels differ (--retrace all, 1 thread, Path64)";
+      << differingPixels(kept, retracedOneThread)
+      << " pixels differ (--retrace all, 1 thread, Path64)";
 }
 
 // One rank sends its pixels through the wavefront in chunks (for the cache);
@@ -209,7 +219,8 @@ TEST(Determinism, PixelChunksDoNotChangeTheImage) {
   std::vector<Vec3f> whole = render<Path8>(1, 2, false, -1);
   for (int chunk : {100, 700}) {  // 48 x 32 pixels: many chunks, and chunks that split rows
     std::vector<Vec3f> chunked = render<Path8>(1, 2, false, chunk);
-    EXPECT_TRUE(bitIdentical(whole, chunked)) << differingPixels(whole, chunked) << " pixels differ, chunk " << chunk;
+    EXPECT_TRUE(bitIdentical(whole, chunked))
+        << differingPixels(whole, chunked) << " pixels differ, chunk " << chunk;
   }
 }
 

@@ -45,7 +45,8 @@ TEST(DirectLighting, LambertianPlaneUnderTheSun) {
   struct Case {
     float thetaDegrees, angularRadius;
   };
-  const Case cases[] = {{0, 0.00465f}, {30, 0.00465f}, {60, 0.00465f}, {80, 0.00465f}, {45, 0.05f}, {20, 0.002f}};
+  const Case cases[] = {{0, 0.00465f},  {30, 0.00465f}, {60, 0.00465f},
+                        {80, 0.00465f}, {45, 0.05f},    {20, 0.002f}};
   const double z = twoSidedNormalQuantile(sidak(kAlpha, 3.0 * std::size(cases)));
   for (const Case& c : cases) {
     Scene scene = litPlane(albedo);
@@ -68,9 +69,13 @@ TEST(DirectLighting, LambertianPlaneUnderTheSun) {
       stats.imageMean(k, mean, se);
       double expected = double(albedo[k]) * irradiance[k] * std::cos(double(t)) / std::numbers::pi;
       double bound = z * se + kHalfRelativeError * expected;
-      std::printf("[ sun      ] theta %4.1f r %.5f ch%d: mean %.6f +- %.2e expected %.6f (rel. diff %+.2e, allowed %.1e)\n",
-                  c.thetaDegrees, c.angularRadius, k, mean, se, expected, mean / expected - 1, bound / expected);
-      EXPECT_NEAR(mean, expected, bound) << "theta " << c.thetaDegrees << " radius " << c.angularRadius;
+      std::printf(
+          "[ sun      ] theta %4.1f r %.5f ch%d: mean %.6f +- %.2e expected %.6f (rel. diff %+.2e, "
+          "allowed %.1e)\n",
+          c.thetaDegrees, c.angularRadius, k, mean, se, expected, mean / expected - 1,
+          bound / expected);
+      EXPECT_NEAR(mean, expected, bound)
+          << "theta " << c.thetaDegrees << " radius " << c.angularRadius;
     }
   }
 }
@@ -83,7 +88,8 @@ double cornerViewFactor(double x, double y, double h) {
   double sa = std::sqrt(1 + a * a), sb = std::sqrt(1 + b * b);
   return (a / sa * std::atan(b / sa) + b / sb * std::atan(a / sb)) / (2 * std::numbers::pi);
 }
-double rectangleViewFactor(double px, double pz, double x0, double x1, double z0, double z1, double h) {
+double rectangleViewFactor(double px, double pz, double x0, double x1, double z0, double z1,
+                           double h) {
   return cornerViewFactor(x1 - px, z1 - pz, h) - cornerViewFactor(x0 - px, z1 - pz, h) -
          cornerViewFactor(x1 - px, z0 - pz, h) + cornerViewFactor(x0 - px, z0 - pz, h);
 }
@@ -100,8 +106,8 @@ TEST(DirectLighting, LambertianPlaneUnderASquareEmitter) {
   int32_t e = scene.addMaterial(emitter);
   // Winding gives a geometric normal of +y (away from the plane); emitters
   // are two-sided (docs/architecture.md), so the lower side emits.
-  scene.addSingleInstanceMesh(makeQuad({-float(half), float(h), -float(half)}, {0, 0, 2 * float(half)},
-                                       {2 * float(half), 0, 0}, e));
+  scene.addSingleInstanceMesh(makeQuad({-float(half), float(h), -float(half)},
+                                       {0, 0, 2 * float(half)}, {2 * float(half), 0, 0}, e));
   // Looking at the centre under the emitter from the side, under its edge,
   // with a narrow view: the image spans about 0.3 units around the centre.
   CameraView view;
@@ -143,8 +149,8 @@ TEST(DirectLighting, LambertianPlaneUnderASquareEmitter) {
     stats.imageMean(k, mean, se);
     double expected = albedo[k] * le[k] * viewFactorMean;
     double bound = z * se + kHalfRelativeError * expected;
-    std::printf("[ emitter  ] ch%d: mean %.6f +- %.2e expected %.6f (|z| %.2f, threshold %.2f)\n", k, mean, se,
-                expected, std::abs(mean - expected) / se, z);
+    std::printf("[ emitter  ] ch%d: mean %.6f +- %.2e expected %.6f (|z| %.2f, threshold %.2f)\n",
+                k, mean, se, expected, std::abs(mean - expected) / se, z);
     EXPECT_NEAR(mean, expected, bound) << "channel " << k;
   }
 }

@@ -9,7 +9,8 @@ namespace ferry {
 uint8_t toneMapChannel(float x, const ToneMapping& tm) {
   if (!std::isfinite(x)) x = 0;
   x = std::max(0.0f, x) * std::exp2(tm.exposure);
-  if (tm.filmic) x = std::clamp((x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f), 0.0f, 1.0f);
+  if (tm.filmic)
+    x = std::clamp((x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f), 0.0f, 1.0f);
   return static_cast<uint8_t>(std::lround(linearToSrgb(x) * 255.0f));
 }
 

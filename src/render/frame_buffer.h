@@ -18,7 +18,8 @@ namespace ferry {
 
 class FrameBuffer {
  public:
-  FrameBuffer(int width, int height) : width_(width), height_(height), sum_(size_t(width) * height) {}
+  FrameBuffer(int width, int height)
+      : width_(width), height_(height), sum_(size_t(width) * height) {}
   void add(uint32_t pixel, Vec3f value) { sum_[pixel] += value; }
   int width() const { return width_; }
   int height() const { return height_; }
@@ -37,6 +38,7 @@ struct ToneMapping {
   bool filmic = true;
 };
 uint8_t toneMapChannel(float linear, const ToneMapping& toneMapping);
-std::vector<uint8_t> toneMapToRgba8(const std::vector<Vec3f>& linear, const ToneMapping& toneMapping);
+std::vector<uint8_t> toneMapToRgba8(const std::vector<Vec3f>& linear,
+                                    const ToneMapping& toneMapping);
 
 }  // namespace ferry

@@ -48,7 +48,9 @@ Scene sphereInEnvironment(const Material& material, float fovY, bool smoothNorma
 // vertex contributes a^k: every stored throughput and the shadow weight round
 // once each, so vertex k's term carries at most (k + 1) roundings of 2^-11:
 // sum (k+1) a^k / sum a^k = 1 / (1 - a).
-double halfBias(double albedo) { return kHalfRelativeError / (1 - std::min(albedo, 0.999)); }
+double halfBias(double albedo) {
+  return kHalfRelativeError / (1 - std::min(albedo, 0.999));
+}
 
 struct Check {
   std::string what;
@@ -58,9 +60,11 @@ struct Check {
 void expectAll(const std::vector<Check>& checks) {
   const double z = twoSidedNormalQuantile(sidak(kAlpha, double(checks.size())));
   for (const Check& c : checks) {
-    std::printf("[ furnace  ] %-36s mean %.6f +- %.6f (expected %.6f, |z| %.2f, threshold %.2f + bias %.1e)\n",
-                c.what.c_str(), c.mean, c.standardError, c.expected,
-                c.standardError > 0 ? std::abs(c.mean - c.expected) / c.standardError : 0.0, z, c.bias);
+    std::printf(
+        "[ furnace  ] %-36s mean %.6f +- %.6f (expected %.6f, |z| %.2f, threshold %.2f + bias "
+        "%.1e)\n",
+        c.what.c_str(), c.mean, c.standardError, c.expected,
+        c.standardError > 0 ? std::abs(c.mean - c.expected) / c.standardError : 0.0, z, c.bias);
     EXPECT_NEAR(c.mean, c.expected, z * c.standardError + c.bias * c.expected) << c.what;
   }
 }
@@ -86,8 +90,8 @@ TEST(Furnace, ConvexDiffuseSphereReturnsItsAlbedo) {
     for (int k = 0; k < 3; ++k) {
       double mean, se;
       stats.imageMean(k, mean, se);
-      checks.push_back({"diffuse albedo " + std::to_string(c.albedo) + " ch" + std::to_string(k), mean, se,
-                        c.albedo, kHalfRelativeError});
+      checks.push_back({"diffuse albedo " + std::to_string(c.albedo) + " ch" + std::to_string(k),
+                        mean, se, c.albedo, kHalfRelativeError});
     }
     // Every pixel, not only the mean: with zero variance expected, each
     // frame's pixel value is the albedo up to rounding.
@@ -168,7 +172,8 @@ TEST(Furnace, InsideAClosedEmitterRadianceIsLeOverOneMinusAlbedo) {
     double mean, se;
     stats.imageMean(k, mean, se);
     double expected = le[k] / (1 - albedo[k]);
-    checks.push_back({"closed emitter ch" + std::to_string(k), mean, se, expected, halfBias(albedo[k])});
+    checks.push_back(
+        {"closed emitter ch" + std::to_string(k), mean, se, expected, halfBias(albedo[k])});
   }
   expectAll(checks);
 }

@@ -30,7 +30,8 @@ float sunConePdf(const SunLight& sun) {
 
 }  // namespace
 
-LightSampler::LightSampler(const Scene& scene) : suns_(scene.suns), environment_(scene.environment) {
+LightSampler::LightSampler(const Scene& scene)
+    : suns_(scene.suns), environment_(scene.environment) {
   for (const SunLight& sun : suns_)
     sunConstants_.push_back({sunRadiance(sun), sunConePdf(sun), oneMinusCos(sun.angularRadius),
                              2 * std::sin(0.5f * sun.angularRadius), luminance(sun.irradiance),
@@ -58,7 +59,8 @@ LightSampler::LightSampler(const Scene& scene) : suns_(scene.suns), environment_
   std::vector<std::vector<int32_t>> emissiveMeshesPerObject(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o)
     for (int32_t m : scene.objects[o].meshes)
-      if (scene.materials[scene.meshes[m].material].isEmissive()) emissiveMeshesPerObject[o].push_back(m);
+      if (scene.materials[scene.meshes[m].material].isEmissive())
+        emissiveMeshesPerObject[o].push_back(m);
   for (const Instance& inst : scene.instances) {
     for (int32_t m : emissiveMeshesPerObject[inst.object]) {
       const Mesh& mesh = scene.meshes[m];
@@ -122,11 +124,13 @@ Vec3f LightSampler::background(Vec3f d) const {
   Vec3f l = environmentRadiance(d);
   for (size_t i = 0; i < suns_.size(); ++i)
     // |d - s| <= 2 sin(r / 2) is the cone test without 1 - cos cancellation.
-    if (length(d - suns_[i].direction) <= sunConstants_[i].chordRadius) l += sunConstants_[i].radiance;
+    if (length(d - suns_[i].direction) <= sunConstants_[i].chordRadius)
+      l += sunConstants_[i].radiance;
   return l;
 }
 
-bool LightSampler::sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u, LightSample& out) const {
+bool LightSampler::sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u,
+                                     LightSample& out) const {
   if (!environment_.image && twoSided) {
     // Uniform over the sphere: light arrives from both sides.
     float z = 1 - 2 * u.x;
@@ -155,7 +159,8 @@ bool LightSampler::sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u,
   return out.pdf > 0;
 }
 
-bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u, LightSample& out) const {
+bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u,
+                                  LightSample& out) const {
   float su = std::sqrt(u.x);
   float b1 = 1 - su, b2 = u.y * su;
   Vec3f q = t.p0 + t.e1 * b1 + t.e2 * b2;
@@ -193,7 +198,8 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
   // Calls visit(index, weight) for each candidate in order until it returns true.
   auto forEachCandidate = [&](auto&& visit) {
     for (int i = 0; i < sunCount; ++i)
-      if (visit(i, sunConstants_[i].selectionWeight * std::max(std::abs(dot(n, suns_[i].direction)), 1e-3f)))
+      if (visit(i, sunConstants_[i].selectionWeight *
+                       std::max(std::abs(dot(n, suns_[i].direction)), 1e-3f)))
         return;
     if (!environment_.isBlack() && visit(envIndex, environmentWeight_)) return;
     int next = triangleBase;
@@ -204,7 +210,9 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
       }
     } else {
       for (const Group& g : groups_)
-        if (visit(next++, triangleWeight(g.bounds.center(), g.power, g.bounds.surfaceArea() * 0.25f))) return;
+        if (visit(next++,
+                  triangleWeight(g.bounds.center(), g.power, g.bounds.surfaceArea() * 0.25f)))
+          return;
     }
   };
   float total = 0;

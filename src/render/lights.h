@@ -18,11 +18,11 @@
 namespace ferry {
 
 struct LightSample {
-  Vec3f direction;         // unit, from the shading point to the light
+  Vec3f direction;             // unit, from the shading point to the light
   float distance = kInfinity;  // to the sampled point; infinity for sun and environment
-  Vec3f normal;            // the emitter's unit normal there (either sign); zero at infinity
-  Vec3f radiance;          // emitted radiance along -direction
-  float pdf = 0;           // solid angle, including the light's selection probability
+  Vec3f normal;                // the emitter's unit normal there (either sign); zero at infinity
+  Vec3f radiance;              // emitted radiance along -direction
+  float pdf = 0;               // solid angle, including the light's selection probability
 };
 
 class LightSampler {
@@ -36,7 +36,8 @@ class LightSampler {
     return sample(p, Frame(n), twoSided, uSelect, u, out);
   }
   // The same, given the frame about n (shading has built it already).
-  bool sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u, LightSample& out) const;
+  bool sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u,
+              LightSample& out) const;
 
   // Radiance arriving along `direction` from infinitely far away: environment
   // plus any sun whose disk `direction` falls in.
@@ -71,9 +72,9 @@ class LightSampler {
     Vec3f radiance;
     float conePdf;
     float oneMinusCosRadius;
-    float chordRadius;  // 2 sin(r / 2): the cone test on |d - s|
+    float chordRadius;      // 2 sin(r / 2): the cone test on |d - s|
     float selectionWeight;  // luminance(irradiance)
-    Frame frame;  // Frame(direction), for sampling the cone
+    Frame frame;            // Frame(direction), for sampling the cone
   };
   std::vector<SunConstants> sunConstants_;
   EnvironmentLight environment_;

@@ -22,12 +22,12 @@
 namespace ferry {
 
 enum PathFlags : uint32_t {
-  kPathShadow = 1u << 0,          // a shadow ray carrying its unoccluded contribution
-  kPathOccluded = 1u << 1,        // shadow ray: an occluder was found
-  kPathAfterSpecular = 1u << 2,   // previous vertex was a delta lobe (or the camera):
-                                  // emission hit next counts (no light sample covered it)
-  kPathTraversed = 1u << 3,       // traversal is complete: sent to a rank only to be shaded
-  kPathReply = 1u << 4,           // broadcast mode: a copy returning its result to its origin
+  kPathShadow = 1u << 0,         // a shadow ray carrying its unoccluded contribution
+  kPathOccluded = 1u << 1,       // shadow ray: an occluder was found
+  kPathAfterSpecular = 1u << 2,  // previous vertex was a delta lobe (or the camera):
+                                 // emission hit next counts (no light sample covered it)
+  kPathTraversed = 1u << 3,      // traversal is complete: sent to a rank only to be shaded
+  kPathReply = 1u << 4,          // broadcast mode: a copy returning its result to its origin
   kPathFlagMask = 0x3fu,
 };
 constexpr int kPixelBits = 26;  // 67 M pixels, e.g. 8192 x 8192
@@ -81,8 +81,8 @@ static_assert(sizeof(PathCore) == 32);
 // uint64_t (up to 64 ranks, 48 bytes).
 template <typename RankMask>
 struct PathT : PathCore {
-  RankMask visited;        // ranks this ray has been traced on
-  RankMask hitOwners;      // ranks holding the content of the closest hit so far (0: no hit)
+  RankMask visited;    // ranks this ray has been traced on
+  RankMask hitOwners;  // ranks holding the content of the closest hit so far (0: no hit)
 
   using Mask = RankMask;
   static constexpr bool kReplay = false;
@@ -95,7 +95,9 @@ struct PathT : PathCore {
   // Traced on `rank` (local tracing marks every ray it traces).
   void markTraced(int rank) { visited |= RankMask(RankMask(1) << rank); }
   // The closest hit so far was found on `rank`, in content `owners` hold (a mask up to 64 ranks).
-  void setHit(int rank, uint64_t owners) { hitOwners = owners ? RankMask(owners) : RankMask(RankMask(1) << rank); }
+  void setHit(int rank, uint64_t owners) {
+    hitOwners = owners ? RankMask(owners) : RankMask(RankMask(1) << rank);
+  }
 };
 
 // The replay layout, for any rank count (the paper's Section 3.3 "replay"):

@@ -19,7 +19,8 @@ void checkQuantizedAtCreation() {
   for (uint32_t i = 0; i < 20000; ++i) {
     key.pixel = i;
     // Unit directions all over the sphere, and some unnormalised.
-    float z = 1 - 2 * random01(key, RandomDim::BsdfU), phi = 2 * kPi * random01(key, RandomDim::BsdfV);
+    float z = 1 - 2 * random01(key, RandomDim::BsdfU),
+          phi = 2 * kPi * random01(key, RandomDim::BsdfV);
     float r = std::sqrt(std::max(0.0f, 1 - z * z));
     float scale = i % 7 == 0 ? 3.7f : 1.0f;
     Vec3f d{r * std::cos(phi) * scale, r * std::sin(phi) * scale, z * scale};

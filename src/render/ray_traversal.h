@@ -36,8 +36,8 @@ class RayTraversal {
   // return `rays` holds exactly the rays this rank must shade, and `hits` one
   // entry per ray: its closest hit when this rank found it in this traversal
   // (so shading need not re-trace it), else an invalid hit (re-trace).
-  virtual void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
-                        FrameStats& stats) = 0;
+  virtual void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
+                        ExchangeCounters& exchange, FrameStats& stats) = 0;
   // True while any rank still has rays (a collective in the distributed case).
   virtual bool anyRaysLeft(size_t localRays) = 0;
 };
@@ -52,7 +52,8 @@ class RayTraversal {
 // trace did not set it.
 template <typename Path>
 void traceLocally(const LocalGeometry& geometry, PathQueue<Path>& rays, int rank,
-                  std::span<const uint64_t> instanceOwners, FrameStats& stats, TraceHit* hits = nullptr);
+                  std::span<const uint64_t> instanceOwners, FrameStats& stats,
+                  TraceHit* hits = nullptr);
 
 // The query with which shading re-traces a path whose hit it does not have:
 // Embree accepts a hit only somewhat inside tfar, with an error that scales

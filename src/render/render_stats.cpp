@@ -54,22 +54,23 @@ nlohmann::json FrameStats::toJson() const {
   j["camera_paths"] = cameraPaths;
   j["continuation_rays"] = continuationRays;
   j["shadow_rays"] = shadowRays;
-  j["traces"] = {{"closest", closestTraces},
-                 {"occlusion", occlusionTraces},
-                 {"retrace", retraces},
-                 {"retrace_misses", retraceMisses},
-                 {"proxy_queries", proxyQueries},
-                 {"replay_queries", replayQueries},
+  j["traces"] = {{"closest", closestTraces},      {"occlusion", occlusionTraces},
+                 {"retrace", retraces},           {"retrace_misses", retraceMisses},
+                 {"proxy_queries", proxyQueries}, {"replay_queries", replayQueries},
                  {"total", raysTraced()}};
   j["rays_per_second"] = seconds > 0 ? double(raysTraced()) / seconds : 0.0;
   ExchangeCounters ex = exchangeTotal();
-  j["exchange"] = {{"rays_forwarded", ex.raysForwarded}, {"bytes_sent", ex.bytesSent}, {"rounds", ex.rounds}};
+  j["exchange"] = {
+      {"rays_forwarded", ex.raysForwarded}, {"bytes_sent", ex.bytesSent}, {"rounds", ex.rounds}};
   nlohmann::json bounces = nlohmann::json::array();
   for (const ExchangeCounters& c : perBounce)
-    bounces.push_back({{"rays_forwarded", c.raysForwarded}, {"bytes_sent", c.bytesSent}, {"rounds", c.rounds}});
+    bounces.push_back(
+        {{"rays_forwarded", c.raysForwarded}, {"bytes_sent", c.bytesSent}, {"rounds", c.rounds}});
   j["exchange_per_bounce"] = bounces;
-  j["stage_seconds"] = {{"generate", times.generate}, {"trace", times.trace},
-                        {"exchange", times.exchange}, {"shade", times.shade},
+  j["stage_seconds"] = {{"generate", times.generate},
+                        {"trace", times.trace},
+                        {"exchange", times.exchange},
+                        {"shade", times.shade},
                         {"composite", times.composite}};
   return j;
 }
@@ -106,18 +107,20 @@ std::string RenderStats::summaryText(int ranks) const {
                             frames.empty() ? 0.0 : t.seconds / frames.size()));
   row("ranks", fmt::format("{}", ranks));
   row("camera paths", formatCount(t.cameraPaths));
-  row("rays traced", fmt::format("{} ({} closest, {} shadow, {} re-trace)", formatCount(t.raysTraced()),
-                                 formatCount(t.closestTraces), formatCount(t.occlusionTraces),
-                                 formatCount(t.retraces)));
+  row("rays traced", fmt::format("{} ({} closest, {} shadow, {} re-trace)",
+                                 formatCount(t.raysTraced()), formatCount(t.closestTraces),
+                                 formatCount(t.occlusionTraces), formatCount(t.retraces)));
   row("rays per second", formatCount(uint64_t(t.seconds > 0 ? t.raysTraced() / t.seconds : 0)));
-  row("rays forwarded", fmt::format("{} ({} per frame)", formatCount(ex.raysForwarded),
-                                    formatCount(frames.empty() ? 0 : ex.raysForwarded / frames.size())));
+  row("rays forwarded",
+      fmt::format("{} ({} per frame)", formatCount(ex.raysForwarded),
+                  formatCount(frames.empty() ? 0 : ex.raysForwarded / frames.size())));
   row("bytes sent", formatBytes(ex.bytesSent));
   row("exchange rounds", fmt::format("{}", ex.rounds));
-  row("stage seconds", fmt::format("generate {:.2f}, trace {:.2f}, exchange {:.2f}, shade {:.2f}, "
-                                   "composite {:.2f} (summed over ranks, and on one rank over threads)",
-                                   t.times.generate, t.times.trace, t.times.exchange, t.times.shade,
-                                   t.times.composite));
+  row("stage seconds",
+      fmt::format("generate {:.2f}, trace {:.2f}, exchange {:.2f}, shade {:.2f}, "
+                  "composite {:.2f} (summed over ranks, and on one rank over threads)",
+                  t.times.generate, t.times.trace, t.times.exchange, t.times.shade,
+                  t.times.composite));
   if (t.retraceMisses) row("re-trace misses", fmt::format("{}", t.retraceMisses));
   return out;
 }

@@ -21,11 +21,11 @@ struct ExchangeCounters {
 // Seconds per stage: summed over ranks when merged; on one rank the chunks
 // run in parallel, so there they are summed over threads too.
 struct StageTimes {
-  double generate = 0;  // camera rays (and proxy-guided ownership)
-  double trace = 0;     // local traces inside traversal
-  double exchange = 0;  // forwarding decisions, compaction, MPI
-  double shade = 0;     // shadow-ray contributions, re-trace, BSDF and light sampling, spawning
-  double composite = 0;   // merging frame buffers
+  double generate = 0;   // camera rays (and proxy-guided ownership)
+  double trace = 0;      // local traces inside traversal
+  double exchange = 0;   // forwarding decisions, compaction, MPI
+  double shade = 0;      // shadow-ray contributions, re-trace, BSDF and light sampling, spawning
+  double composite = 0;  // merging frame buffers
   StageTimes& operator+=(const StageTimes& o);
   double total() const { return generate + trace + exchange + shade + composite; }
 };
@@ -41,7 +41,7 @@ struct FrameStats {
   uint64_t retraces = 0;         // shading re-traces
   uint64_t retraceMisses = 0;    // re-traces that did not find the hit again (should be 0)
   uint64_t proxyQueries = 0;     // proxy-BVH queries: camera-ray ownership and forwarding decisions
-  uint64_t replayQueries = 0;  // replay layout: proxy queries spent recomputing visited sets
+  uint64_t replayQueries = 0;    // replay layout: proxy queries spent recomputing visited sets
   std::vector<ExchangeCounters> perBounce;
   StageTimes times;
 

@@ -31,7 +31,9 @@ namespace ferry::testing {
 
 // Per-test significance so that `tests` independent tests at it have a
 // family-wise false-alarm rate of `alpha` (Sidak).
-inline double sidak(double alpha, double tests) { return 1 - std::pow(1 - alpha, 1 / tests); }
+inline double sidak(double alpha, double tests) {
+  return 1 - std::pow(1 - alpha, 1 / tests);
+}
 
 // Regularized upper incomplete gamma Q(a, x) (Numerical Recipes 6.2).
 inline double regularizedGammaQ(double a, double x) {
@@ -65,7 +67,9 @@ inline double regularizedGammaQ(double a, double x) {
 }
 
 // P(X >= chi2) for a chi-square variable with `dof` degrees of freedom.
-inline double chiSquareSurvival(double chi2, double dof) { return regularizedGammaQ(dof / 2, chi2 / 2); }
+inline double chiSquareSurvival(double chi2, double dof) {
+  return regularizedGammaQ(dof / 2, chi2 / 2);
+}
 
 // Regularized incomplete beta I_x(a, b) (Numerical Recipes 6.4).
 inline double regularizedIncompleteBeta(double a, double b, double x) {
@@ -113,7 +117,8 @@ inline double studentTwoSidedP(double t, double dof) {
 // Welch's t-test of two means from their estimated variances-of-the-mean
 // (va, vb) and the degrees of freedom of those estimates; returns the
 // two-sided p-value (1 when both variances are zero and the means agree).
-inline double welchP(double meanA, double varMeanA, double dofA, double meanB, double varMeanB, double dofB) {
+inline double welchP(double meanA, double varMeanA, double dofA, double meanB, double varMeanB,
+                     double dofB) {
   double v = varMeanA + varMeanB;
   if (v <= 0) return meanA == meanB ? 1.0 : 0.0;
   double t = (meanA - meanB) / std::sqrt(v);
@@ -126,12 +131,17 @@ inline double twoSidedNormalQuantile(double p) {
   double lo = 0, hi = 40;
   for (int i = 0; i < 200; ++i) {
     double mid = 0.5 * (lo + hi);
-    if (std::erfc(mid / std::sqrt(2.0)) > p) lo = mid; else hi = mid;
+    if (std::erfc(mid / std::sqrt(2.0)) > p)
+      lo = mid;
+    else
+      hi = mid;
   }
   return 0.5 * (lo + hi);
 }
 // z such that P(Z > z) = p (one-sided).
-inline double oneSidedNormalQuantile(double p) { return twoSidedNormalQuantile(2 * p); }
+inline double oneSidedNormalQuantile(double p) {
+  return twoSidedNormalQuantile(2 * p);
+}
 
 // Running mean and variance (Welford), in double.
 struct MeanVariance {
@@ -227,7 +237,8 @@ struct RenderSetup {
     geometry = std::make_unique<LocalGeometry>(scene);
     lights = std::make_unique<LightSampler>(scene);
     traversal = std::make_unique<LocalTraversal<Path8>>(*geometry);
-    renderer = std::make_unique<WavefrontRenderer<Path8>>(scene, *geometry, *lights, *traversal, settings);
+    renderer =
+        std::make_unique<WavefrontRenderer<Path8>>(scene, *geometry, *lights, *traversal, settings);
   }
   // Renders frame `frame` into a fresh buffer and returns its per-pixel mean
   // (the buffer's sums divided by the samples per pixel).

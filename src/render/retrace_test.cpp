@@ -21,7 +21,9 @@
 namespace ferry {
 namespace {
 
-bool same(const void* a, const void* b, size_t n) { return std::memcmp(a, b, n) == 0; }
+bool same(const void* a, const void* b, size_t n) {
+  return std::memcmp(a, b, n) == 0;
+}
 
 bool sameHit(const TraceHit& a, const TraceHit& b) {
   return a.instance == b.instance && a.meshSlot == b.meshSlot && a.primitive == b.primitive &&
@@ -31,8 +33,9 @@ bool sameHit(const TraceHit& a, const TraceHit& b) {
 bool sameSurface(const SurfacePoint& a, const SurfacePoint& b) {
   return same(&a.position, &b.position, sizeof(Vec3f)) &&
          same(&a.geometricNormal, &b.geometricNormal, sizeof(Vec3f)) &&
-         same(&a.shadingNormal, &b.shadingNormal, sizeof(Vec3f)) && same(&a.uv, &b.uv, sizeof(Vec2f)) &&
-         a.material == b.material && same(&a.baseColor, &b.baseColor, sizeof(Vec3f));
+         same(&a.shadingNormal, &b.shadingNormal, sizeof(Vec3f)) &&
+         same(&a.uv, &b.uv, sizeof(Vec2f)) && a.material == b.material &&
+         same(&a.baseColor, &b.baseColor, sizeof(Vec3f));
 }
 
 // Traces camera rays, then two generations of cosine-distributed rays from
@@ -76,13 +79,15 @@ size_t checkScene(const std::string& spec, int width, int height) {
       const TraceHit single = geometry.intersect(queries[i]);
       if (!kept[i].valid()) continue;  // reported above
       EXPECT_TRUE(sameHit(kept[i], single)) << spec << " generation " << generation << " ray " << i;
-      EXPECT_TRUE(sameHit(kept[i], batched[i])) << spec << " generation " << generation << " ray " << i;
+      EXPECT_TRUE(sameHit(kept[i], batched[i]))
+          << spec << " generation " << generation << " ray " << i;
       EXPECT_EQ(kept[i].t, p.tmax);
       SurfacePoint fromKept = reconstructSurface(scene, kept[i]);
       SurfacePoint fromRetrace = reconstructSurface(scene, batched[i]);
       EXPECT_TRUE(sameSurface(fromKept, fromRetrace)) << spec << " ray " << i;
       // With the per-instance inverses precomputed (as the renderer does): the same surface.
-      EXPECT_TRUE(sameSurface(fromKept, reconstructSurface(scene, kept[i], &inverses))) << spec << " ray " << i;
+      EXPECT_TRUE(sameSurface(fromKept, reconstructSurface(scene, kept[i], &inverses)))
+          << spec << " ray " << i;
       ++checked;
       // A secondary ray from the hit, as shading would spawn it.
       Vec3f ng = fromKept.geometricNormal;

@@ -18,7 +18,7 @@ struct SurfacePoint {
   Vec3f shadingNormal;    // world space, unit, interpolated (or geometric)
   Vec2f uv;
   const Material* material = nullptr;
-  Vec3f baseColor;        // material colour times its texture
+  Vec3f baseColor;  // material colour times its texture
 };
 
 // `inverses` (from instanceInverses, one per instance) saves inverting the
@@ -45,7 +45,7 @@ struct SurfaceTable {
     const Vec2f* uvs;      // null: none
     const Material* material;
   };
-  std::vector<Affine3f> inverses;       // per instance
+  std::vector<Affine3f> inverses;        // per instance
   std::vector<uint32_t> instanceMeshes;  // per instance: its object's slot 0 in `meshes`
   std::vector<MeshArrays> meshes;
   explicit SurfaceTable(const Scene& scene);
@@ -89,7 +89,8 @@ inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, con
   } else {
     s.shadingNormal = ng;
   }
-  s.uv = !mesh.uvs ? Vec2f{hit.u, hit.v} : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
+  s.uv = !mesh.uvs ? Vec2f{hit.u, hit.v}
+                   : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
   s.material = mesh.material;
   s.baseColor = s.material->baseColor;
   if (s.material->baseColorTexture != kNoTexture)
@@ -98,7 +99,8 @@ inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, con
 }
 
 inline SurfaceTable::MeshArrays meshArrays(const Scene& scene, const Mesh& mesh) {
-  return {mesh.indices.data(), mesh.positions.data(), mesh.normals.empty() ? nullptr : mesh.normals.data(),
+  return {mesh.indices.data(), mesh.positions.data(),
+          mesh.normals.empty() ? nullptr : mesh.normals.data(),
           mesh.uvs.empty() ? nullptr : mesh.uvs.data(), &scene.materials[mesh.material]};
 }
 
@@ -110,7 +112,8 @@ inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
   return surfaceAt(scene, inst.transform, inv, meshArrays(scene, mesh), hit);
 }
 
-inline SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table, const TraceHit& hit) {
+inline SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table,
+                                       const TraceHit& hit) {
   return surfaceAt(scene, scene.instances[hit.instance].transform, table.inverses[hit.instance],
                    table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.meshSlot)], hit);
 }
@@ -128,6 +131,5 @@ inline Vec3f offsetRayOrigin(Vec3f p, Vec3f n) {
   }
   return out;
 }
-
 
 }  // namespace ferry

@@ -20,13 +20,13 @@
 namespace ferry {
 namespace {
 
-
 // Paths whose bounce reaches this start playing Russian roulette.
 constexpr uint32_t kRouletteStartBounce = 3;
 
 // Returns the ray's direction as stored (quantized to halves).
 template <typename Path>
-Vec3f setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, uint32_t pixel, uint32_t flags) {
+Vec3f setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, uint32_t pixel,
+             uint32_t flags) {
   p.origin = origin;
   Vec3f stored = p.setDirAndWeight(direction, weight);
   p.tmax = tmax;
@@ -36,13 +36,16 @@ Vec3f setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, u
 }
 
 // Contributions that cannot be represented are dropped rather than poisoning the image.
-[[gnu::always_inline]] inline bool usable(Vec3f c) { return isFinite(c) && maxComponent(c) > 0; }
+[[gnu::always_inline]] inline bool usable(Vec3f c) {
+  return isFinite(c) && maxComponent(c) > 0;
+}
 
 }  // namespace
 
 template <typename Path>
 WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const LocalGeometry& geometry,
-                                           const LightSampler& lights, RayTraversal<Path>& traversal,
+                                           const LightSampler& lights,
+                                           RayTraversal<Path>& traversal,
                                            const RenderSettings& settings)
     : scene_(scene),
       geometry_(geometry),
@@ -87,12 +90,13 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
           // Isolated: while its stages wait, this thread takes no other chunk,
           // which would reuse its workspace.
           tbb::this_task_arena::isolate([&] {
-            runWavefront(sampleIndex, c * chunk, std::min(pixels, (c + 1) * chunk), chunkWorkspaces_.local(),
-                         frameBuffer, chunkStats.local());
+            runWavefront(sampleIndex, c * chunk, std::min(pixels, (c + 1) * chunk),
+                         chunkWorkspaces_.local(), frameBuffer, chunkStats.local());
           });
         }
       });
-      for (const FrameStats& local : chunkStats) stats.merge(local);  // counters and stage times summed
+      for (const FrameStats& local : chunkStats)
+        stats.merge(local);  // counters and stage times summed
     }
     if (progress) progress(s + 1, settings_.samplesPerPixel);
   }
@@ -101,8 +105,9 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
 }
 
 template <typename Path>
-void WavefrontRenderer<Path>::runWavefront(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
-                                           FrameBuffer& frameBuffer, FrameStats& stats) {
+void WavefrontRenderer<Path>::runWavefront(uint32_t sampleIndex, uint32_t first, uint32_t last,
+                                           Workspace& ws, FrameBuffer& frameBuffer,
+                                           FrameStats& stats) {
   generateCameraRays(sampleIndex, first, last, ws, stats);
   for (uint32_t bounce = 0; traversal_.anyRaysLeft(ws.rays.size()); ++bounce) {
     if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
@@ -120,22 +125,23 @@ namespace {
 constexpr size_t kBlock = 2048;
 
 template <typename Path>
-void concatenateBlocks(const PathQueue<Path>& staging, size_t stride, const std::vector<uint32_t>& counts,
-                       PathQueue<Path>& out) {
+void concatenateBlocks(const PathQueue<Path>& staging, size_t stride,
+                       const std::vector<uint32_t>& counts, PathQueue<Path>& out) {
   std::vector<size_t> offsets(counts.size() + 1, 0);
   for (size_t b = 0; b < counts.size(); ++b) offsets[b + 1] = offsets[b] + counts[b];
   out.resize(offsets.back());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, counts.size(), 4), [&](const auto& range) {
     for (size_t b = range.begin(); b != range.end(); ++b)
-      std::copy_n(staging.begin() + ptrdiff_t(b * stride), counts[b], out.begin() + ptrdiff_t(offsets[b]));
+      std::copy_n(staging.begin() + ptrdiff_t(b * stride), counts[b],
+                  out.begin() + ptrdiff_t(offsets[b]));
   });
 }
 
 }  // namespace
 
 template <typename Path>
-void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last,
-                                                 Workspace& ws, FrameStats& stats) {
+void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t first,
+                                                 uint32_t last, Workspace& ws, FrameStats& stats) {
   PathQueue<Path>& rays = ws.rays;
   auto start = Clock::now();
   const uint32_t pixels = last - first;
@@ -144,7 +150,8 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     RandomStream random(RandomKey{pixel, sampleIndex, 0, settings_.seed});
     float x = float(px) + random(RandomDim::PixelJitterX);
     float y = float(py) + random(RandomDim::PixelJitterY);
-    setRay(p, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel, kPathAfterSpecular);
+    setRay(p, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
+           kPathAfterSpecular);
   };
   // Calls f(pixel, x, y) for pixels [begin, end), one division per range.
   auto forPixels = [width](uint32_t begin, uint32_t end, auto&& f) {
@@ -161,8 +168,9 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     // Every pixel's path is this rank's, and this chunk this thread's:
     // straight into the queue, in pixel order.
     rays.resize(pixels);
-    forPixels(first, last,
-              [&](uint32_t pixel, uint32_t px, uint32_t py) { cameraRay(pixel, px, py, rays[pixel - first]); });
+    forPixels(first, last, [&](uint32_t pixel, uint32_t px, uint32_t py) {
+      cameraRay(pixel, px, py, rays[pixel - first]);
+    });
   } else {
     const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
     ws.staging.resize(pixels);
@@ -171,7 +179,8 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
       FrameStats local;
       for (size_t b = range.begin(); b != range.end(); ++b) {
-        const uint32_t begin = uint32_t(b * kBlock), end = uint32_t(std::min<size_t>(pixels, begin + kBlock));
+        const uint32_t begin = uint32_t(b * kBlock),
+                       end = uint32_t(std::min<size_t>(pixels, begin + kBlock));
         uint32_t kept = 0;
         forPixels(first + begin, first + end, [&](uint32_t pixel, uint32_t px, uint32_t py) {
           Path& p = ws.staging[begin + kept];
@@ -190,8 +199,8 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
 }
 
 template <typename Path>
-void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
-                                    FrameStats& stats) {
+void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce,
+                                    FrameBuffer& frameBuffer, FrameStats& stats) {
   const PathQueue<Path>& rays = ws.rays;
   const std::vector<TraceHit>& hits = ws.hits;
   auto start = Clock::now();
@@ -221,7 +230,8 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
       size_t needed = 0;
       for (size_t i = 0; mayRetrace && i < m; ++i) {
         const Path& p = rays[batch + i];
-        const bool retrace = !p.isShadow() && p.hasHit() && (settings_.retraceAll || !hits[batch + i].valid());
+        const bool retrace =
+            !p.isShadow() && p.hasHit() && (settings_.retraceAll || !hits[batch + i].valid());
         kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
         if (retrace) {
           queries[i] = retraceQuery(p.origin, p.dir(), p.tmax);
@@ -229,7 +239,8 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
         }
       }
       if (needed) {
-        geometry_.traceBatch(std::span(queries, m), std::span(kinds, m), std::span(found, m), std::span(unused, m));
+        geometry_.traceBatch(std::span(queries, m), std::span(kinds, m), std::span(found, m),
+                             std::span(unused, m));
         retraced += needed;
       }
       for (size_t i = 0; i < m; ++i) {
@@ -239,7 +250,8 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
           if (!p.has(kPathOccluded)) frameBuffer.add(p.pixel(), p.weight());
           continue;
         }
-        const TraceHit& hit = needed && kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
+        const TraceHit& hit =
+            needed && kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
         int spawned = shadeOne(p, hit, sampleIndex, bounce, frameBuffer, out + count, misses);
         for (int k = 0; k < spawned; ++k) shadows += out[count + k].isShadow();
         count += uint32_t(spawned);
@@ -265,7 +277,8 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
       uint64_t retraced = 0, misses = 0, shadows = 0;
       for (size_t b = range.begin(); b != range.end(); ++b) {
         const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
-        ws.blockCounts[b] = shadeRange(begin, end, ws.staging.data() + 2 * begin, retraced, misses, shadows);
+        ws.blockCounts[b] =
+            shadeRange(begin, end, ws.staging.data() + 2 * begin, retraced, misses, shadows);
       }
       retraceCount += retraced;
       missCount += misses;
@@ -345,14 +358,16 @@ int WavefrontRenderer<Path>::shadeOne(const Path& path, const TraceHit& hit, uin
     }
     if (!usable(next)) return;
     Vec3f origin = offsetRayOrigin(surface.position, dot(wi, ng) > 0 ? ng : -ng);
-    setRay(out[spawned++], origin, wi, kInfinity, next, pixel, bs.delta ? uint32_t(kPathAfterSpecular) : 0u);
+    setRay(out[spawned++], origin, wi, kInfinity, next, pixel,
+           bs.delta ? uint32_t(kPathAfterSpecular) : 0u);
   }();
 
   // Next-event estimation: exactly one light sample.
   if (bsdf.isDelta()) return spawned;
   LightSample ls;
   Vec2f u{random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)};
-  if (!lights_.sample(surface.position, frame, bsdf.transmits(), random(RandomDim::LightSelect), u, ls))
+  if (!lights_.sample(surface.position, frame, bsdf.transmits(), random(RandomDim::LightSelect), u,
+                      ls))
     return spawned;
   Vec3f f = bsdf.eval(woLocal, frame.toLocal(ls.direction));
   Vec3f contribution = throughput * f * ls.radiance * (1 / ls.pdf);

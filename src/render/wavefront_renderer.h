@@ -32,9 +32,9 @@ struct RenderSettings {
   int height = 720;
   int samplesPerPixel = 1;  // per frame
   int frames = 1;
-  int maxDepth = 5;         // scattering events; 1 = direct lighting only
+  int maxDepth = 5;  // scattering events; 1 = direct lighting only
   uint32_t seed = 1;
-  std::string view;         // empty: the scene's first view
+  std::string view;  // empty: the scene's first view
   // Shading re-traces every path it shades (the paper, whose compact path
   // carries no hit) instead of only those whose hit was found on another
   // rank. The image is the same either way (tests check it); only the speed differs.
@@ -55,7 +55,8 @@ class WavefrontRenderer {
                     RayTraversal<Path>& traversal, const RenderSettings& settings);
 
   // Adds frame `frame`'s samples to `frameBuffer` (this rank's partial sum).
-  FrameStats renderFrame(int frame, FrameBuffer& frameBuffer, const ProgressCallback& progress = {});
+  FrameStats renderFrame(int frame, FrameBuffer& frameBuffer,
+                         const ProgressCallback& progress = {});
 
  private:
   // A wavefront's queues and scratch, reused from wavefront to wavefront (no
@@ -81,7 +82,8 @@ class WavefrontRenderer {
   // One pass: within a wavefront no pixel is written twice (a pixel sample's
   // shadow ray comes from a non-delta vertex, so its path does not count
   // emission there).
-  void shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer, FrameStats& stats);
+  void shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
+             FrameStats& stats);
   // Shades path i given its hit (invalid: escaped or re-trace missed); writes
   // its continuation and shadow ray, in that order, to out; returns how many.
   int shadeOne(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
@@ -94,7 +96,7 @@ class WavefrontRenderer {
   RenderSettings settings_;
   Camera camera_;
   SurfaceTable surfaces_;  // for reconstructSurface
-  Workspace workspace_;  // many ranks: the one whole-image wavefront
+  Workspace workspace_;    // many ranks: the one whole-image wavefront
   tbb::enumerable_thread_specific<Workspace> chunkWorkspaces_;  // one rank: one per thread
 };
 

@@ -52,7 +52,9 @@ MemoryCost textureCost(uint64_t texelCount) {
   return c;
 }
 
-MemoryCost textureCost(const Texture& texture) { return textureCost(texture.texelCount()); }
+MemoryCost textureCost(const Texture& texture) {
+  return textureCost(texture.texelCount());
+}
 
 MemoryCost instanceCost(uint64_t instanceCount) {
   MemoryCost c;

@@ -13,7 +13,7 @@ struct Mesh;
 struct Texture;
 
 struct MemoryCost {
-  uint64_t vertices = 0;   // positions
+  uint64_t vertices = 0;  // positions
   uint64_t normals = 0;
   uint64_t uvs = 0;
   uint64_t indices = 0;

@@ -34,7 +34,9 @@ namespace {
 constexpr double kLowestRatio = 0.5;
 constexpr double kHighestRatio = 2.0;
 
-float unitRandom(uint32_t i, uint32_t k) { return float(hashCombine(i, k) & 0xffffff) / float(0x1000000); }
+float unitRandom(uint32_t i, uint32_t k) {
+  return float(hashCombine(i, k) & 0xffffff) / float(0x1000000);
+}
 
 // An n x n grid of quads (2 n^2 triangles) with jittered heights, so the BVH
 // is a real one and not a degenerate flat split.
@@ -42,7 +44,8 @@ Mesh gridMesh(int n, uint32_t seed) {
   Mesh m;
   for (int y = 0; y <= n; ++y)
     for (int x = 0; x <= n; ++x)
-      m.positions.push_back({float(x), 0.3f * unitRandom(uint32_t(y * (n + 1) + x), seed), float(y)});
+      m.positions.push_back(
+          {float(x), 0.3f * unitRandom(uint32_t(y * (n + 1) + x), seed), float(y)});
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
       int a = y * (n + 1) + x, b = a + 1, c = a + n + 1, d = c + 1;
@@ -59,7 +62,8 @@ Scene emptyScene() {
 }
 
 Affine3f scattered(uint32_t i, float extent) {
-  return Affine3f::translate({extent * unitRandom(i, 1), extent * unitRandom(i, 2), extent * unitRandom(i, 3)});
+  return Affine3f::translate(
+      {extent * unitRandom(i, 1), extent * unitRandom(i, 2), extent * unitRandom(i, 3)});
 }
 
 // Each grid its own object with one instance, scattered so the top level is a real BVH.
@@ -119,8 +123,10 @@ TEST(MemoryModel, BytesPerMeshMatchesManySmallMeshes) {
   Scene scene = gridScene(std::vector<int>(meshes, 1));
   EmbreeBytes bytes = buildAndMeasure(scene);
   double perMesh = (bytes.retained - meshes * (2 * MemoryModel::kAccelBytesPerTriangle +
-                                               MemoryModel::kAccelBytesPerInstance)) / meshes;
-  std::printf("  %d two-triangle meshes: %.0f B/mesh retained beyond triangles and instances\n", meshes, perMesh);
+                                               MemoryModel::kAccelBytesPerInstance)) /
+                   meshes;
+  std::printf("  %d two-triangle meshes: %.0f B/mesh retained beyond triangles and instances\n",
+              meshes, perMesh);
   EXPECT_NEAR(perMesh / MemoryModel::kAccelBytesPerMesh, 1.0, 0.3)
       << perMesh << " B/mesh measured, the model says " << MemoryModel::kAccelBytesPerMesh;
 }
@@ -131,9 +137,11 @@ TEST(MemoryModel, BytesPerInstanceMatchesManyInstances) {
   EmbreeBytes a = buildAndMeasure(few), b = buildAndMeasure(many);
   double perInstance = (b.retained - a.retained) / (50000 - 2000);
   double peakPerInstance = (b.peak - a.peak) / (50000 - 2000);
-  std::printf("  instances: %.1f B/instance retained, %.1f at the peak\n", perInstance, peakPerInstance);
+  std::printf("  instances: %.1f B/instance retained, %.1f at the peak\n", perInstance,
+              peakPerInstance);
   EXPECT_NEAR(perInstance / MemoryModel::kAccelBytesPerInstance, 1.0, 0.3)
-      << perInstance << " B/instance measured, the model says " << MemoryModel::kAccelBytesPerInstance;
+      << perInstance << " B/instance measured, the model says "
+      << MemoryModel::kAccelBytesPerInstance;
 }
 
 class EmbreeMemory : public ::testing::TestWithParam<std::string> {};
@@ -145,21 +153,26 @@ TEST_P(EmbreeMemory, AccelAndInstanceEstimateIsWithinAFactorOfEmbree) {
   EmbreeBytes bytes = buildAndMeasure(scene);
   ASSERT_GT(bytes.retained, 0) << "Embree's memory monitor reported nothing";
   const double ratio = estimate / bytes.retained;
-  std::printf("  %-28s %9llu triangles %6llu meshes %6llu instances: estimate %11.0f B, Embree retained %11.0f B"
-              " (estimate/retained %.3f), peak %11.0f B (estimate/peak %.3f); accel alone/retained %.3f\n",
-              GetParam().c_str(), (unsigned long long)summary.triangles, (unsigned long long)summary.uniqueMeshes,
-              (unsigned long long)summary.instances, estimate, bytes.retained, ratio, bytes.peak,
-              estimate / bytes.peak, double(summary.memory.accel) / bytes.retained);
-  EXPECT_GE(ratio, kLowestRatio) << "the estimate is too low: " << estimate << " B for " << bytes.retained
-                                 << " B retained by Embree";
-  EXPECT_LE(ratio, kHighestRatio) << "the estimate is too high: " << estimate << " B for " << bytes.retained
-                                  << " B retained by Embree";
+  std::printf(
+      "  %-28s %9llu triangles %6llu meshes %6llu instances: estimate %11.0f B, Embree retained "
+      "%11.0f B"
+      " (estimate/retained %.3f), peak %11.0f B (estimate/peak %.3f); accel alone/retained %.3f\n",
+      GetParam().c_str(), (unsigned long long)summary.triangles,
+      (unsigned long long)summary.uniqueMeshes, (unsigned long long)summary.instances, estimate,
+      bytes.retained, ratio, bytes.peak, estimate / bytes.peak,
+      double(summary.memory.accel) / bytes.retained);
+  EXPECT_GE(ratio, kLowestRatio) << "the estimate is too low: " << estimate << " B for "
+                                 << bytes.retained << " B retained by Embree";
+  EXPECT_LE(ratio, kHighestRatio) << "the estimate is too high: " << estimate << " B for "
+                                  << bytes.retained << " B retained by Embree";
   const EmbreeBytes shared = buildAndMeasure(scene, Instancing::Shared);
-  EXPECT_LE(shared.retained, bytes.retained * 1.01) << "unique objects at the top level retained more";
+  EXPECT_LE(shared.retained, bytes.retained * 1.01)
+      << "unique objects at the top level retained more";
 }
 
 INSTANTIATE_TEST_SUITE_P(Builtins, EmbreeMemory,
-                         ::testing::Values("builtin:cornell", "builtin:furnace", "builtin:island?scale=0.1",
+                         ::testing::Values("builtin:cornell", "builtin:furnace",
+                                           "builtin:island?scale=0.1",
                                            "builtin:landscape?scale=0.1"),
                          [](const auto& info) {
                            std::string name = info.param.substr(info.param.find(':') + 1);

@@ -38,7 +38,8 @@ Box3f Scene::worldBounds() const {
   std::vector<Box3f> perObject(objects.size());
   for (size_t i = 0; i < objects.size(); ++i) perObject[i] = objectBounds(int32_t(i));
   Box3f b;
-  for (const Instance& inst : instances) b.extend(inst.transform.transformBox(perObject[inst.object]));
+  for (const Instance& inst : instances)
+    b.extend(inst.transform.transformBox(perObject[inst.object]));
   return b;
 }
 
@@ -50,7 +51,8 @@ const CameraView& Scene::view(const std::string& name) const {
     if (v.name == name) return v;
     known += (known.empty() ? "" : ", ") + v.name;
   }
-  throw InputError(fmt::format("unknown view '{}' in scene '{}' (views: {})", name, this->name, known));
+  throw InputError(
+      fmt::format("unknown view '{}' in scene '{}' (views: {})", name, this->name, known));
 }
 
 std::vector<uint32_t> Scene::instanceCountPerObject() const {
@@ -60,7 +62,8 @@ std::vector<uint32_t> Scene::instanceCountPerObject() const {
 }
 
 void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
-  std::vector<uint8_t> keepMesh(meshes.size(), 0), keepTexture(textures.size(), 0), keepObject(objects.size(), 0);
+  std::vector<uint8_t> keepMesh(meshes.size(), 0), keepTexture(textures.size(), 0),
+      keepObject(objects.size(), 0);
   for (int32_t i : keptInstances) keepObject[instances[i].object] = 1;
   for (size_t o = 0; o < objects.size(); ++o)
     if (keepObject[o])
@@ -100,8 +103,8 @@ void Scene::validate() const {
       fail(fmt::format("mesh '{}' refers to material {} of {}", mesh.name, mesh.material,
                        materials.size()));
     if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
-      fail(fmt::format("mesh '{}' has {} normals for {} positions", mesh.name,
-                       mesh.normals.size(), mesh.positions.size()));
+      fail(fmt::format("mesh '{}' has {} normals for {} positions", mesh.name, mesh.normals.size(),
+                       mesh.positions.size()));
     if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
       fail(fmt::format("mesh '{}' has {} uvs for {} positions", mesh.name, mesh.uvs.size(),
                        mesh.positions.size()));

@@ -28,8 +28,8 @@ struct Material {
   float metallic = 0.0f;                  // 1: conductor with baseColor as reflectance
   float transmission = 0.0f;              // 1: dielectric (glass), refracting with ior
   float ior = 1.5f;
-  Vec3f emission{0, 0, 0};              // radiance leaving the surface
-  int32_t alphaTexture = kNoTexture;    // cut-out: texel alpha < alphaCutoff is a hole
+  Vec3f emission{0, 0, 0};            // radiance leaving the surface
+  int32_t alphaTexture = kNoTexture;  // cut-out: texel alpha < alphaCutoff is a hole
   float alphaCutoff = 0.5f;
 
   bool isEmissive() const { return maxComponent(emission) > 0; }
@@ -61,8 +61,8 @@ struct Instance {
 
 // Sun / directional light: radiance arriving from a small cone around `direction`.
 struct SunLight {
-  Vec3f direction{0, 1, 0};   // unit vector pointing *towards* the sun
-  Vec3f irradiance{3, 3, 3};  // W/m^2 on a surface facing the sun
+  Vec3f direction{0, 1, 0};        // unit vector pointing *towards* the sun
+  Vec3f irradiance{3, 3, 3};       // W/m^2 on a surface facing the sun
   float angularRadius = 0.00465f;  // radians (the real sun: 0.27 degrees)
 };
 

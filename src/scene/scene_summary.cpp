@@ -24,8 +24,10 @@ SceneSummary summarize(const Scene& scene) {
   s.instances = scene.instances.size();
   std::vector<uint64_t> trianglesPerObject(scene.objects.size(), 0);
   for (size_t o = 0; o < scene.objects.size(); ++o)
-    for (int32_t m : scene.objects[o].meshes) trianglesPerObject[o] += scene.meshes[m].triangleCount();
-  for (const Instance& inst : scene.instances) s.instancedTriangles += trianglesPerObject[inst.object];
+    for (int32_t m : scene.objects[o].meshes)
+      trianglesPerObject[o] += scene.meshes[m].triangleCount();
+  for (const Instance& inst : scene.instances)
+    s.instancedTriangles += trianglesPerObject[inst.object];
   s.memory += instanceCost(scene.instances.size());
   s.textures = scene.textures.size();
   for (const Texture& t : scene.textures) {
@@ -103,9 +105,9 @@ nlohmann::json SceneSummary::toJson() const {
   if (!bounds.empty())
     j["bounds"] = {{bounds.lower.x, bounds.lower.y, bounds.lower.z},
                    {bounds.upper.x, bounds.upper.y, bounds.upper.z}};
-  j["memory_bytes"] = {{"total", memory.total()},   {"vertices", memory.vertices},
-                       {"normals", memory.normals}, {"uvs", memory.uvs},
-                       {"indices", memory.indices}, {"texels", memory.texels},
+  j["memory_bytes"] = {{"total", memory.total()},       {"vertices", memory.vertices},
+                       {"normals", memory.normals},     {"uvs", memory.uvs},
+                       {"indices", memory.indices},     {"texels", memory.texels},
                        {"instances", memory.instances}, {"accel", memory.accel}};
   return j;
 }
@@ -123,9 +125,9 @@ std::string SceneSummary::toText() const {
   row("instances", formatCount(instances));
   row("instanced triangles", formatCount(instancedTriangles));
   row("textures", fmt::format("{} ({} texels)", textures, formatCount(texels)));
-  row("lights", fmt::format("{} ({} sun, {} environment, {} emissive meshes / {} triangles)",
-                            lights(), suns, environments, emissiveMeshes,
-                            formatCount(emissiveTriangles)));
+  row("lights",
+      fmt::format("{} ({} sun, {} environment, {} emissive meshes / {} triangles)", lights(), suns,
+                  environments, emissiveMeshes, formatCount(emissiveTriangles)));
   row("views", fmt::format("{}", views));
   if (!bounds.empty())
     row("bounds", fmt::format("({:.4g}, {:.4g}, {:.4g}) - ({:.4g}, {:.4g}, {:.4g})", bounds.lower.x,

@@ -47,9 +47,12 @@ BilinearTaps bilinearTaps(Vec2f uv, int width, int height, WrapMode wrapX, WrapM
   fx0 = std::fmod(fx0, 1 << 24);
   fy0 = std::fmod(fy0, 1 << 24);
   int ix = static_cast<int>(fx0), iy = static_cast<int>(fy0);
-  return {wrapCoordinate(ix, width, wrapX), wrapCoordinate(ix + 1, width, wrapX),
-          wrapCoordinate(iy, height, wrapY), wrapCoordinate(iy + 1, height, wrapY),
-          x - std::floor(x), y - std::floor(y)};
+  return {wrapCoordinate(ix, width, wrapX),
+          wrapCoordinate(ix + 1, width, wrapX),
+          wrapCoordinate(iy, height, wrapY),
+          wrapCoordinate(iy + 1, height, wrapY),
+          x - std::floor(x),
+          y - std::floor(y)};
 }
 
 }  // namespace
@@ -72,8 +75,7 @@ Vec4f Texture::sample(Vec2f uv) const {
     if (srgb) return Vec4f{table[p[0]], table[p[1]], table[p[2]], p[3] / 255.0f};
     return Vec4f{p[0] / 255.0f, p[1] / 255.0f, p[2] / 255.0f, p[3] / 255.0f};
   };
-  Vec4f a = fetch(t.x0, t.y0), b = fetch(t.x1, t.y0), c = fetch(t.x0, t.y1),
-        d = fetch(t.x1, t.y1);
+  Vec4f a = fetch(t.x0, t.y0), b = fetch(t.x1, t.y0), c = fetch(t.x0, t.y1), d = fetch(t.x1, t.y1);
   auto mix = [&](float va, float vb, float vc, float vd) {
     return (va * (1 - t.fx) + vb * t.fx) * (1 - t.fy) + (vc * (1 - t.fx) + vd * t.fx) * t.fy;
   };
@@ -93,8 +95,8 @@ Vec3f HdrImage::sampleBilinear(Vec2f uv) const {
   if (width <= 0 || height <= 0) return Vec3f(0);
   // Longitude wraps around, latitude stops at the poles.
   BilinearTaps t = bilinearTaps(uv, width, height, WrapMode::Repeat, WrapMode::Clamp);
-  return lerp(lerp(at(t.x0, t.y0), at(t.x1, t.y0), t.fx), lerp(at(t.x0, t.y1), at(t.x1, t.y1), t.fx),
-              t.fy);
+  return lerp(lerp(at(t.x0, t.y0), at(t.x1, t.y0), t.fx),
+              lerp(at(t.x0, t.y1), at(t.x1, t.y1), t.fx), t.fy);
 }
 
 }  // namespace ferry

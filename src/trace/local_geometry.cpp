@@ -136,7 +136,8 @@ struct LocalGeometry::Impl {
   }
 };
 
-LocalGeometry::LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstances, Instancing instancing)
+LocalGeometry::LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstances,
+                             Instancing instancing)
     : scene_(scene), impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
   im.device = rtcNewDevice(nullptr);
@@ -162,8 +163,8 @@ LocalGeometry::LocalGeometry(Scene& scene, std::span<const int32_t> ownedInstanc
       RTCGeometry g = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
       rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                  mesh.positions.data(), 0, sizeof(Vec3f), mesh.positions.size());
-      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                 mesh.indices.data(), 0, sizeof(Vec3i), mesh.indices.size());
+      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices.data(),
+                                 0, sizeof(Vec3i), mesh.indices.size());
       const Material& material = scene.materials[mesh.material];
       if (material.alphaTexture != kNoTexture) {
         auto ctx = std::make_unique<AlphaContext>();
@@ -253,7 +254,8 @@ void LocalGeometry::intersect(std::span<const TraceRay> rays, std::span<TraceHit
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kStreamBatch),
                     [&](const tbb::blocked_range<size_t>& range) {
                       RTCRayHit batch[kStreamBatch];
-                      for (size_t begin = range.begin(); begin < range.end(); begin += kStreamBatch) {
+                      for (size_t begin = range.begin(); begin < range.end();
+                           begin += kStreamBatch) {
                         size_t n = std::min(kStreamBatch, range.end() - begin);
                         for (size_t i = 0; i < n; ++i) batch[i] = toEmbree(rays[begin + i]);
                         RTCIntersectContext context;
@@ -269,7 +271,8 @@ void LocalGeometry::occluded(std::span<const TraceRay> rays, std::span<uint8_t> 
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kStreamBatch),
                     [&](const tbb::blocked_range<size_t>& range) {
                       RTCRay batch[kStreamBatch];
-                      for (size_t begin = range.begin(); begin < range.end(); begin += kStreamBatch) {
+                      for (size_t begin = range.begin(); begin < range.end();
+                           begin += kStreamBatch) {
                         size_t n = std::min(kStreamBatch, range.end() - begin);
                         for (size_t i = 0; i < n; ++i) batch[i] = toEmbree(rays[begin + i]).ray;
                         RTCIntersectContext context;
@@ -282,8 +285,8 @@ void LocalGeometry::occluded(std::span<const TraceRay> rays, std::span<uint8_t> 
 
 void LocalGeometry::trace(RayBatch& batch) const {
   // RayBatch::EmbreeRay must be RTCRayHit exactly (one instance level).
-#define FERRY_SAME_OFFSET(ours, theirs)                                                          \
-    static_assert(offsetof(RayBatch::EmbreeRay, ours) == offsetof(RTCRayHit, theirs), #ours);
+#define FERRY_SAME_OFFSET(ours, theirs) \
+  static_assert(offsetof(RayBatch::EmbreeRay, ours) == offsetof(RTCRayHit, theirs), #ours);
   static_assert(RTC_MAX_INSTANCE_LEVEL_COUNT == 1);
   static_assert(sizeof(RayBatch::EmbreeRay) == sizeof(RTCRayHit));
   static_assert(alignof(RayBatch::EmbreeRay) >= alignof(RTCRayHit));
@@ -321,7 +324,8 @@ void LocalGeometry::trace(RayBatch& batch) const {
 
 void LocalGeometry::traceBatch(std::span<const TraceRay> rays, std::span<const TraceQuery> queries,
                                std::span<TraceHit> hits, std::span<uint8_t> occluded) const {
-  FERRY_CHECK(rays.size() == queries.size() && rays.size() == hits.size() && rays.size() == occluded.size());
+  FERRY_CHECK(rays.size() == queries.size() && rays.size() == hits.size() &&
+              rays.size() == occluded.size());
   RayBatch batch;
   for (size_t begin = 0; begin < rays.size(); begin += RayBatch::kCapacity) {
     const size_t n = std::min(RayBatch::kCapacity, rays.size() - begin);
@@ -335,7 +339,8 @@ void LocalGeometry::traceBatch(std::span<const TraceRay> rays, std::span<const T
     }
     trace(batch);
     for (size_t k = 0; k < batch.closestCount(); ++k) hits[batch.closestIndex(k)] = batch.hit(k);
-    for (size_t k = 0; k < batch.occludedCount(); ++k) occluded[batch.occludedIndex(k)] = batch.isOccluded(k);
+    for (size_t k = 0; k < batch.occludedCount(); ++k)
+      occluded[batch.occludedIndex(k)] = batch.isOccluded(k);
   }
 }
 
@@ -350,10 +355,20 @@ Box3f LocalGeometry::bounds() const {
   return r;
 }
 
-int64_t LocalGeometry::embreeBytes() const { return impl_->memory[0].load(); }
-int64_t LocalGeometry::embreePeakBytes() const { return impl_->memory[1].load(); }
-uint64_t LocalGeometry::builtObjectCount() const { return impl_->objectScenes.size() + impl_->topLevelObjects; }
-uint64_t LocalGeometry::topLevelObjectCount() const { return impl_->topLevelObjects; }
-uint64_t LocalGeometry::builtInstanceCount() const { return impl_->instanceCount; }
+int64_t LocalGeometry::embreeBytes() const {
+  return impl_->memory[0].load();
+}
+int64_t LocalGeometry::embreePeakBytes() const {
+  return impl_->memory[1].load();
+}
+uint64_t LocalGeometry::builtObjectCount() const {
+  return impl_->objectScenes.size() + impl_->topLevelObjects;
+}
+uint64_t LocalGeometry::topLevelObjectCount() const {
+  return impl_->topLevelObjects;
+}
+uint64_t LocalGeometry::builtInstanceCount() const {
+  return impl_->instanceCount;
+}
 
 }  // namespace ferry

@@ -15,13 +15,16 @@
 namespace ferry {
 namespace {
 
-float uniform(uint32_t i, uint32_t d) { return random01(RandomKey{i, 0, 0, 17}, RandomDim(d % 8)); }
+float uniform(uint32_t i, uint32_t d) {
+  return random01(RandomKey{i, 0, 0, 17}, RandomDim(d % 8));
+}
 
 // Rays from random points of the scene's bounds in random directions.
 std::vector<TraceRay> randomRays(const Box3f& b, size_t n) {
   std::vector<TraceRay> rays(n);
   for (uint32_t i = 0; i < n; ++i) {
-    Vec3f o{b.lower.x + (b.upper.x - b.lower.x) * uniform(i, 0), b.lower.y + (b.upper.y - b.lower.y) * uniform(i, 1),
+    Vec3f o{b.lower.x + (b.upper.x - b.lower.x) * uniform(i, 0),
+            b.lower.y + (b.upper.y - b.lower.y) * uniform(i, 1),
             b.lower.z + (b.upper.z - b.lower.z) * uniform(i, 2)};
     Vec3f d = normalize(Vec3f(uniform(i, 3), uniform(i, 4), uniform(i, 5)) - Vec3f(0.5f));
     rays[i] = TraceRay{o, d, 0, i % 3 == 0 ? kInfinity : 0.3f * length(b.upper - b.lower)};
@@ -57,7 +60,8 @@ void expectSameAnswers(const std::string& spec, bool someStayInstanced) {
     ASSERT_EQ(std::memcmp(&a[i].t, &b[i].t, 4), 0) << i;
     // The same distance on another triangle (a shared edge) may be found
     // first in the other BVH; anything else must name the same triangle.
-    if (a[i].instance != b[i].instance || a[i].meshSlot != b[i].meshSlot || a[i].primitive != b[i].primitive) {
+    if (a[i].instance != b[i].instance || a[i].meshSlot != b[i].meshSlot ||
+        a[i].primitive != b[i].primitive) {
       ++tiedElsewhere;
       continue;
     }
@@ -74,8 +78,10 @@ void expectSameAnswers(const std::string& spec, bool someStayInstanced) {
   // The batch the renderer uses (RayBatch, mixed queries) agrees too.
   RayBatch batch;
   for (uint32_t i = 0; i < RayBatch::kCapacity; ++i) {
-    if (i % 2) batch.addClosest(i, rays[i].origin, rays[i].direction, rays[i].tmax);
-    else batch.addOccluded(i, rays[i].origin, rays[i].direction, rays[i].tmax);
+    if (i % 2)
+      batch.addClosest(i, rays[i].origin, rays[i].direction, rays[i].tmax);
+    else
+      batch.addOccluded(i, rays[i].origin, rays[i].direction, rays[i].tmax);
   }
   shared.trace(batch);
   for (size_t k = 0; k < batch.closestCount(); ++k) {

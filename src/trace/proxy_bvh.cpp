@@ -66,7 +66,8 @@ int32_t ProxyBvh::build(int32_t first, int32_t count, int depth) {
   int32_t mid = first + count / 2;
   std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + first + count,
                    [&](int32_t a, int32_t b) {
-                     float ca = proxies_[a].bounds.center()[axis], cb = proxies_[b].bounds.center()[axis];
+                     float ca = proxies_[a].bounds.center()[axis],
+                           cb = proxies_[b].bounds.center()[axis];
                      return ca < cb || (ca == cb && a < b);
                    });
   int32_t left = build(first, mid - first, depth + 1);
@@ -86,20 +87,23 @@ struct SetExclusion {
 };
 }  // namespace
 
-ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax, RankMask excluded) const {
+ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax,
+                                RankMask excluded) const {
   if (narrow()) return closestImpl(origin, direction, tmax, MaskExclusion{excluded});
   const RankSet set = RankSet::fromMask(excluded);
   return closestImpl(origin, direction, tmax, SetExclusion{set});
 }
 
-ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax, const RankSet& excluded) const {
+ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax,
+                                const RankSet& excluded) const {
   // Narrow: owners are all below 64, so only the first word of `excluded` matters.
   if (narrow()) return closestImpl(origin, direction, tmax, MaskExclusion{excluded.mask()});
   return closestImpl(origin, direction, tmax, SetExclusion{excluded});
 }
 
 template <typename Excluded>
-ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax, const Excluded& ex) const {
+ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
+                                    const Excluded& ex) const {
   constexpr bool kMask = std::is_same_v<Excluded, MaskExclusion>;
   Hit best;
   if (nodes_.empty()) return best;
@@ -118,7 +122,8 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax, c
     }
     float tNode;
     // Strictly closer, or equally close (a lower index may still win the tie).
-    if (!intersectBox(node.bounds, origin, inv, std::min(tmax, std::nextafter(best.tEnter, kInfinity)), tNode))
+    if (!intersectBox(node.bounds, origin, inv,
+                      std::min(tmax, std::nextafter(best.tEnter, kInfinity)), tNode))
       continue;
     if (node.left < 0) {
       for (int32_t i = node.first; i < node.first + node.count; ++i) {

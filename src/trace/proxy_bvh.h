@@ -57,6 +57,7 @@ class ProxyBvh {
 };
 
 // Slab test; entry distance clamped at 0 (origin inside counts as entering at 0).
-bool intersectBox(const Box3f& box, Vec3f origin, Vec3f inverseDirection, float tmax, float& tEnter);
+bool intersectBox(const Box3f& box, Vec3f origin, Vec3f inverseDirection, float tmax,
+                  float& tEnter);
 
 }  // namespace ferry

@@ -7,7 +7,9 @@
 namespace ferry {
 namespace {
 
-float uniform(uint32_t a, uint32_t b) { return random01(RandomKey{a, b, 0, 42}, RandomDim::OwnerPick); }
+float uniform(uint32_t a, uint32_t b) {
+  return random01(RandomKey{a, b, 0, 42}, RandomDim::OwnerPick);
+}
 
 std::vector<Proxy> randomProxies(int count, int ranks, uint32_t seed) {
   std::vector<Proxy> proxies;
@@ -22,7 +24,8 @@ std::vector<Proxy> randomProxies(int count, int ranks, uint32_t seed) {
   return proxies;
 }
 
-ProxyBvh::Hit bruteForce(const std::vector<Proxy>& proxies, Vec3f o, Vec3f d, float tmax, const RankSet& excluded) {
+ProxyBvh::Hit bruteForce(const std::vector<Proxy>& proxies, Vec3f o, Vec3f d, float tmax,
+                         const RankSet& excluded) {
   ProxyBvh::Hit best;
   Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
   for (size_t i = 0; i < proxies.size(); ++i) {
@@ -43,7 +46,8 @@ TEST(ProxyBvh, MatchesBruteForceOnRandomProxiesAndRays) {
       Vec3f o = Vec3f(uniform(k, 10), uniform(k, 11), uniform(k, 12)) * 14.0f - Vec3f(2);
       Vec3f d = normalize(Vec3f(uniform(k, 13), uniform(k, 14), uniform(k, 15)) - Vec3f(0.5f));
       float tmax = uniform(k, 16) < 0.3f ? kInfinity : uniform(k, 17) * 20;
-      RankMask excluded = RankMask(randomBits(RandomKey{k, 0, 0, 7}, 0)) & ((ranks == 64) ? ~RankMask(0) : ((RankMask(1) << ranks) - 1));
+      RankMask excluded = RankMask(randomBits(RandomKey{k, 0, 0, 7}, 0)) &
+                          ((ranks == 64) ? ~RankMask(0) : ((RankMask(1) << ranks) - 1));
       excluded &= RankMask(randomBits(RandomKey{k, 1, 0, 7}, 0));
       ProxyBvh::Hit a = bvh.closest(o, d, tmax, excluded);
       ProxyBvh::Hit b = bruteForce(proxies, o, d, tmax, RankSet::fromMask(excluded));
