@@ -9,7 +9,7 @@
 #include "app/partition_command.h"
 #include "app/render_command.h"
 #include "core/error.h"
-#include "dist/communicator.h"
+#include "mpi/communicator.h"
 
 int main(int argc, char** argv) {
   using namespace ferry;

@@ -103,7 +103,7 @@ struct PathT : PathCore {
 // The replay layout, for any rank count (the paper's Section 3.3 "replay"):
 // instead of a mask of visited ranks the ray keeps only the rank that
 // generated it; any rank recomputes the visited set by re-running the
-// forwarding decisions from there (dist/forwarding.h: replayWalk). The hit is
+// forwarding decisions from there (distributed/forwarding.h: replayWalk). The hit is
 // kept as the one rank that found it, which therefore holds it (the mask
 // layouts keep every owner of the hit content, so a replica may shade; here
 // the finished ray goes to that one rank). Two 16-bit rank ids replace the

@@ -26,7 +26,7 @@ class ProxyBvh {
   // The answer is a pure function of the set of such proxies (least entry
   // distance, then least index): the entry distance of a proxy does not
   // depend on tmax, so a smaller tmax only drops candidates from the far end.
-  // The replay layout relies on this (dist/forwarding.h).
+  // The replay layout relies on this (distributed/forwarding.h).
   Hit closest(Vec3f origin, Vec3f direction, float tmax, RankMask excluded) const;
   // The same for any rank count (used by the replay layout; a few words per
   // test instead of one above 64 ranks).

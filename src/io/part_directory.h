@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "partition/manifest.h"
+#include "io/manifest.h"
 #include "partition/partition.h"
 #include "scene/scene.h"
 

@@ -1,4 +1,4 @@
-#include "partition/partition_report.h"
+#include "report/partition_report.h"
 
 #include <fmt/format.h>
 
@@ -10,7 +10,7 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "io/image_io.h"
-#include "partition/canvas.h"
+#include "report/canvas.h"
 #include "scene/scene.h"
 #include "scene/scene_summary.h"
 

@@ -1,4 +1,4 @@
-#include "dist/distributed_traversal.h"
+#include "distributed/distributed_traversal.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -6,8 +6,6 @@
 #include <atomic>
 #include <bit>
 #include <chrono>
-#include <csignal>
-#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <unordered_map>
@@ -16,6 +14,7 @@
 
 #include "core/clock.h"
 #include "core/error.h"
+#include "core/fault_injection.h"
 
 namespace ferry {
 namespace {
@@ -33,15 +32,6 @@ int decisionToDestination(const ForwardDecision& d, Path& ray, int rank) {
 }
 
 }  // namespace
-
-void maybeInjectFailure(const char* point, int rank) {
-  const char* at = std::getenv("FERRY_FAIL_AT");
-  const char* who = std::getenv("FERRY_FAIL_RANK");
-  if (!at || !who || std::atoi(who) != rank) return;
-  std::string where = at;
-  if (where == point) throw std::runtime_error(fmt::format("injected failure at {}", point));
-  if (where == std::string("signal-") + point) std::raise(SIGSEGV);
-}
 
 template <typename Path>
 DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,

@@ -1,4 +1,4 @@
-#include "partition/partition_picture.h"
+#include "report/partition_picture.h"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
@@ -7,8 +7,8 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "partition/canvas.h"
 #include "render/camera.h"
+#include "report/canvas.h"
 #include "scene/scene.h"
 #include "trace/local_geometry.h"
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/math.h"
-#include "dist/communicator.h"
+#include "mpi/communicator.h"
 #include "render/frame_buffer.h"
 
 namespace ferry {

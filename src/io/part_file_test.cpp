@@ -1,4 +1,4 @@
-#include "partition/part_file.h"
+#include "io/part_file.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -11,7 +11,7 @@
 
 #include "builtin/builtin.h"
 #include "core/error.h"
-#include "partition/part_directory.h"
+#include "io/part_directory.h"
 #include "partition/partitioner.h"
 #include "render/lights.h"
 #include "scene/light_scene.h"

@@ -1,4 +1,4 @@
-#include "dist/communicator.h"
+#include "mpi/communicator.h"
 
 #include <fmt/format.h>
 #include <mpi.h>

@@ -1,4 +1,4 @@
-#include "partition/canvas.h"
+#include "report/canvas.h"
 
 #include <stb/stb_easy_font.h>
 

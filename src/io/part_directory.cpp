@@ -1,11 +1,11 @@
-#include "partition/part_directory.h"
+#include "io/part_directory.h"
 
 #include <fmt/format.h>
 
 #include <filesystem>
 
 #include "core/error.h"
-#include "partition/part_file.h"
+#include "io/part_file.h"
 #include "scene/scene_summary.h"
 
 namespace ferry {

@@ -1,4 +1,4 @@
-#include "partition/part_file.h"
+#include "io/part_file.h"
 
 #include <fcntl.h>
 #include <fmt/format.h>

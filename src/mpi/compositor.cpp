@@ -1,6 +1,6 @@
-#include "dist/compositor.h"
+#include "mpi/compositor.h"
 
-#include "dist/distributed_traversal.h"
+#include "core/fault_injection.h"
 
 namespace ferry {
 namespace {

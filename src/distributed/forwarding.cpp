@@ -1,4 +1,4 @@
-#include "dist/forwarding.h"
+#include "distributed/forwarding.h"
 
 #include <bit>
 #include <cstring>

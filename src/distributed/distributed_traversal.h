@@ -7,17 +7,13 @@
 
 #include <vector>
 
-#include "dist/communicator.h"
-#include "dist/forwarding.h"
+#include "distributed/forwarding.h"
+#include "mpi/communicator.h"
 #include "partition/partition.h"
 #include "render/ray_traversal.h"
 #include "trace/proxy_bvh.h"
 
 namespace ferry {
-
-// Test-only failure injection (FERRY_FAIL_RANK, FERRY_FAIL_AT): throws or
-// raises a signal on the chosen rank at the named point.
-void maybeInjectFailure(const char* point, int rank);
 
 template <typename Path>
 class DistributedTraversal final : public RayTraversal<Path> {

@@ -1,11 +1,11 @@
-#include "partition/partition_picture.h"
+#include "report/partition_picture.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "builtin/builtin.h"
-#include "partition/canvas.h"
+#include "report/canvas.h"
 #include "scene/scene.h"
 
 namespace ferry {

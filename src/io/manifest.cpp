@@ -1,4 +1,4 @@
-#include "partition/manifest.h"
+#include "io/manifest.h"
 
 #include <fmt/format.h>
 
@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "core/hash64.h"
 #include "io/image_io.h"
-#include "partition/part_file.h"
+#include "io/part_file.h"
 
 namespace ferry {
 namespace {
