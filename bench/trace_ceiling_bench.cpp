@@ -42,11 +42,11 @@
 #include "builtin/builtin.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
-#include "render/path.h"
 #include "render/ray_traversal.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene.h"
 #include "trace/local_geometry.h"
+#include "trace/path.h"
 
 namespace ferry {
 namespace {

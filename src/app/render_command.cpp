@@ -31,10 +31,10 @@
 #include "partition/partition.h"
 #include "partition/partitioner.h"
 #include "render/lights.h"
-#include "render/path.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene_summary.h"
 #include "trace/local_geometry.h"
+#include "trace/path.h"
 
 namespace ferry {
 namespace {

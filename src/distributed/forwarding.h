@@ -7,7 +7,7 @@
 #include <string>
 
 #include "partition/partition.h"
-#include "render/path.h"
+#include "trace/path.h"
 #include "trace/proxy_bvh.h"
 
 namespace ferry {

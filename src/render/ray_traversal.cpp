@@ -7,7 +7,7 @@
 #include <span>
 
 #include "core/clock.h"
-#include "render/path.h"
+#include "trace/path.h"
 
 namespace ferry {
 

@@ -15,9 +15,9 @@
 #include <span>
 #include <vector>
 
-#include "render/path.h"
 #include "render/render_stats.h"
 #include "trace/local_geometry.h"
+#include "trace/path.h"
 
 namespace ferry {
 

@@ -19,11 +19,11 @@
 #include "core/math.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
-#include "render/path.h"
 #include "render/ray_traversal.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene.h"
 #include "trace/local_geometry.h"
+#include "trace/path.h"
 
 namespace ferry::testing {
 

@@ -13,10 +13,10 @@
 #include "core/random.h"
 #include "render/bsdf.h"
 #include "render/camera.h"
-#include "render/path.h"
 #include "render/ray_traversal.h"
 #include "render/surface.h"
 #include "scene/scene.h"
+#include "trace/path.h"
 
 namespace ferry {
 namespace {

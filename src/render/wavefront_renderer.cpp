@@ -13,9 +13,9 @@
 #include "core/error.h"
 #include "core/random.h"
 #include "render/bsdf.h"
-#include "render/path.h"
 #include "render/surface.h"
 #include "scene/scene.h"
+#include "trace/path.h"
 
 namespace ferry {
 namespace {

@@ -1,6 +1,6 @@
 // The compact path: layout is checked by static_asserts in path.h; here, that
 // what is stored is what is read back, quantized once when the ray is made.
-#include "render/path.h"
+#include "trace/path.h"
 
 #include <gtest/gtest.h>
 
