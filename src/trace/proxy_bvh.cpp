@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 
 namespace ferry {
@@ -34,44 +35,114 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies) : proxies_(std::move(proxies)) {
   if (wide) wideUnion_.push_back({});  // marks the BVH wide; filled per node by build
   order_.resize(proxies_.size());
   for (size_t i = 0; i < order_.size(); ++i) order_[i] = int32_t(i);
-  if (!proxies_.empty()) build(0, int32_t(proxies_.size()), 0);
+  if (proxies_.empty()) return;
+  std::vector<Vec3f> centers(proxies_.size());
+  for (size_t i = 0; i < proxies_.size(); ++i) centers[i] = proxies_[i].bounds.center();
+  build(0, int32_t(proxies_.size()), 0, centers);
+  // Leaves read their proxies' boxes and masks in leaf order (one stream).
+  leafBounds_.resize(order_.size());
+  leafMasks_.resize(order_.size());
+  for (size_t i = 0; i < order_.size(); ++i) {
+    leafBounds_[i] = proxies_[size_t(order_[i])].bounds;
+    leafMasks_[i] = ownerMasks_[size_t(order_[i])];
+  }
 }
 
-int32_t ProxyBvh::build(int32_t first, int32_t count, int depth) {
+namespace {
+
+// Binned SAH over the centres along one axis of [first, first + count):
+// returns the best split position (items with bin < split go left) and its
+// cost, or cost infinity if every centre falls into one bin.
+constexpr int kBins = 16;
+struct SplitChoice {
+  int axis = -1;
+  int bin = 0;
+  float cost = kInfinity;
+};
+
+}  // namespace
+
+int32_t ProxyBvh::build(int32_t first, int32_t count, int depth,
+                        const std::vector<Vec3f>& centers) {
   int32_t index = int32_t(nodes_.size());
   nodes_.push_back({});
-  Box3f bounds, centers;
+  Box3f bounds, centerBounds;
   RankMask owners = 0;
   RankSet wideOwners;
+  int32_t minIndex = std::numeric_limits<int32_t>::max();
   for (int32_t i = first; i < first + count; ++i) {
-    const Proxy& p = proxies_[order_[i]];
+    const int32_t id = order_[i];
+    const Proxy& p = proxies_[id];
     bounds.extend(p.bounds);
-    centers.extend(p.bounds.center());
-    owners |= p.owners.mask();
+    centerBounds.extend(centers[size_t(id)]);
+    owners |= ownerMasks_[size_t(id)];
+    minIndex = std::min(minIndex, id);
     if (!narrow()) wideOwners |= p.owners;
   }
   nodes_[index].bounds = bounds;
   nodes_[index].ownersUnion = owners;
+  nodes_[index].minIndex = minIndex;
   if (!narrow()) {
     if (wideUnion_.size() <= size_t(index)) wideUnion_.resize(size_t(index) + 1);
     wideUnion_[size_t(index)] = std::move(wideOwners);
   }
-  if (count <= kLeafSize || depth > 60) {
+  auto makeLeaf = [&] {
     nodes_[index].first = first;
     nodes_[index].count = count;
     return index;
+  };
+  if (count <= kLeafSize || depth > 60) return makeLeaf();
+
+  // Binned surface-area heuristic over the centres, on all three axes: the
+  // query is "the closest box along a ray", whose cost is the boxes a ray
+  // enters, i.e. their surface area.
+  SplitChoice best;
+  const Vec3f extent = centerBounds.size();
+  auto binOf = [&](int axis, int32_t id) {
+    const float f = (centers[size_t(id)][axis] - centerBounds.lower[axis]) / extent[axis];
+    return std::clamp(int(f * kBins), 0, kBins - 1);
+  };
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!(extent[axis] > 0)) continue;
+    Box3f binBounds[kBins];
+    int binCount[kBins] = {};
+    for (int32_t i = first; i < first + count; ++i) {
+      const int b = binOf(axis, order_[i]);
+      binBounds[b].extend(proxies_[order_[i]].bounds);
+      ++binCount[b];
+    }
+    // Sweep from the right, then from the left.
+    float rightArea[kBins];
+    int rightCount[kBins];
+    Box3f acc;
+    int n = 0;
+    for (int b = kBins - 1; b > 0; --b) {
+      acc.extend(binBounds[b]);
+      n += binCount[b];
+      rightArea[b] = acc.surfaceArea();
+      rightCount[b] = n;
+    }
+    acc = Box3f{};
+    n = 0;
+    for (int b = 1; b < kBins; ++b) {
+      acc.extend(binBounds[b - 1]);
+      n += binCount[b - 1];
+      if (n == 0 || rightCount[b] == 0) continue;
+      const float cost = acc.surfaceArea() * float(n) + rightArea[b] * float(rightCount[b]);
+      if (cost < best.cost) best = {axis, b, cost};
+    }
   }
-  // Median split on the longest axis of the centres: simple, balanced, deterministic.
-  int axis = centers.longestAxis();
-  int32_t mid = first + count / 2;
-  std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + first + count,
-                   [&](int32_t a, int32_t b) {
-                     float ca = proxies_[a].bounds.center()[axis],
-                           cb = proxies_[b].bounds.center()[axis];
-                     return ca < cb || (ca == cb && a < b);
-                   });
-  int32_t left = build(first, mid - first, depth + 1);
-  int32_t right = build(mid, first + count - mid, depth + 1);
+  int32_t mid;
+  if (best.axis >= 0) {
+    auto middle = std::partition(order_.begin() + first, order_.begin() + first + count,
+                                 [&](int32_t id) { return binOf(best.axis, id) < best.bin; });
+    mid = int32_t(middle - order_.begin());
+  } else {
+    // Every centre in one point: a median split by index keeps the tree balanced.
+    mid = first + count / 2;
+  }
+  int32_t left = build(first, mid - first, depth + 1, centers);
+  int32_t right = build(mid, first + count - mid, depth + 1, centers);
   nodes_[index].left = left;
   nodes_[index].right = right;
   return index;
@@ -107,41 +178,71 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
   constexpr bool kMask = std::is_same_v<Excluded, MaskExclusion>;
   Hit best;
   if (nodes_.empty()) return best;
-  Vec3f inv{1 / direction.x, 1 / direction.y, 1 / direction.z};
-  int32_t stack[128];
+  const Vec3f inv{1 / direction.x, 1 / direction.y, 1 / direction.z};
+  // Whether every proxy below node n is excluded.
+  auto excludedNode = [&](int32_t n) {
+    if constexpr (kMask)
+      return (nodes_[size_t(n)].ownersUnion & ~ex.excluded) == 0;
+    else
+      return wideUnion_[size_t(n)].isSubsetOf(ex.excluded);
+  };
+  // Whether a subtree entered at tNode may still hold a better proxy: its
+  // proxies are entered at tNode or later, so it can only tie with the best
+  // so far at tNode, and a tie goes to the lower index.
+  auto mayImprove = [&](float tNode, int32_t n) {
+    return tNode < best.tEnter || (tNode == best.tEnter && nodes_[size_t(n)].minIndex < best.proxy);
+  };
+  // Closest first: children are visited nearer (then lower index) first, so
+  // the best answer is found early and prunes the rest.
+  struct Entry {
+    int32_t node;
+    float t;
+  };
+  Entry stack[128];
   int top = 0;
-  stack[top++] = 0;
+  float tRoot;
+  if (excludedNode(0) || !intersectBox(nodes_[0].bounds, origin, inv, tmax, tRoot)) return best;
+  stack[top++] = {0, tRoot};
   while (top > 0) {
-    const int32_t nodeIndex = stack[--top];
-    const Node& node = nodes_[nodeIndex];
-    // Every proxy below is excluded.
-    if constexpr (kMask) {
-      if ((node.ownersUnion & ~ex.excluded) == 0) continue;
-    } else {
-      if (wideUnion_[size_t(nodeIndex)].isSubsetOf(ex.excluded)) continue;
-    }
-    float tNode;
-    // Strictly closer, or equally close (a lower index may still win the tie).
-    if (!intersectBox(node.bounds, origin, inv,
-                      std::min(tmax, std::nextafter(best.tEnter, kInfinity)), tNode))
-      continue;
+    const Entry e = stack[--top];
+    if (!mayImprove(e.t, e.node)) continue;
+    const Node& node = nodes_[size_t(e.node)];
     if (node.left < 0) {
       for (int32_t i = node.first; i < node.first + node.count; ++i) {
-        int32_t id = order_[i];
-        const Proxy& p = proxies_[id];
+        const int32_t id = order_[size_t(i)];
         if constexpr (kMask) {
-          if (ownerMasks_[size_t(id)] & ex.excluded) continue;
+          if (leafMasks_[size_t(i)] & ex.excluded) continue;
         } else {
-          if (p.owners.intersects(ex.excluded)) continue;
+          if (proxies_[size_t(id)].owners.intersects(ex.excluded)) continue;
         }
         float t;
-        if (!intersectBox(p.bounds, origin, inv, tmax, t)) continue;
+        if (!intersectBox(leafBounds_[size_t(i)], origin, inv, tmax, t)) continue;
         if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) best = {id, t};
       }
-    } else {
-      stack[top++] = node.right;
-      stack[top++] = node.left;
+      continue;
     }
+    // Strictly closer, or equally close (a lower index may still win the tie).
+    const float limit = std::min(tmax, std::nextafter(best.tEnter, kInfinity));
+    Entry near{-1, 0}, far{-1, 0};
+    for (int32_t child : {node.left, node.right}) {
+      float t;
+      if (excludedNode(child) ||
+          !intersectBox(nodes_[size_t(child)].bounds, origin, inv, limit, t) ||
+          !mayImprove(t, child))
+        continue;
+      const Entry c{child, t};
+      if (near.node < 0) {
+        near = c;
+      } else if (c.t < near.t || (c.t == near.t && nodes_[size_t(child)].minIndex <
+                                                       nodes_[size_t(near.node)].minIndex)) {
+        far = near;
+        near = c;
+      } else {
+        far = c;
+      }
+    }
+    if (far.node >= 0) stack[top++] = far;
+    if (near.node >= 0) stack[top++] = near;
   }
   return best;
 }

@@ -46,13 +46,16 @@ class ProxyBvh {
     RankMask ownersUnion = 0;  // lets a subtree whose proxies are all excluded be skipped (narrow)
     int32_t left = -1, right = -1;  // children; -1 in a leaf
     int32_t first = 0, count = 0;   // leaf range in order_
+    int32_t minIndex = 0;           // least proxy index below: prunes ties (closestImpl)
   };
-  int32_t build(int32_t first, int32_t count, int depth);
+  int32_t build(int32_t first, int32_t count, int depth, const std::vector<Vec3f>& centers);
 
   std::vector<Proxy> proxies_;
   std::vector<RankMask> ownerMasks_;  // per proxy (narrow)
   std::vector<RankSet> wideUnion_;    // per node, only when some owner is rank 64 or above
   std::vector<int32_t> order_;
+  std::vector<Box3f> leafBounds_;    // proxies' boxes in leaf order (order_)
+  std::vector<RankMask> leafMasks_;  // their owner masks (narrow), in leaf order
   std::vector<Node> nodes_;
 };
 
