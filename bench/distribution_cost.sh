@@ -15,6 +15,10 @@
 # the configurations so a busy machine slows all alike. Counters are exact
 # and independent of timing.
 #
+#   4. with BASELINE=old/ferry: the same proxies runs of another build in the
+#      same rounds (interleaved), and its frame time per rank count against
+#      this build's: before/after under the same load.
+#
 #   bash bench/distribution_cost.sh [FERRY]             (default build/ferry)
 #   SCENE='builtin:island' SIZE=640x360 SPP=1 FRAMES=3 ROUNDS=3 CORES=$(nproc) \
 #     PARTITION=round-robin bash bench/distribution_cost.sh
@@ -28,17 +32,18 @@ ROUNDS=${ROUNDS:-3}
 CORES=${CORES:-$(nproc)}
 RANKS=${RANKS:-1 2 4 8}
 PARTITION=${PARTITION:-round-robin}
+BASELINE=${BASELINE:+$(realpath "$BASELINE")}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_mpi_yield_when_idle=1
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# run RANKS FORWARDING TAG: one render; its stats go to $work/TAG.json.
+# run RANKS FORWARDING TAG [BINARY]: one render; its stats go to $work/TAG.json.
 run() {
-  local n=$1 mode=$2 tag=$3 threads=$((CORES / $1))
+  local n=$1 mode=$2 tag=$3 binary=${4:-$ferry} threads=$((CORES / $1))
   [ "$threads" -ge 1 ] || threads=1
-  mpirun --oversubscribe -np "$n" "$ferry" render "$SCENE" --size "$SIZE" --spp "$SPP" --frames "$FRAMES" \
+  mpirun --oversubscribe -np "$n" "$binary" render "$SCENE" --size "$SIZE" --spp "$SPP" --frames "$FRAMES" \
     --threads "$threads" --forwarding "$mode" --partition "$PARTITION" -q -o "$work/out.pfm" --stats "$work/$tag.json"
 }
 
@@ -48,15 +53,19 @@ echo "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $CORES core
   "partition $PARTITION"
 
 for round in $(seq "$ROUNDS"); do
-  for n in $RANKS; do run "$n" proxies "time-$n-$round"; done
+  for n in $RANKS; do
+    run "$n" proxies "time-$n-$round"
+    if [ -n "$BASELINE" ]; then run "$n" proxies "base-$n-$round" "$BASELINE"; fi
+  done
 done
 for n in 4 8; do
   for mode in ring broadcast; do run "$n" "$mode" "$mode-$n"; done
 done
 
-python3 - "$work" "$ROUNDS" "$CORES" $RANKS <<'EOF'
-import json, statistics, sys
-work, rounds, cores, ranks = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), [int(r) for r in sys.argv[4:]]
+python3 - "$work" "$ROUNDS" "$CORES" "${BASELINE:-none}" $RANKS <<'EOF'
+import json, os, statistics, sys
+work, rounds, cores, baseline = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+ranks = [int(r) for r in sys.argv[5:]]
 load = lambda tag: json.load(open(f"{work}/{tag}.json"))
 MiB = 1 / 2**20
 
@@ -71,6 +80,16 @@ for n in ranks:
     print(f"  {n} rank(s) x {threads} thread(s): {frame[n]:7.3f} s/frame   ratio {frame[n] / base:5.2f}"
           f"   (frames: {', '.join(f'{f:.2f}' for r in range(1, rounds + 1) for f in [x['seconds'] for x in load(f'time-{n}-{r}')['render']['frames']])})")
 
+if baseline != "none":
+    print(f"\nthis build against the baseline {baseline} (same rounds, interleaved; < 1: this build is faster)")
+    for n in ranks:
+        times = [f["seconds"] for r in range(1, rounds + 1) for f in load(f"base-{n}-{r}")["render"]["frames"]]
+        base_n = statistics.median(times)
+        base_1 = statistics.median([f["seconds"] for r in range(1, rounds + 1)
+                                    for f in load(f"base-{ranks[0]}-{r}")["render"]["frames"]])
+        print(f"  {n} rank(s): {frame[n]:7.3f} s against {base_n:7.3f} s   ratio {frame[n] / base_n:5.2f}"
+              f"   (baseline's own ratio to 1 rank: {base_n / base_1:5.2f})")
+
 print("\nwhere the time goes (round 1, per frame): rays traced and forwarded (exact), stage seconds summed over ranks")
 for n in ranks:
     s = load(f"time-{n}-1")
@@ -79,7 +98,9 @@ for n in ranks:
     print(f"  {n} rank(s): traced {t['traces']['total'] / f:9.0f} (closest {t['traces']['closest'] / f:.0f},"
           f" shadow {t['traces']['occlusion'] / f:.0f}, re-trace {t['traces']['retrace'] / f:.0f}),"
           f" forwarded {t['exchange']['rays_forwarded'] / f:8.0f};"
-          f" s: " + ", ".join(f"{k} {st[k] / f:.2f}" for k in ("generate", "trace", "exchange", "shade")))
+          f" proxy queries per camera path {t['traces']['proxy_queries'] / max(1, t['camera_paths']):.2f};"
+          f" s: " + ", ".join(f"{k} {st[k] / f:.2f}" for k in ("generate", "trace", "exchange", "shade"))
+          + f" (generate {100 * st['generate'] / max(1e-12, sum(st[k] for k in ('generate', 'trace', 'exchange', 'shade'))):.0f}%)")
 
 print("\nrays forwarded per frame (exact counters; bytes and rounds per frame too)")
 frames = lambda s: len(s["render"]["frames"])
