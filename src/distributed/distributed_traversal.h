@@ -23,7 +23,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   int rank() const override { return comm_.rank(); }
   int rankCount() const override { return comm_.size(); }
   bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const override;
-  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+  void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override;
   bool anyRaysLeft(size_t localRays) override { return comm_.sum(uint64_t(localRays)) > 0; }
 
@@ -35,10 +35,14 @@ class DistributedTraversal final : public RayTraversal<Path> {
   uint64_t received() const { return received_; }
 
  private:
-  void traverseForwarding(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
-                          ExchangeCounters& exchange, FrameStats& stats);
-  void traverseBroadcast(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
-                         ExchangeCounters& exchange, FrameStats& stats);
+  // Both take the wavefront as it travels (both kinds in one queue) and add
+  // the rays left here to shade to `ready`, by kind (readyHits: per path).
+  void traverseForwarding(PathQueue<Path> moving, RayQueues<Path>& ready,
+                          std::vector<TraceHit>& readyHits, ExchangeCounters& exchange,
+                          FrameStats& stats);
+  void traverseBroadcast(PathQueue<Path> rays, RayQueues<Path>& ready,
+                         std::vector<TraceHit>& readyHits, ExchangeCounters& exchange,
+                         FrameStats& stats);
   // Sends each ray to destination[i] (this rank's rays are not in the list);
   // returns what this rank received, in rank order.
   PathQueue<Path> exchange(const PathQueue<Path>& rays, const std::vector<int>& destination,
