@@ -9,7 +9,7 @@
 #include "app/partition_command.h"
 #include "app/render_command.h"
 #include "core/error.h"
-#include "mpi/communicator.h"
+#include "mpi/mpi_communicator.h"
 
 int main(int argc, char** argv) {
   using namespace ferry;
@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (app.got_subcommand("render")) {
-      Communicator comm(&argc, &argv);
+      MpiCommunicator comm(&argc, &argv);
       comm.reportFatalSignals();
       return runRender(renderOptions, comm);
     }

@@ -1,63 +1,102 @@
-// The one place Ferry talks to MPI. Everything above uses this small interface,
-// so another transport touches only this file pair.
+// How ranks talk: the collectives Ferry's distributed layer is written
+// against. Two implementations: MpiCommunicator (mpi_communicator.h, the only
+// code that names MPI) for real runs under mpirun, and InProcessCommunicator
+// (in_process_communicator.h), N ranks as N threads of one process, so the
+// distributed traversal and the compositor can be tested without mpirun.
+//
+// Every operation is collective unless it says otherwise: every rank calls it,
+// in the same order, with matching arguments. Callers take a `const
+// Communicator&`; the operations change no state a caller can see.
 //
 // Failure policy (nothing may hang): an error that every rank meets at the
 // same point (bad flag, missing scene) is agreed on with agreeOnFailure() and
 // all ranks exit cleanly with one message; an error on one rank in the middle
 // of collective work calls abortAll(), which ends every rank within seconds.
+// A collective that fails underneath (MPI returns an error code) throws a
+// CommunicationError naming the operation and the rank.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace ferry {
 
+// A collective failed on this rank (an MPI error code, or in-process: another
+// rank aborted, or the ranks' arguments do not match).
+class CommunicationError : public std::runtime_error {
+ public:
+  // what(): "OPERATION on rank RANK: DETAIL" (rank -1: not known yet, as
+  // when MPI fails to start; then "OPERATION: DETAIL").
+  CommunicationError(std::string operation, int rank, const std::string& detail);
+  const std::string& operation() const { return operation_; }
+  int rank() const { return rank_; }
+
+ private:
+  std::string operation_;
+  int rank_;
+};
+
 class Communicator {
  public:
-  // Initializes MPI if needed (thread level: funneled; TBB threads never call MPI).
-  Communicator(int* argc, char*** argv);
-  ~Communicator();
-  Communicator(const Communicator&) = delete;
-  Communicator& operator=(const Communicator&) = delete;
+  virtual ~Communicator() = default;
 
-  int rank() const { return rank_; }
-  int size() const { return size_; }
-  bool isRoot() const { return rank_ == 0; }
+  // Not collective.
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  bool isRoot() const { return rank() == 0; }
 
-  void barrier() const;
-  uint64_t sum(uint64_t value) const;
-  double max(double value) const;
-  std::vector<uint64_t> sum(std::span<const uint64_t> values) const;  // element-wise
-  std::vector<double> sum(std::span<const double> values) const;
-  std::vector<double> max(std::span<const double> values) const;
+  virtual void barrier() const = 0;
+  virtual uint64_t sum(uint64_t value) const = 0;
+  virtual double max(double value) const = 0;
+  // Element-wise over ranks; every rank passes the same length.
+  virtual std::vector<uint64_t> sum(std::span<const uint64_t> values) const = 0;
+  virtual std::vector<double> sum(std::span<const double> values) const = 0;
+  virtual std::vector<double> max(std::span<const double> values) const = 0;
   // counts[r]: items for rank r; returns how many each rank sends to us.
-  std::vector<int> exchangeCounts(const std::vector<int>& sendCounts) const;
-  // All-to-all-v of raw bytes; counts and displacements in bytes.
-  void exchangeBytes(const void* send, const std::vector<int>& sendCounts,
-                     const std::vector<int>& sendOffsets, void* receive,
-                     const std::vector<int>& receiveCounts,
-                     const std::vector<int>& receiveOffsets) const;
-  // Gathers variable-size byte blocks on rank 0 (receive ignored elsewhere).
-  void gatherBytes(const void* send, int sendBytes, void* receive, const std::vector<int>& counts,
-                   const std::vector<int>& offsets) const;
-  std::vector<int> gatherInt(int value) const;  // on rank 0; empty elsewhere
+  virtual std::vector<int> exchangeCounts(const std::vector<int>& sendCounts) const = 0;
+  // All-to-all-v of raw bytes; counts and displacements in bytes, one per
+  // rank. receiveCounts[r] must equal what rank r sends here.
+  virtual void exchangeBytes(const void* send, const std::vector<int>& sendCounts,
+                             const std::vector<int>& sendOffsets, void* receive,
+                             const std::vector<int>& receiveCounts,
+                             const std::vector<int>& receiveOffsets) const = 0;
+  // Gathers variable-size byte blocks on rank 0 (receive, counts and offsets
+  // are read on rank 0 only).
+  virtual void gatherBytes(const void* send, int sendBytes, void* receive,
+                           const std::vector<int>& counts,
+                           const std::vector<int>& offsets) const = 0;
+  virtual std::vector<int> gatherInt(int value) const = 0;  // on rank 0; empty elsewhere
+  // Rank 0's bytes to every rank; every rank passes the same length.
+  virtual void broadcastBytes(std::span<std::byte> bytes) const = 0;
+
+  // Rank 0's values replace every other rank's (e.g. a camera change made on
+  // rank 0). Plain data only: the bytes are copied as they are.
+  template <typename T>
+  void broadcast(std::span<T> values) const {
+    static_assert(std::is_trivially_copyable_v<T> && !std::is_const_v<T>);
+    broadcastBytes(std::as_writable_bytes(values));
+  }
+  template <typename T>
+  void broadcast(T& value) const {
+    broadcast(std::span<T>(&value, 1));
+  }
 
   // Collective: true if any rank failed; then rank 0 prints one message (the
   // failing ranks' messages, merged when identical) to stderr.
   bool agreeOnFailure(bool failed, const std::string& message) const;
-  // Makes a fatal signal on this rank (segfault, bus error, abort, ...) print
-  // "ferry: rank R died of SIGNAME" before the default action, so the user
-  // learns which rank failed; mpirun then ends the others.
-  void reportFatalSignals() const;
-  // Prints "ferry: error on rank R: message" and ends every rank (MPI_Abort).
+  // Not collective: called by the one rank that failed. Ends every rank with
+  // `message` (MPI: prints "ferry: error on rank R: message" and aborts the
+  // job with exit code `code`; in-process: throws here and in every other rank).
   [[noreturn]] void abortAll(const std::string& message, int code = 1) const;
 
- private:
-  int rank_ = 0;
-  int size_ = 1;
-  bool ownsMpi_ = false;
+ protected:
+  // abortAll's work; must not return (end the process or throw).
+  virtual void abortEveryRank(const std::string& message, int code) const = 0;
 };
 
 }  // namespace ferry

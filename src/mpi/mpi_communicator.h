@@ -1,0 +1,59 @@
+// The Communicator over MPI (MPI_COMM_WORLD): the one place Ferry talks to
+// MPI, so another transport touches only this folder. mpi.h stays in the .cpp.
+//
+// MPI errors come back as codes (MPI_ERRORS_RETURN) and are thrown as
+// CommunicationError naming the MPI call, the rank and MPI's own message,
+// rather than killing the job without a word.
+#pragma once
+
+#include "mpi/communicator.h"
+
+namespace ferry {
+
+class MpiCommunicator final : public Communicator {
+ public:
+  // Initializes MPI if needed (thread level: funneled; TBB threads never
+  // call MPI) and finalizes it on destruction if it did.
+  MpiCommunicator(int* argc, char*** argv);
+  ~MpiCommunicator() override;
+  MpiCommunicator(const MpiCommunicator&) = delete;
+  MpiCommunicator& operator=(const MpiCommunicator&) = delete;
+
+  int rank() const override { return rank_; }
+  int size() const override { return size_; }
+
+  void barrier() const override;
+  uint64_t sum(uint64_t value) const override;
+  double max(double value) const override;
+  std::vector<uint64_t> sum(std::span<const uint64_t> values) const override;
+  std::vector<double> sum(std::span<const double> values) const override;
+  std::vector<double> max(std::span<const double> values) const override;
+  std::vector<int> exchangeCounts(const std::vector<int>& sendCounts) const override;
+  void exchangeBytes(const void* send, const std::vector<int>& sendCounts,
+                     const std::vector<int>& sendOffsets, void* receive,
+                     const std::vector<int>& receiveCounts,
+                     const std::vector<int>& receiveOffsets) const override;
+  void gatherBytes(const void* send, int sendBytes, void* receive, const std::vector<int>& counts,
+                   const std::vector<int>& offsets) const override;
+  std::vector<int> gatherInt(int value) const override;
+  void broadcastBytes(std::span<std::byte> bytes) const override;
+
+  // Not collective. Makes a fatal signal on this rank (segfault, bus error,
+  // abort, ...) print "ferry: rank R died of SIGNAME" before the default
+  // action, so the user learns which rank failed; mpirun then ends the
+  // others. (Not part of Communicator: in one process a signal ends every
+  // rank at once.)
+  void reportFatalSignals() const;
+
+ private:
+  // Prints "ferry: error on rank R: message" and ends every rank (MPI_Abort).
+  void abortEveryRank(const std::string& message, int code) const override;
+  // Throws a CommunicationError unless `code` is MPI_SUCCESS.
+  void check(int code, const char* operation) const;
+
+  int rank_ = -1;  // until MPI_Comm_rank answers (errors before it name no rank)
+  int size_ = 1;
+  bool ownsMpi_ = false;
+};
+
+}  // namespace ferry

@@ -1,0 +1,52 @@
+#include "mpi/mpi_communicator.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "mpi/communicator_test_util.h"
+
+namespace ferry {
+namespace {
+
+// One test only: MPI starts once per process and cannot restart after
+// MPI_Finalize. Under ctest it runs as a single rank (MPI's singleton start);
+// tests/tools/run_mpi_unit_tests.sh runs it on three ranks under mpirun.
+TEST(MpiCommunicator, KeepsTheCommunicatorContract) {
+  MpiCommunicator comm(nullptr, nullptr);
+  EXPECT_GE(comm.size(), 1);
+  testing::checkReductions(comm);
+  testing::checkExchangeCounts(comm);
+  testing::checkExchangeBytes(comm);
+  testing::checkGathers(comm);
+  testing::checkBroadcast(comm);
+
+  ::testing::internal::CaptureStderr();  // each rank is its own process
+  std::vector<bool> agreed = testing::agreeOnFailureCases(comm);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(),
+            comm.isRoot() ? testing::agreeOnFailureCasesStderr(comm.size()) : "");
+  EXPECT_EQ(agreed, (std::vector<bool>{false, true, true}));
+
+  // An MPI error comes back as a CommunicationError naming the call and the
+  // rank: every rank sends itself 8 bytes but expects 4 (truncation).
+  const int n = comm.size();
+  std::vector<char> send(8, 'x'), receive(8);
+  std::vector<int> sendCounts(n, 0), receiveCounts(n, 0), offsets(n, 0);
+  sendCounts[comm.rank()] = 8;
+  receiveCounts[comm.rank()] = 4;
+  try {
+    comm.exchangeBytes(send.data(), sendCounts, offsets, receive.data(), receiveCounts, offsets);
+    ADD_FAILURE() << "a truncated exchange did not throw";
+  } catch (const CommunicationError& e) {
+    EXPECT_EQ(e.operation(), "MPI_Alltoallv");
+    EXPECT_EQ(e.rank(), comm.rank());
+    const std::string prefix = "MPI_Alltoallv on rank " + std::to_string(comm.rank()) + ": ";
+    EXPECT_EQ(std::string(e.what()).substr(0, prefix.size()), prefix) << e.what();
+    EXPECT_NE(std::string(e.what()).find("MPI error code"), std::string::npos) << e.what();
+  }
+  comm.barrier();  // the ranks still talk after an error that came back as a code
+}
+
+}  // namespace
+}  // namespace ferry
