@@ -65,6 +65,8 @@ class WavefrontRenderer {
     PathQueue<Path> rays, next, staging;
     std::vector<TraceHit> hits;
     std::vector<uint32_t> blockCounts;
+    std::vector<uint32_t>
+        primaryPixels;  // many ranks: the pixels whose camera paths are this rank's
   };
   // One rank (the traversal keeps every primary): the image goes through in
   // chunks, each wavefront on one thread, whose stages then loop instead of
