@@ -63,17 +63,17 @@ class RecordingTraversal final : public RayTraversal<Path8> {
   int rank() const override { return 0; }
   int rankCount() const override { return 1; }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
-  void traverse(PathQueue<Path8>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+  void traverse(RayQueues<Path8>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override {
     Wave& w = waves.emplace_back();
-    for (const Path8& p : rays) {
-      TraceRay r{p.origin, p.dir(), 0.0f, p.tmax};
-      (p.isShadow() ? w.shadow : w.closest).push_back(r);
-    }
-    inner_.traverse(rays, hits, exchange, stats);
-    // With --retrace all, WavefrontRenderer::shade re-traces every non-shadow ray that hit.
-    for (const Path8& p : rays)
-      if (!p.isShadow() && p.hasHit()) w.retrace.push_back(retraceQuery(p.origin, p.dir(), p.tmax));
+    for (const Path8& p : rays.paths)
+      w.closest.push_back(TraceRay{p.origin, p.dir(), 0.0f, p.tmax});
+    for (const Path8& p : rays.shadowRays)
+      w.shadow.push_back(TraceRay{p.origin, p.dir(), 0.0f, p.tmax});
+    inner_.traverse(rays, pathHits, exchange, stats);
+    // With --retrace all, WavefrontRenderer::shade re-traces every path that hit.
+    for (const Path8& p : rays.paths)
+      if (p.hasHit()) w.retrace.push_back(retraceQuery(p.origin, p.dir(), p.tmax));
   }
   std::vector<Wave> waves;
 

@@ -32,6 +32,19 @@ int decisionToDestination(const ForwardDecision& d, Path& ray, int rank) {
   return d.rank;
 }
 
+// A ray whose traversal ended on this rank, into the queue of its kind; a
+// path with its kept hit (invalid: shading re-traces it).
+template <typename Path>
+void keepToShade(const Path& ray, const TraceHit& hit, RayQueues<Path>& ready,
+                 std::vector<TraceHit>& readyHits) {
+  if (ray.isShadow()) {
+    ready.shadowRays.push_back(ray);
+  } else {
+    ready.paths.push_back(ray);
+    readyHits.push_back(hit);
+  }
+}
+
 }  // namespace
 
 template <typename Path>
@@ -198,25 +211,30 @@ PathQueue<Path> DistributedTraversal<Path>::exchange(const PathQueue<Path>& rays
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
+void DistributedTraversal<Path>::traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits,
                                           ExchangeCounters& exchange, FrameStats& stats) {
+  // Paths and shadow rays travel as one queue (the path format is the same;
+  // kPathShadow tells them apart): one exchange per round for both.
+  PathQueue<Path> wavefront = std::move(rays.paths);
+  wavefront.insert(wavefront.end(), rays.shadowRays.begin(), rays.shadowRays.end());
+  rays.clear();
+  pathHits.clear();
   if (mode_ == ForwardingMode::Broadcast)
-    traverseBroadcast(rays, hits, exchange, stats);
+    traverseBroadcast(std::move(wavefront), rays, pathHits, exchange, stats);
   else
-    traverseForwarding(rays, hits, exchange, stats);
+    traverseForwarding(std::move(wavefront), rays, pathHits, exchange, stats);
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays,
-                                                    std::vector<TraceHit>& hits,
+void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path> moving, RayQueues<Path>& ready,
+                                                    std::vector<TraceHit>& readyHits,
                                                     ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
-  PathQueue<Path> ready;  // traversal complete here: shade on this rank
-  // The hit of each ready ray when its last trace, here, found it (shading
+  // `ready` gets the rays whose traversal is complete here (shade on this
+  // rank), each path with its hit when its last trace, here, found it (shading
   // then need not re-trace it); invalid for rays that arrive to be shaded.
-  std::vector<TraceHit> readyHits, movingHits;
-  PathQueue<Path> moving = std::move(rays);
+  std::vector<TraceHit> movingHits;
   // Replay layout (proxies): the visited set of each ray in `moving`, this rank
   // included; new rays have visited only this rank.
   const bool replay = Path::kReplay && mode_ == ForwardingMode::Proxies;
@@ -251,8 +269,7 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays,
     std::vector<int> leavingTo;
     for (size_t i = 0; i < moving.size(); ++i) {
       if (destination[i] == kShadeHere) {
-        ready.push_back(moving[i]);
-        readyHits.push_back(movingHits[i]);
+        keepToShade(moving[i], movingHits[i], ready, readyHits);
       } else if (destination[i] >= 0) {
         leaving.push_back(moving[i]);
         leavingTo.push_back(destination[i]);
@@ -264,8 +281,7 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays,
     moving.clear();
     for (Path& p : received) {
       if (p.has(kPathTraversed)) {
-        ready.push_back(p);
-        readyHits.emplace_back();
+        keepToShade(p, TraceHit{}, ready, readyHits);
       } else {
         moving.push_back(p);
       }
@@ -274,13 +290,11 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path>& rays,
     if (replay) visited = replayArrivals(moving, stats);
     trace(moving, stats, &movingHits);
   }
-  rays = std::move(ready);
-  hits = std::move(readyHits);
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path>& rays,
-                                                   std::vector<TraceHit>& hits,
+void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path> rays, RayQueues<Path>& ready,
+                                                   std::vector<TraceHit>& readyHits,
                                                    ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
@@ -337,27 +351,21 @@ void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path>& rays,
   }
 
   // 3. Shade where the hit is.
-  PathQueue<Path> ready, leaving;
-  std::vector<TraceHit> readyHits;
+  PathQueue<Path> leaving;
   std::vector<int> leavingTo;
   for (size_t i = 0; i < rays.size(); ++i) {
     Path& p = rays[i];
     int d = decisionToDestination(finishTraversal(p, rank), p, rank);
     if (d == kShadeHere) {
-      ready.push_back(p);
-      readyHits.push_back(ownHits[i]);
+      keepToShade(p, ownHits[i], ready, readyHits);
     } else if (d >= 0) {
       leaving.push_back(p);
       leavingTo.push_back(d);
     }
   }
   stats.times.exchange += secondsSince(start);
-  for (Path& p : exchange(leaving, leavingTo, counters, stats)) {
-    ready.push_back(p);
-    readyHits.emplace_back();
-  }
-  rays = std::move(ready);
-  hits = std::move(readyHits);
+  for (const Path& p : exchange(leaving, leavingTo, counters, stats))
+    keepToShade(p, TraceHit{}, ready, readyHits);
 }
 
 template class DistributedTraversal<Path8>;

@@ -24,7 +24,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   int rankCount() const override { return comm_.size(); }
   void primaryPixels(uint32_t first, uint32_t last, const CameraRayOf& cameraRay,
                      std::vector<uint32_t>& pixels, FrameStats& stats) override;
-  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
+  void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override;
   bool anyRaysLeft(size_t localRays) override { return comm_.sum(uint64_t(localRays)) > 0; }
 
@@ -40,10 +40,14 @@ class DistributedTraversal final : public RayTraversal<Path> {
  private:
   // The rank whose camera path `pixel` is: the owner of the closest proxy.
   int primaryOwner(uint32_t pixel, const TraceRay& ray) const;
-  void traverseForwarding(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
-                          ExchangeCounters& exchange, FrameStats& stats);
-  void traverseBroadcast(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
-                         ExchangeCounters& exchange, FrameStats& stats);
+  // Both take the wavefront as it travels (both kinds in one queue) and add
+  // the rays left here to shade to `ready`, by kind (readyHits: per path).
+  void traverseForwarding(PathQueue<Path> moving, RayQueues<Path>& ready,
+                          std::vector<TraceHit>& readyHits, ExchangeCounters& exchange,
+                          FrameStats& stats);
+  void traverseBroadcast(PathQueue<Path> rays, RayQueues<Path>& ready,
+                         std::vector<TraceHit>& readyHits, ExchangeCounters& exchange,
+                         FrameStats& stats);
   // Sends each ray to destination[i] (this rank's rays are not in the list);
   // returns what this rank received, in rank order.
   PathQueue<Path> exchange(const PathQueue<Path>& rays, const std::vector<int>& destination,

@@ -126,9 +126,9 @@ struct WholeImageTraversal final : RayTraversal<Path> {
   explicit WholeImageTraversal(const LocalGeometry& geometry) : local(geometry) {}
   int rank() const override { return 0; }
   int rankCount() const override { return 1; }
-  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& e,
+  void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& e,
                 FrameStats& s) override {
-    local.traverse(rays, hits, e, s);
+    local.traverse(rays, pathHits, e, s);
   }
   bool anyRaysLeft(size_t n) override { return n > 0; }
   LocalTraversal<Path> local;

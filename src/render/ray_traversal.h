@@ -46,11 +46,12 @@ class RayTraversal {
   // Whether every camera path is generated here (one rank): then the renderer
   // skips primaryPixels and writes the camera rays straight into the queue.
   virtual bool keepsAllPrimaries() const { return false; }
-  // Traces all of `rays` (new rays, made on this rank) to completion; on
-  // return `rays` holds exactly the rays this rank must shade, and `hits` one
-  // entry per ray: its closest hit when this rank found it in this traversal
-  // (so shading need not re-trace it), else an invalid hit (re-trace).
-  virtual void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
+  // Traces all of `rays` (new paths and shadow rays, made on this rank) to
+  // completion; on return `rays` holds exactly the rays this rank must shade,
+  // each in the queue of its kind, and `pathHits` one entry per path (in
+  // rays.paths order): its closest hit when this rank found it in this
+  // traversal (so shading need not re-trace it), else an invalid hit (re-trace).
+  virtual void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits,
                         ExchangeCounters& exchange, FrameStats& stats) = 0;
   // True while any rank still has rays (a collective in the distributed case).
   virtual bool anyRaysLeft(size_t localRays) = 0;
@@ -88,10 +89,11 @@ class LocalTraversal final : public RayTraversal<Path> {
   int rankCount() const override { return 1; }
   bool keepsAllPrimaries() const override { return true; }
   // Every ray is traced once, here: every hit is known.
-  void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters&,
+  void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters&,
                 FrameStats& stats) override {
-    hits.resize(rays.size());
-    traceLocally(geometry_, rays, 0, {}, stats, hits.data());
+    pathHits.resize(rays.paths.size());
+    traceLocally(geometry_, rays.paths, 0, {}, stats, pathHits.data());
+    traceLocally(geometry_, rays.shadowRays, 0, {}, stats);
   }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
 

@@ -7,53 +7,26 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cmath>
+#include <span>
 
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/random.h"
-#include "render/bsdf.h"
-#include "render/surface.h"
 #include "scene/scene.h"
 #include "trace/path.h"
 
 namespace ferry {
-namespace {
-
-// Paths whose bounce reaches this start playing Russian roulette.
-constexpr uint32_t kRouletteStartBounce = 3;
-
-// Returns the ray's direction as stored (quantized to halves).
-template <typename Path>
-Vec3f setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, uint32_t pixel,
-             uint32_t flags) {
-  p.origin = origin;
-  Vec3f stored = p.setDirAndWeight(direction, weight);
-  p.tmax = tmax;
-  p.setPixelAndFlags(pixel, flags);
-  p.clearHistory();
-  return stored;
-}
-
-// Contributions that cannot be represented are dropped rather than poisoning the image.
-[[gnu::always_inline]] inline bool usable(Vec3f c) {
-  return isFinite(c) && maxComponent(c) > 0;
-}
-
-}  // namespace
 
 template <typename Path>
 WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const LocalGeometry& geometry,
                                            const LightSampler& lights,
                                            RayTraversal<Path>& traversal,
                                            const RenderSettings& settings)
-    : scene_(scene),
-      geometry_(geometry),
-      lights_(lights),
+    : geometry_(geometry),
       traversal_(traversal),
       settings_(settings),
       camera_(scene.view(settings.view), settings.width, settings.height),
-      surfaces_(scene) {
+      shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed) {
   if (uint64_t(settings.width) * uint64_t(settings.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.width,
                                  settings.height, kMaxPixels));
@@ -142,7 +115,8 @@ void concatenateBlocks(const PathQueue<Path>& staging, size_t stride,
 template <typename Path>
 void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t first,
                                                  uint32_t last, Workspace& ws, FrameStats& stats) {
-  PathQueue<Path>& rays = ws.rays;
+  PathQueue<Path>& rays = ws.rays.paths;
+  ws.rays.shadowRays.clear();
   auto start = Clock::now();
   const uint32_t pixels = last - first;
   const uint32_t width = uint32_t(settings_.width);
@@ -150,8 +124,8 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     RandomStream random(RandomKey{pixel, sampleIndex, 0, settings_.seed});
     float x = float(px) + random(RandomDim::PixelJitterX);
     float y = float(py) + random(RandomDim::PixelJitterY);
-    setRay(p, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
-           kPathAfterSpecular);
+    makeRay(p, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
+            kPathAfterSpecular);
   };
   // Calls f(pixel, x, y) for pixels [begin, end), one division per range.
   auto forPixels = [width](uint32_t begin, uint32_t end, auto&& f) {
@@ -197,198 +171,146 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
 template <typename Path>
 void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce,
                                     FrameBuffer& frameBuffer, FrameStats& stats) {
-  const PathQueue<Path>& rays = ws.rays;
-  const std::vector<TraceHit>& hits = ws.hits;
   auto start = Clock::now();
-  FERRY_CHECK(hits.size() == rays.size());
-  const size_t n = rays.size();
-  const size_t blocks = (n + kBlock - 1) / kBlock;
-  // Each path spawns at most two rays (its continuation, then its shadow ray).
-  std::atomic<uint64_t> retraceCount{0}, missCount{0}, shadowCount{0};
-  // One rank traced every ray itself and kept every hit: nothing to re-trace
-  // unless asked to (--retrace all).
-  const bool mayRetrace = settings_.retraceAll || !chunked();
-
-  // Shades rays [begin, end) in batches, writing their new rays from `out`
-  // on; returns how many.
-  auto shadeRange = [&](size_t begin, size_t end, Path* out, uint64_t& retraced, uint64_t& misses,
-                        uint64_t& shadows) {
-    constexpr size_t kBatch = 256;
-    TraceRay queries[kBatch];
-    TraceQuery kinds[kBatch];
-    TraceHit found[kBatch];
-    uint8_t unused[kBatch];
-    uint32_t count = 0;
-    for (size_t batch = begin; batch < end; batch += kBatch) {
-      const size_t m = std::min(kBatch, end - batch);
-      // Re-trace, as one batched query, every path that hit something whose
-      // hit this rank does not have (all of them with --retrace all).
-      size_t needed = 0;
-      for (size_t i = 0; mayRetrace && i < m; ++i) {
-        const Path& p = rays[batch + i];
-        const bool retrace =
-            !p.isShadow() && p.hasHit() && (settings_.retraceAll || !hits[batch + i].valid());
-        kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
-        if (retrace) {
-          queries[i] = retraceQuery(p.origin, p.dir(), p.tmax);
-          ++needed;
-        }
-      }
-      if (needed) {
-        geometry_.traceBatch(std::span(queries, m), std::span(kinds, m), std::span(found, m),
-                             std::span(unused, m));
-        retraced += needed;
-      }
-      for (size_t i = 0; i < m; ++i) {
-        const Path& p = rays[batch + i];
-        if (p.isShadow()) {
-          // Its light arrives unless something was in the way.
-          if (!p.has(kPathOccluded)) frameBuffer.add(p.pixel(), p.weight());
-          continue;
-        }
-        const TraceHit& hit =
-            needed && kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
-        int spawned = shadeOne(p, hit, sampleIndex, bounce, frameBuffer, out + count, misses);
-        for (int k = 0; k < spawned; ++k) shadows += out[count + k].isShadow();
-        count += uint32_t(spawned);
-      }
-    }
-    return count;
-  };
-
-  PathQueue<Path>& next = ws.next;
-  if (chunked()) {
-    // One thread has this wavefront: new rays go straight into the next
-    // queue, in the same order as the blocks would give.
-    uint64_t retraced = 0, misses = 0, shadows = 0;
-    next.resize(2 * n);
-    next.resize(shadeRange(0, n, next.data(), retraced, misses, shadows));
-    retraceCount += retraced;
-    missCount += misses;
-    shadowCount += shadows;
-  } else {
-    ws.staging.resize(2 * n);
-    ws.blockCounts.assign(blocks, 0);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
-      uint64_t retraced = 0, misses = 0, shadows = 0;
-      for (size_t b = range.begin(); b != range.end(); ++b) {
-        const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
-        ws.blockCounts[b] =
-            shadeRange(begin, end, ws.staging.data() + 2 * begin, retraced, misses, shadows);
-      }
-      retraceCount += retraced;
-      missCount += misses;
-      shadowCount += shadows;
-    });
-    concatenateBlocks(ws.staging, 2 * kBlock, ws.blockCounts, next);
-  }
-
-  stats.shadowRays += shadowCount;
-  stats.continuationRays += next.size() - shadowCount;
-  stats.retraces += retraceCount;
-  stats.retraceMisses += missCount;
+  addUnoccludedLight(ws.rays.shadowRays, frameBuffer);
+  shadePaths(ws, sampleIndex, bounce, frameBuffer, stats);
   stats.times.shade += secondsSince(start);
 }
 
 template <typename Path>
-int WavefrontRenderer<Path>::shadeOne(const Path& path, const TraceHit& hit, uint32_t sampleIndex,
-                                      uint32_t bounce, FrameBuffer& frameBuffer, Path* out,
-                                      uint64_t& misses) const {
-  const uint32_t maxDepth = uint32_t(std::max(settings_.maxDepth, 0));
-  const uint32_t pixel = path.pixel();
-  const Vec3f throughput = path.weight();
-  const Vec3f dir = path.dir();
-  const bool afterSpecular = path.has(kPathAfterSpecular);
-
-  if (!path.hasHit()) {
-    // Escaped: light from infinity counts only where no light sample covered it.
-    if (afterSpecular) {
-      Vec3f l = throughput * lights_.background(normalize(dir));
-      if (usable(l)) frameBuffer.add(pixel, l);
+void WavefrontRenderer<Path>::addUnoccludedLight(const PathQueue<Path>& shadowRays,
+                                                 FrameBuffer& frameBuffer) const {
+  auto addRange = [&](size_t begin, size_t end) {
+    for (size_t i = begin; i != end; ++i) {
+      const Path& ray = shadowRays[i];
+      if (!ray.has(kPathOccluded)) frameBuffer.add(ray.pixel(), ray.weight());
     }
-    return 0;
+  };
+  if (chunked()) {
+    addRange(0, shadowRays.size());
+  } else {
+    // A pixel has at most one shadow ray per wavefront: the blocks add to
+    // different pixels.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, shadowRays.size(), kBlock),
+                      [&](const auto& range) { addRange(range.begin(), range.end()); });
   }
-  if (!hit.valid()) {
-    ++misses;
-    return 0;
-  }
-  SurfacePoint surface = reconstructSurface(scene_, surfaces_, hit);
-  const Material& material = *surface.material;
-  const Vec3f wo = normalize(-dir);
+}
 
-  if (afterSpecular && material.isEmissive()) {
-    Vec3f l = throughput * material.emission;
-    if (usable(l)) frameBuffer.add(pixel, l);
+template <typename Path>
+void WavefrontRenderer<Path>::shadePaths(Workspace& ws, uint32_t sampleIndex, uint32_t bounce,
+                                         FrameBuffer& frameBuffer, FrameStats& stats) {
+  const size_t n = ws.rays.paths.size();
+  FERRY_CHECK(ws.hits.size() == n);
+  // Each path makes at most one continuation and one shadow ray.
+  RayQueues<Path>& next = ws.next;
+  ShadeCounts total;
+  if (chunked()) {
+    // One thread has this wavefront: new rays go straight into the next
+    // queues, in the same order as the blocks would give.
+    next.paths.resize(n);
+    next.shadowRays.resize(n);
+    total = shadePathRange(ws, 0, n, sampleIndex, bounce, frameBuffer, next.paths.data(),
+                           next.shadowRays.data());
+    next.paths.resize(total.continuations);
+    next.shadowRays.resize(total.shadowRays);
+  } else {
+    const size_t blocks = (n + kBlock - 1) / kBlock;
+    ws.staging.paths.resize(n);
+    ws.staging.shadowRays.resize(n);
+    ws.pathCounts.assign(blocks, 0);
+    ws.shadowCounts.assign(blocks, 0);
+    std::atomic<uint64_t> retraced{0}, retraceMisses{0};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
+      uint64_t localRetraced = 0, localMisses = 0;
+      for (size_t b = range.begin(); b != range.end(); ++b) {
+        const size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
+        const ShadeCounts counts =
+            shadePathRange(ws, begin, end, sampleIndex, bounce, frameBuffer,
+                           ws.staging.paths.data() + begin, ws.staging.shadowRays.data() + begin);
+        ws.pathCounts[b] = counts.continuations;
+        ws.shadowCounts[b] = counts.shadowRays;
+        localRetraced += counts.retraced;
+        localMisses += counts.retraceMisses;
+      }
+      retraced += localRetraced;
+      retraceMisses += localMisses;
+    });
+    concatenateBlocks(ws.staging.paths, kBlock, ws.pathCounts, next.paths);
+    concatenateBlocks(ws.staging.shadowRays, kBlock, ws.shadowCounts, next.shadowRays);
+    total.retraced = retraced;
+    total.retraceMisses = retraceMisses;
   }
-  if (bounce >= maxDepth) return 0;
+  stats.continuationRays += next.paths.size();
+  stats.shadowRays += next.shadowRays.size();
+  stats.retraces += total.retraced;
+  stats.retraceMisses += total.retraceMisses;
+}
 
-  // (Emission above counted only after a delta vertex, which spawns no shadow
-  // ray: a pixel's path and shadow ray never both write the frame buffer in
-  // one wavefront, which lets shade() add shadow rays in the same pass.)
-  Bsdf bsdf = Bsdf::fromMaterial(material, surface.baseColor);
-  Vec3f ng = surface.geometricNormal, ns = surface.shadingNormal;
-  if (!bsdf.transmits() && dot(ng, wo) < 0) {
-    // Opaque surfaces are two-sided: shade the side the ray arrived on.
-    ng = -ng;
-    ns = -ns;
+// A batch of re-trace queries (a few hundred keep the arrays in cache).
+template <typename Path>
+struct WavefrontRenderer<Path>::RetraceBatch {
+  static constexpr size_t kCapacity = 256;
+  TraceRay queries[kCapacity];
+  TraceQuery kinds[kCapacity];
+  TraceHit found[kCapacity];
+  uint8_t unused[kCapacity];
+  size_t retraced = 0;
+
+  // Path i's hit: re-traced, or the one kept.
+  const TraceHit& hitOf(size_t i, const TraceHit& kept) const {
+    return retraced && kinds[i] == TraceQuery::Closest ? found[i] : kept;
   }
-  Frame frame(ns);
-  const Vec3f woLocal = frame.toLocal(wo);
-  const RandomStream random(RandomKey{pixel, sampleIndex, bounce, settings_.seed});
-  int spawned = 0;
+};
 
-  // Continuation, then the shadow ray: the queue order. Each is written in
-  // place (no copy of a half-written path through the stack); the two draw
-  // different random dimensions, so the order of computing them is free.
-  [&] {
-    BsdfSample bs;
-    Vec2f u{random(RandomDim::BsdfU), random(RandomDim::BsdfV)};
-    if (!bsdf.sample(woLocal, random(RandomDim::BsdfLobe), u, bs)) return;
-    Vec3f wi = frame.toWorld(bs.wi);
-    if (!bsdf.transmits() && dot(wi, ng) <= 0) return;  // shading normal sent it below the surface
-    Vec3f next = throughput * bs.weight;
-    if (bounce + 1 >= kRouletteStartBounce) {
-      float q = std::min(1.0f, maxComponent(next));
-      if (random(RandomDim::Roulette) >= q) return;
-      next = next * (1 / q);
+template <typename Path>
+typename WavefrontRenderer<Path>::ShadeCounts WavefrontRenderer<Path>::shadePathRange(
+    const Workspace& ws, size_t begin, size_t end, uint32_t sampleIndex, uint32_t bounce,
+    FrameBuffer& frameBuffer, Path* continuations, Path* shadowRays) const {
+  const PathQueue<Path>& paths = ws.rays.paths;
+  const std::vector<TraceHit>& kept = ws.hits;
+  // One rank traced every ray itself and kept every hit: nothing to re-trace
+  // unless asked to (--retrace all).
+  const bool mayRetrace = settings_.retraceAll || !chunked();
+  ShadeCounts counts;
+  RetraceBatch batch;
+  for (size_t first = begin; first < end; first += RetraceBatch::kCapacity) {
+    const size_t m = std::min(RetraceBatch::kCapacity, end - first);
+    if (mayRetrace) counts.retraced += retraceBatch(&paths[first], &kept[first], m, batch);
+    for (size_t i = 0; i < m; ++i) {
+      const Path& path = paths[first + i];
+      const TraceHit& hit = batch.hitOf(i, kept[first + i]);
+      if (path.hasHit() && !hit.valid()) {
+        ++counts.retraceMisses;  // the re-trace lost the hit (counted: never seen in tests)
+        continue;
+      }
+      const auto spawned =
+          shading_.shadePath(path, hit, sampleIndex, bounce, frameBuffer,
+                             continuations[counts.continuations], shadowRays[counts.shadowRays]);
+      counts.continuations += spawned.continuation;
+      counts.shadowRays += spawned.shadowRay;
     }
-    if (!usable(next)) return;
-    Vec3f origin = offsetRayOrigin(surface.position, dot(wi, ng) > 0 ? ng : -ng);
-    setRay(out[spawned++], origin, wi, kInfinity, next, pixel,
-           bs.delta ? uint32_t(kPathAfterSpecular) : 0u);
-  }();
-
-  // Next-event estimation: exactly one light sample.
-  if (bsdf.isDelta()) return spawned;
-  LightSample ls;
-  Vec2f u{random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)};
-  if (!lights_.sample(surface.position, frame, bsdf.transmits(), random(RandomDim::LightSelect), u,
-                      ls))
-    return spawned;
-  Vec3f f = bsdf.eval(woLocal, frame.toLocal(ls.direction));
-  Vec3f contribution = throughput * f * ls.radiance * (1 / ls.pdf);
-  // Only light arriving on the geometric side it is evaluated for.
-  bool sameSide = bsdf.transmits() || dot(ls.direction, ng) > 0;
-  if (!sameSide || !usable(contribution)) return spawned;
-  Vec3f origin = offsetRayOrigin(surface.position, dot(ls.direction, ng) > 0 ? ng : -ng);
-  Path& shadow = out[spawned++];
-  const Vec3f d = setRay(shadow, origin, ls.direction, kInfinity, contribution, pixel, kPathShadow);
-  if (std::isfinite(ls.distance)) {
-    // Stop short of the emitter along the ray as stored: its half-precision
-    // direction is off by up to ~3e-4 rad, so it meets the emitter's plane up
-    // to 3e-4 / cos(theta_light) (relative) before or after the sampled point,
-    // more than the 1e-4 margin; the emitter then shadowed itself (6% too
-    // dark under a square light, 11% inside a closed emitter).
-    Vec3f toLight = surface.position + ls.direction * ls.distance - origin;
-    float t = length(toLight) / length(d);
-    float along = dot(d, ls.normal);
-    if (along != 0) {
-      float tPlane = dot(toLight, ls.normal) / along;
-      if (tPlane > 0) t = std::min(t, tPlane);
-    }
-    shadow.tmax = t * (1 - 1e-4f);
   }
-  return spawned;
+  return counts;
+}
+
+template <typename Path>
+size_t WavefrontRenderer<Path>::retraceBatch(const Path* paths, const TraceHit* kept, size_t count,
+                                             RetraceBatch& batch) const {
+  size_t needed = 0;
+  for (size_t i = 0; i < count; ++i) {
+    const Path& p = paths[i];
+    const bool retrace = p.hasHit() && (settings_.retraceAll || !kept[i].valid());
+    batch.kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
+    if (retrace) {
+      batch.queries[i] = retraceQuery(p.origin, p.dir(), p.tmax);
+      ++needed;
+    }
+  }
+  if (needed)
+    geometry_.traceBatch(std::span(batch.queries, count), std::span(batch.kinds, count),
+                         std::span(batch.found, count), std::span(batch.unused, count));
+  batch.retraced = needed;
+  return needed;
 }
 
 template class WavefrontRenderer<Path8>;

@@ -1,12 +1,15 @@
-// The path tracer every rank runs, as a wavefront: queues of compact paths,
-// one method per stage, the render loop reading like the algorithm.
+// The path tracer every rank runs, as a wavefront: typed queues of compact
+// paths (trace/path.h: RayQueues, paths and shadow rays), one method per
+// stage, the render loop reading like the algorithm.
 //
 // One wavefront is one sample of every pixel this rank generates (on one
 // rank: of a chunk of pixels, each chunk on one thread, see renderFrame). Per
-// bounce: traverse (local trace, and forwarding when distributed), then one
-// shading pass (add unoccluded shadow rays to the frame buffer; shade paths:
-// re-trace, emission, one light sample, one continuation). A pixel sample has at most two live
-// rays (its path and its shadow ray), so queues are bounded by the image size.
+// bounce: traverse (local trace, and forwarding when distributed), then
+// shade: shadow rays add their light where nothing was in the way; paths are
+// shaded (re-trace where the hit is not kept, then the steps of
+// render/path_shading.h: emission, one continuation, one light sample), each
+// kind of new ray into its own queue. A pixel sample has at most two live rays
+// (its path and its shadow ray), so queues are bounded by the image size.
 #pragma once
 
 #include <cstdint>
@@ -19,9 +22,9 @@
 #include "render/camera.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
+#include "render/path_shading.h"
 #include "render/ray_traversal.h"
 #include "render/render_stats.h"
-#include "render/surface.h"
 
 namespace ferry {
 
@@ -62,11 +65,16 @@ class WavefrontRenderer {
   // A wavefront's queues and scratch, reused from wavefront to wavefront (no
   // allocation per bounce).
   struct Workspace {
-    PathQueue<Path> rays, next, staging;
-    std::vector<TraceHit> hits;
-    std::vector<uint32_t> blockCounts;
-    std::vector<uint32_t>
-        primaryPixels;  // many ranks: the pixels whose camera paths are this rank's
+    RayQueues<Path> rays, next, staging;
+    std::vector<TraceHit> hits;  // per rays.paths entry: its kept hit (invalid: re-trace)
+    std::vector<uint32_t> pathCounts, shadowCounts;  // per block: rays it wrote to staging
+    std::vector<uint32_t> primaryPixels;  // many ranks: pixels whose camera paths are this rank's
+  };
+  struct RetraceBatch;
+  // What shading a range of paths made and counted.
+  struct ShadeCounts {
+    uint32_t continuations = 0, shadowRays = 0;
+    uint64_t retraced = 0, retraceMisses = 0;
   };
   // One rank (the traversal keeps every primary): the image goes through in
   // chunks, each wavefront on one thread, whose stages then loop instead of
@@ -78,27 +86,37 @@ class WavefrontRenderer {
   // The camera rays of pixels [first, last) for this sample, into ws.rays.
   void generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
                           FrameStats& stats);
-  // Adds each unoccluded shadow ray's contribution and shades every other
-  // path (re-tracing those without a valid hit); reads ws.rays and ws.hits,
-  // writes the next wavefront (continuations and shadow rays) to ws.next.
-  // One pass: within a wavefront no pixel is written twice (a pixel sample's
-  // shadow ray comes from a non-delta vertex, so its path does not count
-  // emission there).
+  // Shadow rays add their light, paths are shaded; reads ws.rays and ws.hits,
+  // writes the next wavefront to ws.next. Within a wavefront no pixel is
+  // written twice (a pixel sample's shadow ray comes from a non-delta vertex,
+  // so its path does not count emission there): the two kinds are shaded in
+  // any order, and a pixel's sum does not depend on the queue order.
   void shade(Workspace& ws, uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
              FrameStats& stats);
-  // Shades path i given its hit (invalid: escaped or re-trace missed); writes
-  // its continuation and shadow ray, in that order, to out; returns how many.
-  int shadeOne(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
-               FrameBuffer& frameBuffer, Path* out, uint64_t& misses) const;
+  // Each unoccluded shadow ray's contribution, to the frame buffer.
+  void addUnoccludedLight(const PathQueue<Path>& shadowRays, FrameBuffer& frameBuffer) const;
+  // Shades ws.rays.paths: continuations to ws.next.paths, shadow rays to
+  // ws.next.shadowRays, each in path order (blocks concatenated in order).
+  void shadePaths(Workspace& ws, uint32_t sampleIndex, uint32_t bounce, FrameBuffer& frameBuffer,
+                  FrameStats& stats);
+  // Shades paths [begin, end) in batches (re-trace, then each path), writing
+  // their continuations from `continuations` on and their shadow rays from
+  // `shadowRays` on.
+  ShadeCounts shadePathRange(const Workspace& ws, size_t begin, size_t end, uint32_t sampleIndex,
+                             uint32_t bounce, FrameBuffer& frameBuffer, Path* continuations,
+                             Path* shadowRays) const;
+  // Re-traces, as one batched query, each of paths[0, count) that hit
+  // something whose hit this rank does not keep (every one that hit, with
+  // --retrace all); returns how many. The one call shading makes to the trace.
+  size_t retraceBatch(const Path* paths, const TraceHit* kept, size_t count,
+                      RetraceBatch& batch) const;
 
-  const Scene& scene_;
-  const LocalGeometry& geometry_;
-  const LightSampler& lights_;
+  const LocalGeometry& geometry_;  // for the re-trace
   RayTraversal<Path>& traversal_;
   RenderSettings settings_;
   Camera camera_;
-  SurfaceTable surfaces_;  // for reconstructSurface
-  Workspace workspace_;    // many ranks: the one whole-image wavefront
+  PathShading<Path> shading_;
+  Workspace workspace_;  // many ranks: the one whole-image wavefront
   tbb::enumerable_thread_specific<Workspace> chunkWorkspaces_;  // one rank: one per thread
 };
 

@@ -164,4 +164,23 @@ struct UninitializedAllocator : std::allocator<T> {
 template <typename Path>
 using PathQueue = std::vector<Path, UninitializedAllocator<Path>>;
 
+// A wavefront's rays, each kind in its own queue: paths (their closest hit
+// is wanted; shading continues them) and shadow rays (any hit decides;
+// shading adds the light of the unoccluded ones). Stages read and write the
+// kind they handle, so no stage sorts rays by flag. The rays still carry
+// kPathShadow: on the wire both kinds travel as one queue (the distributed
+// traversal exchanges them together and sorts what it returns by kind), and
+// the trace asks each ray the question its kind needs.
+template <typename Path>
+struct RayQueues {
+  PathQueue<Path> paths;
+  PathQueue<Path> shadowRays;
+
+  size_t size() const { return paths.size() + shadowRays.size(); }
+  void clear() {
+    paths.clear();
+    shadowRays.clear();
+  }
+};
+
 }  // namespace ferry

@@ -1,0 +1,158 @@
+#include "render/path_shading.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "scene/scene.h"
+
+namespace ferry {
+namespace {
+
+// Paths whose bounce reaches this start playing Russian roulette.
+constexpr uint32_t kRouletteStartBounce = 3;
+
+// Contributions that cannot be represented are dropped rather than poisoning the image.
+[[gnu::always_inline]] inline bool usable(Vec3f c) {
+  return isFinite(c) && maxComponent(c) > 0;
+}
+
+}  // namespace
+
+template <typename Path>
+PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth,
+                               uint32_t seed)
+    : scene_(scene), lights_(lights), surfaces_(scene), maxDepth_(maxDepth), seed_(seed) {}
+
+template <typename Path>
+typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
+    const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
+    FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const {
+  if (!path.hasHit()) {
+    addEscapedLight(path, frameBuffer);
+    return {};
+  }
+  const PathVertex vertex = surfaceVertex(path, hit, bounce);
+  addEmission(vertex, frameBuffer);
+  if (bounce >= maxDepth_) return {};
+  const VertexScattering scattering = shadingFrame(vertex, sampleIndex);
+  Spawned spawned;
+  spawned.continuation = sampleContinuation(vertex, scattering, continuation);
+  // (A delta vertex takes no light sample: its emission on the next vertex
+  // counts instead. So a pixel's path and shadow ray never both write the
+  // frame buffer in one wavefront, which lets shading add shadow rays and
+  // shade paths in any order.)
+  if (!scattering.bsdf.isDelta()) spawned.shadowRay = sampleLight(vertex, scattering, shadowRay);
+  return spawned;
+}
+
+// Escaped: light from infinity counts only where no light sample covered it.
+template <typename Path>
+[[gnu::always_inline]] inline void PathShading<Path>::addEscapedLight(
+    const Path& path, FrameBuffer& frameBuffer) const {
+  if (!path.has(kPathAfterSpecular)) return;
+  const Vec3f l = path.weight() * lights_.background(normalize(path.dir()));
+  if (usable(l)) frameBuffer.add(path.pixel(), l);
+}
+
+template <typename Path>
+[[gnu::always_inline]] inline PathVertex PathShading<Path>::surfaceVertex(const Path& path,
+                                                                          const TraceHit& hit,
+                                                                          uint32_t bounce) const {
+  return PathVertex{path.pixel(),
+                    bounce,
+                    path.weight(),
+                    normalize(-path.dir()),
+                    path.has(kPathAfterSpecular),
+                    reconstructSurface(scene_, surfaces_, hit)};
+}
+
+// Emission counts, like escaped light, only where no light sample covered it.
+template <typename Path>
+[[gnu::always_inline]] inline void PathShading<Path>::addEmission(const PathVertex& vertex,
+                                                                  FrameBuffer& frameBuffer) const {
+  const Material& material = *vertex.surface.material;
+  if (!vertex.afterSpecular || !material.isEmissive()) return;
+  const Vec3f l = vertex.throughput * material.emission;
+  if (usable(l)) frameBuffer.add(vertex.pixel, l);
+}
+
+template <typename Path>
+[[gnu::always_inline]] inline VertexScattering PathShading<Path>::shadingFrame(
+    const PathVertex& vertex, uint32_t sampleIndex) const {
+  const Bsdf bsdf = Bsdf::fromMaterial(*vertex.surface.material, vertex.surface.baseColor);
+  Vec3f ng = vertex.surface.geometricNormal, ns = vertex.surface.shadingNormal;
+  if (!bsdf.transmits() && dot(ng, vertex.wo) < 0) {
+    // Opaque surfaces are two-sided: shade the side the ray arrived on.
+    ng = -ng;
+    ns = -ns;
+  }
+  const Frame frame(ns);
+  return VertexScattering{bsdf, ng, frame, frame.toLocal(vertex.wo),
+                          RandomStream(RandomKey{vertex.pixel, sampleIndex, vertex.bounce, seed_})};
+}
+
+// The continuation is written in place (no copy of a half-written path
+// through the stack). It and the light sample draw different random
+// dimensions, so the order of computing them is free.
+template <typename Path>
+[[gnu::always_inline]] inline bool PathShading<Path>::sampleContinuation(
+    const PathVertex& vertex, const VertexScattering& scattering, Path& continuation) const {
+  const RandomStream& random = scattering.random;
+  BsdfSample bs;
+  const Vec2f u{random(RandomDim::BsdfU), random(RandomDim::BsdfV)};
+  if (!scattering.bsdf.sample(scattering.woLocal, random(RandomDim::BsdfLobe), u, bs)) return false;
+  const Vec3f wi = scattering.frame.toWorld(bs.wi);
+  const Vec3f ng = scattering.ng;
+  // The shading normal sent it below the surface.
+  if (!scattering.bsdf.transmits() && dot(wi, ng) <= 0) return false;
+  Vec3f weight = vertex.throughput * bs.weight;
+  if (!survivesRoulette(vertex, scattering, weight) || !usable(weight)) return false;
+  const Vec3f origin = offsetRayOrigin(vertex.surface.position, dot(wi, ng) > 0 ? ng : -ng);
+  makeRay(continuation, origin, wi, kInfinity, weight, vertex.pixel,
+          bs.delta ? uint32_t(kPathAfterSpecular) : 0u);
+  return true;
+}
+
+// Russian roulette from kRouletteStartBounce on: a path survives with
+// probability min(1, its largest weight), and its weight is divided by that.
+template <typename Path>
+[[gnu::always_inline]] inline bool PathShading<Path>::survivesRoulette(
+    const PathVertex& vertex, const VertexScattering& scattering, Vec3f& weight) const {
+  if (vertex.bounce + 1 < kRouletteStartBounce) return true;
+  const float q = std::min(1.0f, maxComponent(weight));
+  if (scattering.random(RandomDim::Roulette) >= q) return false;
+  weight = weight * (1 / q);
+  return true;
+}
+
+// Next-event estimation: exactly one light sample, and its shadow ray
+// carrying the contribution the light makes if nothing is in the way.
+template <typename Path>
+[[gnu::always_inline]] inline bool PathShading<Path>::sampleLight(
+    const PathVertex& vertex, const VertexScattering& scattering, Path& shadowRay) const {
+  const RandomStream& random = scattering.random;
+  const Bsdf& bsdf = scattering.bsdf;
+  const Vec3f position = vertex.surface.position;
+  LightSample ls;
+  const Vec2f u{random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)};
+  if (!lights_.sample(position, scattering.frame, bsdf.transmits(), random(RandomDim::LightSelect),
+                      u, ls))
+    return false;
+  const Vec3f f = bsdf.eval(scattering.woLocal, scattering.frame.toLocal(ls.direction));
+  const Vec3f contribution = vertex.throughput * f * ls.radiance * (1 / ls.pdf);
+  // Only light arriving on the geometric side it is evaluated for.
+  const Vec3f ng = scattering.ng;
+  const bool sameSide = bsdf.transmits() || dot(ls.direction, ng) > 0;
+  if (!sameSide || !usable(contribution)) return false;
+  const Vec3f origin = offsetRayOrigin(position, dot(ls.direction, ng) > 0 ? ng : -ng);
+  const Vec3f stored =
+      makeRay(shadowRay, origin, ls.direction, kInfinity, contribution, vertex.pixel, kPathShadow);
+  if (std::isfinite(ls.distance)) shadowRay.tmax = shadowRayTmax(position, origin, stored, ls);
+  return true;
+}
+
+template class PathShading<Path8>;
+template class PathShading<Path64>;
+template class PathShading<PathReplay>;
+
+}  // namespace ferry

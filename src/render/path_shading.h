@@ -1,0 +1,127 @@
+// Shading one path vertex, in named steps (the wavefront renderer's shade
+// stage runs shadePath for every path that traversal left on this rank):
+//
+//   escaped        a path that hit nothing: the light from infinity
+//   surface        the hit's surface rebuilt (the path carries no hit data)
+//   emission       the light the surface emits back along the path
+//   shading frame  the BSDF, both normals turned to the side the path came
+//                  from, the local frame, the vertex's random numbers
+//   BSDF sample    the continuation, after Russian roulette
+//   light sample   next-event estimation: one light, one shadow ray, its tmax
+//
+// Without MIS the path counts emitted and escaped light only after the camera
+// or a delta vertex (kPathAfterSpecular), where no light sample covered it,
+// and a delta vertex takes no light sample. The vertex travels through the
+// steps as two structs: PathVertex (where the path is, what it brings) and
+// VertexScattering (how the vertex scatters), so a step that needs more (MIS
+// weights, a layered BSDF, a bumped shading normal) changes one of them and
+// the steps that read it.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+
+#include "core/math.h"
+#include "core/random.h"
+#include "render/bsdf.h"
+#include "render/frame_buffer.h"
+#include "render/lights.h"
+#include "render/surface.h"
+#include "trace/local_geometry.h"
+#include "trace/path.h"
+
+namespace ferry {
+
+struct Scene;
+
+// A path at a surface (the surface step): what it brings and where it is.
+struct PathVertex {
+  uint32_t pixel;
+  uint32_t bounce;
+  Vec3f throughput;    // of the path arriving here
+  Vec3f wo;            // unit, back towards where the path came from
+  bool afterSpecular;  // the previous vertex was the camera or a delta lobe
+  SurfacePoint surface;
+};
+
+// How the vertex scatters light (the shading-frame step).
+struct VertexScattering {
+  Bsdf bsdf;
+  Vec3f ng;             // geometric normal, on wo's side unless the BSDF transmits
+  Frame frame;          // about the shading normal, turned with ng
+  Vec3f woLocal;        // wo in `frame`
+  RandomStream random;  // this vertex's numbers: (pixel, sample, bounce, seed)
+};
+
+// Makes `p` a new ray (no traversal history); returns its direction as stored
+// (quantized to halves), without reading it back.
+template <typename Path>
+[[gnu::always_inline]] inline Vec3f makeRay(Path& p, Vec3f origin, Vec3f direction, float tmax,
+                                            Vec3f weight, uint32_t pixel, uint32_t flags) {
+  p.origin = origin;
+  Vec3f stored = p.setDirAndWeight(direction, weight);
+  p.tmax = tmax;
+  p.setPixelAndFlags(pixel, flags);
+  p.clearHistory();
+  return stored;
+}
+
+// Where a shadow ray from `origin` along `storedDir` (its direction as
+// stored) to the sampled point of a finite light stops: short of the sampled
+// point and of the emitter's plane along the ray as stored. Its
+// half-precision direction is off by up to ~3e-4 rad, so it meets the
+// emitter's plane up to 3e-4 / cos(theta_light) (relative) before or after
+// the sampled point, more than the 1e-4 margin; the emitter then shadowed
+// itself (6% too dark under a square light, 11% inside a closed emitter).
+[[gnu::always_inline]] inline float shadowRayTmax(Vec3f position, Vec3f origin, Vec3f storedDir,
+                                                  const LightSample& light) {
+  const Vec3f toLight = position + light.direction * light.distance - origin;
+  float t = length(toLight) / length(storedDir);
+  const float along = dot(storedDir, light.normal);
+  if (along != 0) {
+    const float tPlane = dot(toLight, light.normal) / along;
+    if (tPlane > 0) t = std::min(t, tPlane);
+  }
+  return t * (1 - 1e-4f);
+}
+
+template <typename Path>
+class PathShading {
+ public:
+  // `maxDepth`: scattering events (1 = direct lighting only); `seed`: the
+  // render's random seed.
+  PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed);
+
+  // What shading one path made: each is written only when made.
+  struct Spawned {
+    bool continuation = false;
+    bool shadowRay = false;
+  };
+  // Shades one path, given its hit when it has one (path.hasHit(); the hit
+  // must then be valid): adds the light it finds to the frame buffer, and
+  // writes its continuation to `continuation` and its shadow ray to `shadowRay`.
+  Spawned shadePath(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
+                    FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const;
+
+ private:
+  // The steps, in shadePath's order (defined in path_shading.cpp and inlined
+  // into shadePath: this is the hot loop of a frame).
+  inline void addEscapedLight(const Path& path, FrameBuffer& frameBuffer) const;
+  inline PathVertex surfaceVertex(const Path& path, const TraceHit& hit, uint32_t bounce) const;
+  inline void addEmission(const PathVertex& vertex, FrameBuffer& frameBuffer) const;
+  inline VertexScattering shadingFrame(const PathVertex& vertex, uint32_t sampleIndex) const;
+  inline bool sampleContinuation(const PathVertex& vertex, const VertexScattering& scattering,
+                                 Path& continuation) const;
+  inline bool survivesRoulette(const PathVertex& vertex, const VertexScattering& scattering,
+                               Vec3f& weight) const;
+  inline bool sampleLight(const PathVertex& vertex, const VertexScattering& scattering,
+                          Path& shadowRay) const;
+
+  const Scene& scene_;
+  const LightSampler& lights_;
+  SurfaceTable surfaces_;  // for reconstructSurface
+  uint32_t maxDepth_;
+  uint32_t seed_;
+};
+
+}  // namespace ferry
