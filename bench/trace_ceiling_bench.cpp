@@ -62,7 +62,6 @@ class RecordingTraversal final : public RayTraversal<Path8> {
   explicit RecordingTraversal(const LocalGeometry& geometry) : inner_(geometry) {}
   int rank() const override { return 0; }
   int rankCount() const override { return 1; }
-  bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
   void traverse(RayQueues<Path8>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override {

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <chrono>
@@ -63,17 +64,62 @@ DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,
 }
 
 template <typename Path>
-bool DistributedTraversal<Path>::keepsPrimary(uint32_t pixel, const TraceRay& ray,
-                                              FrameStats& stats) const {
-  const int ranks = comm_.size();
-  if (mode_ != ForwardingMode::Proxies) return int(pixel % uint32_t(ranks)) == comm_.rank();
+int DistributedTraversal<Path>::primaryOwner(uint32_t pixel, const TraceRay& ray) const {
+  const uint32_t ranks = uint32_t(comm_.size());
   // Proxy-guided: the owner of the closest proxy keeps it (pixel id breaks
   // ties among replicas); rays that hit no proxy are dealt by pixel id.
-  ++stats.proxyQueries;
   ProxyBvh::Hit hit = proxies_.closest(ray.origin, ray.direction, ray.tmax, 0);
-  if (!hit.found()) return int(pixel % uint32_t(ranks)) == comm_.rank();
-  const RankSet& owners = proxies_.proxies()[hit.proxy].owners;
-  return owners.nth(int(pixel % uint32_t(owners.count()))) == comm_.rank();
+  if (!hit.found()) return int(pixel % ranks);
+  const RankSet& owners = proxies_.proxies()[size_t(hit.proxy)].owners;
+  return owners.nth(int(pixel % uint32_t(owners.count())));
+}
+
+template <typename Path>
+void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
+                                               const CameraRayOf& cameraRay,
+                                               std::vector<uint32_t>& pixels, FrameStats& stats) {
+  const int rank = comm_.rank();
+  const uint32_t ranks = uint32_t(comm_.size());
+  // Each pixel is decided once, by the rank it is dealt to (pixel % ranks),
+  // and sent to its owner as a 4-byte pixel id: one proxy query per camera
+  // path in all, instead of one on every rank (the owner is the same either
+  // way, so the image and every counter but the queries are unchanged).
+  const uint32_t firstDealt = first + (uint32_t(rank) + ranks - first % ranks) % ranks;
+  const size_t dealt = firstDealt < last ? (last - firstDealt + ranks - 1) / ranks : 0;
+  auto pixelOf = [&](size_t k) { return firstDealt + uint32_t(k) * ranks; };
+  if (mode_ != ForwardingMode::Proxies) {
+    // Ring and broadcast have no proxies to guide them: every rank keeps its deal.
+    pixels.resize(dealt);
+    for (size_t k = 0; k < dealt; ++k) pixels[k] = pixelOf(k);
+    return;
+  }
+  std::vector<int32_t> owner(dealt);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, dealt, 1024), [&](const auto& range) {
+    for (size_t k = range.begin(); k != range.end(); ++k)
+      owner[k] = primaryOwner(pixelOf(k), cameraRay(pixelOf(k)));
+  });
+  stats.proxyQueries += dealt;
+  // Pixel ids by owner, each owner's in increasing order.
+  std::vector<int> counts(ranks, 0), offsets(ranks, 0);
+  for (int32_t o : owner) ++counts[size_t(o)];
+  for (uint32_t r = 1; r < ranks; ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
+  std::vector<uint32_t> send(dealt);
+  std::vector<int> cursor = offsets;
+  for (size_t k = 0; k < dealt; ++k) send[size_t(cursor[size_t(owner[k])]++)] = pixelOf(k);
+  std::vector<int> receiveCounts = comm_.exchangeCounts(counts);
+  std::vector<int> receiveOffsets(ranks, 0);
+  for (uint32_t r = 1; r < ranks; ++r)
+    receiveOffsets[r] = receiveOffsets[r - 1] + receiveCounts[r - 1];
+  pixels.resize(size_t(receiveOffsets[ranks - 1]) + size_t(receiveCounts[ranks - 1]));
+  auto toBytes = [](std::vector<int> v) {
+    for (int& x : v) x *= int(sizeof(uint32_t));
+    return v;
+  };
+  comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), pixels.data(),
+                      toBytes(receiveCounts), toBytes(receiveOffsets));
+  primaryBytesSent_ += (dealt - size_t(counts[size_t(rank)])) * sizeof(uint32_t);
+  // Each source's ids are increasing; the queue wants them all in pixel order.
+  std::sort(pixels.begin(), pixels.end());
 }
 
 template <typename Path>

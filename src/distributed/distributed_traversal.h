@@ -22,7 +22,8 @@ class DistributedTraversal final : public RayTraversal<Path> {
                        const Partition& partition, ForwardingMode mode);
   int rank() const override { return comm_.rank(); }
   int rankCount() const override { return comm_.size(); }
-  bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const override;
+  void primaryPixels(uint32_t first, uint32_t last, const CameraRayOf& cameraRay,
+                     std::vector<uint32_t>& pixels, FrameStats& stats) override;
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override;
   bool anyRaysLeft(size_t localRays) override { return comm_.sum(uint64_t(localRays)) > 0; }
@@ -33,8 +34,12 @@ class DistributedTraversal final : public RayTraversal<Path> {
   uint64_t revisits() const { return revisits_; }
   // Rays received, counted on the receiving side (an independent count of forwards).
   uint64_t received() const { return received_; }
+  // Bytes of pixel ids this rank sent to assign camera paths to their owners.
+  uint64_t primaryBytesSent() const { return primaryBytesSent_; }
 
  private:
+  // The rank whose camera path `pixel` is: the owner of the closest proxy.
+  int primaryOwner(uint32_t pixel, const TraceRay& ray) const;
   // Both take the wavefront as it travels (both kinds in one queue) and add
   // the rays left here to shade to `ready`, by kind (readyHits: per path).
   void traverseForwarding(PathQueue<Path> moving, RayQueues<Path>& ready,
@@ -62,6 +67,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   bool firstExchange_ = true;
   uint64_t revisits_ = 0;
   uint64_t received_ = 0;
+  uint64_t primaryBytesSent_ = 0;
 };
 
 }  // namespace ferry

@@ -126,7 +126,6 @@ struct WholeImageTraversal final : RayTraversal<Path> {
   explicit WholeImageTraversal(const LocalGeometry& geometry) : local(geometry) {}
   int rank() const override { return 0; }
   int rankCount() const override { return 1; }
-  bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& e,
                 FrameStats& s) override {
     local.traverse(rays, pathHits, e, s);

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -21,16 +22,29 @@
 
 namespace ferry {
 
+// The camera ray of a pixel for the current sample.
+using CameraRayOf = std::function<TraceRay(uint32_t pixel)>;
+
 template <typename Path>
 class RayTraversal {
  public:
   virtual ~RayTraversal() = default;
   virtual int rank() const = 0;
   virtual int rankCount() const = 0;
-  // Proxy-guided primary rays: whether this rank generates the camera path of `pixel`.
-  virtual bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const = 0;
+  // Proxy-guided primary rays: sets `pixels` to the pixels of [first, last)
+  // whose camera path this rank generates for the current sample, in
+  // increasing order; `cameraRay(pixel)` is the pixel's camera ray as the
+  // path stores it. Collective when distributed (every rank calls it with
+  // the same range). Default: every pixel is this rank's.
+  virtual void primaryPixels(uint32_t first, uint32_t last, const CameraRayOf& cameraRay,
+                             std::vector<uint32_t>& pixels, FrameStats& stats) {
+    (void)cameraRay;
+    (void)stats;
+    pixels.resize(last - first);
+    for (uint32_t p = first; p != last; ++p) pixels[p - first] = p;
+  }
   // Whether every camera path is generated here (one rank): then the renderer
-  // skips keepsPrimary and writes the camera rays straight into the queue.
+  // skips primaryPixels and writes the camera rays straight into the queue.
   virtual bool keepsAllPrimaries() const { return false; }
   // Traces all of `rays` (new paths and shadow rays, made on this rank) to
   // completion; on return `rays` holds exactly the rays this rank must shade,
@@ -73,7 +87,6 @@ class LocalTraversal final : public RayTraversal<Path> {
   explicit LocalTraversal(const LocalGeometry& geometry) : geometry_(geometry) {}
   int rank() const override { return 0; }
   int rankCount() const override { return 1; }
-  bool keepsPrimary(uint32_t, const TraceRay&, FrameStats&) const override { return true; }
   bool keepsAllPrimaries() const override { return true; }
   // Every ray is traced once, here: every hit is known.
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters&,

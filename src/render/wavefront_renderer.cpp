@@ -146,28 +146,23 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
       cameraRay(pixel, px, py, rays[pixel - first]);
     });
   } else {
-    const size_t blocks = (size_t(pixels) + kBlock - 1) / kBlock;
-    PathQueue<Path>& staging = ws.staging.paths;
-    staging.resize(pixels);
-    ws.pathCounts.assign(blocks, 0);
-    std::atomic<uint64_t> proxyQueries{0};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 1), [&](const auto& range) {
-      FrameStats local;
-      for (size_t b = range.begin(); b != range.end(); ++b) {
-        const uint32_t begin = uint32_t(b * kBlock),
-                       end = uint32_t(std::min<size_t>(pixels, begin + kBlock));
-        uint32_t kept = 0;
-        forPixels(first + begin, first + end, [&](uint32_t pixel, uint32_t px, uint32_t py) {
-          Path& p = staging[begin + kept];
-          cameraRay(pixel, px, py, p);
-          kept += traversal_.keepsPrimary(pixel, TraceRay{p.origin, p.dir(), 0, kInfinity}, local);
-        });
-        ws.pathCounts[b] = kept;
-      }
-      proxyQueries += local.proxyQueries;
+    // Many ranks: the traversal says which pixels' paths are this rank's
+    // (proxy-guided, one collective), then their camera rays go into the
+    // queue in pixel order.
+    traversal_.primaryPixels(
+        first, last,
+        [&](uint32_t pixel) {
+          Path p;
+          cameraRay(pixel, pixel % width, pixel / width, p);
+          return TraceRay{p.origin, p.dir(), 0, kInfinity};
+        },
+        ws.primaryPixels, stats);
+    const std::vector<uint32_t>& mine = ws.primaryPixels;
+    rays.resize(mine.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mine.size(), kBlock), [&](const auto& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i)
+        cameraRay(mine[i], mine[i] % width, mine[i] / width, rays[i]);
     });
-    stats.proxyQueries += proxyQueries;
-    concatenateBlocks(staging, kBlock, ws.pathCounts, rays);
   }
   stats.cameraPaths += rays.size();
   stats.times.generate += secondsSince(start);

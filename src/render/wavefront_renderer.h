@@ -68,6 +68,7 @@ class WavefrontRenderer {
     RayQueues<Path> rays, next, staging;
     std::vector<TraceHit> hits;  // per rays.paths entry: its kept hit (invalid: re-trace)
     std::vector<uint32_t> pathCounts, shadowCounts;  // per block: rays it wrote to staging
+    std::vector<uint32_t> primaryPixels;  // many ranks: pixels whose camera paths are this rank's
   };
   struct RetraceBatch;
   // What shading a range of paths made and counted.

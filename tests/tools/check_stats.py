@@ -2,7 +2,8 @@
 """Checks the invariants of a multi-rank render's --stats JSON: no ray traced
 twice on a rank, rays forwarded (counted by senders) equal rays received
 (counted by receivers), every shading re-trace found its hit, and, with proxy
-forwarding, every rank asked the proxies about every camera ray."""
+forwarding, the proxies were asked about every camera ray (once: the rank a
+pixel is dealt to decides its owner for all)."""
 import json
 import sys
 
@@ -15,6 +16,6 @@ assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
 if s["settings"]["forwarding"] == "proxies" and s["settings"]["ranks"] > 1:
     camera = r["total"]["camera_paths"]
     queries = r["total"]["traces"]["proxy_queries"]
-    assert queries >= s["settings"]["ranks"] * camera, f"{queries} proxy queries for {camera} camera paths"
+    assert queries >= camera, f"{queries} proxy queries for {camera} camera paths"
 print(f"  forwarded {fwd}, rounds {r['total']['exchange']['rounds']}, "
       f"max estimated bytes per rank {s['memory']['max_estimated_bytes']:.0f}")
