@@ -233,7 +233,9 @@ TEST_P(DistributedInProcess, EqualsTheOneRankImage) {
       EXPECT_EQ(r.received, r.forwarded);
       EXPECT_EQ(r.retraceMisses, 0u);
       if (variant.mode == ForwardingMode::Proxies) {
-        EXPECT_GE(r.proxyQueries, uint64_t(ranks) * r.cameraPaths);
+        // Every camera path's owner is decided by one proxy query (on the
+        // rank its pixel is dealt to); forwarding decisions add more.
+        EXPECT_GE(r.proxyQueries, r.cameraPaths);
       }
     }
   }
