@@ -19,16 +19,23 @@
 #include "report/partition_report.h"
 #include "scene/light_scene.h"
 #include "scene/scene_summary.h"
+#include "session/session_settings.h"
 
 namespace ferry {
 namespace {
 
-PartitionerOptions partitionerOptions(const PartitionCommandOptions& o) {
+// The flags as the partitioner's options, checked; `kind` names it.
+PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, PartitionerKind kind) {
   PartitionerOptions p;
-  p.name = o.partitioner;
+  p.name = toString(kind);
   p.breakObjects = !o.keepObjectsWhole;
   p.replicationBudget = o.replicationBudget;
   p.meshProxies = o.meshProxies;
+  if (!(p.replicationBudget >= 0 && p.replicationBudget <= 1))
+    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
+                                 p.replicationBudget));
+  if (p.meshProxies < 1 || p.meshProxies > 4096)
+    throw InputError(fmt::format("--mesh-proxies {}: expected 1 to 4096", p.meshProxies));
   return p;
 }
 
@@ -40,22 +47,14 @@ nlohmann::json optionsJson(const PartitionerOptions& p) {
           {"seed", p.seed}};
 }
 
-void checkPartitionerFlags(const PartitionerOptions& p) {
-  checkPartitionerName(p.name);
-  if (!(p.replicationBudget >= 0 && p.replicationBudget <= 1))
-    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
-                                 p.replicationBudget));
-  if (p.meshProxies < 1 || p.meshProxies > 4096)
-    throw InputError(fmt::format("--mesh-proxies {}: expected 1 to 4096", p.meshProxies));
-}
-
 std::string defaultPlotPath(const std::string& report) {
   std::filesystem::path p(report);
   p.replace_extension(".png");
   return p.string();
 }
 
-int writeParts(const PartitionCommandOptions& o, const PartitionerOptions& p, int ranks) {
+int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const PartitionerOptions& p,
+               int ranks) {
   auto start = Clock::now();
   Scene scene = loadScene(o.scene);
   const double loadSeconds = secondsSince(start);
@@ -84,7 +83,7 @@ int writeParts(const PartitionCommandOptions& o, const PartitionerOptions& p, in
   if (stats.split.objectsBroken || stats.split.meshesCut)
     fmt::print("  rewritten first: {} objects broken into meshes, {} meshes cut into {} pieces\n",
                stats.split.objectsBroken, stats.split.meshesCut, stats.split.piecesMade);
-  if (p.name == "best")
+  if (kind == PartitionerKind::Best)
     fmt::print("  replicated {} units, {} over all ranks (budget {:.1f}% = {})\n",
                stats.replicatedUnits, formatBytes(stats.replicatedBytes), 100 * p.replicationBudget,
                formatBytes(uint64_t(p.replicationBudget * double(stats.inputBytes))));
@@ -162,8 +161,8 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
 }
 
 int runPartition(const PartitionCommandOptions& o) {
-  const PartitionerOptions p = partitionerOptions(o);
-  checkPartitionerFlags(p);
+  const PartitionerKind kind = parsePartitioner(o.partitioner);
+  const PartitionerOptions p = partitionerOptions(o, kind);
   if (o.output.empty() && o.report.empty())
     throw InputError(
         "ferry partition: give -o DIR (write parts) or --report FILE.csv (largest part per rank "
@@ -180,18 +179,9 @@ int runPartition(const PartitionCommandOptions& o) {
     if (last > kMaxRanks)
       throw InputError(
           fmt::format("--ranks {}: parts are made for 1 to {} ranks", last, kMaxRanks));
-    writeParts(o, p, last);
+    writeParts(o, kind, p, last);
   }
   return 0;
-}
-
-PartitionerOptions renderPartitionerOptions(const RenderOptions& o) {
-  PartitionerOptions p;
-  p.name = o.partition;
-  p.breakObjects = !o.keepObjectsWhole;
-  p.replicationBudget = o.replicationBudget;
-  p.seed = o.seed;
-  return p;
 }
 
 int runShowPartition(const RenderOptions& o, const Communicator& comm) {
@@ -201,8 +191,7 @@ int runShowPartition(const RenderOptions& o, const Communicator& comm) {
       int width = 0, height = 0;
       parseImageSize(o.size, width, height);
       const std::string& out = o.output;
-      if (out.size() < 4 ||
-          (out.substr(out.size() - 4) != ".png" && out.substr(out.size() - 4) != ".PNG"))
+      if (imageFormatOf(out) != ImageFormat::Png)
         throw InputError(fmt::format("{}: --show-partition writes a PNG", out));
       Scene scene;
       Partition partition;
@@ -214,8 +203,9 @@ int runShowPartition(const RenderOptions& o, const Communicator& comm) {
                             m.partitioner, m.ranks, o.scene);
       } else {
         const int ranks = o.showPartition > 0 ? o.showPartition : comm.size();
-        const PartitionerOptions p = renderPartitionerOptions(o);
-        checkPartitionerFlags(p);
+        SessionSettings settings;
+        applyPartitionerFlags(o, settings);
+        const PartitionerOptions p = partitionerOptions(settings);
         scene = loadScene(o.scene);
         partition = partitionScene(scene, ranks, p);
         title = fmt::format("{}: {}{}, {} ranks", scene.name, p.name,

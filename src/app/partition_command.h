@@ -33,8 +33,6 @@ struct PartitionCommandOptions {
 void addPartitionCommand(CLI::App& app, PartitionCommandOptions& options);
 int runPartition(const PartitionCommandOptions& options);
 
-// The partitioner options `ferry render` passes on.
-PartitionerOptions renderPartitionerOptions(const RenderOptions& options);
 // `ferry render --show-partition[=N]`: rank 0 draws the partition (of a part
 // directory, or made on the fly for N ranks, default the MPI rank count) and
 // writes it as PNG; the other ranks only agree on failure.

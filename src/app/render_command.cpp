@@ -1,133 +1,27 @@
 #include "app/render_command.h"
 
 #include <fmt/format.h>
-#include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
-#include <malloc.h>
 #include <algorithm>
-
 #include <charconv>
-#include <chrono>
-#include <filesystem>
-#include <fstream>
-#include <memory>
 #include <optional>
 
-#include "app/image_output.h"
 #include "app/partition_command.h"
 #include "app/progress.h"
 #include "core/clock.h"
 #include "core/error.h"
-#include "core/fault_injection.h"
-#include "core/process_memory.h"
-#include "distributed/distributed_traversal.h"
+#include "distributed/forwarding.h"
 #include "io/image_io.h"
-#include "io/part_directory.h"
-#include "io/scene_loader.h"
 #include "mpi/communicator.h"
-#include "mpi/compositor.h"
-#include "partition/partition.h"
-#include "partition/partitioner.h"
-#include "render/lights.h"
-#include "render/wavefront_renderer.h"
 #include "scene/scene_summary.h"
-#include "trace/local_geometry.h"
+#include "session/image_file_sink.h"
+#include "session/render_session.h"
+#include "session/session_stats.h"
 #include "trace/path.h"
 
 namespace ferry {
 namespace {
-
-void validate(const RenderOptions& o) {
-  if (o.samplesPerPixel < 1)
-    throw InputError(fmt::format("--spp {}: must be at least 1", o.samplesPerPixel));
-  if (o.frames < 1) throw InputError(fmt::format("--frames {}: must be at least 1", o.frames));
-  if (o.maxDepth < 0)
-    throw InputError(fmt::format("--max-depth {}: must be 0 or more", o.maxDepth));
-  if (o.threads < 0)
-    throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
-  checkOutputPath(o.output);
-  parseForwardingMode(o.forwarding);
-  if (o.pathLayout != "auto" && o.pathLayout != "mask" && o.pathLayout != "replay")
-    throw InputError(
-        fmt::format("--path-layout '{}': expected auto, mask or replay", o.pathLayout));
-  if (o.retrace != "remote" && o.retrace != "all")
-    throw InputError(fmt::format("--retrace '{}': expected remote or all", o.retrace));
-  if (o.instancing != "shared" && o.instancing != "always")
-    throw InputError(fmt::format("--instancing '{}': expected shared or always", o.instancing));
-  checkPartitionerName(o.partition);
-  if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
-    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
-                                 o.replicationBudget));
-}
-
-// Everything a rank holds once set up.
-struct RankSetup {
-  Scene scene;
-  Partition partition;
-  std::vector<int32_t> owned;
-  std::unique_ptr<LocalGeometry> geometry;
-  std::unique_ptr<LightSampler> lights;
-  SceneSummary summary;  // of the whole scene, before releasing what this rank does not own
-  MemoryCost ownedEstimate;
-  double loadSeconds = 0, buildSeconds = 0;
-};
-
-// Per-rank figures gathered for the stats: what each rank really holds.
-struct RankMemory {
-  std::vector<double> estimated, embree, embreePeak, resident, residentPeak;
-};
-
-RankMemory gatherMemory(const Communicator& comm, const RankSetup& setup) {
-  ProcessMemory m = readProcessMemory();
-  int n = comm.size();
-  auto spread = [&](double mine) {
-    std::vector<double> v(n, 0.0);
-    v[comm.rank()] = mine;
-    return comm.sum(std::span<const double>(v));
-  };
-  return {spread(double(setup.ownedEstimate.total())),
-          spread(double(setup.geometry->embreeBytes())),
-          spread(double(setup.geometry->embreePeakBytes())), spread(double(m.residentBytes)),
-          spread(double(m.peakResidentBytes))};
-}
-
-// Sums every counter over ranks (seconds: the slowest rank).
-FrameStats reduceFrameStats(const Communicator& comm, const FrameStats& mine) {
-  double maxBounces = comm.max(double(mine.perBounce.size()));
-  FrameStats local = mine;
-  local.perBounce.resize(size_t(maxBounces));
-  std::vector<uint64_t> counters = {
-      local.cameraPaths,   local.continuationRays, local.shadowRays,
-      local.closestTraces, local.occlusionTraces,  local.retraces,
-      local.retraceMisses, local.proxyQueries,     local.replayQueries};
-  for (const ExchangeCounters& c : local.perBounce) {
-    counters.push_back(c.raysForwarded);
-    counters.push_back(c.bytesSent);
-    counters.push_back(c.rounds);
-  }
-  std::vector<uint64_t> s = comm.sum(std::span<const uint64_t>(counters));
-  std::vector<double> times = {local.times.generate, local.times.trace, local.times.exchange,
-                               local.times.shade, local.times.composite};
-  std::vector<double> t = comm.sum(std::span<const double>(times));
-  FrameStats out;
-  out.frame = mine.frame;
-  out.seconds = comm.max(mine.seconds);
-  out.cameraPaths = s[0];
-  out.continuationRays = s[1];
-  out.shadowRays = s[2];
-  out.closestTraces = s[3];
-  out.occlusionTraces = s[4];
-  out.retraces = s[5];
-  out.retraceMisses = s[6];
-  out.proxyQueries = s[7];
-  out.replayQueries = s[8];
-  for (size_t b = 0; b < local.perBounce.size(); ++b)
-    out.perBounce.push_back({s[9 + 3 * b], s[10 + 3 * b], s[11 + 3 * b]});
-  out.times = {t[0], t[1], t[2], t[3], t[4]};
-  return out;
-}
 
 // How this rank loads a scene file: only rank 0 speaks (warnings, progress).
 LoadOptions sceneLoadOptions(const RenderOptions& o, const Communicator& comm) {
@@ -146,195 +40,84 @@ LoadOptions sceneLoadOptions(const RenderOptions& o, const Communicator& comm) {
   return l;
 }
 
+// The flags, checked, as the session's settings: every mode is parsed here, once.
+SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm) {
+  if (o.samplesPerPixel < 1)
+    throw InputError(fmt::format("--spp {}: must be at least 1", o.samplesPerPixel));
+  if (o.frames < 1) throw InputError(fmt::format("--frames {}: must be at least 1", o.frames));
+  if (o.maxDepth < 0)
+    throw InputError(fmt::format("--max-depth {}: must be 0 or more", o.maxDepth));
+  if (o.threads < 0)
+    throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
+  checkOutputPath(o.output);
+  SessionSettings s;
+  s.forwarding = parseForwardingMode(o.forwarding);
+  s.pathLayout = parsePathLayout(o.pathLayout);
+  s.retrace = parseRetrace(o.retrace);
+  s.instancing = parseInstancing(o.instancing);
+  applyPartitionerFlags(o, s);
+  checkRankCount(comm.size(), s.pathLayout);
+  parseImageSize(o.size, s.render.width, s.render.height);
+  s.render.samplesPerPixel = o.samplesPerPixel;
+  s.render.frames = o.frames;
+  s.render.maxDepth = o.maxDepth;
+  s.render.seed = o.seed;
+  s.render.view = o.view;
+  s.render.toneMapping.exposure = o.exposure;
+  s.scene = o.scene;
+  s.load = sceneLoadOptions(o, comm);
+  s.threads = o.threads;
+  return s;
+}
+
 // The image size and file a scene asks for (pbrt's Film) when the command
-// line does not say.
-void applySceneDefaults(const Scene& scene, RenderOptions& o, RenderSettings& settings) {
+// line does not say; returns the output file.
+std::string applySceneDefaults(const RenderOptions& o, RenderSession& session) {
+  const Scene& scene = session.scene();
   if (!o.sizeGiven && scene.filmWidth && scene.filmHeight) {
-    o.size = fmt::format("{}x{}", *scene.filmWidth, *scene.filmHeight);
-    parseImageSize(o.size, settings.width, settings.height);
+    int width = 0, height = 0;
+    parseImageSize(fmt::format("{}x{}", *scene.filmWidth, *scene.filmHeight), width, height);
+    session.setImageSize(width, height);
   }
-  if (!o.outputGiven && !scene.filmFilename.empty()) {
-    std::string ext = std::filesystem::path(scene.filmFilename).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
-    if (ext == ".png" || ext == ".exr" || ext == ".pfm") {
-      o.output = scene.filmFilename;
-      checkOutputPath(o.output);
-    } else {
-      fmt::print(
-          stderr,
-          "ferry: warning: the scene's output file {} has an unsupported format; writing {}\n",
-          scene.filmFilename, o.output);
-    }
+  if (o.outputGiven || scene.filmFilename.empty()) return o.output;
+  if (imageFormatOf(scene.filmFilename)) {
+    checkOutputPath(scene.filmFilename);
+    return scene.filmFilename;
   }
+  fmt::print(stderr,
+             "ferry: warning: the scene's output file {} has an unsupported format; writing {}\n",
+             scene.filmFilename, o.output);
+  return o.output;
 }
 
-// Fills `s` in place: the Embree structures refer to its scene, so it must not move afterwards.
-void setUp(const RenderOptions& o, const RenderSettings& settings, const Communicator& comm,
-           RankSetup& s) {
-  auto start = Clock::now();
-  if (isPartDirectory(o.scene)) {
-    // A part directory: this rank reads only its own part and the shared data.
-    RankPart part = loadRankPart(o.scene, comm.rank(), comm.size());
-    s.scene = std::move(part.scene);
-    s.scene.view(settings.view);
-    s.summary = summaryFromJson(part.manifest.summary);
-    s.partition = std::move(part.partition);
-    s.owned.resize(s.scene.instances.size());
-    for (size_t i = 0; i < s.owned.size(); ++i) s.owned[i] = int32_t(i);
-    s.lights = std::make_unique<LightSampler>(part.lights);
-  } else {
-    s.scene = loadScene(o.scene, sceneLoadOptions(o, comm));
-    s.scene.view(settings.view);  // fail on an unknown view before building anything
-    s.summary = summarize(s.scene);
-    // Light data is small and needed everywhere: take it from the scene as
-    // given, before the partitioner rewrites it and ranks release geometry.
-    s.lights = std::make_unique<LightSampler>(s.scene);
-    s.partition = partitionScene(s.scene, comm.size(), renderPartitionerOptions(o));
-    s.owned = s.partition.instancesOf(comm.rank());
-    s.scene.releaseAllBut(s.owned);
-    // Hand the freed geometry back to the system, so resident memory shows what the rank holds.
-    malloc_trim(0);
-  }
-  s.ownedEstimate = ownedMemory(s.scene, s.owned);
-  s.loadSeconds = secondsSince(start);
-  maybeInjectFailure("load", comm.rank());
-  auto build = Clock::now();
-  s.geometry = std::make_unique<LocalGeometry>(
-      s.scene, s.owned, o.instancing == "always" ? Instancing::Always : Instancing::Shared);
-  s.buildSeconds = secondsSince(build);
-}
-
-void writeStats(const RenderOptions& o, const RenderSettings& settings, const RankSetup& setup,
-                const RenderStats& stats, const RankMemory& memory, uint64_t received,
-                uint64_t revisits, uint64_t compositeBytes, int ranks, double totalSeconds,
-                const std::string& layout, size_t pathBytes) {
-  nlohmann::json j;
-  j["scene"] = setup.summary.toJson();
-  j["settings"] = {{"width", settings.width},
-                   {"height", settings.height},
-                   {"spp", settings.samplesPerPixel},
-                   {"frames", settings.frames},
-                   {"max_depth", settings.maxDepth},
-                   {"seed", settings.seed},
-                   {"view", o.view},
-                   {"threads", o.threads},
-                   {"ranks", ranks},
-                   {"forwarding", o.forwarding},
-                   {"retrace", o.retrace},
-                   {"instancing", o.instancing},
-                   {"partition", o.partition},
-                   {"output", o.output},
-                   {"path_layout", layout},
-                   {"path_bytes", pathBytes}};
-  j["render"] = stats.toJson();
-  j["render"]["rays_received"] = received;
-  j["render"]["revisits"] = revisits;
-  j["render"]["composite_bytes_sent"] = compositeBytes;
-  nlohmann::json perRank = nlohmann::json::array();
-  for (int r = 0; r < ranks; ++r)
-    perRank.push_back({{"rank", r},
-                       {"estimated_bytes", memory.estimated[r]},
-                       {"embree_bytes", memory.embree[r]},
-                       {"embree_peak_bytes", memory.embreePeak[r]},
-                       {"resident_bytes", memory.resident[r]},
-                       {"peak_resident_bytes", memory.residentPeak[r]}});
-  j["memory"] = {
-      {"scene_estimated_bytes", setup.summary.memory.total()},
-      {"max_estimated_bytes", *std::max_element(memory.estimated.begin(), memory.estimated.end())},
-      {"max_embree_bytes", *std::max_element(memory.embree.begin(), memory.embree.end())},
-      {"max_peak_resident_bytes",
-       *std::max_element(memory.residentPeak.begin(), memory.residentPeak.end())},
-      {"per_rank", perRank}};
-  j["seconds"] = {
-      {"load", setup.loadSeconds}, {"build", setup.buildSeconds}, {"total", totalSeconds}};
-  writeFileAtomically(o.statsPath, [&](const std::string& tmp) {
-    std::ofstream out(tmp);
-    out << j.dump(2) << "\n";
-    if (!out) throw InputError(fmt::format("{}: could not write", o.statsPath));
-  });
-}
-
-template <typename Path>
-std::string layoutName() {
-  if constexpr (Path::kReplay)
-    return "replay";
-  else
-    return sizeof(typename Path::Mask) == 1 ? "mask8" : "mask64";
-}
-
-template <typename Path>
-int renderOnRanks(const RenderOptions& o, const RenderSettings& settings, RankSetup& setup,
-                  const Communicator& comm, Clock::time_point start) {
-  const bool talk = comm.isRoot() && !o.quiet;
-  // One rank needs no forwarding machinery (no proxy queries, no collectives per round).
-  std::unique_ptr<RayTraversal<Path>> traversal;
-  DistributedTraversal<Path>* distributed = nullptr;
-  if (comm.size() == 1) {
-    traversal = std::make_unique<LocalTraversal<Path>>(*setup.geometry);
-  } else {
-    auto d = std::make_unique<DistributedTraversal<Path>>(comm, *setup.geometry, setup.partition,
-                                                          parseForwardingMode(o.forwarding));
-    distributed = d.get();
-    traversal = std::move(d);
-  }
-  WavefrontRenderer<Path> renderer(setup.scene, *setup.geometry, *setup.lights, *traversal,
-                                   settings);
-  FrameBuffer frameBuffer(settings.width, settings.height);
-  RenderStats stats;
-  Progress rendering("render", settings.frames * settings.samplesPerPixel, talk);
-  for (int frame = 0; frame < settings.frames; ++frame) {
-    FrameStats mine = renderer.renderFrame(frame, frameBuffer, [&](int done, int) {
-      rendering.update(frame * settings.samplesPerPixel + done, fmt::format("frame {}", frame + 1));
-    });
-    stats.frames.push_back(reduceFrameStats(comm, mine));
-  }
-  rendering.finish();
-
-  auto compositeStart = Clock::now();
-  const float scale = 1.0f / float(settings.frames * settings.samplesPerPixel);
-  const bool png = o.output.size() >= 4 && (o.output.substr(o.output.size() - 4) == ".png" ||
-                                            o.output.substr(o.output.size() - 4) == ".PNG");
-  uint64_t compositeBytes = 0;
-  std::vector<Vec3f> linear;
-  std::vector<uint8_t> rgba;
-  if (png)
-    rgba = compositeToneMapped(comm, frameBuffer, scale, settings.toneMapping, compositeBytes);
-  else
-    linear = compositeLinear(comm, frameBuffer, scale, compositeBytes);
-  double compositeSeconds = comm.max(secondsSince(compositeStart));
-  if (!stats.frames.empty()) stats.frames.back().times.composite += compositeSeconds;
-  compositeBytes = comm.sum(compositeBytes);
-  RankMemory memory = gatherMemory(comm, setup);
-  uint64_t received = comm.sum(distributed ? distributed->received() : 0);
-  uint64_t revisits = comm.sum(distributed ? distributed->revisits() : 0);
-
-  if (!comm.isRoot()) return 0;
-  if (png)
-    writePng(o.output, settings.width, settings.height, rgba);
-  else
-    writeRenderedImage(o.output, settings.width, settings.height, linear, settings.toneMapping);
-  if (!o.quiet) {
-    fmt::print("{}", stats.summaryText(comm.size()));
-    auto maxOf = [](const std::vector<double>& v) {
-      return uint64_t(*std::max_element(v.begin(), v.end()));
-    };
-    fmt::print("  {:<22}{} of {} estimated, {} Embree, {} peak resident (largest rank)\n",
-               "memory per rank", formatBytes(maxOf(memory.estimated)),
-               formatBytes(setup.summary.memory.total()), formatBytes(maxOf(memory.embree)),
-               formatBytes(maxOf(memory.residentPeak)));
-    fmt::print("  {:<22}{} ({} sent by direct send)\n", "composite",
-               fmt::format("{:.3f} s", compositeSeconds), formatBytes(compositeBytes));
-    if (revisits) fmt::print("  {:<22}{}\n", "REVISITS", revisits);
-    fmt::print("  {:<22}{}\n", "wrote", o.output);
-  }
-  if (!o.statsPath.empty())
-    writeStats(o, settings, setup, stats, memory, received, revisits, compositeBytes, comm.size(),
-               secondsSince(start), layoutName<Path>(), sizeof(Path));
-  return 0;
+void printSummary(const RenderSession& session, const SessionReport& report, int ranks,
+                  const std::string& output) {
+  fmt::print("{}", report.stats.summaryText(ranks));
+  auto maxOf = [](const std::vector<double>& v) {
+    return uint64_t(*std::max_element(v.begin(), v.end()));
+  };
+  const RankMemory& memory = report.memory;
+  fmt::print("  {:<22}{} of {} estimated, {} Embree, {} peak resident (largest rank)\n",
+             "memory per rank", formatBytes(maxOf(memory.estimated)),
+             formatBytes(session.summary().memory.total()), formatBytes(maxOf(memory.embree)),
+             formatBytes(maxOf(memory.residentPeak)));
+  fmt::print("  {:<22}{} ({} sent by direct send)\n", "composite",
+             fmt::format("{:.3f} s", report.compositeSeconds), formatBytes(report.compositeBytes));
+  if (report.revisits) fmt::print("  {:<22}{}\n", "REVISITS", report.revisits);
+  fmt::print("  {:<22}{}\n", "wrote", output);
 }
 
 }  // namespace
+
+void applyPartitionerFlags(const RenderOptions& o, SessionSettings& settings) {
+  settings.partitioner = parsePartitioner(o.partition);
+  settings.keepObjectsWhole = o.keepObjectsWhole;
+  settings.replicationBudget = o.replicationBudget;
+  settings.render.seed = o.seed;
+  if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
+    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
+                                 o.replicationBudget));
+}
 
 void parseImageSize(const std::string& text, int& width, int& height) {
   auto bad = [&]() {
@@ -451,37 +234,18 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
 int runRender(const RenderOptions& o, const Communicator& comm) {
   if (o.showPartition != 0) return runShowPartition(o, comm);
   auto start = Clock::now();
-  RenderSettings settings;
-  std::unique_ptr<tbb::global_control> threadLimit;
-  std::optional<RankSetup> setup;
+  const bool talk = comm.isRoot() && !o.quiet;
+  std::optional<RenderSession> session;
+  std::optional<ImageFileSink> sink;
   std::string error;
-  RenderOptions effective = o;  // with the scene's own size and output file where none was given
   try {
-    validate(o);
-    if (comm.size() > kMaxRanks)
-      throw InputError(
-          fmt::format("{} ranks: Ferry supports up to {} ranks", comm.size(), kMaxRanks));
-    if (o.pathLayout == "mask" && comm.size() > 64)
-      throw InputError(
-          fmt::format("--path-layout mask: {} ranks do not fit a 64-bit mask (use replay or auto)",
-                      comm.size()));
-    parseImageSize(o.size, settings.width, settings.height);
-    settings.samplesPerPixel = o.samplesPerPixel;
-    settings.frames = o.frames;
-    settings.maxDepth = o.maxDepth;
-    settings.seed = o.seed;
-    settings.retraceAll = o.retrace == "all";
-    settings.view = o.view;
-    settings.toneMapping.exposure = o.exposure;
-    if (o.threads > 0)
-      threadLimit = std::make_unique<tbb::global_control>(
-          tbb::global_control::max_allowed_parallelism, o.threads);
-    Progress loading("load", 1, comm.isRoot() && !o.quiet);
+    const SessionSettings settings = sessionSettings(o, comm);
+    Progress loading("load", 1, talk);
     loading.update(0, o.scene);
-    setUp(o, settings, comm, setup.emplace());
-    applySceneDefaults(setup->scene, effective, settings);
-    loading.finish(
-        fmt::format("{:.2f} s load, {:.2f} s build", setup->loadSeconds, setup->buildSeconds));
+    session.emplace(settings, comm);
+    sink.emplace(applySceneDefaults(o, *session));
+    loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", session->loadSeconds(),
+                               session->buildSeconds()));
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -489,11 +253,21 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
   if (comm.agreeOnFailure(!error.empty(), error)) return 1;
 
   try {
-    // The layout: masks while they fit (8 then 64 ranks), else replay (or as forced).
-    if (o.pathLayout == "replay" || (o.pathLayout == "auto" && comm.size() > 64))
-      return renderOnRanks<PathReplay>(effective, settings, *setup, comm, start);
-    if (comm.size() <= 8) return renderOnRanks<Path8>(effective, settings, *setup, comm, start);
-    return renderOnRanks<Path64>(effective, settings, *setup, comm, start);
+    const RenderSettings& render = session->settings().render;
+    Progress rendering("render", render.frames * render.samplesPerPixel, talk);
+    const SessionReport report = session->run(*sink, [&](const RenderProgress& p) {
+      if (p.rendered)
+        rendering.finish();
+      else
+        rendering.update(p.frame * p.samplesPerFrame + p.samplesDone,
+                         fmt::format("frame {}", p.frame + 1));
+    });
+    if (!comm.isRoot()) return 0;
+    if (!o.quiet) printSummary(*session, report, comm.size(), sink->path());
+    if (!o.statsPath.empty())
+      writeStatsFile(o.statsPath,
+                     sessionStatsJson(*session, report, {sink->path(), secondsSince(start)}));
+    return 0;
   } catch (const InputError& e) {
     // Only rank 0 writes files, after every collective: the others have finished.
     if (comm.isRoot()) {

@@ -11,6 +11,7 @@ class App;
 namespace ferry {
 
 class Communicator;
+struct SessionSettings;
 
 struct RenderOptions {
   std::string scene = "builtin:island";
@@ -59,5 +60,8 @@ int runRender(const RenderOptions& options, const Communicator& comm);
 
 // "1280x720" -> (1280, 720); throws InputError naming the flag.
 void parseImageSize(const std::string& text, int& width, int& height);
+// --partitioner, --keep-objects-whole and --replication-budget (and the
+// seed, which the random partitioner uses) into `settings`; throws InputError.
+void applyPartitionerFlags(const RenderOptions& options, SessionSettings& settings);
 
 }  // namespace ferry

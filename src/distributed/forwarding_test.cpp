@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 
+#include "core/error.h"
 #include "core/random.h"
 
 namespace ferry {
@@ -253,6 +254,15 @@ TEST(Forwarding, ModesParseAndUnknownModeIsAnError) {
   EXPECT_EQ(parseForwardingMode("ring"), ForwardingMode::Ring);
   EXPECT_EQ(parseForwardingMode("broadcast"), ForwardingMode::Broadcast);
   EXPECT_THROW(parseForwardingMode("telepathy"), std::exception);
+  for (ForwardingMode mode :
+       {ForwardingMode::Proxies, ForwardingMode::Ring, ForwardingMode::Broadcast})
+    EXPECT_EQ(parseForwardingMode(toString(mode)), mode);
+  try {
+    parseForwardingMode("Ring");
+    FAIL() << "a name differing in case was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "--forwarding 'Ring': expected proxies, ring or broadcast");
+  }
 }
 
 }  // namespace ferry

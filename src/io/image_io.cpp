@@ -37,12 +37,24 @@ constexpr int kMaxImageSide = 1 << 24;
 // than that, for the file's size, describes data that is not there.
 constexpr uint64_t kMaxPixelsPerFileByte = 8300;
 
-std::string lowerExtension(const std::string& path) {
+}  // namespace
+
+std::string lowerCaseExtension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
+
+std::optional<ImageFormat> imageFormatOf(const std::string& path) {
+  const std::string ext = lowerCaseExtension(path);
+  if (ext == ".png") return ImageFormat::Png;
+  if (ext == ".exr") return ImageFormat::Exr;
+  if (ext == ".pfm") return ImageFormat::Pfm;
+  return std::nullopt;
+}
+
+namespace {
 
 // The size of a readable regular file; InputError otherwise.
 uint64_t requireRegularFile(const std::string& path) {
@@ -253,7 +265,7 @@ Texture readAlphaTexture(const std::string& path) {
 }
 
 HdrImage readHdrImage(const std::string& path) {
-  std::string ext = lowerExtension(path);
+  std::string ext = lowerCaseExtension(path);
   HdrImage image;
   if (ext == ".exr") {
     image = readExr(path);
@@ -441,16 +453,20 @@ std::vector<uint8_t> toPng(const LinearImage& image) {
 }
 
 void writeImage(const std::string& path, const LinearImage& image) {
-  std::string ext = lowerExtension(path);
-  if (ext == ".png") {
-    writePng(path, image.width, image.height, toPng(image));
-  } else if (ext == ".exr") {
-    writeExr(path, image);
-  } else if (ext == ".pfm") {
-    writePfm(path, image);
-  } else {
-    throw InputError(
-        fmt::format("{}: unsupported output format '{}' (supported: .png, .exr, .pfm)", path, ext));
+  const std::optional<ImageFormat> format = imageFormatOf(path);
+  if (!format)
+    throw InputError(fmt::format("{}: unsupported output format '{}' (supported: .png, .exr, .pfm)",
+                                 path, lowerCaseExtension(path)));
+  switch (*format) {
+    case ImageFormat::Png:
+      writePng(path, image.width, image.height, toPng(image));
+      return;
+    case ImageFormat::Exr:
+      writeExr(path, image);
+      return;
+    case ImageFormat::Pfm:
+      writePfm(path, image);
+      return;
   }
 }
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,16 @@
 #include "scene/texture.h"
 
 namespace ferry {
+
+// The formats Ferry writes rendered images in: PNG (tone mapped, 8 bits), EXR
+// and PFM (linear radiance).
+enum class ImageFormat { Png, Exr, Pfm };
+// The written format a file name asks for, by its extension (case-insensitive:
+// "a.PNG" is a PNG); nullopt for any other extension, or none.
+std::optional<ImageFormat> imageFormatOf(const std::string& path);
+// The extension of `path` in lower case, with its dot (".png"; empty if none):
+// what error messages about a format quote.
+std::string lowerCaseExtension(const std::string& path);
 
 // 8-bit images (PNG, JPEG, TGA, BMP) as RGBA; throws InputError naming the file.
 // Sizes are checked from the header before decoding: over 2^28 pixels, or more
@@ -49,8 +60,7 @@ LinearImage readPfm(const std::string& path);
 // The PNG encoding of a linear image: clamped to [0, 1], sRGB-encoded, rounded
 // to 8 bits, alpha 255. No exposure: scale the image first if needed.
 std::vector<uint8_t> toPng(const LinearImage& image);
-// Writes .png (through toPng), .exr or .pfm, chosen by the extension of `path`
-// (case-insensitive).
+// Writes .png (through toPng), .exr or .pfm, chosen by imageFormatOf(path).
 void writeImage(const std::string& path, const LinearImage& image);
 
 // Runs `write(tempPath)` and renames the result onto `path`; removes the

@@ -181,6 +181,23 @@ TEST(ImageIo, UnknownExtensions) {
 
 // ------------------------------------------------------------------ good images
 
+TEST(ImageIo, FormatOfAFileNameIsItsExtensionInAnyCase) {
+  EXPECT_EQ(imageFormatOf("out.png"), ImageFormat::Png);
+  EXPECT_EQ(imageFormatOf("out.PNG"), ImageFormat::Png);
+  EXPECT_EQ(imageFormatOf("dir.d/Out.Png"), ImageFormat::Png);
+  EXPECT_EQ(imageFormatOf("a/b.exr"), ImageFormat::Exr);
+  EXPECT_EQ(imageFormatOf("b.EXR"), ImageFormat::Exr);
+  EXPECT_EQ(imageFormatOf("c.pfm"), ImageFormat::Pfm);
+  EXPECT_EQ(imageFormatOf("c.PfM"), ImageFormat::Pfm);
+  EXPECT_EQ(imageFormatOf("x.png.gif"), std::nullopt);
+  EXPECT_EQ(imageFormatOf("x.jpg"), std::nullopt);  // read, never written
+  EXPECT_EQ(imageFormatOf("png"), std::nullopt);
+  EXPECT_EQ(imageFormatOf("dir.png/image"), std::nullopt);
+  EXPECT_EQ(imageFormatOf(""), std::nullopt);
+  EXPECT_EQ(lowerCaseExtension("a/B.GiF"), ".gif");
+  EXPECT_EQ(lowerCaseExtension("noext"), "");
+}
+
 TEST(ImageIo, ReadPfmLittleEndianRgb) {
   LinearImage img = readPfm(image("little_rgb.pfm"));
   ASSERT_EQ(img.width, 2);

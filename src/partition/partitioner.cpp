@@ -84,11 +84,22 @@ const std::vector<std::string>& paperPartitionerNames() {
 }
 
 void checkPartitionerName(const std::string& name) {
+  parsePartitioner(name);
+}
+
+PartitionerKind parsePartitioner(const std::string& name) {
   const auto& all = partitionerNames();
-  if (std::find(all.begin(), all.end(), name) != all.end()) return;
+  const auto found = std::find(all.begin(), all.end(), name);
+  if (found != all.end()) return PartitionerKind(found - all.begin());
   std::string known;
   for (const std::string& n : all) known += (known.empty() ? "" : ", ") + n;
   throw InputError(fmt::format("unknown partitioner '{}' (partitioners: {})", name, known));
+}
+
+std::string toString(PartitionerKind kind) {
+  const size_t index = size_t(kind);
+  FERRY_CHECK(index < partitionerNames().size());
+  return partitionerNames()[index];
 }
 
 Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,

@@ -68,6 +68,22 @@ const std::vector<std::string>& paperPartitionerNames();
 // Throws InputError naming the accepted ones.
 void checkPartitionerName(const std::string& name);
 
+// The partitioners as a choice a command line makes once (in partitionerNames() order).
+enum class PartitionerKind {
+  SpatialSimple,
+  SpatialSah,
+  ObjectNaive,
+  ObjectProxies,
+  BvhStyle,
+  Best,
+  RoundRobin,
+  Random
+};
+// By name; throws InputError naming the accepted ones (as checkPartitionerName).
+PartitionerKind parsePartitioner(const std::string& name);
+// The name (PartitionerOptions::name, the stats).
+std::string toString(PartitionerKind kind);
+
 // Partitions `scene` over `ranks` (1..kMaxRanks). The six paper partitioners first
 // rewrite the scene in place with splitForPartitioning (same image); the
 // partition refers to the rewritten scene.

@@ -340,6 +340,28 @@ TEST(Partitioners, UnknownNamesAndRankCountsAreInputErrors) {
   EXPECT_THROW(checkPartitionerName("spatial"), InputError);
 }
 
+TEST(Partitioners, EveryNameParsesToItsKindAndBack) {
+  for (const std::string& name : partitionerNames())
+    EXPECT_EQ(toString(parsePartitioner(name)), name);
+  EXPECT_EQ(parsePartitioner("spatial-simple"), PartitionerKind::SpatialSimple);
+  EXPECT_EQ(parsePartitioner("spatial-sah"), PartitionerKind::SpatialSah);
+  EXPECT_EQ(parsePartitioner("object-naive"), PartitionerKind::ObjectNaive);
+  EXPECT_EQ(parsePartitioner("object-proxies"), PartitionerKind::ObjectProxies);
+  EXPECT_EQ(parsePartitioner("bvh-style"), PartitionerKind::BvhStyle);
+  EXPECT_EQ(parsePartitioner("best"), PartitionerKind::Best);
+  EXPECT_EQ(parsePartitioner("round-robin"), PartitionerKind::RoundRobin);
+  EXPECT_EQ(parsePartitioner("random"), PartitionerKind::Random);
+  try {
+    parsePartitioner("Best");
+    FAIL() << "a name differing in case was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "unknown partitioner 'Best' (partitioners: spatial-simple, spatial-sah, "
+              "object-naive, object-proxies, bvh-style, best, round-robin, random)");
+  }
+  EXPECT_THROW(parsePartitioner(""), InputError);
+}
+
 // Above 64 ranks owner sets grow past one word: the spare ranks (the Cornell
 // box has 8 instances) hold copies, including ranks 64 and above.
 TEST(Partitioners, MoreThan64RanksGetCopiesBeyondRank63) {

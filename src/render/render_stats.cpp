@@ -1,27 +1,39 @@
 #include "render/render_stats.h"
 
 #include <algorithm>
+#include <iterator>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/error.h"
 #include "scene/scene_summary.h"
 
 namespace ferry {
 
+namespace {
+
+// j[group][key] for a field with a group, else j[key].
+template <typename Owner, typename Value>
+nlohmann::json& slot(nlohmann::json& j, const StatsField<Owner, Value>& field) {
+  return field.group ? j[field.group][field.key] : j[field.key];
+}
+
+nlohmann::json exchangeJson(const ExchangeCounters& c) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& field : kExchangeCounters) slot(j, field) = c.*field.member;
+  return j;
+}
+
+}  // namespace
+
 ExchangeCounters& ExchangeCounters::operator+=(const ExchangeCounters& o) {
-  raysForwarded += o.raysForwarded;
-  bytesSent += o.bytesSent;
-  rounds += o.rounds;
+  for (const auto& field : kExchangeCounters) this->*field.member += o.*field.member;
   return *this;
 }
 
 StageTimes& StageTimes::operator+=(const StageTimes& o) {
-  generate += o.generate;
-  trace += o.trace;
-  exchange += o.exchange;
-  shade += o.shade;
-  composite += o.composite;
+  for (const auto& field : kStageTimes) this->*field.member += o.*field.member;
   return *this;
 }
 
@@ -33,15 +45,7 @@ ExchangeCounters FrameStats::exchangeTotal() const {
 
 void FrameStats::merge(const FrameStats& o) {
   seconds = std::max(seconds, o.seconds);
-  cameraPaths += o.cameraPaths;
-  continuationRays += o.continuationRays;
-  shadowRays += o.shadowRays;
-  closestTraces += o.closestTraces;
-  occlusionTraces += o.occlusionTraces;
-  retraces += o.retraces;
-  retraceMisses += o.retraceMisses;
-  proxyQueries += o.proxyQueries;
-  replayQueries += o.replayQueries;
+  for (const auto& field : kFrameCounters) this->*field.member += o.*field.member;
   if (perBounce.size() < o.perBounce.size()) perBounce.resize(o.perBounce.size());
   for (size_t i = 0; i < o.perBounce.size(); ++i) perBounce[i] += o.perBounce[i];
   times += o.times;
@@ -51,28 +55,48 @@ nlohmann::json FrameStats::toJson() const {
   nlohmann::json j;
   j["frame"] = frame;
   j["seconds"] = seconds;
-  j["camera_paths"] = cameraPaths;
-  j["continuation_rays"] = continuationRays;
-  j["shadow_rays"] = shadowRays;
-  j["traces"] = {{"closest", closestTraces},      {"occlusion", occlusionTraces},
-                 {"retrace", retraces},           {"retrace_misses", retraceMisses},
-                 {"proxy_queries", proxyQueries}, {"replay_queries", replayQueries},
-                 {"total", raysTraced()}};
+  for (const auto& field : kFrameCounters) slot(j, field) = this->*field.member;
+  j["traces"]["total"] = raysTraced();
   j["rays_per_second"] = seconds > 0 ? double(raysTraced()) / seconds : 0.0;
-  ExchangeCounters ex = exchangeTotal();
-  j["exchange"] = {
-      {"rays_forwarded", ex.raysForwarded}, {"bytes_sent", ex.bytesSent}, {"rounds", ex.rounds}};
+  j["exchange"] = exchangeJson(exchangeTotal());
   nlohmann::json bounces = nlohmann::json::array();
-  for (const ExchangeCounters& c : perBounce)
-    bounces.push_back(
-        {{"rays_forwarded", c.raysForwarded}, {"bytes_sent", c.bytesSent}, {"rounds", c.rounds}});
+  for (const ExchangeCounters& c : perBounce) bounces.push_back(exchangeJson(c));
   j["exchange_per_bounce"] = bounces;
-  j["stage_seconds"] = {{"generate", times.generate},
-                        {"trace", times.trace},
-                        {"exchange", times.exchange},
-                        {"shade", times.shade},
-                        {"composite", times.composite}};
+  for (const auto& field : kStageTimes) slot(j, field) = times.*field.member;
   return j;
+}
+
+std::vector<uint64_t> FrameStats::counterValues() const {
+  std::vector<uint64_t> values;
+  values.reserve(std::size(kFrameCounters) + perBounce.size() * std::size(kExchangeCounters));
+  for (const auto& field : kFrameCounters) values.push_back(this->*field.member);
+  for (const ExchangeCounters& c : perBounce)
+    for (const auto& field : kExchangeCounters) values.push_back(c.*field.member);
+  return values;
+}
+
+void FrameStats::setCounterValues(std::span<const uint64_t> values) {
+  constexpr size_t frameCounters = std::size(kFrameCounters);
+  constexpr size_t perBounceCounters = std::size(kExchangeCounters);
+  FERRY_CHECK(values.size() >= frameCounters &&
+              (values.size() - frameCounters) % perBounceCounters == 0);
+  const uint64_t* v = values.data();
+  for (const auto& field : kFrameCounters) this->*field.member = *v++;
+  perBounce.assign((values.size() - frameCounters) / perBounceCounters, {});
+  for (ExchangeCounters& c : perBounce)
+    for (const auto& field : kExchangeCounters) c.*field.member = *v++;
+}
+
+std::vector<double> FrameStats::stageTimeValues() const {
+  std::vector<double> values;
+  for (const auto& field : kStageTimes) values.push_back(times.*field.member);
+  return values;
+}
+
+void FrameStats::setStageTimeValues(std::span<const double> values) {
+  FERRY_CHECK(values.size() == std::size(kStageTimes));
+  const double* v = values.data();
+  for (const auto& field : kStageTimes) times.*field.member = *v++;
 }
 
 FrameStats RenderStats::total() const {

@@ -1,8 +1,13 @@
 // Counters and timings of a render, kept by the code that does the work (not
 // estimated afterwards). Every field is a sum, so ranks' stats add up.
+//
+// Each counter is named once, in the tables below the structs (its JSON key
+// and member): adding, merging, the JSON and the sum over ranks walk them, so
+// a new counter is one member and one table line.
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -50,6 +55,48 @@ struct FrameStats {
   // Adds another rank's counters (seconds: the maximum).
   void merge(const FrameStats& other);
   nlohmann::json toJson() const;
+
+  // Every counter as one array, in table order (kFrameCounters, then
+  // kExchangeCounters of each bounce): what the ranks sum element-wise.
+  std::vector<uint64_t> counterValues() const;
+  // The inverse of counterValues(): perBounce gets as many bounces as `values` holds.
+  void setCounterValues(std::span<const uint64_t> values);
+  // The stage times in kStageTimes order, and back.
+  std::vector<double> stageTimeValues() const;
+  void setStageTimeValues(std::span<const double> values);
+};
+
+// A counter's JSON key (inside `group` when there is one) and its member.
+template <typename Owner, typename Value>
+struct StatsField {
+  const char* group;  // nullptr: a key of the frame's own object
+  const char* key;
+  Value Owner::*member;
+};
+
+inline constexpr StatsField<FrameStats, uint64_t> kFrameCounters[] = {
+    {nullptr, "camera_paths", &FrameStats::cameraPaths},
+    {nullptr, "continuation_rays", &FrameStats::continuationRays},
+    {nullptr, "shadow_rays", &FrameStats::shadowRays},
+    {"traces", "closest", &FrameStats::closestTraces},
+    {"traces", "occlusion", &FrameStats::occlusionTraces},
+    {"traces", "retrace", &FrameStats::retraces},
+    {"traces", "retrace_misses", &FrameStats::retraceMisses},
+    {"traces", "proxy_queries", &FrameStats::proxyQueries},
+    {"traces", "replay_queries", &FrameStats::replayQueries},
+};
+// Per bounce under "exchange_per_bounce", and summed over bounces under "exchange".
+inline constexpr StatsField<ExchangeCounters, uint64_t> kExchangeCounters[] = {
+    {nullptr, "rays_forwarded", &ExchangeCounters::raysForwarded},
+    {nullptr, "bytes_sent", &ExchangeCounters::bytesSent},
+    {nullptr, "rounds", &ExchangeCounters::rounds},
+};
+inline constexpr StatsField<StageTimes, double> kStageTimes[] = {
+    {"stage_seconds", "generate", &StageTimes::generate},
+    {"stage_seconds", "trace", &StageTimes::trace},
+    {"stage_seconds", "exchange", &StageTimes::exchange},
+    {"stage_seconds", "shade", &StageTimes::shade},
+    {"stage_seconds", "composite", &StageTimes::composite},
 };
 
 struct RenderStats {

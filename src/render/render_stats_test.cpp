@@ -1,0 +1,111 @@
+#include "render/render_stats.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <iterator>
+#include <set>
+#include <string>
+
+#include "core/error.h"
+
+namespace ferry {
+namespace {
+
+// Every counter, bounce counter and stage time a different value, from `base` up.
+FrameStats distinctStats(uint64_t base, size_t bounces) {
+  FrameStats s;
+  s.frame = 3;
+  s.seconds = double(base) / 8;
+  uint64_t next = base;
+  for (const auto& field : kFrameCounters) s.*field.member = next++;
+  s.perBounce.resize(bounces);
+  for (ExchangeCounters& c : s.perBounce)
+    for (const auto& field : kExchangeCounters) c.*field.member = next++;
+  for (const auto& field : kStageTimes) s.times.*field.member = double(next++) / 4;
+  return s;
+}
+
+template <typename Owner, typename Value>
+const nlohmann::json& at(const nlohmann::json& j, const StatsField<Owner, Value>& field) {
+  return field.group ? j.at(field.group).at(field.key) : j.at(field.key);
+}
+
+std::set<std::string> keysOf(const nlohmann::json& j) {
+  std::set<std::string> keys;
+  for (const auto& item : j.items()) keys.insert(item.key());
+  return keys;
+}
+
+TEST(RenderStats, EveryCounterAppearsInTheJsonUnderItsKey) {
+  const FrameStats s = distinctStats(100, 2);
+  const nlohmann::json j = s.toJson();
+  for (const auto& field : kFrameCounters)
+    EXPECT_EQ(at(j, field).get<uint64_t>(), s.*field.member) << field.key;
+  ASSERT_EQ(j.at("exchange_per_bounce").size(), 2u);
+  for (size_t b = 0; b < 2; ++b)
+    for (const auto& field : kExchangeCounters)
+      EXPECT_EQ(at(j.at("exchange_per_bounce")[b], field).get<uint64_t>(),
+                s.perBounce[b].*field.member)
+          << field.key;
+  for (const auto& field : kExchangeCounters)
+    EXPECT_EQ(at(j.at("exchange"), field).get<uint64_t>(),
+              s.perBounce[0].*field.member + s.perBounce[1].*field.member)
+        << field.key;
+  for (const auto& field : kStageTimes)
+    EXPECT_EQ(at(j, field).get<double>(), s.times.*field.member) << field.key;
+  EXPECT_EQ(j.at("traces").at("total").get<uint64_t>(), s.raysTraced());
+  EXPECT_EQ(j.at("frame").get<int>(), 3);
+}
+
+// The layout scripts read (bench/, tests/tools/check_stats.py): nothing more, nothing less.
+TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
+  const nlohmann::json j = distinctStats(1, 1).toJson();
+  EXPECT_EQ(keysOf(j),
+            (std::set<std::string>{"frame", "seconds", "camera_paths", "continuation_rays",
+                                   "shadow_rays", "traces", "rays_per_second", "exchange",
+                                   "exchange_per_bounce", "stage_seconds"}));
+  EXPECT_EQ(keysOf(j.at("traces")),
+            (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses",
+                                   "proxy_queries", "replay_queries", "total"}));
+  const std::set<std::string> exchange = {"rays_forwarded", "bytes_sent", "rounds"};
+  EXPECT_EQ(keysOf(j.at("exchange")), exchange);
+  EXPECT_EQ(keysOf(j.at("exchange_per_bounce")[0]), exchange);
+  EXPECT_EQ(keysOf(j.at("stage_seconds")),
+            (std::set<std::string>{"generate", "trace", "exchange", "shade", "composite"}));
+}
+
+TEST(RenderStats, MergeAddsEveryCounterAndKeepsTheSlowestSeconds) {
+  FrameStats a = distinctStats(10, 1);
+  const FrameStats b = distinctStats(1000, 3);
+  const FrameStats before = a;
+  a.merge(b);
+  EXPECT_EQ(a.seconds, std::max(before.seconds, b.seconds));
+  for (const auto& field : kFrameCounters)
+    EXPECT_EQ(a.*field.member, before.*field.member + b.*field.member) << field.key;
+  ASSERT_EQ(a.perBounce.size(), 3u);
+  for (size_t i = 0; i < 3; ++i)
+    for (const auto& field : kExchangeCounters)
+      EXPECT_EQ(a.perBounce[i].*field.member,
+                (i < 1 ? before.perBounce[i].*field.member : 0) + b.perBounce[i].*field.member)
+          << field.key << " bounce " << i;
+  for (const auto& field : kStageTimes)
+    EXPECT_EQ(a.times.*field.member, before.times.*field.member + b.times.*field.member)
+        << field.key;
+}
+
+TEST(RenderStats, CounterArraysRoundTrip) {
+  const FrameStats s = distinctStats(7, 4);
+  const std::vector<uint64_t> counters = s.counterValues();
+  ASSERT_EQ(counters.size(), std::size(kFrameCounters) + 4 * std::size(kExchangeCounters));
+  FrameStats back;
+  back.setCounterValues(counters);
+  back.setStageTimeValues(s.stageTimeValues());
+  back.frame = s.frame;
+  back.seconds = s.seconds;
+  EXPECT_EQ(back.toJson(), s.toJson());
+  EXPECT_THROW(back.setCounterValues(std::span<const uint64_t>(counters).first(2)), InternalError);
+}
+
+}  // namespace
+}  // namespace ferry

@@ -1,0 +1,260 @@
+#include "session/render_session.h"
+
+#include <malloc.h>
+
+#include <numeric>
+#include <span>
+
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+
+#include "core/clock.h"
+#include "core/error.h"
+#include "core/fault_injection.h"
+#include "core/process_memory.h"
+#include "distributed/distributed_traversal.h"
+#include "io/part_directory.h"
+#include "io/scene_loader.h"
+#include "mpi/compositor.h"
+#include "partition/partition.h"
+#include "render/lights.h"
+#include "render/wavefront_renderer.h"
+#include "trace/local_geometry.h"
+#include "trace/path.h"
+
+namespace ferry {
+
+// Everything this rank holds once set up. Built in place and never moved: the
+// trace structures refer to the scene.
+struct RenderSession::Rank {
+  std::unique_ptr<tbb::global_control> threadLimit;
+  Scene scene;
+  Partition partition;
+  std::string partitionerName;
+  std::vector<int32_t> owned;
+  std::unique_ptr<LocalGeometry> geometry;
+  int64_t embreeBytes = 0, embreePeakBytes = 0;
+  std::unique_ptr<LightSampler> lights;
+  SceneSummary summary;  // of the whole scene, before releasing what this rank does not own
+  MemoryCost ownedEstimate;
+  double loadSeconds = 0, buildSeconds = 0;
+
+  Rank(const SessionSettings& settings, const Communicator& comm);
+  // The one place the session names the trace backend: this rank's trace
+  // structures over its instances, and what Embree holds for them.
+  void buildTraceStructures(Instancing instancing);
+};
+
+RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm) {
+  if (settings.threads > 0)
+    threadLimit = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, settings.threads);
+  auto start = Clock::now();
+  if (isPartDirectory(settings.scene)) {
+    // A part directory: this rank reads only its own part and the shared data.
+    RankPart part = loadRankPart(settings.scene, comm.rank(), comm.size());
+    scene = std::move(part.scene);
+    scene.view(settings.render.view);
+    summary = summaryFromJson(part.manifest.summary);
+    partition = std::move(part.partition);
+    partitionerName = part.manifest.partitioner;
+    owned.resize(scene.instances.size());
+    std::iota(owned.begin(), owned.end(), 0);
+    lights = std::make_unique<LightSampler>(part.lights);
+  } else {
+    scene = loadScene(settings.scene, settings.load);
+    scene.view(settings.render.view);  // fail on an unknown view before building anything
+    summary = summarize(scene);
+    // Light data is small and needed everywhere: take it from the scene as
+    // given, before the partitioner rewrites it and ranks release geometry.
+    lights = std::make_unique<LightSampler>(scene);
+    const PartitionerOptions options = partitionerOptions(settings);
+    partition = partitionScene(scene, comm.size(), options);
+    partitionerName = options.name;
+    owned = partition.instancesOf(comm.rank());
+    scene.releaseAllBut(owned);
+    // Hand the freed geometry back to the system, so resident memory shows what the rank holds.
+    malloc_trim(0);
+  }
+  ownedEstimate = ownedMemory(scene, owned);
+  loadSeconds = secondsSince(start);
+  maybeInjectFailure("load", comm.rank());
+  buildTraceStructures(settings.instancing);
+}
+
+void RenderSession::Rank::buildTraceStructures(Instancing instancing) {
+  auto start = Clock::now();
+  geometry = std::make_unique<LocalGeometry>(scene, owned, instancing);
+  buildSeconds = secondsSince(start);
+  embreeBytes = geometry->embreeBytes();
+  embreePeakBytes = geometry->embreePeakBytes();
+}
+
+namespace {
+
+// Each rank's figure, on every rank.
+std::vector<double> spread(const Communicator& comm, double mine) {
+  std::vector<double> v(comm.size(), 0.0);
+  v[comm.rank()] = mine;
+  return comm.sum(std::span<const double>(v));
+}
+
+// Sums every counter over ranks (seconds: the slowest rank).
+FrameStats sumOverRanks(const Communicator& comm, const FrameStats& mine) {
+  FrameStats local = mine;
+  local.perBounce.resize(size_t(comm.max(double(mine.perBounce.size()))));
+  const std::vector<uint64_t> counters = local.counterValues();
+  const std::vector<double> times = local.stageTimeValues();
+  FrameStats out;
+  out.frame = mine.frame;
+  out.setCounterValues(comm.sum(std::span<const uint64_t>(counters)));
+  out.setStageTimeValues(comm.sum(std::span<const double>(times)));
+  out.seconds = comm.max(mine.seconds);
+  return out;
+}
+
+// The sum of every rank's frame buffer times `scale`, as `pixels` asks, on
+// rank 0 (collective). Adds the bytes this rank sent to `bytesSent`.
+FrameImage composite(const Communicator& comm, const FrameBuffer& frameBuffer, float scale,
+                     FrameSink::Pixels pixels, const ToneMapping& toneMapping,
+                     uint64_t& bytesSent) {
+  FrameImage image;
+  image.width = frameBuffer.width();
+  image.height = frameBuffer.height();
+  if (pixels == FrameSink::Pixels::ToneMapped)
+    image.rgba = compositeToneMapped(comm, frameBuffer, scale, toneMapping, bytesSent);
+  else
+    image.linear = compositeLinear(comm, frameBuffer, scale, bytesSent);
+  return image;
+}
+
+template <typename Path>
+std::string layoutName() {
+  if constexpr (Path::kReplay)
+    return "replay";
+  else
+    return sizeof(typename Path::Mask) == 1 ? "mask8" : "mask64";
+}
+
+}  // namespace
+
+void checkRankCount(int ranks, PathLayout layout) {
+  if (ranks > kMaxRanks)
+    throw InputError(fmt::format("{} ranks: Ferry supports up to {} ranks", ranks, kMaxRanks));
+  if (layout == PathLayout::Mask && ranks > 64)
+    throw InputError(fmt::format(
+        "--path-layout mask: {} ranks do not fit a 64-bit mask (use replay or auto)", ranks));
+}
+
+RenderSession::RenderSession(const SessionSettings& settings, const Communicator& comm)
+    : settings_(settings), comm_(comm) {
+  FERRY_CHECK(settings.render.frames >= 1 && settings.render.samplesPerPixel >= 1);
+  checkRankCount(comm.size(), settings.pathLayout);
+  settings_.render.retraceAll = settings.retrace == Retrace::All;
+  rank_ = std::make_unique<Rank>(settings_, comm_);
+}
+
+RenderSession::~RenderSession() = default;
+
+void RenderSession::setImageSize(int width, int height) {
+  settings_.render.width = width;
+  settings_.render.height = height;
+}
+
+const Scene& RenderSession::scene() const {
+  return rank_->scene;
+}
+const SceneSummary& RenderSession::summary() const {
+  return rank_->summary;
+}
+const std::string& RenderSession::partitionerName() const {
+  return rank_->partitionerName;
+}
+double RenderSession::loadSeconds() const {
+  return rank_->loadSeconds;
+}
+double RenderSession::buildSeconds() const {
+  return rank_->buildSeconds;
+}
+
+SessionReport RenderSession::run(FrameSink& sink, const SessionProgress& progress) {
+  // The layout: masks while they fit (8 then 64 ranks), else replay (or as forced).
+  const int ranks = comm_.size();
+  if (settings_.pathLayout == PathLayout::Replay ||
+      (settings_.pathLayout == PathLayout::Auto && ranks > 64))
+    return runWithLayout<PathReplay>(sink, progress);
+  if (ranks <= 8) return runWithLayout<Path8>(sink, progress);
+  return runWithLayout<Path64>(sink, progress);
+}
+
+template <typename Path>
+SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgress& progress) {
+  Rank& rank = *rank_;
+  const RenderSettings& render = settings_.render;
+  // One rank needs no forwarding machinery (no proxy queries, no collectives per round).
+  std::unique_ptr<RayTraversal<Path>> traversal;
+  DistributedTraversal<Path>* distributed = nullptr;
+  if (comm_.size() == 1) {
+    traversal = std::make_unique<LocalTraversal<Path>>(*rank.geometry);
+  } else {
+    auto d = std::make_unique<DistributedTraversal<Path>>(comm_, *rank.geometry, rank.partition,
+                                                          settings_.forwarding);
+    distributed = d.get();
+    traversal = std::move(d);
+  }
+  WavefrontRenderer<Path> renderer(rank.scene, *rank.geometry, *rank.lights, *traversal, render);
+  FrameBuffer frameBuffer(render.width, render.height);
+  const FrameSink::Frames frames = sink.frames();
+  const FrameSink::Pixels pixels = sink.pixels();
+  SessionReport report;
+  RenderStats& stats = report.stats;
+  uint64_t compositeBytes = 0;  // this rank's, over every composite
+  auto compositeAfter = [&](int frame, double& seconds) {
+    auto start = Clock::now();
+    const float scale = 1.0f / float((frame + 1) * render.samplesPerPixel);
+    FrameImage image =
+        composite(comm_, frameBuffer, scale, pixels, render.toneMapping, compositeBytes);
+    image.frame = frame;
+    image.last = frame + 1 == render.frames;
+    seconds = comm_.max(secondsSince(start));
+    stats.frames[frame].times.composite += seconds;
+    return image;
+  };
+
+  for (int frame = 0; frame < render.frames; ++frame) {
+    FrameStats mine = renderer.renderFrame(frame, frameBuffer, [&](int done, int total) {
+      if (progress) progress({frame, done, total, false});
+    });
+    stats.frames.push_back(sumOverRanks(comm_, mine));
+    if (frames == FrameSink::Frames::Every && frame + 1 < render.frames) {
+      double seconds = 0;
+      FrameImage image = compositeAfter(frame, seconds);
+      // The other ranks go on into the next frame's collectives: a failure
+      // here must end them too.
+      if (comm_.isRoot()) try {
+          sink.receive(image);
+        } catch (const std::exception& e) {
+          comm_.abortAll(e.what());
+        }
+    }
+  }
+
+  if (progress) progress({render.frames - 1, render.samplesPerPixel, render.samplesPerPixel, true});
+
+  FrameImage image = compositeAfter(render.frames - 1, report.compositeSeconds);
+  report.compositeBytes = comm_.sum(compositeBytes);
+  const ProcessMemory memory = readProcessMemory();
+  report.memory = {
+      spread(comm_, double(rank.ownedEstimate.total())), spread(comm_, double(rank.embreeBytes)),
+      spread(comm_, double(rank.embreePeakBytes)), spread(comm_, double(memory.residentBytes)),
+      spread(comm_, double(memory.peakResidentBytes))};
+  report.raysReceived = comm_.sum(distributed ? distributed->received() : 0);
+  report.revisits = comm_.sum(distributed ? distributed->revisits() : 0);
+  report.pathLayout = layoutName<Path>();
+  report.pathBytes = sizeof(Path);
+  // After the last collective: what the sink throws ends only this rank.
+  if (comm_.isRoot()) sink.receive(image);
+  return report;
+}
+
+}  // namespace ferry

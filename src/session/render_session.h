@@ -1,0 +1,110 @@
+// A render on every rank of a communicator, from the scene to the images:
+// the frame loop above the wavefront renderer.
+//
+// Construction sets this rank up: loads the scene (or this rank's part of a
+// part directory), partitions it, keeps this rank's instances, builds the
+// trace structures and the light sampler. run() picks the traversal (local
+// on one rank, distributed by forwarding on many) and the path layout,
+// renders the frames, sums the stats over ranks, composites the ranks'
+// partial frame buffers and hands the images to a FrameSink.
+//
+// Both are collective: every rank of `comm` constructs a session with the
+// same settings and calls run() with the same kind of sink. The session
+// prints nothing; progress goes through a callback.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "mpi/communicator.h"
+#include "render/render_stats.h"
+#include "scene/scene.h"
+#include "scene/scene_summary.h"
+#include "session/frame_sink.h"
+#include "session/session_settings.h"
+
+namespace ferry {
+
+// Per-rank memory, each vector indexed by rank (the same on every rank).
+struct RankMemory {
+  std::vector<double> estimated;     // the memory model's estimate of what the rank holds
+  std::vector<double> embree;        // bytes Embree holds for the rank's structures
+  std::vector<double> embreePeak;    // and its peak while building them
+  std::vector<double> resident;      // resident set after rendering
+  std::vector<double> residentPeak;  // peak resident set
+};
+
+// What a session measured, the same on every rank.
+struct SessionReport {
+  RenderStats stats;  // per frame, summed over ranks (seconds: the slowest rank)
+  RankMemory memory;
+  uint64_t raysReceived = 0;    // counted by receivers (stats count senders)
+  uint64_t revisits = 0;        // rays that came back to a rank they had visited (must be 0)
+  uint64_t compositeBytes = 0;  // sent by direct send over all composites and ranks
+  double compositeSeconds = 0;  // the final image's composite, slowest rank
+  std::string pathLayout;       // mask8, mask64 or replay
+  size_t pathBytes = 0;         // sizeof the path on the wire
+};
+
+// How far run() is: called after every sample of every frame, then once
+// with `rendered` set when the last frame is done (compositing and the final
+// image follow).
+struct RenderProgress {
+  int frame = 0;            // the frame being rendered (0-based)
+  int samplesDone = 0;      // of that frame
+  int samplesPerFrame = 0;  // wavefronts per frame
+  bool rendered = false;
+};
+using SessionProgress = std::function<void(const RenderProgress&)>;
+
+// Throws InputError if a session cannot run on `ranks` ranks with `layout`
+// (more than kMaxRanks, or masks asked for above 64 ranks). The session
+// checks it when made; a command line may check it first.
+void checkRankCount(int ranks, PathLayout layout);
+
+class RenderSession {
+ public:
+  // Sets this rank up; throws InputError for what the user can fix (scene,
+  // view, rank count, path layout). Every rank usually meets the same error:
+  // the caller agrees on failure (Communicator::agreeOnFailure).
+  RenderSession(const SessionSettings& settings, const Communicator& comm);
+  ~RenderSession();
+  RenderSession(const RenderSession&) = delete;
+  RenderSession& operator=(const RenderSession&) = delete;
+
+  // Renders every frame, composites what the sink asks for on every rank and
+  // gives it to rank 0's sink. What this throws comes from the middle of
+  // collective work, so the caller ends every rank (Communicator::abortAll)
+  // -- except what rank 0's sink throws for the final image, which comes
+  // after the last collective, when the other ranks have returned. (What the
+  // sink throws for an earlier image ends every rank here.)
+  SessionReport run(FrameSink& sink, const SessionProgress& progress = {});
+
+  // Before run(): renders at this size instead (a scene's own, pbrt's Film).
+  void setImageSize(int width, int height);
+  const SessionSettings& settings() const { return settings_; }
+  // This rank's scene (its part, after partitioning): for its film settings.
+  const Scene& scene() const;
+  // The whole scene, summarized before this rank released what it does not own.
+  const SceneSummary& summary() const;
+  // The partitioner that made the parts: a part directory's (from its
+  // manifest) or the one run on the fly.
+  const std::string& partitionerName() const;
+  double loadSeconds() const;
+  double buildSeconds() const;
+
+ private:
+  struct Rank;
+
+  template <typename Path>
+  SessionReport runWithLayout(FrameSink& sink, const SessionProgress& progress);
+
+  SessionSettings settings_;
+  const Communicator& comm_;
+  std::unique_ptr<Rank> rank_;
+};
+
+}  // namespace ferry

@@ -1,0 +1,194 @@
+// A render session on one rank, in this process: the sink gets the images it
+// asks for, of the right size and not black, and a part directory's stats
+// name the partitioner that made the parts.
+#include "session/render_session.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "core/error.h"
+#include "io/part_directory.h"
+#include "io/scene_loader.h"
+#include "mpi/in_process_communicator.h"
+#include "partition/partitioner.h"
+#include "scene/light_scene.h"
+#include "session/session_stats.h"
+
+namespace ferry {
+namespace {
+
+namespace fs = std::filesystem;
+
+// One rank, in process (no MPI in unit tests): a group of one.
+const Communicator& oneRank() {
+  static InProcessGroup group(1);
+  return group.communicator(0);
+}
+
+class RecordingSink final : public FrameSink {
+ public:
+  RecordingSink(Frames frames, Pixels pixels) : frames_(frames), pixels_(pixels) {}
+  Frames frames() const override { return frames_; }
+  Pixels pixels() const override { return pixels_; }
+  void receive(const FrameImage& image) override { images.push_back(image); }
+  std::vector<FrameImage> images;
+
+ private:
+  Frames frames_;
+  Pixels pixels_;
+};
+
+SessionSettings cornellSettings() {
+  SessionSettings s;
+  s.scene = "builtin:cornell";
+  s.render.width = 40;
+  s.render.height = 24;
+  s.render.samplesPerPixel = 2;
+  s.render.frames = 2;
+  s.render.maxDepth = 3;
+  s.load.warn = [](const std::string& message) { ADD_FAILURE() << message; };
+  return s;
+}
+
+bool nonBlack(const std::vector<Vec3f>& pixels) {
+  for (const Vec3f& p : pixels) {
+    EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+    if (p.x > 0 || p.y > 0 || p.z > 0) return true;
+  }
+  return false;
+}
+
+TEST(RenderSession, FileLikeSinkGetsOnlyTheFinalImage) {
+  ASSERT_EQ(oneRank().size(), 1);
+  RenderSession session(cornellSettings(), oneRank());
+  RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+  int calls = 0, rendered = 0;
+  const SessionReport report = session.run(sink, [&](const RenderProgress& p) {
+    ++calls;
+    rendered += p.rendered;
+    EXPECT_LE(p.samplesDone, p.samplesPerFrame);
+  });
+  ASSERT_EQ(sink.images.size(), 1u);
+  const FrameImage& image = sink.images[0];
+  EXPECT_TRUE(image.last);
+  EXPECT_EQ(image.frame, 1);
+  EXPECT_EQ(image.width, 40);
+  EXPECT_EQ(image.height, 24);
+  ASSERT_EQ(image.linear.size(), 40u * 24u);
+  EXPECT_TRUE(image.rgba.empty());
+  EXPECT_TRUE(nonBlack(image.linear));
+
+  EXPECT_EQ(rendered, 1);
+  EXPECT_EQ(calls, 2 * 2 + 1);  // every sample of both frames, then once when rendered
+  ASSERT_EQ(report.stats.frames.size(), 2u);
+  for (const FrameStats& frame : report.stats.frames) EXPECT_EQ(frame.cameraPaths, 40u * 24u * 2u);
+  EXPECT_EQ(report.pathLayout, "mask8");
+  EXPECT_EQ(report.pathBytes, 36u);
+  EXPECT_EQ(report.memory.estimated.size(), 1u);
+  EXPECT_EQ(report.raysReceived, 0u);
+  EXPECT_EQ(session.partitionerName(), "round-robin");
+}
+
+// A viewer's sink: the accumulated image after every frame, the last one the
+// same as a file sink's.
+TEST(RenderSession, ProgressiveSinkGetsEveryFrameAndTheSameFinalImage) {
+  std::vector<Vec3f> finalOnly;
+  {
+    RenderSession session(cornellSettings(), oneRank());
+    RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+    session.run(sink);
+    ASSERT_EQ(sink.images.size(), 1u);
+    finalOnly = sink.images[0].linear;
+  }
+  RenderSession session(cornellSettings(), oneRank());
+  RecordingSink every(FrameSink::Frames::Every, FrameSink::Pixels::Linear);
+  session.run(every);
+  ASSERT_EQ(every.images.size(), 2u);
+  EXPECT_EQ(every.images[0].frame, 0);
+  EXPECT_FALSE(every.images[0].last);
+  EXPECT_TRUE(nonBlack(every.images[0].linear));
+  EXPECT_EQ(every.images[1].frame, 1);
+  EXPECT_TRUE(every.images[1].last);
+  ASSERT_EQ(every.images[1].linear.size(), finalOnly.size());
+  for (size_t i = 0; i < finalOnly.size(); ++i) {
+    ASSERT_EQ(every.images[1].linear[i].x, finalOnly[i].x) << i;
+    ASSERT_EQ(every.images[1].linear[i].y, finalOnly[i].y) << i;
+    ASSERT_EQ(every.images[1].linear[i].z, finalOnly[i].z) << i;
+  }
+}
+
+TEST(RenderSession, ToneMappedSinkGetsRgba8AtTheSizeSetAfterLoading) {
+  RenderSession session(cornellSettings(), oneRank());
+  session.setImageSize(17, 9);
+  RecordingSink sink(FrameSink::Frames::Every, FrameSink::Pixels::ToneMapped);
+  session.run(sink);
+  ASSERT_EQ(sink.images.size(), 2u);
+  for (const FrameImage& image : sink.images) {
+    EXPECT_EQ(image.width, 17);
+    EXPECT_EQ(image.height, 9);
+    ASSERT_EQ(image.rgba.size(), 17u * 9u * 4u);
+    EXPECT_TRUE(image.linear.empty());
+    bool lit = false;
+    for (size_t i = 0; i < image.rgba.size(); i += 4) {
+      lit = lit || image.rgba[i] || image.rgba[i + 1] || image.rgba[i + 2];
+      EXPECT_EQ(image.rgba[i + 3], 255);
+    }
+    EXPECT_TRUE(lit);
+  }
+}
+
+TEST(RenderSession, BadSettingsAreInputErrors) {
+  SessionSettings unknownView = cornellSettings();
+  unknownView.render.view = "nowhere";
+  EXPECT_THROW(RenderSession(unknownView, oneRank()), InputError);
+  SessionSettings missing = cornellSettings();
+  missing.scene = "/no/such/scene.obj";
+  EXPECT_THROW(RenderSession(missing, oneRank()), InputError);
+  EXPECT_THROW(checkRankCount(65, PathLayout::Mask), InputError);
+  EXPECT_NO_THROW(checkRankCount(65, PathLayout::Auto));
+  EXPECT_THROW(checkRankCount(kMaxRanks + 1, PathLayout::Replay), InputError);
+}
+
+// The stats of a render from a part directory name the partitioner that made
+// the parts (from the manifest), not the settings' on-the-fly partitioner.
+TEST(RenderSession, PartDirectoryStatsNameThePartitionerThatMadeTheParts) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("ferry-session-test-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  {
+    Scene scene = loadScene("builtin:cornell");
+    const Scene lights = lightScene(scene);
+    PartitionerOptions options;
+    options.name = toString(PartitionerKind::SpatialSah);
+    const Partition partition = partitionScene(scene, 1, options);
+    PartDirectoryInfo info;
+    info.scene = "builtin:cornell";
+    info.partitioner = options.name;
+    info.summary = summarize(scene).toJson();
+    writePartDirectory(dir.string(), scene, partition, lights, info);
+  }
+  SessionSettings settings = cornellSettings();
+  settings.scene = dir.string();
+  settings.partitioner = PartitionerKind::Best;  // not used for a part directory
+  RenderSession session(settings, oneRank());
+  RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+  const SessionReport report = session.run(sink);
+  EXPECT_EQ(session.partitionerName(), "spatial-sah");
+  const nlohmann::json stats = sessionStatsJson(session, report, {"out.pfm", 1.0});
+  EXPECT_EQ(stats.at("settings").at("partition"), "spatial-sah");
+  EXPECT_EQ(stats.at("settings").at("output"), "out.pfm");
+  EXPECT_EQ(stats.at("settings").at("retrace"), "remote");
+  EXPECT_EQ(stats.at("settings").at("forwarding"), "proxies");
+  EXPECT_EQ(stats.at("settings").at("instancing"), "shared");
+  EXPECT_EQ(stats.at("settings").at("path_layout"), "mask8");
+  ASSERT_EQ(sink.images.size(), 1u);
+  EXPECT_TRUE(nonBlack(sink.images[0].linear));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace ferry

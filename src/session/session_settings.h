@@ -1,0 +1,40 @@
+// Everything a render session needs to know, parsed and checked: the command
+// line (app/) builds it; the session never reads a flag.
+#pragma once
+
+#include <string>
+
+#include "distributed/forwarding.h"
+#include "io/load_options.h"
+#include "partition/partitioner.h"
+#include "render/wavefront_renderer.h"
+#include "session/modes.h"
+
+namespace ferry {
+
+struct SessionSettings {
+  // A scene file, a built-in (builtin:NAME?...) or a part directory (ferry partition -o DIR).
+  std::string scene;
+  // How a scene file is loaded, and how the loaders talk back on this rank.
+  LoadOptions load;
+  // Image size, samples, frames, depth, seed, view, tone mapping. Its
+  // retraceAll is the session's to set, from `retrace`.
+  RenderSettings render;
+  int threads = 0;  // worker threads per rank (0: all cores)
+
+  ForwardingMode forwarding = ForwardingMode::Proxies;
+  PathLayout pathLayout = PathLayout::Auto;
+  Retrace retrace = Retrace::Remote;
+  Instancing instancing = Instancing::Shared;
+
+  // How a scene (not a part directory) is split over the ranks, on the fly:
+  // every rank runs the same deterministic partitioner.
+  PartitionerKind partitioner = PartitionerKind::RoundRobin;
+  bool keepObjectsWhole = false;
+  double replicationBudget = 0.05;
+};
+
+// The partitioner options a session with `settings` partitions with.
+PartitionerOptions partitionerOptions(const SessionSettings& settings);
+
+}  // namespace ferry

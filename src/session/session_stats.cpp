@@ -1,0 +1,75 @@
+#include "session/session_stats.h"
+
+#include <algorithm>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "io/image_io.h"
+
+namespace ferry {
+namespace {
+
+double maxOf(const std::vector<double>& v) {
+  return *std::max_element(v.begin(), v.end());
+}
+
+}  // namespace
+
+nlohmann::json sessionStatsJson(const RenderSession& session, const SessionReport& report,
+                                const StatsContext& context) {
+  const SessionSettings& s = session.settings();
+  const RenderSettings& r = s.render;
+  const RankMemory& memory = report.memory;
+  const int ranks = int(memory.estimated.size());
+  nlohmann::json j;
+  j["scene"] = session.summary().toJson();
+  j["settings"] = {{"width", r.width},
+                   {"height", r.height},
+                   {"spp", r.samplesPerPixel},
+                   {"frames", r.frames},
+                   {"max_depth", r.maxDepth},
+                   {"seed", r.seed},
+                   {"view", r.view},
+                   {"threads", s.threads},
+                   {"ranks", ranks},
+                   {"forwarding", toString(s.forwarding)},
+                   {"retrace", toString(s.retrace)},
+                   {"instancing", toString(s.instancing)},
+                   {"partition", session.partitionerName()},
+                   {"output", context.output},
+                   {"path_layout", report.pathLayout},
+                   {"path_bytes", report.pathBytes}};
+  j["render"] = report.stats.toJson();
+  j["render"]["rays_received"] = report.raysReceived;
+  j["render"]["revisits"] = report.revisits;
+  j["render"]["composite_bytes_sent"] = report.compositeBytes;
+  nlohmann::json perRank = nlohmann::json::array();
+  for (int rank = 0; rank < ranks; ++rank)
+    perRank.push_back({{"rank", rank},
+                       {"estimated_bytes", memory.estimated[rank]},
+                       {"embree_bytes", memory.embree[rank]},
+                       {"embree_peak_bytes", memory.embreePeak[rank]},
+                       {"resident_bytes", memory.resident[rank]},
+                       {"peak_resident_bytes", memory.residentPeak[rank]}});
+  j["memory"] = {{"scene_estimated_bytes", session.summary().memory.total()},
+                 {"max_estimated_bytes", maxOf(memory.estimated)},
+                 {"max_embree_bytes", maxOf(memory.embree)},
+                 {"max_peak_resident_bytes", maxOf(memory.residentPeak)},
+                 {"per_rank", perRank}};
+  j["seconds"] = {{"load", session.loadSeconds()},
+                  {"build", session.buildSeconds()},
+                  {"total", context.totalSeconds}};
+  return j;
+}
+
+void writeStatsFile(const std::string& path, const nlohmann::json& stats) {
+  writeFileAtomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp);
+    out << stats.dump(2) << "\n";
+    if (!out) throw InputError(fmt::format("{}: could not write", path));
+  });
+}
+
+}  // namespace ferry
