@@ -33,7 +33,7 @@
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene_summary.h"
-#include "trace/local_geometry.h"
+#include "trace/embree_backend.h"
 #include "trace/path.h"
 
 namespace ferry {
@@ -67,7 +67,7 @@ struct RankSetup {
   Scene scene;
   Partition partition;
   std::vector<int32_t> owned;
-  std::unique_ptr<LocalGeometry> geometry;
+  std::unique_ptr<TraceBackend> geometry;
   std::unique_ptr<LightSampler> lights;
   SceneSummary summary;  // of the whole scene, before releasing what this rank does not own
   MemoryCost ownedEstimate;
@@ -87,9 +87,8 @@ RankMemory gatherMemory(const Communicator& comm, const RankSetup& setup) {
     v[comm.rank()] = mine;
     return comm.sum(std::span<const double>(v));
   };
-  return {spread(double(setup.ownedEstimate.total())),
-          spread(double(setup.geometry->embreeBytes())),
-          spread(double(setup.geometry->embreePeakBytes())), spread(double(m.residentBytes)),
+  return {spread(double(setup.ownedEstimate.total())), spread(double(setup.geometry->bytes().now)),
+          spread(double(setup.geometry->bytes().peak)), spread(double(m.residentBytes)),
           spread(double(m.peakResidentBytes))};
 }
 
@@ -200,7 +199,7 @@ void setUp(const RenderOptions& o, const RenderSettings& settings, const Communi
   s.loadSeconds = secondsSince(start);
   maybeInjectFailure("load", comm.rank());
   auto build = Clock::now();
-  s.geometry = std::make_unique<LocalGeometry>(
+  s.geometry = makeEmbreeBackend(
       s.scene, s.owned, o.instancing == "always" ? Instancing::Always : Instancing::Shared);
   s.buildSeconds = secondsSince(build);
 }

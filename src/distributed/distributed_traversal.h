@@ -18,10 +18,8 @@ namespace ferry {
 template <typename Path>
 class DistributedTraversal final : public RayTraversal<Path> {
  public:
-  DistributedTraversal(const Communicator& comm, const LocalGeometry& geometry,
+  DistributedTraversal(const Communicator& comm, const TraceBackend& geometry,
                        const Partition& partition, ForwardingMode mode);
-  int rank() const override { return comm_.rank(); }
-  int rankCount() const override { return comm_.size(); }
   bool keepsPrimary(uint32_t pixel, const TraceRay& ray, FrameStats& stats) const override;
   void traverse(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& exchange,
                 FrameStats& stats) override;
@@ -50,7 +48,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   std::vector<RankSet> replayArrivals(const PathQueue<Path>& rays, FrameStats& stats);
 
   const Communicator& comm_;
-  const LocalGeometry& geometry_;
+  const TraceBackend& geometry_;
   ForwardingMode mode_;
   ProxyBvh proxies_;
   std::vector<uint64_t>

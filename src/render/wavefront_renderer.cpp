@@ -43,7 +43,7 @@ Vec3f setRay(Path& p, Vec3f origin, Vec3f direction, float tmax, Vec3f weight, u
 }  // namespace
 
 template <typename Path>
-WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const LocalGeometry& geometry,
+WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBackend& geometry,
                                            const LightSampler& lights,
                                            RayTraversal<Path>& traversal,
                                            const RenderSettings& settings)
@@ -218,10 +218,10 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
   auto shadeRange = [&](size_t begin, size_t end, Path* out, uint64_t& retraced, uint64_t& misses,
                         uint64_t& shadows) {
     constexpr size_t kBatch = 256;
-    TraceRay queries[kBatch];
-    TraceQuery kinds[kBatch];
+    constexpr uint16_t kKept = 0xffff;  // no re-trace: the kept hit (or none)
+    RetraceRay queries[kBatch];
     TraceHit found[kBatch];
-    uint8_t unused[kBatch];
+    uint16_t retraceSlot[kBatch];  // path i's hit is found[retraceSlot[i]], or kKept
     uint32_t count = 0;
     for (size_t batch = begin; batch < end; batch += kBatch) {
       const size_t m = std::min(kBatch, end - batch);
@@ -232,15 +232,11 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
         const Path& p = rays[batch + i];
         const bool retrace =
             !p.isShadow() && p.hasHit() && (settings_.retraceAll || !hits[batch + i].valid());
-        kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
-        if (retrace) {
-          queries[i] = retraceQuery(p.origin, p.dir(), p.tmax);
-          ++needed;
-        }
+        retraceSlot[i] = retrace ? uint16_t(needed) : kKept;
+        if (retrace) queries[needed++] = {p.origin, p.dir(), p.tmax};
       }
       if (needed) {
-        geometry_.traceBatch(std::span(queries, m), std::span(kinds, m), std::span(found, m),
-                             std::span(unused, m));
+        geometry_.retrace(std::span(queries, needed), std::span(found, needed));
         retraced += needed;
       }
       for (size_t i = 0; i < m; ++i) {
@@ -251,7 +247,7 @@ void WavefrontRenderer<Path>::shade(Workspace& ws, uint32_t sampleIndex, uint32_
           continue;
         }
         const TraceHit& hit =
-            needed && kinds[i] == TraceQuery::Closest ? found[i] : hits[batch + i];
+            needed && retraceSlot[i] != kKept ? found[retraceSlot[i]] : hits[batch + i];
         int spawned = shadeOne(p, hit, sampleIndex, bounce, frameBuffer, out + count, misses);
         for (int k = 0; k < spawned; ++k) shadows += out[count + k].isShadow();
         count += uint32_t(spawned);

@@ -51,7 +51,7 @@ using ProgressCallback = std::function<void(int done, int total)>;
 template <typename Path>
 class WavefrontRenderer {
  public:
-  WavefrontRenderer(const Scene& scene, const LocalGeometry& geometry, const LightSampler& lights,
+  WavefrontRenderer(const Scene& scene, const TraceBackend& geometry, const LightSampler& lights,
                     RayTraversal<Path>& traversal, const RenderSettings& settings);
 
   // Adds frame `frame`'s samples to `frameBuffer` (this rank's partial sum).
@@ -90,7 +90,7 @@ class WavefrontRenderer {
                FrameBuffer& frameBuffer, Path* out, uint64_t& misses) const;
 
   const Scene& scene_;
-  const LocalGeometry& geometry_;
+  const TraceBackend& geometry_;  // shading's re-traces
   const LightSampler& lights_;
   RayTraversal<Path>& traversal_;
   RenderSettings settings_;
