@@ -1,6 +1,6 @@
-// How close Ferry's path tracer comes to the ceiling set by Embree alone, and
-// whether Embree's stream API (rtcIntersect1M / rtcOccluded1M, what
-// LocalGeometry's batched queries use) beats single-ray calls
+// How close Ferry's path tracer comes to the ceiling set by its trace backend
+// alone, and whether the Embree backend's wavefront calls (Embree's stream
+// API, rtcIntersect1M / rtcOccluded1M) beat single-ray calls
 // (rtcIntersect1 / rtcOccluded1) in a tbb::parallel_for on the same rays.
 //
 // One frame is rendered once through the WavefrontRenderer with a traversal
@@ -8,10 +8,14 @@
 // rays of each wavefront (as the traversal receives them) and the shading
 // re-traces (rebuilt exactly as WavefrontRenderer::shade makes them). Then:
 //   Render       the whole frame (camera rays, traversal, shading, re-traces)
-//   TraceStream  only the recorded Embree queries, wavefront by wavefront,
-//                through LocalGeometry's batched (stream) calls
+//   TraceStream  only the recorded queries, wavefront by wavefront, through
+//                the backend's wavefront calls (TraceBackend::trace of a copy
+//                of the recorded queue, TraceBackend::retrace in batches of
+//                256 as shading makes them)
 //   TraceSingle  the same queries, same batches, same parallel_for grain,
-//                one rtcIntersect1 / rtcOccluded1 per ray
+//                one rtcIntersect1 / rtcOccluded1 per ray (the re-traces
+//                searching to the recorded distance, without the backend's
+//                small margin: the same traversal work)
 //   TraceStreamNoRetrace  TraceStream without the re-traces: what keeping
 //                the hit instead of re-tracing would save
 //   RenderRemote the whole frame as Ferry renders it by default (--retrace
@@ -36,6 +40,7 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,27 +50,31 @@
 #include "render/ray_traversal.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene.h"
-#include "trace/local_geometry.h"
+#include "trace/embree_backend.h"
 #include "trace/path.h"
 
 namespace ferry {
 namespace {
 
-// The queries of one wavefront, in the order the renderer makes them.
+// The queries of one wavefront, in the order the renderer makes them: the
+// queue as the traversal received it, and shading's re-traces.
 struct Wave {
-  std::vector<TraceRay> closest, shadow, retrace;
+  PathQueue<Path8> paths, shadowRays;
+  std::vector<TraceRay> closest, shadow;  // the queue's rays, for single-ray calls
+  std::vector<RetraceRay> retrace;
+  std::vector<TraceRay> retraceRays;  // the same, for single-ray calls
 };
 
 // LocalTraversal that also writes down what it traces.
 class RecordingTraversal final : public RayTraversal<Path8> {
  public:
-  explicit RecordingTraversal(const LocalGeometry& geometry) : inner_(geometry) {}
-  int rank() const override { return 0; }
-  int rankCount() const override { return 1; }
+  explicit RecordingTraversal(const TraceBackend& geometry) : inner_(geometry) {}
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
   void traverse(RayQueues<Path8>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override {
     Wave& w = waves.emplace_back();
+    w.paths = rays.paths;
+    w.shadowRays = rays.shadowRays;
     for (const Path8& p : rays.paths)
       w.closest.push_back(TraceRay{p.origin, p.dir(), 0.0f, p.tmax});
     for (const Path8& p : rays.shadowRays)
@@ -73,7 +82,10 @@ class RecordingTraversal final : public RayTraversal<Path8> {
     inner_.traverse(rays, pathHits, exchange, stats);
     // With --retrace all, WavefrontRenderer::shade re-traces every path that hit.
     for (const Path8& p : rays.paths)
-      if (p.hasHit()) w.retrace.push_back(retraceQuery(p.origin, p.dir(), p.tmax));
+      if (p.hasHit()) {
+        w.retrace.push_back({p.origin, p.dir(), p.tmax});
+        w.retraceRays.push_back({p.origin, p.dir(), 0, p.tmax});
+      }
   }
   std::vector<Wave> waves;
 
@@ -84,7 +96,7 @@ class RecordingTraversal final : public RayTraversal<Path8> {
 struct Setup {
   std::string spec;
   Scene scene;
-  std::unique_ptr<LocalGeometry> geometry;
+  std::unique_ptr<TraceBackend> geometry;
   std::unique_ptr<LightSampler> lights;
   RenderSettings settings;
   std::vector<Wave> waves;
@@ -100,7 +112,7 @@ Setup& setup(int which) {
   Setup& s = *slot;
   s.spec = which == 0 ? "builtin:island?scale=0.1" : "builtin:cornell";
   s.scene = generateBuiltin(parseBuiltinSpec(s.spec));
-  s.geometry = std::make_unique<LocalGeometry>(s.scene);
+  s.geometry = makeEmbreeBackend(s.scene);
   s.lights = std::make_unique<LightSampler>(s.scene);
   s.settings.width = 640;
   s.settings.height = 360;
@@ -160,22 +172,33 @@ void BM_RenderRemote(benchmark::State& state) {
   setLabels(state, s);
 }
 
+// The backend's batch (256 rays): the grain of every parallel loop here.
+constexpr size_t kGrain = 256;
+
 void traceStream(benchmark::State& state, bool retrace) {
   Setup& s = setup(int(state.range(0)));
+  PathQueue<Path8> queue;
   std::vector<TraceHit> hits;
-  std::vector<uint8_t> occluded;
   for (auto _ : state) {
     for (const Wave& w : s.waves) {
-      hits.resize(w.closest.size());
-      s.geometry->intersect(w.closest, hits);
-      occluded.resize(w.shadow.size());
-      s.geometry->occluded(w.shadow, occluded);
+      queue = w.paths;  // the trace writes its answers into the paths
+      hits.resize(queue.size());
+      s.geometry->trace(queue, 0, {}, hits);
+      queue = w.shadowRays;
+      s.geometry->trace(queue, 0, {}, {});
       if (retrace) {
         hits.resize(w.retrace.size());
-        s.geometry->intersect(w.retrace, hits);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, w.retrace.size(), kGrain),
+                          [&](const auto& r) {
+                            for (size_t i = r.begin(); i < r.end(); i += kGrain) {
+                              const size_t n = std::min(kGrain, r.end() - i);
+                              s.geometry->retrace(std::span(w.retrace).subspan(i, n),
+                                                  std::span(hits).subspan(i, n));
+                            }
+                          });
       }
       benchmark::DoNotOptimize(hits.data());
-      benchmark::DoNotOptimize(occluded.data());
+      benchmark::DoNotOptimize(queue.data());
     }
   }
   setLabels(state, s);
@@ -190,10 +213,8 @@ void BM_TraceStreamNoRetrace(benchmark::State& state) {
   traceStream(state, false);
 }
 
-// Same batches and grain as LocalGeometry's stream calls (256 rays), single-ray Embree calls.
-constexpr size_t kGrain = 256;
-
-void intersectSingle(const LocalGeometry& g, const std::vector<TraceRay>& rays,
+// Single-ray calls, same grain as the backend's batches.
+void intersectSingle(const TraceBackend& g, const std::vector<TraceRay>& rays,
                      std::vector<TraceHit>& hits) {
   hits.resize(rays.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kGrain), [&](const auto& r) {
@@ -213,7 +234,7 @@ void BM_TraceSingle(benchmark::State& state) {
         for (size_t i = r.begin(); i != r.end(); ++i)
           occluded[i] = s.geometry->occluded(w.shadow[i]);
       });
-      intersectSingle(*s.geometry, w.retrace, hits);
+      intersectSingle(*s.geometry, w.retraceRays, hits);
       benchmark::DoNotOptimize(hits.data());
       benchmark::DoNotOptimize(occluded.data());
     }

@@ -49,7 +49,7 @@ void keepToShade(const Path& ray, const TraceHit& hit, RayQueues<Path>& ready,
 
 template <typename Path>
 DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,
-                                                 const LocalGeometry& geometry,
+                                                 const TraceBackend& geometry,
                                                  const Partition& partition, ForwardingMode mode)
     : comm_(comm), geometry_(geometry), mode_(mode), proxies_(partition.proxies) {
   FERRY_CHECK(comm.size() <= kMaxRanks);
@@ -134,7 +134,8 @@ void DistributedTraversal<Path>::trace(PathQueue<Path>& rays, FrameStats& stats,
     }
   }
   if (hits) hits->resize(rays.size());
-  traceLocally(geometry_, rays, rank, instanceOwners_, stats, hits ? hits->data() : nullptr);
+  traceCounted(geometry_, rays, rank, instanceOwners_,
+               hits ? std::span<TraceHit>(*hits) : std::span<TraceHit>(), stats);
 }
 
 template <typename Path>

@@ -18,10 +18,8 @@ namespace ferry {
 template <typename Path>
 class DistributedTraversal final : public RayTraversal<Path> {
  public:
-  DistributedTraversal(const Communicator& comm, const LocalGeometry& geometry,
+  DistributedTraversal(const Communicator& comm, const TraceBackend& geometry,
                        const Partition& partition, ForwardingMode mode);
-  int rank() const override { return comm_.rank(); }
-  int rankCount() const override { return comm_.size(); }
   void primaryPixels(uint32_t first, uint32_t last, const CameraRayOf& cameraRay,
                      std::vector<uint32_t>& pixels, FrameStats& stats) override;
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
@@ -59,7 +57,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   std::vector<RankSet> replayArrivals(const PathQueue<Path>& rays, FrameStats& stats);
 
   const Communicator& comm_;
-  const LocalGeometry& geometry_;
+  const TraceBackend& geometry_;
   ForwardingMode mode_;
   ProxyBvh proxies_;
   std::vector<uint64_t>

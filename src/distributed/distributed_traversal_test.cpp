@@ -30,7 +30,7 @@
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene.h"
-#include "trace/local_geometry.h"
+#include "trace/embree_backend.h"
 #include "trace/path.h"
 
 namespace ferry {
@@ -38,8 +38,8 @@ namespace {
 
 // The one place this test builds a rank's trace geometry (over the instances
 // it owns), so a change of the trace backend's interface touches one function.
-std::unique_ptr<LocalGeometry> buildGeometry(Scene& scene, const std::vector<int32_t>& owned) {
-  return std::make_unique<LocalGeometry>(scene, owned);
+std::unique_ptr<TraceBackend> buildGeometry(Scene& scene, const std::vector<int32_t>& owned) {
+  return makeEmbreeBackend(scene, owned);
 }
 
 struct SceneCase {
@@ -85,10 +85,9 @@ struct RenderResult {
 // One frame on this rank (set up as the `ferry` command sets up a rank:
 // LocalTraversal on one rank, DistributedTraversal on more), composited.
 template <typename Path>
-RenderResult renderFrame(const Communicator& comm, const Scene& scene,
-                         const LocalGeometry& geometry, const LightSampler& lights,
-                         const Partition& partition, ForwardingMode mode,
-                         const RenderSettings& settings) {
+RenderResult renderFrame(const Communicator& comm, const Scene& scene, const TraceBackend& geometry,
+                         const LightSampler& lights, const Partition& partition,
+                         ForwardingMode mode, const RenderSettings& settings) {
   std::unique_ptr<RayTraversal<Path>> traversal;
   DistributedTraversal<Path>* distributed = nullptr;
   if (comm.size() == 1) {

@@ -674,6 +674,7 @@ class GltfBuilder {
     mesh.name = name;
     {
       std::vector<float> p = accessors_.floats(position, 3, "POSITION");
+      mesh.positions.reserve(p.size() / 3 + 1);  // Mesh::hasVertexSlack
       mesh.positions.resize(p.size() / 3);
       std::memcpy(static_cast<void*>(mesh.positions.data()), p.data(), p.size() * sizeof(float));
     }

@@ -286,7 +286,7 @@ class BodyReader {
     if (slots_.x < 0 || slots_.y < 0 || slots_.z < 0)
       throw InputError(SourceLocation{in_.name(), vertex->line},
                        "vertex element has no x, y and z properties");
-    mesh_.positions.reserve(size_t(vertexCount_));
+    mesh_.positions.reserve(size_t(vertexCount_) + 1);  // Mesh::hasVertexSlack
     if (slots_.nx >= 0) mesh_.normals.reserve(size_t(vertexCount_));
     if (slots_.u >= 0) mesh_.uvs.reserve(size_t(vertexCount_));
     for (const Element& e : header_.elements) {

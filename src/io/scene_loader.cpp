@@ -25,7 +25,11 @@ std::string lowerExtension(const std::string& path) {
 }  // namespace
 
 Scene loadScene(const std::string& spec, const LoadOptions& options) {
-  if (isBuiltinSpec(spec)) return generateBuiltin(parseBuiltinSpec(spec));
+  if (isBuiltinSpec(spec)) {
+    Scene scene = generateBuiltin(parseBuiltinSpec(spec));
+    scene.reserveVertexSlack();  // so the trace backend shares every vertex array
+    return scene;
+  }
   if (!std::filesystem::exists(spec)) throw InputError(fmt::format("{}: no such file", spec));
   std::string ext = lowerExtension(spec);
   Scene scene;
@@ -44,6 +48,7 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
                     spec, ext));
   }
   scene.validate();
+  scene.reserveVertexSlack();  // so the trace backend shares every vertex array
   return scene;
 }
 

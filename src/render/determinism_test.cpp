@@ -123,9 +123,7 @@ RenderSettings busySettings(uint32_t seed) {
 // renderer then sends the whole image through one wavefront (as on many ranks).
 template <typename Path>
 struct WholeImageTraversal final : RayTraversal<Path> {
-  explicit WholeImageTraversal(const LocalGeometry& geometry) : local(geometry) {}
-  int rank() const override { return 0; }
-  int rankCount() const override { return 1; }
+  explicit WholeImageTraversal(const TraceBackend& geometry) : local(geometry) {}
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& e,
                 FrameStats& s) override {
     local.traverse(rays, pathHits, e, s);
@@ -144,7 +142,8 @@ std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false, i
   RenderSettings s = busySettings(seed);
   s.retraceAll = retraceAll;
   if (chunk > 0) s.chunkPixels = uint32_t(chunk);
-  LocalGeometry geometry(scene);
+  const std::unique_ptr<TraceBackend> backend = makeEmbreeBackend(scene);
+  const TraceBackend& geometry = *backend;
   LightSampler lights(scene);
   std::unique_ptr<RayTraversal<Path>> traversalHolder;
   if (chunk < 0)

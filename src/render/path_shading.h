@@ -27,8 +27,8 @@
 #include "render/frame_buffer.h"
 #include "render/lights.h"
 #include "render/surface.h"
-#include "trace/local_geometry.h"
 #include "trace/path.h"
+#include "trace/trace_backend.h"
 
 namespace ferry {
 

@@ -4,6 +4,7 @@
 // limit and the two-sided rule; and the shadow ray's tmax against the
 // emitter's plane along the direction as stored.
 #include "render/path_shading.h"
+#include "trace/embree_backend.h"
 
 #include <gtest/gtest.h>
 
@@ -25,7 +26,7 @@ constexpr uint32_t kMaxDepth = 4;
 // emissive ceiling panel (y = 4, facing down), under a constant sky and a sun.
 struct ShadingScene {
   Scene scene;
-  std::unique_ptr<LocalGeometry> geometry;
+  std::unique_ptr<TraceBackend> geometry;
   std::unique_ptr<LightSampler> lights;
   std::unique_ptr<PathShading<Path8>> shading;
   Vec3f sky{0.2f, 0.3f, 0.5f};
@@ -51,7 +52,7 @@ struct ShadingScene {
     scene.suns.push_back(sun);
     CameraView view;
     scene.views.push_back(view);
-    geometry = std::make_unique<LocalGeometry>(scene);
+    geometry = makeEmbreeBackend(scene);
     lights = std::make_unique<LightSampler>(scene);
     shading = std::make_unique<PathShading<Path8>>(scene, *lights, kMaxDepth, 1);
   }

@@ -4,21 +4,20 @@
 // whether an occluder was found).
 //
 // LocalTraversal is the one-rank case: everything is here, so a ray is traced
-// once. The distributed traversal (src/dist) forwards rays between ranks by
+// once. The distributed traversal (src/distributed) forwards rays between ranks by
 // proxies; the renderer does not know which one it has.
 #pragma once
 
-#include <algorithm>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <span>
 #include <vector>
 
+#include "core/clock.h"
 #include "render/render_stats.h"
-#include "trace/local_geometry.h"
 #include "trace/path.h"
+#include "trace/trace_backend.h"
 
 namespace ferry {
 
@@ -29,8 +28,6 @@ template <typename Path>
 class RayTraversal {
  public:
   virtual ~RayTraversal() = default;
-  virtual int rank() const = 0;
-  virtual int rankCount() const = 0;
   // Proxy-guided primary rays: sets `pixels` to the pixels of [first, last)
   // whose camera path this rank generates for the current sample, in
   // increasing order; `cameraRay(pixel)` is the pixel's camera ray as the
@@ -57,48 +54,34 @@ class RayTraversal {
   virtual bool anyRaysLeft(size_t localRays) = 0;
 };
 
-// Marks a path's closest hit on this rank or its shadow-ray occlusion, using
-// batched Embree queries, and records the rank as visited (Path::markTraced).
-// A closer hit is recorded by Path::setHit: the mask layouts take the hit
-// owners from `instanceOwners[instance]` (every rank holding that content,
-// for replication; this rank alone when the table is empty), the replay
-// layout records this rank. With `hits` (rays.size() entries), hits[i]
-// becomes the hit that set ray i's tmax here, or an invalid hit when this
-// trace did not set it.
+// TraceBackend::trace on this rank, its queries and time added to `stats`.
 template <typename Path>
-void traceLocally(const LocalGeometry& geometry, PathQueue<Path>& rays, int rank,
-                  std::span<const uint64_t> instanceOwners, FrameStats& stats,
-                  TraceHit* hits = nullptr);
-
-// The query with which shading re-traces a path whose hit it does not have:
-// Embree accepts a hit only somewhat inside tfar, with an error that scales
-// with the coordinates, not with t (measured: tfar = t, t + 1e-6 relative, or
-// t * 1.001 at t = 0.016 in a 555-unit box can all miss it), so it searches
-// past tmax by a margin of both kinds; nothing closer than the recorded hit
-// exists, so the closest hit found is the same one.
-inline TraceRay retraceQuery(Vec3f origin, Vec3f direction, float tmax) {
-  const float scale = std::max({std::abs(origin.x), std::abs(origin.y), std::abs(origin.z), 1.0f});
-  return {origin, direction, 0, tmax * 1.001f + 1e-4f * scale};
+void traceCounted(const TraceBackend& backend, PathQueue<Path>& rays, int rank,
+                  std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept,
+                  FrameStats& stats) {
+  const auto start = Clock::now();
+  const TraceCounts counts = backend.trace(rays, rank, instanceOwners, kept);
+  stats.closestTraces += counts.closest;
+  stats.occlusionTraces += counts.occlusion;
+  stats.times.trace += secondsSince(start);
 }
 
 template <typename Path>
 class LocalTraversal final : public RayTraversal<Path> {
  public:
-  explicit LocalTraversal(const LocalGeometry& geometry) : geometry_(geometry) {}
-  int rank() const override { return 0; }
-  int rankCount() const override { return 1; }
+  explicit LocalTraversal(const TraceBackend& backend) : backend_(backend) {}
   bool keepsAllPrimaries() const override { return true; }
   // Every ray is traced once, here: every hit is known.
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters&,
                 FrameStats& stats) override {
     pathHits.resize(rays.paths.size());
-    traceLocally(geometry_, rays.paths, 0, {}, stats, pathHits.data());
-    traceLocally(geometry_, rays.shadowRays, 0, {}, stats);
+    traceCounted(backend_, rays.paths, 0, {}, pathHits, stats);
+    traceCounted(backend_, rays.shadowRays, 0, {}, {}, stats);
   }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
 
  private:
-  const LocalGeometry& geometry_;
+  const TraceBackend& backend_;
 };
 
 }  // namespace ferry

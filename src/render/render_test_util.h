@@ -22,7 +22,7 @@
 #include "render/ray_traversal.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene.h"
-#include "trace/local_geometry.h"
+#include "trace/embree_backend.h"
 #include "trace/path.h"
 
 namespace ferry::testing {
@@ -227,14 +227,14 @@ inline Material diffuseMaterial(Vec3f albedo) {
 
 // Everything a one-rank render needs, built over `scene` (which must outlive it).
 struct RenderSetup {
-  std::unique_ptr<LocalGeometry> geometry;
+  std::unique_ptr<TraceBackend> geometry;
   std::unique_ptr<LightSampler> lights;
   std::unique_ptr<LocalTraversal<Path8>> traversal;
   std::unique_ptr<WavefrontRenderer<Path8>> renderer;
   RenderSettings settings;
 
-  RenderSetup(Scene& scene, const RenderSettings& s) : settings(s) {
-    geometry = std::make_unique<LocalGeometry>(scene);
+  RenderSetup(const Scene& scene, const RenderSettings& s) : settings(s) {
+    geometry = makeEmbreeBackend(scene);
     lights = std::make_unique<LightSampler>(scene);
     traversal = std::make_unique<LocalTraversal<Path8>>(*geometry);
     renderer =

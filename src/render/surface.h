@@ -8,7 +8,7 @@
 
 #include "core/math.h"
 #include "scene/scene.h"
-#include "trace/local_geometry.h"
+#include "trace/trace_backend.h"
 
 namespace ferry {
 

@@ -18,7 +18,7 @@
 namespace ferry {
 
 template <typename Path>
-WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const LocalGeometry& geometry,
+WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBackend& geometry,
                                            const LightSampler& lights,
                                            RayTraversal<Path>& traversal,
                                            const RenderSettings& settings)
@@ -246,19 +246,21 @@ void WavefrontRenderer<Path>::shadePaths(Workspace& ws, uint32_t sampleIndex, ui
   stats.retraceMisses += total.retraceMisses;
 }
 
-// A batch of re-trace queries (a few hundred keep the arrays in cache).
+// A batch of re-trace queries (a few hundred keep the arrays in cache): the
+// paths that need one, densely, and for each path of the batch where its
+// answer is.
 template <typename Path>
 struct WavefrontRenderer<Path>::RetraceBatch {
   static constexpr size_t kCapacity = 256;
-  TraceRay queries[kCapacity];
-  TraceQuery kinds[kCapacity];
+  static constexpr uint16_t kKept = 0xffff;  // no re-trace: the kept hit (or none)
+  RetraceRay queries[kCapacity];
   TraceHit found[kCapacity];
-  uint8_t unused[kCapacity];
+  uint16_t slot[kCapacity];  // path i's hit is found[slot[i]], or kKept
   size_t retraced = 0;
 
   // Path i's hit: re-traced, or the one kept.
   const TraceHit& hitOf(size_t i, const TraceHit& kept) const {
-    return retraced && kinds[i] == TraceQuery::Closest ? found[i] : kept;
+    return retraced && slot[i] != kKept ? found[slot[i]] : kept;
   }
 };
 
@@ -300,15 +302,10 @@ size_t WavefrontRenderer<Path>::retraceBatch(const Path* paths, const TraceHit* 
   for (size_t i = 0; i < count; ++i) {
     const Path& p = paths[i];
     const bool retrace = p.hasHit() && (settings_.retraceAll || !kept[i].valid());
-    batch.kinds[i] = retrace ? TraceQuery::Closest : TraceQuery::None;
-    if (retrace) {
-      batch.queries[i] = retraceQuery(p.origin, p.dir(), p.tmax);
-      ++needed;
-    }
+    batch.slot[i] = retrace ? uint16_t(needed) : RetraceBatch::kKept;
+    if (retrace) batch.queries[needed++] = {p.origin, p.dir(), p.tmax};
   }
-  if (needed)
-    geometry_.traceBatch(std::span(batch.queries, count), std::span(batch.kinds, count),
-                         std::span(batch.found, count), std::span(batch.unused, count));
+  if (needed) geometry_.retrace(std::span(batch.queries, needed), std::span(batch.found, needed));
   batch.retraced = needed;
   return needed;
 }

@@ -54,7 +54,7 @@ using ProgressCallback = std::function<void(int done, int total)>;
 template <typename Path>
 class WavefrontRenderer {
  public:
-  WavefrontRenderer(const Scene& scene, const LocalGeometry& geometry, const LightSampler& lights,
+  WavefrontRenderer(const Scene& scene, const TraceBackend& geometry, const LightSampler& lights,
                     RayTraversal<Path>& traversal, const RenderSettings& settings);
 
   // Adds frame `frame`'s samples to `frameBuffer` (this rank's partial sum).
@@ -111,7 +111,7 @@ class WavefrontRenderer {
   size_t retraceBatch(const Path* paths, const TraceHit* kept, size_t count,
                       RetraceBatch& batch) const;
 
-  const LocalGeometry& geometry_;  // for the re-trace
+  const TraceBackend& geometry_;  // shading's re-traces
   RayTraversal<Path>& traversal_;
   RenderSettings settings_;
   Camera camera_;

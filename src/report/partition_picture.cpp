@@ -5,12 +5,13 @@
 
 #include <bit>
 #include <cmath>
+#include <memory>
 
 #include "core/error.h"
 #include "render/camera.h"
 #include "report/canvas.h"
 #include "scene/scene.h"
-#include "trace/local_geometry.h"
+#include "trace/embree_backend.h"
 
 namespace ferry {
 namespace {
@@ -24,14 +25,14 @@ Rgba scaled(Rgba c, float s) {
 
 }  // namespace
 
-std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition,
+std::vector<uint8_t> partitionPicture(const Scene& scene, const Partition& partition,
                                       const PictureOptions& o) {
   FERRY_CHECK(partition.instanceOwners.size() == scene.instances.size());
   const int w = o.width, h = o.height;
   Canvas canvas(w, h, {236, 238, 242, 255});
   const CameraView& view = scene.view(o.view);
   const Camera camera(view, w, h);
-  LocalGeometry geometry(scene);
+  const std::unique_ptr<TraceBackend> geometry = makeEmbreeBackend(scene);
   std::vector<float> depth(size_t(w) * h, kInfinity);
 
   tbb::parallel_for(
@@ -39,7 +40,7 @@ std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition,
         for (int y = r.rows().begin(); y != r.rows().end(); ++y)
           for (int x = r.cols().begin(); x != r.cols().end(); ++x) {
             TraceRay ray{camera.origin(), camera.direction(x + 0.5f, y + 0.5f), 0, kInfinity};
-            TraceHit hit = geometry.intersect(ray);
+            TraceHit hit = geometry->intersect(ray);
             if (!hit.valid()) continue;
             depth[size_t(y) * w + x] = hit.t;
             const Instance& inst = scene.instances[hit.instance];

@@ -2,7 +2,7 @@
 // coloured by the rank that owns it (content held by several ranks is
 // checkerboarded in their colours), with every proxy drawn as a translucent
 // box outline in its owner's colour (fainter where geometry hides it). A small
-// renderer of its own over LocalGeometry, not a mode of the path tracer.
+// renderer of its own over the trace backend, not a mode of the path tracer.
 #pragma once
 
 #include <cstdint>
@@ -23,9 +23,9 @@ struct PictureOptions {
   bool proxies = true;
 };
 
-// RGBA, row 0 at the top. `scene` holds all content (LocalGeometry needs it
-// mutable for Embree's vertex slack); `partition` refers to its instances.
-std::vector<uint8_t> partitionPicture(Scene& scene, const Partition& partition,
+// RGBA, row 0 at the top. `scene` holds all content; `partition` refers to
+// its instances.
+std::vector<uint8_t> partitionPicture(const Scene& scene, const Partition& partition,
                                       const PictureOptions& options);
 
 }  // namespace ferry

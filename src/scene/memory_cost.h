@@ -27,7 +27,7 @@ struct MemoryCost {
 };
 
 // The model assumes every object has its own BVH under an instance
-// (LocalGeometry with Instancing::Always); the default build puts an object a
+// (the Embree backend with Instancing::Always); the default build puts an object a
 // rank places once, untransformed, into the top-level BVH, which retains no
 // more (tested), so for it the model is an upper bound (by a few KB per such
 // object; Cornell's 8 meshes: 14.8 KB estimated, 3.5 KB retained).

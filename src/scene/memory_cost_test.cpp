@@ -20,7 +20,7 @@
 #include "core/random.h"
 #include "scene/scene.h"
 #include "scene/scene_summary.h"
-#include "trace/local_geometry.h"
+#include "trace/embree_backend.h"
 
 namespace ferry {
 namespace {
@@ -93,8 +93,9 @@ struct EmbreeBytes {
 // the default build puts objects placed once at the top level, which retains
 // no more (checked below), so the model is an upper bound for it.
 EmbreeBytes buildAndMeasure(Scene& scene, Instancing instancing = Instancing::Always) {
-  LocalGeometry geometry(scene, {}, instancing);
-  return {double(geometry.embreeBytes()), double(geometry.embreePeakBytes())};
+  scene.reserveVertexSlack();  // as loadScene does: Embree shares the arrays, no padded copies
+  const BackendBytes bytes = makeEmbreeBackend(scene, {}, instancing)->bytes();
+  return {double(bytes.now), double(bytes.peak)};
 }
 
 TEST(MemoryModel, BytesPerTriangleMatchesLargeMeshes) {

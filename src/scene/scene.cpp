@@ -13,6 +13,7 @@ Box3f Mesh::bounds() const {
 }
 
 int32_t Scene::addSingleInstanceMesh(Mesh mesh) {
+  mesh.reserveVertexSlack();
   meshes.push_back(std::move(mesh));
   Object object;
   object.name = meshes.back().name;
@@ -21,6 +22,10 @@ int32_t Scene::addSingleInstanceMesh(Mesh mesh) {
   int32_t id = static_cast<int32_t>(objects.size() - 1);
   instances.push_back({id, Affine3f::identity()});
   return id;
+}
+
+void Scene::reserveVertexSlack() {
+  for (Mesh& mesh : meshes) mesh.reserveVertexSlack();
 }
 
 int32_t Scene::addMaterial(Material material) {

@@ -46,6 +46,14 @@ struct Mesh {
   uint64_t triangleCount() const { return indices.size(); }
   uint64_t vertexCount() const { return positions.size(); }
   Box3f bounds() const;
+  // A trace backend may read a few bytes past the last position (Embree
+  // reads 16 bytes at the last vertex): with one element of spare capacity it
+  // shares the array, else it keeps a padded copy. Loaders leave the spare
+  // element (reserveVertexSlack where they finish a mesh; loadScene checks).
+  bool hasVertexSlack() const { return positions.capacity() > positions.size(); }
+  void reserveVertexSlack() {
+    if (!positions.empty() && !hasVertexSlack()) positions.reserve(positions.size() + 1);
+  }
 };
 
 // A group of meshes placed together by instances (a tree: trunk + leaf cards).
@@ -103,7 +111,8 @@ struct Scene {
   std::optional<int> filmWidth, filmHeight;
   std::string filmFilename;
 
-  // Adds a mesh as its own object with one identity instance; returns the object.
+  // Adds a mesh (with vertex slack) as its own object with one identity
+  // instance; returns the object.
   int32_t addSingleInstanceMesh(Mesh mesh);
   int32_t addMaterial(Material material);
 
@@ -116,6 +125,8 @@ struct Scene {
   std::vector<uint32_t> instanceCountPerObject() const;
   // Checks indices, references and numbers; throws InputError naming the element.
   void validate() const;
+  // Mesh::reserveVertexSlack for every mesh (a copy only where a loader left none).
+  void reserveVertexSlack();
   // Frees the geometry and texels no listed instance needs (a rank keeps only
   // what it owns). Indices stay valid; released meshes and textures are empty.
   void releaseAllBut(const std::vector<int32_t>& keptInstances);

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "trace/local_geometry.h"
+#include "trace/trace_backend.h"
 
 namespace ferry {
 

@@ -19,7 +19,7 @@
 #include "partition/partition.h"
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
-#include "trace/local_geometry.h"
+#include "trace/embree_backend.h"
 #include "trace/path.h"
 
 namespace ferry {
@@ -32,7 +32,7 @@ struct RenderSession::Rank {
   Partition partition;
   std::string partitionerName;
   std::vector<int32_t> owned;
-  std::unique_ptr<LocalGeometry> geometry;
+  std::unique_ptr<TraceBackend> geometry;
   int64_t embreeBytes = 0, embreePeakBytes = 0;
   std::unique_ptr<LightSampler> lights;
   SceneSummary summary;  // of the whole scene, before releasing what this rank does not own
@@ -84,10 +84,10 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
 
 void RenderSession::Rank::buildTraceStructures(Instancing instancing) {
   auto start = Clock::now();
-  geometry = std::make_unique<LocalGeometry>(scene, owned, instancing);
+  geometry = makeEmbreeBackend(scene, owned, instancing);
   buildSeconds = secondsSince(start);
-  embreeBytes = geometry->embreeBytes();
-  embreePeakBytes = geometry->embreePeakBytes();
+  embreeBytes = geometry->bytes().now;
+  embreePeakBytes = geometry->bytes().peak;
 }
 
 namespace {

@@ -1,4 +1,17 @@
-#include "render/ray_traversal.h"
+// How a backend traces a wavefront's queue (TraceBackend::trace), written
+// once for every backend so they share its semantics: batches of closest-hit
+// and occlusion queries in queue order, built, traced and applied on the
+// worker thread that owns them (no whole-wavefront arrays, no serial pass).
+// Included by the backends' .cpp files only.
+//
+// A backend supplies its Batch type (its ray layout: each ray is written once,
+// in the form its tracer reads, and answered in place) with
+//   kCapacity, clear(),
+//   addClosest(index, origin, direction, tmax), addOccluded(...),
+//   closestCount(), occludedCount(), closestIndex(k), occludedIndex(k),
+//   hitFound(k), hitDistance(k), hit(k) (a TraceHit), isOccluded(k),
+// and a function that traces one batch's two lists.
+#pragma once
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -6,29 +19,29 @@
 #include <atomic>
 #include <span>
 
-#include "core/clock.h"
+#include "core/error.h"
 #include "trace/path.h"
+#include "trace/trace_backend.h"
 
 namespace ferry {
 
-template <typename Path>
-void traceLocally(const LocalGeometry& geometry, PathQueue<Path>& rays, int rank,
-                  std::span<const uint64_t> instanceOwners, FrameStats& stats, TraceHit* found) {
-  auto start = Clock::now();
-  // Batches of closest-hit and shadow queries in queue order, built, traced and
-  // applied on the worker thread that owns them (no whole-wavefront arrays, no
-  // serial pass), each ray written once in Embree's layout (RayBatch).
-  constexpr size_t kBatch = RayBatch::kCapacity;
+template <typename Batch, typename Path, typename TraceBatch>
+TraceCounts traceQueueInBatches(PathQueue<Path>& paths, int rank,
+                                std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept,
+                                const TraceBatch& traceBatch) {
+  FERRY_CHECK(kept.empty() || kept.size() == paths.size());
+  TraceHit* found = kept.empty() ? nullptr : kept.data();
+  constexpr size_t kBatch = Batch::kCapacity;
   std::atomic<uint64_t> closestCount{0}, shadowCount{0};
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), kBatch),
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.size(), kBatch),
                     [&](const tbb::blocked_range<size_t>& range) {
-                      RayBatch batch;
+                      Batch batch;
                       uint64_t closest = 0, shadow = 0;
                       for (size_t begin = range.begin(); begin < range.end(); begin += kBatch) {
                         const size_t n = std::min(kBatch, range.end() - begin);
                         batch.clear();
                         for (size_t i = begin; i < begin + n; ++i) {
-                          Path& p = rays[i];
+                          Path& p = paths[i];
                           p.markTraced(rank);
                           if (found) found[i] = TraceHit{};
                           if (!p.isShadow())
@@ -36,13 +49,13 @@ void traceLocally(const LocalGeometry& geometry, PathQueue<Path>& rays, int rank
                           else if (!p.has(kPathOccluded))  // else already decided elsewhere
                             batch.addOccluded(uint32_t(i), p.origin, p.dir(), p.tmax);
                         }
-                        geometry.trace(batch);
+                        traceBatch(batch);
                         closest += batch.closestCount();
                         shadow += batch.occludedCount();
                         for (size_t k = 0; k < batch.closestCount(); ++k) {
                           if (!batch.hitFound(k)) continue;
                           const uint32_t i = batch.closestIndex(k);
-                          Path& p = rays[i];
+                          Path& p = paths[i];
                           if (!(batch.hitDistance(k) < p.tmax)) continue;
                           const TraceHit hit = batch.hit(k);
                           p.tmax = hit.t;
@@ -51,21 +64,12 @@ void traceLocally(const LocalGeometry& geometry, PathQueue<Path>& rays, int rank
                             found[i] = hit;  // this trace set tmax: shading need not re-trace
                         }
                         for (size_t k = 0; k < batch.occludedCount(); ++k)
-                          if (batch.isOccluded(k)) rays[batch.occludedIndex(k)].set(kPathOccluded);
+                          if (batch.isOccluded(k)) paths[batch.occludedIndex(k)].set(kPathOccluded);
                       }
                       closestCount += closest;
                       shadowCount += shadow;
                     });
-  stats.closestTraces += closestCount;
-  stats.occlusionTraces += shadowCount;
-  stats.times.trace += secondsSince(start);
+  return {closestCount.load(), shadowCount.load()};
 }
-
-template void traceLocally<Path8>(const LocalGeometry&, PathQueue<Path8>&, int,
-                                  std::span<const uint64_t>, FrameStats&, TraceHit*);
-template void traceLocally<Path64>(const LocalGeometry&, PathQueue<Path64>&, int,
-                                   std::span<const uint64_t>, FrameStats&, TraceHit*);
-template void traceLocally<PathReplay>(const LocalGeometry&, PathQueue<PathReplay>&, int,
-                                       std::span<const uint64_t>, FrameStats&, TraceHit*);
 
 }  // namespace ferry

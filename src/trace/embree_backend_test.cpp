@@ -2,15 +2,17 @@
 // Instancing::Shared (objects placed once, untransformed, at the top level)
 // and Instancing::Always (every object instanced) every query answers alike,
 // naming the same instance, mesh slot and triangle.
-#include "trace/local_geometry.h"
+#include "trace/embree_backend.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <memory>
 
 #include "builtin/builtin.h"
 #include "core/random.h"
 #include "scene/scene.h"
+#include "trace/path.h"
 
 namespace ferry {
 namespace {
@@ -32,32 +34,60 @@ std::vector<TraceRay> randomRays(const Box3f& b, size_t n) {
   return rays;
 }
 
+// Rays as paths (closest-hit queries), or shadow rays when `shadow`.
+PathQueue<Path8> asPaths(const std::vector<TraceRay>& rays, bool shadow) {
+  PathQueue<Path8> paths(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) {
+    Path8& p = paths[i];
+    p.origin = rays[i].origin;
+    p.setDirAndWeight(rays[i].direction, Vec3f(1));
+    p.tmax = rays[i].tmax;
+    p.setPixelAndFlags(uint32_t(i), shadow ? uint32_t(kPathShadow) : 0u);
+    p.clearHistory();
+  }
+  return paths;
+}
+
 void expectSameAnswers(const std::string& spec, bool someStayInstanced) {
   Scene scene = generateBuiltin(parseBuiltinSpec(spec));
-  LocalGeometry shared(scene, {}, Instancing::Shared);
-  LocalGeometry always(scene, {}, Instancing::Always);
-  EXPECT_GT(shared.topLevelObjectCount(), 0u) << spec;
-  EXPECT_EQ(always.topLevelObjectCount(), 0u) << spec;
-  EXPECT_EQ(shared.builtInstanceCount(), always.builtInstanceCount());
-  EXPECT_EQ(shared.builtObjectCount(), always.builtObjectCount());
+  const std::unique_ptr<TraceBackend> shared = makeEmbreeBackend(scene, {}, Instancing::Shared);
+  const std::unique_ptr<TraceBackend> always = makeEmbreeBackend(scene, {}, Instancing::Always);
+  const BuiltCounts builtShared = shared->built(), builtAlways = always->built();
+  EXPECT_GT(builtShared.topLevelObjects, 0u) << spec;
+  EXPECT_EQ(builtAlways.topLevelObjects, 0u) << spec;
+  EXPECT_EQ(builtShared.instances, builtAlways.instances);
+  EXPECT_EQ(builtShared.objects, builtAlways.objects);
   if (someStayInstanced) {
-    EXPECT_LT(shared.topLevelObjectCount(), shared.builtObjectCount()) << spec;
+    EXPECT_LT(builtShared.topLevelObjects, builtShared.objects) << spec;
   }
 
-  const std::vector<TraceRay> rays = randomRays(always.bounds(), 20000);
+  // The wavefront trace, as the renderer calls it: closest hits kept, shadow rays marked.
+  const std::vector<TraceRay> rays = randomRays(always->bounds(), 20000);
+  PathQueue<Path8> pathsA = asPaths(rays, false), pathsB = pathsA;
+  PathQueue<Path8> shadowsA = asPaths(rays, true), shadowsB = shadowsA;
   std::vector<TraceHit> a(rays.size()), b(rays.size());
-  shared.intersect(rays, a);
-  always.intersect(rays, b);
-  std::vector<uint8_t> occludedA(rays.size()), occludedB(rays.size());
-  shared.occluded(rays, occludedA);
-  always.occluded(rays, occludedB);
+  const TraceCounts countsA = shared->trace(pathsA, 0, {}, a);
+  always->trace(pathsB, 0, {}, b);
+  const TraceCounts shadowCounts = shared->trace(shadowsA, 0, {});
+  always->trace(shadowsB, 0, {});
+  EXPECT_EQ(countsA.closest, rays.size());
+  EXPECT_EQ(countsA.occlusion, 0u);
+  EXPECT_EQ(shadowCounts.closest, 0u);
+  EXPECT_EQ(shadowCounts.occlusion, rays.size());
   size_t hits = 0, tiedElsewhere = 0;
   for (size_t i = 0; i < rays.size(); ++i) {
     ASSERT_EQ(a[i].valid(), b[i].valid()) << i;
-    ASSERT_EQ(occludedA[i], occludedB[i]) << i;
+    const bool occludedA = shadowsA[i].has(kPathOccluded),
+               occludedB = shadowsB[i].has(kPathOccluded);
+    ASSERT_EQ(occludedA, occludedB) << i;
+    // The single-ray queries answer as the wavefront trace does.
+    const TraceRay asTraced{pathsA[i].origin, shadowsA[i].dir(), 0, rays[i].tmax};
+    EXPECT_EQ(shared->occluded(asTraced), occludedA) << i;
     if (!a[i].valid()) continue;
     ++hits;
     ASSERT_EQ(std::memcmp(&a[i].t, &b[i].t, 4), 0) << i;
+    EXPECT_EQ(pathsA[i].tmax, a[i].t);
+    EXPECT_TRUE(pathsA[i].hasHit());
     // The same distance on another triangle (a shared edge) may be found
     // first in the other BVH; anything else must name the same triangle.
     if (a[i].instance != b[i].instance || a[i].meshSlot != b[i].meshSlot ||
@@ -68,40 +98,19 @@ void expectSameAnswers(const std::string& spec, bool someStayInstanced) {
     EXPECT_EQ(std::memcmp(&a[i].u, &b[i].u, 4), 0) << i;
     EXPECT_EQ(std::memcmp(&a[i].v, &b[i].v, 4), 0) << i;
     // The single-ray query names hits the same way.
-    TraceHit single = shared.intersect(rays[i]);
+    TraceHit single = shared->intersect(asTraced);
     EXPECT_EQ(single.instance, a[i].instance);
     EXPECT_EQ(single.meshSlot, a[i].meshSlot);
   }
   EXPECT_GT(hits, rays.size() / 4) << spec;
   EXPECT_LE(tiedElsewhere, hits / 1000) << spec;
-
-  // The batch the renderer uses (RayBatch, mixed queries) agrees too.
-  RayBatch batch;
-  for (uint32_t i = 0; i < RayBatch::kCapacity; ++i) {
-    if (i % 2)
-      batch.addClosest(i, rays[i].origin, rays[i].direction, rays[i].tmax);
-    else
-      batch.addOccluded(i, rays[i].origin, rays[i].direction, rays[i].tmax);
-  }
-  shared.trace(batch);
-  for (size_t k = 0; k < batch.closestCount(); ++k) {
-    const uint32_t i = batch.closestIndex(k);
-    const TraceHit h = batch.hit(k);
-    EXPECT_EQ(h.valid(), b[i].valid());
-    if (h.valid() && b[i].valid() && h.primitive == b[i].primitive) {
-      EXPECT_EQ(h.instance, b[i].instance);
-      EXPECT_EQ(h.meshSlot, b[i].meshSlot);
-    }
-  }
-  for (size_t k = 0; k < batch.occludedCount(); ++k)
-    EXPECT_EQ(batch.isOccluded(k), occludedB[batch.occludedIndex(k)] != 0);
 }
 
-TEST(LocalGeometry, SharedAndAlwaysInstancingAnswerAlikeOnTheCornellBox) {
+TEST(EmbreeTraceBackend, SharedAndAlwaysInstancingAnswerAlikeOnTheCornellBox) {
   expectSameAnswers("builtin:cornell", false);
 }
 
-TEST(LocalGeometry, SharedAndAlwaysInstancingAnswerAlikeOnTheIsland) {
+TEST(EmbreeTraceBackend, SharedAndAlwaysInstancingAnswerAlikeOnTheIsland) {
   // Terrain and water are placed once; the plants are instanced many times.
   expectSameAnswers("builtin:island?scale=0.05", true);
 }

@@ -1,0 +1,490 @@
+#include "trace/embree_backend.h"
+
+#include <embree3/rtcore.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstddef>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "core/error.h"
+#include "scene/scene.h"
+#include "trace/alpha_cutout.h"
+#include "trace/queue_trace.h"
+
+namespace ferry {
+namespace {
+
+// A batch of queries written once, in the layout Embree's stream API reads
+// and answers in place (RTCRayHit, every offset checked below), so a path is
+// converted once and each answer read where Embree wrote it: no intermediate
+// TraceRay or TraceHit arrays. Closest-hit and occlusion queries go to two
+// lists; each query keeps the caller's index. (The Batch of queue_trace.h.)
+class RayBatch {
+ public:
+  static constexpr size_t kCapacity = 256;  // in cache, and large enough for the stream API
+
+  void clear() { closestCount_ = occludedCount_ = 0; }
+  void addClosest(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float tnear = 0) {
+    closestIndex_[closestCount_] = index;
+    closest_[closestCount_++].set(origin, direction, tnear, tmax);
+  }
+  void addOccluded(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float tnear = 0) {
+    occludedIndex_[occludedCount_] = index;
+    occluded_[occludedCount_++].set(origin, direction, tnear, tmax);
+  }
+
+  size_t closestCount() const { return closestCount_; }
+  size_t occludedCount() const { return occludedCount_; }
+  uint32_t closestIndex(size_t k) const { return closestIndex_[k]; }
+  uint32_t occludedIndex(size_t k) const { return occludedIndex_[k]; }
+  // Answers, after EmbreeBackend::traceBatch.
+  bool hitFound(size_t k) const { return closest_[k].geomID != kNoGeometry; }
+  float hitDistance(size_t k) const { return closest_[k].tfar; }
+  TraceHit hit(size_t k) const {
+    const EmbreeRay& r = closest_[k];
+    if (r.geomID == kNoGeometry) return {};
+    return {r.tfar, int32_t(r.instID), int32_t(r.geomID), r.primID, r.u, r.v};
+  }
+  bool isOccluded(size_t k) const { return occluded_[k].tfar < 0; }  // Embree sets tfar = -inf
+
+ private:
+  friend class EmbreeBackend;
+  static constexpr uint32_t kNoGeometry = RTC_INVALID_GEOMETRY_ID;
+  // RTCRayHit, field for field (one instance level), with the setter the
+  // queries need.
+  struct alignas(16) EmbreeRay {
+    float orgX, orgY, orgZ, tnear;
+    float dirX, dirY, dirZ, time;
+    float tfar;
+    uint32_t mask, id, flags;
+    float ngX, ngY, ngZ, u, v;
+    uint32_t primID, geomID, instID;
+    void set(Vec3f o, Vec3f d, float tmin, float tmax) {
+      orgX = o.x, orgY = o.y, orgZ = o.z, tnear = tmin;
+      dirX = d.x, dirY = d.y, dirZ = d.z, time = 0;
+      tfar = tmax, mask = 0xffffffffu, id = 0, flags = 0;
+      geomID = kNoGeometry, instID = kNoGeometry;
+    }
+  };
+  EmbreeRay closest_[kCapacity];
+  EmbreeRay occluded_[kCapacity];  // only the ray part is used
+  uint32_t closestIndex_[kCapacity], occludedIndex_[kCapacity];
+  size_t closestCount_ = 0, occludedCount_ = 0;
+};
+
+#define FERRY_SAME_OFFSET(ours, theirs)                                             \
+  static_assert(offsetof(RayBatch::EmbreeRay, ours) == offsetof(RTCRayHit, theirs), \
+                #ours " must sit where RTCRayHit has " #theirs);
+
+// Rejects hits in alpha cut-outs; used for both closest-hit and occlusion
+// queries, so shadows see the same cut-outs as camera rays.
+void alphaFilter(const RTCFilterFunctionNArguments* args) {
+  const auto* cutout = static_cast<const AlphaCutout*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    float u = RTCHitN_u(args->hit, args->N, i);
+    float v = RTCHitN_v(args->hit, args->N, i);
+    uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
+    if (cutout->isHole(prim, u, v)) args->valid[i] = 0;
+  }
+}
+
+// Bytes now and at the peak: Embree's (its memory-monitor callback) and the
+// backend's own padded vertex copies.
+struct MemoryCounters {
+  std::atomic<int64_t> now{0}, peak{0};
+  void add(int64_t bytes) {
+    int64_t current = now.fetch_add(bytes) + bytes;
+    int64_t high = peak.load();
+    while (current > high && !peak.compare_exchange_weak(high, current)) {
+    }
+  }
+};
+
+bool memoryMonitor(void* user, ssize_t bytes, bool /*post*/) {
+  static_cast<MemoryCounters*>(user)->add(bytes);
+  return true;
+}
+
+const char* errorName(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE:
+      return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION:
+      return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU:
+      return "unsupported CPU";
+    case RTC_ERROR_CANCELLED:
+      return "cancelled";
+    default:
+      return "unknown error";
+  }
+}
+
+// Errors Embree reports through its callback, from whichever thread called
+// it (a worker inside a parallel trace, Embree's own build threads). They
+// cannot be thrown through Embree's C code, so the first one is kept and the
+// backend call that was running throws it on the calling thread when it
+// returns (every call checks; one relaxed load when nothing failed).
+class ErrorLog {
+ public:
+  void record(RTCError code, const char* message) {
+    std::lock_guard lock(mutex_);
+    if (failed_.load(std::memory_order_relaxed)) return;
+    first_ = fmt::format("error {} ({}){}{}", int(code), errorName(code), message ? ": " : "",
+                         message ? message : "");
+    failed_.store(true, std::memory_order_release);
+  }
+  void throwIfFailed(const char* what) const {
+    if (!failed_.load(std::memory_order_acquire)) return;
+    std::lock_guard lock(mutex_);
+    throw TraceError(fmt::format("Embree failed while {}: {}", what, first_));
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::atomic<bool> failed_{false};
+  std::string first_;
+};
+
+void errorCallback(void* user, RTCError code, const char* message) {
+  if (code != RTC_ERROR_NONE) static_cast<ErrorLog*>(user)->record(code, message);
+}
+
+RTCRayHit toEmbree(const TraceRay& r) {
+  RTCRayHit rh{};
+  rh.ray.org_x = r.origin.x;
+  rh.ray.org_y = r.origin.y;
+  rh.ray.org_z = r.origin.z;
+  rh.ray.dir_x = r.direction.x;
+  rh.ray.dir_y = r.direction.y;
+  rh.ray.dir_z = r.direction.z;
+  rh.ray.tnear = r.tnear;
+  rh.ray.tfar = r.tmax;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
+// Re-trace margin (docs/architecture.md): Embree accepts a hit only somewhat
+// inside tfar, with an error that scales with the coordinates, not with t
+// (measured: tfar = t, t + 1e-6 relative, or t * 1.001 at t = 0.016 in a
+// 555-unit box can all miss it), so the re-trace searches past the recorded
+// distance by a margin of both kinds; nothing closer than the recorded hit
+// exists, so the closest hit found is the same one.
+TraceRay retraceQuery(const RetraceRay& r) {
+  const Vec3f o = r.origin;
+  const float scale = std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z), 1.0f});
+  return {o, r.direction, 0, r.tmax * 1.001f + 1e-4f * scale};
+}
+
+// Embree's handles, released when the backend goes (or its build throws).
+struct EmbreeHandles {
+  RTCDevice device = nullptr;
+  RTCScene top = nullptr;
+  std::unordered_map<int32_t, RTCScene> objectScenes;
+
+  EmbreeHandles() = default;
+  EmbreeHandles(const EmbreeHandles&) = delete;
+  EmbreeHandles& operator=(const EmbreeHandles&) = delete;
+  ~EmbreeHandles() {
+    if (top) rtcReleaseScene(top);
+    for (auto& [id, s] : objectScenes) rtcReleaseScene(s);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+class EmbreeBackend final : public TraceBackend {
+ public:
+  EmbreeBackend(const Scene& scene, std::span<const int32_t> ownedInstances, Instancing instancing);
+
+  TraceCounts trace(PathQueue<Path8>& paths, int rank, std::span<const uint64_t> owners,
+                    std::span<TraceHit> kept) const override {
+    return traceQueue(paths, rank, owners, kept);
+  }
+  TraceCounts trace(PathQueue<Path64>& paths, int rank, std::span<const uint64_t> owners,
+                    std::span<TraceHit> kept) const override {
+    return traceQueue(paths, rank, owners, kept);
+  }
+  TraceCounts trace(PathQueue<PathReplay>& paths, int rank, std::span<const uint64_t> owners,
+                    std::span<TraceHit> kept) const override {
+    return traceQueue(paths, rank, owners, kept);
+  }
+  void retrace(std::span<const RetraceRay> rays, std::span<TraceHit> hits) const override;
+  TraceHit intersect(const TraceRay& ray) const override;
+  bool occluded(const TraceRay& ray) const override;
+  Box3f bounds() const override;
+  BackendBytes bytes() const override { return {memory_.now.load(), memory_.peak.load()}; }
+  BuiltCounts built() const override {
+    return {embree_.objectScenes.size() + topLevelObjects_, instanceCount_, topLevelObjects_};
+  }
+
+ private:
+  template <typename Path>
+  TraceCounts traceQueue(PathQueue<Path>& paths, int rank, std::span<const uint64_t> owners,
+                         std::span<TraceHit> kept) const {
+    TraceCounts counts = traceQueueInBatches<RayBatch>(
+        paths, rank, owners, kept, [this](RayBatch& batch) { traceBatch(batch); });
+    errors_.throwIfFailed("tracing a wavefront");
+    return counts;
+  }
+  // Traces both lists of `batch` on the calling thread (rtcIntersect1M, rtcOccluded1M).
+  void traceBatch(RayBatch& batch) const;
+  // A hit on a top-level mesh has no instance id and its top-level geometry
+  // id: rewrite both to what a hit through an instance would have said.
+  void nameHit(uint32_t& geomID, uint32_t& instID) const {
+    if (geomID == RTC_INVALID_GEOMETRY_ID || instID != RTC_INVALID_GEOMETRY_ID) return;
+    const TopLevelMesh& m = topLevelMeshes_[geomID - topLevelBase_];
+    instID = uint32_t(m.instance);
+    geomID = uint32_t(m.meshSlot);
+  }
+  TraceHit hitOf(const RTCRayHit& rh) const;
+  // The vertex array Embree reads for `mesh`: the scene's own when it has a
+  // spare element, else a padded copy kept here.
+  const Vec3f* sharedPositions(const Mesh& mesh);
+  // Embree geometries for the meshes of `object`, each attached to `target`
+  // by the id idForSlot(slot) returns.
+  template <typename IdForSlot>
+  void attachMeshes(const Object& object, RTCScene target, const IdForSlot& idForSlot);
+  RTCScene objectScene(int32_t objectId);
+  void checkBuild(const char* what);
+
+  const Scene& scene_;
+  MemoryCounters memory_;
+  ErrorLog errors_;
+  // Meshes attached straight to the top-level scene, by top-level geometry id
+  // minus topLevelBase_: the instance and mesh slot a hit on them names.
+  struct TopLevelMesh {
+    int32_t instance, meshSlot;
+  };
+  std::vector<TopLevelMesh> topLevelMeshes_;
+  uint32_t topLevelBase_ = 0;
+  uint64_t topLevelObjects_ = 0;
+  uint64_t instanceCount_ = 0;
+  std::vector<std::unique_ptr<AlphaCutout>> cutouts_;
+  std::unordered_map<const Mesh*, std::vector<Vec3f>> paddedPositions_;
+  // Last, so released first: Embree calls the counters and reads the buffers above until then.
+  EmbreeHandles embree_;
+};
+
+EmbreeBackend::EmbreeBackend(const Scene& scene, std::span<const int32_t> ownedInstances,
+                             Instancing instancing)
+    : scene_(scene) {
+  embree_.device = rtcNewDevice(nullptr);
+  if (!embree_.device)
+    throw TraceError(fmt::format("could not create an Embree device (error {})",
+                                 int(rtcGetDeviceError(nullptr))));
+  rtcSetDeviceErrorFunction(embree_.device, errorCallback, &errors_);
+  rtcSetDeviceMemoryMonitorFunction(embree_.device, memoryMonitor, &memory_);
+
+  std::vector<int32_t> all;
+  if (ownedInstances.empty()) {
+    all.resize(scene.instances.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = int32_t(i);
+    ownedInstances = all;
+  }
+
+  // Objects placed once on this rank, untransformed: their meshes go to the top level.
+  std::unordered_map<int32_t, int> placements;
+  for (int32_t instanceId : ownedInstances) ++placements[scene.instances[instanceId].object];
+  auto atTopLevel = [&](const Instance& inst) {
+    return instancing == Instancing::Shared && placements[inst.object] == 1 &&
+           inst.transform.isIdentity();
+  };
+  topLevelBase_ = uint32_t(scene.instances.size());  // instances keep their own ids below
+
+  embree_.top = rtcNewScene(embree_.device);
+  for (int32_t instanceId : ownedInstances) {
+    const Instance& inst = scene.instances[instanceId];
+    if (atTopLevel(inst)) {
+      attachMeshes(scene.objects[inst.object], embree_.top, [&](int32_t slot) {
+        topLevelMeshes_.push_back({instanceId, slot});
+        return unsigned(topLevelBase_ + topLevelMeshes_.size() - 1);
+      });
+      ++topLevelObjects_;
+      ++instanceCount_;
+      continue;
+    }
+    RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, objectScene(inst.object));
+    float xfm[12];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) xfm[r * 4 + c] = inst.transform.l[r][c];
+      xfm[r * 4 + 3] = inst.transform.t[r];
+    }
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(embree_.top, g, static_cast<unsigned>(instanceId));
+    rtcReleaseGeometry(g);
+    ++instanceCount_;
+  }
+  rtcCommitScene(embree_.top);
+  checkBuild("building the instance level");
+}
+
+void EmbreeBackend::checkBuild(const char* what) {
+  errors_.throwIfFailed(what);
+  RTCError e = rtcGetDeviceError(embree_.device);
+  if (e != RTC_ERROR_NONE)
+    throw TraceError(
+        fmt::format("Embree failed while {}: error {} ({})", what, int(e), errorName(e)));
+}
+
+const Vec3f* EmbreeBackend::sharedPositions(const Mesh& mesh) {
+  if (mesh.hasVertexSlack()) return mesh.positions.data();
+  auto [it, added] = paddedPositions_.try_emplace(&mesh);
+  if (added) {
+    std::vector<Vec3f>& copy = it->second;
+    copy.reserve(mesh.positions.size() + 1);
+    copy.assign(mesh.positions.begin(), mesh.positions.end());
+    memory_.add(int64_t(copy.capacity() * sizeof(Vec3f)));
+  }
+  return it->second.data();
+}
+
+template <typename IdForSlot>
+void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
+                                 const IdForSlot& idForSlot) {
+  for (size_t slot = 0; slot < object.meshes.size(); ++slot) {
+    const Mesh& mesh = scene_.meshes[object.meshes[slot]];
+    if (mesh.indices.empty()) continue;
+    RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // Embree only reads shared buffers; its API takes them as void*.
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                               const_cast<Vec3f*>(sharedPositions(mesh)), 0, sizeof(Vec3f),
+                               mesh.positions.size());
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                               const_cast<Vec3i*>(mesh.indices.data()), 0, sizeof(Vec3i),
+                               mesh.indices.size());
+    const AlphaCutout cutout = AlphaCutout::of(scene_, mesh);
+    if (cutout.active()) {
+      cutouts_.push_back(std::make_unique<AlphaCutout>(cutout));
+      rtcSetGeometryUserData(g, cutouts_.back().get());
+      rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
+      rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(target, g, idForSlot(int32_t(slot)));
+    rtcReleaseGeometry(g);
+  }
+}
+
+RTCScene EmbreeBackend::objectScene(int32_t objectId) {
+  auto it = embree_.objectScenes.find(objectId);
+  if (it != embree_.objectScenes.end()) return it->second;
+  RTCScene s = rtcNewScene(embree_.device);
+  embree_.objectScenes.emplace(objectId, s);  // released with the others if the build throws
+  attachMeshes(scene_.objects[objectId], s, [](int32_t slot) { return unsigned(slot); });
+  rtcCommitScene(s);
+  checkBuild("building an object");
+  return s;
+}
+
+TraceHit EmbreeBackend::hitOf(const RTCRayHit& rh) const {
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
+  uint32_t geomID = rh.hit.geomID, instID = rh.hit.instID[0];
+  nameHit(geomID, instID);
+  return {rh.ray.tfar, int32_t(instID), int32_t(geomID), rh.hit.primID, rh.hit.u, rh.hit.v};
+}
+
+void EmbreeBackend::traceBatch(RayBatch& batch) const {
+  // RayBatch::EmbreeRay must be RTCRayHit exactly (one instance level).
+  static_assert(RTC_MAX_INSTANCE_LEVEL_COUNT == 1);
+  static_assert(sizeof(RayBatch::EmbreeRay) == sizeof(RTCRayHit));
+  static_assert(alignof(RayBatch::EmbreeRay) >= alignof(RTCRayHit));
+  FERRY_SAME_OFFSET(orgX, ray.org_x)
+  FERRY_SAME_OFFSET(tnear, ray.tnear)
+  FERRY_SAME_OFFSET(dirX, ray.dir_x)
+  FERRY_SAME_OFFSET(time, ray.time)
+  FERRY_SAME_OFFSET(tfar, ray.tfar)
+  FERRY_SAME_OFFSET(mask, ray.mask)
+  FERRY_SAME_OFFSET(id, ray.id)
+  FERRY_SAME_OFFSET(flags, ray.flags)
+  FERRY_SAME_OFFSET(ngX, hit.Ng_x)
+  FERRY_SAME_OFFSET(u, hit.u)
+  FERRY_SAME_OFFSET(v, hit.v)
+  FERRY_SAME_OFFSET(primID, hit.primID)
+  FERRY_SAME_OFFSET(geomID, hit.geomID)
+  FERRY_SAME_OFFSET(instID, hit.instID)
+  RTCIntersectContext context;
+  if (batch.closestCount_) {
+    rtcInitIntersectContext(&context);
+    rtcIntersect1M(embree_.top, &context, reinterpret_cast<RTCRayHit*>(batch.closest_),
+                   unsigned(batch.closestCount_), sizeof(RTCRayHit));
+    if (!topLevelMeshes_.empty())
+      for (size_t k = 0; k < batch.closestCount_; ++k)
+        nameHit(batch.closest_[k].geomID, batch.closest_[k].instID);
+  }
+  if (batch.occludedCount_) {
+    rtcInitIntersectContext(&context);
+    rtcOccluded1M(embree_.top, &context, reinterpret_cast<RTCRay*>(batch.occluded_),
+                  unsigned(batch.occludedCount_), sizeof(RTCRayHit));
+  }
+}
+
+void EmbreeBackend::retrace(std::span<const RetraceRay> rays, std::span<TraceHit> hits) const {
+  FERRY_CHECK(rays.size() == hits.size());
+  RayBatch batch;
+  for (size_t begin = 0; begin < rays.size(); begin += RayBatch::kCapacity) {
+    const size_t n = std::min(RayBatch::kCapacity, rays.size() - begin);
+    batch.clear();
+    for (size_t i = begin; i < begin + n; ++i) {
+      const TraceRay q = retraceQuery(rays[i]);
+      batch.addClosest(uint32_t(i), q.origin, q.direction, q.tmax);
+    }
+    traceBatch(batch);
+    for (size_t k = 0; k < batch.closestCount(); ++k) hits[batch.closestIndex(k)] = batch.hit(k);
+  }
+  errors_.throwIfFailed("re-tracing");
+}
+
+TraceHit EmbreeBackend::intersect(const TraceRay& ray) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh = toEmbree(ray);
+  rtcIntersect1(embree_.top, &context, &rh);
+  errors_.throwIfFailed("tracing a ray");
+  return hitOf(rh);
+}
+
+bool EmbreeBackend::occluded(const TraceRay& ray) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRay r = toEmbree(ray).ray;
+  rtcOccluded1(embree_.top, &context, &r);
+  errors_.throwIfFailed("tracing a shadow ray");
+  return r.tfar < 0;  // Embree marks occlusion with tfar = -inf
+}
+
+Box3f EmbreeBackend::bounds() const {
+  RTCBounds b;
+  rtcGetSceneBounds(embree_.top, &b);
+  Box3f r;
+  if (b.lower_x <= b.upper_x) {
+    r.lower = {b.lower_x, b.lower_y, b.lower_z};
+    r.upper = {b.upper_x, b.upper_y, b.upper_z};
+  }
+  return r;
+}
+
+}  // namespace
+
+std::unique_ptr<TraceBackend> makeEmbreeBackend(const Scene& scene,
+                                                std::span<const int32_t> ownedInstances,
+                                                Instancing instancing) {
+  return std::make_unique<EmbreeBackend>(scene, ownedInstances, instancing);
+}
+
+}  // namespace ferry
