@@ -14,7 +14,7 @@ MeshCounts terrainCounts(const TerrainGrid& grid) {
 }
 
 Mesh buildTerrain(const TerrainGrid& grid, const HeightFunction& height) {
-  FERRY_CHECK(grid.segments >= 1);
+  FERRY_CHECK_GE(grid.segments, 1);
   const int n = grid.segments;
   const int stride = n + 1;
   const size_t vertexCount = size_t(stride) * size_t(stride);

@@ -114,7 +114,8 @@ uint64_t scaledCount(double base, double scale) {
 }
 
 std::vector<int32_t> addSpecies(ScenePlan& plan, const Species& species, uint32_t key) {
-  FERRY_CHECK(species.count >= 1 && species.variants >= 1);
+  FERRY_CHECK_GE(species.count, 1);
+  FERRY_CHECK_GE(species.variants, 1);
   const uint64_t variants = std::min<uint64_t>(uint64_t(species.variants), species.count);
   auto scatter = std::make_shared<const Scatter>(species.rule, species.ground, key, species.count);
   std::vector<int32_t> objects;
