@@ -301,8 +301,8 @@ struct IslandMaterials {
   }
 };
 
-// A flat square of half size kOceanHalfSize at height y.
-MeshRecipe seaLevelSquare(std::string name, int32_t material, float y) {
+// A flat square as wide as the ocean, at height y.
+MeshRecipe oceanWideSquare(std::string name, int32_t material, float y) {
   MeshRecipe r;
   r.name = std::move(name);
   r.material = material;
@@ -344,13 +344,15 @@ class IslandPlanner {
 
   ScenePlan plan() && {
     addMaterials(addTextures());
-    addTerrainAndMountain();
+    addTerrainMesh(plan_, "island-terrain", mat_.terrain, grid_,
+                   [shape = shape_](float x, float z) { return shape->terrain(x, z); });
+    addMountain();
     addSeaCliffs();
     addBeach();
     // The seabed beyond the terrain, out to the ocean's edge: without it the
     // sea would look different over the terrain than beyond it.
-    plan_.addSingleInstanceMesh(seaLevelSquare("seabed", mat_.seabed, kSeabed));
-    plan_.addSingleInstanceMesh(seaLevelSquare("ocean", mat_.ocean, 0));
+    plan_.addSingleInstanceMesh(oceanWideSquare("seabed", mat_.seabed, kSeabed));
+    plan_.addSingleInstanceMesh(oceanWideSquare("ocean", mat_.ocean, 0));
     addCampfire();
     addLanterns();
     addHeroBanyan();
@@ -367,7 +369,7 @@ class IslandPlanner {
  private:
   IslandTextures addTextures();
   void addMaterials(const IslandTextures& tex);
-  void addTerrainAndMountain();
+  void addMountain();
   void addSeaCliffs();
   void addBeach();
   void addCampfire();
@@ -493,11 +495,9 @@ void IslandPlanner::addMaterials(const IslandTextures& tex) {
   mat.lanternPole = material("lantern-pole", {0.2f, 0.13f, 0.07f});
 }
 
-void IslandPlanner::addTerrainAndMountain() {
+void IslandPlanner::addMountain() {
   const Shape shape = shape_;
   const TerrainGrid grid = grid_;
-  addTerrainMesh(plan_, "island-terrain", mat_.terrain, grid,
-                 [shape](float x, float z) { return shape->terrain(x, z); });
   const int rings = int(scaledResolution(128, scale_, 12, 2048));
   const int segments = int(scaledResolution(512, scale_, 48, 8192));
   MeshRecipe r;
