@@ -4,8 +4,6 @@
 #include <cmath>
 #include <memory>
 
-#include <fmt/format.h>
-
 #include "builtin/noise.h"
 #include "builtin/plants.h"
 #include "builtin/procedural_texture.h"
