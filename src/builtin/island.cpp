@@ -39,11 +39,6 @@ float scaledResolution(float base, double scale, int lo, int hi) {
   return float(std::clamp(v, double(lo), double(hi)));
 }
 
-uint64_t scaledCount(double base, double scale) {
-  double n = std::round(base * scale);
-  return uint64_t(std::clamp(n, 1.0, 9.0e15));
-}
-
 struct Cliff {
   Vec2f centre;
   float yaw = 0;
@@ -270,210 +265,276 @@ Vec3f groundColour(const IslandShape& shape, float x, float z, uint32_t seed) {
   return c * (0.85f + 0.15f * n);
 }
 
+struct IslandTextures {
+  int32_t terrain, rock, sand, bark, leaves, banyanLeaves, palmBark, palmFronds, fern, grass, petal;
+};
+
 // Roles to materials for the plants; some species override a role.
 struct IslandMaterials {
   int32_t terrain, sand, rock, ocean, seabed, bark, leaves, palmBark, palmFronds, coconut, fern,
       grass, stem, flowerCentre, driftwood, banyanBark, banyanLeaves, lanternGlow, flame,
       lanternPole;
   std::array<int32_t, 3> petals;
+
+  int32_t forPlantPart(PartRole role) const {
+    switch (role) {
+      case PartRole::Wood:
+        return bark;
+      case PartRole::Leaves:
+        return leaves;
+      case PartRole::Fronds:
+        return palmFronds;
+      case PartRole::Fruit:
+        return coconut;
+      case PartRole::Blades:
+        return grass;
+      case PartRole::Stems:
+        return stem;
+      case PartRole::Petals:
+        return petals[0];
+      case PartRole::FlowerCentre:
+        return flowerCentre;
+      case PartRole::Rock:
+      default:
+        return rock;
+    }
+  }
 };
 
-}  // namespace
-
-ScenePlan planIsland(double scale, uint32_t seed) {
-  ScenePlan plan;
-  plan.name = "island";
-  auto shape = std::make_shared<const IslandShape>(seed);
-  const float sq = float(std::sqrt(scale));
-  const int variantFactor = int(std::clamp(std::floor(std::sqrt(scale)), 1.0, 32.0));
-
-  // ------------------------------------------------------------ textures
-  TerrainGrid grid;
-  grid.x0 = grid.z0 = -kTerrainHalfSize;
-  grid.x1 = grid.z1 = kTerrainHalfSize;
-  grid.segments = int(scaledResolution(1024, scale, 64, 16384));
-  grid.skirtY = kSeabed;
-
-  int terrainTexels = 256;
-  while (terrainTexels < 8192 && terrainTexels < 1024 * sq * 0.75f) terrainTexels *= 2;
-  auto texture = [&](std::string name, int w, int h, std::function<Texture()> build) {
-    return plan.addTexture({std::move(name), w, h, std::move(build)});
+// A flat square as wide as the ocean, at height y.
+MeshRecipe oceanWideSquare(std::string name, int32_t material, float y) {
+  MeshRecipe r;
+  r.name = std::move(name);
+  r.material = material;
+  r.counts = {4, 2};
+  r.hasUvs = false;
+  r.build = [y] {
+    MeshBuilder b(true, false, {4, 2});
+    const float w = kOceanHalfSize;
+    int32_t a = b.vertex({-w, y, -w}), c = b.vertex({-w, y, w}), d = b.vertex({w, y, w}),
+            e = b.vertex({w, y, -w});
+    b.quad(a, c, d, e);
+    return b.finish();
   };
-  int32_t terrainTex = texture("island-terrain", terrainTexels, terrainTexels, [=] {
-    return paintTexture("island-terrain", terrainTexels, terrainTexels, WrapMode::Clamp,
-                        [&](Vec2f uv) {
-                          Vec2f p = grid.worldAt(uv);
-                          Vec3f c = groundColour(*shape, p.x, p.y, seed);
-                          return Vec4f{c.x, c.y, c.z, 1};
-                        });
-  });
-  int32_t rockTex = texture("island-rock", 512, 512, [=] {
+  return r;
+}
+
+// The random numbers that shape variant v of species `species`.
+HashRng variantRng(uint32_t seed, uint32_t species, int v) {
+  return HashRng(seed, 0xa7a, species, uint32_t(v));
+}
+
+// Makes the island's plan one step at a time, in a fixed order: the indices
+// of textures, materials, meshes and objects, and the species' random
+// streams, depend on it. Every recipe captures what it needs by value: the
+// planner is gone when the plan is materialized.
+class IslandPlanner {
+ public:
+  IslandPlanner(double scale, uint32_t seed)
+      : scale_(scale),
+        seed_(seed),
+        variantFactor_(int(std::clamp(std::floor(std::sqrt(scale)), 1.0, 32.0))),
+        shape_(std::make_shared<const IslandShape>(seed)) {
+    plan_.name = "island";
+    grid_.x0 = grid_.z0 = -kTerrainHalfSize;
+    grid_.x1 = grid_.z1 = kTerrainHalfSize;
+    grid_.segments = int(scaledResolution(1024, scale, 64, 16384));
+    grid_.skirtY = kSeabed;
+  }
+
+  ScenePlan plan() && {
+    addMaterials(addTextures());
+    addTerrainMesh(plan_, "island-terrain", mat_.terrain, grid_,
+                   [shape = shape_](float x, float z) { return shape->terrain(x, z); });
+    addMountain();
+    addSeaCliffs();
+    addBeach();
+    // The seabed beyond the terrain, out to the ocean's edge: without it the
+    // sea would look different over the terrain than beyond it.
+    plan_.addSingleInstanceMesh(oceanWideSquare("seabed", mat_.seabed, kSeabed));
+    plan_.addSingleInstanceMesh(oceanWideSquare("ocean", mat_.ocean, 0));
+    addCampfire();
+    addLanterns();
+    addHeroBanyan();
+    addSpecies(
+        plan_,
+        {trees(), palms(), bushes(), ferns(), grass(), flowers(), rocks(), boulders(), driftwood()},
+        streamKey(seed_, 0x5bec));
+    addLightsAndViews();
+    plan_.bounds.extend(Vec3f(-kOceanHalfSize, kSeabed, -kOceanHalfSize));
+    plan_.bounds.extend(Vec3f(kOceanHalfSize, kMountainHeight, kOceanHalfSize));
+    return std::move(plan_);
+  }
+
+ private:
+  IslandTextures addTextures();
+  void addMaterials(const IslandTextures& tex);
+  void addMountain();
+  void addSeaCliffs();
+  void addBeach();
+  void addCampfire();
+  void addLanterns();
+  void addHeroBanyan();
+  Species trees() const;
+  Species palms() const;
+  Species bushes() const;
+  Species ferns() const;
+  Species grass() const;
+  Species flowers() const;
+  Species rocks() const;
+  Species boulders() const;
+  Species driftwood() const;
+  void addLightsAndViews();
+
+  const double scale_;
+  const uint32_t seed_;
+  const int variantFactor_;  // species have more variants in larger scenes
+  const Shape shape_;
+  TerrainGrid grid_;
+  IslandMaterials mat_{};
+  ScenePlan plan_;
+};
+
+IslandTextures IslandPlanner::addTextures() {
+  const uint32_t seed = seed_;
+  auto texture = [&](std::string name, int w, int h, std::function<Texture()> build) {
+    return plan_.addTexture({std::move(name), w, h, std::move(build)});
+  };
+  IslandTextures t;
+  // The size is computed in float (the landscape's in double): near a power of
+  // two the two can differ, and the island has always used float.
+  t.terrain = addTerrainTexture(
+      plan_, "island-terrain", grid_, terrainTextureSize(1024 * float(std::sqrt(scale_)) * 0.75f),
+      [shape = shape_, seed](float x, float z) { return groundColour(*shape, x, z, seed); });
+  t.rock = texture("island-rock", 512, 512, [=] {
     return rockTexture("island-rock", 512, seed + 1, {0.09f, 0.085f, 0.08f}, {0.32f, 0.3f, 0.27f});
   });
-  int32_t sandTex = texture("island-sand", 256, 256, [=] {
+  t.sand = texture("island-sand", 256, 256, [=] {
     return sandTexture("island-sand", 256, seed + 2, {0.26f, 0.21f, 0.14f}, {0.42f, 0.35f, 0.24f});
   });
-  int32_t barkTex = texture("island-bark", 256, 256, [=] {
+  t.bark = texture("island-bark", 256, 256, [=] {
     return barkTexture("island-bark", 256, 256, seed + 3, {0.05f, 0.035f, 0.025f},
                        {0.25f, 0.19f, 0.13f}, BarkStyle::Furrowed);
   });
-  int32_t leafTex = texture("island-leaves", 512, 512, [=] {
+  t.leaves = texture("island-leaves", 512, 512, [=] {
     return leafClusterTexture("island-leaves", 512, seed + 4, {0.16f, 0.36f, 0.06f},
                               {0.03f, 0.11f, 0.02f}, 11);
   });
-  int32_t banyanLeafTex = texture("banyan-leaves", 512, 512, [=] {
+  t.banyanLeaves = texture("banyan-leaves", 512, 512, [=] {
     return leafClusterTexture("banyan-leaves", 512, seed + 5, {0.1f, 0.26f, 0.05f},
                               {0.02f, 0.07f, 0.015f}, 15);
   });
-  int32_t palmBarkTex = texture("palm-bark", 256, 256, [=] {
+  t.palmBark = texture("palm-bark", 256, 256, [=] {
     return barkTexture("palm-bark", 256, 256, seed + 6, {0.12f, 0.09f, 0.06f},
                        {0.42f, 0.35f, 0.25f}, BarkStyle::PalmRings);
   });
-  int32_t palmFrondTex = texture("palm-frond", 256, 1024, [=] {
+  t.palmFronds = texture("palm-frond", 256, 1024, [=] {
     return frondTexture("palm-frond", 256, 1024, seed + 7, {0.22f, 0.4f, 0.08f},
                         {0.06f, 0.15f, 0.03f}, 70, 0.5f);
   });
-  int32_t fernTex = texture("fern-frond", 256, 512, [=] {
+  t.fern = texture("fern-frond", 256, 512, [=] {
     return frondTexture("fern-frond", 256, 512, seed + 8, {0.12f, 0.33f, 0.05f},
                         {0.03f, 0.12f, 0.02f}, 34, 0.45f);
   });
-  int32_t grassTex = texture("grass-blade", 64, 256, [=] {
+  t.grass = texture("grass-blade", 64, 256, [=] {
     return bladeTexture("grass-blade", 64, 256, seed + 9, {0.05f, 0.12f, 0.02f},
                         {0.3f, 0.45f, 0.1f});
   });
-  int32_t petalTex = texture("petal", 128, 128, [=] {
+  t.petal = texture("petal", 128, 128, [=] {
     return petalTexture("petal", 128, {0.9f, 0.75f, 0.2f});
   });
+  return t;
+}
 
-  // ------------------------------------------------------------ materials
-  IslandMaterials mat;
-  auto material = [&](const char* name, Vec3f colour, int32_t tex = kNoTexture, bool alpha = false,
-                      float roughness = 0.9f) {
-    Material m;
-    m.name = name;
-    m.baseColor = colour;
-    m.baseColorTexture = tex;
-    m.alphaTexture = alpha ? tex : kNoTexture;
-    m.roughness = roughness;
-    return plan.addMaterial(m);
+void IslandPlanner::addMaterials(const IslandTextures& tex) {
+  auto material = [&](const char* name, Vec3f colour, int32_t texture = kNoTexture,
+                      bool alphaCutout = false, float roughness = 0.9f) {
+    return addDiffuseMaterial(plan_, name, colour, texture, alphaCutout, roughness);
   };
-  mat.terrain = material("island-ground", Vec3f(1), terrainTex);
-  mat.sand = material("beach-sand", Vec3f(1), sandTex);
-  mat.rock = material("rock", Vec3f(1), rockTex, false, 0.8f);
-  {
-    Material water;
-    water.name = "ocean";
-    water.baseColor = {0.9f, 0.97f, 1.0f};
-    water.transmission = 1;
-    water.ior = 1.33f;
-    // Slightly rough: light reaches a diffuse seabed under a perfectly smooth
-    // surface only by caustic paths, which a path tracer with light sampling
-    // finds by chance (white speckles on black); a rough surface takes light
-    // samples itself, so the sea reads as sky and sun reflected on dark water.
-    water.roughness = 0.12f;
-    mat.ocean = plan.addMaterial(water);
-  }
+  IslandMaterials& mat = mat_;
+  mat.terrain = material("island-ground", Vec3f(1), tex.terrain);
+  mat.sand = material("beach-sand", Vec3f(1), tex.sand);
+  mat.rock = material("rock", Vec3f(1), tex.rock, false, 0.8f);
+  Material water;
+  water.name = "ocean";
+  water.baseColor = {0.9f, 0.97f, 1.0f};
+  water.transmission = 1;
+  water.ior = 1.33f;
+  // Slightly rough: light reaches a diffuse seabed under a perfectly smooth
+  // surface only by caustic paths, which a path tracer with light sampling
+  // finds by chance (white speckles on black); a rough surface takes light
+  // samples itself, so the sea reads as sky and sun reflected on dark water.
+  water.roughness = 0.12f;
+  mat.ocean = plan_.addMaterial(water);
   mat.seabed = material("seabed", kDeepSeabed);
-  mat.bark = material("bark", Vec3f(1), barkTex);
-  mat.leaves = material("leaves", Vec3f(1), leafTex, true, 0.6f);
-  mat.palmBark = material("palm-bark", Vec3f(1), palmBarkTex);
-  mat.palmFronds = material("palm-fronds", Vec3f(1), palmFrondTex, true, 0.6f);
+  mat.bark = material("bark", Vec3f(1), tex.bark);
+  mat.leaves = material("leaves", Vec3f(1), tex.leaves, true, 0.6f);
+  mat.palmBark = material("palm-bark", Vec3f(1), tex.palmBark);
+  mat.palmFronds = material("palm-fronds", Vec3f(1), tex.palmFronds, true, 0.6f);
   mat.coconut = material("coconut", {0.22f, 0.15f, 0.07f}, kNoTexture, false, 0.6f);
-  mat.fern = material("fern", Vec3f(1), fernTex, true, 0.7f);
-  mat.grass = material("grass", Vec3f(1), grassTex, false, 0.7f);
+  mat.fern = material("fern", Vec3f(1), tex.fern, true, 0.7f);
+  mat.grass = material("grass", Vec3f(1), tex.grass, false, 0.7f);
   mat.stem = material("flower-stem", {0.08f, 0.22f, 0.04f});
-  mat.petals = {material("petal-red", {1.0f, 0.12f, 0.15f}, petalTex, true, 0.6f),
-                material("petal-yellow", {1.0f, 0.85f, 0.2f}, petalTex, true, 0.6f),
-                material("petal-white", {0.95f, 0.95f, 0.92f}, petalTex, true, 0.6f)};
+  mat.petals = {material("petal-red", {1.0f, 0.12f, 0.15f}, tex.petal, true, 0.6f),
+                material("petal-yellow", {1.0f, 0.85f, 0.2f}, tex.petal, true, 0.6f),
+                material("petal-white", {0.95f, 0.95f, 0.92f}, tex.petal, true, 0.6f)};
   mat.flowerCentre = material("flower-centre", {0.8f, 0.5f, 0.05f});
-  mat.driftwood = material("driftwood", {0.9f, 0.88f, 0.85f}, barkTex);
-  mat.banyanBark = material("banyan-bark", {0.85f, 0.82f, 0.78f}, barkTex);
-  mat.banyanLeaves = material("banyan-leaves", Vec3f(1), banyanLeafTex, true, 0.6f);
-  {
-    Material glow;
-    glow.name = "lantern-glow";
-    glow.baseColor = {0.8f, 0.7f, 0.5f};
-    glow.emission = {6.0f, 4.0f, 1.5f};
-    mat.lanternGlow = plan.addMaterial(glow);
-    Material fire;
-    fire.name = "campfire-flame";
-    fire.baseColor = {0.8f, 0.5f, 0.2f};
-    fire.emission = {8.0f, 3.0f, 0.7f};
-    mat.flame = plan.addMaterial(fire);
-  }
+  mat.driftwood = material("driftwood", {0.9f, 0.88f, 0.85f}, tex.bark);
+  mat.banyanBark = material("banyan-bark", {0.85f, 0.82f, 0.78f}, tex.bark);
+  mat.banyanLeaves = material("banyan-leaves", Vec3f(1), tex.banyanLeaves, true, 0.6f);
+  Material glow;
+  glow.name = "lantern-glow";
+  glow.baseColor = {0.8f, 0.7f, 0.5f};
+  glow.emission = {6.0f, 4.0f, 1.5f};
+  mat.lanternGlow = plan_.addMaterial(glow);
+  Material fire;
+  fire.name = "campfire-flame";
+  fire.baseColor = {0.8f, 0.5f, 0.2f};
+  fire.emission = {8.0f, 3.0f, 0.7f};
+  mat.flame = plan_.addMaterial(fire);
   mat.lanternPole = material("lantern-pole", {0.2f, 0.13f, 0.07f});
+}
 
-  auto plantMaterial = [mat](PartRole role) {
-    switch (role) {
-      case PartRole::Wood:
-        return mat.bark;
-      case PartRole::Leaves:
-        return mat.leaves;
-      case PartRole::Fronds:
-        return mat.palmFronds;
-      case PartRole::Fruit:
-        return mat.coconut;
-      case PartRole::Blades:
-        return mat.grass;
-      case PartRole::Stems:
-        return mat.stem;
-      case PartRole::Petals:
-        return mat.petals[0];
-      case PartRole::FlowerCentre:
-        return mat.flowerCentre;
-      case PartRole::Rock:
-      default:
-        return mat.rock;
-    }
+void IslandPlanner::addMountain() {
+  const Shape shape = shape_;
+  const TerrainGrid grid = grid_;
+  const int rings = int(scaledResolution(128, scale_, 12, 2048));
+  const int segments = int(scaledResolution(512, scale_, 48, 8192));
+  MeshRecipe r;
+  r.name = "mountain";
+  r.material = mat_.terrain;  // painted by the terrain texture, which knows the mountain
+  r.counts = polarCapCounts(rings, segments);
+  r.build = [shape, grid, rings, segments] {
+    MeshBuilder b(true, true, polarCapCounts(rings, segments));
+    const Vec2f c = shape->mountainCentre;
+    addPolarCap(
+        b, rings, segments,
+        [&](float r, float phi) {
+          float x = r == 0 ? c.x : c.x + r * kMountainRadius * std::cos(phi);
+          float z = r == 0 ? c.y : c.y + r * kMountainRadius * std::sin(phi);
+          return Vec3f(x, shape->mountainAt(x, z, r), z);
+        },
+        [&](Vec3f p) { return grid.uvAt(p.x, p.z); });
+    Mesh m = b.finish();
+    auto height = [&](float x, float z) {
+      float dx = x - c.x, dz = z - c.y;
+      return shape->mountainAt(x, z, std::sqrt(dx * dx + dz * dz) / kMountainRadius);
+    };
+    for (size_t v = 0; v < m.positions.size(); ++v)
+      m.normals[v] = heightNormal(height, m.positions[v].x, m.positions[v].z, 0.5f);
+    return m;
   };
+  plan_.addSingleInstanceMesh(std::move(r));
+}
 
-  // ------------------------------------------------------------ terrain and set pieces
-  {
-    MeshRecipe r;
-    r.name = "island-terrain";
-    r.material = mat.terrain;
-    r.counts = terrainCounts(grid);
-    r.build = [grid, shape] {
-      return buildTerrain(grid, [&](float x, float z) { return shape->terrain(x, z); });
-    };
-    plan.addSingleInstanceMesh(std::move(r));
-  }
-  {
-    const int rings = int(scaledResolution(128, scale, 12, 2048));
-    const int segments = int(scaledResolution(512, scale, 48, 8192));
-    MeshRecipe r;
-    r.name = "mountain";
-    r.material = mat.terrain;  // painted by the terrain texture, which knows the mountain
-    r.counts = polarCapCounts(rings, segments);
-    r.build = [shape, grid, rings, segments] {
-      MeshBuilder b(true, true, polarCapCounts(rings, segments));
-      const Vec2f c = shape->mountainCentre;
-      addPolarCap(
-          b, rings, segments,
-          [&](float r, float phi) {
-            float x = r == 0 ? c.x : c.x + r * kMountainRadius * std::cos(phi);
-            float z = r == 0 ? c.y : c.y + r * kMountainRadius * std::sin(phi);
-            return Vec3f(x, shape->mountainAt(x, z, r), z);
-          },
-          [&](Vec3f p) { return grid.uvAt(p.x, p.z); });
-      Mesh m = b.finish();
-      auto height = [&](float x, float z) {
-        float dx = x - c.x, dz = z - c.y;
-        return shape->mountainAt(x, z, std::sqrt(dx * dx + dz * dz) / kMountainRadius);
-      };
-      for (size_t v = 0; v < m.positions.size(); ++v)
-        m.normals[v] = heightNormal(height, m.positions[v].x, m.positions[v].z, 0.5f);
-      return m;
-    };
-    plan.addSingleInstanceMesh(std::move(r));
-  }
-  for (size_t k = 0; k < shape->cliffs.size(); ++k) {
-    const int detail = int(scaledResolution(48, scale, 8, 1024));
+void IslandPlanner::addSeaCliffs() {
+  for (size_t k = 0; k < shape_->cliffs.size(); ++k) {
+    const int detail = int(scaledResolution(48, scale_, 8, 1024));
     MeshRecipe r;
     r.name = fmt::format("sea-cliff-{}", k);
-    r.material = mat.rock;
+    r.material = mat_.rock;
     r.counts = cubeSphereCounts(detail);
-    r.build = [shape, k, detail] {
+    r.build = [shape = shape_, k, detail] {
       const Cliff& c = shape->cliffs[k];
       MeshBuilder b(true, true, cubeSphereCounts(detail));
       addCubeSphere(b, detail, [&](Vec3f dir) { return rockSurface(c.rock, c.seed, dir); });
@@ -488,110 +549,80 @@ ScenePlan planIsland(double scale, uint32_t seed) {
       }
       return m;
     };
-    plan.addSingleInstanceMesh(std::move(r));
+    plan_.addSingleInstanceMesh(std::move(r));
   }
-  {
-    const int nu = int(scaledResolution(480, scale, 32, 8192));
-    const int nv = int(scaledResolution(48, scale, 6, 1024));
-    const float arc = kCoastRadius * (kBeachTheta1 - kBeachTheta0);
-    const float depth = kCoastRadius * (kBeachRho1 - kBeachRho0);
-    MeshRecipe r;
-    r.name = "beach";
-    r.material = mat.sand;
-    r.counts = gridCounts(nu, nv);
-    r.build = [shape, nu, nv, arc, depth] {
-      MeshBuilder b(true, true, gridCounts(nu, nv));
-      addGrid(b, nu, nv,
-              [&](float u, float v) {
-                float theta = lerpf(kBeachTheta0, kBeachTheta1, u);
-                float rho = lerpf(kBeachRho0, kBeachRho1, v);
-                Vec2f p = shape->polar(theta, rho);
-                return Vec3f(p.x, IslandShape::beachAt(theta, rho), p.y);
-              },
-              {arc / 5, depth / 5});
-      Mesh m = b.finish();
-      computeVertexNormals(m);
-      return m;
-    };
-    plan.addSingleInstanceMesh(std::move(r));
-  }
-  {
-    // The seabed beyond the terrain, out to the ocean's edge: without it the
-    // sea would look different over the terrain than beyond it.
-    MeshRecipe r;
-    r.name = "seabed";
-    r.material = mat.seabed;
-    r.counts = {4, 2};
-    r.hasUvs = false;
-    r.build = [] {
-      MeshBuilder b(true, false, {4, 2});
-      const float w = kOceanHalfSize;
-      int32_t a = b.vertex({-w, kSeabed, -w}), c = b.vertex({-w, kSeabed, w}),
-              d = b.vertex({w, kSeabed, w}), e = b.vertex({w, kSeabed, -w});
-      b.quad(a, c, d, e);
-      return b.finish();
-    };
-    plan.addSingleInstanceMesh(std::move(r));
-  }
-  {
-    MeshRecipe r;
-    r.name = "ocean";
-    r.material = mat.ocean;
-    r.counts = {4, 2};
-    r.hasUvs = false;
-    r.build = [] {
-      MeshBuilder b(true, false, {4, 2});
-      const float w = kOceanHalfSize;
-      int32_t a = b.vertex({-w, 0, -w}), c = b.vertex({-w, 0, w}), d = b.vertex({w, 0, w}),
-              e = b.vertex({w, 0, -w});
-      b.quad(a, c, d, e);
-      return b.finish();
-    };
-    plan.addSingleInstanceMesh(std::move(r));
-  }
+}
 
-  // ------------------------------------------------------------ campfire and lanterns
-  {
-    Vec2f at = shape->campfire;
-    float y = shape->surface(at.x, at.y);
-    MeshRecipe flame;
-    flame.name = "campfire-flame";
-    flame.material = mat.flame;
-    flame.counts = cubeSphereCounts(4);
-    flame.build = [at, y] {
-      MeshBuilder b(true, true, cubeSphereCounts(4));
-      addCubeSphere(b, 4, [&](Vec3f d) {
-        float taper = 1 - 0.6f * std::max(0.0f, d.y);  // a flame narrows upwards
-        return Vec3f(at.x + 0.3f * d.x * taper, y + 0.45f + 0.5f * d.y, at.y + 0.3f * d.z * taper);
-      });
-      return b.finish();
-    };
-    MeshRecipe stones;
-    stones.name = "campfire-stones";
-    stones.material = mat.rock;
-    stones.counts = cubeSphereCounts(3) * 9;
-    stones.build = [at, y, seed] {
-      MeshBuilder b(true, true, cubeSphereCounts(3) * 9);
-      for (int k = 0; k < 9; ++k) {
-        float a = 2 * kPi * float(k) / 9;
-        Vec3f c{at.x + 0.75f * std::cos(a), y, at.y + 0.75f * std::sin(a)};
-        RockParams rp;
-        rp.radii = {0.22f, 0.15f, 0.18f};
-        addCubeSphere(b, 3, [&](Vec3f d) { return c + rockSurface(rp, seed + uint32_t(k), d); });
-      }
-      return b.finish();
-    };
-    int32_t f = plan.addMesh(std::move(flame));
-    int32_t s = plan.addMesh(std::move(stones));
-    int32_t o = plan.addObject("campfire", {f, s});
-    plan.addInstances(o, 1, [](uint64_t) { return Affine3f::identity(); });
-  }
-  for (size_t k = 0; k < shape->lanterns.size(); ++k) {
-    Vec2f at = shape->lanterns[k];
-    float y = shape->surface(at.x, at.y);
+void IslandPlanner::addBeach() {
+  const int nu = int(scaledResolution(480, scale_, 32, 8192));
+  const int nv = int(scaledResolution(48, scale_, 6, 1024));
+  const float arc = kCoastRadius * (kBeachTheta1 - kBeachTheta0);
+  const float depth = kCoastRadius * (kBeachRho1 - kBeachRho0);
+  MeshRecipe r;
+  r.name = "beach";
+  r.material = mat_.sand;
+  r.counts = gridCounts(nu, nv);
+  r.build = [shape = shape_, nu, nv, arc, depth] {
+    MeshBuilder b(true, true, gridCounts(nu, nv));
+    addGrid(b, nu, nv,
+            [&](float u, float v) {
+              float theta = lerpf(kBeachTheta0, kBeachTheta1, u);
+              float rho = lerpf(kBeachRho0, kBeachRho1, v);
+              Vec2f p = shape->polar(theta, rho);
+              return Vec3f(p.x, IslandShape::beachAt(theta, rho), p.y);
+            },
+            {arc / 5, depth / 5});
+    Mesh m = b.finish();
+    computeVertexNormals(m);
+    return m;
+  };
+  plan_.addSingleInstanceMesh(std::move(r));
+}
+
+void IslandPlanner::addCampfire() {
+  const Vec2f at = shape_->campfire;
+  const float y = shape_->surface(at.x, at.y);
+  const uint32_t seed = seed_;
+  MeshRecipe flame;
+  flame.name = "campfire-flame";
+  flame.material = mat_.flame;
+  flame.counts = cubeSphereCounts(4);
+  flame.build = [at, y] {
+    MeshBuilder b(true, true, cubeSphereCounts(4));
+    addCubeSphere(b, 4, [&](Vec3f d) {
+      float taper = 1 - 0.6f * std::max(0.0f, d.y);  // a flame narrows upwards
+      return Vec3f(at.x + 0.3f * d.x * taper, y + 0.45f + 0.5f * d.y, at.y + 0.3f * d.z * taper);
+    });
+    return b.finish();
+  };
+  MeshRecipe stones;
+  stones.name = "campfire-stones";
+  stones.material = mat_.rock;
+  stones.counts = cubeSphereCounts(3) * 9;
+  stones.build = [at, y, seed] {
+    MeshBuilder b(true, true, cubeSphereCounts(3) * 9);
+    for (int k = 0; k < 9; ++k) {
+      float a = 2 * kPi * float(k) / 9;
+      Vec3f c{at.x + 0.75f * std::cos(a), y, at.y + 0.75f * std::sin(a)};
+      RockParams rp;
+      rp.radii = {0.22f, 0.15f, 0.18f};
+      addCubeSphere(b, 3, [&](Vec3f d) { return c + rockSurface(rp, seed + uint32_t(k), d); });
+    }
+    return b.finish();
+  };
+  int32_t f = plan_.addMesh(std::move(flame));
+  int32_t s = plan_.addMesh(std::move(stones));
+  int32_t o = plan_.addObject("campfire", {f, s});
+  plan_.addInstances(o, 1, [](uint64_t) { return Affine3f::identity(); });
+}
+
+void IslandPlanner::addLanterns() {
+  for (size_t k = 0; k < shape_->lanterns.size(); ++k) {
+    const Vec2f at = shape_->lanterns[k];
+    const float y = shape_->surface(at.x, at.y);
     MeshRecipe pole;
     pole.name = fmt::format("lantern-{}-pole", k);
-    pole.material = mat.lanternPole;
+    pole.material = mat_.lanternPole;
     pole.counts = tubeCounts(2, 6);
     pole.build = [at, y] {
       MeshBuilder b(true, true, tubeCounts(2, 6));
@@ -602,7 +633,7 @@ ScenePlan planIsland(double scale, uint32_t seed) {
     };
     MeshRecipe glow;
     glow.name = fmt::format("lantern-{}-glow", k);
-    glow.material = mat.lanternGlow;
+    glow.material = mat_.lanternGlow;
     glow.counts = cubeSphereCounts(3);
     glow.build = [at, y] {
       MeshBuilder b(true, true, cubeSphereCounts(3));
@@ -610,284 +641,277 @@ ScenePlan planIsland(double scale, uint32_t seed) {
       addCubeSphere(b, 3, [&](Vec3f d) { return c + Vec3f(d.x, d.y * 1.3f, d.z) * 0.16f; });
       return b.finish();
     };
-    int32_t p = plan.addMesh(std::move(pole));
-    int32_t g = plan.addMesh(std::move(glow));
-    int32_t o = plan.addObject(fmt::format("lantern-{}", k), {p, g});
-    plan.addInstances(o, 1, [](uint64_t) { return Affine3f::identity(); });
+    int32_t p = plan_.addMesh(std::move(pole));
+    int32_t g = plan_.addMesh(std::move(glow));
+    int32_t o = plan_.addObject(fmt::format("lantern-{}", k), {p, g});
+    plan_.addInstances(o, 1, [](uint64_t) { return Affine3f::identity(); });
   }
+}
 
-  // ------------------------------------------------------------ the hero banyan
-  {
-    TreeParams banyan;
-    banyan.trunkLength = 9;
-    banyan.trunkRadius = 1.4f;
-    banyan.trunkRings = 40;
-    banyan.trunkSides = 32;
-    banyan.trunkTaper = 0.5f;
-    banyan.trunkLean = 0.05f;
-    banyan.trunkFlare = 0.8f;
-    banyan.levels = {{12, 24, 16, 1.5f, 0.45f, 70, 0.55f, 0.05f, 0.35f},
-                     {6, 12, 10, 0.5f, 0.5f, 45, 0.2f, 0.3f, 0.4f},
-                     {5, 8, 6, 0.5f, 0.5f, 40, 0.3f, 0.2f, 0.4f},
-                     {4, 5, 4, 0.5f, 0.5f, 40, 0.3f, 0.15f, 0.4f}};
-    // Below scale 1 the banyan thins out too, so tiny test scenes stay tiny.
-    const double heroDetail = std::sqrt(std::min(scale, 1.0));
-    banyan.leavesPerTip = std::max(8, int(std::lround(48 * heroDetail)));
-    banyan.leafSegments = 2;
-    banyan.leafSize = 1.3f;
-    banyan.aerialRoots = std::max(16, int(std::lround(160 * heroDetail)));
-    banyan.rootRings = 24;
-    banyan.rootSides = 8;
-    banyan.rootRadius = 0.1f;
-    PlantDesign design = designTree(banyan, streamKey(seed, 0xba2));
-    int32_t object = addPlantObject(plan, "banyan", design, [mat](PartRole role) {
-      return role == PartRole::Leaves ? mat.banyanLeaves : mat.banyanBark;
-    });
-    const uint64_t count = uint64_t(std::clamp(std::floor(std::sqrt(scale)), 1.0, 64.0));
-    ScatterRule rule;
-    rule.scaleMin = 0.85f;
-    rule.scaleMax = 1.1f;
-    rule.tiltDegrees = 1;
-    rule.sink = 0.3f;
-    // The first banyan stands where the default view sees it; more of them
-    // (at larger scales) go anywhere in the lowlands.
-    auto others = std::make_shared<const Scatter>(
-        rule, islandGround(shape, 0.3f, 0.8f, 1.5f, 60, false), streamKey(seed, 0xba3), count);
-    Vec2f hero = shape->heroSpot;
-    float heroY = shape->surface(hero.x, hero.y);
-    plan.addInstances(object, count, [=](uint64_t i) {
-      if (i > 0) return others->transform(i);
-      return Affine3f::translate({hero.x, heroY - 0.3f, hero.y}) *
-             Affine3f::rotate({0, 1, 0}, 0.7f);
-    });
-  }
+void IslandPlanner::addHeroBanyan() {
+  TreeParams banyan;
+  banyan.trunkLength = 9;
+  banyan.trunkRadius = 1.4f;
+  banyan.trunkRings = 40;
+  banyan.trunkSides = 32;
+  banyan.trunkTaper = 0.5f;
+  banyan.trunkLean = 0.05f;
+  banyan.trunkFlare = 0.8f;
+  banyan.levels = {{12, 24, 16, 1.5f, 0.45f, 70, 0.55f, 0.05f, 0.35f},
+                   {6, 12, 10, 0.5f, 0.5f, 45, 0.2f, 0.3f, 0.4f},
+                   {5, 8, 6, 0.5f, 0.5f, 40, 0.3f, 0.2f, 0.4f},
+                   {4, 5, 4, 0.5f, 0.5f, 40, 0.3f, 0.15f, 0.4f}};
+  // Below scale 1 the banyan thins out too, so tiny test scenes stay tiny.
+  const double heroDetail = std::sqrt(std::min(scale_, 1.0));
+  banyan.leavesPerTip = std::max(8, int(std::lround(48 * heroDetail)));
+  banyan.leafSegments = 2;
+  banyan.leafSize = 1.3f;
+  banyan.aerialRoots = std::max(16, int(std::lround(160 * heroDetail)));
+  banyan.rootRings = 24;
+  banyan.rootSides = 8;
+  banyan.rootRadius = 0.1f;
+  PlantDesign design = designTree(banyan, streamKey(seed_, 0xba2));
+  int32_t object = addPlantObject(plan_, "banyan", design, [mat = mat_](PartRole role) {
+    return role == PartRole::Leaves ? mat.banyanLeaves : mat.banyanBark;
+  });
+  const uint64_t count = uint64_t(std::clamp(std::floor(std::sqrt(scale_)), 1.0, 64.0));
+  ScatterRule rule;
+  rule.scaleMin = 0.85f;
+  rule.scaleMax = 1.1f;
+  rule.tiltDegrees = 1;
+  rule.sink = 0.3f;
+  // The first banyan stands where the default view sees it; more of them
+  // (at larger scales) go anywhere in the lowlands.
+  auto others = std::make_shared<const Scatter>(
+      rule, islandGround(shape_, 0.3f, 0.8f, 1.5f, 60, false), streamKey(seed_, 0xba3), count);
+  Vec2f hero = shape_->heroSpot;
+  float heroY = shape_->surface(hero.x, hero.y);
+  plan_.addInstances(object, count, [=](uint64_t i) {
+    if (i > 0) return others->transform(i);
+    return Affine3f::translate({hero.x, heroY - 0.3f, hero.y}) * Affine3f::rotate({0, 1, 0}, 0.7f);
+  });
+}
 
-  // ------------------------------------------------------------ instanced species
-  const uint32_t speciesSeed = streamKey(seed, 0x5bec);
-  int speciesIndex = 0;
-  auto add = [&](Species s) {
-    addSpecies(plan, s, streamKey(speciesSeed, uint32_t(speciesIndex++)));
+Species IslandPlanner::trees() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "tree";
+  s.count = scaledCount(3000, scale_);
+  s.variants = 3 * variantFactor_;
+  s.design = [seed](int v) {
+    HashRng rng = variantRng(seed, 1, v);
+    TreeParams p;
+    p.trunkLength = rng.uniform(6, 9);
+    p.trunkRadius = rng.uniform(0.22f, 0.32f);
+    p.trunkRings = 18;
+    p.trunkSides = 12;
+    p.trunkLean = rng.uniform(0.05f, 0.2f);
+    p.levels = {{6 + v % 2, 10, 8, 0.6f, 0.55f, 50, 0.45f, 0.25f, 0.4f},
+                {4, 6, 6, 0.5f, 0.55f, 45, 0.3f, 0.15f, 0.4f},
+                {4, 4, 4, 0.45f, 0.55f, 40, 0.3f, 0.1f, 0.4f}};
+    p.leavesPerTip = 48;
+    p.leafSegments = 2;
+    p.leafSize = 1.1f;
+    return designTree(p, streamKey(seed, 0x7ee, uint32_t(v)));
   };
-  auto variantRng = [seed](uint32_t species, int v) {
-    return HashRng(seed, 0xa7a, species, uint32_t(v));
+  s.material = [mat = mat_](PartRole r, int) { return mat.forPlantPart(r); };
+  s.rule = {40, 60, 0.75f, 1.25f, 4, 0, 0.1f, 12};
+  s.ground = islandGround(shape_, 0.12f, 0.86f, 1.5f, kVegetationLine, false);
+  return s;
+}
+
+Species IslandPlanner::palms() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "palm";
+  s.count = scaledCount(600, scale_);
+  s.variants = 3 * variantFactor_;
+  s.design = [seed](int v) {
+    HashRng rng = variantRng(seed, 2, v);
+    PalmParams p;
+    p.height = rng.uniform(7, 12);
+    p.lean = rng.uniform(0.1f, 0.35f);
+    p.fronds = 14 + v % 4;
+    p.coconuts = 4 + v % 4;
+    return designPalm(p, streamKey(seed, 0xba1, uint32_t(v)));
   };
+  s.material = [mat = mat_](PartRole r, int) {
+    return r == PartRole::Wood ? mat.palmBark : mat.forPlantPart(r);
+  };
+  s.rule = {0, 0, 0.8f, 1.2f, 3, 0, 0.1f, 12};
+  s.ground = islandGround(shape_, 0.86f, 0.97f, 0.3f, 8, false);
+  return s;
+}
 
-  {
-    Species s;
-    s.name = "tree";
-    s.count = scaledCount(3000, scale);
-    s.variants = 3 * variantFactor;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(1, v);
-      TreeParams p;
-      p.trunkLength = rng.uniform(6, 9);
-      p.trunkRadius = rng.uniform(0.22f, 0.32f);
-      p.trunkRings = 18;
-      p.trunkSides = 12;
-      p.trunkLean = rng.uniform(0.05f, 0.2f);
-      p.levels = {{6 + v % 2, 10, 8, 0.6f, 0.55f, 50, 0.45f, 0.25f, 0.4f},
-                  {4, 6, 6, 0.5f, 0.55f, 45, 0.3f, 0.15f, 0.4f},
-                  {4, 4, 4, 0.45f, 0.55f, 40, 0.3f, 0.1f, 0.4f}};
-      p.leavesPerTip = 48;
-      p.leafSegments = 2;
-      p.leafSize = 1.1f;
-      return designTree(p, streamKey(seed, 0x7ee, uint32_t(v)));
-    };
-    s.material = [=](PartRole r, int) { return plantMaterial(r); };
-    s.rule = {40, 60, 0.75f, 1.25f, 4, 0, 0.1f, 12};
-    s.ground = islandGround(shape, 0.12f, 0.86f, 1.5f, kVegetationLine, false);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "palm";
-    s.count = scaledCount(600, scale);
-    s.variants = 3 * variantFactor;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(2, v);
-      PalmParams p;
-      p.height = rng.uniform(7, 12);
-      p.lean = rng.uniform(0.1f, 0.35f);
-      p.fronds = 14 + v % 4;
-      p.coconuts = 4 + v % 4;
-      return designPalm(p, streamKey(seed, 0xba1, uint32_t(v)));
-    };
-    s.material = [=](PartRole r, int) {
-      return r == PartRole::Wood ? mat.palmBark : plantMaterial(r);
-    };
-    s.rule = {0, 0, 0.8f, 1.2f, 3, 0, 0.1f, 12};
-    s.ground = islandGround(shape, 0.86f, 0.97f, 0.3f, 8, false);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "bush";
-    s.count = scaledCount(6000, scale);
-    s.variants = 2 * variantFactor;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(3, v);
-      TreeParams p;
-      p.trunkLength = rng.uniform(0.4f, 0.7f);
-      p.trunkRadius = 0.06f;
-      p.trunkRings = 4;
-      p.trunkSides = 6;
-      p.trunkFlare = 0.3f;
-      p.levels = {{5, 6, 5, 2.2f, 0.8f, 40, 0.2f, 0.3f, 0.4f},
-                  {4, 4, 4, 0.5f, 0.6f, 40, 0.3f, 0.1f, 0.4f}};
-      p.leavesPerTip = 40 + 4 * (v % 3);
-      p.leafSegments = 2;
-      p.leafSize = 0.35f;
-      return designTree(p, streamKey(seed, 0xb05, uint32_t(v)));
-    };
-    s.material = [=](PartRole r, int) { return plantMaterial(r); };
-    s.rule = {25, 25, 0.6f, 1.3f, 6, 0.3f, 0.05f, 12};
-    s.ground = islandGround(shape, 0.2f, 0.9f, 1, kVegetationLine, false);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "fern";
-    s.count = scaledCount(6000, scale);
-    s.variants = 2 * variantFactor;
-    s.design = [=](int v) {
-      FernParams p;
-      p.fronds = 18 + 2 * (v % 3);
-      p.length = 1.0f + 0.1f * float(v % 3);
-      return designFern(p, streamKey(seed, 0xfe2, uint32_t(v)));
-    };
-    s.material = [=](PartRole, int) { return mat.fern; };
-    s.rule = {40, 14, 0.6f, 1.4f, 8, 0.5f, 0.03f, 12};
-    s.ground = islandGround(shape, 0.15f, 0.85f, 2, kVegetationLine, true);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "grass";
-    s.count = scaledCount(45000, scale);
-    s.variants = 3 * variantFactor;
-    s.design = [=](int v) {
-      GrassParams p;
-      p.blades = 128 + 16 * (v % 3);
-      p.height = 0.5f + 0.1f * float(v % 3);
-      return designGrass(p, streamKey(seed, 0x9a5, uint32_t(v)));
-    };
-    s.material = [=](PartRole, int) { return mat.grass; };
-    s.rule = {300, 26, 0.6f, 1.5f, 6, 0.7f, 0.02f, 12};
-    s.ground = islandGround(shape, 0.3f, 0.93f, 0.8f, kVegetationLine, true);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "flower";
-    s.count = scaledCount(9000, scale);
-    s.variants = 3 * variantFactor;
-    s.design = [=](int v) {
-      FlowerParams p;
-      p.stems = 12 + (v % 3);
-      p.petals = 5 + (v % 2);
-      return designFlowers(p, streamKey(seed, 0xf10, uint32_t(v)));
-    };
-    s.material = [=](PartRole r, int v) {
-      return r == PartRole::Petals ? mat.petals[size_t(v) % 3] : plantMaterial(r);
-    };
-    s.rule = {60, 7, 0.7f, 1.3f, 5, 0.6f, 0.02f, 12};
-    s.ground = islandGround(shape, 0.3f, 0.9f, 1, kVegetationLine, true);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "rock";
-    s.count = scaledCount(1500, scale);
-    s.variants = 4 * variantFactor;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(7, v);
-      RockParams p;
-      p.detail = 16;
-      p.radii = {rng.uniform(0.6f, 0.9f), rng.uniform(0.35f, 0.6f), rng.uniform(0.5f, 0.8f)};
-      p.roughness = rng.uniform(0.2f, 0.35f);
-      return designRock(p, streamKey(seed, 0x20c, uint32_t(v)));
-    };
-    s.material = [=](PartRole, int) { return mat.rock; };
-    s.rule = {0, 0, 0.3f, 1.6f, 30, 0.8f, 0.1f, 12};
-    s.ground = islandGround(shape, 0.0f, 1.02f, -3, kVegetationLine, false);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "boulder";
-    s.count = scaledCount(60, scale);
-    s.variants = 2 * variantFactor;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(8, v);
-      RockParams p;
-      p.detail = 32;
-      p.radii = {rng.uniform(2.2f, 2.8f), rng.uniform(1.5f, 2.0f), rng.uniform(1.9f, 2.4f)};
-      p.roughness = 0.3f;
-      return designRock(p, streamKey(seed, 0xb01, uint32_t(v)));
-    };
-    s.material = [=](PartRole, int) { return mat.rock; };
-    s.rule = {0, 0, 0.7f, 1.4f, 15, 0.5f, 0.3f, 12};
-    s.ground = islandGround(shape, 0.92f, 1.06f, -4, 10, false);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "driftwood";
-    s.count = scaledCount(80, scale);
-    s.variants = 2 * variantFactor;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(9, v);
-      LogParams p;
-      p.length = rng.uniform(2.0f, 4.0f);
-      p.radius = rng.uniform(0.1f, 0.2f);
-      return designLog(p, streamKey(seed, 0x109, uint32_t(v)));
-    };
-    s.material = [=](PartRole, int) { return mat.driftwood; };
-    s.rule = {0, 0, 0.7f, 1.3f, 4, 1.0f, 0.05f, 12};
-    s.ground = islandGround(shape, 0.9f, 0.99f, 0.1f, 3, false);
-    add(s);
-  }
+Species IslandPlanner::bushes() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "bush";
+  s.count = scaledCount(6000, scale_);
+  s.variants = 2 * variantFactor_;
+  s.design = [seed](int v) {
+    HashRng rng = variantRng(seed, 3, v);
+    TreeParams p;
+    p.trunkLength = rng.uniform(0.4f, 0.7f);
+    p.trunkRadius = 0.06f;
+    p.trunkRings = 4;
+    p.trunkSides = 6;
+    p.trunkFlare = 0.3f;
+    p.levels = {{5, 6, 5, 2.2f, 0.8f, 40, 0.2f, 0.3f, 0.4f},
+                {4, 4, 4, 0.5f, 0.6f, 40, 0.3f, 0.1f, 0.4f}};
+    p.leavesPerTip = 40 + 4 * (v % 3);
+    p.leafSegments = 2;
+    p.leafSize = 0.35f;
+    return designTree(p, streamKey(seed, 0xb05, uint32_t(v)));
+  };
+  s.material = [mat = mat_](PartRole r, int) { return mat.forPlantPart(r); };
+  s.rule = {25, 25, 0.6f, 1.3f, 6, 0.3f, 0.05f, 12};
+  s.ground = islandGround(shape_, 0.2f, 0.9f, 1, kVegetationLine, false);
+  return s;
+}
 
-  // ------------------------------------------------------------ lights, views, bounds
-  plan.suns.push_back({normalize(Vec3f(0.35f, 0.8f, 0.45f)), {5.5f, 5.2f, 4.8f}, 0.00465f});
-  plan.environmentColor = {1, 1, 1};
+Species IslandPlanner::ferns() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "fern";
+  s.count = scaledCount(6000, scale_);
+  s.variants = 2 * variantFactor_;
+  s.design = [seed](int v) {
+    FernParams p;
+    p.fronds = 18 + 2 * (v % 3);
+    p.length = 1.0f + 0.1f * float(v % 3);
+    return designFern(p, streamKey(seed, 0xfe2, uint32_t(v)));
+  };
+  s.material = [fern = mat_.fern](PartRole, int) { return fern; };
+  s.rule = {40, 14, 0.6f, 1.4f, 8, 0.5f, 0.03f, 12};
+  s.ground = islandGround(shape_, 0.15f, 0.85f, 2, kVegetationLine, true);
+  return s;
+}
+
+Species IslandPlanner::grass() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "grass";
+  s.count = scaledCount(45000, scale_);
+  s.variants = 3 * variantFactor_;
+  s.design = [seed](int v) {
+    GrassParams p;
+    p.blades = 128 + 16 * (v % 3);
+    p.height = 0.5f + 0.1f * float(v % 3);
+    return designGrass(p, streamKey(seed, 0x9a5, uint32_t(v)));
+  };
+  s.material = [grass = mat_.grass](PartRole, int) { return grass; };
+  s.rule = {300, 26, 0.6f, 1.5f, 6, 0.7f, 0.02f, 12};
+  s.ground = islandGround(shape_, 0.3f, 0.93f, 0.8f, kVegetationLine, true);
+  return s;
+}
+
+Species IslandPlanner::flowers() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "flower";
+  s.count = scaledCount(9000, scale_);
+  s.variants = 3 * variantFactor_;
+  s.design = [seed](int v) {
+    FlowerParams p;
+    p.stems = 12 + (v % 3);
+    p.petals = 5 + (v % 2);
+    return designFlowers(p, streamKey(seed, 0xf10, uint32_t(v)));
+  };
+  s.material = [mat = mat_](PartRole r, int v) {
+    return r == PartRole::Petals ? mat.petals[size_t(v) % 3] : mat.forPlantPart(r);
+  };
+  s.rule = {60, 7, 0.7f, 1.3f, 5, 0.6f, 0.02f, 12};
+  s.ground = islandGround(shape_, 0.3f, 0.9f, 1, kVegetationLine, true);
+  return s;
+}
+
+Species IslandPlanner::rocks() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "rock";
+  s.count = scaledCount(1500, scale_);
+  s.variants = 4 * variantFactor_;
+  s.design = [seed](int v) {
+    HashRng rng = variantRng(seed, 7, v);
+    RockParams p;
+    p.detail = 16;
+    p.radii = {rng.uniform(0.6f, 0.9f), rng.uniform(0.35f, 0.6f), rng.uniform(0.5f, 0.8f)};
+    p.roughness = rng.uniform(0.2f, 0.35f);
+    return designRock(p, streamKey(seed, 0x20c, uint32_t(v)));
+  };
+  s.material = [rock = mat_.rock](PartRole, int) { return rock; };
+  s.rule = {0, 0, 0.3f, 1.6f, 30, 0.8f, 0.1f, 12};
+  s.ground = islandGround(shape_, 0.0f, 1.02f, -3, kVegetationLine, false);
+  return s;
+}
+
+Species IslandPlanner::boulders() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "boulder";
+  s.count = scaledCount(60, scale_);
+  s.variants = 2 * variantFactor_;
+  s.design = [seed](int v) {
+    HashRng rng = variantRng(seed, 8, v);
+    RockParams p;
+    p.detail = 32;
+    p.radii = {rng.uniform(2.2f, 2.8f), rng.uniform(1.5f, 2.0f), rng.uniform(1.9f, 2.4f)};
+    p.roughness = 0.3f;
+    return designRock(p, streamKey(seed, 0xb01, uint32_t(v)));
+  };
+  s.material = [rock = mat_.rock](PartRole, int) { return rock; };
+  s.rule = {0, 0, 0.7f, 1.4f, 15, 0.5f, 0.3f, 12};
+  s.ground = islandGround(shape_, 0.92f, 1.06f, -4, 10, false);
+  return s;
+}
+
+Species IslandPlanner::driftwood() const {
+  const uint32_t seed = seed_;
+  Species s;
+  s.name = "driftwood";
+  s.count = scaledCount(80, scale_);
+  s.variants = 2 * variantFactor_;
+  s.design = [seed](int v) {
+    HashRng rng = variantRng(seed, 9, v);
+    LogParams p;
+    p.length = rng.uniform(2.0f, 4.0f);
+    p.radius = rng.uniform(0.1f, 0.2f);
+    return designLog(p, streamKey(seed, 0x109, uint32_t(v)));
+  };
+  s.material = [wood = mat_.driftwood](PartRole, int) { return wood; };
+  s.rule = {0, 0, 0.7f, 1.3f, 4, 1.0f, 0.05f, 12};
+  s.ground = islandGround(shape_, 0.9f, 0.99f, 0.1f, 3, false);
+  return s;
+}
+
+void IslandPlanner::addLightsAndViews() {
   // Below the horizon: the colour of the open sea, so the ocean's far edge does not show.
-  plan.environmentImage = [] {
-    return skyGradient({0.16f, 0.34f, 0.8f}, {0.7f, 0.8f, 0.95f}, {0.04f, 0.09f, 0.13f}, 0.05f);
-  };
+  addDaylight(plan_, {0.35f, 0.8f, 0.45f}, {0.16f, 0.34f, 0.8f}, {0.7f, 0.8f, 0.95f},
+              {0.04f, 0.09f, 0.13f}, 0.05f);
+  const IslandShape& shape = *shape_;
+  auto surfaceAt = [&](Vec2f p) { return shape.surface(p.x, p.y); };
+  Vec2f shore = shape.shoreCamera, beach = shape.beachCamera, campfire = shape.campfire;
+  plan_.views.push_back(
+      {.name = "default",
+       .from = {shore.x, std::max(surfaceAt(shore), 0.0f) + 3.0f, shore.y},
+       .at = {shape.mountainCentre.x, 0.4f * kMountainHeight, shape.mountainCentre.y},
+       .fovY = 50});
+  plan_.views.push_back({.name = "beach",
+                         .from = {beach.x, surfaceAt(beach) + 1.3f, beach.y},
+                         .at = {campfire.x, surfaceAt(campfire) + 0.6f, campfire.y},
+                         .fovY = 55});
+  // Steep enough that the horizon (and the ocean's edge) stays out of the frame.
+  plan_.views.push_back({.name = "overview",
+                         .from = {0.3f * kCoastRadius, 2.1f * kCoastRadius, 1.0f * kCoastRadius},
+                         .at = {0, 0, 0.1f * kCoastRadius},
+                         .fovY = 55});
+}
 
-  auto surfaceAt = [&](Vec2f p) { return shape->surface(p.x, p.y); };
-  {
-    CameraView v;
-    v.name = "default";
-    Vec2f eye = shape->shoreCamera;
-    v.from = {eye.x, std::max(surfaceAt(eye), 0.0f) + 3.0f, eye.y};
-    v.at = {shape->mountainCentre.x, 0.4f * kMountainHeight, shape->mountainCentre.y};
-    v.fovY = 50;
-    plan.views.push_back(v);
-  }
-  {
-    CameraView v;
-    v.name = "beach";
-    Vec2f eye = shape->beachCamera;
-    Vec2f target = shape->campfire;
-    v.from = {eye.x, surfaceAt(eye) + 1.3f, eye.y};
-    v.at = {target.x, surfaceAt(target) + 0.6f, target.y};
-    v.fovY = 55;
-    plan.views.push_back(v);
-  }
-  {
-    CameraView v;
-    v.name = "overview";
-    // Steep enough that the horizon (and the ocean's edge) stays out of the frame.
-    v.from = {0.3f * kCoastRadius, 2.1f * kCoastRadius, 1.0f * kCoastRadius};
-    v.at = {0, 0, 0.1f * kCoastRadius};
-    v.fovY = 55;
-    plan.views.push_back(v);
-  }
-  plan.bounds.extend(Vec3f(-kOceanHalfSize, kSeabed, -kOceanHalfSize));
-  plan.bounds.extend(Vec3f(kOceanHalfSize, kMountainHeight, kOceanHalfSize));
-  return plan;
+}  // namespace
+
+ScenePlan planIsland(double scale, uint32_t seed) {
+  return IslandPlanner(scale, seed).plan();
 }
 
 }  // namespace ferry::builtin

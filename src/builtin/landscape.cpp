@@ -4,8 +4,6 @@
 #include <cmath>
 #include <memory>
 
-#include <fmt/format.h>
-
 #include "builtin/noise.h"
 #include "builtin/plants.h"
 #include "builtin/procedural_texture.h"
@@ -27,11 +25,6 @@ constexpr float kVegetationLine =
 constexpr float kLowestGround = 2.5f;  // plants sunk or tilted into the ground stay above 0
 constexpr float kEdgeMargin = 20;      // widest crown (scaled) < 20 m
 constexpr float kPathHalfWidth = 1.3f;
-
-uint64_t scaledCount(double base, double scale) {
-  double n = std::round(base * scale);
-  return uint64_t(std::clamp(n, 1.0, 9.0e15));
-}
 
 class LandscapeShape {
  public:
@@ -122,388 +115,415 @@ Vec3f groundColour(const LandscapeShape& shape, float x, float z, uint32_t seed)
   return c * (0.85f + 0.15f * n);
 }
 
-}  // namespace
+struct LandscapeTextures {
+  int32_t terrain, oakBark, birchBark, pineBark, oakLeaves, autumnLeaves, birchLeaves, shrubLeaves,
+      needles, fern, petal, blade, rock;
+};
 
-ScenePlan planLandscape(double scale, uint32_t seed) {
-  ScenePlan plan;
-  plan.name = "landscape";
+struct LandscapeMaterials {
+  int32_t terrain, oakBark, birchBark, pineBark;
+  std::array<int32_t, 3> oakLeaves;
+  int32_t birchLeaves, needles, shrubLeaves, fern, grass, stem;
+  std::array<int32_t, 4> petals;
+  int32_t flowerCentre, rock, logWood;
+};
 
-  TerrainGrid grid;
-  grid.x0 = grid.z0 = -kHalfSize;
-  grid.x1 = grid.z1 = kHalfSize;
-  grid.segments = int(std::clamp(std::round(512 * std::sqrt(scale)), 64.0, 16384.0));
-  grid.skirtY = 0;
-  auto shape = std::make_shared<const LandscapeShape>(seed, grid);
+// The random numbers that shape variant v of species `species`, and the key
+// of its design.
+struct VariantKeys {
+  uint32_t seed;
+  HashRng rng(uint32_t species, int v) const { return HashRng(seed, 0x1a7a, species, uint32_t(v)); }
+  uint32_t design(uint32_t species, int v) const {
+    return streamKey(seed, 0x1a7b, species, uint32_t(v));
+  }
+};
 
-  // ------------------------------------------------------------ textures
-  int terrainTexels = 256;
-  while (terrainTexels < 8192 && terrainTexels < 1024 * std::sqrt(scale) * 0.75) terrainTexels *= 2;
+// Makes the landscape's plan one step at a time, in a fixed order: the
+// indices of textures, materials, meshes and objects, and the species'
+// random streams, depend on it. Every recipe captures what it needs by
+// value: the planner is gone when the plan is materialized.
+class LandscapePlanner {
+ public:
+  LandscapePlanner(double scale, uint32_t seed) : scale_(scale), seed_(seed), variants_{seed} {
+    plan_.name = "landscape";
+    grid_.x0 = grid_.z0 = -kHalfSize;
+    grid_.x1 = grid_.z1 = kHalfSize;
+    grid_.segments = int(std::clamp(std::round(512 * std::sqrt(scale)), 64.0, 16384.0));
+    grid_.skirtY = 0;
+    shape_ = std::make_shared<const LandscapeShape>(seed, grid_);
+  }
+
+  ScenePlan plan() && {
+    addMaterials(addTextures());
+    addTerrainMesh(plan_, "landscape-terrain", mat_.terrain, grid_,
+                   [shape = shape_](float x, float z) { return shape->height(x, z); });
+    addSpecies(plan_,
+               {oaks(), pines(), birches(), shrubs(), ferns(), grass(), flowers(), rocks(), logs()},
+               streamKey(seed_, 0x1a4d));
+    addLightsAndViews();
+    plan_.bounds.extend(Vec3f(-kHalfSize, 0, -kHalfSize));
+    plan_.bounds.extend(Vec3f(kHalfSize, kKnollHeight, kHalfSize));
+    return std::move(plan_);
+  }
+
+ private:
+  LandscapeTextures addTextures();
+  void addMaterials(const LandscapeTextures& tex);
+  Species oaks() const;
+  Species pines() const;
+  Species birches() const;
+  Species shrubs() const;
+  Species ferns() const;
+  Species grass() const;
+  Species flowers() const;
+  Species rocks() const;
+  Species logs() const;
+  void addLightsAndViews();
+
+  const double scale_;
+  const uint32_t seed_;
+  const VariantKeys variants_;
+  TerrainGrid grid_;
+  Shape shape_;
+  LandscapeMaterials mat_{};
+  ScenePlan plan_;
+};
+
+LandscapeTextures LandscapePlanner::addTextures() {
+  const uint32_t seed = seed_;
   auto texture = [&](std::string name, int w, int h, std::function<Texture()> build) {
-    return plan.addTexture({std::move(name), w, h, std::move(build)});
+    return plan_.addTexture({std::move(name), w, h, std::move(build)});
   };
-  int32_t terrainTex = texture("landscape-terrain", terrainTexels, terrainTexels, [=] {
-    return paintTexture("landscape-terrain", terrainTexels, terrainTexels, WrapMode::Clamp,
-                        [&](Vec2f uv) {
-                          Vec2f p = grid.worldAt(uv);
-                          Vec3f c = groundColour(*shape, p.x, p.y, seed);
-                          return Vec4f{c.x, c.y, c.z, 1};
-                        });
-  });
-  int32_t oakBarkTex = texture("oak-bark", 256, 256, [=] {
+  LandscapeTextures t;
+  t.terrain = addTerrainTexture(
+      plan_, "landscape-terrain", grid_, terrainTextureSize(1024 * std::sqrt(scale_) * 0.75),
+      [shape = shape_, seed](float x, float z) { return groundColour(*shape, x, z, seed); });
+  t.oakBark = texture("oak-bark", 256, 256, [=] {
     return barkTexture("oak-bark", 256, 256, seed + 1, {0.05f, 0.04f, 0.03f}, {0.22f, 0.18f, 0.13f},
                        BarkStyle::Furrowed);
   });
-  int32_t birchBarkTex = texture("birch-bark", 256, 256, [=] {
+  t.birchBark = texture("birch-bark", 256, 256, [=] {
     return barkTexture("birch-bark", 256, 256, seed + 2, {0.04f, 0.035f, 0.03f},
                        {0.75f, 0.73f, 0.68f}, BarkStyle::Birch);
   });
-  int32_t pineBarkTex = texture("pine-bark", 256, 256, [=] {
+  t.pineBark = texture("pine-bark", 256, 256, [=] {
     return barkTexture("pine-bark", 256, 256, seed + 3, {0.07f, 0.035f, 0.02f},
                        {0.3f, 0.16f, 0.09f}, BarkStyle::Furrowed);
   });
-  int32_t oakLeafTex = texture("oak-leaves", 256, 256, [=] {
+  t.oakLeaves = texture("oak-leaves", 256, 256, [=] {
     return leafClusterTexture("oak-leaves", 256, seed + 4, {0.2f, 0.36f, 0.07f},
                               {0.04f, 0.12f, 0.02f}, 9);
   });
-  int32_t autumnLeafTex = texture("autumn-leaves", 256, 256, [=] {
+  t.autumnLeaves = texture("autumn-leaves", 256, 256, [=] {
     return leafClusterTexture("autumn-leaves", 256, seed + 5, {0.75f, 0.35f, 0.05f},
                               {0.35f, 0.08f, 0.02f}, 9);
   });
-  int32_t birchLeafTex = texture("birch-leaves", 256, 256, [=] {
+  t.birchLeaves = texture("birch-leaves", 256, 256, [=] {
     return leafClusterTexture("birch-leaves", 256, seed + 6, {0.35f, 0.5f, 0.1f},
                               {0.1f, 0.22f, 0.03f}, 13);
   });
-  int32_t shrubLeafTex = texture("shrub-leaves", 256, 256, [=] {
+  t.shrubLeaves = texture("shrub-leaves", 256, 256, [=] {
     return leafClusterTexture("shrub-leaves", 256, seed + 7, {0.12f, 0.3f, 0.06f},
                               {0.03f, 0.1f, 0.03f}, 17);
   });
-  int32_t needleTex = texture("pine-needles", 256, 256, [=] {
+  t.needles = texture("pine-needles", 256, 256, [=] {
     return needleTexture("pine-needles", 256, seed + 8, {0.08f, 0.2f, 0.06f},
                          {0.02f, 0.07f, 0.03f});
   });
-  int32_t fernTex = texture("fern-frond", 256, 512, [=] {
+  t.fern = texture("fern-frond", 256, 512, [=] {
     return frondTexture("fern-frond", 256, 512, seed + 9, {0.15f, 0.35f, 0.06f},
                         {0.04f, 0.13f, 0.02f}, 30, 0.45f);
   });
-  int32_t petalTex = texture("petal", 128, 128, [=] {
+  t.petal = texture("petal", 128, 128, [=] {
     return petalTexture("petal", 128, {0.95f, 0.8f, 0.25f});
   });
-  int32_t bladeTex = texture("grass-blade", 64, 256, [=] {
+  t.blade = texture("grass-blade", 64, 256, [=] {
     return bladeTexture("grass-blade", 64, 256, seed + 10, {0.05f, 0.1f, 0.02f},
                         {0.35f, 0.45f, 0.12f});
   });
-  int32_t rockTex = texture("rock", 256, 256, [=] {
-    return rockTexture("rock", 256, seed + 11, {0.1f, 0.1f, 0.09f}, {0.38f, 0.37f, 0.34f});
-  });
+  t.rock = plan_.addTexture(
+      {"rock", 256, 256, [=] {
+         return rockTexture("rock", 256, seed + 11, {0.1f, 0.1f, 0.09f}, {0.38f, 0.37f, 0.34f});
+       }});
+  return t;
+}
 
-  // ------------------------------------------------------------ materials
-  auto material = [&](const std::string& name, Vec3f colour, int32_t tex = kNoTexture,
-                      bool alpha = false, float roughness = 0.9f) {
-    Material m;
-    m.name = name;
-    m.baseColor = colour;
-    m.baseColorTexture = tex;
-    m.alphaTexture = alpha ? tex : kNoTexture;
-    m.roughness = roughness;
-    return plan.addMaterial(m);
+void LandscapePlanner::addMaterials(const LandscapeTextures& tex) {
+  auto material = [&](const char* name, Vec3f colour, int32_t texture = kNoTexture,
+                      bool alphaCutout = false, float roughness = 0.9f) {
+    return addDiffuseMaterial(plan_, name, colour, texture, alphaCutout, roughness);
   };
-  const int32_t terrainMat = material("landscape-ground", Vec3f(1), terrainTex);
-  const int32_t oakBark = material("oak-bark", Vec3f(1), oakBarkTex);
-  const int32_t birchBark = material("birch-bark", Vec3f(1), birchBarkTex);
-  const int32_t pineBark = material("pine-bark", Vec3f(1), pineBarkTex);
-  const std::array<int32_t, 3> oakLeaves = {
-      material("oak-leaves", Vec3f(1), oakLeafTex, true, 0.6f),
-      material("oak-leaves-dark", Vec3f(0.7f), oakLeafTex, true, 0.6f),
-      material("autumn-leaves", Vec3f(1), autumnLeafTex, true, 0.6f)};
-  const int32_t birchLeaves = material("birch-leaves", Vec3f(1), birchLeafTex, true, 0.6f);
-  const int32_t needles = material("pine-needles", Vec3f(1), needleTex, true, 0.7f);
-  const int32_t shrubLeaves = material("shrub-leaves", Vec3f(1), shrubLeafTex, true, 0.6f);
-  const int32_t fern = material("fern", Vec3f(1), fernTex, true, 0.7f);
-  const int32_t grass = material("grass", Vec3f(1), bladeTex, false, 0.7f);
-  const int32_t stem = material("flower-stem", {0.07f, 0.2f, 0.04f});
-  const std::array<int32_t, 4> petals = {
-      material("petal-white", {0.95f, 0.95f, 0.93f}, petalTex, true, 0.6f),
-      material("petal-yellow", {1.0f, 0.82f, 0.15f}, petalTex, true, 0.6f),
-      material("petal-purple", {0.5f, 0.2f, 0.75f}, petalTex, true, 0.6f),
-      material("petal-red", {0.9f, 0.1f, 0.08f}, petalTex, true, 0.6f)};
-  const int32_t flowerCentre = material("flower-centre", {0.85f, 0.6f, 0.05f});
-  const int32_t rock = material("rock", Vec3f(1), rockTex, false, 0.8f);
-  const int32_t logWood = material("log", {0.8f, 0.75f, 0.7f}, oakBarkTex);
+  LandscapeMaterials& mat = mat_;
+  mat.terrain = material("landscape-ground", Vec3f(1), tex.terrain);
+  mat.oakBark = material("oak-bark", Vec3f(1), tex.oakBark);
+  mat.birchBark = material("birch-bark", Vec3f(1), tex.birchBark);
+  mat.pineBark = material("pine-bark", Vec3f(1), tex.pineBark);
+  mat.oakLeaves = {material("oak-leaves", Vec3f(1), tex.oakLeaves, true, 0.6f),
+                   material("oak-leaves-dark", Vec3f(0.7f), tex.oakLeaves, true, 0.6f),
+                   material("autumn-leaves", Vec3f(1), tex.autumnLeaves, true, 0.6f)};
+  mat.birchLeaves = material("birch-leaves", Vec3f(1), tex.birchLeaves, true, 0.6f);
+  mat.needles = material("pine-needles", Vec3f(1), tex.needles, true, 0.7f);
+  mat.shrubLeaves = material("shrub-leaves", Vec3f(1), tex.shrubLeaves, true, 0.6f);
+  mat.fern = material("fern", Vec3f(1), tex.fern, true, 0.7f);
+  mat.grass = material("grass", Vec3f(1), tex.blade, false, 0.7f);
+  mat.stem = material("flower-stem", {0.07f, 0.2f, 0.04f});
+  mat.petals = {material("petal-white", {0.95f, 0.95f, 0.93f}, tex.petal, true, 0.6f),
+                material("petal-yellow", {1.0f, 0.82f, 0.15f}, tex.petal, true, 0.6f),
+                material("petal-purple", {0.5f, 0.2f, 0.75f}, tex.petal, true, 0.6f),
+                material("petal-red", {0.9f, 0.1f, 0.08f}, tex.petal, true, 0.6f)};
+  mat.flowerCentre = material("flower-centre", {0.85f, 0.6f, 0.05f});
+  mat.rock = material("rock", Vec3f(1), tex.rock, false, 0.8f);
+  mat.logWood = material("log", {0.8f, 0.75f, 0.7f}, tex.oakBark);
+}
 
-  // ------------------------------------------------------------ terrain
-  {
-    MeshRecipe r;
-    r.name = "landscape-terrain";
-    r.material = terrainMat;
-    r.counts = terrainCounts(grid);
-    r.build = [grid, shape] {
-      return buildTerrain(grid, [&](float x, float z) { return shape->height(x, z); });
-    };
-    plan.addSingleInstanceMesh(std::move(r));
-  }
-
-  // ------------------------------------------------------------ species
-  const uint32_t speciesSeed = streamKey(seed, 0x1a4d);
-  int speciesIndex = 0;
-  auto add = [&](Species s) {
-    addSpecies(plan, s, streamKey(speciesSeed, uint32_t(speciesIndex++)));
+Species LandscapePlanner::oaks() const {
+  Species s;
+  s.name = "oak";
+  s.count = scaledCount(300, scale_);
+  s.variants = 16;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(1, v);
+    TreeParams p;
+    p.trunkLength = rng.uniform(4.5f, 6);
+    p.trunkRadius = rng.uniform(0.35f, 0.45f);
+    p.trunkRings = 16;
+    p.trunkSides = 12;
+    p.levels = {{6 + v % 3, 10, 8, 0.9f, 0.5f, 55, 0.45f, 0.1f, 0.4f},
+                {4, 6, 6, 0.5f, 0.55f, 45, 0.3f, 0.15f, 0.4f},
+                {4, 4, 4, 0.5f, 0.55f, 40, 0.3f, 0.1f, 0.4f}};
+    p.leavesPerTip = 24 + 2 * (v % 4);
+    p.leafSegments = 2;
+    p.leafSize = 1.0f;
+    return designTree(p, keys.design(1, v));
   };
-  auto variantRng = [seed](uint32_t species, int v) {
-    return HashRng(seed, 0x1a7a, species, uint32_t(v));
+  s.material = [leaves = mat_.oakLeaves, bark = mat_.oakBark](PartRole r, int v) {
+    return r == PartRole::Leaves ? leaves[size_t(v) % 3] : bark;
   };
-  auto variantSeed = [seed](uint32_t species, int v) {
-    return streamKey(seed, 0x1a7b, species, uint32_t(v));
+  s.rule = {6, 25, 0.8f, 1.2f, 3, 0, 0.1f, 24};
+  s.ground = landscapeGround(shape_, false, 4, 0.0f, 10);
+  return s;
+}
+
+Species LandscapePlanner::pines() const {
+  Species s;
+  s.name = "pine";
+  s.count = scaledCount(350, scale_);
+  s.variants = 16;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(2, v);
+    TreeParams p;
+    p.trunkLength = rng.uniform(11, 16);
+    p.trunkRadius = rng.uniform(0.2f, 0.3f);
+    p.trunkRings = 20;
+    p.trunkSides = 10;
+    p.trunkTaper = 0.1f;
+    p.trunkLean = 0.03f;
+    p.trunkFlare = 0.3f;
+    p.coneFactor = 0.9f;
+    p.levels = {{34 + 2 * (v % 4), 6, 5, 0.35f, 0.3f, 95, 0.15f, -0.1f, 0.3f},
+                {3, 3, 3, 0.35f, 0.5f, 50, 0.3f, 0.0f, 0.4f}};
+    p.leavesPerTip = 16;
+    p.leafSegments = 1;
+    p.leafSize = 0.9f;
+    p.leafDroop = 0.1f;
+    return designTree(p, keys.design(2, v));
   };
-
-  {
-    Species s;
-    s.name = "oak";
-    s.count = scaledCount(300, scale);
-    s.variants = 16;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(1, v);
-      TreeParams p;
-      p.trunkLength = rng.uniform(4.5f, 6);
-      p.trunkRadius = rng.uniform(0.35f, 0.45f);
-      p.trunkRings = 16;
-      p.trunkSides = 12;
-      p.levels = {{6 + v % 3, 10, 8, 0.9f, 0.5f, 55, 0.45f, 0.1f, 0.4f},
-                  {4, 6, 6, 0.5f, 0.55f, 45, 0.3f, 0.15f, 0.4f},
-                  {4, 4, 4, 0.5f, 0.55f, 40, 0.3f, 0.1f, 0.4f}};
-      p.leavesPerTip = 24 + 2 * (v % 4);
-      p.leafSegments = 2;
-      p.leafSize = 1.0f;
-      return designTree(p, variantSeed(1, v));
-    };
-    s.material = [=](PartRole r, int v) {
-      return r == PartRole::Leaves ? oakLeaves[size_t(v) % 3] : oakBark;
-    };
-    s.rule = {6, 25, 0.8f, 1.2f, 3, 0, 0.1f, 24};
-    s.ground = landscapeGround(shape, false, 4, 0.0f, 10);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "pine";
-    s.count = scaledCount(350, scale);
-    s.variants = 16;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(2, v);
-      TreeParams p;
-      p.trunkLength = rng.uniform(11, 16);
-      p.trunkRadius = rng.uniform(0.2f, 0.3f);
-      p.trunkRings = 20;
-      p.trunkSides = 10;
-      p.trunkTaper = 0.1f;
-      p.trunkLean = 0.03f;
-      p.trunkFlare = 0.3f;
-      p.coneFactor = 0.9f;
-      p.levels = {{34 + 2 * (v % 4), 6, 5, 0.35f, 0.3f, 95, 0.15f, -0.1f, 0.3f},
-                  {3, 3, 3, 0.35f, 0.5f, 50, 0.3f, 0.0f, 0.4f}};
-      p.leavesPerTip = 16;
-      p.leafSegments = 1;
-      p.leafSize = 0.9f;
-      p.leafDroop = 0.1f;
-      return designTree(p, variantSeed(2, v));
-    };
-    s.material = [=](PartRole r, int) { return r == PartRole::Leaves ? needles : pineBark; };
-    s.rule = {8, 30, 0.8f, 1.2f, 2, 0, 0.1f, 24};
-    s.ground = landscapeGround(shape, false, 4, 0.1f, 10);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "birch";
-    s.count = scaledCount(220, scale);
-    s.variants = 14;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(3, v);
-      TreeParams p;
-      p.trunkLength = rng.uniform(8, 11);
-      p.trunkRadius = rng.uniform(0.12f, 0.17f);
-      p.trunkRings = 16;
-      p.trunkSides = 8;
-      p.trunkTaper = 0.3f;
-      p.trunkLean = rng.uniform(0.05f, 0.15f);
-      p.levels = {{8, 8, 6, 0.4f, 0.5f, 35, 0.4f, 0.3f, 0.4f},
-                  {4, 5, 4, 0.5f, 0.55f, 40, 0.3f, -0.2f, 0.4f},
-                  {3, 4, 3, 0.5f, 0.55f, 40, 0.3f, -0.2f, 0.4f}};
-      p.leavesPerTip = 20 + v % 5;
-      p.leafSegments = 1;
-      p.leafSize = 0.6f;
-      return designTree(p, variantSeed(3, v));
-    };
-    s.material = [=](PartRole r, int) { return r == PartRole::Leaves ? birchLeaves : birchBark; };
-    s.rule = {5, 15, 0.8f, 1.2f, 4, 0, 0.1f, 24};
-    s.ground = landscapeGround(shape, false, 4, -0.1f, 10);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "shrub";
-    s.count = scaledCount(2000, scale);
-    s.variants = 24;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(4, v);
-      TreeParams p;
-      p.trunkLength = rng.uniform(0.3f, 0.6f);
-      p.trunkRadius = 0.05f;
-      p.trunkRings = 4;
-      p.trunkSides = 5;
-      p.trunkFlare = 0.2f;
-      p.levels = {{4 + v % 3, 5, 4, 2.0f, 0.8f, 45, 0.2f, 0.3f, 0.4f},
-                  {3, 4, 3, 0.5f, 0.6f, 40, 0.3f, 0.1f, 0.4f}};
-      p.leavesPerTip = 24 + v % 8;
-      p.leafSegments = 2;
-      p.leafSize = 0.4f;
-      return designTree(p, variantSeed(4, v));
-    };
-    s.material = [=](PartRole r, int) { return r == PartRole::Leaves ? shrubLeaves : oakBark; };
-    s.rule = {10, 12, 0.6f, 1.3f, 6, 0.3f, 0.05f, 12};
-    s.ground = landscapeGround(shape, false, 2, -10, 10);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "fern";
-    s.count = scaledCount(3000, scale);
-    s.variants = 20;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(5, v);
-      FernParams p;
-      p.fronds = 16 + v % 6;
-      p.length = rng.uniform(0.7f, 1.2f);
-      return designFern(p, variantSeed(5, v));
-    };
-    s.material = [=](PartRole, int) { return fern; };
-    s.rule = {25, 8, 0.6f, 1.4f, 8, 0.5f, 0.03f, 16};
-    s.ground = landscapeGround(shape, true, 1.6f, -0.05f, 10);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "grass";
-    s.count = scaledCount(26000, scale);
-    s.variants = 40;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(6, v);
-      GrassParams p;
-      p.blades = 96 + 4 * (v % 10);
-      p.segments = 5;
-      p.height = rng.uniform(0.35f, 0.8f);
-      p.radius = rng.uniform(0.15f, 0.3f);
-      return designGrass(p, variantSeed(6, v));
-    };
-    s.material = [=](PartRole, int) { return grass; };
-    s.rule = {200, 15, 0.6f, 1.5f, 6, 0.7f, 0.02f, 16};
-    s.ground = landscapeGround(shape, true, 1.5f, -10, 0.3f);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "flower";
-    s.count = scaledCount(7000, scale);
-    s.variants = 30;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(7, v);
-      FlowerParams p;
-      p.stems = 8 + v % 7;
-      p.petals = 5 + v % 4;
-      p.height = rng.uniform(0.25f, 0.6f);
-      p.petalLength = rng.uniform(0.03f, 0.06f);
-      return designFlowers(p, variantSeed(7, v));
-    };
-    s.material = [=](PartRole r, int v) {
-      switch (r) {
-        case PartRole::Petals:
-          return petals[size_t(v) % 4];
-        case PartRole::Leaves:
-          return shrubLeaves;
-        case PartRole::FlowerCentre:
-          return flowerCentre;
-        default:
-          return stem;
-      }
-    };
-    s.rule = {50, 5, 0.7f, 1.3f, 5, 0.6f, 0.02f, 16};
-    s.ground = landscapeGround(shape, true, 1.5f, -10, 0.15f);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "rock";
-    s.count = scaledCount(700, scale);
-    s.variants = 20;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(8, v);
-      RockParams p;
-      p.detail = 12 + v % 8;
-      p.radii = {rng.uniform(0.5f, 0.9f), rng.uniform(0.3f, 0.6f), rng.uniform(0.4f, 0.8f)};
-      p.roughness = rng.uniform(0.2f, 0.35f);
-      return designRock(p, variantSeed(8, v));
-    };
-    s.material = [=](PartRole, int) { return rock; };
-    s.rule = {0, 0, 0.3f, 1.6f, 30, 0.8f, 0.1f, 12};
-    s.ground = landscapeGround(shape, true, 2, -10, 10, 0.9f * kKnollHeight);
-    add(s);
-  }
-  {
-    Species s;
-    s.name = "log";
-    s.count = scaledCount(30, scale);
-    s.variants = 6;
-    s.design = [=](int v) {
-      HashRng rng = variantRng(9, v);
-      LogParams p;
-      p.length = rng.uniform(3, 6);
-      p.radius = rng.uniform(0.15f, 0.3f);
-      return designLog(p, variantSeed(9, v));
-    };
-    s.material = [=](PartRole, int) { return logWood; };
-    s.rule = {0, 0, 0.8f, 1.2f, 3, 1.0f, 0.05f, 24};
-    s.ground = landscapeGround(shape, false, 3, 0.0f, 10);
-    add(s);
-  }
-
-  // ------------------------------------------------------------ lights, views, bounds
-  plan.suns.push_back({normalize(Vec3f(0.3f, 0.7f, 0.65f)), {5.5f, 5.2f, 4.8f}, 0.00465f});
-  plan.environmentColor = {1, 1, 1};
-  plan.environmentImage = [] {
-    return skyGradient({0.2f, 0.38f, 0.78f}, {0.75f, 0.82f, 0.92f}, {0.28f, 0.27f, 0.24f}, 0.3f);
+  s.material = [needles = mat_.needles, bark = mat_.pineBark](PartRole r, int) {
+    return r == PartRole::Leaves ? needles : bark;
   };
+  s.rule = {8, 30, 0.8f, 1.2f, 2, 0, 0.1f, 24};
+  s.ground = landscapeGround(shape_, false, 4, 0.1f, 10);
+  return s;
+}
 
-  auto groundAt = [&](float x, float z) { return shape->height(x, z); };
-  {
-    CameraView v;
-    v.name = "path";
-    float x0 = 70, x1 = 35;
-    float z0 = LandscapeShape::pathZ(x0), z1 = LandscapeShape::pathZ(x1);
-    v.from = {x0, groundAt(x0, z0) + 1.7f, z0};
-    v.at = {x1, groundAt(x1, z1) + 1.5f, z1};
-    v.fovY = 45;
-    plan.views.push_back(v);
-  }
-  {
-    CameraView v;
-    v.name = "view-3";
-    Vec2f eye = LandscapeShape::kLookout;
-    v.from = {eye.x, groundAt(eye.x, eye.y) + 6, eye.y};
-    v.at = {shape->knoll.x, 0.45f * kKnollHeight, shape->knoll.y};
-    v.fovY = 40;
-    plan.views.push_back(v);
-  }
-  {
-    CameraView v;
-    v.name = "top";
-    v.from = {0, 420, 0};
-    v.at = {0, 0, 0};
-    v.up = {0, 0, -1};
-    v.fovY = 45;
-    plan.views.push_back(v);
-  }
-  plan.bounds.extend(Vec3f(-kHalfSize, 0, -kHalfSize));
-  plan.bounds.extend(Vec3f(kHalfSize, kKnollHeight, kHalfSize));
-  return plan;
+Species LandscapePlanner::birches() const {
+  Species s;
+  s.name = "birch";
+  s.count = scaledCount(220, scale_);
+  s.variants = 14;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(3, v);
+    TreeParams p;
+    p.trunkLength = rng.uniform(8, 11);
+    p.trunkRadius = rng.uniform(0.12f, 0.17f);
+    p.trunkRings = 16;
+    p.trunkSides = 8;
+    p.trunkTaper = 0.3f;
+    p.trunkLean = rng.uniform(0.05f, 0.15f);
+    p.levels = {{8, 8, 6, 0.4f, 0.5f, 35, 0.4f, 0.3f, 0.4f},
+                {4, 5, 4, 0.5f, 0.55f, 40, 0.3f, -0.2f, 0.4f},
+                {3, 4, 3, 0.5f, 0.55f, 40, 0.3f, -0.2f, 0.4f}};
+    p.leavesPerTip = 20 + v % 5;
+    p.leafSegments = 1;
+    p.leafSize = 0.6f;
+    return designTree(p, keys.design(3, v));
+  };
+  s.material = [leaves = mat_.birchLeaves, bark = mat_.birchBark](PartRole r, int) {
+    return r == PartRole::Leaves ? leaves : bark;
+  };
+  s.rule = {5, 15, 0.8f, 1.2f, 4, 0, 0.1f, 24};
+  s.ground = landscapeGround(shape_, false, 4, -0.1f, 10);
+  return s;
+}
+
+Species LandscapePlanner::shrubs() const {
+  Species s;
+  s.name = "shrub";
+  s.count = scaledCount(2000, scale_);
+  s.variants = 24;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(4, v);
+    TreeParams p;
+    p.trunkLength = rng.uniform(0.3f, 0.6f);
+    p.trunkRadius = 0.05f;
+    p.trunkRings = 4;
+    p.trunkSides = 5;
+    p.trunkFlare = 0.2f;
+    p.levels = {{4 + v % 3, 5, 4, 2.0f, 0.8f, 45, 0.2f, 0.3f, 0.4f},
+                {3, 4, 3, 0.5f, 0.6f, 40, 0.3f, 0.1f, 0.4f}};
+    p.leavesPerTip = 24 + v % 8;
+    p.leafSegments = 2;
+    p.leafSize = 0.4f;
+    return designTree(p, keys.design(4, v));
+  };
+  s.material = [leaves = mat_.shrubLeaves, bark = mat_.oakBark](PartRole r, int) {
+    return r == PartRole::Leaves ? leaves : bark;
+  };
+  s.rule = {10, 12, 0.6f, 1.3f, 6, 0.3f, 0.05f, 12};
+  s.ground = landscapeGround(shape_, false, 2, -10, 10);
+  return s;
+}
+
+Species LandscapePlanner::ferns() const {
+  Species s;
+  s.name = "fern";
+  s.count = scaledCount(3000, scale_);
+  s.variants = 20;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(5, v);
+    FernParams p;
+    p.fronds = 16 + v % 6;
+    p.length = rng.uniform(0.7f, 1.2f);
+    return designFern(p, keys.design(5, v));
+  };
+  s.material = [fern = mat_.fern](PartRole, int) { return fern; };
+  s.rule = {25, 8, 0.6f, 1.4f, 8, 0.5f, 0.03f, 16};
+  s.ground = landscapeGround(shape_, true, 1.6f, -0.05f, 10);
+  return s;
+}
+
+Species LandscapePlanner::grass() const {
+  Species s;
+  s.name = "grass";
+  s.count = scaledCount(26000, scale_);
+  s.variants = 40;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(6, v);
+    GrassParams p;
+    p.blades = 96 + 4 * (v % 10);
+    p.segments = 5;
+    p.height = rng.uniform(0.35f, 0.8f);
+    p.radius = rng.uniform(0.15f, 0.3f);
+    return designGrass(p, keys.design(6, v));
+  };
+  s.material = [grass = mat_.grass](PartRole, int) { return grass; };
+  s.rule = {200, 15, 0.6f, 1.5f, 6, 0.7f, 0.02f, 16};
+  s.ground = landscapeGround(shape_, true, 1.5f, -10, 0.3f);
+  return s;
+}
+
+Species LandscapePlanner::flowers() const {
+  Species s;
+  s.name = "flower";
+  s.count = scaledCount(7000, scale_);
+  s.variants = 30;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(7, v);
+    FlowerParams p;
+    p.stems = 8 + v % 7;
+    p.petals = 5 + v % 4;
+    p.height = rng.uniform(0.25f, 0.6f);
+    p.petalLength = rng.uniform(0.03f, 0.06f);
+    return designFlowers(p, keys.design(7, v));
+  };
+  s.material = [mat = mat_](PartRole r, int v) {
+    switch (r) {
+      case PartRole::Petals:
+        return mat.petals[size_t(v) % 4];
+      case PartRole::Leaves:
+        return mat.shrubLeaves;
+      case PartRole::FlowerCentre:
+        return mat.flowerCentre;
+      default:
+        return mat.stem;
+    }
+  };
+  s.rule = {50, 5, 0.7f, 1.3f, 5, 0.6f, 0.02f, 16};
+  s.ground = landscapeGround(shape_, true, 1.5f, -10, 0.15f);
+  return s;
+}
+
+Species LandscapePlanner::rocks() const {
+  Species s;
+  s.name = "rock";
+  s.count = scaledCount(700, scale_);
+  s.variants = 20;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(8, v);
+    RockParams p;
+    p.detail = 12 + v % 8;
+    p.radii = {rng.uniform(0.5f, 0.9f), rng.uniform(0.3f, 0.6f), rng.uniform(0.4f, 0.8f)};
+    p.roughness = rng.uniform(0.2f, 0.35f);
+    return designRock(p, keys.design(8, v));
+  };
+  s.material = [rock = mat_.rock](PartRole, int) { return rock; };
+  s.rule = {0, 0, 0.3f, 1.6f, 30, 0.8f, 0.1f, 12};
+  s.ground = landscapeGround(shape_, true, 2, -10, 10, 0.9f * kKnollHeight);
+  return s;
+}
+
+Species LandscapePlanner::logs() const {
+  Species s;
+  s.name = "log";
+  s.count = scaledCount(30, scale_);
+  s.variants = 6;
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(9, v);
+    LogParams p;
+    p.length = rng.uniform(3, 6);
+    p.radius = rng.uniform(0.15f, 0.3f);
+    return designLog(p, keys.design(9, v));
+  };
+  s.material = [wood = mat_.logWood](PartRole, int) { return wood; };
+  s.rule = {0, 0, 0.8f, 1.2f, 3, 1.0f, 0.05f, 24};
+  s.ground = landscapeGround(shape_, false, 3, 0.0f, 10);
+  return s;
+}
+
+void LandscapePlanner::addLightsAndViews() {
+  addDaylight(plan_, {0.3f, 0.7f, 0.65f}, {0.2f, 0.38f, 0.78f}, {0.75f, 0.82f, 0.92f},
+              {0.28f, 0.27f, 0.24f}, 0.3f);
+  auto groundAt = [shape = shape_](float x, float z) { return shape->height(x, z); };
+  // Along the path, looking ahead down it.
+  const float x0 = 70, x1 = 35;
+  const float z0 = LandscapeShape::pathZ(x0), z1 = LandscapeShape::pathZ(x1);
+  plan_.views.push_back({.name = "path",
+                         .from = {x0, groundAt(x0, z0) + 1.7f, z0},
+                         .at = {x1, groundAt(x1, z1) + 1.5f, z1},
+                         .fovY = 45});
+  const Vec2f eye = LandscapeShape::kLookout, knoll = shape_->knoll;
+  plan_.views.push_back({.name = "view-3",
+                         .from = {eye.x, groundAt(eye.x, eye.y) + 6, eye.y},
+                         .at = {knoll.x, 0.45f * kKnollHeight, knoll.y},
+                         .fovY = 40});
+  plan_.views.push_back(
+      {.name = "top", .from = {0, 420, 0}, .at = {0, 0, 0}, .up = {0, 0, -1}, .fovY = 45});
+}
+
+}  // namespace
+
+ScenePlan planLandscape(double scale, uint32_t seed) {
+  return LandscapePlanner(scale, seed).plan();
 }
 
 }  // namespace ferry::builtin

@@ -241,9 +241,14 @@ MeshCounts treeLeafCounts(const TreeParams& p) {
 }
 
 PlantDesign designTree(const TreeParams& p, uint32_t seed) {
-  FERRY_CHECK(p.trunkRings >= 2 && p.trunkSides >= 3 && p.leafSegments >= 1);
-  for (const BranchLevel& l : p.levels)
-    FERRY_CHECK(l.children >= 1 && l.rings >= 2 && l.sides >= 3);
+  FERRY_CHECK_GE(p.trunkRings, 2);
+  FERRY_CHECK_GE(p.trunkSides, 3);
+  FERRY_CHECK_GE(p.leafSegments, 1);
+  for (const BranchLevel& l : p.levels) {
+    FERRY_CHECK_GE(l.children, 1);
+    FERRY_CHECK_GE(l.rings, 2);
+    FERRY_CHECK_GE(l.sides, 3);
+  }
   PlantDesign d;
   d.push_back({"wood", PartRole::Wood, treeWoodCounts(p), true, true,
                [p, seed] { return buildTreeWood(p, seed); }});
@@ -256,7 +261,9 @@ PlantDesign designTree(const TreeParams& p, uint32_t seed) {
 // ------------------------------------------------------------------ palms
 
 PlantDesign designPalm(const PalmParams& p, uint32_t seed) {
-  FERRY_CHECK(p.trunkRings >= 2 && p.fronds >= 1 && p.frondSegments >= 1);
+  FERRY_CHECK_GE(p.trunkRings, 2);
+  FERRY_CHECK_GE(p.fronds, 1);
+  FERRY_CHECK_GE(p.frondSegments, 1);
   // The trunk and crown share one curve; all parts recompute it from the seed.
   auto trunkCurve = [p, seed](std::vector<Vec3f>& pts, std::vector<float>& radii) {
     HashRng rng(seed, 0xba1);
@@ -327,7 +334,8 @@ PlantDesign designPalm(const PalmParams& p, uint32_t seed) {
 // ------------------------------------------------------------------ ferns
 
 PlantDesign designFern(const FernParams& p, uint32_t seed) {
-  FERRY_CHECK(p.fronds >= 1 && p.segments >= 1);
+  FERRY_CHECK_GE(p.fronds, 1);
+  FERRY_CHECK_GE(p.segments, 1);
   MeshCounts counts = frondCounts(p.segments) * uint64_t(p.fronds);
   PlantDesign d;
   d.push_back({"fronds", PartRole::Fronds, counts, true, true, [p, seed, counts] {
@@ -347,7 +355,8 @@ PlantDesign designFern(const FernParams& p, uint32_t seed) {
 // ------------------------------------------------------------------ grass
 
 PlantDesign designGrass(const GrassParams& p, uint32_t seed) {
-  FERRY_CHECK(p.blades >= 1 && p.segments >= 1);
+  FERRY_CHECK_GE(p.blades, 1);
+  FERRY_CHECK_GE(p.segments, 1);
   MeshCounts counts = ribbonCounts(p.segments) * uint64_t(p.blades);
   PlantDesign d;
   d.push_back({"blades", PartRole::Blades, counts, true, true, [p, seed, counts] {
@@ -382,7 +391,10 @@ PlantDesign designGrass(const GrassParams& p, uint32_t seed) {
 // ---------------------------------------------------------------- flowers
 
 PlantDesign designFlowers(const FlowerParams& p, uint32_t seed) {
-  FERRY_CHECK(p.stems >= 1 && p.stemRings >= 2 && p.stemSides >= 3 && p.petals >= 1);
+  FERRY_CHECK_GE(p.stems, 1);
+  FERRY_CHECK_GE(p.stemRings, 2);
+  FERRY_CHECK_GE(p.stemSides, 3);
+  FERRY_CHECK_GE(p.petals, 1);
   // Stem curves are shared by all parts, recomputed from the seed.
   auto stemCurve = [p, seed](int k, std::vector<Vec3f>& pts, std::vector<float>& radii) {
     HashRng rng(seed, 0x57e, uint32_t(k));
@@ -483,7 +495,7 @@ Vec3f rockSurface(const RockParams& p, uint32_t seed, Vec3f dir) {
 }
 
 PlantDesign designRock(const RockParams& p, uint32_t seed) {
-  FERRY_CHECK(p.detail >= 1);
+  FERRY_CHECK_GE(p.detail, 1);
   PlantDesign d;
   d.push_back({"rock", PartRole::Rock, cubeSphereCounts(p.detail), true, true, [p, seed] {
                  MeshBuilder b(true, true, cubeSphereCounts(p.detail));
@@ -496,7 +508,10 @@ PlantDesign designRock(const RockParams& p, uint32_t seed) {
 // ------------------------------------------------------------------- logs
 
 PlantDesign designLog(const LogParams& p, uint32_t seed) {
-  FERRY_CHECK(p.rings >= 2 && p.sides >= 3 && p.stubRings >= 2 && p.stubSides >= 3);
+  FERRY_CHECK_GE(p.rings, 2);
+  FERRY_CHECK_GE(p.sides, 3);
+  FERRY_CHECK_GE(p.stubRings, 2);
+  FERRY_CHECK_GE(p.stubSides, 3);
   MeshCounts counts =
       tubeCounts(p.rings, p.sides) + tubeCounts(p.stubRings, p.stubSides) * uint64_t(p.stubs);
   PlantDesign d;

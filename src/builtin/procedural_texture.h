@@ -14,13 +14,13 @@
 
 namespace ferry::builtin {
 
-// Paints width x height texels from `colourAt(uv)` (linear rgb, alpha in w),
-// evaluated at texel centres with v = 0 at the bottom row, rows in parallel.
 // A vertical sky for an equirectangular environment: horizon to zenith above,
 // fading to `below` under the horizon over `belowFade` radians.
 std::shared_ptr<const HdrImage> skyGradient(Vec3f zenith, Vec3f horizon, Vec3f below,
                                             float belowFade);
 
+// Paints width x height texels from `colourAt(uv)` (linear rgb, alpha in w),
+// evaluated at texel centres with v = 0 at the bottom row, rows in parallel.
 Texture paintTexture(const std::string& name, int width, int height, WrapMode wrap,
                      const std::function<Vec4f(Vec2f)>& colourAt);
 

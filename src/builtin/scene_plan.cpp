@@ -6,6 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "builtin/procedural_texture.h"
 #include "core/error.h"
 
 namespace ferry::builtin {
@@ -53,6 +54,24 @@ uint64_t ScenePlan::instanceCount() const {
   uint64_t n = 0;
   for (const InstanceBatch& b : batches) n += b.count;
   return n;
+}
+
+int32_t addDiffuseMaterial(ScenePlan& plan, const std::string& name, Vec3f colour, int32_t texture,
+                           bool alphaCutout, float roughness) {
+  Material m;
+  m.name = name;
+  m.baseColor = colour;
+  m.baseColorTexture = texture;
+  m.alphaTexture = alphaCutout ? texture : kNoTexture;
+  m.roughness = roughness;
+  return plan.addMaterial(m);
+}
+
+void addDaylight(ScenePlan& plan, Vec3f towardsSun, Vec3f zenith, Vec3f horizon, Vec3f below,
+                 float belowFade) {
+  plan.suns.push_back({normalize(towardsSun), {5.5f, 5.2f, 4.8f}, 0.00465f});
+  plan.environmentColor = {1, 1, 1};
+  plan.environmentImage = [=] { return skyGradient(zenith, horizon, below, belowFade); };
 }
 
 SceneSummary describePlan(const ScenePlan& plan) {

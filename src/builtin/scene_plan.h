@@ -78,6 +78,18 @@ struct ScenePlan {
   uint64_t instanceCount() const;
 };
 
+// A Lambertian material, its colour multiplied by `texture` when one is
+// given, and cut out where the texture's alpha is low if `alphaCutout`.
+int32_t addDiffuseMaterial(ScenePlan& plan, const std::string& name, Vec3f colour,
+                           int32_t texture = kNoTexture, bool alphaCutout = false,
+                           float roughness = 0.9f);
+
+// Daylight: a sun of the real sun's size and clear-day irradiance towards
+// `towardsSun` (any length), and a sky of unit scale fading from `zenith` to
+// `horizon`, and to `below` over `belowFade` radians under the horizon.
+void addDaylight(ScenePlan& plan, Vec3f towardsSun, Vec3f zenith, Vec3f horizon, Vec3f below,
+                 float belowFade);
+
 SceneSummary describePlan(const ScenePlan& plan);
 // Throws InternalError if a recipe makes something other than it promised.
 Scene materializePlan(const ScenePlan& plan);

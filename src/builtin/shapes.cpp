@@ -44,7 +44,9 @@ MeshCounts tubeCounts(int rings, int sides) {
 
 void addTube(MeshBuilder& b, std::span<const Vec3f> centres, std::span<const float> radii,
              int sides, float vPerUnit, float twist) {
-  FERRY_CHECK(centres.size() >= 2 && centres.size() == radii.size() && sides >= 3);
+  FERRY_CHECK_GE(centres.size(), 2);
+  FERRY_CHECK_EQ(radii.size(), centres.size());
+  FERRY_CHECK_GE(sides, 3);
   const int32_t first = b.vertexCount();
   const int stride = sides + 1;
   // Parallel transport keeps the rings from twisting where the path bends.
@@ -76,8 +78,9 @@ MeshCounts ribbonCounts(int segments) {
 
 void addRibbon(MeshBuilder& b, std::span<const Vec3f> centres, std::span<const Vec3f> sides,
                std::span<const float> widths, float u0, float u1) {
-  FERRY_CHECK(centres.size() >= 2 && sides.size() == centres.size() &&
-              widths.size() == centres.size());
+  FERRY_CHECK_GE(centres.size(), 2);
+  FERRY_CHECK_EQ(sides.size(), centres.size());
+  FERRY_CHECK_EQ(widths.size(), centres.size());
   const int32_t first = b.vertexCount();
   const float segments = float(centres.size() - 1);
   for (size_t i = 0; i < centres.size(); ++i) {
@@ -101,7 +104,7 @@ MeshCounts cubeSphereCounts(int n) {
 }
 
 void addCubeSphere(MeshBuilder& b, int n, const std::function<Vec3f(Vec3f)>& surface) {
-  FERRY_CHECK(n >= 1);
+  FERRY_CHECK_GE(n, 1);
   struct Face {
     Vec3f normal, u, v;  // u x v = normal: counter-clockwise from outside
   };
@@ -144,7 +147,8 @@ MeshCounts uvSphereCounts(int latitudes, int longitudes) {
 }
 
 void addUvSphere(MeshBuilder& b, int latitudes, int longitudes, Vec3f centre, float radius) {
-  FERRY_CHECK(latitudes >= 2 && longitudes >= 3);
+  FERRY_CHECK_GE(latitudes, 2);
+  FERRY_CHECK_GE(longitudes, 3);
   const int32_t first = b.vertexCount();
   const int stride = longitudes + 1;
   for (int i = 0; i <= latitudes; ++i) {
@@ -182,7 +186,8 @@ MeshCounts gridCounts(int nu, int nv) {
 
 void addGrid(MeshBuilder& b, int nu, int nv, const std::function<Vec3f(float, float)>& at,
              Vec2f uvScale) {
-  FERRY_CHECK(nu >= 1 && nv >= 1);
+  FERRY_CHECK_GE(nu, 1);
+  FERRY_CHECK_GE(nv, 1);
   const int32_t first = b.vertexCount();
   for (int j = 0; j <= nv; ++j)
     for (int i = 0; i <= nu; ++i) {
@@ -205,7 +210,8 @@ MeshCounts polarCapCounts(int rings, int segments) {
 void addPolarCap(MeshBuilder& b, int rings, int segments,
                  const std::function<Vec3f(float, float)>& at,
                  const std::function<Vec2f(Vec3f)>& uvOf) {
-  FERRY_CHECK(rings >= 1 && segments >= 3);
+  FERRY_CHECK_GE(rings, 1);
+  FERRY_CHECK_GE(segments, 3);
   Vec3f apex = at(0, 0);
   const int32_t apexIndex = b.vertex(apex, {0, 1, 0}, uvOf(apex));
   const int stride = segments + 1;

@@ -4,6 +4,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "builtin/procedural_texture.h"
 #include "core/error.h"
 
 namespace ferry::builtin {
@@ -13,7 +14,7 @@ MeshCounts terrainCounts(const TerrainGrid& grid) {
 }
 
 Mesh buildTerrain(const TerrainGrid& grid, const HeightFunction& height) {
-  FERRY_CHECK(grid.segments >= 1);
+  FERRY_CHECK_GE(grid.segments, 1);
   const int n = grid.segments;
   const int stride = n + 1;
   const size_t vertexCount = size_t(stride) * size_t(stride);
@@ -56,6 +57,33 @@ Mesh buildTerrain(const TerrainGrid& grid, const HeightFunction& height) {
     }
   });
   return mesh;
+}
+
+int32_t addTerrainMesh(ScenePlan& plan, const std::string& name, int32_t material,
+                       const TerrainGrid& grid, HeightFunction height) {
+  MeshRecipe r;
+  r.name = name;
+  r.material = material;
+  r.counts = terrainCounts(grid);
+  r.build = [grid, height] { return buildTerrain(grid, height); };
+  return plan.addSingleInstanceMesh(std::move(r));
+}
+
+int terrainTextureSize(double texelsAcross) {
+  int size = 256;
+  while (size < 8192 && size < texelsAcross) size *= 2;
+  return size;
+}
+
+int32_t addTerrainTexture(ScenePlan& plan, const std::string& name, const TerrainGrid& grid,
+                          int size, std::function<Vec3f(float x, float z)> colour) {
+  return plan.addTexture({name, size, size, [name, grid, size, colour] {
+                            return paintTexture(name, size, size, WrapMode::Clamp, [&](Vec2f uv) {
+                              Vec2f p = grid.worldAt(uv);
+                              Vec3f c = colour(p.x, p.y);
+                              return Vec4f{c.x, c.y, c.z, 1};
+                            });
+                          }});
 }
 
 Vec3f heightNormal(const HeightFunction& height, float x, float z, float eps) {

@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 
+#include "builtin/scene_plan.h"
 #include "builtin/shapes.h"
 #include "core/math.h"
 #include "scene/scene.h"
@@ -37,6 +38,18 @@ struct TerrainGrid {
 MeshCounts terrainCounts(const TerrainGrid& grid);
 // Positions, normals (from the height grid) and uvs; rows in parallel.
 Mesh buildTerrain(const TerrainGrid& grid, const HeightFunction& height);
+
+// The terrain as a mesh of the plan, placed once.
+int32_t addTerrainMesh(ScenePlan& plan, const std::string& name, int32_t material,
+                       const TerrainGrid& grid, HeightFunction height);
+
+// The side of a terrain's colour texture: the smallest power of two from 256
+// to 8192 that is at least `texelsAcross`.
+int terrainTextureSize(double texelsAcross);
+// A size x size texture painted with colour(x, z) at the world point under
+// each texel, mapped onto the terrain by its uvs (clamped at the edges).
+int32_t addTerrainTexture(ScenePlan& plan, const std::string& name, const TerrainGrid& grid,
+                          int size, std::function<Vec3f(float x, float z)> colour);
 
 // Upward unit normal of the function by central differences.
 Vec3f heightNormal(const HeightFunction& height, float x, float z, float eps);

@@ -108,8 +108,14 @@ int32_t addPlantObject(ScenePlan& plan, const std::string& name, const PlantDesi
   return plan.addObject(name, std::move(meshes));
 }
 
+uint64_t scaledCount(double base, double scale) {
+  double n = std::round(base * scale);
+  return uint64_t(std::clamp(n, 1.0, 9.0e15));
+}
+
 std::vector<int32_t> addSpecies(ScenePlan& plan, const Species& species, uint32_t key) {
-  FERRY_CHECK(species.count >= 1 && species.variants >= 1);
+  FERRY_CHECK_GE(species.count, 1);
+  FERRY_CHECK_GE(species.variants, 1);
   const uint64_t variants = std::min<uint64_t>(uint64_t(species.variants), species.count);
   auto scatter = std::make_shared<const Scatter>(species.rule, species.ground, key, species.count);
   std::vector<int32_t> objects;
@@ -126,6 +132,11 @@ std::vector<int32_t> addSpecies(ScenePlan& plan, const Species& species, uint32_
     objects.push_back(object);
   }
   return objects;
+}
+
+void addSpecies(ScenePlan& plan, const std::vector<Species>& species, uint32_t key) {
+  for (size_t k = 0; k < species.size(); ++k)
+    addSpecies(plan, species[k], streamKey(key, uint32_t(k)));
 }
 
 }  // namespace ferry::builtin

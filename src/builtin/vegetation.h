@@ -77,6 +77,12 @@ std::vector<int32_t> addSpecies(ScenePlan& plan, const Species& species, uint32_
 int32_t addPlantObject(ScenePlan& plan, const std::string& name, const PlantDesign& design,
                        const std::function<int32_t(PartRole)>& material);
 
+// Adds the species in order, species k with key streamKey(key, k).
+void addSpecies(ScenePlan& plan, const std::vector<Species>& species, uint32_t key);
+
+// An instance count that grows in proportion to the scene's scale, at least 1.
+uint64_t scaledCount(double base, double scale);
+
 // Instances per variant when `count` instances are shared by `variants` objects.
 uint64_t variantShare(uint64_t count, uint64_t variants, uint64_t variant);
 

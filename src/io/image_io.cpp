@@ -220,7 +220,8 @@ HdrImage readRadianceHdr(const std::string& path) {
 }
 
 void checkImage(const char* what, int width, int height, size_t values, size_t valuesPerPixel) {
-  FERRY_CHECK(width > 0 && height > 0);
+  FERRY_CHECK_GT(width, 0);
+  FERRY_CHECK_GT(height, 0);
   if (values != size_t(width) * size_t(height) * valuesPerPixel)
     throw InternalError(fmt::format("{}: {} values for a {}x{} image with {} per pixel", what,
                                     values, width, height, valuesPerPixel));

@@ -24,7 +24,7 @@ std::string partFileName(int rank) {
 Manifest writePartDirectory(const std::string& directory, const Scene& scene,
                             const Partition& partition, const Scene& lights,
                             const PartDirectoryInfo& info) {
-  FERRY_CHECK(partition.instanceOwners.size() == scene.instances.size());
+  FERRY_CHECK_EQ(partition.instanceOwners.size(), scene.instances.size());
   std::error_code ec;
   std::filesystem::create_directories(directory, ec);
   if (ec || !std::filesystem::is_directory(directory))

@@ -507,7 +507,7 @@ void validated(const std::string& path, Scene& scene, Fill&& fill) {
 WrittenFile writePartFile(const std::string& path, const Scene& scene,
                           const std::vector<int32_t>& instances, const std::vector<RankSet>& owners,
                           int rank, int ranks) {
-  FERRY_CHECK(owners.size() == scene.instances.size());
+  FERRY_CHECK_EQ(owners.size(), scene.instances.size());
   FERRY_CHECK(std::is_sorted(instances.begin(), instances.end()));
   WrittenFile written;
   writeFileAtomically(path, [&](const std::string& tmp) {

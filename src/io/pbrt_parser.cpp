@@ -408,12 +408,16 @@ class Parser {
 
   // `name` is a copy: the token it came from changes as the arguments are read.
   void directive(Input& in, const std::string name, const SourceLocation& where) {
+    if (!transformDirective(in, name, where) && !attributeDirective(in, name, where) &&
+        !sceneContentDirective(in, name, where) && !optionDirective(in, name, where))
+      fail(where, fmt::format("unknown directive '{}'", name));
+  }
+
+  // The current transform and named coordinate systems; false if `name` is
+  // not one of these directives.
+  bool transformDirective(Input& in, const std::string& name, const SourceLocation& where) {
     const char* n = name.c_str();
-    if (name == "AttributeBegin") {
-      pushBlock(BlockKind::Attribute, where);
-    } else if (name == "AttributeEnd") {
-      popBlock(BlockKind::Attribute, where);
-    } else if (name == "TransformBegin") {
+    if (name == "TransformBegin") {
       pushBlock(BlockKind::Transform, where);
     } else if (name == "TransformEnd") {
       popBlock(BlockKind::Transform, where);
@@ -440,41 +444,149 @@ class Parser {
     } else if (name == "CoordinateSystem") {
       coordinateSystems_[string(in, n)] = state_.ctm;
     } else if (name == "CoordSysTransform") {
-      std::string system = string(in, n);
-      auto it = coordinateSystems_.find(system);
-      if (it == coordinateSystems_.end()) {
-        std::string known;
-        for (const auto& [k, v] : coordinateSystems_) known += (known.empty() ? "" : ", ") + k;
-        fail(where, fmt::format("CoordSysTransform: no coordinate system \"{}\" (defined: {})",
-                                system, known.empty() ? "none" : known));
-      }
-      setTransform(it->second);
+      coordSysTransform(in, where);
     } else if (name == "ActiveTransform") {
-      const PbrtToken& t = in.tokens.next();
-      if (t.kind != PbrtToken::Kind::Word ||
-          (t.text != "StartTime" && t.text != "EndTime" && t.text != "All"))
-        fail(in.tokens.where(t),
-             fmt::format("ActiveTransform: expected StartTime, EndTime or All, found {}",
-                         describe(t)));
-      activeStart_ = t.text != "EndTime";
-      if (t.text != "StartTime")
-        warnings_.once("motion", fmt::format("motion blur is not supported: only the start "
-                                             "transform is used (first at {})",
-                                             where.toString()));
+      activeTransform(in, where);
     } else if (name == "TransformTimes") {
       numbers(in, 2, n);
       skipped(name, PbrtParams(), where, "no motion blur");
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  void coordSysTransform(Input& in, const SourceLocation& where) {
+    std::string system = string(in, "CoordSysTransform");
+    auto it = coordinateSystems_.find(system);
+    if (it == coordinateSystems_.end()) {
+      std::string known;
+      for (const auto& [k, v] : coordinateSystems_) known += (known.empty() ? "" : ", ") + k;
+      fail(where, fmt::format("CoordSysTransform: no coordinate system \"{}\" (defined: {})",
+                              system, known.empty() ? "none" : known));
+    }
+    setTransform(it->second);
+  }
+
+  void activeTransform(Input& in, const SourceLocation& where) {
+    const PbrtToken& t = in.tokens.next();
+    if (t.kind != PbrtToken::Kind::Word ||
+        (t.text != "StartTime" && t.text != "EndTime" && t.text != "All"))
+      fail(in.tokens.where(t),
+           fmt::format("ActiveTransform: expected StartTime, EndTime or All, found {}",
+                       describe(t)));
+    activeStart_ = t.text != "EndTime";
+    if (t.text != "StartTime")
+      warnings_.once("motion", fmt::format("motion blur is not supported: only the start "
+                                           "transform is used (first at {})",
+                                           where.toString()));
+  }
+
+  // Attribute blocks and defaults, and object definitions and instances;
+  // false if `name` is not one of these directives.
+  bool attributeDirective(Input& in, const std::string& name, const SourceLocation& where) {
+    const char* n = name.c_str();
+    if (name == "AttributeBegin") {
+      pushBlock(BlockKind::Attribute, where);
+    } else if (name == "AttributeEnd") {
+      popBlock(BlockKind::Attribute, where);
+    } else if (name == "Attribute") {
+      attribute(in, where);
     } else if (name == "ReverseOrientation") {
       // Shading and emission are two-sided in Ferry: orientation changes nothing.
       state_.reverseOrientation = !state_.reverseOrientation;
-    } else if (name == "Option") {
-      skipped(name, params(in), where, "rendering options are Ferry's own");
-    } else if (name == "ColorSpace") {
-      std::string space = string(in, n);
-      if (space != "srgb")
-        warnings_.once("colorspace", fmt::format("ColorSpace \"{}\" ignored: Ferry renders in "
-                                                 "linear sRGB (first at {})",
-                                                 space, where.toString()));
+    } else if (name == "ObjectBegin") {
+      objectBegin(string(in, n), where);
+    } else if (name == "ObjectEnd") {
+      objectEnd(where);
+    } else if (name == "ObjectInstance") {
+      objectInstance(string(in, n), where);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  void attribute(Input& in, const SourceLocation& where) {
+    std::string target = string(in, "Attribute");
+    if (target != "shape" && target != "light" && target != "material" && target != "medium" &&
+        target != "texture")
+      fail(where, fmt::format("Attribute: unknown target \"{}\" (shape, light, material, medium, "
+                              "texture)",
+                              target));
+    PbrtParams p = params(in);
+    PbrtParams& defaults = state_.attributes[target];
+    for (const PbrtParam& param : p.all()) {
+      PbrtParams merged;
+      merged.add(param);
+      for (const PbrtParam& old : defaults.all())
+        if (old.name != param.name) merged.add(old);
+      defaults = std::move(merged);
+    }
+  }
+
+  // Shapes, lights, materials, textures and media; false if `name` is not one
+  // of these directives.
+  bool sceneContentDirective(Input& in, const std::string& name, const SourceLocation& where) {
+    const char* n = name.c_str();
+    if (name == "Shape") {
+      std::string type = string(in, n);
+      shape(type, withDefaults(params(in), "shape"), where);
+    } else if (name == "LightSource") {
+      std::string type = string(in, n);
+      light(type, withDefaults(params(in), "light"), where);
+    } else if (name == "AreaLightSource") {
+      std::string type = string(in, n);
+      areaLight(type, withDefaults(params(in), "light"), where);
+    } else if (name == "Material") {
+      std::string type = string(in, n);
+      PbrtParams p = withDefaults(params(in), "material");
+      state_.material = materials_.addMaterial({type, std::move(p), where, ""});
+    } else if (name == "MakeNamedMaterial") {
+      makeNamedMaterial(in, where);
+    } else if (name == "NamedMaterial") {
+      std::string materialName = string(in, n);
+      auto id = materials_.namedMaterial(materialName);
+      if (!id) fail(where, fmt::format("NamedMaterial: no material named \"{}\"", materialName));
+      state_.material = *id;
+    } else if (name == "Texture") {
+      texture(in, where);
+    } else if (name == "MakeNamedMedium") {
+      string(in, n);
+      skipped(name, params(in), where, "participating media are not supported");
+    } else if (name == "MediumInterface") {
+      string(in, n);
+      if (in.tokens.peek().kind == PbrtToken::Kind::String) string(in, n);
+      skipped(name, PbrtParams(), where, "participating media are not supported");
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  void makeNamedMaterial(Input& in, const SourceLocation& where) {
+    std::string materialName = string(in, "MakeNamedMaterial");
+    PbrtParams p = withDefaults(params(in), "material");
+    std::string type = p.getString("type", "");
+    if (!p.has("type"))
+      fail(where, fmt::format("MakeNamedMaterial \"{}\" has no \"string type\"", materialName));
+    materials_.nameMaterial(materialName,
+                            materials_.addMaterial({type, std::move(p), where, materialName}));
+  }
+
+  // The world block, included files, and the camera, film and rendering
+  // options; false if `name` is not one of these directives.
+  bool optionDirective(Input& in, const std::string& name, const SourceLocation& where) {
+    const char* n = name.c_str();
+    if (name == "WorldBegin") {
+      state_.ctm = Affine3f::identity();
+      coordinateSystems_["world"] = state_.ctm;
+      inWorld_ = true;
+    } else if (name == "WorldEnd") {
+      worldEnd(in, where);
+    } else if (name == "Include" || name == "Import") {
+      std::string file = string(in, n);
+      pushFile(resolve(file, where, name.c_str()), where, name == "Import");
     } else if (name == "Camera") {
       std::string type = string(in, n);
       camera(type, params(in), where);
@@ -487,82 +599,18 @@ class Parser {
       std::string type = string(in, n);
       skipped(name, params(in), where,
               fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type));
-    } else if (name == "MakeNamedMedium") {
-      string(in, n);
-      skipped(name, params(in), where, "participating media are not supported");
-    } else if (name == "MediumInterface") {
-      string(in, n);
-      if (in.tokens.peek().kind == PbrtToken::Kind::String) string(in, n);
-      skipped(name, PbrtParams(), where, "participating media are not supported");
-    } else if (name == "WorldBegin") {
-      state_.ctm = Affine3f::identity();
-      coordinateSystems_["world"] = state_.ctm;
-      inWorld_ = true;
-    } else if (name == "WorldEnd") {
-      worldEnd(in, where);
-    } else if (name == "Attribute") {
-      std::string target = string(in, n);
-      if (target != "shape" && target != "light" && target != "material" && target != "medium" &&
-          target != "texture")
-        fail(where, fmt::format("Attribute: unknown target \"{}\" (shape, light, material, medium, "
-                                "texture)",
-                                target));
-      PbrtParams p = params(in);
-      PbrtParams& defaults = state_.attributes[target];
-      for (const PbrtParam& param : p.all()) {
-        PbrtParams merged;
-        merged.add(param);
-        for (const PbrtParam& old : defaults.all())
-          if (old.name != param.name) merged.add(old);
-        defaults = std::move(merged);
-      }
-    } else if (name == "Include" || name == "Import") {
-      std::string file = string(in, n);
-      pushFile(resolve(file, where, name.c_str()), where, name == "Import");
-    } else if (name == "Texture") {
-      texture(in, where);
-    } else if (name == "Material") {
-      std::string type = string(in, n);
-      PbrtParams p = withDefaults(params(in), "material");
-      state_.material = materials_.addMaterial({type, std::move(p), where, ""});
-    } else if (name == "MakeNamedMaterial") {
-      std::string materialName = string(in, n);
-      PbrtParams p = withDefaults(params(in), "material");
-      std::string type = p.getString("type", "");
-      if (!p.has("type"))
-        fail(where, fmt::format("MakeNamedMaterial \"{}\" has no \"string type\"", materialName));
-      materials_.nameMaterial(materialName,
-                              materials_.addMaterial({type, std::move(p), where, materialName}));
-    } else if (name == "NamedMaterial") {
-      std::string materialName = string(in, n);
-      auto id = materials_.namedMaterial(materialName);
-      if (!id) fail(where, fmt::format("NamedMaterial: no material named \"{}\"", materialName));
-      state_.material = *id;
-    } else if (name == "LightSource") {
-      std::string type = string(in, n);
-      light(type, withDefaults(params(in), "light"), where);
-    } else if (name == "AreaLightSource") {
-      std::string type = string(in, n);
-      areaLight(type, withDefaults(params(in), "light"), where);
-    } else if (name == "Shape") {
-      std::string type = string(in, n);
-      shape(type, withDefaults(params(in), "shape"), where);
-    } else if (name == "ObjectBegin") {
-      objectBegin(string(in, n), where);
-    } else if (name == "ObjectEnd") {
-      if (!currentObject_) fail(where, "ObjectEnd without ObjectBegin");
-      popBlock(BlockKind::Object, where);
-      if (scene_.objects[size_t(*currentObject_)].meshes.empty())
-        warnings_.once("empty object|" + scene_.objects[size_t(*currentObject_)].name,
-                       fmt::format("{}: object \"{}\" has no shapes", where.toString(),
-                                   scene_.objects[size_t(*currentObject_)].name));
-      currentObject_.reset();
-      curveBatch_.reset();
-    } else if (name == "ObjectInstance") {
-      objectInstance(string(in, n), where);
+    } else if (name == "Option") {
+      skipped(name, params(in), where, "rendering options are Ferry's own");
+    } else if (name == "ColorSpace") {
+      std::string space = string(in, n);
+      if (space != "srgb")
+        warnings_.once("colorspace", fmt::format("ColorSpace \"{}\" ignored: Ferry renders in "
+                                                 "linear sRGB (first at {})",
+                                                 space, where.toString()));
     } else {
-      fail(where, fmt::format("unknown directive '{}'", name));
+      return false;
     }
+    return true;
   }
 
   PbrtParams withDefaults(PbrtParams p, const std::string& target) {
@@ -658,6 +706,17 @@ class Parser {
     scene_.objects.push_back(std::move(o));
     currentObject_ = int32_t(scene_.objects.size() - 1);
     objects_[name] = *currentObject_;
+    curveBatch_.reset();
+  }
+
+  void objectEnd(const SourceLocation& where) {
+    if (!currentObject_) fail(where, "ObjectEnd without ObjectBegin");
+    popBlock(BlockKind::Object, where);
+    if (scene_.objects[size_t(*currentObject_)].meshes.empty())
+      warnings_.once("empty object|" + scene_.objects[size_t(*currentObject_)].name,
+                     fmt::format("{}: object \"{}\" has no shapes", where.toString(),
+                                 scene_.objects[size_t(*currentObject_)].name));
+    currentObject_.reset();
     curveBatch_.reset();
   }
 

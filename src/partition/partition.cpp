@@ -126,8 +126,8 @@ std::vector<int32_t> Partition::instancesOf(int rank) const {
 }
 
 void Partition::checkCovers(const Scene& scene) const {
-  FERRY_CHECK(instanceOwners.size() == scene.instances.size());
-  FERRY_CHECK(ranks >= 1);
+  FERRY_CHECK_EQ(instanceOwners.size(), scene.instances.size());
+  FERRY_CHECK_GE(ranks, 1);
   const RankSet valid = RankSet::firstN(ranks);
   for (const Proxy& p : proxies)
     if (p.owners.empty() || !p.owners.isSubsetOf(valid))

@@ -160,7 +160,7 @@ std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& 
   if (!isPaperPartitioner(o.name))
     throw InputError(
         fmt::format("max-part curves are made for the paper's partitioners, not '{}'", o.name));
-  FERRY_CHECK(maxRanks >= 1);
+  FERRY_CHECK_GE(maxRanks, 1);
   Prepared p = prepare(scene, o);
   std::unique_ptr<PartSplitter> splitter = makeSplitter(o.name, p.units);
   std::vector<uint64_t> curve;

@@ -39,7 +39,7 @@ bool RankSet::contains(int rank) const {
 }
 
 void RankSet::insert(int rank) {
-  FERRY_CHECK(rank >= 0);
+  FERRY_CHECK_GE(rank, 0);
   if (rank < 64) {
     low_ |= uint64_t(1) << rank;
     return;
@@ -56,7 +56,7 @@ int RankSet::count() const {
 }
 
 int RankSet::nth(int k) const {
-  FERRY_CHECK(k >= 0);
+  FERRY_CHECK_GE(k, 0);
   for (size_t i = 0; i < wordCount(); ++i) {
     uint64_t w = word(i);
     int c = std::popcount(w);

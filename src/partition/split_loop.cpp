@@ -31,7 +31,7 @@ Box3f PartSplitter::boundsOf(const std::vector<uint32_t>& members) const {
 
 std::vector<Part> runSplitLoop(PartSplitter& splitter, int parts,
                                const std::function<void(const std::vector<Part>&)>& observe) {
-  FERRY_CHECK(parts >= 1);
+  FERRY_CHECK_GE(parts, 1);
   std::vector<Part> current;
   current.push_back(splitter.root());
   if (observe) observe(current);
@@ -58,7 +58,8 @@ std::vector<Part> runSplitLoop(PartSplitter& splitter, int parts,
 }
 
 std::vector<RankSet> assignRanks(const std::vector<Part>& parts, int ranks) {
-  FERRY_CHECK(!parts.empty() && int(parts.size()) <= ranks);
+  FERRY_CHECK(!parts.empty());
+  FERRY_CHECK_LE(parts.size(), ranks);
   std::vector<RankSet> mask(parts.size());
   for (size_t k = 0; k < parts.size(); ++k) mask[k] = RankSet::single(int(k));
   std::vector<size_t> byCost(parts.size());

@@ -113,7 +113,8 @@ Bsdf Bsdf::dielectric(float ior, float roughness, Vec3f tint) {
 }
 
 // One lobe per material, chosen by the dominant parameter; blends are left to
-// the material system of a later version (recorded in docs/path-tracer.md).
+// the material system of a later version (docs/path-tracer.md, "Known to be
+// missing").
 Bsdf Bsdf::fromMaterial(const Material& material, Vec3f color) {
   if (material.transmission >= 0.5f) return dielectric(material.ior, material.roughness, color);
   if (material.metallic >= 0.5f) return conductor(color, material.roughness);

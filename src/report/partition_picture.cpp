@@ -27,7 +27,7 @@ Rgba scaled(Rgba c, float s) {
 
 std::vector<uint8_t> partitionPicture(const Scene& scene, const Partition& partition,
                                       const PictureOptions& o) {
-  FERRY_CHECK(partition.instanceOwners.size() == scene.instances.size());
+  FERRY_CHECK_EQ(partition.instanceOwners.size(), scene.instances.size());
   const int w = o.width, h = o.height;
   Canvas canvas(w, h, {236, 238, 242, 255});
   const CameraView& view = scene.view(o.view);

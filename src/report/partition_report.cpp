@@ -18,7 +18,8 @@ namespace ferry {
 
 MaxPartReport maxPartReport(Scene scene, const std::string& sceneName, int minRanks, int maxRanks,
                             const PartitionerOptions& base) {
-  FERRY_CHECK(minRanks >= 1 && minRanks <= maxRanks);
+  FERRY_CHECK_GE(minRanks, 1);
+  FERRY_CHECK_LE(minRanks, maxRanks);
   MaxPartReport report;
   report.scene = sceneName;
   report.inputBytes = summarize(scene).memory.total();
