@@ -52,9 +52,9 @@ DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,
                                                  const TraceBackend& geometry,
                                                  const Partition& partition, ForwardingMode mode)
     : comm_(comm), geometry_(geometry), mode_(mode), proxies_(partition.proxies) {
-  FERRY_CHECK(comm.size() <= kMaxRanks);
+  FERRY_CHECK_LE(comm.size(), kMaxRanks);
   if constexpr (!Path::kReplay) {
-    FERRY_CHECK(comm.size() <= int(sizeof(typename Path::Mask) * 8));
+    FERRY_CHECK_LE(comm.size(), sizeof(typename Path::Mask) * 8);
     instanceOwners_.reserve(partition.instanceOwners.size());
     for (const RankSet& owners : partition.instanceOwners) {
       FERRY_CHECK(owners.fitsInMask());

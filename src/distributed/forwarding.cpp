@@ -39,7 +39,7 @@ uint32_t ownerHash(const PathCore& ray) {
 
 int pickOwner(RankMask owners, const PathCore& ray) {
   int count = std::popcount(owners);
-  FERRY_CHECK(count > 0);
+  FERRY_CHECK_GT(count, 0);
   int k = int(ownerHash(ray) % uint32_t(count));
   for (;; --k) {
     int r = std::countr_zero(owners);

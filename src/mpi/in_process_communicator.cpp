@@ -183,7 +183,7 @@ std::vector<double> InProcessCommunicator::max(std::span<const double> values) c
 }
 
 std::vector<int> InProcessCommunicator::exchangeCounts(const std::vector<int>& sendCounts) const {
-  FERRY_CHECK(int(sendCounts.size()) == hub_.size);
+  FERRY_CHECK_EQ(sendCounts.size(), hub_.size);
   std::vector<int> receive(hub_.size);
   collective(hub_, rank_, "exchangeCounts", &sendCounts, [&](const std::vector<const void*>& all) {
     for (int r = 0; r < hub_.size; ++r)
@@ -197,8 +197,10 @@ void InProcessCommunicator::exchangeBytes(const void* send, const std::vector<in
                                           const std::vector<int>& receiveCounts,
                                           const std::vector<int>& receiveOffsets) const {
   const int n = hub_.size;
-  FERRY_CHECK(int(sendCounts.size()) == n && int(sendOffsets.size()) == n &&
-              int(receiveCounts.size()) == n && int(receiveOffsets.size()) == n);
+  FERRY_CHECK_EQ(sendCounts.size(), n);
+  FERRY_CHECK_EQ(sendOffsets.size(), n);
+  FERRY_CHECK_EQ(receiveCounts.size(), n);
+  FERRY_CHECK_EQ(receiveOffsets.size(), n);
   const ExchangeSend mine{static_cast<const std::byte*>(send), &sendCounts, &sendOffsets};
   collective(hub_, rank_, "exchangeBytes", &mine, [&](const std::vector<const void*>& all) {
     for (int r = 0; r < n; ++r) {
@@ -221,7 +223,8 @@ void InProcessCommunicator::gatherBytes(const void* send, int sendBytes, void* r
   const GatherSend mine{static_cast<const std::byte*>(send), sendBytes};
   collective(hub_, rank_, "gatherBytes", &mine, [&](const std::vector<const void*>& all) {
     if (!isRoot()) return;
-    FERRY_CHECK(int(counts.size()) == hub_.size && int(offsets.size()) == hub_.size);
+    FERRY_CHECK_EQ(counts.size(), hub_.size);
+    FERRY_CHECK_EQ(offsets.size(), hub_.size);
     for (int r = 0; r < hub_.size; ++r) {
       const auto& theirs = *static_cast<const GatherSend*>(all[r]);
       if (theirs.bytes != counts[r])
@@ -265,7 +268,7 @@ void InProcessCommunicator::abortEveryRank(const std::string& message, int) cons
 }
 
 InProcessGroup::InProcessGroup(int size) : hub_(std::make_unique<InProcessHub>(size)) {
-  FERRY_CHECK(size >= 1);
+  FERRY_CHECK_GE(size, 1);
   for (int r = 0; r < size; ++r)
     communicators_.push_back(
         std::unique_ptr<InProcessCommunicator>(new InProcessCommunicator(*hub_, r)));
@@ -278,7 +281,8 @@ int InProcessGroup::size() const {
 }
 
 const Communicator& InProcessGroup::communicator(int rank) const {
-  FERRY_CHECK(rank >= 0 && rank < hub_->size);
+  FERRY_CHECK_GE(rank, 0);
+  FERRY_CHECK_LT(rank, hub_->size);
   return *communicators_[rank];
 }
 

@@ -104,7 +104,7 @@ std::vector<double> MpiCommunicator::max(std::span<const double> values) const {
 }
 
 std::vector<int> MpiCommunicator::exchangeCounts(const std::vector<int>& sendCounts) const {
-  FERRY_CHECK(int(sendCounts.size()) == size_);
+  FERRY_CHECK_EQ(sendCounts.size(), size_);
   std::vector<int> receive(size_);
   check(MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receive.data(), 1, MPI_INT, MPI_COMM_WORLD),
         "MPI_Alltoall");
@@ -115,8 +115,10 @@ void MpiCommunicator::exchangeBytes(const void* send, const std::vector<int>& se
                                     const std::vector<int>& sendOffsets, void* receive,
                                     const std::vector<int>& receiveCounts,
                                     const std::vector<int>& receiveOffsets) const {
-  FERRY_CHECK(int(sendCounts.size()) == size_ && int(sendOffsets.size()) == size_ &&
-              int(receiveCounts.size()) == size_ && int(receiveOffsets.size()) == size_);
+  FERRY_CHECK_EQ(sendCounts.size(), size_);
+  FERRY_CHECK_EQ(sendOffsets.size(), size_);
+  FERRY_CHECK_EQ(receiveCounts.size(), size_);
+  FERRY_CHECK_EQ(receiveOffsets.size(), size_);
   check(MPI_Alltoallv(send, sendCounts.data(), sendOffsets.data(), MPI_BYTE, receive,
                       receiveCounts.data(), receiveOffsets.data(), MPI_BYTE, MPI_COMM_WORLD),
         "MPI_Alltoallv");

@@ -98,7 +98,7 @@ PartitionerKind parsePartitioner(const std::string& name) {
 
 std::string toString(PartitionerKind kind) {
   const size_t index = size_t(kind);
-  FERRY_CHECK(index < partitionerNames().size());
+  FERRY_CHECK_LT(index, partitionerNames().size());
   return partitionerNames()[index];
 }
 

@@ -78,8 +78,8 @@ std::vector<uint64_t> FrameStats::counterValues() const {
 void FrameStats::setCounterValues(std::span<const uint64_t> values) {
   constexpr size_t frameCounters = std::size(kFrameCounters);
   constexpr size_t perBounceCounters = std::size(kExchangeCounters);
-  FERRY_CHECK(values.size() >= frameCounters &&
-              (values.size() - frameCounters) % perBounceCounters == 0);
+  FERRY_CHECK_GE(values.size(), frameCounters);
+  FERRY_CHECK_EQ((values.size() - frameCounters) % perBounceCounters, 0u);
   const uint64_t* v = values.data();
   for (const auto& field : kFrameCounters) this->*field.member = *v++;
   perBounce.assign((values.size() - frameCounters) / perBounceCounters, {});
@@ -94,7 +94,7 @@ std::vector<double> FrameStats::stageTimeValues() const {
 }
 
 void FrameStats::setStageTimeValues(std::span<const double> values) {
-  FERRY_CHECK(values.size() == std::size(kStageTimes));
+  FERRY_CHECK_EQ(values.size(), std::size(kStageTimes));
   const double* v = values.data();
   for (const auto& field : kStageTimes) times.*field.member = *v++;
 }

@@ -200,7 +200,7 @@ template <typename Path>
 void WavefrontRenderer<Path>::shadePaths(Workspace& ws, uint32_t sampleIndex, uint32_t bounce,
                                          FrameBuffer& frameBuffer, FrameStats& stats) {
   const size_t n = ws.rays.paths.size();
-  FERRY_CHECK(ws.hits.size() == n);
+  FERRY_CHECK_EQ(ws.hits.size(), n);
   // Each path makes at most one continuation and one shadow ray.
   RayQueues<Path>& next = ws.next;
   ShadeCounts total;

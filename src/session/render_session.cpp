@@ -148,7 +148,8 @@ void checkRankCount(int ranks, PathLayout layout) {
 
 RenderSession::RenderSession(const SessionSettings& settings, const Communicator& comm)
     : settings_(settings), comm_(comm) {
-  FERRY_CHECK(settings.render.frames >= 1 && settings.render.samplesPerPixel >= 1);
+  FERRY_CHECK_GE(settings.render.frames, 1);
+  FERRY_CHECK_GE(settings.render.samplesPerPixel, 1);
   checkRankCount(comm.size(), settings.pathLayout);
   settings_.render.retraceAll = settings.retrace == Retrace::All;
   rank_ = std::make_unique<Rank>(settings_, comm_);

@@ -435,7 +435,7 @@ void EmbreeBackend::traceBatch(RayBatch& batch) const {
 }
 
 void EmbreeBackend::retrace(std::span<const RetraceRay> rays, std::span<TraceHit> hits) const {
-  FERRY_CHECK(rays.size() == hits.size());
+  FERRY_CHECK_EQ(rays.size(), hits.size());
   RayBatch batch;
   for (size_t begin = 0; begin < rays.size(); begin += RayBatch::kCapacity) {
     const size_t n = std::min(RayBatch::kCapacity, rays.size() - begin);

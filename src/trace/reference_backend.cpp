@@ -93,7 +93,7 @@ class Bvh {
       float entryLeft, entryRight;
       const bool left = crossesBox(nodes_[n.left].box, ray, tfar, entryLeft);
       const bool right = crossesBox(nodes_[n.left + 1].box, ray, tfar, entryRight);
-      FERRY_CHECK(size + 2 <= 128);
+      FERRY_CHECK_LE(size + 2, 128);
       if (left && right) {
         const bool leftFirst = entryLeft <= entryRight;
         stack[size++] = leftFirst ? n.left + 1 : n.left;
@@ -215,7 +215,7 @@ class ReferenceBackend final : public TraceBackend {
   // one: searching to the next float up always reaches the recorded hit, and
   // nothing closer exists.
   void retrace(std::span<const RetraceRay> rays, std::span<TraceHit> hits) const override {
-    FERRY_CHECK(rays.size() == hits.size());
+    FERRY_CHECK_EQ(rays.size(), hits.size());
     for (size_t i = 0; i < rays.size(); ++i)
       hits[i] = intersect(
           {rays[i].origin, rays[i].direction, 0, std::nextafter(rays[i].tmax, kInfinity)});
