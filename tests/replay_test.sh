@@ -52,7 +52,7 @@ for forwarding in proxies ring broadcast; do
   for layout in replay mask; do
     out="$work/island-4-$forwarding-$layout.pfm"
     mpirun_n 4 "$ferry" render "$island" $island_args --threads 1 --path-layout "$layout" \
-      --forwarding "$forwarding" -o "$out" --stats "$out.json"
+      --forwarding "$forwarding" --partition round-robin -o "$out" --stats "$out.json"
   done
   echo "island, 4 ranks, $forwarding, replay:"
   $compare "$work/island.pfm" "$work/island-4-$forwarding-replay.pfm" --outliers 0.002

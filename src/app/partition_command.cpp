@@ -205,7 +205,7 @@ int runShowPartition(const RenderOptions& o, const Communicator& comm) {
         const int ranks = o.showPartition > 0 ? o.showPartition : comm.size();
         SessionSettings settings;
         applyPartitionerFlags(o, settings);
-        const PartitionerOptions p = partitionerOptions(settings);
+        const PartitionerOptions p = partitionerOptions(settings, ranks);
         scene = loadScene(o.scene);
         partition = partitionScene(scene, ranks, p);
         title = fmt::format("{}: {}{}, {} ranks", scene.name, p.name,

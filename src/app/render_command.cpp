@@ -110,7 +110,7 @@ void printSummary(const RenderSession& session, const SessionReport& report, int
 }  // namespace
 
 void applyPartitionerFlags(const RenderOptions& o, SessionSettings& settings) {
-  settings.partitioner = parsePartitioner(o.partition);
+  if (!o.partition.empty()) settings.partitioner = parsePartitioner(o.partition);
   settings.keepObjectsWhole = o.keepObjectsWhole;
   settings.replicationBudget = o.replicationBudget;
   settings.render.seed = o.seed;
@@ -203,13 +203,12 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
           "which saves every ray an instance transform) or always (every object). Instanced\n"
           "objects are never flattened either way. The image is the same.")
       ->capture_default_str();
-  render
-      ->add_option(
-          "--partitioner,--partition", o.partition,
-          "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
-          "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
-          "round-robin, random (for testing). Not used for a part directory.")
-      ->capture_default_str();
+  render->add_option(
+      "--partitioner,--partition", o.partition,
+      "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
+      "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
+      "round-robin, random (for testing). Default: best on more than one rank. Not used\n"
+      "for a part directory (its manifest names the partitioner that made it).");
   render->add_flag("--keep-objects-whole", o.keepObjectsWhole,
                    "Partitioners keep non-instanced content whole (default: broken into meshes)");
   render

@@ -44,7 +44,7 @@ struct RenderOptions {
   // --partitioner (alias --partition): a name from partition/partitioner.h,
   // made on the fly (every rank runs the same deterministic partitioner).
   // Ignored when the scene is a part directory (ferry partition -o DIR).
-  std::string partition = "round-robin";
+  std::string partition;  // empty: best on more than one rank
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
   // --show-partition[=N]: draw the partition instead of rendering (0: off;

@@ -99,6 +99,7 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
       owner[k] = primaryOwner(pixelOf(k), cameraRay(pixelOf(k)));
   });
   stats.proxyQueries += dealt;
+  stats.primaryQueries += dealt;
   // Pixel ids by owner, each owner's in increasing order.
   std::vector<int> counts(ranks, 0), offsets(ranks, 0);
   for (int32_t o : owner) ++counts[size_t(o)];
@@ -117,7 +118,7 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
   };
   comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), pixels.data(),
                       toBytes(receiveCounts), toBytes(receiveOffsets));
-  primaryBytesSent_ += (dealt - size_t(counts[size_t(rank)])) * sizeof(uint32_t);
+  stats.primaryBytesSent += (dealt - size_t(counts[size_t(rank)])) * sizeof(uint32_t);
   // Each source's ids are increasing; the queue wants them all in pixel order.
   std::sort(pixels.begin(), pixels.end());
 }

@@ -32,8 +32,6 @@ class DistributedTraversal final : public RayTraversal<Path> {
   uint64_t revisits() const { return revisits_; }
   // Rays received, counted on the receiving side (an independent count of forwards).
   uint64_t received() const { return received_; }
-  // Bytes of pixel ids this rank sent to assign camera paths to their owners.
-  uint64_t primaryBytesSent() const { return primaryBytesSent_; }
 
  private:
   // The rank whose camera path `pixel` is: the owner of the closest proxy.
@@ -65,7 +63,6 @@ class DistributedTraversal final : public RayTraversal<Path> {
   bool firstExchange_ = true;
   uint64_t revisits_ = 0;
   uint64_t received_ = 0;
-  uint64_t primaryBytesSent_ = 0;
 };
 
 }  // namespace ferry

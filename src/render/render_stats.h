@@ -47,6 +47,8 @@ struct FrameStats {
   uint64_t retraceMisses = 0;    // re-traces that did not find the hit again (should be 0)
   uint64_t proxyQueries = 0;     // proxy-BVH queries: camera-ray ownership and forwarding decisions
   uint64_t replayQueries = 0;    // replay layout: proxy queries spent recomputing visited sets
+  uint64_t primaryQueries = 0;   // of proxyQueries: deciding which rank generates a camera path
+  uint64_t primaryBytesSent = 0;  // pixel ids sent to the ranks that generate their camera paths
   std::vector<ExchangeCounters> perBounce;
   StageTimes times;
 
@@ -84,6 +86,8 @@ inline constexpr StatsField<FrameStats, uint64_t> kFrameCounters[] = {
     {"traces", "retrace_misses", &FrameStats::retraceMisses},
     {"traces", "proxy_queries", &FrameStats::proxyQueries},
     {"traces", "replay_queries", &FrameStats::replayQueries},
+    {"traces", "primary_queries", &FrameStats::primaryQueries},
+    {nullptr, "primary_bytes_sent", &FrameStats::primaryBytesSent},
 };
 // Per bounce under "exchange_per_bounce", and summed over bounces under "exchange".
 inline constexpr StatsField<ExchangeCounters, uint64_t> kExchangeCounters[] = {

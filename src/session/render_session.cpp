@@ -68,7 +68,7 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     // Light data is small and needed everywhere: take it from the scene as
     // given, before the partitioner rewrites it and ranks release geometry.
     lights = std::make_unique<LightSampler>(scene);
-    const PartitionerOptions options = partitionerOptions(settings);
+    const PartitionerOptions options = partitionerOptions(settings, comm.size());
     partition = partitionScene(scene, comm.size(), options);
     partitionerName = options.name;
     owned = partition.instancesOf(comm.rank());

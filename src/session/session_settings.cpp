@@ -2,9 +2,10 @@
 
 namespace ferry {
 
-PartitionerOptions partitionerOptions(const SessionSettings& settings) {
+PartitionerOptions partitionerOptions(const SessionSettings& settings, int ranks) {
   PartitionerOptions p;
-  p.name = toString(settings.partitioner);
+  p.name = toString(settings.partitioner.value_or(ranks > 1 ? PartitionerKind::Best
+                                                            : PartitionerKind::RoundRobin));
   p.breakObjects = !settings.keepObjectsWhole;
   p.replicationBudget = settings.replicationBudget;
   p.seed = settings.render.seed;

@@ -7,6 +7,8 @@
 #include "distributed/forwarding.h"
 #include "io/load_options.h"
 #include "partition/partitioner.h"
+
+#include <optional>
 #include "render/wavefront_renderer.h"
 #include "session/modes.h"
 
@@ -28,13 +30,14 @@ struct SessionSettings {
   Instancing instancing = Instancing::Shared;
 
   // How a scene (not a part directory) is split over the ranks, on the fly:
-  // every rank runs the same deterministic partitioner.
-  PartitionerKind partitioner = PartitionerKind::RoundRobin;
+  // every rank runs the same deterministic partitioner. None given: the
+  // paper's best on more than one rank (round-robin, which does nothing, on one).
+  std::optional<PartitionerKind> partitioner;
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
 };
 
-// The partitioner options a session with `settings` partitions with.
-PartitionerOptions partitionerOptions(const SessionSettings& settings);
+// The partitioner options a session with `settings` partitions with on `ranks` ranks.
+PartitionerOptions partitionerOptions(const SessionSettings& settings, int ranks);
 
 }  // namespace ferry

@@ -17,5 +17,7 @@ if s["settings"]["forwarding"] == "proxies" and s["settings"]["ranks"] > 1:
     camera = r["total"]["camera_paths"]
     queries = r["total"]["traces"]["proxy_queries"]
     assert queries >= camera, f"{queries} proxy queries for {camera} camera paths"
+    primary = r["total"]["traces"]["primary_queries"]
+    assert primary == camera, f"{primary} primary-ownership queries for {camera} camera paths"
 print(f"  forwarded {fwd}, rounds {r['total']['exchange']['rounds']}, "
       f"max estimated bytes per rank {s['memory']['max_estimated_bytes']:.0f}")
