@@ -5,10 +5,13 @@
 namespace ferry {
 namespace {
 
-// Direct send: returns this rank's summed, scaled slice.
+// Direct send: returns this rank's summed, scaled slice. The partial sums are
+// fixed point (render/frame_buffer.h), so the slice is the exact sum of every
+// rank's contributions whatever the rank count, converted to floats once.
 std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& partial, float scale,
                                uint64_t& bytesSent) {
   maybeInjectFailure("composite", comm.rank());
+  constexpr int kPixelBytes = 3 * int(sizeof(int64_t));
   const int ranks = comm.size(), width = partial.width(), height = partial.height();
   std::vector<int> sendCounts(ranks), sendOffsets(ranks), receiveCounts(ranks),
       receiveOffsets(ranks);
@@ -18,20 +21,25 @@ std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& part
   for (int r = 0; r < ranks; ++r) {
     int first, last;
     compositeSlice(height, ranks, r, first, last);
-    sendCounts[r] = (last - first) * width * int(sizeof(Vec3f));
-    sendOffsets[r] = first * width * int(sizeof(Vec3f));
-    receiveCounts[r] = slicePixels * int(sizeof(Vec3f));
-    receiveOffsets[r] = r * slicePixels * int(sizeof(Vec3f));
+    sendCounts[r] = (last - first) * width * kPixelBytes;
+    sendOffsets[r] = first * width * kPixelBytes;
+    receiveCounts[r] = slicePixels * kPixelBytes;
+    receiveOffsets[r] = r * slicePixels * kPixelBytes;
   }
-  std::vector<Vec3f> pieces(size_t(slicePixels) * ranks);
-  comm.exchangeBytes(partial.sum().data(), sendCounts, sendOffsets, pieces.data(), receiveCounts,
-                     receiveOffsets);
+  const size_t sliceValues = size_t(slicePixels) * 3;
+  std::vector<int64_t> pieces(sliceValues * size_t(ranks));
+  comm.exchangeBytes(partial.fixedSum().data(), sendCounts, sendOffsets, pieces.data(),
+                     receiveCounts, receiveOffsets);
   for (int r = 0; r < ranks; ++r)
     if (r != comm.rank()) bytesSent += uint64_t(sendCounts[r]);
-  std::vector<Vec3f> slice(slicePixels, Vec3f(0));
+  std::vector<int64_t> total(sliceValues, 0);
   for (int r = 0; r < ranks; ++r)
-    for (int i = 0; i < slicePixels; ++i) slice[i] += pieces[size_t(r) * slicePixels + i];
-  for (Vec3f& v : slice) v = v * scale;
+    for (size_t i = 0; i < sliceValues; ++i) total[i] += pieces[size_t(r) * sliceValues + i];
+  std::vector<Vec3f> slice(static_cast<size_t>(slicePixels));
+  for (size_t i = 0; i < slice.size(); ++i)
+    slice[i] = Vec3f(FrameBuffer::toLinear(total[3 * i], scale),
+                     FrameBuffer::toLinear(total[3 * i + 1], scale),
+                     FrameBuffer::toLinear(total[3 * i + 2], scale));
   return slice;
 }
 

@@ -16,24 +16,25 @@ FrameBuffer randomPartial(int width, int height, int rank) {
   FrameBuffer fb(width, height);
   std::mt19937 rng(1234u + 77u * uint32_t(rank) + uint32_t(width * 131 + height));
   std::uniform_real_distribution<float> value(0.0f, 2.0f);
-  for (Vec3f& v : fb.sum()) {
+  for (uint32_t pixel = 0; pixel < fb.pixelCount(); ++pixel) {
     if (rng() % 5 == 0) continue;
-    v = Vec3f(value(rng), value(rng), value(rng));
+    Vec3f v(value(rng), value(rng), value(rng));
     if (rng() % 17 == 0) v = v * 100.0f;
+    fb.add(pixel, v);
   }
   return fb;
 }
 
-// The plain sum of every rank's buffer, in rank order, then scaled: what the
-// compositor must give bit for bit.
+// Every rank's contributions added to one buffer, then scaled: what the
+// compositor must give bit for bit (fixed-point sums do not depend on how
+// they are split over ranks).
 std::vector<Vec3f> plainSum(int width, int height, int ranks, float scale) {
-  std::vector<Vec3f> sum(size_t(width) * height, Vec3f(0));
+  FrameBuffer all(width, height);
   for (int r = 0; r < ranks; ++r) {
-    FrameBuffer fb = randomPartial(width, height, r);
-    for (size_t i = 0; i < sum.size(); ++i) sum[i] += fb.sum()[i];
+    const FrameBuffer fb = randomPartial(width, height, r);
+    for (size_t i = 0; i < fb.fixedSum().size(); ++i) all.fixedSum()[i] += fb.fixedSum()[i];
   }
-  for (Vec3f& v : sum) v = v * scale;
-  return sum;
+  return all.sum(scale);
 }
 
 bool sameBits(const std::vector<Vec3f>& a, const std::vector<Vec3f>& b) {
@@ -88,8 +89,11 @@ TEST_P(Compositor, LinearAndToneMappedEqualThePlainSum) {
       totalLinear += linearBytes[r];
       totalRgba += rgbaBytes[r];
     }
-    EXPECT_EQ(totalLinear, (uint64_t(ranks - 1) * pixels + others) * sizeof(Vec3f));
-    EXPECT_EQ(totalRgba, uint64_t(ranks - 1) * pixels * sizeof(Vec3f) + others * 4);
+    // Direct send moves fixed-point sums (3 x 8 bytes a pixel); the gather
+    // moves linear floats or RGBA8.
+    const uint64_t directSend = uint64_t(ranks - 1) * pixels * 3 * sizeof(int64_t);
+    EXPECT_EQ(totalLinear, directSend + others * sizeof(Vec3f));
+    EXPECT_EQ(totalRgba, directSend + others * 4);
   }
 }
 

@@ -6,6 +6,14 @@
 
 namespace ferry {
 
+std::vector<Vec3f> FrameBuffer::sum(double scale) const {
+  std::vector<Vec3f> out(pixelCount());
+  for (size_t i = 0; i < out.size(); ++i)
+    out[i] = Vec3f(toLinear(sum_[3 * i], scale), toLinear(sum_[3 * i + 1], scale),
+                   toLinear(sum_[3 * i + 2], scale));
+  return out;
+}
+
 uint8_t toneMapChannel(float x, const ToneMapping& tm) {
   if (!std::isfinite(x)) x = 0;
   x = std::max(0.0f, x) * std::exp2(tm.exposure);

@@ -2,13 +2,20 @@
 // computed, for any pixel. The distributed layer sums the ranks' buffers by
 // direct send; on one rank it is the image.
 //
-// Writes are not atomic: a wavefront touches each pixel at most once (one
-// path and one shadow ray per pixel sample, and the path adds light only after
-// a delta vertex, which spawns no shadow ray; Bsdf tests that a sample is
-// delta exactly when its lobe is), which also makes the summation order, and
-// so the image, independent of the thread count.
+// Sums are kept in fixed point (64-bit integers, kFractionBits below the
+// binary point), not in floats: integer addition is associative, so the sum
+// of a pixel's contributions does not depend on the order they arrive in.
+// That is what lets the distributed engine shade rays in whatever order
+// other ranks send them (issue 13), any number of contributions land on a
+// pixel per wavefront (MIS), and the ranks' partial sums add up to exactly
+// the one-rank image, bit for bit, at any rank count.
+//
+// Writes are not atomic: the renderer adds to a pixel from one thread at a
+// time (one rank's chunks are disjoint pixel ranges; a whole-image wavefront
+// shades a pixel sample's path or its shadow ray, never both, in one pass).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -18,18 +25,44 @@ namespace ferry {
 
 class FrameBuffer {
  public:
+  // 2^-28 (3.7e-9) resolution. A contribution is clamped to [0, 2^26]
+  // (6.7e7); a pixel's sum may reach 2^35 (3.4e10) before the 64-bit total
+  // could overflow, far above any radiance times sample count Ferry renders.
+  static constexpr int kFractionBits = 28;
+  static constexpr float kMaxContribution = float(1 << 26);
+
   FrameBuffer(int width, int height)
-      : width_(width), height_(height), sum_(size_t(width) * height) {}
-  void add(uint32_t pixel, Vec3f value) { sum_[pixel] += value; }
+      : width_(width), height_(height), sum_(size_t(width) * height * 3, 0) {}
+
+  // Adds one contribution. NaN and negative values add nothing.
+  void add(uint32_t pixel, Vec3f value) {
+    int64_t* s = &sum_[size_t(pixel) * 3];
+    s[0] += toFixed(value.x);
+    s[1] += toFixed(value.y);
+    s[2] += toFixed(value.z);
+  }
+  static int64_t toFixed(float v) {
+    if (!(v > 0)) return 0;  // also NaN
+    if (v > kMaxContribution) v = kMaxContribution;
+    return int64_t(double(v) * double(int64_t(1) << kFractionBits) + 0.5);
+  }
+  static float toLinear(int64_t fixed, double scale) {
+    return float(double(fixed) * (scale / double(int64_t(1) << kFractionBits)));
+  }
+
   int width() const { return width_; }
   int height() const { return height_; }
-  size_t pixelCount() const { return sum_.size(); }
-  const std::vector<Vec3f>& sum() const { return sum_; }
-  std::vector<Vec3f>& sum() { return sum_; }
+  size_t pixelCount() const { return sum_.size() / 3; }
+  // Three fixed-point channels per pixel, pixel after pixel.
+  const std::vector<int64_t>& fixedSum() const { return sum_; }
+  std::vector<int64_t>& fixedSum() { return sum_; }
+  // The sums as floats (times `scale`).
+  std::vector<Vec3f> sum(double scale = 1) const;
+  void clear() { std::fill(sum_.begin(), sum_.end(), 0); }
 
  private:
   int width_, height_;
-  std::vector<Vec3f> sum_;
+  std::vector<int64_t> sum_;
 };
 
 // Exposure (in stops), the ACES filmic curve (Narkowicz's fit), then sRGB.
