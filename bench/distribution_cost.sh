@@ -18,10 +18,16 @@
 #   4. with BASELINE=old/ferry: the same proxies runs of another build in the
 #      same rounds (interleaved), and its frame time per rank count against
 #      this build's: before/after under the same load.
+#   5. both exchanges (EXCHANGES, default "overlapped bulk"): every rank count
+#      above 1 runs with each in the same rounds, so the overlapped exchange
+#      (issue 13) and the paper's bulk rounds are compared under the same
+#      load; the table gives each one's ratio to the same 1-rank frames, and
+#      the share of stage time spent waiting (overlapped: idle in "wait";
+#      bulk: inside the collectives, part of "exchange").
 #
 #   bash bench/distribution_cost.sh [FERRY]             (default build/ferry)
 #   SCENE='builtin:island' SIZE=640x360 SPP=1 FRAMES=3 ROUNDS=3 CORES=$(nproc) \
-#     PARTITION=round-robin bash bench/distribution_cost.sh
+#     PARTITION=best EXCHANGES="overlapped bulk" bash bench/distribution_cost.sh
 set -euo pipefail
 ferry=$(realpath "${1:-build/ferry}")
 SCENE=${SCENE:-builtin:island}
@@ -31,7 +37,8 @@ FRAMES=${FRAMES:-3}
 ROUNDS=${ROUNDS:-3}
 CORES=${CORES:-$(nproc)}
 RANKS=${RANKS:-1 2 4 8}
-PARTITION=${PARTITION:-round-robin}
+PARTITION=${PARTITION:-best}
+EXCHANGES=${EXCHANGES:-overlapped bulk}
 BASELINE=${BASELINE:+$(realpath "$BASELINE")}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_mpi_yield_when_idle=1
@@ -39,12 +46,14 @@ export OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_mpi_yield_when_idl
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# run RANKS FORWARDING TAG [BINARY]: one render; its stats go to $work/TAG.json.
+# run RANKS FORWARDING TAG [BINARY [EXTRA FLAGS...]]: one render; its stats go to $work/TAG.json.
 run() {
   local n=$1 mode=$2 tag=$3 binary=${4:-$ferry} threads=$((CORES / $1))
+  shift 4 2> /dev/null || shift $#
   [ "$threads" -ge 1 ] || threads=1
   mpirun --oversubscribe -np "$n" "$binary" render "$SCENE" --size "$SIZE" --spp "$SPP" --frames "$FRAMES" \
-    --threads "$threads" --forwarding "$mode" --partition "$PARTITION" -q -o "$work/out.pfm" --stats "$work/$tag.json"
+    --threads "$threads" --forwarding "$mode" --partition "$PARTITION" -q -o "$work/out.pfm" \
+    --stats "$work/$tag.json" "$@"
 }
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
@@ -54,7 +63,16 @@ echo "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $CORES core
 
 for round in $(seq "$ROUNDS"); do
   for n in $RANKS; do
-    run "$n" proxies "time-$n-$round"
+    if [ "$n" -eq 1 ]; then
+      run "$n" proxies "time-$n-$round"
+    else
+      first=1
+      for exchange in $EXCHANGES; do
+        run "$n" proxies "$exchange-$n-$round" "$ferry" --exchange "$exchange"
+        if [ $first -eq 1 ]; then cp "$work/$exchange-$n-$round.json" "$work/time-$n-$round.json"; fi
+        first=0
+      done
+    fi
     if [ -n "$BASELINE" ]; then run "$n" proxies "base-$n-$round" "$BASELINE"; fi
   done
 done
@@ -62,10 +80,11 @@ for n in 4 8; do
   for mode in ring broadcast; do run "$n" "$mode" "$mode-$n"; done
 done
 
-python3 - "$work" "$ROUNDS" "$CORES" "${BASELINE:-none}" $RANKS <<'EOF'
+python3 - "$work" "$ROUNDS" "$CORES" "${BASELINE:-none}" "$EXCHANGES" $RANKS <<'EOF'
 import json, os, statistics, sys
 work, rounds, cores, baseline = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
-ranks = [int(r) for r in sys.argv[5:]]
+exchanges = sys.argv[5].split()
+ranks = [int(r) for r in sys.argv[6:]]
 load = lambda tag: json.load(open(f"{work}/{tag}.json"))
 MiB = 1 / 2**20
 
@@ -79,6 +98,21 @@ for n in ranks:
     threads = max(1, cores // n)
     print(f"  {n} rank(s) x {threads} thread(s): {frame[n]:7.3f} s/frame   ratio {frame[n] / base:5.2f}"
           f"   (frames: {', '.join(f'{f:.2f}' for r in range(1, rounds + 1) for f in [x['seconds'] for x in load(f'time-{n}-{r}')['render']['frames']])})")
+
+def median_frame(tag_of):
+    return statistics.median([f["seconds"] for r in range(1, rounds + 1)
+                              for f in load(tag_of(r))["render"]["frames"]])
+
+print("\nby exchange (same rounds; ratio to the same 1-rank frames; wait share: of the stage time summed over ranks)")
+for exchange in exchanges:
+    for n in ranks[1:]:
+        t = median_frame(lambda r: f"{exchange}-{n}-{r}")
+        st = load(f"{exchange}-{n}-1")["render"]["total"]["stage_seconds"]
+        stages = sum(st.get(k, 0) for k in ("generate", "trace", "exchange", "shade", "wait"))
+        waiting = st.get("wait", 0) if exchange == "overlapped" else st["exchange"]
+        print(f"  {exchange:10} {n} ranks: {t:7.3f} s/frame   ratio {t / base:5.2f}"
+              f"   {'idle wait' if exchange == 'overlapped' else 'exchange (collectives)'} {100 * waiting / max(1e-12, stages):4.0f}% of stage time"
+              f"   generate {100 * st['generate'] / max(1e-12, stages):4.1f}%")
 
 if baseline != "none":
     print(f"\nthis build against the baseline {baseline} (same rounds, interleaved; < 1: this build is faster)")
@@ -99,8 +133,8 @@ for n in ranks:
           f" shadow {t['traces']['occlusion'] / f:.0f}, re-trace {t['traces']['retrace'] / f:.0f}),"
           f" forwarded {t['exchange']['rays_forwarded'] / f:8.0f};"
           f" proxy queries per camera path {t['traces']['proxy_queries'] / max(1, t['camera_paths']):.2f};"
-          f" s: " + ", ".join(f"{k} {st[k] / f:.2f}" for k in ("generate", "trace", "exchange", "shade"))
-          + f" (generate {100 * st['generate'] / max(1e-12, sum(st[k] for k in ('generate', 'trace', 'exchange', 'shade'))):.0f}%)")
+          f" s: " + ", ".join(f"{k} {st.get(k, 0) / f:.2f}" for k in ("generate", "trace", "exchange", "shade", "wait"))
+          + f" (generate {100 * st['generate'] / max(1e-12, sum(st.get(k, 0) for k in ('generate', 'trace', 'exchange', 'shade', 'wait'))):.0f}%)")
 
 print("\nrays forwarded per frame (exact counters; bytes and rounds per frame too)")
 frames = lambda s: len(s["render"]["frames"])
@@ -112,6 +146,7 @@ for n in (4, 8):
         print(f"  {n} ranks {mode:9}: {ex['rays_forwarded'] / frames(s):12.0f} rays/frame"
               f" ({ex['rays_forwarded'] / frames(s) / paths:5.2f} per camera path),"
               f" {ex['bytes_sent'] / frames(s) * MiB:8.2f} MiB/frame, {ex['rounds'] / frames(s):5.1f} rounds/frame,"
+              f" {ex.get('messages', 0) / frames(s):7.0f} messages/frame,"
               f" rays traced {t['traces']['total'] / frames(s):10.0f}/frame")
 
 print("\nmemory per rank, MiB (estimated / Embree retained / resident; max and mean over ranks)")

@@ -2,11 +2,11 @@
 # The distributed layer's central property: the N-rank image equals the
 # 1-rank image with the same seed, for every rank count (odd ones too), every
 # forwarding mode and every partition (including random replication and
-# overlapping proxies). Tolerance: relative 1e-4 per channel (plus 1e-6
-# absolute): the ranks trace bit-identical rays and find the same hits, so
-# only the order in which partial frame buffers are summed differs; with at
-# most a few hundred float additions per pixel that is far below 1e-4.
-# One exception, allowed in at most 0.2% of the pixels: a ray that meets two
+# overlapping proxies), both exchanges (overlapped, the default, and bulk)
+# and any chunk size. Exact: the ranks trace bit-identical rays and find the
+# same hits, and the frame buffers sum in fixed point, so neither the order
+# in which rays are shaded nor how the partial buffers are split over ranks
+# changes a bit. One exception, allowed in at most 0.2% of the pixels: a ray that meets two
 # surfaces at exactly the same distance (seams where instances touch, as in
 # the Cornell box's corners) gets whichever the traversal order finds first,
 # and that order depends on how the content is split over ranks.
@@ -29,7 +29,7 @@ run_scene() {
         mpirun_n "$ranks" "$ferry" render "$scene" $args --seed 3 -q --threads 1 \
           --forwarding "$forwarding" --partition "$partition" -o "$out" --stats "$out.json"
         echo "ranks $ranks, $forwarding, $partition:"
-        $compare "$work/ref.pfm" "$out" --outliers 0.002
+        $compare "$work/ref.pfm" "$out" --rel 0 --abs 0 --outliers 0.002
         check_stats "$out.json"
       done
     done
@@ -38,6 +38,25 @@ run_scene() {
 
 run_scene "builtin:cornell" "--size 40x40 --spp 2 --max-depth 4"
 run_scene "builtin:island?scale=0.05" "--size 48x32 --spp 1 --max-depth 3"
+# The bulk exchange (the paper's rounds), and the overlapped one at small
+# chunks (many chunks and bounces in flight at once) and with two threads a
+# rank: the same image, bit for bit (tie pixels aside).
+island="builtin:island?scale=0.05"
+island_args="--size 48x32 --spp 1 --max-depth 3 --seed 3"
+"$ferry" render "$island" $island_args -q -o "$work/island-ref.pfm"
+for ranks in 3 5; do
+  for variant in "--exchange bulk --threads 1" "--chunk 50 --threads 1" \
+    "--chunk 7 --path-layout replay --threads 1" "--chunk 300 --threads 2" \
+    "--forwarding ring --chunk 100 --threads 1"; do
+    out="$work/variant.pfm"
+    # shellcheck disable=SC2086
+    mpirun_n "$ranks" "$ferry" render "$island" $island_args -q $variant \
+      -o "$out" --stats "$out.json"
+    echo "ranks $ranks, $variant:"
+    $compare "$work/island-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0.002
+    check_stats "$out.json"
+  done
+done
 # One rank under mpirun equals the plain run.
 mpirun_n 1 "$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q -o "$work/one.pfm"
 "$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q -o "$work/plain.pfm"

@@ -36,6 +36,10 @@ for point in load exchange composite; do
   FERRY_FAIL_RANK=1 FERRY_FAIL_AT=$point expect_failure "exception at $point on rank 1" \
     "rank 1: injected failure at $point" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
 done
+# The same in the bulk exchange (the default is the overlapped one, whose
+# other ranks are then polling for messages, not waiting in a collective).
+FERRY_FAIL_RANK=1 FERRY_FAIL_AT=exchange expect_failure "exception at exchange on rank 1, bulk" \
+  "rank 1: injected failure at exchange" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --exchange bulk -o "$work/out.png"
 FERRY_FAIL_RANK=2 FERRY_FAIL_AT=signal-exchange expect_failure "signal at first exchange on rank 2" \
   "ferry: rank 2 died of SIGSEGV" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" -o "$work/out.png"
 
@@ -53,6 +57,8 @@ one_message "unknown builtin" "builtin" mpirun --oversubscribe -np 3 "$ferry" re
 one_message "unknown view" "view" mpirun --oversubscribe -np 3 "$ferry" render "$scene" --view nowhere "${args[@]}" -o "$work/out.png"
 one_message "bad size" "--size" mpirun --oversubscribe -np 3 "$ferry" render "$scene" --size 12by3 -q -o "$work/out.png"
 one_message "bad flag" "--no-such-flag" mpirun --oversubscribe -np 3 "$ferry" render "$scene" --no-such-flag -o "$work/out.png"
+one_message "bad exchange" "--exchange" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --exchange sometimes -o "$work/out.png"
+one_message "overlapped broadcast" "broadcast" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --exchange overlapped --forwarding broadcast -o "$work/out.png"
 one_message "bad output format" "unknown image format" mpirun --oversubscribe -np 2 "$ferry" render "$scene" "${args[@]}" -o "$work/out.gif"
 
 if [ $failures -ne 0 ]; then echo "failure_test: $failures failures"; exit 1; fi

@@ -11,6 +11,7 @@
 #include "app/progress.h"
 #include "core/clock.h"
 #include "core/error.h"
+#include "distributed/distributed_traversal.h"
 #include "distributed/forwarding.h"
 #include "io/image_io.h"
 #include "mpi/communicator.h"
@@ -52,6 +53,10 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   checkOutputPath(o.output);
   SessionSettings s;
   s.forwarding = parseForwardingMode(o.forwarding);
+  s.exchange = resolveExchangeMode(parseExchangeMode(o.exchange), s.forwarding);
+  if (o.chunkPixels < 1)
+    throw InputError(fmt::format("--chunk {}: must be at least 1", o.chunkPixels));
+  s.render.chunkPixels = o.chunkPixels;
   s.pathLayout = parsePathLayout(o.pathLayout);
   s.retrace = parseRetrace(o.retrace);
   s.instancing = parseInstancing(o.instancing);
@@ -142,8 +147,8 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
       "render",
       "Path trace a scene and write the image. Run under mpirun to spread the scene over ranks:\n"
       "  mpirun -np 4 ferry render builtin:island -o island.png\n"
-      "The image is the same whatever the rank count, --threads, --partition or --forwarding\n"
-      "(up to floating-point summation order).");
+      "The image is the same whatever the rank count, --threads, --partition, --forwarding,\n"
+      "--exchange or --chunk (the frame buffer sums in fixed point).");
   render
       ->add_option("scene", o.scene,
                    "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in: builtin:island, "
@@ -180,6 +185,19 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
           "How rays travel between ranks: proxies (the paper: closest proxy of an unvisited\n"
           "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
           "wins, as Kilauea)")
+      ->capture_default_str();
+  render
+      ->add_option(
+          "--exchange", o.exchange,
+          "How ranks exchange rays: overlapped (rays leave as soon as a batch is traced, in\n"
+          "non-blocking messages, while the rank works on other chunks and bounces; no\n"
+          "collective per round), bulk (the paper's: a whole-image wavefront per bounce, one\n"
+          "all-to-all per round) or auto (overlapped; bulk for --forwarding broadcast)")
+      ->capture_default_str();
+  render
+      ->add_option("--chunk", o.chunkPixels,
+                   "Camera paths a rank takes at once (and the largest batch it traces at\n"
+                   "once). The image is the same for any value.")
       ->capture_default_str();
   render
       ->add_option(

@@ -16,42 +16,51 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/fault_injection.h"
+#include "distributed/ray_routing.h"
 
 namespace ferry {
-namespace {
+namespace {}  // namespace
 
-constexpr int kShadeHere = -1;
-constexpr int kDrop = -2;
-
-// A destination rank, or kShadeHere / kDrop; marks rays sent only to be shaded.
-template <typename Path>
-int decisionToDestination(const ForwardDecision& d, Path& ray, int rank) {
-  if (d.kind == ForwardDecision::Drop) return kDrop;
-  if (d.kind == ForwardDecision::ShadeHere || d.rank == rank) return kShadeHere;
-  if (d.toShade) ray.set(kPathTraversed);
-  return d.rank;
+ExchangeMode parseExchangeMode(const std::string& name) {
+  if (name == "auto") return ExchangeMode::Auto;
+  if (name == "overlapped") return ExchangeMode::Overlapped;
+  if (name == "bulk") return ExchangeMode::Bulk;
+  throw InputError(fmt::format("--exchange '{}': expected auto, overlapped or bulk", name));
 }
 
-// A ray whose traversal ended on this rank, into the queue of its kind; a
-// path with its kept hit (invalid: shading re-traces it).
-template <typename Path>
-void keepToShade(const Path& ray, const TraceHit& hit, RayQueues<Path>& ready,
-                 std::vector<TraceHit>& readyHits) {
-  if (ray.isShadow()) {
-    ready.shadowRays.push_back(ray);
-  } else {
-    ready.paths.push_back(ray);
-    readyHits.push_back(hit);
+std::string toString(ExchangeMode mode) {
+  switch (mode) {
+    case ExchangeMode::Auto:
+      return "auto";
+    case ExchangeMode::Overlapped:
+      return "overlapped";
+    case ExchangeMode::Bulk:
+      return "bulk";
   }
+  return "?";
 }
 
-}  // namespace
+ExchangeMode resolveExchangeMode(ExchangeMode mode, ForwardingMode forwarding) {
+  if (mode == ExchangeMode::Auto)
+    return forwarding == ForwardingMode::Broadcast ? ExchangeMode::Bulk : ExchangeMode::Overlapped;
+  if (mode == ExchangeMode::Overlapped && forwarding == ForwardingMode::Broadcast)
+    throw InputError(
+        "--exchange overlapped does not do --forwarding broadcast (its replies are built on "
+        "rounds): use --exchange bulk or auto");
+  return mode;
+}
 
 template <typename Path>
 DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,
                                                  const TraceBackend& geometry,
-                                                 const Partition& partition, ForwardingMode mode)
-    : comm_(comm), geometry_(geometry), mode_(mode), proxies_(partition.proxies) {
+                                                 const Partition& partition, ForwardingMode mode,
+                                                 ExchangeMode exchange, uint32_t chunkPixels)
+    : comm_(comm),
+      geometry_(geometry),
+      mode_(mode),
+      exchange_(resolveExchangeMode(exchange, mode)),
+      chunkPixels_(std::max(1u, chunkPixels)),
+      proxies_(partition.proxies) {
   FERRY_CHECK_LE(comm.size(), kMaxRanks);
   if constexpr (!Path::kReplay) {
     FERRY_CHECK_LE(comm.size(), sizeof(typename Path::Mask) * 8);
@@ -232,7 +241,6 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path> moving, RayQ
                                                     std::vector<TraceHit>& readyHits,
                                                     ExchangeCounters& counters, FrameStats& stats) {
   const int rank = comm_.rank();
-  const int ranks = comm_.size();
   // `ready` gets the rays whose traversal is complete here (shade on this
   // rank), each path with its hit when its last trace, here, found it (shading
   // then need not re-trace it); invalid for rays that arrive to be shaded.
@@ -244,28 +252,10 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path> moving, RayQ
   if (replay) visited.assign(moving.size(), RankSet::single(rank));
   // Local first: every new ray is traced on the rank that made it.
   trace(moving, stats, &movingHits);
+  std::vector<int> destination;
   for (;;) {
     auto start = Clock::now();
-    std::vector<int> destination(moving.size());
-    std::atomic<uint64_t> proxyQueries{0};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, moving.size(), 1024), [&](const auto& range) {
-      uint64_t queries =
-          0;  // one per proxies decision, except for shadow rays already occluded (dropped)
-      for (size_t i = range.begin(); i != range.end(); ++i) {
-        if (mode_ == ForwardingMode::Proxies)
-          queries += !(moving[i].isShadow() && moving[i].has(kPathOccluded));
-        ForwardDecision d;
-        if (mode_ == ForwardingMode::Ring)
-          d = forwardByRing(moving[i], rank, ranks);
-        else if constexpr (Path::kReplay)
-          d = forwardByProxies(proxies_, moving[i], rank, visited[i]);
-        else
-          d = forwardByProxies(proxies_, moving[i], rank);
-        destination[i] = decisionToDestination(d, moving[i], rank);
-      }
-      proxyQueries += queries;
-    });
-    stats.proxyQueries += proxyQueries;
+    decide(moving, visited, destination, stats);
     // Split: kept, dropped, and leaving.
     PathQueue<Path> leaving;
     std::vector<int> leavingTo;
@@ -292,6 +282,33 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path> moving, RayQ
     if (replay) visited = replayArrivals(moving, stats);
     trace(moving, stats, &movingHits);
   }
+}
+
+template <typename Path>
+void DistributedTraversal<Path>::decide(PathQueue<Path>& rays, const std::vector<RankSet>& visited,
+                                        std::vector<int>& destination, FrameStats& stats) const {
+  const int rank = comm_.rank();
+  const int ranks = comm_.size();
+  destination.resize(rays.size());
+  std::atomic<uint64_t> proxyQueries{0};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const auto& range) {
+    // One query per proxies decision, except for shadow rays already occluded (dropped).
+    uint64_t queries = 0;
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      if (mode_ == ForwardingMode::Proxies)
+        queries += !(rays[i].isShadow() && rays[i].has(kPathOccluded));
+      ForwardDecision d;
+      if (mode_ == ForwardingMode::Ring)
+        d = forwardByRing(rays[i], rank, ranks);
+      else if constexpr (Path::kReplay)
+        d = forwardByProxies(proxies_, rays[i], rank, visited[i]);
+      else
+        d = forwardByProxies(proxies_, rays[i], rank);
+      destination[i] = decisionToDestination(d, rays[i], rank);
+    }
+    proxyQueries += queries;
+  });
+  stats.proxyQueries += proxyQueries;
 }
 
 template <typename Path>

@@ -1,10 +1,24 @@
-// Ray traversal across ranks (paper, Sections 3 and 5.2). Per round: trace
-// the rays that are here on the local geometry, decide each ray's next rank
-// with the forwarding operator, compact by destination, exchange counts then
-// rays (all-to-all, all-to-all-v), until no ray moves on any rank. What is left
-// on each rank is what it shades.
+// Ray traversal across ranks (paper, Sections 3 and 5.2), in one of two
+// exchanges:
+//
+// - bulk (the paper's): a whole-image wavefront per bounce. Per round: trace
+//   the rays that are here on the local geometry, decide each ray's next rank
+//   with the forwarding operator, compact by destination, exchange counts then
+//   rays (all-to-all, all-to-all-v), until no ray moves on any rank. What is
+//   left on each rank is what it shades (traverse()).
+// - overlapped (issue 13): the traversal runs the whole sample
+//   (runSample(), overlapped_exchange.cpp). A rank takes its camera paths in
+//   chunks; rays leave for other ranks as soon as a batch is traced, in
+//   non-blocking messages, while the rank traces and shades whatever is
+//   here: other chunks, other bounces, rays that arrived. Nobody waits in a
+//   collective per round; the sample ends when the counts of rays made and
+//   rays ended agree over all ranks twice in a row (non-blocking sums).
+//
+// The forwarding operator, and so every ray's path through the ranks, is the
+// same in both; so is the image (the frame buffer sums in fixed point).
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "distributed/forwarding.h"
@@ -15,11 +29,28 @@
 
 namespace ferry {
 
+enum class ExchangeMode : uint8_t {
+  Auto,        // overlapped where it is built (proxies, ring), else bulk (broadcast)
+  Overlapped,  // rays sent as soon as traced, non-blocking; chunks overlap
+  Bulk,        // the paper's: a collective exchange per round of a whole-image wavefront
+};
+ExchangeMode parseExchangeMode(const std::string& name);  // --exchange; throws InputError
+std::string toString(ExchangeMode mode);
+// What `mode` is with `forwarding` (Auto resolved); throws InputError for
+// overlapped broadcast (broadcast's three-step replies are built on rounds).
+ExchangeMode resolveExchangeMode(ExchangeMode mode, ForwardingMode forwarding);
+
 template <typename Path>
 class DistributedTraversal final : public RayTraversal<Path> {
  public:
+  // `chunkPixels`: overlapped, camera paths a rank starts at once, and the
+  // largest batch it traces at once (any value gives the same image).
   DistributedTraversal(const Communicator& comm, const TraceBackend& geometry,
-                       const Partition& partition, ForwardingMode mode);
+                       const Partition& partition, ForwardingMode mode,
+                       ExchangeMode exchange = ExchangeMode::Auto, uint32_t chunkPixels = 8192);
+  bool runsSamples() const override { return exchange_ == ExchangeMode::Overlapped; }
+  void runSample(uint32_t sampleIndex, uint32_t pixels, SampleShading<Path>& shading,
+                 FrameStats& stats) override;
   void primaryPixels(uint32_t first, uint32_t last, const CameraRayOf& cameraRay,
                      std::vector<uint32_t>& pixels, FrameStats& stats) override;
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
@@ -48,6 +79,11 @@ class DistributedTraversal final : public RayTraversal<Path> {
   // returns what this rank received, in rank order.
   PathQueue<Path> exchange(const PathQueue<Path>& rays, const std::vector<int>& destination,
                            ExchangeCounters& counters, FrameStats& stats);
+  // Each ray's next step after its trace here (decisionToDestination's
+  // values), into `destination`; `visited` (replay layout, proxies): each
+  // ray's visited set. Counts proxy queries.
+  void decide(PathQueue<Path>& rays, const std::vector<RankSet>& visited,
+              std::vector<int>& destination, FrameStats& stats) const;
   // With `hits`: resized to rays.size(), the hits that set a ray's tmax here.
   void trace(PathQueue<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits = nullptr);
   // Replay layout, proxies mode: the visited set of each ray that arrived
@@ -57,9 +93,19 @@ class DistributedTraversal final : public RayTraversal<Path> {
   const Communicator& comm_;
   const TraceBackend& geometry_;
   ForwardingMode mode_;
+  ExchangeMode exchange_;
+  uint32_t chunkPixels_;
   ProxyBvh proxies_;
   std::vector<uint64_t>
       instanceOwners_;  // mask layouts: owner mask per instance (empty for replay)
+  // Overlapped: rays of a later sample that arrived before this rank saw the
+  // end of the current one (a rank that saw it first may already be sending
+  // the next sample's rays: ring forwarding has no collective in between).
+  struct EarlyRays {
+    uint32_t sample, bounce;
+    PathQueue<Path> rays;
+  };
+  std::vector<EarlyRays> early_;
   bool firstExchange_ = true;
   uint64_t revisits_ = 0;
   uint64_t received_ = 0;

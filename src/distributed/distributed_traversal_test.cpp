@@ -1,13 +1,13 @@
 // The distributed layer's central property, in one process: ranks as threads
 // (InProcessCommunicator), each holding only its part of the scene, render
 // the image the one-rank renderer renders, for every forwarding mode, both
-// 36-byte path layouts and two partitioners, at 2, 3 and 4 ranks. The same
-// tolerance rules and invariants as tests/distributed_test.sh (which runs the
-// real thing under mpirun): relative 1e-4 per channel plus 1e-6 absolute,
-// except in at most 0.2 % of the pixels (a ray meeting two surfaces at exactly
-// the same distance takes whichever the traversal finds first, and that
-// depends on how the content is split); no ray visits a rank twice; rays
-// forwarded equal rays received; every shading re-trace finds its hit.
+// 36-byte path layouts, both exchanges (bulk rounds, overlapped at several
+// chunk sizes) and two partitioners, at 2, 3 and 4 ranks. The frame buffer
+// sums in fixed point, so the image is the one-rank image bit for bit, except
+// in at most 0.2 % of the pixels (a ray meeting two surfaces at exactly the
+// same distance takes whichever the traversal finds first, and that depends
+// on how the content is split); no ray visits a rank twice; rays forwarded
+// equal rays received; every shading re-trace finds its hit.
 #include "distributed/distributed_traversal.h"
 
 #include <gtest/gtest.h>
@@ -87,13 +87,15 @@ struct RenderResult {
 template <typename Path>
 RenderResult renderFrame(const Communicator& comm, const Scene& scene, const TraceBackend& geometry,
                          const LightSampler& lights, const Partition& partition,
-                         ForwardingMode mode, const RenderSettings& settings) {
+                         ForwardingMode mode, const RenderSettings& settings,
+                         ExchangeMode exchange = ExchangeMode::Bulk) {
   std::unique_ptr<RayTraversal<Path>> traversal;
   DistributedTraversal<Path>* distributed = nullptr;
   if (comm.size() == 1) {
     traversal = std::make_unique<LocalTraversal<Path>>(geometry);
   } else {
-    auto d = std::make_unique<DistributedTraversal<Path>>(comm, geometry, partition, mode);
+    auto d = std::make_unique<DistributedTraversal<Path>>(comm, geometry, partition, mode, exchange,
+                                                          settings.chunkPixels);
     distributed = d.get();
     traversal = std::move(d);
   }
@@ -140,14 +142,29 @@ int pixelsBeyondTolerance(const std::vector<Vec3f>& reference, const std::vector
 struct Variant {
   ForwardingMode mode;
   bool replay;  // PathReplay, else Path8 (both 36 bytes)
-  std::string name() const { return toString(mode) + (replay ? "/replay" : "/mask8"); }
+  ExchangeMode exchange = ExchangeMode::Bulk;
+  uint32_t chunk = 8192;  // overlapped: camera paths taken at once
+  std::string name() const {
+    return toString(mode) + (replay ? "/replay/" : "/mask8/") + toString(exchange) +
+           (exchange == ExchangeMode::Overlapped ? fmt::format("/chunk{}", chunk) : "");
+  }
 };
 
+// Overlapped at chunk sizes from a few dozen paths (many chunks and messages
+// in flight, rays of many bounces at once) to the whole image.
 const std::vector<Variant>& variants() {
   static const std::vector<Variant> all = {
-      {ForwardingMode::Proxies, false},   {ForwardingMode::Proxies, true},
-      {ForwardingMode::Ring, false},      {ForwardingMode::Ring, true},
-      {ForwardingMode::Broadcast, false}, {ForwardingMode::Broadcast, true}};
+      {ForwardingMode::Proxies, false},
+      {ForwardingMode::Proxies, true},
+      {ForwardingMode::Ring, false},
+      {ForwardingMode::Ring, true},
+      {ForwardingMode::Broadcast, false},
+      {ForwardingMode::Broadcast, true},
+      {ForwardingMode::Proxies, false, ExchangeMode::Overlapped, 8192},
+      {ForwardingMode::Proxies, false, ExchangeMode::Overlapped, 37},
+      {ForwardingMode::Proxies, true, ExchangeMode::Overlapped, 200},
+      {ForwardingMode::Ring, false, ExchangeMode::Overlapped, 64},
+      {ForwardingMode::Ring, true, ExchangeMode::Overlapped, 1000}};
   return all;
 }
 
@@ -177,11 +194,13 @@ std::vector<RenderResult> renderVariants(const Scene& loaded, const LightSampler
     auto geometry = buildGeometry(mine, owned);
     for (size_t v = 0; v < variants().size(); ++v) {
       const Variant& variant = variants()[v];
-      RenderResult r = variant.replay
-                           ? renderFrame<PathReplay>(comm, mine, *geometry, lights,
-                                                     shared.partition, variant.mode, settings)
-                           : renderFrame<Path8>(comm, mine, *geometry, lights, shared.partition,
-                                                variant.mode, settings);
+      RenderSettings s = settings;
+      s.chunkPixels = variant.chunk;
+      RenderResult r =
+          variant.replay ? renderFrame<PathReplay>(comm, mine, *geometry, lights, shared.partition,
+                                                   variant.mode, s, variant.exchange)
+                         : renderFrame<Path8>(comm, mine, *geometry, lights, shared.partition,
+                                              variant.mode, s, variant.exchange);
       if (comm.isRoot()) results[v] = std::move(r);
     }
   });
@@ -225,7 +244,8 @@ TEST_P(DistributedInProcess, EqualsTheOneRankImage) {
       const RenderResult& r = results[v];
       SCOPED_TRACE(fmt::format("{} ranks, {}", ranks, variant.name()));
       ASSERT_EQ(r.image.size(), reference.image.size());
-      EXPECT_LE(pixelsBeyondTolerance(reference.image, r.image), allowedOutliers);
+      // Exact: fixed-point sums do not depend on which rank adds what.
+      EXPECT_LE(pixelsBeyondTolerance(reference.image, r.image, 0, 0), allowedOutliers);
       EXPECT_EQ(r.cameraPaths, reference.cameraPaths);
       EXPECT_GT(r.forwarded, 0u) << "no ray left its rank: nothing distributed was tested";
       EXPECT_EQ(r.revisits, 0u);
@@ -255,8 +275,9 @@ INSTANTIATE_TEST_SUITE_P(Renders, DistributedInProcess, ::testing::ValuesIn(allC
 // ------------------------------------------------------------------- failures
 
 // Passes everything through to a rank's real communicator, except that one
-// rank's exchangeBytes throws at its n-th call: a failure mid-render, in the
-// exchange stage.
+// rank's exchange throws at its n-th call (exchangeBytes in the bulk
+// exchange, a message sent in the overlapped one): a failure mid-render, in
+// the exchange stage.
 class FailingExchange final : public Communicator {
  public:
   FailingExchange(const Communicator& inner, int failingRank, int failAtCall)
@@ -294,6 +315,23 @@ class FailingExchange final : public Communicator {
   }
   std::vector<int> gatherInt(int value) const override { return inner_.gatherInt(value); }
   void broadcastBytes(std::span<std::byte> bytes) const override { inner_.broadcastBytes(bytes); }
+  SendHandle sendBytes(int to, std::vector<std::byte> bytes) const override {
+    if (rank() == failingRank_ && ++calls_ == failAtCall_)
+      throw std::runtime_error("injected failure at exchange");
+    return inner_.sendBytes(to, std::move(bytes));
+  }
+  std::optional<ReceivedBytes> receiveBytes() const override { return inner_.receiveBytes(); }
+  bool sendDone(SendHandle handle) const override { return inner_.sendDone(handle); }
+  bool allSendsDone() const override { return inner_.allSendsDone(); }
+  void waitForMessage(std::chrono::microseconds timeout) const override {
+    inner_.waitForMessage(timeout);
+  }
+  SumHandle startSum(std::vector<uint64_t> values) const override {
+    return inner_.startSum(std::move(values));
+  }
+  bool sumDone(SumHandle handle, std::vector<uint64_t>& result) const override {
+    return inner_.sumDone(handle, result);
+  }
 
  private:
   void abortEveryRank(const std::string& message, int code) const override {
@@ -316,8 +354,15 @@ TEST(DistributedInProcessFailure, ExchangeFailureOnOneRankEndsEveryRank) {
   const LightSampler lights(loaded);
   const int ranks = 3;
   const PartitionedScene shared = partitioned(loaded, ranks, "round-robin", settings.seed);
-  for (ForwardingMode mode : {ForwardingMode::Proxies, ForwardingMode::Broadcast}) {
-    SCOPED_TRACE(toString(mode));
+  struct FailureCase {
+    ForwardingMode mode;
+    ExchangeMode exchange;
+  };
+  for (FailureCase fc : {FailureCase{ForwardingMode::Proxies, ExchangeMode::Bulk},
+                         FailureCase{ForwardingMode::Broadcast, ExchangeMode::Bulk},
+                         FailureCase{ForwardingMode::Proxies, ExchangeMode::Overlapped}}) {
+    const ForwardingMode mode = fc.mode;
+    SCOPED_TRACE(toString(mode) + "/" + toString(fc.exchange));
     using Clock = std::chrono::steady_clock;
     std::mutex mutex;
     std::vector<std::string> messages(ranks);
@@ -332,7 +377,10 @@ TEST(DistributedInProcessFailure, ExchangeFailureOnOneRankEndsEveryRank) {
           const std::vector<int32_t> owned = shared.partition.instancesOf(comm.rank());
           mine.releaseAllBut(owned);
           auto geometry = buildGeometry(mine, owned);
-          renderFrame<Path8>(failing, mine, *geometry, lights, shared.partition, mode, settings);
+          RenderSettings s = settings;
+          s.chunkPixels = 64;  // overlapped: many messages, the failure mid-sample
+          renderFrame<Path8>(failing, mine, *geometry, lights, shared.partition, mode, s,
+                             fc.exchange);
         } catch (const std::exception& e) {
           if (comm.rank() == 1) {
             failingCalls = failing.calls();

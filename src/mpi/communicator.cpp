@@ -66,3 +66,15 @@ void Communicator::abortAll(const std::string& message, int code) const {
 }
 
 }  // namespace ferry
+
+namespace ferry {
+
+void Communicator::throwMalformed(int from, size_t bytes, size_t headerBytes,
+                                  size_t itemBytes) const {
+  throw CommunicationError(
+      "receive", rank(),
+      fmt::format("a message of {} bytes from rank {} is not a {}-byte header and {}-byte items",
+                  bytes, from, headerBytes, itemBytes));
+}
+
+}  // namespace ferry

@@ -16,8 +16,11 @@
 // CommunicationError naming the operation and the rank.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -39,6 +42,27 @@ class CommunicationError : public std::runtime_error {
  private:
   std::string operation_;
   int rank_;
+};
+
+// A message that arrived (non-blocking messages, below): who sent it and its bytes.
+struct ReceivedBytes {
+  int from = -1;
+  std::vector<std::byte> bytes;
+};
+// A message that arrived, typed: the sender's header and items.
+template <typename Header, typename Item>
+struct Received {
+  int from = -1;
+  Header header;
+  std::vector<Item> items;
+};
+// A send started by Communicator::send, to ask whether it has completed.
+struct SendHandle {
+  uint64_t id = 0;
+};
+// A non-blocking sum started by Communicator::startSum.
+struct SumHandle {
+  uint64_t id = 0;
 };
 
 class Communicator {
@@ -86,6 +110,67 @@ class Communicator {
     broadcast(std::span<T>(&value, 1));
   }
 
+  // --- Non-blocking messages (not collective) ---
+  // What the overlapped ray exchange is built on: a rank sends rays to
+  // another rank whenever it has them and goes on working; the receiver picks
+  // them up when it next looks. Messages from one rank to another arrive in
+  // the order they were sent; messages of any size are allowed (the MPI
+  // implementation splits what exceeds MPI's int counts). Only the thread
+  // that owns the communicator calls these; each call also drives progress.
+
+  // Sends `header` followed by `items` to rank `to` (not this rank) and
+  // returns at once; the bytes are copied, so the caller's buffer is free.
+  template <typename Header, typename Item>
+  SendHandle send(int to, const Header& header, std::span<const Item> items) const {
+    static_assert(std::is_trivially_copyable_v<Header> && std::is_trivially_copyable_v<Item>);
+    std::vector<std::byte> bytes(sizeof(Header) + items.size_bytes());
+    std::memcpy(bytes.data(), &header, sizeof(Header));
+    if (!items.empty())
+      std::memcpy(bytes.data() + sizeof(Header), items.data(), items.size_bytes());
+    return sendBytes(to, std::move(bytes));
+  }
+  // A message that has arrived for this rank, if any. Every message must
+  // have been sent with the same Header and Item types; a message whose size
+  // does not fit them throws CommunicationError.
+  template <typename Header, typename Item>
+  std::optional<Received<Header, Item>> receive() const {
+    static_assert(std::is_trivially_copyable_v<Header> && std::is_trivially_copyable_v<Item>);
+    std::optional<ReceivedBytes> message = receiveBytes();
+    if (!message) return std::nullopt;
+    const std::vector<std::byte>& bytes = message->bytes;
+    if (bytes.size() < sizeof(Header) || (bytes.size() - sizeof(Header)) % sizeof(Item) != 0)
+      throwMalformed(message->from, bytes.size(), sizeof(Header), sizeof(Item));
+    Received<Header, Item> out;
+    out.from = message->from;
+    std::memcpy(&out.header, bytes.data(), sizeof(Header));
+    out.items.resize((bytes.size() - sizeof(Header)) / sizeof(Item));
+    if (!out.items.empty())
+      std::memcpy(out.items.data(), bytes.data() + sizeof(Header), bytes.size() - sizeof(Header));
+    return out;
+  }
+  // send() and receive() in bytes, what an implementation provides (and a
+  // wrapper passes on): the message is `bytes`, whatever its size.
+  virtual SendHandle sendBytes(int to, std::vector<std::byte> bytes) const = 0;
+  virtual std::optional<ReceivedBytes> receiveBytes() const = 0;
+  // Whether the send has completed (its bytes handed over; MPI may still be
+  // delivering them). Drives progress.
+  virtual bool sendDone(SendHandle handle) const = 0;
+  // Whether every send this rank started has completed. Drives progress.
+  virtual bool allSendsDone() const = 0;
+  // Returns when a message may have arrived, or after `timeout`: what a rank
+  // with nothing to do calls instead of spinning, so that on an
+  // oversubscribed machine it leaves the core to ranks that have work.
+  virtual void waitForMessage(std::chrono::microseconds timeout) const = 0;
+
+  // --- Non-blocking sums (collective, but nobody waits in them) ---
+  // Starts an element-wise sum over ranks of `values` and returns at once;
+  // every rank starts the same sequence of sums with the same lengths, each
+  // when it likes. sumDone() answers, without blocking, whether every rank
+  // has contributed; then `result` holds the sum. A handle is asked until it
+  // is done, and sums complete in the order they were started.
+  virtual SumHandle startSum(std::vector<uint64_t> values) const = 0;
+  virtual bool sumDone(SumHandle handle, std::vector<uint64_t>& result) const = 0;
+
   // Collective: true if any rank failed; then rank 0 prints one message (the
   // failing ranks' messages, merged when identical) to stderr.
   bool agreeOnFailure(bool failed, const std::string& message) const;
@@ -97,6 +182,10 @@ class Communicator {
  protected:
   // abortAll's work; must not return (end the process or throw).
   virtual void abortEveryRank(const std::string& message, int code) const = 0;
+
+ private:
+  [[noreturn]] void throwMalformed(int from, size_t bytes, size_t headerBytes,
+                                   size_t itemBytes) const;
 };
 
 }  // namespace ferry

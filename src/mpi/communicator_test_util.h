@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -145,6 +146,79 @@ inline void checkBroadcast(const Communicator& comm) {
   EXPECT_EQ(values, (std::vector<float>{0.5f, 1.5f, 2.5f, 3.5f, 4.5f}));
   std::vector<float> none;
   comm.broadcast(std::span<float>(none));  // an empty broadcast is still collective
+}
+
+// What checkMessages sends: a header naming sender and sequence, items
+// that are a function of both.
+struct MessageHeader {
+  int32_t from;
+  int32_t sequence;
+};
+inline uint64_t messageItem(int from, int to, int sequence, size_t i) {
+  return uint64_t(from) << 48 | uint64_t(to) << 40 | uint64_t(sequence) << 32 | uint64_t(i);
+}
+// Items of message `sequence` from `from` to `to`: none, a few, or
+// `largeItems` (larger than the MPI implementation's piece when a test lowers it).
+inline size_t messageItems(int from, int to, int sequence, size_t largeItems) {
+  return sequence == 0 ? 0 : sequence == 1 ? size_t(1 + from + to) : largeItems;
+}
+
+// Non-blocking messages: every rank sends three messages to every other
+// rank and receives its own, in the order each sender sent them; then two
+// overlapping non-blocking sums. Polls with waitForMessage, never blocks;
+// gives up (failing) after 20 s.
+inline void checkMessages(const Communicator& comm, size_t largeItems) {
+  const int n = comm.size(), me = comm.rank();
+  std::vector<SendHandle> sent;
+  for (int sequence = 0; sequence < 3; ++sequence)
+    for (int to = 0; to < n; ++to) {
+      if (to == me) continue;
+      std::vector<uint64_t> items(messageItems(me, to, sequence, largeItems));
+      for (size_t i = 0; i < items.size(); ++i) items[i] = messageItem(me, to, sequence, i);
+      sent.push_back(comm.send(to, MessageHeader{me, sequence}, std::span<const uint64_t>(items)));
+    }
+  std::vector<int> next(n, 0);  // per sender: the sequence number expected next
+  int received = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (received < 3 * (n - 1) && std::chrono::steady_clock::now() < deadline) {
+    auto message = comm.receive<MessageHeader, uint64_t>();
+    if (!message) {
+      comm.waitForMessage(std::chrono::microseconds(200));
+      continue;
+    }
+    ++received;
+    const int from = message->from;
+    EXPECT_EQ(message->header.from, from);
+    EXPECT_NE(from, me);
+    if (from < 0 || from >= n) continue;
+    const int sequence = next[from]++;
+    EXPECT_EQ(message->header.sequence, sequence) << "from rank " << from;
+    ASSERT_EQ(message->items.size(), messageItems(from, me, sequence, largeItems));
+    for (size_t i = 0; i < message->items.size(); ++i)
+      if (message->items[i] != messageItem(from, me, sequence, i)) {
+        ADD_FAILURE() << "item " << i << " of message " << sequence << " from rank " << from;
+        break;
+      }
+  }
+  EXPECT_EQ(received, 3 * (n - 1));
+  while (!comm.allSendsDone() && std::chrono::steady_clock::now() < deadline)
+    comm.waitForMessage(std::chrono::microseconds(100));
+  for (SendHandle h : sent) EXPECT_TRUE(comm.sendDone(h));
+
+  // Two sums in flight at once; ranks start them at different times.
+  SumHandle first = comm.startSum({uint64_t(me), 1});
+  comm.waitForMessage(std::chrono::microseconds(100 * me));
+  SumHandle second = comm.startSum({uint64_t(10 * me)});
+  std::vector<uint64_t> a, b;
+  bool firstDone = false, secondDone = false;
+  while (!(firstDone && secondDone) && std::chrono::steady_clock::now() < deadline) {
+    if (!firstDone) firstDone = comm.sumDone(first, a);
+    if (!secondDone) secondDone = comm.sumDone(second, b);
+    comm.waitForMessage(std::chrono::microseconds(50));
+  }
+  EXPECT_EQ(a, (std::vector<uint64_t>{uint64_t(n * (n - 1) / 2), uint64_t(n)}));
+  EXPECT_EQ(b, (std::vector<uint64_t>{uint64_t(10 * n * (n - 1) / 2)}));
+  comm.barrier();
 }
 
 // agreeOnFailure's three cases in turn: no rank fails, only the last one

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <condition_variable>
 #include <cstring>
+#include <deque>
 #include <exception>
+#include <map>
 #include <mutex>
 #include <string_view>
 #include <thread>
@@ -19,7 +21,8 @@ namespace ferry {
 // around the reads: deposit, wait for all, read the others' deposits, wait
 // for all again.
 struct InProcessHub {
-  explicit InProcessHub(int n) : size(n), operations(n), deposits(n) {}
+  explicit InProcessHub(int n)
+      : size(n), operations(n), deposits(n), inboxes(n), sumsStarted(n, 0) {}
 
   const int size;
   std::mutex mutex;
@@ -33,6 +36,17 @@ struct InProcessHub {
   int leftRank = -1;        // the first rank whose work returned
   int abortingRank = -1;    // the first rank that aborted
   std::string abortMessage;
+
+  // Non-blocking messages: each rank's arrived messages, oldest first.
+  std::vector<std::deque<ReceivedBytes>> inboxes;
+  // Non-blocking sums, by sequence number: the running sum, how many ranks
+  // have contributed and how many have read the result (then it goes).
+  struct PendingSum {
+    std::vector<uint64_t> total;
+    int contributed = 0, read = 0;
+  };
+  std::map<uint64_t, PendingSum> sums;
+  std::vector<uint64_t> sumsStarted;  // per rank
 };
 
 namespace {
@@ -255,6 +269,85 @@ void InProcessCommunicator::broadcastBytes(std::span<std::byte> bytes) const {
           fmt::format("rank 0 sends {} bytes, this rank expects {}", root.size(), bytes.size()));
     if (!isRoot() && !bytes.empty()) std::memcpy(bytes.data(), root.data(), bytes.size());
   });
+}
+
+SendHandle InProcessCommunicator::sendBytes(int to, std::vector<std::byte> bytes) const {
+  FERRY_CHECK_GE(to, 0);
+  FERRY_CHECK_LT(to, hub_.size);
+  FERRY_CHECK_NE(to, rank_);
+  std::unique_lock lock(hub_.mutex);
+  if (hub_.abortingRank >= 0)
+    throw GroupAborted("send", rank_, hub_.abortingRank, hub_.abortMessage);
+  hub_.inboxes[size_t(to)].push_back(ReceivedBytes{rank_, std::move(bytes)});
+  hub_.changed.notify_all();
+  return SendHandle{0};  // delivered: complete at once
+}
+
+std::optional<ReceivedBytes> InProcessCommunicator::receiveBytes() const {
+  std::unique_lock lock(hub_.mutex);
+  if (hub_.abortingRank >= 0)
+    throw GroupAborted("receive", rank_, hub_.abortingRank, hub_.abortMessage);
+  std::deque<ReceivedBytes>& inbox = hub_.inboxes[size_t(rank_)];
+  if (inbox.empty()) return std::nullopt;
+  ReceivedBytes message = std::move(inbox.front());
+  inbox.pop_front();
+  return message;
+}
+
+bool InProcessCommunicator::sendDone(SendHandle) const {
+  return true;
+}
+
+bool InProcessCommunicator::allSendsDone() const {
+  return true;
+}
+
+void InProcessCommunicator::waitForMessage(std::chrono::microseconds timeout) const {
+  std::unique_lock lock(hub_.mutex);
+  hub_.changed.wait_for(lock, timeout, [&] {
+    return hub_.abortingRank >= 0 || !hub_.inboxes[size_t(rank_)].empty();
+  });
+  if (hub_.abortingRank >= 0)
+    throw GroupAborted("waitForMessage", rank_, hub_.abortingRank, hub_.abortMessage);
+}
+
+SumHandle InProcessCommunicator::startSum(std::vector<uint64_t> values) const {
+  std::unique_lock lock(hub_.mutex);
+  if (hub_.abortingRank >= 0)
+    throw GroupAborted("startSum", rank_, hub_.abortingRank, hub_.abortMessage);
+  const uint64_t id = hub_.sumsStarted[size_t(rank_)]++;
+  InProcessHub::PendingSum& pending = hub_.sums[id];
+  if (pending.contributed == 0) {
+    pending.total = std::move(values);
+  } else {
+    if (pending.total.size() != values.size())
+      throw CommunicationError("startSum", rank_,
+                               fmt::format("this rank sums {} values, another rank {}",
+                                           values.size(), pending.total.size()));
+    for (size_t i = 0; i < values.size(); ++i) pending.total[i] += values[i];
+  }
+  ++pending.contributed;
+  hub_.changed.notify_all();
+  return SumHandle{id};
+}
+
+bool InProcessCommunicator::sumDone(SumHandle handle, std::vector<uint64_t>& result) const {
+  std::unique_lock lock(hub_.mutex);
+  if (hub_.abortingRank >= 0)
+    throw GroupAborted("sumDone", rank_, hub_.abortingRank, hub_.abortMessage);
+  auto it = hub_.sums.find(handle.id);
+  FERRY_CHECK(it != hub_.sums.end());
+  InProcessHub::PendingSum& pending = it->second;
+  if (pending.contributed < hub_.size) {
+    if (hub_.leftRank >= 0)
+      throw CommunicationError(
+          "sumDone", rank_,
+          fmt::format("rank {} finished its work, so this sum can never complete", hub_.leftRank));
+    return false;
+  }
+  result = pending.total;
+  if (++pending.read == hub_.size) hub_.sums.erase(it);
+  return true;
 }
 
 void InProcessCommunicator::abortEveryRank(const std::string& message, int) const {

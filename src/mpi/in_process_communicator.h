@@ -70,6 +70,17 @@ class InProcessCommunicator final : public Communicator {
   std::vector<int> gatherInt(int value) const override;
   void broadcastBytes(std::span<std::byte> bytes) const override;
 
+  // Messages are delivered at once into the receiver's inbox (a send is
+  // complete when it returns); a rank waiting for messages sleeps on the
+  // hub's condition variable. Sums complete when the last rank contributes.
+  SendHandle sendBytes(int to, std::vector<std::byte> bytes) const override;
+  std::optional<ReceivedBytes> receiveBytes() const override;
+  bool sendDone(SendHandle handle) const override;
+  bool allSendsDone() const override;
+  void waitForMessage(std::chrono::microseconds timeout) const override;
+  SumHandle startSum(std::vector<uint64_t> values) const override;
+  bool sumDone(SumHandle handle, std::vector<uint64_t>& result) const override;
+
  private:
   // abortAll: marks the group failed, wakes every rank, and throws
   // GroupAborted here. Prints nothing and ends no process (the exit code has

@@ -82,6 +82,10 @@ TEST_P(InProcessCollectives, BroadcastFromRankZero) {
   runRanks(GetParam(), testing::checkBroadcast);
 }
 
+TEST_P(InProcessCollectives, NonBlockingMessagesAndSums) {
+  runRanks(GetParam(), [](const Communicator& comm) { testing::checkMessages(comm, 5000); });
+}
+
 TEST_P(InProcessCollectives, AgreeOnFailure) {
   const int n = GetParam();
   std::vector<std::vector<bool>> agreed(n);
@@ -152,6 +156,55 @@ TEST_P(InProcessAbort, EndsEveryRank) {
 
 INSTANTIATE_TEST_SUITE_P(Ranks, InProcessAbort, ::testing::Values(1, 2, 3, 5),
                          [](const auto& info) { return std::to_string(info.param) + "ranks"; });
+
+// Ranks that only poll for messages and sums (the overlapped exchange's idle
+// loop) end within a second when another rank aborts.
+TEST(InProcessFailure, AbortEndsRanksThatPollForMessages) {
+  const auto start = std::chrono::steady_clock::now();
+  std::atomic<int> ended{0};
+  EXPECT_THROW(runRanks(3,
+                        [&](const Communicator& comm) {
+                          try {
+                            if (comm.rank() == 2) {
+                              std::this_thread::sleep_for(50ms);
+                              comm.abortAll("injected failure while rays are in flight");
+                            }
+                            SumHandle sum = comm.startSum({1});
+                            std::vector<uint64_t> result;
+                            for (;;) {
+                              while (comm.receive<int, int>()) {
+                              }
+                              comm.sumDone(sum, result);
+                              comm.waitForMessage(std::chrono::milliseconds(5));
+                            }
+                          } catch (const GroupAborted&) {
+                            ++ended;
+                            throw;
+                          }
+                        }),
+               GroupAborted);
+  EXPECT_EQ(ended.load(), 3);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 1.0);
+}
+
+// A message that is not a header plus whole items is an error, not garbage.
+TEST(InProcessFailure, MalformedMessageThrows) {
+  runRanks(2, [](const Communicator& comm) {
+    if (comm.rank() == 0) {
+      const uint8_t bytes[3] = {1, 2, 3};
+      comm.send(1, int32_t(7), std::span<const uint8_t>(bytes));
+    }
+    comm.barrier();
+    if (comm.rank() == 1) {
+      try {
+        comm.receive<int32_t, uint16_t>();
+        ADD_FAILURE() << "a 7-byte message read as 4 + 2k bytes did not throw";
+      } catch (const CommunicationError& e) {
+        EXPECT_NE(std::string(e.what()).find("7 bytes from rank 0"), std::string::npos) << e.what();
+      }
+    }
+  });
+}
 
 // A rank whose work throws (without calling abortAll) ends the others too,
 // and runRanks rethrows that exception, not the others' GroupAborted.

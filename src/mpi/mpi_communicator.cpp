@@ -8,7 +8,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <list>
 #include <string>
+#include <thread>
 
 #include "core/error.h"
 
@@ -33,7 +35,30 @@ void onFatalSignal(int signal) {
   std::raise(signal);
 }
 
+// Message tags on the messaging communicator.
+constexpr int kWholeMessage = 1;  // a message in one piece
+constexpr int kLargeLength = 2;   // the length (uint64_t) of a message that follows in pieces
+constexpr int kLargePiece = 3;    // one of those pieces
+
 }  // namespace
+
+struct MpiCommunicator::Messaging {
+  MPI_Comm comm = MPI_COMM_NULL;
+  struct Send {
+    uint64_t id;
+    std::vector<std::byte> bytes;
+    uint64_t length;  // a large message's length message
+    std::vector<MPI_Request> requests;
+  };
+  struct Sum {
+    uint64_t id;
+    std::vector<uint64_t> values, result;
+    MPI_Request request;
+  };
+  std::list<Send> sends;  // in flight; a list, so buffers never move
+  std::list<Sum> sums;
+  uint64_t nextSend = 1, nextSum = 1;
+};
 
 MpiCommunicator::MpiCommunicator(int* argc, char*** argv) {
   int initialized = 0;
@@ -47,10 +72,140 @@ MpiCommunicator::MpiCommunicator(int* argc, char*** argv) {
   check(MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN), "MPI_Comm_set_errhandler");
   check(MPI_Comm_rank(MPI_COMM_WORLD, &rank_), "MPI_Comm_rank");
   check(MPI_Comm_size(MPI_COMM_WORLD, &size_), "MPI_Comm_size");
+  messaging_ = std::make_unique<Messaging>();
+  check(MPI_Comm_dup(MPI_COMM_WORLD, &messaging_->comm), "MPI_Comm_dup");
+  check(MPI_Comm_set_errhandler(messaging_->comm, MPI_ERRORS_RETURN), "MPI_Comm_set_errhandler");
 }
 
 MpiCommunicator::~MpiCommunicator() {
+  if (messaging_ && messaging_->comm != MPI_COMM_NULL) MPI_Comm_free(&messaging_->comm);
   if (ownsMpi_) MPI_Finalize();
+}
+
+SendHandle MpiCommunicator::sendBytes(int to, std::vector<std::byte> bytes) const {
+  FERRY_CHECK_GE(to, 0);
+  FERRY_CHECK_LT(to, size_);
+  FERRY_CHECK_NE(to, rank_);
+  Messaging& m = *messaging_;
+  Messaging::Send& send = m.sends.emplace_back();
+  send.id = m.nextSend++;
+  send.bytes = std::move(bytes);
+  send.length = send.bytes.size();
+  auto post = [&](const void* data, size_t count, int tag) {
+    MPI_Request request;
+    check(MPI_Isend(data, int(count), MPI_BYTE, to, tag, m.comm, &request), "MPI_Isend");
+    send.requests.push_back(request);
+  };
+  const size_t piece = std::max<size_t>(1, maxPieceBytes_);
+  if (send.bytes.size() <= piece) {
+    post(send.bytes.data(), send.bytes.size(), kWholeMessage);
+  } else {
+    post(&send.length, sizeof(send.length), kLargeLength);
+    for (size_t done = 0; done < send.bytes.size(); done += piece)
+      post(send.bytes.data() + done, std::min(piece, send.bytes.size() - done), kLargePiece);
+  }
+  return SendHandle{send.id};
+}
+
+void MpiCommunicator::progressSends() const {
+  for (auto it = messaging_->sends.begin(); it != messaging_->sends.end();) {
+    int done = 0;
+    check(MPI_Testall(int(it->requests.size()), it->requests.data(), &done, MPI_STATUSES_IGNORE),
+          "MPI_Testall");
+    it = done ? messaging_->sends.erase(it) : std::next(it);
+  }
+}
+
+bool MpiCommunicator::sendDone(SendHandle handle) const {
+  progressSends();
+  for (const Messaging::Send& send : messaging_->sends)
+    if (send.id == handle.id) return false;
+  return true;
+}
+
+bool MpiCommunicator::allSendsDone() const {
+  progressSends();
+  return messaging_->sends.empty();
+}
+
+std::optional<ReceivedBytes> MpiCommunicator::receiveBytes() const {
+  progressSends();
+  MPI_Comm comm = messaging_->comm;
+  int found = 0;
+  MPI_Message message;
+  MPI_Status status;
+  check(MPI_Improbe(MPI_ANY_SOURCE, MPI_ANY_TAG, comm, &found, &message, &status), "MPI_Improbe");
+  if (!found) return std::nullopt;
+  ReceivedBytes out;
+  out.from = status.MPI_SOURCE;
+  int count = 0;
+  check(MPI_Get_count(&status, MPI_BYTE, &count), "MPI_Get_count");
+  if (status.MPI_TAG == kWholeMessage) {
+    out.bytes.resize(size_t(count));
+    check(MPI_Mrecv(out.bytes.data(), count, MPI_BYTE, &message, MPI_STATUS_IGNORE), "MPI_Mrecv");
+    return out;
+  }
+  if (status.MPI_TAG != kLargeLength || count != int(sizeof(uint64_t)))
+    throw CommunicationError("MPI_Improbe", rank_,
+                             fmt::format("unexpected message (tag {}, {} bytes) from rank {}",
+                                         status.MPI_TAG, count, out.from));
+  uint64_t length = 0;
+  check(MPI_Mrecv(&length, count, MPI_BYTE, &message, MPI_STATUS_IGNORE), "MPI_Mrecv");
+  out.bytes.resize(length);
+  // The pieces were all posted after the length, in order (MPI does not
+  // let messages from one sender overtake each other): receive them now.
+  for (size_t done = 0; done < length;) {
+    MPI_Status piece;
+    check(MPI_Probe(out.from, kLargePiece, comm, &piece), "MPI_Probe");
+    int pieceBytes = 0;
+    check(MPI_Get_count(&piece, MPI_BYTE, &pieceBytes), "MPI_Get_count");
+    if (pieceBytes <= 0 || done + size_t(pieceBytes) > length)
+      throw CommunicationError(
+          "MPI_Recv", rank_,
+          fmt::format("a piece of {} bytes overruns a {}-byte message", pieceBytes, length));
+    check(MPI_Recv(out.bytes.data() + done, pieceBytes, MPI_BYTE, out.from, kLargePiece, comm,
+                   MPI_STATUS_IGNORE),
+          "MPI_Recv");
+    done += size_t(pieceBytes);
+  }
+  return out;
+}
+
+void MpiCommunicator::waitForMessage(std::chrono::microseconds timeout) const {
+  // MPI has no wait-with-timeout: look once, else give the core away for the
+  // timeout (a rank that spins in MPI steals it from ranks that have work
+  // when ranks outnumber cores).
+  progressSends();
+  int found = 0;
+  check(MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, messaging_->comm, &found, MPI_STATUS_IGNORE),
+        "MPI_Iprobe");
+  if (!found) std::this_thread::sleep_for(timeout);
+}
+
+SumHandle MpiCommunicator::startSum(std::vector<uint64_t> values) const {
+  Messaging& m = *messaging_;
+  Messaging::Sum& sum = m.sums.emplace_back();
+  sum.id = m.nextSum++;
+  sum.values = std::move(values);
+  sum.result.resize(sum.values.size());
+  check(MPI_Iallreduce(sum.values.data(), sum.result.data(), int(sum.values.size()), MPI_UINT64_T,
+                       MPI_SUM, m.comm, &sum.request),
+        "MPI_Iallreduce");
+  return SumHandle{sum.id};
+}
+
+bool MpiCommunicator::sumDone(SumHandle handle, std::vector<uint64_t>& result) const {
+  progressSends();
+  for (auto it = messaging_->sums.begin(); it != messaging_->sums.end(); ++it) {
+    if (it->id != handle.id) continue;
+    int done = 0;
+    check(MPI_Test(&it->request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+    if (!done) return false;
+    result = std::move(it->result);
+    messaging_->sums.erase(it);
+    return true;
+  }
+  throw CommunicationError("sumDone", rank_, "no such sum (asked again after it was done?)");
 }
 
 void MpiCommunicator::check(int code, const char* operation) const {

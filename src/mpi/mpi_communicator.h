@@ -6,6 +6,8 @@
 // rather than killing the job without a word.
 #pragma once
 
+#include <memory>
+
 #include "mpi/communicator.h"
 
 namespace ferry {
@@ -45,7 +47,25 @@ class MpiCommunicator final : public Communicator {
   // rank at once.)
   void reportFatalSignals() const;
 
+  // Point-to-point messages go over a duplicate of MPI_COMM_WORLD (so they
+  // never match anything else), MPI_Isend and MPI_Improbe/MPI_Mrecv; a
+  // message larger than `maxPieceBytes` (1 GiB: MPI counts are ints) goes as
+  // a length and pieces. Sums are MPI_Iallreduce; progress is made whenever
+  // one of these is called (the funneled thread level: one thread calls MPI).
+  SendHandle sendBytes(int to, std::vector<std::byte> bytes) const override;
+  std::optional<ReceivedBytes> receiveBytes() const override;
+  bool sendDone(SendHandle handle) const override;
+  bool allSendsDone() const override;
+  void waitForMessage(std::chrono::microseconds timeout) const override;
+  SumHandle startSum(std::vector<uint64_t> values) const override;
+  bool sumDone(SumHandle handle, std::vector<uint64_t>& result) const override;
+  // For tests: split messages above this many bytes (every rank alike).
+  void setMaxPieceBytes(size_t bytes) { maxPieceBytes_ = bytes; }
+
  private:
+  struct Messaging;  // MPI requests and buffers in flight (in the .cpp, with mpi.h)
+  // Tests every send in flight, releasing the completed ones.
+  void progressSends() const;
   // Prints "ferry: error on rank R: message" and ends every rank (MPI_Abort).
   void abortEveryRank(const std::string& message, int code) const override;
   // Throws a CommunicationError unless `code` is MPI_SUCCESS.
@@ -54,6 +74,8 @@ class MpiCommunicator final : public Communicator {
   int rank_ = -1;  // until MPI_Comm_rank answers (errors before it name no rank)
   int size_ = 1;
   bool ownsMpi_ = false;
+  size_t maxPieceBytes_ = size_t(1) << 30;
+  std::unique_ptr<Messaging> messaging_;
 };
 
 }  // namespace ferry

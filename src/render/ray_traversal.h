@@ -24,10 +24,42 @@ namespace ferry {
 // The camera ray of a pixel for the current sample.
 using CameraRayOf = std::function<TraceRay(uint32_t pixel)>;
 
+// What the renderer does for a traversal that runs whole samples itself
+// (RayTraversal::runsSamples: the overlapped distributed exchange): make
+// camera paths, and shade the rays that are ready on this rank, bounce by
+// bounce, in whatever order they become ready. The frame buffer sums in
+// fixed point, so the order does not change the image.
+template <typename Path>
+class SampleShading {
+ public:
+  virtual ~SampleShading() = default;
+  // The camera ray of `pixel` for this sample, as its path stores it.
+  virtual TraceRay cameraRay(uint32_t pixel) const = 0;
+  // Appends the camera paths of `pixels` to `out`, in that order.
+  virtual void cameraPaths(std::span<const uint32_t> pixels, PathQueue<Path>& out,
+                           FrameStats& stats) = 0;
+  // Shades rays of bounce `bounce` whose traversal ended here: shadow rays
+  // add their light, paths are shaded (`hits[i]`: path i's kept hit, or
+  // invalid to re-trace). `next` is replaced by the new rays (continuations
+  // and shadow rays of bounce + 1). `ready` and `hits` are left unspecified.
+  virtual void shade(uint32_t bounce, RayQueues<Path>& ready, std::vector<TraceHit>& hits,
+                     RayQueues<Path>& next, FrameStats& stats) = 0;
+};
+
 template <typename Path>
 class RayTraversal {
  public:
   virtual ~RayTraversal() = default;
+  // Whether this traversal runs a whole sample itself (runSample): it then
+  // decides when rays are traced, forwarded and shaded, instead of being
+  // called once per bounce of a wavefront (traverse).
+  virtual bool runsSamples() const { return false; }
+  // One sample of pixels [0, pixels) from camera paths to the last bounce,
+  // shading through `shading`. Collective when distributed.
+  virtual void runSample(uint32_t sampleIndex, uint32_t pixels, SampleShading<Path>& shading,
+                         FrameStats& stats) {
+    (void)sampleIndex, (void)pixels, (void)shading, (void)stats;
+  }
   // Proxy-guided primary rays: sets `pixels` to the pixels of [first, last)
   // whose camera path this rank generates for the current sample, in
   // increasing order; `cameraRay(pixel)` is the pixel's camera ray as the

@@ -139,11 +139,15 @@ std::string RenderStats::summaryText(int ranks) const {
       fmt::format("{} ({} per frame)", formatCount(ex.raysForwarded),
                   formatCount(frames.empty() ? 0 : ex.raysForwarded / frames.size())));
   row("bytes sent", formatBytes(ex.bytesSent));
-  row("exchange rounds", fmt::format("{}", ex.rounds));
+  if (ex.messages || t.terminationWaves)
+    row("exchange", fmt::format("overlapped: {} messages, {} termination sums", ex.messages,
+                                t.terminationWaves));
+  else
+    row("exchange rounds", fmt::format("{}", ex.rounds));
   row("stage seconds",
-      fmt::format("generate {:.2f}, trace {:.2f}, exchange {:.2f}, shade {:.2f}, "
+      fmt::format("generate {:.2f}, trace {:.2f}, exchange {:.2f}, shade {:.2f}, wait {:.2f}, "
                   "composite {:.2f} (summed over ranks, and on one rank over threads)",
-                  t.times.generate, t.times.trace, t.times.exchange, t.times.shade,
+                  t.times.generate, t.times.trace, t.times.exchange, t.times.shade, t.times.wait,
                   t.times.composite));
   if (t.retraceMisses) row("re-trace misses", fmt::format("{}", t.retraceMisses));
   return out;

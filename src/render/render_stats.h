@@ -19,7 +19,8 @@ namespace ferry {
 struct ExchangeCounters {
   uint64_t raysForwarded = 0;  // rays sent to another rank
   uint64_t bytesSent = 0;      // ray payload bytes sent to other ranks
-  uint64_t rounds = 0;         // exchange rounds until no ray moved
+  uint64_t rounds = 0;         // bulk exchange: rounds until no ray moved
+  uint64_t messages = 0;       // overlapped exchange: ray messages sent
   ExchangeCounters& operator+=(const ExchangeCounters& o);
 };
 
@@ -30,9 +31,10 @@ struct StageTimes {
   double trace = 0;      // local traces inside traversal
   double exchange = 0;   // forwarding decisions, compaction, MPI
   double shade = 0;      // shadow-ray contributions, re-trace, BSDF and light sampling, spawning
+  double wait = 0;       // overlapped exchange: idle, waiting for rays or for the end of the sample
   double composite = 0;  // merging frame buffers
   StageTimes& operator+=(const StageTimes& o);
-  double total() const { return generate + trace + exchange + shade + composite; }
+  double total() const { return generate + trace + exchange + shade + wait + composite; }
 };
 
 struct FrameStats {
@@ -49,6 +51,7 @@ struct FrameStats {
   uint64_t replayQueries = 0;    // replay layout: proxy queries spent recomputing visited sets
   uint64_t primaryQueries = 0;   // of proxyQueries: deciding which rank generates a camera path
   uint64_t primaryBytesSent = 0;  // pixel ids sent to the ranks that generate their camera paths
+  uint64_t terminationWaves = 0;  // overlapped exchange: non-blocking sums until a sample ended
   std::vector<ExchangeCounters> perBounce;
   StageTimes times;
 
@@ -88,18 +91,21 @@ inline constexpr StatsField<FrameStats, uint64_t> kFrameCounters[] = {
     {"traces", "replay_queries", &FrameStats::replayQueries},
     {"traces", "primary_queries", &FrameStats::primaryQueries},
     {nullptr, "primary_bytes_sent", &FrameStats::primaryBytesSent},
+    {nullptr, "termination_waves", &FrameStats::terminationWaves},
 };
 // Per bounce under "exchange_per_bounce", and summed over bounces under "exchange".
 inline constexpr StatsField<ExchangeCounters, uint64_t> kExchangeCounters[] = {
     {nullptr, "rays_forwarded", &ExchangeCounters::raysForwarded},
     {nullptr, "bytes_sent", &ExchangeCounters::bytesSent},
     {nullptr, "rounds", &ExchangeCounters::rounds},
+    {nullptr, "messages", &ExchangeCounters::messages},
 };
 inline constexpr StatsField<StageTimes, double> kStageTimes[] = {
     {"stage_seconds", "generate", &StageTimes::generate},
     {"stage_seconds", "trace", &StageTimes::trace},
     {"stage_seconds", "exchange", &StageTimes::exchange},
     {"stage_seconds", "shade", &StageTimes::shade},
+    {"stage_seconds", "wait", &StageTimes::wait},
     {"stage_seconds", "composite", &StageTimes::composite},
 };
 

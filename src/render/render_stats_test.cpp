@@ -61,18 +61,18 @@ TEST(RenderStats, EveryCounterAppearsInTheJsonUnderItsKey) {
 // The layout scripts read (bench/, tests/tools/check_stats.py): nothing more, nothing less.
 TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
   const nlohmann::json j = distinctStats(1, 1).toJson();
-  EXPECT_EQ(keysOf(j),
-            (std::set<std::string>{"frame", "seconds", "camera_paths", "continuation_rays",
-                                   "shadow_rays", "traces", "rays_per_second", "exchange",
-                                   "exchange_per_bounce", "stage_seconds", "primary_bytes_sent"}));
+  EXPECT_EQ(keysOf(j), (std::set<std::string>{
+                           "frame", "seconds", "camera_paths", "continuation_rays", "shadow_rays",
+                           "traces", "rays_per_second", "exchange", "exchange_per_bounce",
+                           "stage_seconds", "primary_bytes_sent", "termination_waves"}));
   EXPECT_EQ(keysOf(j.at("traces")),
             (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses",
                                    "proxy_queries", "replay_queries", "primary_queries", "total"}));
-  const std::set<std::string> exchange = {"rays_forwarded", "bytes_sent", "rounds"};
+  const std::set<std::string> exchange = {"rays_forwarded", "bytes_sent", "rounds", "messages"};
   EXPECT_EQ(keysOf(j.at("exchange")), exchange);
   EXPECT_EQ(keysOf(j.at("exchange_per_bounce")[0]), exchange);
   EXPECT_EQ(keysOf(j.at("stage_seconds")),
-            (std::set<std::string>{"generate", "trace", "exchange", "shade", "composite"}));
+            (std::set<std::string>{"generate", "trace", "exchange", "shade", "wait", "composite"}));
 }
 
 TEST(RenderStats, MergeAddsEveryCounterAndKeepsTheSlowestSeconds) {

@@ -41,7 +41,12 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
   const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
-    if (!chunked()) {
+    if (traversal_.runsSamples()) {
+      // The traversal runs the sample (the overlapped distributed exchange):
+      // it calls back for camera paths and shading as rays become ready.
+      SampleStages stages(*this, sampleIndex, frameBuffer);
+      traversal_.runSample(sampleIndex, pixels, stages, stats);
+    } else if (!chunked()) {
       // Many ranks: the whole image in one wavefront (each bounce is a
       // collective exchange), every stage parallel inside the rank.
       runWavefront(sampleIndex, 0, pixels, workspace_, frameBuffer, stats);
@@ -113,6 +118,61 @@ void concatenateBlocks(const PathQueue<Path>& staging, size_t stride,
 }  // namespace
 
 template <typename Path>
+void WavefrontRenderer<Path>::makeCameraPath(uint32_t sampleIndex, uint32_t pixel, uint32_t px,
+                                             uint32_t py, Path& path) const {
+  RandomStream random(RandomKey{pixel, sampleIndex, 0, settings_.seed});
+  float x = float(px) + random(RandomDim::PixelJitterX);
+  float y = float(py) + random(RandomDim::PixelJitterY);
+  makeRay(path, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
+          kPathAfterSpecular);
+}
+
+// What a traversal that runs whole samples calls back: the renderer's camera
+// paths and its shading stage (on the whole-image workspace, whose queues
+// are swapped in and out, not copied).
+template <typename Path>
+class WavefrontRenderer<Path>::SampleStages final : public SampleShading<Path> {
+ public:
+  SampleStages(WavefrontRenderer& renderer, uint32_t sampleIndex, FrameBuffer& frameBuffer)
+      : renderer_(renderer), sampleIndex_(sampleIndex), frameBuffer_(frameBuffer) {}
+
+  TraceRay cameraRay(uint32_t pixel) const override {
+    Path p;
+    renderer_.makeCameraPath(sampleIndex_, pixel, pixel % renderer_.width(),
+                             pixel / renderer_.width(), p);
+    return TraceRay{p.origin, p.dir(), 0, kInfinity};
+  }
+  void cameraPaths(std::span<const uint32_t> pixels, PathQueue<Path>& out,
+                   FrameStats& stats) override {
+    auto start = Clock::now();
+    const size_t first = out.size();
+    out.resize(first + pixels.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 2048), [&](const auto& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i)
+        renderer_.makeCameraPath(sampleIndex_, pixels[i], pixels[i] % renderer_.width(),
+                                 pixels[i] / renderer_.width(), out[first + i]);
+    });
+    stats.cameraPaths += pixels.size();
+    stats.times.generate += secondsSince(start);
+  }
+  void shade(uint32_t bounce, RayQueues<Path>& ready, std::vector<TraceHit>& hits,
+             RayQueues<Path>& next, FrameStats& stats) override {
+    Workspace& ws = renderer_.workspace_;
+    std::swap(ws.rays, ready);
+    std::swap(ws.hits, hits);
+    renderer_.shade(ws, sampleIndex_, bounce, frameBuffer_, stats);
+    std::swap(ws.rays, ready);
+    std::swap(ws.hits, hits);
+    std::swap(ws.next, next);
+  }
+
+ private:
+  WavefrontRenderer& renderer_;
+  uint32_t sampleIndex_;
+  FrameBuffer& frameBuffer_;
+};
+
+template <typename Path>
 void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t first,
                                                  uint32_t last, Workspace& ws, FrameStats& stats) {
   PathQueue<Path>& rays = ws.rays.paths;
@@ -121,11 +181,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
   const uint32_t pixels = last - first;
   const uint32_t width = uint32_t(settings_.width);
   auto cameraRay = [&](uint32_t pixel, uint32_t px, uint32_t py, Path& p) {
-    RandomStream random(RandomKey{pixel, sampleIndex, 0, settings_.seed});
-    float x = float(px) + random(RandomDim::PixelJitterX);
-    float y = float(py) + random(RandomDim::PixelJitterY);
-    makeRay(p, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
-            kPathAfterSpecular);
+    makeCameraPath(sampleIndex, pixel, px, py, p);
   };
   // Calls f(pixel, x, y) for pixels [begin, end), one division per range.
   auto forPixels = [width](uint32_t begin, uint32_t end, auto&& f) {

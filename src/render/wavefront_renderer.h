@@ -71,6 +71,7 @@ class WavefrontRenderer {
     std::vector<uint32_t> primaryPixels;  // many ranks: pixels whose camera paths are this rank's
   };
   struct RetraceBatch;
+  class SampleStages;  // SampleShading for a traversal that runs whole samples
   // What shading a range of paths made and counted.
   struct ShadeCounts {
     uint32_t continuations = 0, shadowRays = 0;
@@ -83,6 +84,10 @@ class WavefrontRenderer {
   // One sample of pixels [first, last) from camera rays to the last bounce.
   void runWavefront(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
                     FrameBuffer& frameBuffer, FrameStats& stats);
+  // Pixel `pixel`'s (at px, py) camera path for sample `sampleIndex`.
+  void makeCameraPath(uint32_t sampleIndex, uint32_t pixel, uint32_t px, uint32_t py,
+                      Path& path) const;
+  uint32_t width() const { return uint32_t(settings_.width); }
   // The camera rays of pixels [first, last) for this sample, into ws.rays.
   void generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
                           FrameStats& stats);

@@ -199,7 +199,8 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
     traversal = std::make_unique<LocalTraversal<Path>>(*rank.geometry);
   } else {
     auto d = std::make_unique<DistributedTraversal<Path>>(comm_, *rank.geometry, rank.partition,
-                                                          settings_.forwarding);
+                                                          settings_.forwarding, settings_.exchange,
+                                                          render.chunkPixels);
     distributed = d.get();
     traversal = std::move(d);
   }

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "distributed/distributed_traversal.h"
 #include "distributed/forwarding.h"
 #include "io/load_options.h"
 #include "partition/partitioner.h"
@@ -25,6 +26,7 @@ struct SessionSettings {
   int threads = 0;  // worker threads per rank (0: all cores)
 
   ForwardingMode forwarding = ForwardingMode::Proxies;
+  ExchangeMode exchange = ExchangeMode::Auto;
   PathLayout pathLayout = PathLayout::Auto;
   Retrace retrace = Retrace::Remote;
   Instancing instancing = Instancing::Shared;

@@ -35,6 +35,8 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                    {"threads", s.threads},
                    {"ranks", ranks},
                    {"forwarding", toString(s.forwarding)},
+                   {"exchange", ranks > 1 ? toString(s.exchange) : "none"},
+                   {"chunk", r.chunkPixels},
                    {"retrace", toString(s.retrace)},
                    {"instancing", toString(s.instancing)},
                    {"partition", session.partitionerName()},

@@ -19,5 +19,14 @@ if s["settings"]["forwarding"] == "proxies" and s["settings"]["ranks"] > 1:
     assert queries >= camera, f"{queries} proxy queries for {camera} camera paths"
     primary = r["total"]["traces"]["primary_queries"]
     assert primary == camera, f"{primary} primary-ownership queries for {camera} camera paths"
-print(f"  forwarded {fwd}, rounds {r['total']['exchange']['rounds']}, "
+ex = r["total"]["exchange"]
+if s["settings"].get("exchange") == "overlapped":
+    # Rays travel in messages, never in collective rounds; every sample ends
+    # with at least two termination sums (two with nothing changed).
+    assert ex["rounds"] == 0, f"overlapped exchange counted {ex['rounds']} rounds"
+    assert fwd == 0 or ex["messages"] > 0, "rays forwarded without a message"
+    assert r["total"]["termination_waves"] >= 2, "a sample ended without two termination sums"
+elif s["settings"]["ranks"] > 1:
+    assert ex["messages"] == 0, "bulk exchange counted messages"
+print(f"  forwarded {fwd}, rounds {ex['rounds']}, messages {ex['messages']}, "
       f"max estimated bytes per rank {s['memory']['max_estimated_bytes']:.0f}")
