@@ -10,6 +10,13 @@
 #      forwarding mode (proxies, ring, broadcast) at 4 and 8 ranks, from the
 #      --stats counters ("render"."total"."exchange");
 #   3. memory per rank (estimated, Embree retained, resident), from --stats.
+# Every mpirun gets --bind-to none: Open MPI binds each rank to one core when
+# it starts at most two, which left the 1-rank baseline's two threads on one
+# core (0.51 s/frame instead of 0.28 on the island: every ratio measured
+# before 2026-11-24 was against that handicapped baseline).
+# THREADS=split (default) gives N ranks --threads max(1, CORES / N); THREADS=all
+# gives every rank --threads CORES (more threads than cores when N > 1: a rank
+# that waits leaves its cores to the others' threads).
 # Frame time is the median over all measured frames of all rounds of a
 # configuration (a frame's time is the slowest rank's); ROUNDS cycle through
 # the configurations so a busy machine slows all alike. Counters are exact
@@ -39,6 +46,7 @@ CORES=${CORES:-$(nproc)}
 RANKS=${RANKS:-1 2 4 8}
 PARTITION=${PARTITION:-best}
 EXCHANGES=${EXCHANGES:-overlapped bulk}
+THREADS=${THREADS:-split}
 BASELINE=${BASELINE:+$(realpath "$BASELINE")}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_mpi_yield_when_idle=1
@@ -51,7 +59,8 @@ run() {
   local n=$1 mode=$2 tag=$3 binary=${4:-$ferry} threads=$((CORES / $1))
   shift 4 2> /dev/null || shift $#
   [ "$threads" -ge 1 ] || threads=1
-  mpirun --oversubscribe -np "$n" "$binary" render "$SCENE" --size "$SIZE" --spp "$SPP" --frames "$FRAMES" \
+  [ "$THREADS" = all ] && threads=$CORES
+  mpirun --oversubscribe --bind-to none -np "$n" "$binary" render "$SCENE" --size "$SIZE" --spp "$SPP" --frames "$FRAMES" \
     --threads "$threads" --forwarding "$mode" --partition "$PARTITION" -q -o "$work/out.pfm" \
     --stats "$work/$tag.json" "$@"
 }
@@ -59,7 +68,7 @@ run() {
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
   "$(free -g | awk '/Mem:/ {print $2}') GiB; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $CORES cores for every configuration," \
-  "partition $PARTITION"
+  "partition $PARTITION, threads $THREADS"
 
 for round in $(seq "$ROUNDS"); do
   for n in $RANKS; do
@@ -80,11 +89,11 @@ for n in 4 8; do
   for mode in ring broadcast; do run "$n" "$mode" "$mode-$n"; done
 done
 
-python3 - "$work" "$ROUNDS" "$CORES" "${BASELINE:-none}" "$EXCHANGES" $RANKS <<'EOF'
+python3 - "$work" "$ROUNDS" "$CORES" "${BASELINE:-none}" "$EXCHANGES" "$THREADS" $RANKS <<'EOF'
 import json, os, statistics, sys
 work, rounds, cores, baseline = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
-exchanges = sys.argv[5].split()
-ranks = [int(r) for r in sys.argv[6:]]
+exchanges, threads_mode = sys.argv[5].split(), sys.argv[6]
+ranks = [int(r) for r in sys.argv[7:]]
 load = lambda tag: json.load(open(f"{work}/{tag}.json"))
 MiB = 1 / 2**20
 
@@ -95,7 +104,7 @@ for n in ranks:
     frame[n] = statistics.median(times)
 base = frame[ranks[0]]
 for n in ranks:
-    threads = max(1, cores // n)
+    threads = cores if threads_mode == "all" else max(1, cores // n)
     print(f"  {n} rank(s) x {threads} thread(s): {frame[n]:7.3f} s/frame   ratio {frame[n] / base:5.2f}"
           f"   (frames: {', '.join(f'{f:.2f}' for r in range(1, rounds + 1) for f in [x['seconds'] for x in load(f'time-{n}-{r}')['render']['frames']])})")
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <filesystem>
 #include <optional>
 
 #include "app/partition_command.h"
@@ -57,6 +58,19 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   if (o.chunkPixels < 1)
     throw InputError(fmt::format("--chunk {}: must be at least 1", o.chunkPixels));
   s.render.chunkPixels = o.chunkPixels;
+  if (o.checkpointEvery < 1)
+    throw InputError(fmt::format("--checkpoint-every {}: must be at least 1", o.checkpointEvery));
+  if (!(o.timeLimit >= 0))
+    throw InputError(fmt::format("--time-limit {}: must be 0 (none) or more seconds", o.timeLimit));
+  if (!o.checkpoint.empty()) {
+    const std::filesystem::path dir = std::filesystem::path(o.checkpoint).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir))
+      throw InputError(fmt::format("--checkpoint {}: directory '{}' does not exist", o.checkpoint,
+                                   dir.string()));
+  }
+  s.checkpoint = o.checkpoint;
+  s.checkpointEvery = o.checkpointEvery;
+  s.timeLimitSeconds = o.timeLimit;
   s.pathLayout = parsePathLayout(o.pathLayout);
   s.retrace = parseRetrace(o.retrace);
   s.instancing = parseInstancing(o.instancing);
@@ -238,6 +252,21 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
       "--show-partition{-1}", o.showPartition,
       "Instead of rendering, draw what each rank owns (replicated content checkerboarded)\n"
       "and the proxies as box outlines, to -o (PNG); =N: for N ranks (default: the MPI ranks)");
+  render->add_option(
+      "--checkpoint", o.checkpoint,
+      "Write the accumulated image (exact sums), its frame count and a hash of the scene and\n"
+      "settings to this file every --checkpoint-every frames and after the last, atomically;\n"
+      "--resume continues from it");
+  render->add_option("--checkpoint-every", o.checkpointEvery, "Frames between checkpoints")
+      ->capture_default_str();
+  render->add_option(
+      "--resume", o.resume,
+      "Continue the render a checkpoint holds (same scene, size, --spp, --max-depth, --seed\n"
+      "and view; any rank count): frames after it up to --frames, with the image an\n"
+      "uninterrupted render would give, bit for bit. May be the --checkpoint file itself.");
+  render->add_option("--time-limit", o.timeLimit,
+                     "Seconds: the frame that crosses it is the last (0: none); the image is\n"
+                     "written as usual, with the frames done");
   render->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
   render->add_flag("--env-fallback", o.envFallback,
                    "Render a scene whose environment map is missing with a constant white\n"
@@ -261,6 +290,7 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
     loading.update(0, o.scene);
     session.emplace(settings, comm);
     sink.emplace(applySceneDefaults(o, *session));
+    if (!o.resume.empty() && comm.isRoot()) session->resumeFrom(o.resume);
     loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", session->loadSeconds(),
                                session->buildSeconds()));
   } catch (const std::exception& e) {
@@ -277,7 +307,9 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
         rendering.finish();
       else
         rendering.update(p.frame * p.samplesPerFrame + p.samplesDone,
-                         fmt::format("frame {}", p.frame + 1));
+                         p.secondsLeft < 0
+                             ? fmt::format("frame {}", p.frame + 1)
+                             : fmt::format("frame {}, {:.0f} s left", p.frame + 1, p.secondsLeft));
     });
     if (!comm.isRoot()) return 0;
     if (!o.quiet) printSummary(*session, report, comm.size(), sink->path());

@@ -33,6 +33,9 @@ struct RenderOptions {
   bool outputGiven = false;
   std::string forwarding = "proxies";
   std::string exchange = "auto";
+  std::string checkpoint, resume;
+  int checkpointEvery = 10;
+  double timeLimit = 0;
   uint32_t chunkPixels = 8192;
   // --path-layout: auto (Path8 up to 8 ranks, Path64 up to 64, replay above),
   // mask (Path8/Path64; at most 64 ranks) or replay (at any rank count).

@@ -5,11 +5,11 @@
 namespace ferry {
 namespace {
 
-// Direct send: returns this rank's summed, scaled slice. The partial sums are
-// fixed point (render/frame_buffer.h), so the slice is the exact sum of every
-// rank's contributions whatever the rank count, converted to floats once.
-std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& partial, float scale,
-                               uint64_t& bytesSent) {
+// Direct send: returns this rank's slice of the sum of every rank's partial
+// buffer, exactly (fixed point, render/frame_buffer.h: the same whatever the
+// rank count), 3 values a pixel.
+std::vector<int64_t> sumOwnSliceFixed(const Communicator& comm, const FrameBuffer& partial,
+                                      uint64_t& bytesSent) {
   maybeInjectFailure("composite", comm.rank());
   constexpr int kPixelBytes = 3 * int(sizeof(int64_t));
   const int ranks = comm.size(), width = partial.width(), height = partial.height();
@@ -35,7 +35,14 @@ std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& part
   std::vector<int64_t> total(sliceValues, 0);
   for (int r = 0; r < ranks; ++r)
     for (size_t i = 0; i < sliceValues; ++i) total[i] += pieces[size_t(r) * sliceValues + i];
-  std::vector<Vec3f> slice(static_cast<size_t>(slicePixels));
+  return total;
+}
+
+// The same slice as floats, times `scale`.
+std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& partial, float scale,
+                               uint64_t& bytesSent) {
+  const std::vector<int64_t> total = sumOwnSliceFixed(comm, partial, bytesSent);
+  std::vector<Vec3f> slice(total.size() / 3);
   for (size_t i = 0; i < slice.size(); ++i)
     slice[i] = Vec3f(FrameBuffer::toLinear(total[3 * i], scale),
                      FrameBuffer::toLinear(total[3 * i + 1], scale),
@@ -43,7 +50,7 @@ std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& part
   return slice;
 }
 
-// `elementsPerPixel`: 1 for Vec3f pixels, 4 for RGBA8 bytes.
+// `elementsPerPixel`: 1 for Vec3f pixels, 3 for fixed-point sums, 4 for RGBA8 bytes.
 template <typename T>
 std::vector<T> gatherSlices(const Communicator& comm, const std::vector<T>& slice, int width,
                             int height, int elementsPerPixel) {
@@ -72,6 +79,13 @@ std::vector<Vec3f> compositeLinear(const Communicator& comm, const FrameBuffer& 
   std::vector<Vec3f> slice = sumOwnSlice(comm, partial, scale, bytesSent);
   if (!comm.isRoot()) bytesSent += slice.size() * sizeof(Vec3f);
   return gatherSlices(comm, slice, partial.width(), partial.height(), 1);
+}
+
+std::vector<int64_t> compositeFixed(const Communicator& comm, const FrameBuffer& partial,
+                                    uint64_t& bytesSent) {
+  std::vector<int64_t> slice = sumOwnSliceFixed(comm, partial, bytesSent);
+  if (!comm.isRoot()) bytesSent += slice.size() * sizeof(int64_t);
+  return gatherSlices(comm, slice, partial.width(), partial.height(), 3);
 }
 
 std::vector<uint8_t> compositeToneMapped(const Communicator& comm, const FrameBuffer& partial,

@@ -21,6 +21,10 @@ void compositeSlice(int height, int ranks, int rank, int& firstRow, int& lastRow
 // empty on the other ranks. Also returns bytes this rank sent.
 std::vector<Vec3f> compositeLinear(const Communicator& comm, const FrameBuffer& partial,
                                    float scale, uint64_t& bytesSent);
+// The exact fixed-point sums of all ranks' buffers (3 per pixel) on rank 0;
+// empty elsewhere: what a checkpoint stores.
+std::vector<int64_t> compositeFixed(const Communicator& comm, const FrameBuffer& partial,
+                                    uint64_t& bytesSent);
 // The same, tone mapped to RGBA8 on the slice owners before gathering.
 std::vector<uint8_t> compositeToneMapped(const Communicator& comm, const FrameBuffer& partial,
                                          float scale, const ToneMapping& toneMapping,

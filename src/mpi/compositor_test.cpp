@@ -25,16 +25,19 @@ FrameBuffer randomPartial(int width, int height, int rank) {
   return fb;
 }
 
-// Every rank's contributions added to one buffer, then scaled: what the
-// compositor must give bit for bit (fixed-point sums do not depend on how
-// they are split over ranks).
-std::vector<Vec3f> plainSum(int width, int height, int ranks, float scale) {
+// Every rank's contributions added to one buffer: what the compositor must
+// give bit for bit (fixed-point sums do not depend on how they are split
+// over ranks).
+FrameBuffer allPartials(int width, int height, int ranks) {
   FrameBuffer all(width, height);
   for (int r = 0; r < ranks; ++r) {
     const FrameBuffer fb = randomPartial(width, height, r);
     for (size_t i = 0; i < fb.fixedSum().size(); ++i) all.fixedSum()[i] += fb.fixedSum()[i];
   }
-  return all.sum(scale);
+  return all;
+}
+std::vector<Vec3f> plainSum(int width, int height, int ranks, float scale) {
+  return allPartials(width, height, ranks).sum(scale);
 }
 
 bool sameBits(const std::vector<Vec3f>& a, const std::vector<Vec3f>& b) {
@@ -76,6 +79,17 @@ TEST_P(Compositor, LinearAndToneMappedEqualThePlainSum) {
       }
     });
     EXPECT_TRUE(sameBits(linear, expected));
+    // The exact sums, as a checkpoint stores them.
+    const FrameBuffer all = allPartials(size.width, size.height, ranks);
+    runRanks(ranks, [&](const Communicator& comm) {
+      uint64_t sent = 0;
+      const std::vector<int64_t> sums =
+          compositeFixed(comm, randomPartial(size.width, size.height, comm.rank()), sent);
+      if (comm.isRoot())
+        EXPECT_EQ(sums, all.fixedSum());
+      else
+        EXPECT_TRUE(sums.empty());
+    });
     EXPECT_EQ(rgba, toneMapToRgba8(expected, toneMapping));
 
     // Bytes sent: every rank's pixels of other ranks' slices, then every

@@ -2,6 +2,7 @@
 
 #include <malloc.h>
 
+#include <algorithm>
 #include <numeric>
 #include <span>
 
@@ -11,8 +12,10 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/fault_injection.h"
+#include "core/hash64.h"
 #include "core/process_memory.h"
 #include "distributed/distributed_traversal.h"
+#include "io/checkpoint_file.h"
 #include "io/part_directory.h"
 #include "io/scene_loader.h"
 #include "mpi/compositor.h"
@@ -157,6 +160,69 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
 
 RenderSession::~RenderSession() = default;
 
+std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
+  const RenderSettings& r = settings_.render;
+  // The scene as its summary counts it (what it is made of, whatever the
+  // ranks), and every setting that changes a pixel; not the rank count,
+  // partitioner, exchange or threads, which do not. "key=value" fields, so
+  // that a mismatch can name the ones that differ.
+  const std::string summary = rank_->summary.toJson().dump();
+  const CameraView& v = rank_->scene.view(r.view);
+  const std::string description = fmt::format(
+      "scene={} (content {}); size={}x{}; spp={}; max-depth={}; seed={}; view={} from ({}, {}, "
+      "{}) at ({}, {}, {}) up ({}, {}, {}) fov {}",
+      settings_.scene, hashToHex(hash64(summary.data(), summary.size())), r.width, r.height,
+      r.samplesPerPixel, r.maxDepth, r.seed, v.name, v.from.x, v.from.y, v.from.z, v.at.x, v.at.y,
+      v.at.z, v.up.x, v.up.y, v.up.z, v.fovY);
+  return {hash64(description.data(), description.size()), description};
+}
+
+namespace {
+
+// The "key=value" fields of two identity descriptions that differ, as
+// "key: A in the checkpoint, B here".
+std::string differingFields(const std::string& theirs, const std::string& ours) {
+  auto fields = [](const std::string& text) {
+    std::vector<std::pair<std::string, std::string>> out;
+    size_t start = 0;
+    while (start < text.size()) {
+      size_t end = text.find("; ", start);
+      if (end == std::string::npos) end = text.size();
+      const std::string field = text.substr(start, end - start);
+      const size_t eq = field.find('=');
+      out.push_back({field.substr(0, eq), eq == std::string::npos ? "" : field.substr(eq + 1)});
+      start = end + 2;
+    }
+    return out;
+  };
+  const auto a = fields(theirs), b = fields(ours);
+  std::string out;
+  for (const auto& [key, value] : b) {
+    auto it = std::find_if(a.begin(), a.end(), [&](const auto& f) { return f.first == key; });
+    const std::string there = it == a.end() ? "(none)" : it->second;
+    if (there == value) continue;
+    if (!out.empty()) out += "; ";
+    out += fmt::format("{}: {} in the checkpoint, {} here", key, there, value);
+  }
+  return out.empty() ? "the settings that shape the image differ" : out;
+}
+
+}  // namespace
+
+void RenderSession::resumeFrom(const std::string& path) {
+  auto checkpoint = std::make_unique<Checkpoint>(readCheckpoint(path));
+  const auto [identity, description] = imageIdentity();
+  if (checkpoint->identity != identity)
+    throw InputError(fmt::format("{}: this checkpoint is of another render ({})", path,
+                                 differingFields(checkpoint->description, description)));
+  if (checkpoint->frames >= settings_.render.frames)
+    throw InputError(
+        fmt::format("{}: the checkpoint holds {} frames already; --frames {} asks "
+                    "for no more (ask for more frames to continue)",
+                    path, checkpoint->frames, settings_.render.frames));
+  resume_ = std::move(checkpoint);
+}
+
 void RenderSession::setImageSize(int width, int height) {
   settings_.render.width = width;
   settings_.render.height = height;
@@ -211,24 +277,65 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
   SessionReport report;
   RenderStats& stats = report.stats;
   uint64_t compositeBytes = 0;  // this rank's, over every composite
+  // A resumed render starts after the checkpoint's frames, with its image on
+  // rank 0 (the other ranks add to zero: the composite is the same sum).
+  int firstFrame = resume_ ? resume_->frames : 0;
+  comm_.broadcast(firstFrame);
+  int lastFrame = render.frames - 1;  // earlier if the time limit says so
   auto compositeAfter = [&](int frame, double& seconds) {
     auto start = Clock::now();
     const float scale = 1.0f / float((frame + 1) * render.samplesPerPixel);
     FrameImage image =
         composite(comm_, frameBuffer, scale, pixels, render.toneMapping, compositeBytes);
     image.frame = frame;
-    image.last = frame + 1 == render.frames;
+    image.last = frame == lastFrame;
     seconds = comm_.max(secondsSince(start));
-    stats.frames[frame].times.composite += seconds;
+    stats.frames[size_t(frame - firstFrame)].times.composite += seconds;
     return image;
   };
 
-  for (int frame = 0; frame < render.frames; ++frame) {
+  if (resume_) {
+    FERRY_CHECK_EQ(resume_->sums.size(), frameBuffer.fixedSum().size());
+    frameBuffer.fixedSum() = std::move(resume_->sums);
+    resume_.reset();
+  }
+  const auto runStart = Clock::now();
+  auto writeCheckpointAfter = [&](int frame) {
+    uint64_t sent = 0;
+    std::vector<int64_t> sums = compositeFixed(comm_, frameBuffer, sent);
+    compositeBytes += sent;
+    if (!comm_.isRoot()) return;
+    Checkpoint c;
+    std::tie(c.identity, c.description) = imageIdentity();
+    c.width = render.width;
+    c.height = render.height;
+    c.frames = frame + 1;
+    c.samplesPerPixel = render.samplesPerPixel;
+    c.sums = std::move(sums);
+    try {
+      writeCheckpoint(settings_.checkpoint, c);
+    } catch (const std::exception& e) {
+      comm_.abortAll(e.what());  // the other ranks are in the next collective
+    }
+  };
+
+  for (int frame = firstFrame; frame <= lastFrame; ++frame) {
+    double secondsLeft = -1;
+    if (settings_.timeLimitSeconds > 0)
+      secondsLeft = std::max(0.0, settings_.timeLimitSeconds - secondsSince(runStart));
     FrameStats mine = renderer.renderFrame(frame, frameBuffer, [&](int done, int total) {
-      if (progress) progress({frame, done, total, false});
+      if (progress) progress({frame, done, total, false, secondsLeft});
     });
     stats.frames.push_back(sumOverRanks(comm_, mine));
-    if (frames == FrameSink::Frames::Every && frame + 1 < render.frames) {
+    // The frame that crosses the time limit is the last (every rank agrees:
+    // the slowest rank's clock decides).
+    if (settings_.timeLimitSeconds > 0 &&
+        comm_.max(secondsSince(runStart)) >= settings_.timeLimitSeconds)
+      lastFrame = frame;
+    if (!settings_.checkpoint.empty() &&
+        (frame == lastFrame || (frame + 1 - firstFrame) % settings_.checkpointEvery == 0))
+      writeCheckpointAfter(frame);
+    if (frames == FrameSink::Frames::Every && frame < lastFrame) {
       double seconds = 0;
       FrameImage image = compositeAfter(frame, seconds);
       // The other ranks go on into the next frame's collectives: a failure
@@ -241,9 +348,9 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
     }
   }
 
-  if (progress) progress({render.frames - 1, render.samplesPerPixel, render.samplesPerPixel, true});
+  if (progress) progress({lastFrame, render.samplesPerPixel, render.samplesPerPixel, true});
 
-  FrameImage image = compositeAfter(render.frames - 1, report.compositeSeconds);
+  FrameImage image = compositeAfter(lastFrame, report.compositeSeconds);
   report.compositeBytes = comm_.sum(compositeBytes);
   const ProcessMemory memory = readProcessMemory();
   report.memory = {

@@ -17,6 +17,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mpi/communicator.h"
@@ -27,6 +28,8 @@
 #include "session/session_settings.h"
 
 namespace ferry {
+
+struct Checkpoint;
 
 // Per-rank memory, each vector indexed by rank (the same on every rank).
 struct RankMemory {
@@ -57,6 +60,7 @@ struct RenderProgress {
   int samplesDone = 0;      // of that frame
   int samplesPerFrame = 0;  // wavefronts per frame
   bool rendered = false;
+  double secondsLeft = -1;  // of a time limit (-1: none)
 };
 using SessionProgress = std::function<void(const RenderProgress&)>;
 
@@ -85,6 +89,15 @@ class RenderSession {
 
   // Before run(): renders at this size instead (a scene's own, pbrt's Film).
   void setImageSize(int width, int height);
+  // Rank 0, before run() (not collective): continues the render held in a
+  // checkpoint (io/checkpoint_file.h): run() starts after its frames, with
+  // its image. Throws InputError naming the file if it cannot be read, or
+  // was made with another scene or other settings that shape the image
+  // (size, samples per frame, depth, seed, view), or holds every frame asked for.
+  void resumeFrom(const std::string& path);
+  // What a checkpoint must match: a hash of the scene and the settings that
+  // shape the image, and those settings in words (the same on every rank).
+  std::pair<uint64_t, std::string> imageIdentity() const;
   const SessionSettings& settings() const { return settings_; }
   // This rank's scene (its part, after partitioning): for its film settings.
   const Scene& scene() const;
@@ -105,6 +118,7 @@ class RenderSession {
   SessionSettings settings_;
   const Communicator& comm_;
   std::unique_ptr<Rank> rank_;
+  std::unique_ptr<Checkpoint> resume_;  // rank 0, from resumeFrom()
 };
 
 }  // namespace ferry

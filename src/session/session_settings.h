@@ -35,6 +35,13 @@ struct SessionSettings {
   // every rank runs the same deterministic partitioner. None given: the
   // paper's best on more than one rank (round-robin, which does nothing, on one).
   std::optional<PartitionerKind> partitioner;
+
+  // Long renders (io/checkpoint_file.h): the accumulated image is written to
+  // `checkpoint` every `checkpointEvery` frames and after the last one;
+  // `timeLimitSeconds` (> 0) makes the frame that crosses it the last.
+  std::string checkpoint;
+  int checkpointEvery = 10;
+  double timeLimitSeconds = 0;
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
 };
