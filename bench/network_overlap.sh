@@ -25,7 +25,8 @@ EXCHANGES=${EXCHANGES:-overlapped bulk}
 SCENE=${SCENE:-builtin:island}
 [ "$(id -u)" -eq 0 ] || { echo "network_overlap: needs root (ip netns, tc)" >&2; exit 1; }
 # shellcheck source=bench/netns.sh
-NETNS_PREFIX=fno source "$here/bench/netns.sh"
+NETNS_PREFIX=fno
+source "$here/bench/netns.sh"
 work=$(mktemp -d)
 cleanup() { netns_down; rm -rf "$work"; }
 trap cleanup EXIT

@@ -16,12 +16,14 @@ import re
 import sys
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
-THIRD_PARTY_HOMES = {"embree": "trace", "mpi": "mpi"}
+THIRD_PARTY_HOMES = {"embree": "trace", "mpi": "mpi", "httplib": "viewer"}
 
 
 def third_party_of(header):
     if header.startswith("embree3/") or header.startswith("embree4/"):
         return "embree"
+    if header == "httplib.h":
+        return "httplib"
     if header in ("mpi.h", "mpi.hpp") or header.startswith("openmpi/"):
         return "mpi"
     return None

@@ -1,4 +1,4 @@
-// The `ferry` command: subcommands render, info and partition.
+// The `ferry` command: subcommands render, view, info and partition.
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
@@ -8,6 +8,7 @@
 #include "app/info_command.h"
 #include "app/partition_command.h"
 #include "app/render_command.h"
+#include "app/view_command.h"
 #include "core/error.h"
 #include "mpi/mpi_communicator.h"
 
@@ -21,7 +22,9 @@ int main(int argc, char** argv) {
   RenderOptions renderOptions;
   InfoOptions infoOptions;
   PartitionCommandOptions partitionOptions;
+  ViewOptions viewOptions;
   addRenderCommand(app, renderOptions);
+  addViewCommand(app, viewOptions);
   addInfoCommand(app, infoOptions);
   addPartitionCommand(app, partitionOptions);
   try {
@@ -40,6 +43,11 @@ int main(int argc, char** argv) {
       MpiCommunicator comm(&argc, &argv);
       comm.reportFatalSignals();
       return runRender(renderOptions, comm);
+    }
+    if (app.got_subcommand("view")) {
+      MpiCommunicator comm(&argc, &argv);
+      comm.reportFatalSignals();
+      return runView(viewOptions, comm);
     }
     if (app.got_subcommand("info")) return runInfo(infoOptions);
     if (app.got_subcommand("partition")) return runPartition(partitionOptions);

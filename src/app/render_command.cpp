@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <optional>
 
@@ -42,7 +44,25 @@ LoadOptions sceneLoadOptions(const RenderOptions& o, const Communicator& comm) {
   return l;
 }
 
-// The flags, checked, as the session's settings: every mode is parsed here, once.
+// "x,y,z" -> a vector; throws InputError naming the flag.
+Vec3f parseVector(const std::string& flag, const std::string& text) {
+  Vec3f v;
+  size_t start = 0;
+  for (int i = 0; i < 3; ++i) {
+    const size_t end = i < 2 ? text.find(',', start) : text.size();
+    const std::string part = end == std::string::npos ? "" : text.substr(start, end - start);
+    char* rest = nullptr;
+    const float f = part.empty() ? 0.0f : std::strtof(part.c_str(), &rest);
+    if (part.empty() || rest != part.c_str() + part.size() || !std::isfinite(f))
+      throw InputError(fmt::format("{} '{}': expected three numbers x,y,z", flag, text));
+    v[i] = f;
+    start = end + 1;
+  }
+  return v;
+}
+
+}  // namespace
+
 SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm) {
   if (o.samplesPerPixel < 1)
     throw InputError(fmt::format("--spp {}: must be at least 1", o.samplesPerPixel));
@@ -51,7 +71,7 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--max-depth {}: must be 0 or more", o.maxDepth));
   if (o.threads < 0)
     throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
-  checkOutputPath(o.output);
+  if (o.writesImage) checkOutputPath(o.output);
   SessionSettings s;
   s.forwarding = parseForwardingMode(o.forwarding);
   s.exchange = resolveExchangeMode(parseExchangeMode(o.exchange), s.forwarding);
@@ -86,8 +106,29 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   s.scene = o.scene;
   s.load = sceneLoadOptions(o, comm);
   s.threads = o.threads;
+  if (!o.lookFrom.empty() || !o.lookAt.empty()) {
+    if (o.lookFrom.empty() || o.lookAt.empty())
+      throw InputError("--look-from and --look-at go together");
+    CameraView c;
+    c.name = "command line";
+    c.from = parseVector("--look-from", o.lookFrom);
+    c.at = parseVector("--look-at", o.lookAt);
+    if (!o.up.empty()) c.up = parseVector("--up", o.up);
+    if (o.fov != 0) c.fovY = o.fov;
+    if (!(length(c.at - c.from) > 0))
+      throw InputError("--look-from and --look-at must be different points");
+    if (!(length(cross(normalize(c.at - c.from), c.up)) > 1e-4f))
+      throw InputError("--up must not be parallel to the view direction");
+    if (!(c.fovY > 0.01f && c.fovY < 179))
+      throw InputError(fmt::format("--fov {}: expected 0.01 to 179 degrees", o.fov));
+    s.render.camera = c;
+  } else if (!o.up.empty() || o.fov != 0) {
+    throw InputError("--up and --fov go with --look-from and --look-at");
+  }
   return s;
 }
+
+namespace {
 
 // The image size and file a scene asks for (pbrt's Film) when the command
 // line does not say; returns the output file.
@@ -138,6 +179,95 @@ void applyPartitionerFlags(const RenderOptions& o, SessionSettings& settings) {
                                  o.replicationBudget));
 }
 
+void addRenderingOptions(CLI::App* command, RenderOptions& o) {
+  command
+      ->add_option("scene", o.scene,
+                   "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in: builtin:island, "
+                   "builtin:landscape, builtin:cornell,\n"
+                   "builtin:furnace, with parameters as builtin:island?scale=4&seed=7")
+      ->capture_default_str();
+  command->add_option("--size", o.size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  command->add_option("--spp", o.samplesPerPixel, "Samples (paths) per pixel in each frame")
+      ->capture_default_str();
+  command
+      ->add_option("--max-depth", o.maxDepth,
+                   "Maximum scattering events per path (1: direct light only, 0: emitters only)")
+      ->capture_default_str();
+  command->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
+  command->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")
+      ->capture_default_str();
+  command->add_option("--threads", o.threads, "Worker threads per rank (0: all cores)")
+      ->capture_default_str();
+  command->add_option("--exposure", o.exposure, "Exposure in stops for the PNG tone mapping")
+      ->capture_default_str();
+  command
+      ->add_option(
+          "--forwarding", o.forwarding,
+          "How rays travel between ranks: proxies (the paper: closest proxy of an unvisited\n"
+          "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
+          "wins, as Kilauea)")
+      ->capture_default_str();
+  command
+      ->add_option(
+          "--exchange", o.exchange,
+          "How ranks exchange rays: overlapped (rays leave as soon as a batch is traced, in\n"
+          "non-blocking messages, while the rank works on other chunks and bounces; no\n"
+          "collective per round), bulk (the paper's: a whole-image wavefront per bounce, one\n"
+          "all-to-all per round) or auto (overlapped; bulk for --forwarding broadcast)")
+      ->capture_default_str();
+  command
+      ->add_option("--chunk", o.chunkPixels,
+                   "Camera paths a rank takes at once (and the largest batch it traces at\n"
+                   "once). The image is the same for any value.")
+      ->capture_default_str();
+  command
+      ->add_option(
+          "--path-layout", o.pathLayout,
+          "The path on the wire: auto (8-rank mask, 64-rank mask, replay above 64 ranks),\n"
+          "mask (visited ranks as a bit mask; up to 64 ranks) or replay (only the generating\n"
+          "rank; any rank recomputes the visited ranks from the proxies)")
+      ->capture_default_str();
+  command
+      ->add_option(
+          "--retrace", o.retrace,
+          "Which shaded paths re-trace their ray to recover the hit (the compact path carries\n"
+          "none): remote (only those whose hit another rank found; a rank keeps the hits it\n"
+          "found) or all (every one, as the paper). The image is the same.")
+      ->capture_default_str();
+  command
+      ->add_option(
+          "--instancing", o.instancing,
+          "Which objects get an Embree instance level: shared (objects placed more than once\n"
+          "or transformed; an object placed once, untransformed, is put in the top-level BVH,\n"
+          "which saves every ray an instance transform) or always (every object). Instanced\n"
+          "objects are never flattened either way. The image is the same.")
+      ->capture_default_str();
+  command->add_option(
+      "--partitioner,--partition", o.partition,
+      "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
+      "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
+      "round-robin, random (for testing). Default: best on more than one rank. Not used\n"
+      "for a part directory (its manifest names the partitioner that made it).");
+  command->add_flag("--keep-objects-whole", o.keepObjectsWhole,
+                    "Partitioners keep non-instanced content whole (default: broken into meshes)");
+  command
+      ->add_option(
+          "--replication-budget", o.replicationBudget,
+          "best: copies of large, cheap content may add this fraction of the scene's bytes")
+      ->capture_default_str();
+  command->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
+  command->add_flag("--env-fallback", o.envFallback,
+                    "Render a scene whose environment map is missing with a constant white\n"
+                    "environment instead (the file is named in a warning)");
+  command
+      ->add_option("--look-from", o.lookFrom,
+                   "A camera given outright, instead of a named view: its position x,y,z")
+      ->type_name("X,Y,Z");
+  command->add_option("--look-at", o.lookAt, "The point it looks at, x,y,z")->type_name("X,Y,Z");
+  command->add_option("--up", o.up, "Its up direction (default 0,1,0)")->type_name("X,Y,Z");
+  command->add_option("--fov", o.fov, "Its vertical field of view in degrees (default 45)");
+}
+
 void parseImageSize(const std::string& text, int& width, int& height) {
   auto bad = [&]() {
     return InputError(fmt::format("--size '{}': expected WIDTHxHEIGHT, e.g. 1280x720", text));
@@ -163,25 +293,8 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
       "  mpirun -np 4 ferry render builtin:island -o island.png\n"
       "The image is the same whatever the rank count, --threads, --partition, --forwarding,\n"
       "--exchange or --chunk (the frame buffer sums in fixed point).");
-  render
-      ->add_option("scene", o.scene,
-                   "Scene file (.obj, .ply, .pbrt, .gltf, .glb) or built-in: builtin:island, "
-                   "builtin:landscape, builtin:cornell,\n"
-                   "builtin:furnace, with parameters as builtin:island?scale=4&seed=7")
-      ->capture_default_str();
-  render->add_option("--size", o.size, "Image size WIDTHxHEIGHT")->capture_default_str();
-  render->add_option("--spp", o.samplesPerPixel, "Samples (paths) per pixel in each frame")
-      ->capture_default_str();
+  addRenderingOptions(render, o);
   render->add_option("--frames", o.frames, "Frames to render and accumulate progressively")
-      ->capture_default_str();
-  render
-      ->add_option("--max-depth", o.maxDepth,
-                   "Maximum scattering events per path (1: direct light only, 0: emitters only)")
-      ->capture_default_str();
-  render->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
-  render->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")
-      ->capture_default_str();
-  render->add_option("--threads", o.threads, "Worker threads per rank (0: all cores)")
       ->capture_default_str();
   render
       ->add_option("-o,--output", o.output,
@@ -191,67 +304,6 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
       "--stats", o.statsPath,
       "Write counters (rays traced, forwarded, bytes sent, rounds per bounce), timings and\n"
       "memory per rank as JSON to this file");
-  render->add_option("--exposure", o.exposure, "Exposure in stops for the PNG tone mapping")
-      ->capture_default_str();
-  render
-      ->add_option(
-          "--forwarding", o.forwarding,
-          "How rays travel between ranks: proxies (the paper: closest proxy of an unvisited\n"
-          "owner), ring (every rank in turn, as barney), broadcast (every rank, closest hit\n"
-          "wins, as Kilauea)")
-      ->capture_default_str();
-  render
-      ->add_option(
-          "--exchange", o.exchange,
-          "How ranks exchange rays: overlapped (rays leave as soon as a batch is traced, in\n"
-          "non-blocking messages, while the rank works on other chunks and bounces; no\n"
-          "collective per round), bulk (the paper's: a whole-image wavefront per bounce, one\n"
-          "all-to-all per round) or auto (overlapped; bulk for --forwarding broadcast)")
-      ->capture_default_str();
-  render
-      ->add_option("--chunk", o.chunkPixels,
-                   "Camera paths a rank takes at once (and the largest batch it traces at\n"
-                   "once). The image is the same for any value.")
-      ->capture_default_str();
-  render
-      ->add_option(
-          "--path-layout", o.pathLayout,
-          "The path on the wire: auto (8-rank mask, 64-rank mask, replay above 64 ranks),\n"
-          "mask (visited ranks as a bit mask; up to 64 ranks) or replay (only the generating\n"
-          "rank; any rank recomputes the visited ranks from the proxies)")
-      ->capture_default_str();
-  render
-      ->add_option(
-          "--retrace", o.retrace,
-          "Which shaded paths re-trace their ray to recover the hit (the compact path carries\n"
-          "none): remote (only those whose hit another rank found; a rank keeps the hits it\n"
-          "found) or all (every one, as the paper). The image is the same.")
-      ->capture_default_str();
-  render
-      ->add_option(
-          "--instancing", o.instancing,
-          "Which objects get an Embree instance level: shared (objects placed more than once\n"
-          "or transformed; an object placed once, untransformed, is put in the top-level BVH,\n"
-          "which saves every ray an instance transform) or always (every object). Instanced\n"
-          "objects are never flattened either way. The image is the same.")
-      ->capture_default_str();
-  render->add_option(
-      "--partitioner,--partition", o.partition,
-      "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
-      "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
-      "round-robin, random (for testing). Default: best on more than one rank. Not used\n"
-      "for a part directory (its manifest names the partitioner that made it).");
-  render->add_flag("--keep-objects-whole", o.keepObjectsWhole,
-                   "Partitioners keep non-instanced content whole (default: broken into meshes)");
-  render
-      ->add_option(
-          "--replication-budget", o.replicationBudget,
-          "best: copies of large, cheap content may add this fraction of the scene's bytes")
-      ->capture_default_str();
-  render->add_flag(
-      "--show-partition{-1}", o.showPartition,
-      "Instead of rendering, draw what each rank owns (replicated content checkerboarded)\n"
-      "and the proxies as box outlines, to -o (PNG); =N: for N ranks (default: the MPI ranks)");
   render->add_option(
       "--checkpoint", o.checkpoint,
       "Write the accumulated image (exact sums), its frame count and a hash of the scene and\n"
@@ -267,10 +319,10 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
   render->add_option("--time-limit", o.timeLimit,
                      "Seconds: the frame that crosses it is the last (0: none); the image is\n"
                      "written as usual, with the frames done");
-  render->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
-  render->add_flag("--env-fallback", o.envFallback,
-                   "Render a scene whose environment map is missing with a constant white\n"
-                   "environment instead (the file is named in a warning)");
+  render->add_flag(
+      "--show-partition{-1}", o.showPartition,
+      "Instead of rendering, draw what each rank owns (replicated content checkerboarded)\n"
+      "and the proxies as box outlines, to -o (PNG); =N: for N ranks (default: the MPI ranks)");
   render->callback([&o, render]() {
     o.sizeGiven = render->get_option("--size")->count() > 0;
     o.outputGiven = render->get_option("--output")->count() > 0;

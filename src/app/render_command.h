@@ -55,9 +55,19 @@ struct RenderOptions {
   // --show-partition[=N]: draw the partition instead of rendering (0: off;
   // -1: for as many ranks as MPI runs; N: for N ranks).
   int showPartition = 0;
+  // --look-from/--look-at/--up/--fov: a camera given outright ("x,y,z").
+  std::string lookFrom, lookAt, up;
+  float fov = 0;  // 0: the view's
+  // `ferry view` shares these options but writes no image file.
+  bool writesImage = true;
 };
 
 void addRenderCommand(CLI::App& app, RenderOptions& options);
+// The options `render` and `view` share: the scene, how it is rendered and
+// spread over ranks (not the output, frames or checkpoints).
+void addRenderingOptions(CLI::App* command, RenderOptions& options);
+// The flags, checked, as a session's settings: every mode parsed once.
+SessionSettings sessionSettings(const RenderOptions& options, const Communicator& comm);
 // Renders on every rank of `comm`; returns this rank's exit code. Errors every
 // rank meets while setting up are agreed on and reported once; an error on
 // one rank while rendering ends all ranks (see Communicator).

@@ -307,6 +307,17 @@ void writePng(const std::string& path, int width, int height, const std::vector<
   });
 }
 
+std::string encodePng(int width, int height, const std::vector<uint8_t>& rgba) {
+  checkImage("encodePng", width, height, rgba.size(), 4);
+  std::string out;
+  auto append = [](void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), size_t(size));
+  };
+  if (!stbi_write_png_to_func(append, &out, width, height, 4, rgba.data(), width * 4))
+    throw std::runtime_error("cannot encode PNG");
+  return out;
+}
+
 void writeExr(const std::string& path, const LinearImage& image) {
   checkImage("writeExr", image.width, image.height, image.rgb.size(), 1);
   // Ferry's own rounding, which saturates instead of overflowing to infinity.

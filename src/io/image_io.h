@@ -48,6 +48,8 @@ struct LinearImage {
   std::vector<Vec3f> rgb;
 };
 void writePng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgba);
+// The same PNG in memory (the viewer serves it).
+std::string encodePng(int width, int height, const std::vector<uint8_t>& rgba);
 // Half-float RGB, ZIP compressed, rounded as core/half.h does (saturating at 65504).
 void writeExr(const std::string& path, const LinearImage& image);
 // "PF", little-endian (scale -1), rows bottom to top as the format says.

@@ -25,7 +25,8 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
     : geometry_(geometry),
       traversal_(traversal),
       settings_(settings),
-      camera_(scene.view(settings.view), settings.width, settings.height),
+      camera_(settings.camera ? *settings.camera : scene.view(settings.view), settings.width,
+              settings.height),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed) {
   if (uint64_t(settings.width) * uint64_t(settings.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.width,

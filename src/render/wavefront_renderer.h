@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,7 @@
 #include "render/path_shading.h"
 #include "render/ray_traversal.h"
 #include "render/render_stats.h"
+#include "scene/scene.h"
 
 namespace ferry {
 
@@ -38,6 +40,8 @@ struct RenderSettings {
   int maxDepth = 5;  // scattering events; 1 = direct lighting only
   uint32_t seed = 1;
   std::string view;  // empty: the scene's first view
+  // A camera given outright (--look-from/--look-at, the viewer): used instead of `view`.
+  std::optional<CameraView> camera;
   // Shading re-traces every path it shades (the paper, whose compact path
   // carries no hit) instead of only those whose hit was found on another
   // rank. The image is the same either way (tests check it); only the speed differs.

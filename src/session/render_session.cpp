@@ -95,13 +95,6 @@ void RenderSession::Rank::buildTraceStructures(Instancing instancing) {
 
 namespace {
 
-// Each rank's figure, on every rank.
-std::vector<double> spread(const Communicator& comm, double mine) {
-  std::vector<double> v(comm.size(), 0.0);
-  v[comm.rank()] = mine;
-  return comm.sum(std::span<const double>(v));
-}
-
 // Sums every counter over ranks (seconds: the slowest rank).
 FrameStats sumOverRanks(const Communicator& comm, const FrameStats& mine) {
   FrameStats local = mine;
@@ -167,7 +160,7 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
   // partitioner, exchange or threads, which do not. "key=value" fields, so
   // that a mismatch can name the ones that differ.
   const std::string summary = rank_->summary.toJson().dump();
-  const CameraView& v = rank_->scene.view(r.view);
+  const CameraView& v = r.camera ? *r.camera : rank_->scene.view(r.view);
   const std::string description = fmt::format(
       "scene={} (content {}); size={}x{}; spp={}; max-depth={}; seed={}; view={} from ({}, {}, "
       "{}) at ({}, {}, {}) up ({}, {}, {}) fov {}",
@@ -255,21 +248,119 @@ SessionReport RenderSession::run(FrameSink& sink, const SessionProgress& progres
 }
 
 template <typename Path>
+std::unique_ptr<RayTraversal<Path>> RenderSession::makeTraversal(
+    DistributedTraversal<Path>** distributed) {
+  Rank& rank = *rank_;
+  // One rank needs no forwarding machinery (no proxy queries, no collectives per round).
+  if (comm_.size() == 1) return std::make_unique<LocalTraversal<Path>>(*rank.geometry);
+  auto d = std::make_unique<DistributedTraversal<Path>>(comm_, *rank.geometry, rank.partition,
+                                                        settings_.forwarding, settings_.exchange,
+                                                        settings_.render.chunkPixels);
+  if (distributed) *distributed = d.get();
+  return d;
+}
+
+namespace {
+
+// Every rank's memory now, on every rank (one collective).
+RankMemory rankMemory(const Communicator& comm, double estimated, double embree,
+                      double embreePeak) {
+  const ProcessMemory memory = readProcessMemory();
+  const size_t n = size_t(comm.size()), me = size_t(comm.rank());
+  std::vector<double> mine(5 * n, 0.0);
+  const double values[5] = {estimated, embree, embreePeak, double(memory.residentBytes),
+                            double(memory.peakResidentBytes)};
+  for (size_t k = 0; k < 5; ++k) mine[k * n + me] = values[k];
+  const std::vector<double> all = comm.sum(std::span<const double>(mine));
+  auto column = [&](size_t k) {
+    return std::vector<double>(all.begin() + ptrdiff_t(k * n),
+                               all.begin() + ptrdiff_t((k + 1) * n));
+  };
+  return {column(0), column(1), column(2), column(3), column(4)};
+}
+
+}  // namespace
+
+void RenderSession::runInteractive(InteractiveControl* control, uint64_t maxFrames) {
+  FERRY_CHECK(!comm_.isRoot() || control);
+  const int ranks = comm_.size();
+  if (settings_.pathLayout == PathLayout::Replay ||
+      (settings_.pathLayout == PathLayout::Auto && ranks > 64))
+    return interactiveWithLayout<PathReplay>(control, maxFrames);
+  if (ranks <= 8) return interactiveWithLayout<Path8>(control, maxFrames);
+  interactiveWithLayout<Path64>(control, maxFrames);
+}
+
+template <typename Path>
+void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames) {
+  Rank& rank = *rank_;
+  std::unique_ptr<RayTraversal<Path>> traversal = makeTraversal<Path>(nullptr);
+  RenderSettings render = settings_.render;
+  render.frames = 1;
+  if (!render.camera) render.camera = rank.scene.view(render.view);
+  auto renderer = std::make_unique<WavefrontRenderer<Path>>(rank.scene, *rank.geometry,
+                                                            *rank.lights, *traversal, render);
+  // Reused from frame to frame; made anew only when the image size changes.
+  FrameBuffer frameBuffer(render.width, render.height);
+  int accumulated = 0;
+  uint64_t compositeBytes = 0;
+  for (uint64_t frames = 0; maxFrames == 0 || frames < maxFrames; ++frames) {
+    ViewChange change;
+    if (comm_.isRoot()) change = control->takeChange();
+    comm_.broadcast(change);
+    if (change.flags & ViewChange::kQuit) break;
+    if (change.flags & ViewChange::kExposure) render.toneMapping.exposure = change.exposure;
+    if (change.flags & (ViewChange::kCamera | ViewChange::kSettings)) {
+      if (change.flags & ViewChange::kCamera) {
+        CameraView& c = *render.camera;
+        c.from = Vec3f(change.from[0], change.from[1], change.from[2]);
+        c.at = Vec3f(change.at[0], change.at[1], change.at[2]);
+        c.up = Vec3f(change.up[0], change.up[1], change.up[2]);
+        c.fovY = change.fovY;
+      }
+      if (change.flags & ViewChange::kSettings) {
+        render.samplesPerPixel = change.samplesPerPixel;
+        render.maxDepth = change.maxDepth;
+        if (change.width != render.width || change.height != render.height) {
+          render.width = change.width;
+          render.height = change.height;
+          frameBuffer = FrameBuffer(render.width, render.height);
+        }
+      }
+      frameBuffer.clear();
+      accumulated = 0;
+      renderer = std::make_unique<WavefrontRenderer<Path>>(rank.scene, *rank.geometry, *rank.lights,
+                                                           *traversal, render);
+    }
+    const FrameStats mine = renderer->renderFrame(accumulated, frameBuffer);
+    InteractiveFrame frame;
+    frame.stats = sumOverRanks(comm_, mine);
+    ++accumulated;
+    const auto start = Clock::now();
+    frame.image = composite(comm_, frameBuffer, 1.0f / float(accumulated * render.samplesPerPixel),
+                            FrameSink::Pixels::ToneMapped, render.toneMapping, compositeBytes);
+    frame.stats.times.composite = comm_.max(secondsSince(start));
+    frame.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
+                              double(rank.embreePeakBytes));
+    if (!comm_.isRoot()) continue;
+    frame.accumulated = accumulated;
+    frame.camera = *render.camera;
+    frame.settings = render;
+    frame.image.frame = accumulated - 1;
+    try {
+      control->publish(frame);
+    } catch (const std::exception& e) {
+      comm_.abortAll(e.what());  // the other ranks are in the next frame's collectives
+    }
+  }
+}
+
+template <typename Path>
 SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgress& progress) {
   Rank& rank = *rank_;
   const RenderSettings& render = settings_.render;
-  // One rank needs no forwarding machinery (no proxy queries, no collectives per round).
-  std::unique_ptr<RayTraversal<Path>> traversal;
   DistributedTraversal<Path>* distributed = nullptr;
-  if (comm_.size() == 1) {
-    traversal = std::make_unique<LocalTraversal<Path>>(*rank.geometry);
-  } else {
-    auto d = std::make_unique<DistributedTraversal<Path>>(comm_, *rank.geometry, rank.partition,
-                                                          settings_.forwarding, settings_.exchange,
-                                                          render.chunkPixels);
-    distributed = d.get();
-    traversal = std::move(d);
-  }
+  std::unique_ptr<RayTraversal<Path>> traversal = makeTraversal<Path>(&distributed);
   WavefrontRenderer<Path> renderer(rank.scene, *rank.geometry, *rank.lights, *traversal, render);
   FrameBuffer frameBuffer(render.width, render.height);
   const FrameSink::Frames frames = sink.frames();
@@ -352,11 +443,8 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
 
   FrameImage image = compositeAfter(lastFrame, report.compositeSeconds);
   report.compositeBytes = comm_.sum(compositeBytes);
-  const ProcessMemory memory = readProcessMemory();
-  report.memory = {
-      spread(comm_, double(rank.ownedEstimate.total())), spread(comm_, double(rank.embreeBytes)),
-      spread(comm_, double(rank.embreePeakBytes)), spread(comm_, double(memory.residentBytes)),
-      spread(comm_, double(memory.peakResidentBytes))};
+  report.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
+                             double(rank.embreePeakBytes));
   report.raysReceived = comm_.sum(distributed ? distributed->received() : 0);
   report.revisits = comm_.sum(distributed ? distributed->revisits() : 0);
   report.pathLayout = layoutName<Path>();

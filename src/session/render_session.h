@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "distributed/distributed_traversal.h"
 #include "mpi/communicator.h"
 #include "render/render_stats.h"
 #include "scene/scene.h"
@@ -64,6 +65,38 @@ struct RenderProgress {
 };
 using SessionProgress = std::function<void(const RenderProgress&)>;
 
+// A change an interactive viewer asks for, applied by every rank at the next
+// frame boundary (rank 0's is broadcast: plain data). Any change but the
+// exposure restarts the accumulation.
+struct ViewChange {
+  enum : uint32_t { kCamera = 1, kSettings = 2, kExposure = 4, kQuit = 8 };
+  uint32_t flags = 0;
+  float from[3], at[3], up[3];
+  float fovY;
+  int32_t width, height, samplesPerPixel, maxDepth;
+  float exposure;
+};
+
+// What an interactive render reports after every frame (rank 0).
+struct InteractiveFrame {
+  FrameImage image;         // the accumulated image, tone mapped
+  int accumulated = 0;      // frames in it since the last change
+  FrameStats stats;         // this frame, summed over ranks (seconds: the slowest rank)
+  RankMemory memory;        // now, per rank
+  CameraView camera;        // what the image shows
+  RenderSettings settings;  // size, samples per frame, depth, exposure
+};
+
+// Drives an interactive render (the viewer, rank 0): asked for changes
+// before every frame, told every frame.
+class InteractiveControl {
+ public:
+  virtual ~InteractiveControl() = default;
+  // What changed since the last call (and forget it).
+  virtual ViewChange takeChange() = 0;
+  virtual void publish(const InteractiveFrame& frame) = 0;
+};
+
 // Throws InputError if a session cannot run on `ranks` ranks with `layout`
 // (more than kMaxRanks, or masks asked for above 64 ranks). The session
 // checks it when made; a command line may check it first.
@@ -86,6 +119,13 @@ class RenderSession {
   // after the last collective, when the other ranks have returned. (What the
   // sink throws for an earlier image ends every rank here.)
   SessionReport run(FrameSink& sink, const SessionProgress& progress = {});
+
+  // Renders frame after frame, accumulating, until rank 0's control says
+  // quit (or `maxFrames` frames, if > 0): before each frame rank 0 asks its
+  // control for changes and broadcasts them; after each frame every rank
+  // composites and rank 0 publishes. Collective; `control` is used on rank 0
+  // only (may be null elsewhere).
+  void runInteractive(InteractiveControl* control, uint64_t maxFrames = 0);
 
   // Before run(): renders at this size instead (a scene's own, pbrt's Film).
   void setImageSize(int width, int height);
@@ -114,6 +154,12 @@ class RenderSession {
 
   template <typename Path>
   SessionReport runWithLayout(FrameSink& sink, const SessionProgress& progress);
+  template <typename Path>
+  void interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames);
+  // The traversal this session's ranks use (local on one rank); `distributed`
+  // set when it is the distributed one.
+  template <typename Path>
+  std::unique_ptr<RayTraversal<Path>> makeTraversal(DistributedTraversal<Path>** distributed);
 
   SessionSettings settings_;
   const Communicator& comm_;

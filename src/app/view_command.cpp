@@ -1,0 +1,80 @@
+#include "app/view_command.h"
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <optional>
+
+#include "app/progress.h"
+#include "core/error.h"
+#include "mpi/communicator.h"
+#include "session/render_session.h"
+#include "viewer/viewer_server.h"
+
+namespace ferry {
+
+void addViewCommand(CLI::App& app, ViewOptions& o) {
+  CLI::App* view = app.add_subcommand(
+      "view",
+      "Render a scene interactively in the browser: every rank renders progressively, rank 0\n"
+      "serves the image, the controls and live stats. Prints the URL. On a cluster, reach the\n"
+      "head node's port through an SSH tunnel:\n"
+      "  mpirun -np 4 ferry view builtin:island --port 8080\n"
+      "  ssh -L 8080:localhost:8080 head-node     (then open http://localhost:8080/)\n"
+      "API: GET / (the page), GET /frame.png, GET /stats (JSON), POST /camera\n"
+      "{\"from\":[x,y,z],\"at\":[x,y,z],\"up\":[x,y,z],\"fov\":deg}, POST /settings "
+      "{\"width\",\"height\",\n"
+      "\"spp\",\"max_depth\",\"exposure\",\"view\"}, POST /quit. Ctrl-C also quits.");
+  o.render.size = "640x360";
+  o.render.writesImage = false;
+  addRenderingOptions(view, o.render);
+  view->add_option("--port", o.port, "Port of the HTTP server on rank 0 (0: any free port)")
+      ->capture_default_str();
+  view->add_option("--bind", o.bind,
+                   "Address it listens on: 127.0.0.1 (this machine only) unless you say\n"
+                   "otherwise, e.g. 0.0.0.0 for every interface")
+      ->capture_default_str();
+  view->add_option("--frames", o.frames, "Stop after this many frames (0: when asked to quit)")
+      ->capture_default_str();
+}
+
+int runView(const ViewOptions& o, const Communicator& comm) {
+  std::optional<RenderSession> session;
+  std::optional<ViewerServer> server;
+  std::string error;
+  try {
+    const SessionSettings settings = sessionSettings(o.render, comm);
+    const bool talk = comm.isRoot() && !o.render.quiet;
+    Progress loading("load", 1, talk);
+    loading.update(0, o.render.scene);
+    session.emplace(settings, comm);
+    loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", session->loadSeconds(),
+                               session->buildSeconds()));
+    if (comm.isRoot()) {
+      const Scene& scene = session->scene();
+      const RenderSettings& r = session->settings().render;
+      server.emplace(o.bind, o.port, scene.views, r.camera ? *r.camera : scene.view(r.view), r,
+                     comm.size());
+    }
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (comm.agreeOnFailure(!error.empty(), error)) return 1;
+
+  quitOnSignals();
+  if (comm.isRoot()) {
+    fmt::print("ferry view: {} ({} rank{}; POST /quit or Ctrl-C to stop)\n", server->url(),
+               comm.size(), comm.size() == 1 ? "" : "s");
+    std::fflush(stdout);
+  }
+  try {
+    session->runInteractive(server ? &*server : nullptr, o.frames);
+  } catch (const std::exception& e) {
+    comm.abortAll(e.what());
+  }
+  if (comm.isRoot() && !o.render.quiet) fmt::print("ferry view: stopped\n");
+  return 0;
+}
+
+}  // namespace ferry

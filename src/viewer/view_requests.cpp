@@ -1,0 +1,123 @@
+#include "viewer/view_requests.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <set>
+
+namespace ferry {
+namespace {
+
+nlohmann::json parseObject(const std::string& body, const std::set<std::string>& allowed) {
+  nlohmann::json j = nlohmann::json::parse(body, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) throw RequestError("the body is not valid JSON");
+  if (!j.is_object()) throw RequestError("the body must be a JSON object");
+  for (const auto& [key, value] : j.items())
+    if (!allowed.count(key)) throw RequestError(fmt::format("unknown field '{}'", key));
+  return j;
+}
+
+double finiteNumber(const nlohmann::json& j, const std::string& key) {
+  const nlohmann::json& v = j.at(key);
+  if (!v.is_number()) throw RequestError(fmt::format("'{}' must be a number", key));
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) throw RequestError(fmt::format("'{}' must be finite", key));
+  return d;
+}
+
+Vec3f vector3(const nlohmann::json& j, const std::string& key) {
+  const nlohmann::json& v = j.at(key);
+  if (!v.is_array() || v.size() != 3)
+    throw RequestError(fmt::format("'{}' must be an array of 3 numbers", key));
+  Vec3f out;
+  for (int i = 0; i < 3; ++i) {
+    if (!v[size_t(i)].is_number())
+      throw RequestError(fmt::format("'{}' must be an array of 3 numbers", key));
+    const double d = v[size_t(i)].get<double>();
+    // Coordinates beyond 1e30 overflow the camera's arithmetic in float.
+    if (!std::isfinite(d) || std::abs(d) > 1e30)
+      throw RequestError(fmt::format("'{}' must hold finite numbers", key));
+    out[i] = float(d);
+  }
+  return out;
+}
+
+int integerIn(const nlohmann::json& j, const std::string& key, int lo, int hi) {
+  const nlohmann::json& v = j.at(key);
+  if (!v.is_number_integer()) throw RequestError(fmt::format("'{}' must be a whole number", key));
+  const int64_t i = v.get<int64_t>();
+  if (i < lo || i > hi)
+    throw RequestError(fmt::format("'{}' {} is out of range [{}, {}]", key, i, lo, hi));
+  return int(i);
+}
+
+}  // namespace
+
+void setCamera(const CameraView& c, ViewChange& change) {
+  for (int i = 0; i < 3; ++i) {
+    change.from[i] = c.from[i];
+    change.at[i] = c.at[i];
+    change.up[i] = c.up[i];
+  }
+  change.fovY = c.fovY;
+  change.flags |= ViewChange::kCamera;
+}
+
+void applyCameraRequest(const std::string& body, const CameraView& current, ViewChange& change) {
+  const nlohmann::json j = parseObject(body, {"from", "at", "up", "fov"});
+  if (!j.contains("from") || !j.contains("at")) throw RequestError("'from' and 'at' are required");
+  CameraView c = current;
+  c.from = vector3(j, "from");
+  c.at = vector3(j, "at");
+  if (j.contains("up")) c.up = vector3(j, "up");
+  if (j.contains("fov")) {
+    const double fov = finiteNumber(j, "fov");
+    if (!(fov > 0.01 && fov < 179))
+      throw RequestError("'fov' must be between 0.01 and 179 degrees");
+    c.fovY = float(fov);
+  }
+  const Vec3f forward = c.at - c.from;
+  if (!(length(forward) > 0)) throw RequestError("'from' and 'at' must differ");
+  if (!(length(cross(normalize(forward), c.up)) > 1e-4f))
+    throw RequestError("'up' must not be parallel to the view direction (or zero)");
+  setCamera(c, change);
+}
+
+void applySettingsRequest(const std::string& body, const RenderSettings& current,
+                          const std::vector<CameraView>& views, const ViewLimits& limits,
+                          ViewChange& change) {
+  const nlohmann::json j =
+      parseObject(body, {"width", "height", "spp", "max_depth", "exposure", "view"});
+  int width = current.width, height = current.height;
+  int spp = current.samplesPerPixel, depth = current.maxDepth;
+  if (j.contains("width")) width = integerIn(j, "width", 1, limits.maxSide);
+  if (j.contains("height")) height = integerIn(j, "height", 1, limits.maxSide);
+  if (j.contains("spp")) spp = integerIn(j, "spp", 1, limits.maxSamplesPerPixel);
+  if (j.contains("max_depth")) depth = integerIn(j, "max_depth", 0, limits.maxDepth);
+  if (j.contains("exposure")) {
+    const double exposure = finiteNumber(j, "exposure");
+    if (std::abs(exposure) > 30) throw RequestError("'exposure' must be between -30 and 30 stops");
+    change.exposure = float(exposure);
+    change.flags |= ViewChange::kExposure;
+  }
+  if (j.contains("view")) {
+    if (!j.at("view").is_string()) throw RequestError("'view' must be a string");
+    const std::string name = j.at("view").get<std::string>();
+    const CameraView* found = nullptr;
+    for (const CameraView& v : views)
+      if (v.name == name) found = &v;
+    if (!found) throw RequestError(fmt::format("no view named '{}'", name));
+    setCamera(*found, change);
+  }
+  if (width != current.width || height != current.height || spp != current.samplesPerPixel ||
+      depth != current.maxDepth) {
+    change.width = width;
+    change.height = height;
+    change.samplesPerPixel = spp;
+    change.maxDepth = depth;
+    change.flags |= ViewChange::kSettings;
+  }
+}
+
+}  // namespace ferry

@@ -1,0 +1,45 @@
+// The viewer's API requests, checked: POST /camera and POST /settings bodies
+// parsed into a ViewChange (session/render_session.h). Pure functions, so
+// the malformed-input corpus is a unit test; the server answers 400 with
+// the message of a RequestError, and no rank ever sees a bad value.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+#include "session/render_session.h"
+
+namespace ferry {
+
+// A request the viewer refuses; what() says why, for the 400 response.
+class RequestError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Limits of what a client may ask for (a browser must not be able to make a
+// rank allocate gigabytes).
+struct ViewLimits {
+  int maxSide = 4096;
+  int maxSamplesPerPixel = 64;
+  int maxDepth = 64;
+};
+
+// {"from":[x,y,z],"at":[x,y,z],"up":[x,y,z],"fov":degrees}: from and at are
+// required; up and fov keep `current`'s when absent. Adds kCamera to `change`.
+void applyCameraRequest(const std::string& body, const CameraView& current, ViewChange& change);
+
+// {"width":W,"height":H,"spp":N,"max_depth":D,"exposure":stops,"view":"name"}:
+// every field optional; a field absent keeps `current`'s. "view" moves the
+// camera to that named view of the scene (`views`). Adds kSettings,
+// kExposure or kCamera to `change` as needed.
+void applySettingsRequest(const std::string& body, const RenderSettings& current,
+                          const std::vector<CameraView>& views, const ViewLimits& limits,
+                          ViewChange& change);
+
+// `camera` into a ViewChange's camera fields (with kCamera).
+void setCamera(const CameraView& camera, ViewChange& change);
+
+}  // namespace ferry

@@ -1,0 +1,145 @@
+// The viewer's request corpus: every malformed camera or settings body gets
+// a RequestError with a reason and leaves the change untouched; good ones
+// become exactly the change they ask for.
+#include "viewer/view_requests.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+namespace ferry {
+namespace {
+
+CameraView current() {
+  CameraView c;
+  c.name = "default";
+  c.from = Vec3f(0, 1, 5);
+  c.at = Vec3f(0, 1, 0);
+  c.up = Vec3f(0, 1, 0);
+  c.fovY = 40;
+  return c;
+}
+
+RenderSettings settings() {
+  RenderSettings s;
+  s.width = 64;
+  s.height = 48;
+  s.samplesPerPixel = 1;
+  s.maxDepth = 5;
+  return s;
+}
+
+std::vector<CameraView> views() {
+  CameraView top = current();
+  top.name = "top";
+  top.from = Vec3f(0, 10, 0.1f);
+  return {current(), top};
+}
+
+TEST(ViewRequests, CameraGoodRequestBecomesTheChange) {
+  ViewChange change;
+  applyCameraRequest(R"({"from":[1,2,3],"at":[0,0,0],"up":[0,0,1],"fov":30})", current(), change);
+  EXPECT_EQ(change.flags, ViewChange::kCamera);
+  EXPECT_EQ(change.from[0], 1);
+  EXPECT_EQ(change.from[2], 3);
+  EXPECT_EQ(change.up[2], 1);
+  EXPECT_EQ(change.fovY, 30);
+  ViewChange keep;  // up and fov may be left out: the current ones stay
+  applyCameraRequest(R"({"from":[0,1,9],"at":[0,1,0]})", current(), keep);
+  EXPECT_EQ(keep.up[1], 1);
+  EXPECT_EQ(keep.fovY, 40);
+}
+
+TEST(ViewRequests, MalformedCamerasAreRefusedWithAReason) {
+  const std::vector<std::pair<std::string, std::string>> corpus = {
+      {"", "not valid JSON"},
+      {"{", "not valid JSON"},
+      {"[1,2,3]", "JSON object"},
+      {"\"from\"", "JSON object"},
+      {R"({"from":[0,0,1]})", "required"},
+      {R"({"at":[0,0,1]})", "required"},
+      {R"({"from":[0,0,1],"at":[0,0,0],"zoom":2})", "unknown field 'zoom'"},
+      {R"({"from":[0,0],"at":[0,0,0]})", "3 numbers"},
+      {R"({"from":[0,0,1,1],"at":[0,0,0]})", "3 numbers"},
+      {R"({"from":"0,0,1","at":[0,0,0]})", "3 numbers"},
+      {R"({"from":[0,"a",1],"at":[0,0,0]})", "3 numbers"},
+      {R"({"from":[0,NaN,1],"at":[0,0,0]})", "not valid JSON"},
+      {R"({"from":[0,Infinity,1],"at":[0,0,0]})", "not valid JSON"},
+      {R"({"from":[0,1e999,1],"at":[0,0,0]})", "not valid JSON"},  // out of double's range
+      {R"({"from":[0,1e31,1],"at":[0,0,0]})", "finite"},
+      {R"({"from":[0,0,0],"at":[0,0,0]})", "must differ"},
+      {R"({"from":[0,5,0],"at":[0,0,0]})", "parallel"},
+      {R"({"from":[0,0,1],"at":[0,0,0],"up":[0,0,0]})", "parallel"},
+      {R"({"from":[0,0,1],"at":[0,0,0],"fov":0})", "fov"},
+      {R"({"from":[0,0,1],"at":[0,0,0],"fov":180})", "fov"},
+      {R"({"from":[0,0,1],"at":[0,0,0],"fov":"wide"})", "number"},
+  };
+  for (const auto& [body, reason] : corpus) {
+    ViewChange change;
+    try {
+      applyCameraRequest(body, current(), change);
+      ADD_FAILURE() << "accepted: " << body;
+    } catch (const RequestError& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
+          << body << " -> " << e.what();
+    }
+    EXPECT_EQ(change.flags, 0u) << body;
+  }
+}
+
+TEST(ViewRequests, SettingsChangeOnlyWhatTheyName) {
+  ViewChange change;
+  applySettingsRequest(R"({"spp":4})", settings(), views(), {}, change);
+  EXPECT_EQ(change.flags, ViewChange::kSettings);
+  EXPECT_EQ(change.samplesPerPixel, 4);
+  EXPECT_EQ(change.width, 64);
+  EXPECT_EQ(change.maxDepth, 5);
+  ViewChange exposure;  // exposure alone does not restart the accumulation
+  applySettingsRequest(R"({"exposure":-1.5})", settings(), views(), {}, exposure);
+  EXPECT_EQ(exposure.flags, ViewChange::kExposure);
+  EXPECT_EQ(exposure.exposure, -1.5f);
+  ViewChange view;
+  applySettingsRequest(R"({"view":"top"})", settings(), views(), {}, view);
+  EXPECT_EQ(view.flags, ViewChange::kCamera);
+  EXPECT_EQ(view.from[1], 10);
+  ViewChange same;  // asking for what is already there changes nothing
+  applySettingsRequest(R"({"width":64,"height":48})", settings(), views(), {}, same);
+  EXPECT_EQ(same.flags, 0u);
+}
+
+TEST(ViewRequests, MalformedSettingsAreRefusedWithAReason) {
+  const std::vector<std::pair<std::string, std::string>> corpus = {
+      {"nonsense", "not valid JSON"},
+      {"null", "JSON object"},
+      {R"({"width":0})", "out of range"},
+      {R"({"width":100000})", "out of range"},
+      {R"({"height":-4})", "out of range"},
+      {R"({"width":64.5})", "whole number"},
+      {R"({"width":"64"})", "whole number"},
+      {R"({"spp":0})", "out of range"},
+      {R"({"spp":100000})", "out of range"},
+      {R"({"max_depth":-1})", "out of range"},
+      {R"({"max_depth":1000})", "out of range"},
+      {R"({"exposure":1e999})", "not valid JSON"},
+      {R"({"exposure":100})", "between"},
+      {R"({"exposure":"bright"})", "number"},
+      {R"({"view":"nowhere"})", "no view named 'nowhere'"},
+      {R"({"view":3})", "string"},
+      {R"({"width":64,"frames":3})", "unknown field 'frames'"},
+      {R"({"width":99999999999999999999})", "whole number"},
+  };
+  for (const auto& [body, reason] : corpus) {
+    ViewChange change;
+    try {
+      applySettingsRequest(body, settings(), views(), {}, change);
+      ADD_FAILURE() << "accepted: " << body;
+    } catch (const RequestError& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
+          << body << " -> " << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ferry

@@ -1,0 +1,281 @@
+#include "viewer/viewer_server.h"
+
+#include <fmt/format.h>
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <mutex>
+#include <thread>
+
+#include "core/error.h"
+#include "io/image_io.h"
+#include "viewer/viewer_page.h"
+
+namespace ferry {
+namespace {
+
+std::atomic<bool> gQuitSignal{false};
+
+void onQuitSignal(int signal) {
+  if (gQuitSignal.exchange(true)) {  // the second one: stop waiting for a frame boundary
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+  }
+}
+
+nlohmann::json vec(Vec3f v) {
+  return {v.x, v.y, v.z};
+}
+
+nlohmann::json cameraJson(const CameraView& c) {
+  return {{"from", vec(c.from)}, {"at", vec(c.at)}, {"up", vec(c.up)}, {"fov", c.fovY}};
+}
+
+nlohmann::json settingsJson(const RenderSettings& s) {
+  return {{"width", s.width},
+          {"height", s.height},
+          {"spp", s.samplesPerPixel},
+          {"max_depth", s.maxDepth},
+          {"exposure", s.toneMapping.exposure}};
+}
+
+}  // namespace
+
+struct ViewerServer::State {
+  httplib::Server server;
+  std::thread thread;
+  std::string bind;
+  int port = 0;
+  ViewLimits limits;
+  std::vector<CameraView> views;
+  int ranks = 1;
+
+  std::mutex mutex;
+  std::condition_variable newFrame;
+  bool stopping = false;
+  // What clients asked for and the loop has not taken yet (flags accumulate;
+  // the last value of each field wins), and the state it leads to (what a
+  // partial request completes).
+  ViewChange pending;
+  CameraView requestedCamera;
+  RenderSettings requestedSettings;
+  // The last published frame.
+  std::string png;
+  uint64_t frameId = 0;
+  nlohmann::json stats;
+
+  void routes();
+  // Applies a checked request under the lock; 400 with the reason if refused.
+  template <typename Apply>
+  void change(const httplib::Request& request, httplib::Response& response, Apply&& apply);
+};
+
+template <typename Apply>
+void ViewerServer::State::change(const httplib::Request& request, httplib::Response& response,
+                                 Apply&& apply) {
+  std::lock_guard lock(mutex);
+  ViewChange change = pending;
+  try {
+    apply(request.body, change);
+  } catch (const RequestError& e) {
+    response.status = 400;
+    response.set_content(nlohmann::json{{"error", e.what()}}.dump(), "application/json");
+    return;
+  }
+  // Accepted: it becomes what the next frame renders.
+  pending = change;
+  if (change.flags & ViewChange::kCamera) {
+    requestedCamera.from = Vec3f(change.from[0], change.from[1], change.from[2]);
+    requestedCamera.at = Vec3f(change.at[0], change.at[1], change.at[2]);
+    requestedCamera.up = Vec3f(change.up[0], change.up[1], change.up[2]);
+    requestedCamera.fovY = change.fovY;
+  }
+  if (change.flags & ViewChange::kSettings) {
+    requestedSettings.width = change.width;
+    requestedSettings.height = change.height;
+    requestedSettings.samplesPerPixel = change.samplesPerPixel;
+    requestedSettings.maxDepth = change.maxDepth;
+  }
+  if (change.flags & ViewChange::kExposure)
+    requestedSettings.toneMapping.exposure = change.exposure;
+  response.set_content(nlohmann::json{{"camera", cameraJson(requestedCamera)},
+                                      {"settings", settingsJson(requestedSettings)}}
+                           .dump(),
+                       "application/json");
+}
+
+void ViewerServer::State::routes() {
+  server.set_payload_max_length(64 * 1024);  // a camera is a few hundred bytes
+  // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, which lets a
+  // second viewer bind the same port and silently share its connections.
+  server.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
+  server.Get("/", [](const httplib::Request&, httplib::Response& response) {
+    response.set_content(viewerPage(), "text/html; charset=utf-8");
+  });
+  server.Get("/frame.png", [this](const httplib::Request& request, httplib::Response& response) {
+    std::unique_lock lock(mutex);
+    if (request.has_param("after")) {
+      uint64_t after = 0;
+      try {
+        after = std::stoull(request.get_param_value("after"));
+      } catch (const std::exception&) {
+        response.status = 400;
+        response.set_content("'after' must be a frame id", "text/plain");
+        return;
+      }
+      newFrame.wait_for(lock, std::chrono::seconds(2),
+                        [&] { return stopping || frameId != after; });
+    } else if (png.empty()) {
+      newFrame.wait_for(lock, std::chrono::seconds(2), [&] { return stopping || !png.empty(); });
+    }
+    if (png.empty()) {
+      response.status = 503;
+      response.set_content("no frame yet", "text/plain");
+      return;
+    }
+    response.set_header("X-Ferry-Frame", std::to_string(frameId));
+    response.set_header("Cache-Control", "no-store");
+    response.set_content(png, "image/png");
+  });
+  server.Get("/stats", [this](const httplib::Request&, httplib::Response& response) {
+    std::lock_guard lock(mutex);
+    nlohmann::json j = stats.is_null() ? nlohmann::json::object() : stats;
+    if (!j.contains("frames")) j["frames"] = 0;
+    j["frame_id"] = frameId;
+    j["ranks"] = ranks;
+    j["requested"] = {{"camera", cameraJson(requestedCamera)},
+                      {"settings", settingsJson(requestedSettings)}};
+    nlohmann::json names = nlohmann::json::array();
+    for (const CameraView& v : views) names.push_back(v.name);
+    j["views"] = names;
+    j["limits"] = {{"max_side", limits.maxSide},
+                   {"max_spp", limits.maxSamplesPerPixel},
+                   {"max_depth", limits.maxDepth}};
+    response.set_header("Cache-Control", "no-store");
+    response.set_content(j.dump(), "application/json");
+  });
+  server.Post("/camera", [this](const httplib::Request& request, httplib::Response& response) {
+    change(request, response, [&](const std::string& body, ViewChange& c) {
+      applyCameraRequest(body, requestedCamera, c);
+    });
+  });
+  server.Post("/settings", [this](const httplib::Request& request, httplib::Response& response) {
+    change(request, response, [&](const std::string& body, ViewChange& c) {
+      applySettingsRequest(body, requestedSettings, views, limits, c);
+    });
+  });
+  server.Post("/quit", [this](const httplib::Request&, httplib::Response& response) {
+    {
+      std::lock_guard lock(mutex);
+      pending.flags |= ViewChange::kQuit;
+    }
+    response.set_content("quitting\n", "text/plain");
+  });
+  // Unknown paths and methods (404, 405), bodies over the limit (413): a
+  // line saying so, never an empty answer.
+  server.set_error_handler([](const httplib::Request& request, httplib::Response& response) {
+    if (response.body.empty())
+      response.set_content(
+          fmt::format("{} {}: error {}\n", request.method, request.path, response.status),
+          "text/plain");
+  });
+}
+
+ViewerServer::ViewerServer(const std::string& bind, int port, std::vector<CameraView> views,
+                           const CameraView& initial, const RenderSettings& settings, int ranks,
+                           ViewLimits limits)
+    : state_(std::make_unique<State>()) {
+  State& s = *state_;
+  s.bind = bind;
+  s.limits = limits;
+  s.views = std::move(views);
+  s.ranks = ranks;
+  s.requestedCamera = initial;
+  s.requestedSettings = settings;
+  s.routes();
+  if (port < 0 || port > 65535)
+    throw InputError(fmt::format("--port {}: expected 0 (any free port) to 65535", port));
+  s.port =
+      port == 0 ? s.server.bind_to_any_port(bind) : (s.server.bind_to_port(bind, port) ? port : -1);
+  if (s.port <= 0)
+    throw InputError(
+        fmt::format("cannot listen on {}:{} (in use, or not an address of this "
+                    "machine)",
+                    bind, port));
+  s.thread = std::thread([&s] { s.server.listen_after_bind(); });
+}
+
+ViewerServer::~ViewerServer() {
+  {
+    std::lock_guard lock(state_->mutex);
+    state_->stopping = true;
+  }
+  state_->newFrame.notify_all();
+  state_->server.stop();
+  if (state_->thread.joinable()) state_->thread.join();
+}
+
+int ViewerServer::port() const {
+  return state_->port;
+}
+
+std::string ViewerServer::url() const {
+  const std::string host = state_->bind == "0.0.0.0" ? "127.0.0.1" : state_->bind;
+  return fmt::format("http://{}:{}/", host.find(':') != std::string::npos ? "[" + host + "]" : host,
+                     state_->port);
+}
+
+void ViewerServer::requestQuit() {
+  std::lock_guard lock(state_->mutex);
+  state_->pending.flags |= ViewChange::kQuit;
+}
+
+ViewChange ViewerServer::takeChange() {
+  std::lock_guard lock(state_->mutex);
+  ViewChange change = state_->pending;
+  if (gQuitSignal) change.flags |= ViewChange::kQuit;
+  state_->pending.flags = 0;
+  return change;
+}
+
+void ViewerServer::publish(const InteractiveFrame& frame) {
+  // Encoded outside the lock: requests are answered meanwhile.
+  std::string png = encodePng(frame.image.width, frame.image.height, frame.image.rgba);
+  nlohmann::json stats = frame.stats.toJson();
+  nlohmann::json j;
+  j["frames"] = frame.accumulated;
+  j["frame"] = stats;
+  j["camera"] = cameraJson(frame.camera);
+  j["settings"] = settingsJson(frame.settings);
+  const RankMemory& m = frame.memory;
+  nlohmann::json perRank = nlohmann::json::array();
+  for (size_t r = 0; r < m.resident.size(); ++r)
+    perRank.push_back({{"rank", r},
+                       {"estimated_bytes", m.estimated[r]},
+                       {"embree_bytes", m.embree[r]},
+                       {"resident_bytes", m.resident[r]},
+                       {"peak_resident_bytes", m.residentPeak[r]}});
+  j["memory_per_rank"] = perRank;
+  {
+    std::lock_guard lock(state_->mutex);
+    state_->png = std::move(png);
+    state_->stats = std::move(j);
+    ++state_->frameId;
+  }
+  state_->newFrame.notify_all();
+}
+
+void quitOnSignals() {
+  std::signal(SIGINT, onQuitSignal);
+  std::signal(SIGTERM, onQuitSignal);
+}
+
+}  // namespace ferry
