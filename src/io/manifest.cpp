@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -48,6 +49,7 @@ nlohmann::json Manifest::toJson() const {
   j["options"] = options;
   j["ranks"] = ranks;
   j["summary"] = summary;
+  j["film_scale"] = filmScale;
   j["input_bytes"] = inputBytes;
   j["replicated_bytes"] = replicatedBytes;
   j["proxies"] = proxies;
@@ -105,6 +107,9 @@ Manifest readManifest(const std::string& directory) {
     m.options = j.value("options", nlohmann::json::object());
     m.ranks = j.at("ranks").get<int>();
     m.summary = j.at("summary");
+    m.filmScale = j.value("film_scale", 1.0f);  // absent in directories made before it existed
+    if (!(m.filmScale > 0) || !std::isfinite(m.filmScale))
+      throw InputError(fmt::format("{}: bad film_scale {}", path, m.filmScale));
     m.inputBytes = j.value("input_bytes", uint64_t(0));
     m.replicatedBytes = j.value("replicated_bytes", uint64_t(0));
     m.proxies = j.value("proxies", uint64_t(0));

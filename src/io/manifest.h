@@ -43,6 +43,7 @@ struct Manifest {
   uint64_t replicatedBytes = 0;
   uint64_t proxies = 0;
   double partitionSeconds = 0;
+  float filmScale = 1;  // the scene's Film scale (Scene::filmScale)
   ManifestFile shared;
   std::vector<ManifestPart> parts;
 

@@ -45,6 +45,7 @@ Manifest writePartDirectory(const std::string& directory, const Scene& scene,
   m.replicatedBytes = info.replicatedBytes;
   m.proxies = partition.proxies.size();
   m.partitionSeconds = info.partitionSeconds;
+  m.filmScale = scene.filmScale;
   for (int r = 0; r < partition.ranks; ++r) {
     const std::vector<int32_t> owned = partition.instancesOf(r);
     ManifestPart p;

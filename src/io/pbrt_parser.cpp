@@ -666,12 +666,23 @@ class Parser {
     filmHeight_ = h;
     std::string file = p.getString("filename", "");
     if (!file.empty()) scene_.filmFilename = file;
-    if (const PbrtParam* scale = p.find("scale");
-        scale && scale->floats.size() == 1 && scale->floats[0] > 0)
-      warnings_.once("film scale",
-                     fmt::format("Film \"float scale\" {} ignored: use --exposure {:.2f} "
-                                 "for the same brightness (at {})",
-                                 scale->floats[0], std::log2(scale->floats[0]), where.toString()));
+    // pbrt-v3 multiplies the radiance by "scale"; pbrt-v4's sensor by its
+    // imaging ratio, exposure time x ISO / 100 (Ferry's camera has no
+    // shutter: a 1 s exposure, pbrt-v4's default).
+    float filmScale = 1;
+    if (p.find("scale")) {
+      const float scale = p.getFloat("scale", 1);
+      if (!(scale > 0) || !std::isfinite(scale))
+        fail(where, fmt::format("Film: \"float scale\" {} must be positive", scale));
+      filmScale *= scale;
+    }
+    if (p.find("iso")) {
+      const float iso = p.getFloat("iso", 100);
+      if (!(iso > 0) || !std::isfinite(iso))
+        fail(where, fmt::format("Film: \"float iso\" {} must be positive", iso));
+      filmScale *= iso / 100;
+    }
+    scene_.filmScale = filmScale;
     reportUnused(p, fmt::format("Film \"{}\"", type));
   }
 

@@ -113,6 +113,7 @@ TEST_F(PbrtV3Features, CameraAndFilm) {
   EXPECT_EQ(scene().filmWidth, 200);
   EXPECT_EQ(scene().filmHeight, 100);
   EXPECT_EQ(scene().filmFilename, "features.exr");
+  EXPECT_EQ(scene().filmScale, 2);  // "float scale" [ 2 ]: the radiance written is doubled
 }
 
 TEST_F(PbrtV3Features, Lights) {
@@ -283,6 +284,7 @@ TEST_F(PbrtV4Features, LeftHandedCameraAndPortraitFov) {
   float expected = 2 * std::atan(std::tan(30 * kPi / 180) * 2) * 180 / kPi;
   EXPECT_NEAR(v.fovY, expected, 1e-3);
   EXPECT_EQ(scene().filmFilename, "v4.png");
+  EXPECT_EQ(scene().filmScale, 4);  // "float iso" 400: pbrt-v4's imaging ratio at 1 s
   EXPECT_TRUE(anyContains(warnings(), "lensradius ignored"));
 }
 
@@ -563,6 +565,7 @@ const std::vector<BadPbrt> kBadPbrt = {
     {"singular.pbrt", "singular.pbrt", 3, 1, "singular"},
     {"projective.pbrt", "projective.pbrt", 2, 1, "projective transforms are not supported"},
     {"huge_film.pbrt", "huge_film.pbrt", 1, 1, "Film: resolution 1000000 x 10"},
+    {"bad_film_scale.pbrt", "bad_film_scale.pbrt", 1, 1, "\"float scale\" -2 must be positive"},
     {"binary.pbrt", "binary.pbrt", 3, 1, "unexpected byte 0x00"},
     {"absurd_subdivision.pbrt", "absurd_subdivision.pbrt", 2, 1, "30 levels of subdivision"},
     {"missing_envmap.pbrt", "missing_envmap.pbrt", 2, 1,

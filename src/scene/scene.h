@@ -110,6 +110,9 @@ struct Scene {
   // directory as written; the caller decides where to put it).
   std::optional<int> filmWidth, filmHeight;
   std::string filmFilename;
+  // pbrt's Film "scale" (v3) and "iso" / 100 (v4's imaging ratio at a 1 s
+  // exposure): multiplies the radiance written to the image.
+  float filmScale = 1;
 
   // Adds a mesh (with vertex slack) as its own object with one identity
   // instance; returns the object.

@@ -61,6 +61,7 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     summary = summaryFromJson(part.manifest.summary);
     partition = std::move(part.partition);
     partitionerName = part.manifest.partitioner;
+    scene.filmScale = part.manifest.filmScale;
     owned.resize(scene.instances.size());
     std::iota(owned.begin(), owned.end(), 0);
     lights = std::make_unique<LightSampler>(part.lights);
@@ -337,7 +338,8 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
     frame.stats = sumOverRanks(comm_, mine);
     ++accumulated;
     const auto start = Clock::now();
-    frame.image = composite(comm_, frameBuffer, 1.0f / float(accumulated * render.samplesPerPixel),
+    frame.image = composite(comm_, frameBuffer,
+                            rank.scene.filmScale / float(accumulated * render.samplesPerPixel),
                             FrameSink::Pixels::ToneMapped, render.toneMapping, compositeBytes);
     frame.stats.times.composite = comm_.max(secondsSince(start));
     frame.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
@@ -375,7 +377,8 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
   int lastFrame = render.frames - 1;  // earlier if the time limit says so
   auto compositeAfter = [&](int frame, double& seconds) {
     auto start = Clock::now();
-    const float scale = 1.0f / float((frame + 1) * render.samplesPerPixel);
+    // The average of the samples so far, times the Film's scale (pbrt).
+    const float scale = rank.scene.filmScale / float((frame + 1) * render.samplesPerPixel);
     FrameImage image =
         composite(comm_, frameBuffer, scale, pixels, render.toneMapping, compositeBytes);
     image.frame = frame;
