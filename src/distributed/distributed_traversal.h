@@ -49,7 +49,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
                        const Partition& partition, ForwardingMode mode,
                        ExchangeMode exchange = ExchangeMode::Auto, uint32_t chunkPixels = 8192);
   bool runsSamples() const override { return exchange_ == ExchangeMode::Overlapped; }
-  void runSample(uint32_t sampleIndex, uint32_t pixels, SampleShading<Path>& shading,
+  void runSample(uint32_t sampleIndex, uint32_t first, uint32_t last, SampleShading<Path>& shading,
                  FrameStats& stats) override;
   void primaryPixels(uint32_t first, uint32_t last, const CameraRayOf& cameraRay,
                      std::vector<uint32_t>& pixels, FrameStats& stats) override;

@@ -79,7 +79,7 @@ class IdleBackoff {
 }  // namespace
 
 template <typename Path>
-void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t pixels,
+void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t first, uint32_t last,
                                            SampleShading<Path>& shading, FrameStats& stats) {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
@@ -90,7 +90,7 @@ void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t pixels
   {
     auto start = Clock::now();
     primaryPixels(
-        0, pixels, [&](uint32_t pixel) { return shading.cameraRay(pixel); }, mine, stats);
+        first, last, [&](uint32_t pixel) { return shading.cameraRay(pixel); }, mine, stats);
     stats.times.generate += secondsSince(start);
   }
 
@@ -258,11 +258,11 @@ void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t pixels
 }
 
 // The class is instantiated in distributed_traversal.cpp; this is its one member here.
-template void DistributedTraversal<Path8>::runSample(uint32_t, uint32_t, SampleShading<Path8>&,
-                                                     FrameStats&);
-template void DistributedTraversal<Path64>::runSample(uint32_t, uint32_t, SampleShading<Path64>&,
-                                                      FrameStats&);
-template void DistributedTraversal<PathReplay>::runSample(uint32_t, uint32_t,
+template void DistributedTraversal<Path8>::runSample(uint32_t, uint32_t, uint32_t,
+                                                     SampleShading<Path8>&, FrameStats&);
+template void DistributedTraversal<Path64>::runSample(uint32_t, uint32_t, uint32_t,
+                                                      SampleShading<Path64>&, FrameStats&);
+template void DistributedTraversal<PathReplay>::runSample(uint32_t, uint32_t, uint32_t,
                                                           SampleShading<PathReplay>&, FrameStats&);
 
 }  // namespace ferry

@@ -54,11 +54,11 @@ class RayTraversal {
   // decides when rays are traced, forwarded and shaded, instead of being
   // called once per bounce of a wavefront (traverse).
   virtual bool runsSamples() const { return false; }
-  // One sample of pixels [0, pixels) from camera paths to the last bounce,
-  // shading through `shading`. Collective when distributed.
-  virtual void runSample(uint32_t sampleIndex, uint32_t pixels, SampleShading<Path>& shading,
-                         FrameStats& stats) {
-    (void)sampleIndex, (void)pixels, (void)shading, (void)stats;
+  // One sample of pixels [first, last) from camera paths to the last
+  // bounce, shading through `shading`. Collective when distributed.
+  virtual void runSample(uint32_t sampleIndex, uint32_t first, uint32_t last,
+                         SampleShading<Path>& shading, FrameStats& stats) {
+    (void)sampleIndex, (void)first, (void)last, (void)shading, (void)stats;
   }
   // Proxy-guided primary rays: sets `pixels` to the pixels of [first, last)
   // whose camera path this rank generates for the current sample, in

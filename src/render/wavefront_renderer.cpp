@@ -36,21 +36,30 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
 template <typename Path>
 FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuffer,
                                                 const ProgressCallback& progress) {
+  return renderPixels(frame, 0, uint32_t(settings_.width) * uint32_t(settings_.height), frameBuffer,
+                      progress);
+}
+
+template <typename Path>
+FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel, uint32_t lastPixel,
+                                                 FrameBuffer& frameBuffer,
+                                                 const ProgressCallback& progress) {
   FrameStats stats;
   stats.frame = frame;
   auto frameStart = Clock::now();
-  const uint32_t pixels = uint32_t(settings_.width) * uint32_t(settings_.height);
+  FERRY_CHECK_LE(firstPixel, lastPixel);
+  FERRY_CHECK_LE(lastPixel, uint32_t(settings_.width) * uint32_t(settings_.height));
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
     if (traversal_.runsSamples()) {
       // The traversal runs the sample (the overlapped distributed exchange):
       // it calls back for camera paths and shading as rays become ready.
       SampleStages stages(*this, sampleIndex, frameBuffer);
-      traversal_.runSample(sampleIndex, pixels, stages, stats);
+      traversal_.runSample(sampleIndex, firstPixel, lastPixel, stages, stats);
     } else if (!chunked()) {
       // Many ranks: the whole image in one wavefront (each bounce is a
       // collective exchange), every stage parallel inside the rank.
-      runWavefront(sampleIndex, 0, pixels, workspace_, frameBuffer, stats);
+      runWavefront(sampleIndex, firstPixel, lastPixel, workspace_, frameBuffer, stats);
     } else {
       // One rank: chunks of pixels, each taken from camera ray to last bounce
       // by one thread, so that its queues (paths, kept hits, spawned rays:
@@ -62,14 +71,15 @@ FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuf
       // buffer in the same order: the image does not depend on the chunks.
       // (Stage times are then summed over the threads.)
       const uint32_t chunk = std::max(1u, settings_.chunkPixels);
-      const uint32_t chunks = (pixels + chunk - 1) / chunk;
+      const uint32_t chunks = (lastPixel - firstPixel + chunk - 1) / chunk;
       tbb::enumerable_thread_specific<FrameStats> chunkStats;
       tbb::parallel_for(tbb::blocked_range<uint32_t>(0, chunks, 1), [&](const auto& range) {
         for (uint32_t c = range.begin(); c != range.end(); ++c) {
           // Isolated: while its stages wait, this thread takes no other chunk,
           // which would reuse its workspace.
           tbb::this_task_arena::isolate([&] {
-            runWavefront(sampleIndex, c * chunk, std::min(pixels, (c + 1) * chunk),
+            runWavefront(sampleIndex, firstPixel + c * chunk,
+                         std::min(lastPixel, firstPixel + (c + 1) * chunk),
                          chunkWorkspaces_.local(), frameBuffer, chunkStats.local());
           });
         }

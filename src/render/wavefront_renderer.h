@@ -64,6 +64,11 @@ class WavefrontRenderer {
   // Adds frame `frame`'s samples to `frameBuffer` (this rank's partial sum).
   FrameStats renderFrame(int frame, FrameBuffer& frameBuffer,
                          const ProgressCallback& progress = {});
+  // The same for pixels [first, last) only (the viewer renders a frame in
+  // slices, so that a camera change can abandon the rest). Collective when
+  // distributed: every rank passes the same range.
+  FrameStats renderPixels(int frame, uint32_t first, uint32_t last, FrameBuffer& frameBuffer,
+                          const ProgressCallback& progress = {});
 
  private:
   // A wavefront's queues and scratch, reused from wavefront to wavefront (no

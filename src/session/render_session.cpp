@@ -304,7 +304,7 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
   // Reused from frame to frame; made anew only when the image size changes.
   FrameBuffer frameBuffer(render.width, render.height);
   int accumulated = 0;
-  uint64_t compositeBytes = 0;
+  uint64_t compositeBytes = 0, abandoned = 0;
   for (uint64_t frames = 0; maxFrames == 0 || frames < maxFrames; ++frames) {
     ViewChange change;
     if (comm_.isRoot()) change = control->takeChange();
@@ -333,8 +333,32 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
       renderer = std::make_unique<WavefrontRenderer<Path>>(rank.scene, *rank.geometry, *rank.lights,
                                                            *traversal, render);
     }
-    const FrameStats mine = renderer->renderFrame(accumulated, frameBuffer);
+    // The frame goes through in slices of about 64 K pixels, with rank 0's
+    // word in between on whether a change is waiting: a camera move
+    // abandons the rest of the frame instead of waiting for it (what was
+    // added is cleared with the accumulation the change restarts).
+    const uint32_t pixels = uint32_t(render.width) * uint32_t(render.height);
+    const uint32_t slices = std::clamp<uint32_t>((pixels + 65535) / 65536, 1, 64);
+    FrameStats mine;
+    bool abandon = false;
+    const auto frameStart = Clock::now();
+    for (uint32_t slice = 0; slice < slices && !abandon; ++slice) {
+      const uint32_t first = uint32_t(uint64_t(pixels) * slice / slices);
+      const uint32_t last = uint32_t(uint64_t(pixels) * (slice + 1) / slices);
+      mine.merge(renderer->renderPixels(accumulated, first, last, frameBuffer));
+      if (slice + 1 < slices) {
+        abandon = comm_.isRoot() && control->restartPending();
+        comm_.broadcast(abandon);
+      }
+    }
+    if (abandon) {
+      ++abandoned;
+      continue;
+    }
+    mine.frame = accumulated;
+    mine.seconds = secondsSince(frameStart);
     InteractiveFrame frame;
+    frame.abandoned = std::exchange(abandoned, 0);
     frame.stats = sumOverRanks(comm_, mine);
     ++accumulated;
     const auto start = Clock::now();

@@ -79,6 +79,7 @@ struct ViewChange {
 
 // What an interactive render reports after every frame (rank 0).
 struct InteractiveFrame {
+  uint64_t abandoned = 0;   // frames abandoned for a change since the last published one
   FrameImage image;         // the accumulated image, tone mapped
   int accumulated = 0;      // frames in it since the last change
   FrameStats stats;         // this frame, summed over ranks (seconds: the slowest rank)
@@ -94,6 +95,9 @@ class InteractiveControl {
   virtual ~InteractiveControl() = default;
   // What changed since the last call (and forget it).
   virtual ViewChange takeChange() = 0;
+  // Whether a change is waiting that restarts the accumulation (or quits):
+  // then the frame being rendered is abandoned at its next slice.
+  virtual bool restartPending() = 0;
   virtual void publish(const InteractiveFrame& frame) = 0;
 };
 

@@ -190,5 +190,72 @@ TEST(RenderSession, PartDirectoryStatsNameThePartitionerThatMadeTheParts) {
   fs::remove_all(dir);
 }
 
+// Scripted like a viewer: frames accumulate; a camera change waiting while
+// a frame is rendered abandons it (at its next slice) and restarts the
+// accumulation; quit ends the loop. 2 ranks in process, so the slices' word
+// from rank 0 is broadcast.
+class ScriptedControl final : public InteractiveControl {
+ public:
+  // The camera moves while the 3rd frame is rendered (the session asks
+  // between slices): that frame is abandoned, and the change taken next.
+  bool restartPending() override {
+    if (published.size() == 2 && !moved) pendingMove = true;
+    return pendingMove;
+  }
+  ViewChange takeChange() override {
+    ViewChange change;
+    if (pendingMove) {
+      CameraView c = camera;
+      c.from = c.from + Vec3f(40, 0, 0);
+      for (int i = 0; i < 3; ++i) {
+        change.from[i] = c.from[i];
+        change.at[i] = c.at[i];
+        change.up[i] = c.up[i];
+      }
+      change.fovY = c.fovY;
+      change.flags = ViewChange::kCamera;
+      pendingMove = false;
+      moved = true;
+    }
+    if (published.size() == 5) change.flags |= ViewChange::kQuit;
+    return change;
+  }
+  void publish(const InteractiveFrame& frame) override {
+    published.push_back({frame.accumulated, frame.abandoned, frame.camera.from.x});
+    if (published.size() == 1) camera = frame.camera;
+  }
+  struct Published {
+    int accumulated;
+    uint64_t abandoned;
+    float fromX;
+  };
+  std::vector<Published> published;
+  CameraView camera;
+  bool pendingMove = false, moved = false;
+};
+
+TEST(RenderSession, InteractiveAccumulatesAbandonsForAChangeAndQuits) {
+  SessionSettings settings = cornellSettings();
+  settings.render.width = 400;  // 160 K pixels: three slices a frame
+  settings.render.height = 400;
+  settings.render.samplesPerPixel = 1;
+  settings.render.maxDepth = 1;
+  ScriptedControl control;
+  runRanks(2, [&](const Communicator& comm) {
+    RenderSession session(settings, comm);
+    session.runInteractive(comm.isRoot() ? &control : nullptr, 50);
+  });
+  ASSERT_EQ(control.published.size(), 5u);
+  EXPECT_EQ(control.published[0].accumulated, 1);
+  EXPECT_EQ(control.published[1].accumulated, 2);
+  // The third frame was abandoned: the next one published is the first of
+  // the moved camera, and says one frame was abandoned.
+  EXPECT_EQ(control.published[2].accumulated, 1);
+  EXPECT_EQ(control.published[2].abandoned, 1u);
+  EXPECT_EQ(control.published[2].fromX, control.camera.from.x + 40);
+  EXPECT_EQ(control.published[3].abandoned, 0u);
+  EXPECT_EQ(control.published[4].accumulated, 3);
+}
+
 }  // namespace
 }  // namespace ferry

@@ -67,6 +67,7 @@ struct ViewerServer::State {
   // The last published frame.
   std::string png;
   uint64_t frameId = 0;
+  uint64_t abandonedTotal = 0;  // frames abandoned for a change (render thread only)
   nlohmann::json stats;
 
   void routes();
@@ -246,12 +247,19 @@ ViewChange ViewerServer::takeChange() {
   return change;
 }
 
+bool ViewerServer::restartPending() {
+  std::lock_guard lock(state_->mutex);
+  constexpr uint32_t kRestart = ViewChange::kCamera | ViewChange::kSettings | ViewChange::kQuit;
+  return gQuitSignal || (state_->pending.flags & kRestart) != 0;
+}
+
 void ViewerServer::publish(const InteractiveFrame& frame) {
   // Encoded outside the lock: requests are answered meanwhile.
   std::string png = encodePng(frame.image.width, frame.image.height, frame.image.rgba);
   nlohmann::json stats = frame.stats.toJson();
   nlohmann::json j;
   j["frames"] = frame.accumulated;
+  j["abandoned_frames"] = state_->abandonedTotal += frame.abandoned;
   j["frame"] = stats;
   j["camera"] = cameraJson(frame.camera);
   j["settings"] = settingsJson(frame.settings);

@@ -46,6 +46,7 @@ class ViewerServer final : public InteractiveControl {
   void requestQuit();
 
   ViewChange takeChange() override;
+  bool restartPending() override;
   void publish(const InteractiveFrame& frame) override;
 
  private:
