@@ -282,18 +282,36 @@ RankMemory rankMemory(const Communicator& comm, double estimated, double embree,
 
 }  // namespace
 
-void RenderSession::runInteractive(InteractiveControl* control, uint64_t maxFrames) {
+void ViewChange::applyTo(CameraView& camera, RenderSettings& settings) const {
+  if (flags & kCamera) {
+    camera.from = Vec3f(from[0], from[1], from[2]);
+    camera.at = Vec3f(at[0], at[1], at[2]);
+    camera.up = Vec3f(up[0], up[1], up[2]);
+    camera.fovY = fovY;
+  }
+  if (flags & kSettings) {
+    settings.width = width;
+    settings.height = height;
+    settings.samplesPerPixel = samplesPerPixel;
+    settings.maxDepth = maxDepth;
+  }
+  if (flags & kExposure) settings.toneMapping.exposure = exposure;
+}
+
+void RenderSession::runInteractive(InteractiveControl* control, uint64_t maxFrames,
+                                   double sliceSeconds) {
   FERRY_CHECK(!comm_.isRoot() || control);
   const int ranks = comm_.size();
   if (settings_.pathLayout == PathLayout::Replay ||
       (settings_.pathLayout == PathLayout::Auto && ranks > 64))
-    return interactiveWithLayout<PathReplay>(control, maxFrames);
-  if (ranks <= 8) return interactiveWithLayout<Path8>(control, maxFrames);
-  interactiveWithLayout<Path64>(control, maxFrames);
+    return interactiveWithLayout<PathReplay>(control, maxFrames, sliceSeconds);
+  if (ranks <= 8) return interactiveWithLayout<Path8>(control, maxFrames, sliceSeconds);
+  interactiveWithLayout<Path64>(control, maxFrames, sliceSeconds);
 }
 
 template <typename Path>
-void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames) {
+void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames,
+                                          double sliceSeconds) {
   Rank& rank = *rank_;
   std::unique_ptr<RayTraversal<Path>> traversal = makeTraversal<Path>(nullptr);
   RenderSettings render = settings_.render;
@@ -305,40 +323,32 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
   FrameBuffer frameBuffer(render.width, render.height);
   int accumulated = 0;
   uint64_t compositeBytes = 0, abandoned = 0;
+  double lastFrameSeconds = 0;  // the slowest rank's, of the last whole frame
   for (uint64_t frames = 0; maxFrames == 0 || frames < maxFrames; ++frames) {
     ViewChange change;
     if (comm_.isRoot()) change = control->takeChange();
     comm_.broadcast(change);
     if (change.flags & ViewChange::kQuit) break;
-    if (change.flags & ViewChange::kExposure) render.toneMapping.exposure = change.exposure;
+    const int oldWidth = render.width, oldHeight = render.height;
+    change.applyTo(*render.camera, render);
     if (change.flags & (ViewChange::kCamera | ViewChange::kSettings)) {
-      if (change.flags & ViewChange::kCamera) {
-        CameraView& c = *render.camera;
-        c.from = Vec3f(change.from[0], change.from[1], change.from[2]);
-        c.at = Vec3f(change.at[0], change.at[1], change.at[2]);
-        c.up = Vec3f(change.up[0], change.up[1], change.up[2]);
-        c.fovY = change.fovY;
-      }
-      if (change.flags & ViewChange::kSettings) {
-        render.samplesPerPixel = change.samplesPerPixel;
-        render.maxDepth = change.maxDepth;
-        if (change.width != render.width || change.height != render.height) {
-          render.width = change.width;
-          render.height = change.height;
-          frameBuffer = FrameBuffer(render.width, render.height);
-        }
-      }
+      if (render.width != oldWidth || render.height != oldHeight)
+        frameBuffer = FrameBuffer(render.width, render.height);
       frameBuffer.clear();
       accumulated = 0;
       renderer = std::make_unique<WavefrontRenderer<Path>>(rank.scene, *rank.geometry, *rank.lights,
                                                            *traversal, render);
     }
-    // The frame goes through in slices of about 64 K pixels, with rank 0's
-    // word in between on whether a change is waiting: a camera move
-    // abandons the rest of the frame instead of waiting for it (what was
-    // added is cleared with the accumulation the change restarts).
+    // A long frame goes through in slices of about `sliceSeconds` (judged by
+    // the last frame's time, the same on every rank), with rank 0's word in
+    // between on whether a change is waiting: a camera move abandons the
+    // rest of the frame instead of waiting for it (what was added is cleared
+    // with the accumulation the change restarts). Each slice costs a
+    // distributed render the overlap at its end, so short frames stay whole.
     const uint32_t pixels = uint32_t(render.width) * uint32_t(render.height);
-    const uint32_t slices = std::clamp<uint32_t>((pixels + 65535) / 65536, 1, 64);
+    const double bySeconds = sliceSeconds > 0 ? lastFrameSeconds / sliceSeconds : 64;
+    const uint32_t slices = std::clamp<uint32_t>(
+        std::min<uint32_t>(uint32_t(std::min(bySeconds, 64.0)), pixels / 4096), 1, 64);
     FrameStats mine;
     bool abandon = false;
     const auto frameStart = Clock::now();
@@ -360,6 +370,7 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
     InteractiveFrame frame;
     frame.abandoned = std::exchange(abandoned, 0);
     frame.stats = sumOverRanks(comm_, mine);
+    lastFrameSeconds = frame.stats.seconds;
     ++accumulated;
     const auto start = Clock::now();
     frame.image = composite(comm_, frameBuffer,

@@ -75,6 +75,8 @@ struct ViewChange {
   float fovY;
   int32_t width, height, samplesPerPixel, maxDepth;
   float exposure;
+  // The change made to a camera and settings (only the parts its flags name).
+  void applyTo(CameraView& camera, RenderSettings& settings) const;
 };
 
 // What an interactive render reports after every frame (rank 0).
@@ -128,8 +130,11 @@ class RenderSession {
   // quit (or `maxFrames` frames, if > 0): before each frame rank 0 asks its
   // control for changes and broadcasts them; after each frame every rank
   // composites and rank 0 publishes. Collective; `control` is used on rank 0
-  // only (may be null elsewhere).
-  void runInteractive(InteractiveControl* control, uint64_t maxFrames = 0);
+  // only (may be null elsewhere). A frame longer than `sliceSeconds` goes
+  // through in slices, between which a waiting change abandons it (0: as
+  // many slices as the image allows, for tests).
+  void runInteractive(InteractiveControl* control, uint64_t maxFrames = 0,
+                      double sliceSeconds = 0.2);
 
   // Before run(): renders at this size instead (a scene's own, pbrt's Film).
   void setImageSize(int width, int height);
@@ -159,7 +164,7 @@ class RenderSession {
   template <typename Path>
   SessionReport runWithLayout(FrameSink& sink, const SessionProgress& progress);
   template <typename Path>
-  void interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames);
+  void interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames, double sliceSeconds);
   // The traversal this session's ranks use (local on one rank); `distributed`
   // set when it is the distributed one.
   template <typename Path>

@@ -236,14 +236,14 @@ class ScriptedControl final : public InteractiveControl {
 
 TEST(RenderSession, InteractiveAccumulatesAbandonsForAChangeAndQuits) {
   SessionSettings settings = cornellSettings();
-  settings.render.width = 400;  // 160 K pixels: three slices a frame
-  settings.render.height = 400;
+  settings.render.width = 128;  // 4 slices a frame (slices of 4096 pixels or more)
+  settings.render.height = 128;
   settings.render.samplesPerPixel = 1;
   settings.render.maxDepth = 1;
   ScriptedControl control;
   runRanks(2, [&](const Communicator& comm) {
     RenderSession session(settings, comm);
-    session.runInteractive(comm.isRoot() ? &control : nullptr, 50);
+    session.runInteractive(comm.isRoot() ? &control : nullptr, 50, /*sliceSeconds=*/0);
   });
   ASSERT_EQ(control.published.size(), 5u);
   EXPECT_EQ(control.published[0].accumulated, 1);

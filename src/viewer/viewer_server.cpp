@@ -90,20 +90,7 @@ void ViewerServer::State::change(const httplib::Request& request, httplib::Respo
   }
   // Accepted: it becomes what the next frame renders.
   pending = change;
-  if (change.flags & ViewChange::kCamera) {
-    requestedCamera.from = Vec3f(change.from[0], change.from[1], change.from[2]);
-    requestedCamera.at = Vec3f(change.at[0], change.at[1], change.at[2]);
-    requestedCamera.up = Vec3f(change.up[0], change.up[1], change.up[2]);
-    requestedCamera.fovY = change.fovY;
-  }
-  if (change.flags & ViewChange::kSettings) {
-    requestedSettings.width = change.width;
-    requestedSettings.height = change.height;
-    requestedSettings.samplesPerPixel = change.samplesPerPixel;
-    requestedSettings.maxDepth = change.maxDepth;
-  }
-  if (change.flags & ViewChange::kExposure)
-    requestedSettings.toneMapping.exposure = change.exposure;
+  change.applyTo(requestedCamera, requestedSettings);
   response.set_content(nlohmann::json{{"camera", cameraJson(requestedCamera)},
                                       {"settings", settingsJson(requestedSettings)}}
                            .dump(),
