@@ -2,9 +2,17 @@
 
 #include <fmt/format.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/fault_injection.h"
 #include "io/part_file.h"
 #include "scene/scene_summary.h"
 
@@ -14,6 +22,44 @@ namespace {
 std::string join(const std::string& directory, const std::string& file) {
   return (std::filesystem::path(directory) / file).string();
 }
+
+namespace fs = std::filesystem;
+
+// Temporary directories of earlier runs that were killed (their process is
+// gone): ".NAME.tmp.PID" next to the target.
+void removeStaleTemporaries(const fs::path& parent, const std::string& name) {
+  std::error_code ec;
+  const std::string prefix = "." + name + ".tmp.";
+  for (const auto& entry : fs::directory_iterator(parent, ec)) {
+    const std::string file = entry.path().filename().string();
+    if (file.rfind(prefix, 0) != 0) continue;
+    const long pid = std::strtol(file.c_str() + prefix.size(), nullptr, 10);
+    if (pid > 0 && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), ec);
+  }
+}
+
+// Makes `temporary` the directory `target`: renamed onto it if there is
+// none, else atomically exchanged with it (renameat2 RENAME_EXCHANGE) and
+// the old one, now at `temporary`, removed. Readers see the old directory or
+// the new one, never a mix or none.
+void replaceDirectory(const fs::path& temporary, const fs::path& target) {
+  std::error_code ec;
+  if (!fs::exists(target, ec)) {
+    fs::rename(temporary, target, ec);
+    if (ec)
+      throw InputError(fmt::format("{}: cannot rename the finished parts into place ({})",
+                                   target.string(), ec.message()));
+    return;
+  }
+  if (::renameat2(AT_FDCWD, temporary.c_str(), AT_FDCWD, target.c_str(), RENAME_EXCHANGE) != 0)
+    throw InputError(fmt::format("{}: cannot swap the finished parts into place ({})",
+                                 target.string(), std::strerror(errno)));
+  fs::remove_all(temporary, ec);  // the old directory
+}
+
+// Writes the whole directory into `directory` (empty, new).
+Manifest writeParts(const std::string& directory, const Scene& scene, const Partition& partition,
+                    const Scene& lights, const PartDirectoryInfo& info);
 
 }  // namespace
 
@@ -25,15 +71,44 @@ Manifest writePartDirectory(const std::string& directory, const Scene& scene,
                             const Partition& partition, const Scene& lights,
                             const PartDirectoryInfo& info) {
   FERRY_CHECK_EQ(partition.instanceOwners.size(), scene.instances.size());
+  // Everything goes into a temporary directory next to the target, which
+  // replaces it only when complete: an interrupted or failed partition
+  // (disk full, bad input, killed) leaves the previous directory as it was
+  // and no half-written one (a killed run's temporary is removed by the next).
+  fs::path target = fs::absolute(fs::path(directory)).lexically_normal();
+  if (target.filename().empty()) target = target.parent_path();
   std::error_code ec;
-  std::filesystem::create_directories(directory, ec);
-  if (ec || !std::filesystem::is_directory(directory))
-    throw InputError(fmt::format("{}: cannot create the directory ({})", directory, ec.message()));
-  std::filesystem::remove(join(directory, kManifestName), ec);
-  if (ec)
-    throw InputError(
-        fmt::format("{}: cannot remove the old manifest ({})", directory, ec.message()));
+  if (fs::exists(target, ec)) {
+    if (!fs::is_directory(target, ec))
+      throw InputError(fmt::format("{}: exists and is not a directory", directory));
+    if (!fs::is_empty(target, ec) && !isPartDirectory(target.string()))
+      throw InputError(
+          fmt::format("{}: exists and is not a part directory (no {}): not replacing it", directory,
+                      kManifestName));
+  }
+  const fs::path parent = target.parent_path();
+  fs::create_directories(parent, ec);
+  removeStaleTemporaries(parent, target.filename().string());
+  const fs::path temporary =
+      parent / fmt::format(".{}.tmp.{}", target.filename().string(), ::getpid());
+  fs::remove_all(temporary, ec);
+  if (!fs::create_directory(temporary, ec))
+    throw InputError(fmt::format("{}: cannot create a directory next to it ({})", directory,
+                                 ec ? ec.message() : "exists"));
+  try {
+    Manifest m = writeParts(temporary.string(), scene, partition, lights, info);
+    replaceDirectory(temporary, target);
+    return m;
+  } catch (...) {
+    fs::remove_all(temporary, ec);
+    throw;
+  }
+}
 
+namespace {
+
+Manifest writeParts(const std::string& directory, const Scene& scene, const Partition& partition,
+                    const Scene& lights, const PartDirectoryInfo& info) {
   Manifest m;
   m.version = kPartFormatVersion;
   m.scene = info.scene;
@@ -58,6 +133,7 @@ Manifest writePartDirectory(const std::string& directory, const Scene& scene,
     p.bytes = w.bytes;
     p.hash = w.hash;
     m.parts.push_back(std::move(p));
+    maybeInjectFailure("partition-write", r);  // tests: a failure after part r is written
   }
   SharedData shared;
   shared.ranks = partition.ranks;
@@ -74,6 +150,8 @@ Manifest writePartDirectory(const std::string& directory, const Scene& scene,
   writeManifest(directory, m);
   return m;
 }
+
+}  // namespace
 
 RankPart loadRankPart(const std::string& directory, int rank, int ranks) {
   RankPart out;
