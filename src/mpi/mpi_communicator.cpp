@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <list>
 #include <string>
 #include <thread>
@@ -50,6 +51,16 @@ struct MpiCommunicator::Messaging {
     uint64_t length;  // a large message's length message
     std::vector<MPI_Request> requests;
   };
+  // A whole message matched and being received (MPI_Imrecv): a receiver
+  // that waited for it in a blocking receive would wait for the sender to
+  // make progress, which it does only when it next calls MPI.
+  struct Receive {
+    int from;
+    std::vector<std::byte> bytes;
+    MPI_Request request;
+    bool done = false;
+  };
+  std::list<Receive> receives;  // in the order they were matched
   struct Sum {
     uint64_t id;
     std::vector<uint64_t> values, result;
@@ -128,23 +139,15 @@ bool MpiCommunicator::allSendsDone() const {
   return messaging_->sends.empty();
 }
 
-std::optional<ReceivedBytes> MpiCommunicator::receiveBytes() const {
-  progressSends();
-  MPI_Comm comm = messaging_->comm;
-  int found = 0;
-  MPI_Message message;
-  MPI_Status status;
-  check(MPI_Improbe(MPI_ANY_SOURCE, MPI_ANY_TAG, comm, &found, &message, &status), "MPI_Improbe");
-  if (!found) return std::nullopt;
+namespace {
+
+// A message above the piece size: its length, then its pieces, received
+// here (blocking: they were all posted after the length).
+std::vector<std::byte> receiveLarge(MPI_Comm comm, int rank_, const MPI_Status& status,
+                                    MPI_Message& message, int count,
+                                    const std::function<void(int, const char*)>& check) {
   ReceivedBytes out;
   out.from = status.MPI_SOURCE;
-  int count = 0;
-  check(MPI_Get_count(&status, MPI_BYTE, &count), "MPI_Get_count");
-  if (status.MPI_TAG == kWholeMessage) {
-    out.bytes.resize(size_t(count));
-    check(MPI_Mrecv(out.bytes.data(), count, MPI_BYTE, &message, MPI_STATUS_IGNORE), "MPI_Mrecv");
-    return out;
-  }
   if (status.MPI_TAG != kLargeLength || count != int(sizeof(uint64_t)))
     throw CommunicationError("MPI_Improbe", rank_,
                              fmt::format("unexpected message (tag {}, {} bytes) from rank {}",
@@ -168,7 +171,56 @@ std::optional<ReceivedBytes> MpiCommunicator::receiveBytes() const {
           "MPI_Recv");
     done += size_t(pieceBytes);
   }
-  return out;
+  return std::move(out.bytes);
+}
+
+}  // namespace
+
+std::optional<ReceivedBytes> MpiCommunicator::receiveBytes() const {
+  progressSends();
+  Messaging& m = *messaging_;
+  // Match every message that has arrived and start receiving it.
+  for (;;) {
+    int found = 0;
+    MPI_Message message;
+    MPI_Status status;
+    check(MPI_Improbe(MPI_ANY_SOURCE, MPI_ANY_TAG, m.comm, &found, &message, &status),
+          "MPI_Improbe");
+    if (!found) break;
+    int count = 0;
+    check(MPI_Get_count(&status, MPI_BYTE, &count), "MPI_Get_count");
+    if (status.MPI_TAG == kWholeMessage) {
+      Messaging::Receive& r = m.receives.emplace_back();
+      r.from = status.MPI_SOURCE;
+      r.bytes.resize(size_t(count));
+      check(MPI_Imrecv(r.bytes.data(), count, MPI_BYTE, &message, &r.request), "MPI_Imrecv");
+      continue;
+    }
+    // A message in pieces (above 1 GiB): received whole, here (it queues
+    // after the earlier messages of its sender).
+    Messaging::Receive& r = m.receives.emplace_back();
+    r.from = status.MPI_SOURCE;
+    r.bytes = receiveLarge(m.comm, rank_, status, message, count,
+                           [this](int code, const char* operation) { check(code, operation); });
+    r.request = MPI_REQUEST_NULL;
+    r.done = true;
+  }
+  // The first complete message whose sender has no earlier one still coming
+  // (messages from one rank arrive in the order sent).
+  for (auto it = m.receives.begin(); it != m.receives.end(); ++it) {
+    if (!it->done) {
+      int done = 0;
+      check(MPI_Test(&it->request, &done, MPI_STATUS_IGNORE), "MPI_Test");
+      it->done = done != 0;
+    }
+    bool earlier = false;
+    for (auto e = m.receives.begin(); e != it && !earlier; ++e) earlier = e->from == it->from;
+    if (!it->done || earlier) continue;
+    ReceivedBytes out{it->from, std::move(it->bytes)};
+    m.receives.erase(it);
+    return out;
+  }
+  return std::nullopt;
 }
 
 void MpiCommunicator::waitForMessage(std::chrono::microseconds timeout) const {
