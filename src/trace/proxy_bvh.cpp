@@ -31,6 +31,19 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies) : proxies_(std::move(proxies)) {
   std::vector<Vec3f> centers(proxies_.size());
   for (size_t i = 0; i < proxies_.size(); ++i) centers[i] = proxies_[i].bounds.center();
   build(0, int32_t(proxies_.size()), 0, centers);
+  children_.resize(nodes_.size());
+  for (size_t n = 0; n < nodes_.size(); ++n) {
+    if (nodes_[n].left < 0) continue;
+    Children& c = children_[n];
+    const int32_t kids[2] = {nodes_[n].left, nodes_[n].right};
+    for (int k = 0; k < 2; ++k) {
+      const Node& child = nodes_[size_t(kids[k])];
+      c.bounds[k] = child.bounds;
+      c.owners[k] = child.ownersUnion;
+      c.minIndex[k] = child.minIndex;
+      c.node[k] = kids[k];
+    }
+  }
   // Leaves read their proxies' boxes and masks in leaf order (one stream).
   leafBounds_.resize(order_.size());
   leafMasks_.resize(order_.size());
@@ -178,26 +191,29 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
     else
       return wideUnion_[size_t(n)].isSubsetOf(ex.excluded);
   };
-  // Whether a subtree entered at tNode may still hold a better proxy: its
-  // proxies are entered at tNode or later, so it can only tie with the best
-  // so far at tNode, and a tie goes to the lower index.
-  auto mayImprove = [&](float tNode, int32_t n) {
-    return tNode < best.tEnter || (tNode == best.tEnter && nodes_[size_t(n)].minIndex < best.proxy);
+  // Whether a subtree entered at tNode, whose least proxy index is
+  // minIndex, may still hold a better proxy: its proxies are entered at
+  // tNode or later, so it can only tie with the best so far at tNode, and a
+  // tie goes to the lower index.
+  auto mayImprove = [&](float tNode, int32_t minIndex) {
+    return tNode < best.tEnter || (tNode == best.tEnter && minIndex < best.proxy);
   };
   // Closest first: children are visited nearer (then lower index) first, so
-  // the best answer is found early and prunes the rest.
+  // the best answer is found early and prunes the rest. An entry carries its
+  // node's least index, so popping it reads nothing more.
   struct Entry {
     int32_t node;
     float t;
+    int32_t minIndex;
   };
   Entry stack[128];
   int top = 0;
   float tRoot;
   if (excludedNode(0) || !intersectBox(nodes_[0].bounds, origin, inv, tmax, tRoot)) return best;
-  stack[top++] = {0, tRoot};
+  stack[top++] = {0, tRoot, nodes_[0].minIndex};
   while (top > 0) {
     const Entry e = stack[--top];
-    if (!mayImprove(e.t, e.node)) continue;
+    if (!mayImprove(e.t, e.minIndex)) continue;
     const Node& node = nodes_[size_t(e.node)];
     if (node.left < 0) {
       for (int32_t i = node.first; i < node.first + node.count; ++i) {
@@ -215,22 +231,26 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
     }
     // Strictly closer, or equally close (a lower index may still win the tie).
     const float limit = std::min(tmax, nextAbove(best.tEnter));
-    Entry near{-1, 0}, far{-1, 0};
-    for (int32_t child : {node.left, node.right}) {
+    const Children& c = children_[size_t(e.node)];
+    Entry near{-1, 0, 0}, far{-1, 0, 0};
+    for (int k = 0; k < 2; ++k) {
+      bool excluded;
+      if constexpr (kMask)
+        excluded = (c.owners[k] & ~ex.excluded) == 0;
+      else
+        excluded = excludedNode(c.node[k]);
       float t;
-      if (excludedNode(child) ||
-          !intersectBox(nodes_[size_t(child)].bounds, origin, inv, limit, t) ||
-          !mayImprove(t, child))
+      if (excluded || !intersectBox(c.bounds[k], origin, inv, limit, t) ||
+          !mayImprove(t, c.minIndex[k]))
         continue;
-      const Entry c{child, t};
+      const Entry entry{c.node[k], t, c.minIndex[k]};
       if (near.node < 0) {
-        near = c;
-      } else if (c.t < near.t || (c.t == near.t && nodes_[size_t(child)].minIndex <
-                                                       nodes_[size_t(near.node)].minIndex)) {
+        near = entry;
+      } else if (entry.t < near.t || (entry.t == near.t && entry.minIndex < near.minIndex)) {
         far = near;
-        near = c;
+        near = entry;
       } else {
-        far = c;
+        far = entry;
       }
     }
     if (far.node >= 0) stack[top++] = far;

@@ -51,6 +51,15 @@ class ProxyBvh {
     int32_t minIndex = 0;           // least proxy index below: prunes ties (closestImpl)
   };
   int32_t build(int32_t first, int32_t count, int depth, const std::vector<Vec3f>& centers);
+  // An inner node's two children as the query reads them: both boxes, owner
+  // masks and least indices in one record (one cache line or two), instead
+  // of a load from each child node before deciding whether to enter it.
+  struct Children {
+    Box3f bounds[2];
+    RankMask owners[2];
+    int32_t minIndex[2];
+    int32_t node[2];
+  };
 
   std::vector<Proxy> proxies_;
   std::vector<RankMask> ownerMasks_;  // per proxy (narrow)
@@ -59,6 +68,7 @@ class ProxyBvh {
   std::vector<Box3f> leafBounds_;    // proxies' boxes in leaf order (order_)
   std::vector<RankMask> leafMasks_;  // their owner masks (narrow), in leaf order
   std::vector<Node> nodes_;
+  std::vector<Children> children_;  // per node (inner nodes only are read)
 };
 
 // Slab test; entry distance clamped at 0 (origin inside counts as entering at 0).
