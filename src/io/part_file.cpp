@@ -144,6 +144,7 @@ void writeMaterial(FileWriter& w, const Material& m) {
   w.pod(m.emission);
   w.pod(m.alphaTexture);
   w.pod(m.alphaCutoff);
+  w.pod(uint8_t(m.emitsBackSide ? 1 : 0));
 }
 
 void writeTexture(FileWriter& w, const Texture& t) {
@@ -343,6 +344,9 @@ class FileReader {
  public:
   FileReader(const MappedFile& file, std::string path)
       : file_(file), path_(std::move(path)), at_(kHeaderBytes) {}
+  // The file's part format version (fields added later are read only from newer files).
+  uint32_t version() const { return version_; }
+  void setVersion(uint32_t version) { version_ = version; }
 
   template <typename T>
   T pod() {
@@ -401,6 +405,7 @@ class FileReader {
   const MappedFile& file_;
   std::string path_;
   uint64_t at_;
+  uint32_t version_ = kPartFormatVersion;
 };
 
 Material readMaterial(FileReader& r) {
@@ -415,6 +420,7 @@ Material readMaterial(FileReader& r) {
   m.emission = r.pod<Vec3f>();
   m.alphaTexture = r.pod<int32_t>();
   m.alphaCutoff = r.pod<float>();
+  if (r.version() >= 3) m.emitsBackSide = r.pod<uint8_t>() != 0;  // older: two-sided
   return m;
 }
 
@@ -525,6 +531,7 @@ LoadedPart readPartFile(const std::string& path, uint64_t expectedHash) {
   MappedFile file(path);
   Header h = checkFile(file, path, kKindPart, expectedHash);
   FileReader r(file, path);
+  r.setVersion(h.version);
   LoadedPart part;
   part.rank = int(r.pod<uint32_t>());
   part.ranks = int(r.pod<uint32_t>());
@@ -582,6 +589,7 @@ SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
   MappedFile file(path);
   const Header h = checkFile(file, path, kKindShared, expectedHash);
   FileReader r(file, path);
+  r.setVersion(h.version);
   SharedData shared;
   shared.ranks = int(r.pod<uint32_t>());
   for (uint64_t n = r.count(45); n > 0; --n) {

@@ -86,7 +86,9 @@ class PbrtMaterials {
 
   // The Ferry material for shapes of `definition` (-1: pbrt's default, diffuse
   // 0.5) emitting `emission` (area light) and cut out by `alphaTexture`.
-  int32_t materialFor(int32_t definition, Vec3f emission, int32_t alphaTexture);
+  // `emitsBackSide`: false for a one-sided area light (pbrt's default).
+  int32_t materialFor(int32_t definition, Vec3f emission, int32_t alphaTexture,
+                      bool emitsBackSide = true);
   // A shape's "alpha" (float or float texture) as an alpha texture;
   // kNoTexture when it is the constant 1.
   int32_t shapeAlpha(const PbrtParams& shapeParams);

@@ -75,6 +75,7 @@ Vec3f bilinear(const HdrImage& img, float x, float y, bool wrapX) {
 
 struct AreaLight {
   Vec3f radiance;
+  bool twoSided = false;  // pbrt's "bool twosided" (default: only the front emits)
 };
 
 struct GraphicsState {
@@ -826,10 +827,7 @@ class Parser {
       return;
     }
     Vec3f L = materials_.constantColor(p, "L", Vec3f(1), SpectrumUse::Illuminant) * lightScale(p);
-    if (!p.getBool("twosided", false))
-      warnings_.once("twosided", fmt::format("area lights emit from both sides in Ferry (pbrt's "
-                                             "emit only in front; first at {})",
-                                             where.toString()));
+    const bool twoSided = p.getBool("twosided", false);
     if (p.has("filename")) {
       p.find("filename");
       warnings_.once("arealight image", fmt::format("AreaLightSource image emission is not "
@@ -837,7 +835,7 @@ class Parser {
                                                     where.toString()));
     }
     reportUnused(p, "AreaLightSource \"diffuse\"");
-    state_.areaLight = AreaLight{L};
+    state_.areaLight = AreaLight{L, twoSided};
   }
 
   // ----------------------------------------------------------------- shapes
@@ -932,7 +930,8 @@ class Parser {
       }
       const int32_t alpha = materials_.shapeAlpha(p);
       const int32_t material = materials_.materialFor(
-          state_.material, state_.areaLight ? state_.areaLight->radiance : Vec3f(0), alpha);
+          state_.material, state_.areaLight ? state_.areaLight->radiance : Vec3f(0), alpha,
+          !state_.areaLight || state_.areaLight->twoSided);
       if (!plyPath.empty()) {
         p.find("displacement");
         p.find("edgelength");
@@ -1025,7 +1024,8 @@ class Parser {
     }
     const int32_t alpha = materials_.shapeAlpha(p);
     const int32_t material = materials_.materialFor(
-        state_.material, state_.areaLight ? state_.areaLight->radiance : Vec3f(0), alpha);
+        state_.material, state_.areaLight ? state_.areaLight->radiance : Vec3f(0), alpha,
+        !state_.areaLight || state_.areaLight->twoSided);
     // Consecutive curves with the same material and transform share a mesh.
     bool reuse = curveBatch_ && curveBatch_->material == material &&
                  curveBatch_->object == currentObject_.value_or(-1) &&
@@ -1075,7 +1075,32 @@ class Parser {
 
   // Adds a mesh where it belongs: into the object being defined (in the
   // definition's space), or as a new object placed by one instance.
+  // A one-sided emitter emits on the side of pbrt's surface normal: the
+  // world winding normal flipped by ReverseOrientation and by a transform
+  // that swaps handedness, or (with vertex normals) turned to the normals'
+  // side. Ferry's emitting side is the object's winding normal transformed
+  // as a normal (render/surface.h; the handedness flip is already in that),
+  // so the winding is set here: reversed under ReverseOrientation, or turned
+  // triangle by triangle to its vertex normals.
+  void orientEmitter(Mesh& mesh) const {
+    const Material& material = scene_.materials[size_t(mesh.material)];
+    if (!material.isEmissive() || material.emitsBackSide) return;
+    for (Vec3i& tri : mesh.indices) {
+      bool flip = state_.reverseOrientation;
+      if (!mesh.normals.empty()) {
+        const Vec3f& a = mesh.positions[size_t(tri.x)];
+        const Vec3f winding =
+            cross(mesh.positions[size_t(tri.y)] - a, mesh.positions[size_t(tri.z)] - a);
+        const Vec3f normal =
+            mesh.normals[size_t(tri.x)] + mesh.normals[size_t(tri.y)] + mesh.normals[size_t(tri.z)];
+        flip = dot(winding, normal) < 0;
+      }
+      if (flip) std::swap(tri.y, tri.z);
+    }
+  }
+
   int32_t addMesh(Mesh mesh) {
+    orientEmitter(mesh);
     if (currentObject_) {
       if (!sameTransform(state_.ctm, Affine3f::identity())) bake(mesh, state_.ctm);
       scene_.meshes.push_back(std::move(mesh));
@@ -1094,8 +1119,12 @@ class Parser {
   }
 
   void addPly(const std::string& path, int32_t material, const SourceLocation& where) {
+    // A one-sided emitter's winding depends on ReverseOrientation and the
+    // transform's handedness (orientEmitter): meshes differing in those are not shared.
+    const int orientation =
+        (state_.reverseOrientation ? 1 : 0) | (state_.ctm.determinant() < 0 ? 2 : 0);
     if (!currentObject_) {
-      auto key = std::make_pair(path, material);
+      auto key = std::make_tuple(path, material, orientation);
       auto it = topLevelPly_.find(key);
       if (it != topLevelPly_.end()) {
         scene_.instances.push_back({it->second, state_.ctm});
@@ -1109,7 +1138,7 @@ class Parser {
     }
     // Inside an object the mesh is baked with the current transform; the
     // same file, material and transform share one mesh.
-    std::string key = fmt::format("{}|{}|", path, material);
+    std::string key = fmt::format("{}|{}|{}|", path, material, orientation);
     key.append(reinterpret_cast<const char*>(&state_.ctm), sizeof(Affine3f));
     auto it = objectPly_.find(key);
     if (it != objectPly_.end()) {
@@ -1311,7 +1340,7 @@ class Parser {
   std::map<std::string, Affine3f> coordinateSystems_;
   std::map<std::string, int32_t> objects_;
   std::optional<int32_t> currentObject_;
-  std::map<std::pair<std::string, int32_t>, int32_t> topLevelPly_;
+  std::map<std::tuple<std::string, int32_t, int>, int32_t> topLevelPly_;
   std::map<std::string, int32_t> objectPly_;
   struct CurveBatch {
     int32_t mesh, material, object;

@@ -534,6 +534,47 @@ TEST_P(PbrtCorpusError, NamesFileLineAndColumn) {
   }
 }
 
+// pbrt's area lights emit only in front unless "twosided"; the front is the
+// winding normal, reversed by ReverseOrientation, or the side of the vertex
+// normals: the loader orients a one-sided emitter's winding to match.
+TEST(PbrtParser, AreaLightsAreOneSidedAndOriented) {
+  auto emitterOf = [](const std::string& before, const std::string& light,
+                      const std::string& extra) {
+    const Scene scene = fromText(
+        "WorldBegin\nAttributeBegin\n" + before + "AreaLightSource \"diffuse\" " + light +
+        "\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] " +
+        extra + "\nAttributeEnd\nWorldEnd\n");
+    for (const Mesh& m : scene.meshes)
+      if (scene.materials[size_t(m.material)].isEmissive()) return m;
+    ADD_FAILURE() << "no emitter";
+    return Mesh{};
+  };
+  auto normalZ = [](const Mesh& m) {
+    const Vec3i t = m.indices[0];
+    return cross(m.positions[size_t(t.y)] - m.positions[size_t(t.x)],
+                 m.positions[size_t(t.z)] - m.positions[size_t(t.x)])
+        .z;
+  };
+  const Scene oneSided = fromText(
+      "WorldBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nShape \"trianglemesh\" "
+      "\"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nWorldEnd\n");
+  bool found = false;
+  for (const Material& m : oneSided.materials)
+    if (m.isEmissive()) {
+      EXPECT_FALSE(m.emitsBackSide);
+      found = true;
+    }
+  EXPECT_TRUE(found);
+  EXPECT_GT(normalZ(emitterOf("", "\"rgb L\" [1 1 1]", "")), 0);  // as written: +z
+  EXPECT_LT(normalZ(emitterOf("ReverseOrientation\n", "\"rgb L\" [1 1 1]", "")), 0);
+  // Vertex normals decide, whatever the winding.
+  EXPECT_LT(normalZ(emitterOf("", "\"rgb L\" [1 1 1]", "\"normal N\" [0 0 -1 0 0 -1 0 0 -1]")), 0);
+  // Two-sided: as written, and emitting on both sides.
+  const Mesh twoSided =
+      emitterOf("ReverseOrientation\n", "\"rgb L\" [1 1 1] \"bool twosided\" true", "");
+  EXPECT_GT(normalZ(twoSided), 0);
+}
+
 const std::vector<BadPbrt> kBadPbrt = {
     {"unknown_directive.pbrt", "unknown_directive.pbrt", 3, 1, "unknown directive 'Shpae'"},
     {"unterminated_string.pbrt", "unterminated_string.pbrt", 3, 35,

@@ -155,5 +155,43 @@ TEST(DirectLighting, LambertianPlaneUnderASquareEmitter) {
   }
 }
 
+// pbrt's area lights emit only on their front (the winding normal's side):
+// facing away from the plane, the square lights nothing; facing it, it
+// lights the plane exactly as a two-sided one does (bit for bit: the same
+// light samples, every one on the front).
+TEST(DirectLighting, OneSidedEmitterLightsOnlyItsFront) {
+  auto render = [](bool facingThePlane, bool twoSided) {
+    Scene scene = litPlane(Vec3f(0.5f));
+    Material emitter;
+    emitter.name = "emitter";
+    emitter.baseColor = Vec3f(0);
+    emitter.emission = Vec3f(4);
+    emitter.emitsBackSide = twoSided;
+    const int32_t e = scene.addMaterial(emitter);
+    // Edges (z, x) give a winding normal of +y, away from the plane; (x, z) of -y.
+    const Vec3f corner{-0.5f, 1, -0.5f}, ex{1, 0, 0}, ez{0, 0, 1};
+    scene.addSingleInstanceMesh(facingThePlane ? makeQuad(corner, ex, ez, e)
+                                               : makeQuad(corner, ez, ex, e));
+    CameraView view;
+    view.from = {0.3f, 0.45f, 2.4f};
+    view.at = {0.05f, 0, 0.1f};
+    view.fovY = 8;
+    scene.views = {view};
+    RenderSettings s;
+    s.width = s.height = 16;
+    s.samplesPerPixel = 4;
+    s.maxDepth = 2;
+    s.seed = 29;
+    PixelStatistics stats = renderStatistics(scene, s, 2);
+    double mean = 0, se = 0;
+    stats.imageMean(0, mean, se);
+    return mean;
+  };
+  EXPECT_EQ(render(/*facingThePlane=*/false, /*twoSided=*/false), 0.0);
+  const double front = render(true, false);
+  EXPECT_GT(front, 0.0);
+  EXPECT_EQ(front, render(true, true));
+}
+
 }  // namespace
 }  // namespace ferry

@@ -64,13 +64,24 @@ LightSampler::LightSampler(const Scene& scene)
   for (const Instance& inst : scene.instances) {
     for (int32_t m : emissiveMeshesPerObject[inst.object]) {
       const Mesh& mesh = scene.meshes[m];
-      Vec3f radiance = scene.materials[mesh.material].emission;
+      const Material& material = scene.materials[mesh.material];
+      const Vec3f radiance = material.emission;
+      // The emitting side is the object's winding normal transformed as a
+      // normal (as at a hit, render/surface.h): the world edges' cross
+      // product, turned around where the transform swaps handedness.
+      const bool swapsHandedness = inst.transform.determinant() < 0;
       for (const Vec3i& tri : mesh.indices) {
         Vec3f p0 = inst.transform.transformPoint(mesh.positions[tri.x]);
         Vec3f p1 = inst.transform.transformPoint(mesh.positions[tri.y]);
         Vec3f p2 = inst.transform.transformPoint(mesh.positions[tri.z]);
         float area = 0.5f * length(cross(p1 - p0, p2 - p0));
-        if (area > 0) triangles_.push_back({p0, p1 - p0, p2 - p0, radiance, area});
+        if (!(area > 0)) continue;
+        // (Two-sided emitters keep their edges: where a sample lands does not
+        // change for them.)
+        if (swapsHandedness && !material.emitsBackSide)  // the same triangle, edges swapped
+          triangles_.push_back({p0, p2 - p0, p1 - p0, radiance, area, !material.emitsBackSide});
+        else
+          triangles_.push_back({p0, p1 - p0, p2 - p0, radiance, area, !material.emitsBackSide});
       }
     }
   }
@@ -170,7 +181,11 @@ bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u,
   float dist = std::sqrt(dist2);
   out.direction = d * (1 / dist);
   Vec3f ng = normalize(cross(t.e1, t.e2));
-  float cosLight = std::abs(dot(ng, out.direction));  // emitters are two-sided
+  const float facing = dot(ng, out.direction);
+  // A one-sided emitter lights only points on the side its normal faces
+  // (the direction runs from the point to the light: facing < 0).
+  if (t.oneSided && !(facing < 0)) return false;
+  float cosLight = std::abs(facing);
   if (cosLight <= 1e-7f) return false;
   out.distance = dist;
   out.normal = ng;

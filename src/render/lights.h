@@ -51,6 +51,7 @@ class LightSampler {
     Vec3f p0, e1, e2;
     Vec3f radiance;
     float area;
+    bool oneSided = false;  // emits only on the side of cross(e1, e2)
   };
   struct Group {  // emissive triangles beyond kMaxIndividualTriangles, chosen by power
     Box3f bounds;

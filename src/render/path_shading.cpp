@@ -72,6 +72,8 @@ template <typename Path>
                                                                   FrameBuffer& frameBuffer) const {
   const Material& material = *vertex.surface.material;
   if (!vertex.afterSpecular || !material.isEmissive()) return;
+  // A one-sided emitter lights only the side its winding normal faces.
+  if (!material.emitsBackSide && !(dot(vertex.surface.geometricNormal, vertex.wo) > 0)) return;
   const Vec3f l = vertex.throughput * material.emission;
   if (usable(l)) frameBuffer.add(vertex.pixel, l);
 }

@@ -31,6 +31,10 @@ struct Material {
   Vec3f emission{0, 0, 0};            // radiance leaving the surface
   int32_t alphaTexture = kNoTexture;  // cut-out: texel alpha < alphaCutoff is a hole
   float alphaCutoff = 0.5f;
+  // An emitter lights both sides of its triangles (Ferry's built-ins, OBJ,
+  // glTF), or only the side its winding normal faces (pbrt's area lights
+  // unless "twosided": the loader orients the winding as pbrt would).
+  bool emitsBackSide = true;
 
   bool isEmissive() const { return maxComponent(emission) > 0; }
 };
