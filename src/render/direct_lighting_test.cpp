@@ -94,26 +94,35 @@ double rectangleViewFactor(double px, double pz, double x0, double x1, double z0
          cornerViewFactor(x1 - px, z0 - pz, h) + cornerViewFactor(x0 - px, z0 - pz, h);
 }
 
+Material emitterMaterial(Vec3f radiance) {
+  Material emitter;
+  emitter.name = "emitter";
+  emitter.baseColor = Vec3f(0);
+  emitter.emission = radiance;
+  return emitter;
+}
+
+// Looking at the centre under the emitter from the side, under its edge,
+// with a narrow view: the image spans about 0.3 units around the centre.
+CameraView underTheEmitter() {
+  CameraView view;
+  view.from = {0.3f, 0.45f, 2.4f};
+  view.at = {0.05f, 0, 0.1f};
+  view.fovY = 8;
+  return view;
+}
+
 TEST(DirectLighting, LambertianPlaneUnderASquareEmitter) {
   const Vec3f albedo{0.5f, 0.7f, 0.3f};
   const Vec3f le{4, 2, 6};
   const double h = 1, half = 0.5;
   Scene scene = litPlane(albedo);
-  Material emitter;
-  emitter.name = "emitter";
-  emitter.baseColor = Vec3f(0);
-  emitter.emission = le;
-  int32_t e = scene.addMaterial(emitter);
+  int32_t e = scene.addMaterial(emitterMaterial(le));
   // Winding gives a geometric normal of +y (away from the plane); emitters
   // are two-sided (docs/architecture.md), so the lower side emits.
   scene.addSingleInstanceMesh(makeQuad({-float(half), float(h), -float(half)},
                                        {0, 0, 2 * float(half)}, {2 * float(half), 0, 0}, e));
-  // Looking at the centre under the emitter from the side, under its edge,
-  // with a narrow view: the image spans about 0.3 units around the centre.
-  CameraView view;
-  view.from = {0.3f, 0.45f, 2.4f};
-  view.at = {0.05f, 0, 0.1f};
-  view.fovY = 8;
+  const CameraView view = underTheEmitter();
   scene.views = {view};
 
   RenderSettings s;
@@ -162,21 +171,14 @@ TEST(DirectLighting, LambertianPlaneUnderASquareEmitter) {
 TEST(DirectLighting, OneSidedEmitterLightsOnlyItsFront) {
   auto render = [](bool facingThePlane, bool twoSided) {
     Scene scene = litPlane(Vec3f(0.5f));
-    Material emitter;
-    emitter.name = "emitter";
-    emitter.baseColor = Vec3f(0);
-    emitter.emission = Vec3f(4);
+    Material emitter = emitterMaterial(Vec3f(4));
     emitter.emitsBackSide = twoSided;
     const int32_t e = scene.addMaterial(emitter);
     // Edges (z, x) give a winding normal of +y, away from the plane; (x, z) of -y.
     const Vec3f corner{-0.5f, 1, -0.5f}, ex{1, 0, 0}, ez{0, 0, 1};
     scene.addSingleInstanceMesh(facingThePlane ? makeQuad(corner, ex, ez, e)
                                                : makeQuad(corner, ez, ex, e));
-    CameraView view;
-    view.from = {0.3f, 0.45f, 2.4f};
-    view.at = {0.05f, 0, 0.1f};
-    view.fovY = 8;
-    scene.views = {view};
+    scene.views = {underTheEmitter()};
     RenderSettings s;
     s.width = s.height = 16;
     s.samplesPerPixel = 4;
