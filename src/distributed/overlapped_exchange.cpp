@@ -25,9 +25,6 @@
 // to sum k+1, one consistent cut of the whole computation. A ray in flight
 // or in a queue at that cut was made and not ended, so made == ended there
 // means no ray was left anywhere, and none can appear.
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 #include <optional>

@@ -69,19 +69,18 @@ LightSampler::LightSampler(const Scene& scene)
       // The emitting side is the object's winding normal transformed as a
       // normal (as at a hit, render/surface.h): the world edges' cross
       // product, turned around where the transform swaps handedness.
-      const bool swapsHandedness = inst.transform.determinant() < 0;
+      // (Two-sided emitters keep their edges: where a sample lands does not
+      // change for them.)
+      const bool oneSided = !material.emitsBackSide;
+      const bool swapEdges = oneSided && inst.transform.determinant() < 0;
       for (const Vec3i& tri : mesh.indices) {
         Vec3f p0 = inst.transform.transformPoint(mesh.positions[tri.x]);
-        Vec3f p1 = inst.transform.transformPoint(mesh.positions[tri.y]);
-        Vec3f p2 = inst.transform.transformPoint(mesh.positions[tri.z]);
-        float area = 0.5f * length(cross(p1 - p0, p2 - p0));
+        Vec3f e1 = inst.transform.transformPoint(mesh.positions[tri.y]) - p0;
+        Vec3f e2 = inst.transform.transformPoint(mesh.positions[tri.z]) - p0;
+        float area = 0.5f * length(cross(e1, e2));
         if (!(area > 0)) continue;
-        // (Two-sided emitters keep their edges: where a sample lands does not
-        // change for them.)
-        if (swapsHandedness && !material.emitsBackSide)  // the same triangle, edges swapped
-          triangles_.push_back({p0, p2 - p0, p1 - p0, radiance, area, !material.emitsBackSide});
-        else
-          triangles_.push_back({p0, p1 - p0, p2 - p0, radiance, area, !material.emitsBackSide});
+        if (swapEdges) std::swap(e1, e2);  // the same triangle, its normal turned
+        triangles_.push_back({p0, e1, e2, radiance, area, oneSided});
       }
     }
   }

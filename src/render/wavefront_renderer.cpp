@@ -138,6 +138,22 @@ void WavefrontRenderer<Path>::makeCameraPath(uint32_t sampleIndex, uint32_t pixe
           kPathAfterSpecular);
 }
 
+template <typename Path>
+TraceRay WavefrontRenderer<Path>::cameraTraceRay(uint32_t sampleIndex, uint32_t pixel) const {
+  Path p;
+  makeCameraPath(sampleIndex, pixel, pixel % width(), pixel / width(), p);
+  return TraceRay{p.origin, p.dir(), 0, kInfinity};
+}
+
+template <typename Path>
+void WavefrontRenderer<Path>::makeCameraPaths(uint32_t sampleIndex,
+                                              std::span<const uint32_t> pixels, Path* out) const {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 2048), [&](const auto& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i)
+      makeCameraPath(sampleIndex, pixels[i], pixels[i] % width(), pixels[i] / width(), out[i]);
+  });
+}
+
 // What a traversal that runs whole samples calls back: the renderer's camera
 // paths and its shading stage (on the whole-image workspace, whose queues
 // are swapped in and out, not copied).
@@ -148,21 +164,14 @@ class WavefrontRenderer<Path>::SampleStages final : public SampleShading<Path> {
       : renderer_(renderer), sampleIndex_(sampleIndex), frameBuffer_(frameBuffer) {}
 
   TraceRay cameraRay(uint32_t pixel) const override {
-    Path p;
-    renderer_.makeCameraPath(sampleIndex_, pixel, pixel % renderer_.width(),
-                             pixel / renderer_.width(), p);
-    return TraceRay{p.origin, p.dir(), 0, kInfinity};
+    return renderer_.cameraTraceRay(sampleIndex_, pixel);
   }
   void cameraPaths(std::span<const uint32_t> pixels, PathQueue<Path>& out,
                    FrameStats& stats) override {
     auto start = Clock::now();
     const size_t first = out.size();
     out.resize(first + pixels.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 2048), [&](const auto& range) {
-      for (size_t i = range.begin(); i != range.end(); ++i)
-        renderer_.makeCameraPath(sampleIndex_, pixels[i], pixels[i] % renderer_.width(),
-                                 pixels[i] / renderer_.width(), out[first + i]);
-    });
+    renderer_.makeCameraPaths(sampleIndex_, pixels, out.data() + first);
     stats.cameraPaths += pixels.size();
     stats.times.generate += secondsSince(start);
   }
@@ -217,19 +226,11 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     // (proxy-guided, one collective), then their camera rays go into the
     // queue in pixel order.
     traversal_.primaryPixels(
-        first, last,
-        [&](uint32_t pixel) {
-          Path p;
-          cameraRay(pixel, pixel % width, pixel / width, p);
-          return TraceRay{p.origin, p.dir(), 0, kInfinity};
-        },
+        first, last, [&](uint32_t pixel) { return cameraTraceRay(sampleIndex, pixel); },
         ws.primaryPixels, stats);
     const std::vector<uint32_t>& mine = ws.primaryPixels;
     rays.resize(mine.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, mine.size(), kBlock), [&](const auto& range) {
-      for (size_t i = range.begin(); i != range.end(); ++i)
-        cameraRay(mine[i], mine[i] % width, mine[i] / width, rays[i]);
-    });
+    makeCameraPaths(sampleIndex, mine, rays.data());
   }
   stats.cameraPaths += rays.size();
   stats.times.generate += secondsSince(start);

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -97,6 +98,10 @@ class WavefrontRenderer {
   void makeCameraPath(uint32_t sampleIndex, uint32_t pixel, uint32_t px, uint32_t py,
                       Path& path) const;
   uint32_t width() const { return uint32_t(settings_.width); }
+  // The camera ray of `pixel`'s path, as the proxy-guided ownership asks it.
+  TraceRay cameraTraceRay(uint32_t sampleIndex, uint32_t pixel) const;
+  // The camera paths of `pixels` into out[0, pixels.size()), in parallel.
+  void makeCameraPaths(uint32_t sampleIndex, std::span<const uint32_t> pixels, Path* out) const;
   // The camera rays of pixels [first, last) for this sample, into ws.rays.
   void generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
                           FrameStats& stats);

@@ -263,6 +263,12 @@ std::unique_ptr<RayTraversal<Path>> RenderSession::makeTraversal(
 
 namespace {
 
+// What turns the frame buffer's sum into the image: the average of the
+// samples so far, times the Film's scale (pbrt).
+float imageScale(const Scene& scene, int frames, int samplesPerPixel) {
+  return scene.filmScale / float(frames * samplesPerPixel);
+}
+
 // Every rank's memory now, on every rank (one collective).
 RankMemory rankMemory(const Communicator& comm, double estimated, double embree,
                       double embreePeak) {
@@ -334,7 +340,8 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
     if (change.flags & (ViewChange::kCamera | ViewChange::kSettings)) {
       if (render.width != oldWidth || render.height != oldHeight)
         frameBuffer = FrameBuffer(render.width, render.height);
-      frameBuffer.clear();
+      else
+        frameBuffer.clear();
       accumulated = 0;
       renderer = std::make_unique<WavefrontRenderer<Path>>(rank.scene, *rank.geometry, *rank.lights,
                                                            *traversal, render);
@@ -373,9 +380,9 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
     lastFrameSeconds = frame.stats.seconds;
     ++accumulated;
     const auto start = Clock::now();
-    frame.image = composite(comm_, frameBuffer,
-                            rank.scene.filmScale / float(accumulated * render.samplesPerPixel),
-                            FrameSink::Pixels::ToneMapped, render.toneMapping, compositeBytes);
+    frame.image =
+        composite(comm_, frameBuffer, imageScale(rank.scene, accumulated, render.samplesPerPixel),
+                  FrameSink::Pixels::ToneMapped, render.toneMapping, compositeBytes);
     frame.stats.times.composite = comm_.max(secondsSince(start));
     frame.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
                               double(rank.embreePeakBytes));
@@ -412,8 +419,7 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
   int lastFrame = render.frames - 1;  // earlier if the time limit says so
   auto compositeAfter = [&](int frame, double& seconds) {
     auto start = Clock::now();
-    // The average of the samples so far, times the Film's scale (pbrt).
-    const float scale = rank.scene.filmScale / float((frame + 1) * render.samplesPerPixel);
+    const float scale = imageScale(rank.scene, frame + 1, render.samplesPerPixel);
     FrameImage image =
         composite(comm_, frameBuffer, scale, pixels, render.toneMapping, compositeBytes);
     image.frame = frame;
