@@ -100,6 +100,9 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   s.render.samplesPerPixel = o.samplesPerPixel;
   s.render.frames = o.frames;
   s.render.maxDepth = o.maxDepth;
+  if (o.mis != "on" && o.mis != "off")
+    throw InputError(fmt::format("--mis {}: expected on or off", o.mis));
+  s.render.lightStrategy = o.mis == "on" ? LightStrategy::Mis : LightStrategy::LightSamples;
   s.render.seed = o.seed;
   s.render.view = o.view;
   s.render.toneMapping.exposure = o.exposure;
@@ -192,6 +195,12 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
   command
       ->add_option("--max-depth", o.maxDepth,
                    "Maximum scattering events per path (1: direct light only, 0: emitters only)")
+      ->capture_default_str();
+  command
+      ->add_option("--mis", o.mis,
+                   "Multiple importance sampling: on (light and BSDF samples both find emitters\n"
+                   "and the environment map, weighed by the power heuristic) or off (emitters\n"
+                   "only through light samples, as the paper)")
       ->capture_default_str();
   command->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   command->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")

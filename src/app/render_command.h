@@ -43,6 +43,9 @@ struct RenderOptions {
   // --retrace: "remote" re-traces only paths whose hit another rank found;
   // "all" re-traces every shaded path (the paper). Same image.
   std::string retrace = "remote";
+  // --mis: "on" weighs light and BSDF samples (multiple importance
+  // sampling); "off" counts emitters only through light samples.
+  std::string mis = "on";
   // --instancing: "shared" gives an Embree instance level only to objects a
   // rank places more than once or transformed; "always" to every object.
   std::string instancing = "shared";

@@ -1,7 +1,10 @@
 #include "render/lights.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 
+#include "core/hash64.h"
 #include "render/bsdf.h"
 
 namespace ferry {
@@ -26,6 +29,20 @@ float oneMinusCos(float r) {
 
 float sunConePdf(const SunLight& sun) {
   return 1.0f / (2 * kPi * oneMinusCos(sun.angularRadius));
+}
+
+// emitterIndex's key: the corners' bits, sorted (a mesh may start a triangle
+// at any corner), -0 counted as +0 (placing by the identity transform, as
+// the light scene does, turns -0 into +0).
+uint64_t cornersKey(std::array<Vec3f, 3> corners) {
+  std::array<std::array<uint32_t, 3>, 3> bits;
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k) {
+      const float v = corners[c][k] + 0.0f;
+      std::memcpy(&bits[c][k], &v, 4);
+    }
+  std::sort(bits.begin(), bits.end());
+  return hash64(bits.data(), sizeof(bits));
 }
 
 }  // namespace
@@ -74,13 +91,17 @@ LightSampler::LightSampler(const Scene& scene)
       const bool oneSided = !material.emitsBackSide;
       const bool swapEdges = oneSided && inst.transform.determinant() < 0;
       for (const Vec3i& tri : mesh.indices) {
-        Vec3f p0 = inst.transform.transformPoint(mesh.positions[tri.x]);
-        Vec3f e1 = inst.transform.transformPoint(mesh.positions[tri.y]) - p0;
-        Vec3f e2 = inst.transform.transformPoint(mesh.positions[tri.z]) - p0;
+        const std::array<Vec3f, 3> corners{inst.transform.transformPoint(mesh.positions[tri.x]),
+                                           inst.transform.transformPoint(mesh.positions[tri.y]),
+                                           inst.transform.transformPoint(mesh.positions[tri.z])};
+        const Vec3f p0 = corners[0];
+        Vec3f e1 = corners[1] - p0, e2 = corners[2] - p0;
         float area = 0.5f * length(cross(e1, e2));
         if (!(area > 0)) continue;
         if (swapEdges) std::swap(e1, e2);  // the same triangle, its normal turned
-        triangles_.push_back({p0, e1, e2, radiance, area, oneSided});
+        triangleByCorners_.emplace(cornersKey(corners), uint32_t(triangles_.size()));
+        triangles_.push_back({p0, e1, e2, radiance, area, luminance(radiance) * area,
+                              p0 + (e1 + e2) * (1.0f / 3), normalize(cross(e1, e2)), oneSided});
       }
     }
   }
@@ -91,9 +112,8 @@ LightSampler::LightSampler(const Scene& scene)
       for (size_t i = begin; i < std::min(triangles_.size(), begin + kTrianglesPerGroup); ++i) {
         const EmissiveTriangle& t = triangles_[i];
         g.triangles.push_back(uint32_t(i));
-        float power = luminance(t.radiance) * t.area;
-        powers.push_back(power);
-        g.power += power;
+        powers.push_back(t.power);
+        g.power += t.power;
         g.bounds.extend(t.p0);
         g.bounds.extend(t.p0 + t.e1);
         g.bounds.extend(t.p0 + t.e2);
@@ -179,7 +199,7 @@ bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u,
   if (dist2 <= 0) return false;
   float dist = std::sqrt(dist2);
   out.direction = d * (1 / dist);
-  Vec3f ng = normalize(cross(t.e1, t.e2));
+  const Vec3f ng = t.normal;
   const float facing = dot(ng, out.direction);
   // A one-sided emitter lights only points on the side its normal faces
   // (the direction runs from the point to the light: facing < 0).
@@ -193,52 +213,61 @@ bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u,
   return true;
 }
 
-bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u,
-                          LightSample& out) const {
-  const Vec3f n = frame.n;
-  // Candidate weights estimate each light's unshadowed contribution but are
-  // never zero for a light that could contribute, which keeps the estimator
-  // unbiased. Candidate i is chosen with probability w_i / sum(w): one pass
-  // sums the weights, a second stops at the first candidate whose running sum
-  // passes uSelect * sum (two cheap passes instead of a division per
-  // candidate, which a streaming reservoir needs).
+// Candidate weights estimate each light's unshadowed contribution but are
+// never zero for a light that could contribute, which keeps the estimator
+// unbiased. Suns weigh their irradiance, the environment its mean radiance
+// times pi, triangles (or groups) their power over the squared distance.
+float LightSampler::triangleWeight(const EmissiveTriangle& t, Vec3f p) const {
+  const Vec3f d = t.centroid - p;
+  return t.power / std::max(dot(d, d), t.area);
+}
+
+float LightSampler::groupWeight(size_t group, Vec3f p) const {
+  const Group& g = groups_[group];
+  const Vec3f d = g.bounds.center() - p;
+  return g.power / std::max(dot(d, d), g.bounds.surfaceArea() * 0.25f);
+}
+
+template <typename Visit>
+void LightSampler::forEachCandidate(Vec3f p, Visit&& visit) const {
   const int sunCount = int(suns_.size());
-  const int envIndex = sunCount;
-  const int triangleBase = envIndex + 1;
-  auto triangleWeight = [&](const Vec3f& center, float power, float area) {
-    Vec3f d = center - p;
-    return power / std::max(dot(d, d), area);
-  };
-  // Calls visit(index, weight) for each candidate in order until it returns true.
-  auto forEachCandidate = [&](auto&& visit) {
-    for (int i = 0; i < sunCount; ++i)
-      if (visit(i, sunConstants_[i].selectionWeight *
-                       std::max(std::abs(dot(n, suns_[i].direction)), 1e-3f)))
-        return;
-    if (!environment_.isBlack() && visit(envIndex, environmentWeight_)) return;
-    int next = triangleBase;
-    if (groups_.empty()) {
-      for (const EmissiveTriangle& t : triangles_) {
-        Vec3f c = t.p0 + (t.e1 + t.e2) * (1.0f / 3);
-        if (visit(next++, triangleWeight(c, luminance(t.radiance) * t.area, t.area))) return;
-      }
-    } else {
-      for (const Group& g : groups_)
-        if (visit(next++,
-                  triangleWeight(g.bounds.center(), g.power, g.bounds.surfaceArea() * 0.25f)))
-          return;
-    }
-  };
+  for (int i = 0; i < sunCount; ++i)
+    if (visit(i, sunConstants_[i].selectionWeight)) return;
+  int next = sunCount;
+  if (!environment_.isBlack() && visit(next, environmentWeight_)) return;
+  ++next;
+  if (groups_.empty()) {
+    for (const EmissiveTriangle& t : triangles_)
+      if (visit(next++, triangleWeight(t, p))) return;
+  } else {
+    for (size_t g = 0; g < groups_.size(); ++g)
+      if (visit(next++, groupWeight(g, p))) return;
+  }
+}
+
+float LightSampler::selectionTotal(Vec3f p) const {
   float total = 0;
-  forEachCandidate([&](int, float w) {
+  forEachCandidate(p, [&](int, float w) {
     if (w > 0) total += w;
     return false;
   });
+  return total;
+}
+
+bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u,
+                          LightSample& out) const {
+  // Candidate i is chosen with probability w_i / sum(w): one pass sums the
+  // weights, a second stops at the first candidate whose running sum passes
+  // uSelect * sum (two cheap passes instead of a division per candidate,
+  // which a streaming reservoir needs).
+  const int envIndex = int(suns_.size());
+  const int triangleBase = envIndex + 1;
+  const float total = selectionTotal(p);
   if (!(total > 0)) return false;
   const float target = uSelect * total;
   float running = 0, chosenWeight = 0;
   int chosen = -1;
-  forEachCandidate([&](int i, float w) {
+  forEachCandidate(p, [&](int i, float w) {
     if (!(w > 0)) return false;
     running += w;
     chosen = i;  // the last positive one if rounding keeps running <= target
@@ -260,13 +289,16 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
     out.distance = kInfinity;
     out.radiance = constants.radiance;
     out.pdf = constants.conePdf * selection;
+    out.mis = false;
     return true;
   }
   if (chosen == envIndex) {
     if (!sampleEnvironment(frame, twoSided, u, out)) return false;
     out.pdf *= selection;
+    out.mis = environmentTakesPartInMis();
     return true;
   }
+  out.mis = true;
   int index = chosen - triangleBase;
   if (groups_.empty()) {
     if (!sampleTriangle(triangles_[index], p, u, out)) return false;
@@ -283,6 +315,48 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
   if (!sampleTriangle(triangles_[g.triangles[local]], p, uTriangle, out)) return false;
   out.pdf *= selection * probability;
   return true;
+}
+
+uint32_t LightSampler::emitterIndex(const std::array<Vec3f, 3>& corners) const {
+  const auto found = triangleByCorners_.find(cornersKey(corners));
+  return found == triangleByCorners_.end() ? kNotAnEmitter : found->second;
+}
+
+float LightSampler::emitterPdf(Vec3f from, uint32_t index, Vec3f point) const {
+  if (index >= triangles_.size()) return 0;
+  const EmissiveTriangle& t = triangles_[index];
+  const Vec3f d = point - from;
+  const float dist2 = dot(d, d);
+  if (!(dist2 > 0)) return 0;
+  const float facing = dot(t.normal, d) / std::sqrt(dist2);
+  // sampleTriangle's rules: a one-sided emitter is sampled only from its
+  // front, and never at grazing angles.
+  if (t.oneSided && !(facing < 0)) return 0;
+  const float cosLight = std::abs(facing);
+  if (cosLight <= 1e-7f) return 0;
+  const float total = selectionTotal(from);
+  if (!(total > 0)) return 0;
+  float selection;
+  if (groups_.empty()) {
+    selection = triangleWeight(t, from) / total;
+  } else {
+    // Groups are consecutive runs of kTrianglesPerGroup triangles.
+    const size_t group = index / kTrianglesPerGroup;
+    selection = groupWeight(group, from) / total *
+                groups_[group].byPower.discreteProbability(int(index % kTrianglesPerGroup));
+  }
+  return selection * dist2 / (cosLight * t.area);
+}
+
+float LightSampler::environmentPdf(Vec3f from, Vec3f direction) const {
+  if (!environmentTakesPartInMis() || environment_.isBlack()) return 0;
+  const float total = selectionTotal(from);
+  if (!(total > 0)) return 0;
+  const Vec2f uv = directionToUv(direction);
+  const float sinTheta = std::sin(uv.y * kPi);
+  if (!(sinTheta > 0)) return 0;
+  return environmentDistribution_.pdf(uv) / (2 * kPi * kPi * sinTheta) *
+         (environmentWeight_ / total);
 }
 
 }  // namespace ferry

@@ -6,9 +6,22 @@
 // over all candidates (each sun, the environment, each emissive triangle or,
 // past a threshold, groups of them), candidate i with probability w_i / sum(w)
 // (what a one-sample weighted reservoir gives), with a single uniform number,
-// so the choice is a pure function of the path's random key.
+// so the choice is a pure function of the path's random key. The weights
+// depend only on the shading point, not on its normal, so that a path which
+// finds an emitter by BSDF sampling can compute, from its ray's origin, the
+// density with which the light sample would have found the same point: the
+// other half of the MIS weight (lightPdf, environmentPdf).
+//
+// Which lights take part in MIS: emissive triangles and an environment map.
+// Suns (cones a BSDF sample almost never finds) and a constant environment
+// (sampled about the shading normal, which a path does not carry) are left
+// to the light sample alone; a BSDF sample counts them only after a delta
+// vertex (or the camera), where no light sample was taken.
 #pragma once
 
+#include <array>
+#include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "core/math.h"
@@ -23,6 +36,7 @@ struct LightSample {
   Vec3f normal;                // the emitter's unit normal there (either sign); zero at infinity
   Vec3f radiance;              // emitted radiance along -direction
   float pdf = 0;               // solid angle, including the light's selection probability
+  bool mis = false;            // a BSDF sample can find it too (an emitter or environment map)
 };
 
 class LightSampler {
@@ -35,6 +49,7 @@ class LightSampler {
   bool sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f u, LightSample& out) const {
     return sample(p, Frame(n), twoSided, uSelect, u, out);
   }
+  static constexpr uint32_t kNotAnEmitter = 0xffffffffu;
   // The same, given the frame about n (shading has built it already).
   bool sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u,
               LightSample& out) const;
@@ -42,6 +57,22 @@ class LightSampler {
   // Radiance arriving along `direction` from infinitely far away: environment
   // plus any sun whose disk `direction` falls in.
   Vec3f background(Vec3f direction) const;
+
+  // For MIS. The emissive triangle with these world-space corners (in any
+  // order; as computed by Affine3f::transformPoint from the mesh and its
+  // instance), or kNotAnEmitter when light sampling does not know it (then
+  // only BSDF sampling finds it, and its emission counts in full).
+  uint32_t emitterIndex(const std::array<Vec3f, 3>& corners) const;
+  // The solid-angle density with which sample(from, ...) picks `point` on
+  // emitter `index` (selection included); 0 where it never does.
+  float emitterPdf(Vec3f from, uint32_t index, Vec3f point) const;
+  // Whether escaped paths weigh the environment against light samples: true
+  // for an environment map (a constant one is sampled about the normal).
+  bool environmentTakesPartInMis() const { return environment_.image != nullptr; }
+  // The environment alone (no suns) along `direction`, and the density with
+  // which sample(from, ...) picks that direction (selection included).
+  Vec3f environmentAlong(Vec3f direction) const { return environmentRadiance(direction); }
+  float environmentPdf(Vec3f from, Vec3f direction) const;
 
   bool empty() const;
   size_t emissiveTriangleCount() const { return triangles_.size(); }
@@ -51,6 +82,9 @@ class LightSampler {
     Vec3f p0, e1, e2;
     Vec3f radiance;
     float area;
+    float power;  // luminance(radiance) * area
+    Vec3f centroid;
+    Vec3f normal;           // unit, cross(e1, e2)
     bool oneSided = false;  // emits only on the side of cross(e1, e2)
   };
   struct Group {  // emissive triangles beyond kMaxIndividualTriangles, chosen by power
@@ -61,6 +95,13 @@ class LightSampler {
   };
 
   Vec3f environmentRadiance(Vec3f direction) const;
+  // Each candidate's selection weight as seen from `p`, in order, until
+  // visit(index, weight) returns true.
+  template <typename Visit>
+  void forEachCandidate(Vec3f p, Visit&& visit) const;
+  float selectionTotal(Vec3f p) const;
+  float triangleWeight(const EmissiveTriangle& t, Vec3f p) const;
+  float groupWeight(size_t group, Vec3f p) const;
   Vec2f directionToUv(Vec3f d) const;
   Vec3f uvToDirection(Vec2f uv) const;
   bool sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u, LightSample& out) const;
@@ -83,6 +124,8 @@ class LightSampler {
   float environmentWeight_ = 0;
   std::vector<EmissiveTriangle> triangles_;
   std::vector<Group> groups_;  // empty when every triangle is its own candidate
+  // emitterIndex's table: a hash of the sorted corners' bits -> triangle.
+  std::unordered_map<uint64_t, uint32_t> triangleByCorners_;
 };
 
 }  // namespace ferry

@@ -20,8 +20,13 @@ constexpr uint32_t kRouletteStartBounce = 3;
 
 template <typename Path>
 PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth,
-                               uint32_t seed)
-    : scene_(scene), lights_(lights), surfaces_(scene), maxDepth_(maxDepth), seed_(seed) {}
+                               uint32_t seed, LightStrategy strategy)
+    : scene_(scene),
+      lights_(lights),
+      surfaces_(scene),
+      maxDepth_(maxDepth),
+      seed_(seed),
+      strategy_(strategy) {}
 
 template <typename Path>
 typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
@@ -32,25 +37,33 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
     return {};
   }
   const PathVertex vertex = surfaceVertex(path, hit, bounce);
-  addEmission(vertex, frameBuffer);
+  addEmission(vertex, hit, frameBuffer);
   if (bounce >= maxDepth_) return {};
   const VertexScattering scattering = shadingFrame(vertex, sampleIndex);
   Spawned spawned;
   spawned.continuation = sampleContinuation(vertex, scattering, continuation);
   // (A delta vertex takes no light sample: its emission on the next vertex
-  // counts instead. So a pixel's path and shadow ray never both write the
-  // frame buffer in one wavefront, which lets shading add shadow rays and
-  // shade paths in any order.)
-  if (!scattering.bsdf.isDelta()) spawned.shadowRay = sampleLight(vertex, scattering, shadowRay);
+  // counts in full instead.)
+  if (!scattering.bsdf.isDelta() && strategy_ != LightStrategy::BsdfSamples)
+    spawned.shadowRay = sampleLight(vertex, scattering, shadowRay);
   return spawned;
 }
 
-// Escaped: light from infinity counts only where no light sample covered it.
+// Escaped: light from infinity counts in full after a delta vertex (no light
+// sample covered it); otherwise only an environment map's, MIS-weighted.
 template <typename Path>
 [[gnu::always_inline]] inline void PathShading<Path>::addEscapedLight(
     const Path& path, FrameBuffer& frameBuffer) const {
-  if (!path.has(kPathAfterSpecular)) return;
-  const Vec3f l = path.weight() * lights_.background(normalize(path.dir()));
+  Vec3f l;
+  if (path.has(kPathAfterSpecular) || strategy_ == LightStrategy::BsdfSamples) {
+    l = path.weight() * lights_.background(normalize(path.dir()));
+  } else if (strategy_ == LightStrategy::Mis && lights_.environmentTakesPartInMis()) {
+    const Vec3f d = path.dir();
+    const float weight = powerHeuristic(path.bsdfPdf(), lights_.environmentPdf(path.origin, d));
+    l = path.weight() * lights_.environmentAlong(d) * weight;
+  } else {
+    return;
+  }
   if (usable(l)) frameBuffer.add(path.pixel(), l);
 }
 
@@ -63,18 +76,30 @@ template <typename Path>
                     path.weight(),
                     normalize(-path.dir()),
                     path.has(kPathAfterSpecular),
+                    path.origin,
+                    path.bsdfPdf(),
                     reconstructSurface(scene_, surfaces_, hit)};
 }
 
-// Emission counts, like escaped light, only where no light sample covered it.
+// Emission counts in full after a delta vertex, and MIS-weighted against the
+// light sample the previous vertex took otherwise.
 template <typename Path>
 [[gnu::always_inline]] inline void PathShading<Path>::addEmission(const PathVertex& vertex,
+                                                                  const TraceHit& hit,
                                                                   FrameBuffer& frameBuffer) const {
   const Material& material = *vertex.surface.material;
-  if (!vertex.afterSpecular || !material.isEmissive()) return;
+  const bool full = vertex.afterSpecular || strategy_ == LightStrategy::BsdfSamples;
+  if (!material.isEmissive() || (!full && strategy_ != LightStrategy::Mis)) return;
   // A one-sided emitter lights only the side its winding normal faces.
   if (!material.emitsBackSide && !(dot(vertex.surface.geometricNormal, vertex.wo) > 0)) return;
-  const Vec3f l = vertex.throughput * material.emission;
+  float weight = 1;
+  if (!full) {
+    const uint32_t emitter = lights_.emitterIndex(worldCorners(scene_, surfaces_, hit));
+    if (emitter != LightSampler::kNotAnEmitter)
+      weight = powerHeuristic(vertex.bsdfPdf,
+                              lights_.emitterPdf(vertex.from, emitter, vertex.surface.position));
+  }
+  const Vec3f l = vertex.throughput * material.emission * weight;
   if (usable(l)) frameBuffer.add(vertex.pixel, l);
 }
 
@@ -111,7 +136,7 @@ template <typename Path>
   if (!survivesRoulette(vertex, scattering, weight) || !usable(weight)) return false;
   const Vec3f origin = offsetRayOrigin(vertex.surface.position, dot(wi, ng) > 0 ? ng : -ng);
   makeRay(continuation, origin, wi, kInfinity, weight, vertex.pixel,
-          bs.delta ? uint32_t(kPathAfterSpecular) : 0u);
+          bs.delta ? uint32_t(kPathAfterSpecular) : 0u, bs.delta ? 0.0f : bs.pdf);
   return true;
 }
 
@@ -140,8 +165,16 @@ template <typename Path>
   if (!lights_.sample(position, scattering.frame, bsdf.transmits(), random(RandomDim::LightSelect),
                       u, ls))
     return false;
-  const Vec3f f = bsdf.eval(scattering.woLocal, scattering.frame.toLocal(ls.direction));
-  const Vec3f contribution = vertex.throughput * f * ls.radiance * (1 / ls.pdf);
+  const Vec3f wiLocal = scattering.frame.toLocal(ls.direction);
+  const Vec3f f = bsdf.eval(scattering.woLocal, wiLocal);
+  // Weighed against the BSDF sample that could find the same light, with
+  // the BSDF density as a continuation would store it.
+  const float weight =
+      strategy_ == LightStrategy::Mis && ls.mis
+          ? powerHeuristic(ls.pdf,
+                           unpackDensity(packDensity(bsdf.pdf(scattering.woLocal, wiLocal))))
+          : 1.0f;
+  const Vec3f contribution = vertex.throughput * f * ls.radiance * (weight / ls.pdf);
   // Only light arriving on the geometric side it is evaluated for.
   const Vec3f ng = scattering.ng;
   const bool sameSide = bsdf.transmits() || dot(ls.direction, ng) > 0;

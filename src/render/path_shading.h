@@ -9,13 +9,29 @@
 //   BSDF sample    the continuation, after Russian roulette
 //   light sample   next-event estimation: one light, one shadow ray, its tmax
 //
-// Without MIS the path counts emitted and escaped light only after the camera
-// or a delta vertex (kPathAfterSpecular), where no light sample covered it,
-// and a delta vertex takes no light sample. The vertex travels through the
-// steps as two structs: PathVertex (where the path is, what it brings) and
-// VertexScattering (how the vertex scatters), so a step that needs more (MIS
-// weights, a layered BSDF, a bumped shading normal) changes one of them and
-// the steps that read it.
+// Multiple importance sampling (Veach 1997, the power heuristic): light an
+// emitter or the environment map sends to a vertex is found twice, by the
+// light sample and by the BSDF sample, and each counts with weight
+// p_own^2 / (p_light^2 + p_bsdf^2). The light sample knows both densities
+// at once; the BSDF sample's density travels with the continuation
+// (PathCore::bsdfDensity, 16 bits) and the light's is recomputed where the
+// path lands, on whichever rank that is (light data is on every rank). Both
+// weights use the stored (packed) BSDF density, so they sum to one. After a
+// delta vertex or the camera (kPathAfterSpecular) no light sample was taken
+// and emission counts in full; suns and a constant sky are left to the
+// light sample alone (lights.h). Without MIS (LightStrategy::LightSamples),
+// emission and escaped light count only there.
+//
+// A pixel sample's path and its shadow ray may now both add light in one
+// wavefront: the renderer adds the shadow rays' light in one pass and shades
+// the paths in another, and a pixel sample has one ray of each kind, so no
+// two threads add to one pixel at once (and the fixed-point frame buffer
+// makes the order irrelevant).
+//
+// The vertex travels through the steps as two structs: PathVertex (where the
+// path is, what it brings) and VertexScattering (how the vertex scatters), so
+// a step that needs more (a layered BSDF, a bumped shading normal) changes
+// one of them and the steps that read it.
 #pragma once
 
 #include <algorithm>
@@ -41,6 +57,8 @@ struct PathVertex {
   Vec3f throughput;    // of the path arriving here
   Vec3f wo;            // unit, back towards where the path came from
   bool afterSpecular;  // the previous vertex was the camera or a delta lobe
+  Vec3f from;          // the ray's origin: the previous vertex
+  float bsdfPdf;       // the previous vertex's BSDF density for wo (as stored)
   SurfacePoint surface;
 };
 
@@ -54,11 +72,13 @@ struct VertexScattering {
 };
 
 // Makes `p` a new ray (no traversal history); returns its direction as stored
-// (quantized to halves), without reading it back.
+// (quantized), without reading it back. `bsdfPdf`: see PathCore::bsdfDensity.
 template <typename Path>
 [[gnu::always_inline]] inline Vec3f makeRay(Path& p, Vec3f origin, Vec3f direction, float tmax,
-                                            Vec3f weight, uint32_t pixel, uint32_t flags) {
+                                            Vec3f weight, uint32_t pixel, uint32_t flags,
+                                            float bsdfPdf = 0) {
   p.origin = origin;
+  p.bsdfDensity = packDensity(bsdfPdf);
   Vec3f stored = p.setDirAndWeight(direction, weight);
   p.tmax = tmax;
   p.setPixelAndFlags(pixel, flags);
@@ -68,11 +88,12 @@ template <typename Path>
 
 // Where a shadow ray from `origin` along `storedDir` (its direction as
 // stored) to the sampled point of a finite light stops: short of the sampled
-// point and of the emitter's plane along the ray as stored. Its
-// half-precision direction is off by up to ~3e-4 rad, so it meets the
-// emitter's plane up to 3e-4 / cos(theta_light) (relative) before or after
-// the sampled point, more than the 1e-4 margin; the emitter then shadowed
-// itself (6% too dark under a square light, 11% inside a closed emitter).
+// point and of the emitter's plane along the ray as stored. Its quantized
+// direction is off by up to ~7e-5 rad, so it meets the emitter's plane up to
+// 7e-5 / cos(theta_light) (relative) before or after the sampled point, which
+// at grazing angles is more than the 1e-4 margin; the emitter then shadowed
+// itself (with half-precision directions, 6% too dark under a square light,
+// 11% inside a closed emitter).
 [[gnu::always_inline]] inline float shadowRayTmax(Vec3f position, Vec3f origin, Vec3f storedDir,
                                                   const LightSample& light) {
   const Vec3f toLight = position + light.direction * light.distance - origin;
@@ -85,12 +106,33 @@ template <typename Path>
   return t * (1 - 1e-4f);
 }
 
+// Which samples find emitters and the sky. Mis: both (the default).
+// LightSamples: light samples alone (emission counts only after delta
+// vertices; the paper's, and Ferry's before MIS). BsdfSamples: BSDF samples
+// alone, no shadow rays (for tests: all three must agree on the mean).
+enum class LightStrategy { Mis, LightSamples, BsdfSamples };
+// "mis", "light", "bsdf" (the stats JSON and checkpoint identities).
+inline const char* lightStrategyName(LightStrategy s) {
+  return s == LightStrategy::Mis ? "mis" : s == LightStrategy::LightSamples ? "light" : "bsdf";
+}
+
+// Veach's power heuristic (beta = 2) for a sample drawn with density `own`
+// against another strategy's `other`: own^2 / (own^2 + other^2), written as
+// a ratio so that large densities do not overflow.
+[[gnu::always_inline]] inline float powerHeuristic(float own, float other) {
+  if (!(other > 0)) return 1;
+  if (!(own > 0)) return 0;
+  const float r = other / own;
+  return 1 / (1 + r * r);
+}
+
 template <typename Path>
 class PathShading {
  public:
   // `maxDepth`: scattering events (1 = direct lighting only); `seed`: the
-  // render's random seed.
-  PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed);
+  // render's random seed; `strategy`: which samples find emitters and the sky.
+  PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed,
+              LightStrategy strategy = LightStrategy::Mis);
 
   // What shading one path made: each is written only when made.
   struct Spawned {
@@ -108,7 +150,8 @@ class PathShading {
   // into shadePath: this is the hot loop of a frame).
   inline void addEscapedLight(const Path& path, FrameBuffer& frameBuffer) const;
   inline PathVertex surfaceVertex(const Path& path, const TraceHit& hit, uint32_t bounce) const;
-  inline void addEmission(const PathVertex& vertex, FrameBuffer& frameBuffer) const;
+  inline void addEmission(const PathVertex& vertex, const TraceHit& hit,
+                          FrameBuffer& frameBuffer) const;
   inline VertexScattering shadingFrame(const PathVertex& vertex, uint32_t sampleIndex) const;
   inline bool sampleContinuation(const PathVertex& vertex, const VertexScattering& scattering,
                                  Path& continuation) const;
@@ -122,6 +165,7 @@ class PathShading {
   SurfaceTable surfaces_;  // for reconstructSurface
   uint32_t maxDepth_;
   uint32_t seed_;
+  LightStrategy strategy_;
 };
 
 }  // namespace ferry

@@ -2,6 +2,7 @@
 // path itself carries no hit data).
 #pragma once
 
+#include <array>
 #include <bit>
 #include <cmath>
 #include <vector>
@@ -51,6 +52,11 @@ struct SurfaceTable {
   explicit SurfaceTable(const Scene& scene);
 };
 SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table, const TraceHit& hit);
+
+// The hit triangle's corners in world space, each as Affine3f::transformPoint
+// places it (what the light sampler keys emitters by: LightSampler::emitterIndex).
+std::array<Vec3f, 3> worldCorners(const Scene& scene, const SurfaceTable& table,
+                                  const TraceHit& hit);
 
 // Moves a ray origin off a surface by a few ulps along the normal (Wächter and
 // Binder, Ray Tracing Gems ch. 6), robust at any distance from the origin.
@@ -116,6 +122,17 @@ inline SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& t
                                        const TraceHit& hit) {
   return surfaceAt(scene, scene.instances[hit.instance].transform, table.inverses[hit.instance],
                    table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.meshSlot)], hit);
+}
+
+inline std::array<Vec3f, 3> worldCorners(const Scene& scene, const SurfaceTable& table,
+                                         const TraceHit& hit) {
+  const Affine3f& transform = scene.instances[hit.instance].transform;
+  const SurfaceTable::MeshArrays& mesh =
+      table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.meshSlot)];
+  const Vec3i& tri = mesh.indices[hit.primitive];
+  return {transform.transformPoint(mesh.positions[tri.x]),
+          transform.transformPoint(mesh.positions[tri.y]),
+          transform.transformPoint(mesh.positions[tri.z])};
 }
 
 inline Vec3f offsetRayOrigin(Vec3f p, Vec3f n) {

@@ -27,7 +27,8 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
       settings_(settings),
       camera_(settings.camera ? *settings.camera : scene.view(settings.view), settings.width,
               settings.height),
-      shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed) {
+      shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
+               settings.lightStrategy) {
   if (uint64_t(settings.width) * uint64_t(settings.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.width,
                                  settings.height, kMaxPixels));

@@ -47,6 +47,9 @@ struct RenderSettings {
   // carries no hit) instead of only those whose hit was found on another
   // rank. The image is the same either way (tests check it); only the speed differs.
   bool retraceAll = false;
+  // Which samples find emitters and the sky (render/path_shading.h): MIS of
+  // light and BSDF samples (--mis on), light samples only (--mis off).
+  LightStrategy lightStrategy = LightStrategy::Mis;
   // One rank: pixels that go through the wavefront together, on one thread
   // (WavefrontRenderer::renderFrame). Any value gives the same image.
   uint32_t chunkPixels = 8192;

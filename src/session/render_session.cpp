@@ -163,11 +163,12 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
   const std::string summary = rank_->summary.toJson().dump();
   const CameraView& v = r.camera ? *r.camera : rank_->scene.view(r.view);
   const std::string description = fmt::format(
-      "scene={} (content {}); size={}x{}; spp={}; max-depth={}; seed={}; view={} from ({}, {}, "
-      "{}) at ({}, {}, {}) up ({}, {}, {}) fov {}",
+      "scene={} (content {}); size={}x{}; spp={}; max-depth={}; light-strategy={}; seed={}; "
+      "view={} from "
+      "({}, {}, {}) at ({}, {}, {}) up ({}, {}, {}) fov {}",
       settings_.scene, hashToHex(hash64(summary.data(), summary.size())), r.width, r.height,
-      r.samplesPerPixel, r.maxDepth, r.seed, v.name, v.from.x, v.from.y, v.from.z, v.at.x, v.at.y,
-      v.at.z, v.up.x, v.up.y, v.up.z, v.fovY);
+      r.samplesPerPixel, r.maxDepth, lightStrategyName(r.lightStrategy), r.seed, v.name, v.from.x,
+      v.from.y, v.from.z, v.at.x, v.at.y, v.at.z, v.up.x, v.up.y, v.up.z, v.fovY);
   return {hash64(description.data(), description.size()), description};
 }
 

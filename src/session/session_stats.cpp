@@ -30,6 +30,7 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                    {"spp", r.samplesPerPixel},
                    {"frames", r.frames},
                    {"max_depth", r.maxDepth},
+                   {"light_strategy", lightStrategyName(r.lightStrategy)},
                    {"seed", r.seed},
                    {"view", r.view},
                    {"threads", s.threads},

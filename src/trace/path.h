@@ -18,6 +18,7 @@
 
 #include "core/half.h"
 #include "core/math.h"
+#include "core/octahedral.h"
 
 namespace ferry {
 
@@ -33,10 +34,17 @@ enum PathFlags : uint32_t {
 constexpr int kPixelBits = 26;  // 67 M pixels, e.g. 8192 x 8192
 constexpr uint32_t kMaxPixels = 1u << kPixelBits;
 
-// What every layout shares: the ray, its throughput, and pixel + flags (32 bytes).
+// What every layout shares: the ray, its throughput, the previous vertex's
+// BSDF density, and pixel + flags (32 bytes).
 struct PathCore {
   Vec3f origin;
-  half direction[3];
+  uint32_t direction;  // octahedral (core/octahedral.h): 2 x 16 bits
+  // The density (solid angle) with which the previous vertex's BSDF sampled
+  // this direction, packed to 16 bits: a path that finds an emitter weighs
+  // the emission against the light sample that could also have found it
+  // (MIS). Unused (0) for camera rays, delta lobes (kPathAfterSpecular) and
+  // shadow rays.
+  uint16_t bsdfDensity;
   half throughput[3];
   float tmax;
   uint32_t pixelAndFlags;  // pixel id in the high 26 bits, flags in the low 6
@@ -50,23 +58,31 @@ struct PathCore {
     pixelAndFlags = (pixel << (32 - kPixelBits)) | (flags & kPathFlagMask);
   }
 
-  [[gnu::always_inline]] Vec3f dir() const { return unpack(offsetof(PathCore, direction)); }
+  [[gnu::always_inline]] Vec3f dir() const { return decodeOctahedral(direction); }
   [[gnu::always_inline]] Vec3f weight() const { return unpack(offsetof(PathCore, throughput)); }
+  float bsdfPdf() const { return unpackDensity(bsdfDensity); }
   // The direction is quantized here, when the ray is made, so every rank
-  // traces exactly the same ray whatever the rank count.
-  [[gnu::always_inline]] void setDir(Vec3f d) { floatsToHalves3(d.x, d.y, d.z, direction); }
+  // traces exactly the same ray whatever the rank count; returns dir().
+  [[gnu::always_inline]] Vec3f setDir(Vec3f d) {
+    direction = encodeOctahedral(d);
+    return decodeOctahedral(direction);
+  }
   [[gnu::always_inline]] void setWeight(Vec3f w) { floatsToHalves3(w.x, w.y, w.z, throughput); }
-  // Both at once (what a new ray needs); returns dir() without reading it back.
+  // Both at once (what a new ray needs); returns dir().
   [[gnu::always_inline]] Vec3f setDirAndWeight(Vec3f d, Vec3f w) {
-    static_assert(offsetof(PathCore, throughput) == offsetof(PathCore, direction) + 6);
-    Vec3f quantized;
-    floatsToHalves6(&d.x, &w.x, direction, &quantized.x);
-    return quantized;
+    setWeight(w);
+    return setDir(d);
+  }
+  // Stores `pdf` as packed (and returns what was stored, which is what the
+  // path will read back: both MIS weights use that value).
+  float setBsdfPdf(float pdf) {
+    bsdfDensity = packDensity(pdf);
+    return bsdfPdf();
   }
 
  private:
   // The three halves at `offset` and the two bytes after them (still inside
-  // the path: throughput follows direction, tmax follows throughput) in one load.
+  // the path: tmax follows throughput) in one load.
   [[gnu::always_inline]] Vec3f unpack(size_t offset) const {
     uint64_t packed;
     std::memcpy(&packed, reinterpret_cast<const unsigned char*>(this) + offset, 8);
