@@ -34,7 +34,7 @@ static_assert(std::is_trivially_copyable_v<ProxyV1> && sizeof(ProxyV1) == 32);
 static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // The writers below list every field of these structs: when one gains a
 // field, these fail so that the part format (and kPartFormatVersion) follows.
-static_assert(sizeof(Material) == 88,
+static_assert(sizeof(Material) == 120,
               "Material changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Mesh) == 136, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 80,
@@ -145,6 +145,11 @@ void writeMaterial(FileWriter& w, const Material& m) {
   w.pod(m.alphaTexture);
   w.pod(m.alphaCutoff);
   w.pod(uint8_t(m.emitsBackSide ? 1 : 0));
+  w.pod(m.specular);
+  w.pod(m.specularRoughness);
+  w.pod(m.specularEta);
+  w.pod(uint8_t(m.coat));
+  w.pod(m.sigma);
 }
 
 void writeTexture(FileWriter& w, const Texture& t) {
@@ -346,6 +351,7 @@ class FileReader {
       : file_(file), path_(std::move(path)), at_(kHeaderBytes) {}
   // The file's part format version (fields added later are read only from newer files).
   uint32_t version() const { return version_; }
+  const std::string& path() const { return path_; }
   void setVersion(uint32_t version) { version_ = version; }
 
   template <typename T>
@@ -421,6 +427,17 @@ Material readMaterial(FileReader& r) {
   m.alphaTexture = r.pod<int32_t>();
   m.alphaCutoff = r.pod<float>();
   if (r.version() >= 3) m.emitsBackSide = r.pod<uint8_t>() != 0;  // older: two-sided
+  if (r.version() >= 4) {  // older: one lobe, no coat, Lambertian
+    m.specular = r.pod<Vec3f>();
+    m.specularRoughness = r.pod<float>();
+    m.specularEta = r.pod<float>();
+    const uint8_t coat = r.pod<uint8_t>();
+    if (coat > uint8_t(Material::Coat::FresnelBlend))
+      throw InputError(
+          fmt::format("{}: material \"{}\" has an unknown coat model {}", r.path(), m.name, coat));
+    m.coat = Material::Coat(coat);
+    m.sigma = r.pod<float>();
+  }
   return m;
 }
 

@@ -55,7 +55,9 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
   return a.name == b.name && a.baseColor == b.baseColor && a.roughness == b.roughness &&
          a.metallic == b.metallic && a.transmission == b.transmission && a.ior == b.ior &&
          a.emission == b.emission && a.alphaCutoff == b.alphaCutoff &&
-         a.emitsBackSide == b.emitsBackSide &&
+         a.emitsBackSide == b.emitsBackSide && a.specular == b.specular &&
+         a.specularRoughness == b.specularRoughness && a.specularEta == b.specularEta &&
+         a.coat == b.coat && a.sigma == b.sigma &&
          sameTexture(a.baseColorTexture, b.baseColorTexture) &&
          sameTexture(a.alphaTexture, b.alphaTexture);
 }
@@ -101,6 +103,13 @@ Written writeDirectory(const std::string& dir, const std::string& partitioner, i
   w.scene = island();
   // One material as a pbrt area light has it (one-sided), so the round trips cover the flag.
   w.scene.materials.back().emitsBackSide = false;
+  // And one coated, Oren-Nayar material, for the coat's fields (format 4).
+  Material& coated = w.scene.materials.front();
+  coated.specular = {0.1f, 0.2f, 0.3f};
+  coated.specularRoughness = 0.4f;
+  coated.specularEta = 1 / 1.5f;
+  coated.coat = Material::Coat::Layered;
+  coated.sigma = 12;
   Scene lights = lightScene(w.scene);
   PartitionerOptions o;
   o.name = partitioner;

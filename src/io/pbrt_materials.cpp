@@ -76,6 +76,9 @@ Material blend(const Material& a, const Material& b, float wb) {
   m.metallic = mix(a.metallic, b.metallic);
   m.transmission = mix(a.transmission, b.transmission);
   m.ior = mix(a.ior, b.ior);
+  // A coat on one side only fades with its weight.
+  m.specular = lerp(a.specular, b.specular, wb);
+  m.sigma = mix(a.sigma, b.sigma);
   return m;
 }
 
@@ -627,6 +630,14 @@ struct PbrtMaterials::Impl {
     return value;
   }
 
+  // A colour that Ferry does not texture (a coat's tint): a texture is averaged.
+  Vec3f untexturedColor(const PbrtParams& params, const char* name, Vec3f fallback) {
+    const PbrtParam* p = params.find(name);
+    if (!p) return fallback;
+    if (p->type == "texture") return Vec3f(averageTexture(*p, false));
+    return colorValue(*p, SpectrumUse::Reflectance);
+  }
+
   float scalar(const PbrtParams& params, const char* name, float fallback) {
     const PbrtParam* p = params.find(name);
     if (!p) return fallback;
@@ -697,7 +708,7 @@ struct PbrtMaterials::Impl {
 
   void layerWarning(const std::string& type, const SourceLocation& where, const char* what) {
     warnings.once("layer|" + type, fmt::format("material \"{}\": {} is not modelled (Ferry's "
-                                               "materials have one lobe); first at {}",
+                                               "materials do not have it); first at {}",
                                                type, what, where.toString()));
   }
 
@@ -738,6 +749,7 @@ struct PbrtMaterials::Impl {
     };
     if (type == "diffuse" || type == "matte") {
       setColor(color(p, {"reflectance", "Kd"}, Vec3f(0.5f)));
+      if (type == "matte") m.sigma = std::clamp(scalar(p, "sigma", 0), 0.0f, 90.0f);
     } else if (type == "translucent") {
       setColor(color(p, {"Kd"}, Vec3f(0.25f)));
       consume(p, {"reflect", "transmit"});
@@ -747,12 +759,35 @@ struct PbrtMaterials::Impl {
       float s = p.getFloat("scale", 1);
       setColor({min((r.value + t.value) * s, Vec3f(1)),
                 r.texture != kNoTexture ? r.texture : t.texture});
-    } else if (type == "coateddiffuse" || type == "plastic" || type == "substrate") {
-      float fallback = type == "plastic" ? 0.25f : 0.5f;
-      setColor(color(p, {"reflectance", "Kd"}, Vec3f(fallback)));
-      consume(p, {"Ks", "roughness", "uroughness", "vroughness", "remaproughness", "thickness",
-                  "albedo", "g", "maxdepth", "nsamples", "eta"});
-      layerWarning(type, def.where, "the glossy coat");
+    } else if (type == "plastic") {
+      // pbrt-v3: Lambertian Kd plus a Trowbridge-Reitz reflection of Ks with
+      // FresnelDielectric(1.5, 1), i.e. seen from inside the glass: Ferry's
+      // eta (n_t / n_i) is 1 / 1.5, which totally reflects microfacets met
+      // beyond 41.8 degrees. That is pbrt-v3's plastic (its reference images
+      // have it), so Ferry keeps it.
+      setColor(color(p, {"Kd"}, Vec3f(0.25f)));
+      m.specular = untexturedColor(p, "Ks", Vec3f(0.25f));
+      m.specularRoughness = roughness(p, "", 0.1f, true);
+      m.specularEta = 1 / 1.5f;
+      m.coat = Material::Coat::Additive;
+    } else if (type == "substrate") {
+      // pbrt-v3's FresnelBlend (Ashikhmin-Shirley).
+      setColor(color(p, {"Kd"}, Vec3f(0.5f)));
+      m.specular = untexturedColor(p, "Ks", Vec3f(0.5f));
+      m.specularRoughness = roughness(p, "", 0.1f, true);
+      m.coat = Material::Coat::FresnelBlend;
+    } else if (type == "coateddiffuse") {
+      // pbrt-v4: a diffuse base under a dielectric interface, simulated by
+      // a random walk between the layers; Ferry's layered coat counts the
+      // refraction in and out (1 - F each way) but not the light the
+      // interface reflects back down (a little darker than pbrt-v4 for
+      // bright bases).
+      setColor(color(p, {"reflectance"}, Vec3f(0.5f)));
+      m.specular = Vec3f(1);
+      m.specularEta = std::max(iorOf(p, 1.5f), 1.01f);
+      m.specularRoughness = roughness(p, "", 0.0f, false);
+      m.coat = Material::Coat::Layered;
+      consume(p, {"thickness", "albedo", "g", "maxdepth", "nsamples"});
     } else if (type == "conductor" || type == "metal" || type == "coatedconductor") {
       std::string prefix = type == "coatedconductor" ? "conductor." : "";
       std::string reflectance = prefix + "reflectance";
@@ -781,10 +816,12 @@ struct PbrtMaterials::Impl {
       if (type == "thindielectric") m.ior = 1.01f;
       if (!(m.ior >= 1)) m.ior = std::max(1.0f / std::max(m.ior, 1e-3f), 1.01f);
     } else if (type == "uber") {
+      // pbrt-v3: Kd (Lambertian) + Ks (Trowbridge-Reitz, FresnelDielectric(1,
+      // eta)) + Kr (mirror) + Kt (window), with opacity.
       Color kd = color(p, {"Kd"}, Vec3f(0.25f));
       Color kr = color(p, {"Kr"}, Vec3f(0));
       Color kt = color(p, {"Kt"}, Vec3f(0));
-      consume(p, {"Ks"});
+      const Vec3f ks = untexturedColor(p, "Ks", Vec3f(0.25f));
       float rough = roughness(p, "", 0.1f, true);
       float ior = iorOf(p, 1.5f);
       Color opacity = color(p, {"opacity"}, Vec3f(1));
@@ -796,10 +833,14 @@ struct PbrtMaterials::Impl {
       } else if (maxComponent(kr.value) > maxComponent(kd.value)) {
         setColor(kr);
         m.metallic = 1;
-        m.roughness = rough;
+        m.roughness = 0;
       } else {
         setColor(kd);
-        layerWarning(type, def.where, "the specular layer (Ks, Kr)");
+        m.specular = ks;
+        m.specularRoughness = rough;
+        m.specularEta = std::max(ior, 1.01f);
+        m.coat = Material::Coat::Additive;
+        if (maxComponent(kr.value) > 0) layerWarning(type, def.where, "the mirror layer (Kr)");
       }
       if (opacity.texture == kNoTexture && average(opacity.value) < 1)
         look.alpha = alphaConstant(average(opacity.value));

@@ -258,7 +258,6 @@ TEST_F(PbrtV3Features, WarnsOnceAboutWhatItSkips) {
   EXPECT_TRUE(anyContains(warnings(), "Sampler ignored"));
   EXPECT_TRUE(anyContains(warnings(), "Integrator ignored"));
   EXPECT_TRUE(anyContains(warnings(), "material type \"fourier\" is not supported"));
-  EXPECT_TRUE(anyContains(warnings(), "\"plastic\": the glossy coat is not modelled"));
   EXPECT_TRUE(anyContains(warnings(), "ignored parameter \"string bsdffile\"") ||
               anyContains(warnings(), "fourier"));
   std::set<std::string> unique(warnings().begin(), warnings().end());
@@ -537,6 +536,53 @@ TEST_P(PbrtCorpusError, NamesFileLineAndColumn) {
 // pbrt's area lights emit only in front unless "twosided"; the front is the
 // winding normal, reversed by ReverseOrientation, or the side of the vertex
 // normals: the loader orients a one-sided emitter's winding to match.
+// The coated materials and matte's sigma (issue 14): what each pbrt
+// parameter becomes.
+TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
+  auto only = [](const std::string& material) {
+    const Scene scene = fromText("WorldBegin\n" + material +
+                                 "\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] "
+                                 "\"integer indices\" [0 1 2]\nWorldEnd\n");
+    return scene.materials.at(size_t(scene.meshes.at(0).material));
+  };
+  // v3 plastic: Kd + Ks with FresnelDielectric(1.5, 1); roughness remapped.
+  const Material plastic = only(
+      "Material \"plastic\" \"rgb Kd\" [0.1 0.2 0.3] \"rgb Ks\" [0.4 0.5 0.6] "
+      "\"float roughness\" 0.2 \"bool remaproughness\" false");
+  EXPECT_EQ(plastic.baseColor, Vec3f(0.1f, 0.2f, 0.3f));
+  EXPECT_EQ(plastic.specular, Vec3f(0.4f, 0.5f, 0.6f));
+  EXPECT_FLOAT_EQ(plastic.specularRoughness, std::sqrt(0.2f));  // alpha 0.2
+  EXPECT_FLOAT_EQ(plastic.specularEta, 1 / 1.5f);
+  EXPECT_EQ(plastic.coat, Material::Coat::Additive);
+  const Material defaults = only("Material \"plastic\"");
+  EXPECT_EQ(defaults.baseColor, Vec3f(0.25f));
+  EXPECT_EQ(defaults.specular, Vec3f(0.25f));
+  // Remapped as pbrt-v3's RoughnessToAlpha(0.1) = 0.4615.
+  EXPECT_NEAR(defaults.specularRoughness * defaults.specularRoughness, 0.4615f, 1e-3f);
+  // matte: sigma in degrees.
+  EXPECT_EQ(only("Material \"matte\" \"float sigma\" 20").sigma, 20.0f);
+  EXPECT_EQ(only("Material \"matte\"").sigma, 0.0f);
+  // uber: Ks with FresnelDielectric(1, eta).
+  const Material uber = only("Material \"uber\" \"rgb Ks\" [0.3 0.3 0.3] \"float eta\" 1.7");
+  EXPECT_EQ(uber.specular, Vec3f(0.3f));
+  EXPECT_FLOAT_EQ(uber.specularEta, 1.7f);
+  EXPECT_EQ(uber.coat, Material::Coat::Additive);
+  // v4 coateddiffuse: a layered coat of the interface's eta.
+  const Material coated = only(
+      "Material \"coateddiffuse\" \"rgb reflectance\" [0.7 0.6 0.5] \"float roughness\" 0.04 "
+      "\"float eta\" 1.4");
+  EXPECT_EQ(coated.baseColor, Vec3f(0.7f, 0.6f, 0.5f));
+  EXPECT_EQ(coated.specular, Vec3f(1));
+  EXPECT_FLOAT_EQ(coated.specularEta, 1.4f);
+  EXPECT_FLOAT_EQ(coated.specularRoughness, std::sqrt(std::sqrt(0.04f)));  // v4: alpha = sqrt(r)
+  EXPECT_EQ(coated.coat, Material::Coat::Layered);
+  // substrate: Ashikhmin-Shirley, Ks the coat's reflectance at normal incidence.
+  const Material substrate = only("Material \"substrate\" \"rgb Ks\" [0.04 0.05 0.06]");
+  EXPECT_EQ(substrate.specular, Vec3f(0.04f, 0.05f, 0.06f));
+  EXPECT_EQ(substrate.baseColor, Vec3f(0.5f));
+  EXPECT_EQ(substrate.coat, Material::Coat::FresnelBlend);
+}
+
 TEST(PbrtParser, AreaLightsAreOneSidedAndOriented) {
   auto emitterOf = [](const std::string& before, const std::string& light,
                       const std::string& extra) {

@@ -88,11 +88,93 @@ float fresnelDielectric(float cosI, float eta) {
   return 0.5f * (rs * rs + rp * rp);
 }
 
-Bsdf Bsdf::diffuse(Vec3f albedo) {
+Bsdf Bsdf::diffuse(Vec3f albedo, float sigmaDegrees) {
   Bsdf b;
   b.kind_ = Kind::Diffuse;
   b.color_ = albedo;
+  if (sigmaDegrees > 0) {
+    // pbrt-v3's OrenNayar constructor.
+    const float sigma = sigmaDegrees * (kPi / 180), sigma2 = sigma * sigma;
+    b.orenA_ = 1 - sigma2 / (2 * (sigma2 + 0.33f));
+    b.orenB_ = 0.45f * sigma2 / (sigma2 + 0.09f);
+  }
   return b;
+}
+
+Bsdf Bsdf::coated(Vec3f base, Vec3f specular, float roughness, float eta, bool layered,
+                  float sigmaDegrees) {
+  Bsdf b = diffuse(base, sigmaDegrees);
+  b.kind_ = Kind::Coated;
+  b.specular_ = max(specular, Vec3f(0));
+  b.alpha_ = std::max(roughness * roughness, 2e-3f);
+  b.ior_ = eta > 0 ? eta : 1.5f;
+  b.layered_ = layered;
+  // Sample the coat in proportion to its tint against the base's colour (the
+  // Fresnel term is not known before wo meets a microfacet); never all one
+  // side unless the other is black, so that MIS and pdf() see both.
+  const float coat = luminance(b.specular_), diffuseWeight = luminance(max(base, Vec3f(0)));
+  b.coatProbability_ = coat <= 0            ? 0
+                       : diffuseWeight <= 0 ? 1
+                                            : std::clamp(coat / (coat + diffuseWeight), 0.1f, 0.9f);
+  return b;
+}
+
+Bsdf Bsdf::fresnelBlend(Vec3f rd, Vec3f rs, float roughness) {
+  Bsdf b = coated(rd, rs, roughness, 1.5f, false);
+  b.fresnelBlend_ = true;
+  return b;
+}
+
+// f * cos(wi) of the diffuse base: Lambertian, or Oren-Nayar as pbrt-v3
+// evaluates it.
+Vec3f Bsdf::diffuseEval(Vec3f wo, Vec3f wi) const {
+  if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
+  if (orenB_ == 0) return color_ * (wi.z / kPi);
+  const float sinI = std::sqrt(std::max(0.0f, 1 - wi.z * wi.z));
+  const float sinO = std::sqrt(std::max(0.0f, 1 - wo.z * wo.z));
+  float maxCos = 0;  // max(0, cos(phi_i - phi_o))
+  if (sinI > 1e-4f && sinO > 1e-4f)
+    maxCos = std::max(0.0f, (wi.x * wo.x + wi.y * wo.y) / (sinI * sinO));
+  float sinAlpha, tanBeta;
+  if (wi.z > wo.z) {
+    sinAlpha = sinO;
+    tanBeta = sinI / wi.z;
+  } else {
+    sinAlpha = sinI;
+    tanBeta = sinO / wo.z;
+  }
+  return color_ * ((orenA_ + orenB_ * maxCos * sinAlpha * tanBeta) * wi.z / kPi);
+}
+
+Vec3f Bsdf::coatEval(Vec3f wo, Vec3f wi) const {
+  if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
+  if (fresnelBlend_) {
+    // pbrt-v3's FresnelBlend::f, times cos(wi).
+    auto pow5 = [](float v) { return (v * v) * (v * v) * v; };
+    const Vec3f base =
+        color_ * (Vec3f(1) - specular_) *
+        (28 / (23 * kPi) * (1 - pow5(1 - 0.5f * wi.z)) * (1 - pow5(1 - 0.5f * wo.z)));
+    const Vec3f m = normalize(wo + wi);
+    const float cosIM = dot(wi, m);
+    if (!(cosIM > 0)) return base * wi.z;
+    const Vec3f schlickF = specular_ + (Vec3f(1) - specular_) * pow5(1 - cosIM);
+    return base * wi.z + schlickF * (ggxD(m, alpha_) / (4 * cosIM * std::max(wi.z, wo.z)) * wi.z);
+  }
+  Vec3f base = diffuseEval(wo, wi);
+  if (layered_)
+    base = base * ((1 - fresnelDielectric(wo.z, ior_)) * (1 - fresnelDielectric(wi.z, ior_)));
+  const Vec3f m = normalize(wo + wi);
+  // pbrt's MicrofacetReflection: F at the microfacet, cos(wi, m).
+  const float f = fresnelDielectric(dot(wi, m), ior_);
+  return base + specular_ * (f * ggxD(m, alpha_) * ggxG2(wo, wi, alpha_) / (4 * wo.z));
+}
+
+float Bsdf::coatPdf(Vec3f wo, Vec3f wi) const {
+  if (wo.z <= 0 || wi.z <= 0) return 0;
+  const Vec3f m = normalize(wo + wi);
+  const float cosOM = dot(wo, m);
+  const float glossy = cosOM > 0 ? visibleNormalPdf(wo, m, alpha_) / (4 * cosOM) : 0;
+  return coatProbability_ * glossy + (1 - coatProbability_) * (wi.z / kPi);
 }
 
 Bsdf Bsdf::conductor(Vec3f f0, float roughness) {
@@ -112,20 +194,25 @@ Bsdf Bsdf::dielectric(float ior, float roughness, Vec3f tint) {
   return b;
 }
 
-// One lobe per material, chosen by the dominant parameter; blends are left to
-// the material system of a later version (docs/path-tracer.md, "Known to be
-// missing").
+// Chosen by the dominant parameter: glass, metal, a coated base, or diffuse
+// (a glTF blend of metal and dielectric takes the larger).
 Bsdf Bsdf::fromMaterial(const Material& material, Vec3f color) {
   if (material.transmission >= 0.5f) return dielectric(material.ior, material.roughness, color);
   if (material.metallic >= 0.5f) return conductor(color, material.roughness);
-  return diffuse(color);
+  if (maxComponent(material.specular) > 0 && material.coat == Material::Coat::FresnelBlend)
+    return fresnelBlend(color, material.specular, material.specularRoughness);
+  if (maxComponent(material.specular) > 0)
+    return coated(color, material.specular, material.specularRoughness, material.specularEta,
+                  material.coat == Material::Coat::Layered, material.sigma);
+  return diffuse(color, material.sigma);
 }
 
 Vec3f Bsdf::eval(Vec3f wo, Vec3f wi) const {
   switch (kind_) {
     case Kind::Diffuse:
-      if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
-      return color_ * (wi.z / kPi);
+      return diffuseEval(wo, wi);
+    case Kind::Coated:
+      return coatEval(wo, wi);
     case Kind::RoughConductor: {
       if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
       Vec3f m = normalize(wo + wi);
@@ -165,6 +252,8 @@ float Bsdf::pdf(Vec3f wo, Vec3f wi) const {
     case Kind::Diffuse:
       if (wo.z <= 0 || wi.z <= 0) return 0;
       return wi.z / kPi;
+    case Kind::Coated:
+      return coatPdf(wo, wi);
     case Kind::RoughConductor: {
       if (wo.z <= 0 || wi.z <= 0) return 0;
       Vec3f m = normalize(wo + wi);
@@ -204,7 +293,23 @@ bool Bsdf::sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const {
       out.wi = sampleCosineHemisphere(u);
       if (out.wi.z <= 0) return false;
       out.pdf = out.wi.z / kPi;
-      out.weight = color_;
+      // eval / pdf: the albedo times Oren-Nayar's factor (1 for Lambertian).
+      out.weight = orenB_ == 0 ? color_ : diffuseEval(wo, out.wi) * (kPi / out.wi.z);
+      out.delta = false;
+      return true;
+    }
+    case Kind::Coated: {
+      if (wo.z <= 0) return false;
+      if (uLobe < coatProbability_) {
+        const Vec3f m = sampleVisibleNormal(wo, alpha_, u);
+        out.wi = reflect(wo, m);
+      } else {
+        out.wi = sampleCosineHemisphere(u);
+      }
+      if (out.wi.z <= 0) return false;
+      out.pdf = coatPdf(wo, out.wi);
+      if (!(out.pdf > 0)) return false;
+      out.weight = coatEval(wo, out.wi) * (1 / out.pdf);
       out.delta = false;
       return true;
     }

@@ -2,10 +2,12 @@
 // Directions point away from the surface: wo towards where the path came
 // from, wi towards where it goes next.
 //
-// A Material maps to one of five lobes (see Bsdf::fromMaterial): Lambertian
-// diffuse, smooth or rough (GGX) conductor, smooth or rough (GGX, Walter et al.
-// 2007) dielectric. Rough lobes are sampled with Heitz's visible-normal
-// distribution. Transmitted radiance is not scaled by 1/eta^2: the factors
+// A Material maps to one of six kinds (see Bsdf::fromMaterial): diffuse
+// (Lambertian, or Oren-Nayar with pbrt's sigma), smooth or rough (GGX)
+// conductor, smooth or rough (GGX, Walter et al. 2007) dielectric, and a
+// diffuse base under a rough dielectric coat (pbrt's plastic: base + coat, or
+// the base seen through the coat). Rough lobes are sampled with Heitz's
+// visible-normal distribution. Transmitted radiance is not scaled by 1/eta^2: the factors
 // cancel for closed objects, and without them a white BSDF never returns more
 // than it receives, which the energy tests check.
 #pragma once
@@ -25,11 +27,32 @@ struct BsdfSample {
 
 class Bsdf {
  public:
-  enum class Kind { Diffuse, SmoothConductor, RoughConductor, SmoothDielectric, RoughDielectric };
+  enum class Kind {
+    Diffuse,
+    SmoothConductor,
+    RoughConductor,
+    SmoothDielectric,
+    RoughDielectric,
+    Coated
+  };
 
   // `color` is the material's base colour times its texture at the hit.
   static Bsdf fromMaterial(const Material& material, Vec3f color);
-  static Bsdf diffuse(Vec3f albedo);
+  // `sigmaDegrees`: Oren-Nayar roughness (pbrt-v3's OrenNayar; 0: Lambertian).
+  static Bsdf diffuse(Vec3f albedo, float sigmaDegrees = 0);
+  // A diffuse base (`base`, Oren-Nayar `sigmaDegrees`) under a GGX coat of
+  // tint `specular`, Ferry roughness `roughness` and Fresnel term
+  // fresnelDielectric(cos, eta) at the microfacet. `layered` false: f = base
+  // + coat (pbrt-v3's plastic, which can reflect more than it receives);
+  // true: the base times (1 - F(wo)) (1 - F(wi)), light refracted into and
+  // out of the coat, plus the coat (energy conserving, reciprocal). The coat
+  // is never delta: its alpha is at least 2e-3.
+  static Bsdf coated(Vec3f base, Vec3f specular, float roughness, float eta, bool layered,
+                     float sigmaDegrees = 0);
+  // pbrt-v3's FresnelBlend (Ashikhmin and Shirley 2000, its "substrate"):
+  // base `rd` and a GGX coat whose Schlick Fresnel reflects `rs` at normal
+  // incidence; the base fades where the coat reflects more.
+  static Bsdf fresnelBlend(Vec3f rd, Vec3f rs, float roughness);
   static Bsdf conductor(Vec3f f0, float roughness);
   static Bsdf dielectric(float ior, float roughness, Vec3f tint = Vec3f(1));
 
@@ -49,10 +72,22 @@ class Bsdf {
   float alpha() const { return alpha_; }
 
  private:
+  Vec3f diffuseEval(Vec3f wo, Vec3f wi) const;
+  Vec3f coatEval(Vec3f wo, Vec3f wi) const;
+  float coatPdf(Vec3f wo, Vec3f wi) const;
+
   Kind kind_ = Kind::Diffuse;
   Vec3f color_{0.8f};
   float alpha_ = 1;  // GGX width (roughness^2)
   float ior_ = 1.5f;
+  // Oren-Nayar's A and B (Lambertian: 1 and 0).
+  float orenA_ = 1, orenB_ = 0;
+  // Coated: the coat's tint, whether the base is seen through it, and the
+  // probability of sampling the coat rather than the base.
+  Vec3f specular_{0};
+  bool layered_ = false;
+  bool fresnelBlend_ = false;
+  float coatProbability_ = 0;
 };
 
 // Helpers exposed for tests.

@@ -53,6 +53,22 @@ std::vector<LobeCase> roughCases() {
   const float outside[] = {0, 30, 60, 85};
   for (float t : outside)
     cases.push_back({"diffuse_wo" + degrees(t), Bsdf::diffuse(Vec3f(1)), direction(t)});
+  for (float t : outside)
+    cases.push_back({"orennayar_s30_wo" + degrees(t), Bsdf::diffuse(Vec3f(1), 30), direction(t)});
+  // Coats: pbrt-v3's plastic (additive, seen from inside the glass: eta 1 /
+  // 1.5) with half-white base and coat, so that the sum stays below one; and
+  // layered coats over a white base. (Roughness from 0.3: the quadrature
+  // grid cannot resolve narrower lobes at normal incidence.)
+  for (float r : {0.3f, 0.6f})
+    for (float t : outside) {
+      const std::string rough = std::to_string(int(r * 10));
+      cases.push_back({"plastic_r" + rough + "_wo" + degrees(t),
+                       Bsdf::coated(Vec3f(0.5f), Vec3f(0.5f), r, 1 / 1.5f, false), direction(t)});
+      cases.push_back({"layered_r" + rough + "_wo" + degrees(t),
+                       Bsdf::coated(Vec3f(1), Vec3f(1), r, 1.5f, true, 20), direction(t)});
+      cases.push_back({"fresnelblend_r" + rough + "_wo" + degrees(t),
+                       Bsdf::fresnelBlend(Vec3f(1), Vec3f(0.3f), r), direction(t)});
+    }
   for (float r : {0.2f, 0.5f, 1.0f})
     for (float t : outside)
       cases.push_back({"conductor_r" + std::to_string(int(r * 10)) + "_wo" + degrees(t),
@@ -417,7 +433,11 @@ TEST(BsdfReciprocity, EvalIsSymmetricUpToTheRefractiveIndexFactor) {
       {"conductor 0.8", Bsdf::conductor(Vec3f(0.5f), 0.8f)},
       {"dielectric 1.5 0.3", Bsdf::dielectric(1.5f, 0.3f)},
       {"dielectric 1.33 0.6", Bsdf::dielectric(1.33f, 0.6f)},
-      {"dielectric 0.67 0.5", Bsdf::dielectric(1 / 1.5f, 0.5f)}};
+      {"dielectric 0.67 0.5", Bsdf::dielectric(1 / 1.5f, 0.5f)},
+      {"oren-nayar 25", Bsdf::diffuse(Vec3f(0.7f), 25)},
+      {"plastic 0.3", Bsdf::coated(Vec3f(0.5f), Vec3f(0.4f), 0.3f, 1 / 1.5f, false)},
+      {"layered 0.2", Bsdf::coated(Vec3f(0.8f), Vec3f(1), 0.2f, 1.5f, true, 10)},
+      {"fresnel blend 0.3", Bsdf::fresnelBlend(Vec3f(0.6f), Vec3f(0.2f), 0.3f)}};
   TestRng rng(7);
   for (const auto& [name, bsdf] : lobes) {
     const float ior = bsdf.transmits() ? (name.find("1.33") != std::string::npos   ? 1.33f

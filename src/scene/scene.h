@@ -35,6 +35,23 @@ struct Material {
   // glTF), or only the side its winding normal faces (pbrt's area lights
   // unless "twosided": the loader orients the winding as pbrt would).
   bool emitsBackSide = true;
+  // A glossy dielectric coat over a diffuse base (pbrt-v3 plastic, uber's Ks,
+  // substrate, pbrt-v4 coateddiffuse): its reflectance tint (0: no coat), its
+  // roughness (Ferry's: GGX alpha = roughness^2) and the relative index of
+  // refraction its Fresnel term uses (render/bsdf.h, Bsdf::plastic).
+  Vec3f specular{0, 0, 0};
+  float specularRoughness = 0.3f;
+  float specularEta = 1.5f;
+  // Additive: base + coat, as pbrt-v3's plastic (not energy conserving);
+  // Layered: the base seen through the coat, times (1 - F) on the way in and
+  // out; FresnelBlend: pbrt-v3's substrate (Ashikhmin-Shirley), whose coat
+  // reflects `specular` at normal incidence (Schlick) and whose base fades as
+  // the coat reflects more (specularEta unused).
+  enum class Coat : uint8_t { Additive, Layered, FresnelBlend };
+  Coat coat = Coat::Additive;
+  // Oren-Nayar roughness of a diffuse base, in degrees (pbrt's matte
+  // "sigma"); 0 is Lambertian.
+  float sigma = 0;
 
   bool isEmissive() const { return maxComponent(emission) > 0; }
 };
