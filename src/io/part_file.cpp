@@ -39,7 +39,7 @@ static_assert(sizeof(Material) == 120,
 static_assert(sizeof(Mesh) == 136, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 80,
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(Texture) == 72,
+static_assert(sizeof(Texture) == 144,
               "Texture changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(SunLight) == 28,
               "SunLight changed: update part_file.cpp and kPartFormatVersion");
@@ -159,6 +159,12 @@ void writeTexture(FileWriter& w, const Texture& t) {
   w.pod(uint8_t(t.wrap));
   w.pod(uint8_t(t.srgb));
   w.array(t.rgba);
+  w.pod(uint8_t(t.solid.kind));
+  w.pod(t.solid.worldToTexture);
+  w.pod(t.solid.octaves);
+  w.pod(t.solid.omega);
+  w.pod(t.solid.scale);
+  w.pod(t.solid.variation);
 }
 
 void writeMesh(FileWriter& w, const Mesh& m, int32_t material) {
@@ -453,6 +459,17 @@ Texture readTexture(FileReader& r) {
   t.rgba = r.array<uint8_t>();
   if (t.width < 0 || t.height < 0 || t.rgba.size() != t.texelCount() * 4)
     r.fail("texture size mismatch");
+  if (r.version() >= 5) {  // older: images only
+    const uint8_t kind = r.pod<uint8_t>();
+    if (kind > uint8_t(SolidTextureKind::Windy)) r.fail("bad solid texture kind");
+    t.solid.kind = SolidTextureKind(kind);
+    t.solid.worldToTexture = r.pod<Affine3f>();
+    t.solid.octaves = r.pod<int32_t>();
+    if (t.solid.octaves < 0 || t.solid.octaves > 32) r.fail("bad solid texture octaves");
+    t.solid.omega = r.pod<float>();
+    t.solid.scale = r.pod<float>();
+    t.solid.variation = r.pod<float>();
+  }
   return t;
 }
 

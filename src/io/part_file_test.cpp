@@ -50,7 +50,10 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
     if (ta == kNoTexture) return true;
     const Texture &x = sa.textures[ta], &y = sb.textures[tb];
     return x.name == y.name && x.width == y.width && x.height == y.height && x.wrap == y.wrap &&
-           x.srgb == y.srgb && sameBytes(x.rgba, y.rgba);
+           x.srgb == y.srgb && sameBytes(x.rgba, y.rgba) && x.solid.kind == y.solid.kind &&
+           std::memcmp(&x.solid.worldToTexture, &y.solid.worldToTexture, sizeof(Affine3f)) == 0 &&
+           x.solid.octaves == y.solid.octaves && x.solid.omega == y.solid.omega &&
+           x.solid.scale == y.solid.scale && x.solid.variation == y.solid.variation;
   };
   return a.name == b.name && a.baseColor == b.baseColor && a.roughness == b.roughness &&
          a.metallic == b.metallic && a.transmission == b.transmission && a.ior == b.ior &&
@@ -110,6 +113,17 @@ Written writeDirectory(const std::string& dir, const std::string& partitioner, i
   coated.specularEta = 1 / 1.5f;
   coated.coat = Material::Coat::Layered;
   coated.sigma = 12;
+  // Its colour a solid texture (format 5).
+  Texture marble;
+  marble.name = "marble";
+  marble.solid.kind = SolidTextureKind::Marble;
+  marble.solid.worldToTexture = Affine3f::translate({1, 2, 3});
+  marble.solid.octaves = 6;
+  marble.solid.omega = 0.4f;
+  marble.solid.scale = 3;
+  marble.solid.variation = 0.25f;
+  coated.baseColorTexture = int32_t(w.scene.textures.size());
+  w.scene.textures.push_back(marble);
   Scene lights = lightScene(w.scene);
   PartitionerOptions o;
   o.name = partitioner;

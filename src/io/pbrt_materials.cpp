@@ -95,7 +95,7 @@ struct PbrtMaterials::Impl {
   std::map<std::string, int32_t> named;
   std::map<std::tuple<int32_t, float, float, float, int32_t, bool>, int32_t> ferryMaterials;
   std::map<std::string, std::shared_ptr<const ImageData>> images;
-  std::map<std::string, int32_t> bakedColor, bakedAlpha;
+  std::map<std::string, int32_t> bakedColor, bakedAlpha, solidTextures;
   std::map<std::string, float> averages;
   std::map<std::string, SampledSpectrum> spectrumFiles;
   std::map<int, int32_t> constantAlpha;
@@ -337,6 +337,14 @@ struct PbrtMaterials::Impl {
   }
 
   void unsupportedClass(const PbrtTextureDefinition& t) {
+    if (solidKind(t.className) != SolidTextureKind::None) {
+      warnings.once("solid in composite|" + t.className,
+                    fmt::format("a \"{}\" texture is evaluated in 3D only where a material uses "
+                                "it directly; inside another texture or on a scalar it is the "
+                                "constant 0.5 (first at {})",
+                                t.className, t.where.toString()));
+      return;
+    }
     warnings.once("texture class|" + t.className,
                   fmt::format("texture class \"{}\" is not supported; using the constant 0.5 "
                               "instead (first at {})",
@@ -594,6 +602,38 @@ struct PbrtMaterials::Impl {
     int32_t texture = kNoTexture;
   };
 
+  static SolidTextureKind solidKind(const std::string& className) {
+    if (className == "marble") return SolidTextureKind::Marble;
+    if (className == "fbm") return SolidTextureKind::Fbm;
+    if (className == "wrinkled") return SolidTextureKind::Wrinkled;
+    if (className == "windy") return SolidTextureKind::Windy;
+    return SolidTextureKind::None;
+  }
+
+  // A solid texture used directly as a colour: evaluated at the shading
+  // point (scene/solid_texture.h), one Ferry texture per pbrt texture.
+  int32_t solidTexture(const PbrtTextureDefinition& t) {
+    auto found = solidTextures.find(t.name);
+    if (found != solidTextures.end()) return found->second;
+    Texture texture;
+    texture.name = t.className + " \"" + t.name + "\"";
+    SolidTexture& s = texture.solid;
+    s.kind = solidKind(t.className);
+    // pbrt-v4's texture space: the inverse of the CTM at the definition
+    // (pbrt-v3 applies the CTM itself; the two agree for the usual
+    // identity, and differ only for transformed textures).
+    s.worldToTexture =
+        t.transform.determinant() != 0 ? t.transform.inverse() : Affine3f::identity();
+    s.octaves = std::clamp(t.params.getInt("octaves", 8), 0, 32);
+    s.omega = t.params.getFloat("roughness", 0.5f);
+    s.scale = t.params.getFloat("scale", 1);
+    s.variation = t.params.getFloat("variation", 0.2f);
+    const int32_t index = int32_t(scene.textures.size());
+    scene.textures.push_back(std::move(texture));
+    solidTextures.emplace(t.name, index);
+    return index;
+  }
+
   Color color(const PbrtParams& params, std::initializer_list<const char*> names, Vec3f fallback) {
     for (const char* name : names) {
       const PbrtParam* p = params.find(name);
@@ -604,6 +644,7 @@ struct PbrtMaterials::Impl {
           evaluations_ = 0;
           return {eval(t, {0.5f, 0.5f}, 0)};
         }
+        if (solidKind(t.className) != SolidTextureKind::None) return {Vec3f(1), solidTexture(t)};
         return {Vec3f(1), bakeColor(*p)};
       }
       return {colorValue(*p, SpectrumUse::Reflectance)};

@@ -60,6 +60,7 @@ struct PbrtTextureDefinition {
   std::string className;  // imagemap, checkerboard, ...
   PbrtParams params;
   SourceLocation where;
+  Affine3f transform;  // the CTM where it was defined (solid textures' space)
 };
 
 struct PbrtMaterialDefinition {

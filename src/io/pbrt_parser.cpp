@@ -701,6 +701,7 @@ class Parser {
     t.className = string(in, "Texture");
     t.params = withDefaults(params(in), "texture");
     t.where = where;
+    t.transform = state_.ctm;
     materials_.defineTexture(std::move(t));
   }
 

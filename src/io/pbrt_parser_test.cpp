@@ -583,6 +583,30 @@ TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
   EXPECT_EQ(substrate.coat, Material::Coat::FresnelBlend);
 }
 
+TEST(PbrtParser, SolidTexturesAreEvaluatedInTheirSpace) {
+  const Scene scene = fromText(
+      "WorldBegin\nTransformBegin\nTranslate 0 2 0\nTexture \"m\" \"color\" \"marble\" \"float "
+      "scale\" 4 \"float variation\" 0.3 \"integer octaves\" 5 \"float roughness\" 0.6\n"
+      "TransformEnd\nTexture \"w\" \"spectrum\" \"wrinkled\"\n"
+      "Material \"matte\" \"texture Kd\" \"m\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 "
+      "0 1 0] \"integer indices\" [0 1 2]\nMaterial \"matte\" \"texture Kd\" \"w\"\nShape "
+      "\"trianglemesh\" \"point3 P\" [0 0 1 1 0 1 0 1 1] \"integer indices\" [0 1 2]\nWorldEnd\n");
+  ASSERT_EQ(scene.meshes.size(), 2u);
+  const Texture& marble = scene.textures.at(
+      size_t(scene.materials.at(size_t(scene.meshes[0].material)).baseColorTexture));
+  EXPECT_EQ(marble.solid.kind, SolidTextureKind::Marble);
+  EXPECT_EQ(marble.solid.scale, 4.0f);
+  EXPECT_EQ(marble.solid.variation, 0.3f);
+  EXPECT_EQ(marble.solid.octaves, 5);
+  EXPECT_EQ(marble.solid.omega, 0.6f);
+  EXPECT_EQ(marble.solid.worldToTexture.transformPoint({0, 2, 0}), Vec3f(0, 0, 0));
+  EXPECT_EQ(marble.texelCount(), 0u);
+  const Texture& wrinkled = scene.textures.at(
+      size_t(scene.materials.at(size_t(scene.meshes[1].material)).baseColorTexture));
+  EXPECT_EQ(wrinkled.solid.kind, SolidTextureKind::Wrinkled);
+  EXPECT_EQ(wrinkled.solid.octaves, 8);
+}
+
 TEST(PbrtParser, AreaLightsAreOneSidedAndOriented) {
   auto emitterOf = [](const std::string& before, const std::string& light,
                       const std::string& extra) {

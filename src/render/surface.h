@@ -100,7 +100,7 @@ inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, con
   s.material = mesh.material;
   s.baseColor = s.material->baseColor;
   if (s.material->baseColorTexture != kNoTexture)
-    s.baseColor *= scene.textures[s.material->baseColorTexture].sample(s.uv).xyz();
+    s.baseColor *= scene.textures[s.material->baseColorTexture].evaluate(s.uv, s.position).xyz();
   return s;
 }
 

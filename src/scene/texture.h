@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "scene/solid_texture.h"
 
 namespace ferry {
 
@@ -20,6 +21,18 @@ struct Texture {
   // Colour channels hold sRGB-encoded values; sample() returns linear colour.
   bool srgb = true;
   std::vector<uint8_t> rgba;  // width * height * 4, row 0 at the top (v = 1)
+  // A solid texture (pbrt's marble, fbm, wrinkled, windy) has no texels: it
+  // is evaluated at the shading point (evaluate()).
+  SolidTexture solid;
+
+  bool isSolid() const { return solid.kind != SolidTextureKind::None; }
+  // The colour at a shading point: the image at uv, or the solid texture at
+  // world point p (alpha 1).
+  Vec4f evaluate(Vec2f uv, Vec3f p) const {
+    if (!isSolid()) return sample(uv);
+    const Vec3f c = solid.evaluate(p);
+    return {c.x, c.y, c.z, 1};
+  }
 
   uint64_t texelCount() const { return uint64_t(width) * uint64_t(height); }
   // Bilinear lookup at (u, v); v = 0 is the bottom row, as in OBJ and glTF-flipped uvs.

@@ -1,0 +1,79 @@
+#include "scene/solid_texture.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "scene/texture.h"
+
+namespace ferry {
+namespace {
+
+TEST(SolidTexture, NoiseIsZeroOnTheLatticeBoundedAndContinuous) {
+  for (int x = -3; x <= 3; ++x)
+    for (int y = -3; y <= 3; ++y)
+      for (int z = -3; z <= 3; ++z) EXPECT_EQ(perlinNoise(Vec3f(float(x), float(y), float(z))), 0);
+  double sum = 0;
+  float largest = 0;
+  constexpr int kSteps = 200000;
+  for (int i = 0; i < kSteps; ++i) {
+    const Vec3f p{0.0137f * float(i), 7.3f - 0.0071f * float(i), 0.0029f * float(i) - 40};
+    const float n = perlinNoise(p);
+    largest = std::max(largest, std::abs(n));
+    sum += n;
+    // Continuous: a tiny step moves it a little (its gradient is at most ~3).
+    EXPECT_LE(std::abs(perlinNoise(p + Vec3f(1e-3f, 0, 0)) - n), 4e-3f) << i;
+  }
+  EXPECT_LE(largest, 1.1f);
+  EXPECT_GT(largest, 0.5f);
+  EXPECT_NEAR(sum / kSteps, 0, 0.02);
+}
+
+TEST(SolidTexture, FbmAndTurbulenceSumOctavesAsPbrt) {
+  const Vec3f p{0.3f, 1.7f, -2.2f};
+  float expected = 0, lambda = 1, o = 1, expectedTurbulence = 0;
+  for (int i = 0; i < 5; ++i) {
+    expected += o * perlinNoise(p * lambda);
+    expectedTurbulence += o * std::abs(perlinNoise(p * lambda));
+    lambda *= 1.99f;
+    o *= 0.6f;
+  }
+  EXPECT_FLOAT_EQ(fractalBrownianMotion(p, 0.6f, 5), expected);
+  EXPECT_FLOAT_EQ(turbulence(p, 0.6f, 5), expectedTurbulence + o * 0.2f);
+}
+
+TEST(SolidTexture, MarbleFollowsPbrtV3sSpline) {
+  SolidTexture marble;
+  marble.kind = SolidTextureKind::Marble;
+  marble.variation = 0;  // no veins: the colour is the spline at 0.5 + 0.5 sin(y)
+  // sin(y) = -1: t = 0, the first control point times 1.5.
+  const Vec3f low = marble.evaluate({0.2f, -kPi / 2, 5});
+  EXPECT_NEAR(low.x, 1.5f * 0.58f, 1e-5f);
+  EXPECT_NEAR(low.z, 1.5f * 0.6f, 1e-5f);
+  // sin(y) = 1: t = 1, first = min(1, 6) = 1, local t = 5: pbrt-v3's spline
+  // extrapolated, as pbrt-v3 evaluates it.
+  const Vec3f high = marble.evaluate({0, kPi / 2, 0});
+  EXPECT_TRUE(isFinite(high));
+  // Scale multiplies the texture space; the transform places it.
+  marble.scale = 2;
+  marble.worldToTexture = Affine3f::translate({0, 1, 0});
+  EXPECT_NEAR(marble.evaluate({0, -kPi / 4 - 1, 0}).x, 1.5f * 0.58f, 1e-5f);
+  // Veins vary the colour along x too.
+  marble.variation = 0.5f;
+  const Vec3f a = marble.evaluate({0.1f, 0.3f, 0.2f}), b = marble.evaluate({2.7f, 0.3f, 0.2f});
+  EXPECT_NE(a.x, b.x);
+}
+
+TEST(SolidTexture, AnImageTextureIgnoresThePointAndASolidOneTheUv) {
+  Texture solid;
+  solid.solid.kind = SolidTextureKind::Fbm;
+  EXPECT_EQ(solid.evaluate({0.1f, 0.1f}, {0.4f, 0.5f, 0.6f}).x,
+            solid.evaluate({0.9f, 0.3f}, {0.4f, 0.5f, 0.6f}).x);
+  EXPECT_NE(solid.evaluate({0.1f, 0.1f}, {0.4f, 0.5f, 0.6f}).x,
+            solid.evaluate({0.1f, 0.1f}, {1.4f, 0.5f, 0.6f}).x);
+  Texture image;  // no texels: white
+  EXPECT_EQ(image.evaluate({0.2f, 0.3f}, {1, 2, 3}).x, 1);
+}
+
+}  // namespace
+}  // namespace ferry
