@@ -198,8 +198,8 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
                   objects = int32_t(all.objects.size());
     for (Texture& t : part.scene.textures) all.textures.push_back(std::move(t));
     for (Material mat : part.scene.materials) {
-      if (mat.baseColorTexture != kNoTexture) mat.baseColorTexture += textures;
-      if (mat.alphaTexture != kNoTexture) mat.alphaTexture += textures;
+      for (int32_t* t : mat.textureSlots())
+        if (*t != kNoTexture) *t += textures;
       all.materials.push_back(std::move(mat));
     }
     for (Mesh& mesh : part.scene.meshes) {

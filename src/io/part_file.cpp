@@ -34,7 +34,7 @@ static_assert(std::is_trivially_copyable_v<ProxyV1> && sizeof(ProxyV1) == 32);
 static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // The writers below list every field of these structs: when one gains a
 // field, these fail so that the part format (and kPartFormatVersion) follows.
-static_assert(sizeof(Material) == 120,
+static_assert(sizeof(Material) == 136,
               "Material changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Mesh) == 136, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 80,
@@ -150,6 +150,10 @@ void writeMaterial(FileWriter& w, const Material& m) {
   w.pod(m.specularEta);
   w.pod(uint8_t(m.coat));
   w.pod(m.sigma);
+  w.pod(m.bumpTexture);
+  w.pod(m.bumpScale);
+  w.pod(m.normalTexture);
+  w.pod(m.normalScale);
 }
 
 void writeTexture(FileWriter& w, const Texture& t) {
@@ -190,9 +194,8 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
     if (meshIndex[m] == 0) materialIndex[scene.meshes[m].material] = 0;
   for (size_t k = 0; k < scene.materials.size(); ++k)
     if (materialIndex[k] == 0) {
-      const Material& mat = scene.materials[k];
-      if (mat.baseColorTexture != kNoTexture) textureIndex[mat.baseColorTexture] = 0;
-      if (mat.alphaTexture != kNoTexture) textureIndex[mat.alphaTexture] = 0;
+      for (int32_t t : scene.materials[k].textures())
+        if (t != kNoTexture) textureIndex[t] = 0;
     }
   // Kept items get new indices in their original order.
   auto number = [](std::vector<int32_t>& index) {
@@ -211,9 +214,8 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
   for (size_t k = 0; k < scene.materials.size(); ++k)
     if (materialIndex[k] >= 0) {
       Material mat = scene.materials[k];
-      if (mat.baseColorTexture != kNoTexture)
-        mat.baseColorTexture = textureIndex[mat.baseColorTexture];
-      if (mat.alphaTexture != kNoTexture) mat.alphaTexture = textureIndex[mat.alphaTexture];
+      for (int32_t* t : mat.textureSlots())
+        if (*t != kNoTexture) *t = textureIndex[*t];
       writeMaterial(w, mat);
     }
   w.pod(uint64_t(meshes));
@@ -443,6 +445,12 @@ Material readMaterial(FileReader& r) {
           fmt::format("{}: material \"{}\" has an unknown coat model {}", r.path(), m.name, coat));
     m.coat = Material::Coat(coat);
     m.sigma = r.pod<float>();
+  }
+  if (r.version() >= 5) {  // older: no bump or normal map
+    m.bumpTexture = r.pod<int32_t>();
+    m.bumpScale = r.pod<float>();
+    m.normalTexture = r.pod<int32_t>();
+    m.normalScale = r.pod<float>();
   }
   return m;
 }

@@ -19,8 +19,7 @@ Scene lightScene(const Scene& scene) {
       int32_t& material = materialOf[source.material];
       if (material < 0) {
         Material mat = scene.materials[source.material];
-        mat.baseColorTexture = kNoTexture;
-        mat.alphaTexture = kNoTexture;
+        for (int32_t* t : mat.textureSlots()) *t = kNoTexture;
         material = out.addMaterial(std::move(mat));
       }
       Mesh mesh;

@@ -74,9 +74,8 @@ void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
     if (keepObject[o])
       for (int32_t m : objects[o].meshes) {
         keepMesh[m] = 1;
-        const Material& mat = materials[meshes[m].material];
-        if (mat.baseColorTexture != kNoTexture) keepTexture[mat.baseColorTexture] = 1;
-        if (mat.alphaTexture != kNoTexture) keepTexture[mat.alphaTexture] = 1;
+        for (int32_t t : materials[meshes[m].material].textures())
+          if (t != kNoTexture) keepTexture[t] = 1;
       }
   for (size_t m = 0; m < meshes.size(); ++m)
     if (!keepMesh[m]) {
@@ -98,8 +97,9 @@ void Scene::validate() const {
       fail(fmt::format("{} refers to texture {} of {}", who, t, textures.size()));
   };
   for (const Material& m : materials) {
-    checkTexture(m.baseColorTexture, "material '" + m.name + "'");
-    checkTexture(m.alphaTexture, "material '" + m.name + "'");
+    for (int32_t t : m.textures()) checkTexture(t, "material '" + m.name + "'");
+    if (m.alphaTexture != kNoTexture && textures[m.alphaTexture].isSolid())
+      fail(fmt::format("material '{}': a solid texture cannot be a cut-out", m.name));
     if (!isFinite(m.baseColor) || !isFinite(m.emission) || !std::isfinite(m.ior))
       fail(fmt::format("material '{}' has a non-finite parameter", m.name));
   }

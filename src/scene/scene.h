@@ -7,6 +7,7 @@
 // island are only representable that way.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -52,8 +53,25 @@ struct Material {
   // Oren-Nayar roughness of a diffuse base, in degrees (pbrt's matte
   // "sigma"); 0 is Lambertian.
   float sigma = 0;
+  // Shading-normal perturbation (render/surface.h), in uv space: a bump map
+  // (pbrt's "bumpmap": a displacement along the normal of bumpScale times
+  // the texture's grey value, in world units) or a tangent-space normal map
+  // (glTF's normalTexture: RGB in [0, 1] -> [-1, 1], x and y times
+  // normalScale; x along +u, y along +v).
+  int32_t bumpTexture = kNoTexture;
+  float bumpScale = 1;
+  int32_t normalTexture = kNoTexture;
+  float normalScale = 1;
 
   bool isEmissive() const { return maxComponent(emission) > 0; }
+  // Every texture index the material holds (kNoTexture where unused), for
+  // code that keeps, drops or renumbers textures with their materials.
+  std::array<int32_t*, 4> textureSlots() {
+    return {&baseColorTexture, &alphaTexture, &bumpTexture, &normalTexture};
+  }
+  std::array<int32_t, 4> textures() const {
+    return {baseColorTexture, alphaTexture, bumpTexture, normalTexture};
+  }
 };
 
 struct Mesh {

@@ -93,14 +93,16 @@ float turbulence(Vec3f p, float omega, int octaves) {
 namespace {
 
 // pbrt-v3's marble: a cubic Bezier through four of nine colours, chosen by
-// t (note pbrt-v3's min(1, ...): only the first two segments are used, which
-// its images show; kept), times 1.5.
+// t, times 1.5. (One pbrt-v3 revision chose the segment by min(1, ...),
+// which extrapolates the spline to reflectances of up to 40 for half the
+// veins; its reference renders show the plain spline, which this is, with
+// the segment kept in range at t = 1.)
 Vec3f marbleColor(float t) {
   static const Vec3f c[9] = {{.58f, .58f, .6f}, {.58f, .58f, .6f}, {.58f, .58f, .6f},
                              {.5f, .5f, .5f},   {.6f, .59f, .58f}, {.58f, .58f, .6f},
                              {.58f, .58f, .6f}, {.2f, .2f, .33f},  {.58f, .58f, .6f}};
   constexpr int kSegments = 9 - 3;
-  const int first = std::min(1, int(std::floor(t * kSegments)));
+  const int first = std::clamp(int(std::floor(t * kSegments)), 0, kSegments - 1);
   t = t * kSegments - float(first);
   const Vec3f c0 = c[first], c1 = c[first + 1], c2 = c[first + 2], c3 = c[first + 3];
   Vec3f s0 = c0 * (1 - t) + c1 * t, s1 = c1 * (1 - t) + c2 * t;

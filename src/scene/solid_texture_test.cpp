@@ -50,10 +50,16 @@ TEST(SolidTexture, MarbleFollowsPbrtV3sSpline) {
   const Vec3f low = marble.evaluate({0.2f, -kPi / 2, 5});
   EXPECT_NEAR(low.x, 1.5f * 0.58f, 1e-5f);
   EXPECT_NEAR(low.z, 1.5f * 0.6f, 1e-5f);
-  // sin(y) = 1: t = 1, first = min(1, 6) = 1, local t = 5: pbrt-v3's spline
-  // extrapolated, as pbrt-v3 evaluates it.
+  // sin(y) = 1: t = 1, the end of the last segment: the last control point.
   const Vec3f high = marble.evaluate({0, kPi / 2, 0});
-  EXPECT_TRUE(isFinite(high));
+  EXPECT_NEAR(high.x, 1.5f * 0.58f, 1e-5f);
+  EXPECT_NEAR(high.z, 1.5f * 0.6f, 1e-5f);
+  // Never extrapolated: every colour between the control points' range.
+  for (int i = 0; i <= 1000; ++i) {
+    const Vec3f c = marble.evaluate({0, kPi * (float(i) / 1000 - 0.5f), 0});
+    ASSERT_GE(c.z, 1.5f * 0.2f) << i;
+    ASSERT_LE(c.x, 1.5f * 0.6f) << i;
+  }
   // Scale multiplies the texture space; the transform places it.
   marble.scale = 2;
   marble.worldToTexture = Affine3f::translate({0, 1, 0});

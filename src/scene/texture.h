@@ -27,10 +27,11 @@ struct Texture {
 
   bool isSolid() const { return solid.kind != SolidTextureKind::None; }
   // The colour at a shading point: the image at uv, or the solid texture at
-  // world point p (alpha 1).
+  // world point p (alpha 1; negative values clamped to 0, as pbrt's
+  // materials clamp their reflectances: fBm is negative half the time).
   Vec4f evaluate(Vec2f uv, Vec3f p) const {
     if (!isSolid()) return sample(uv);
-    const Vec3f c = solid.evaluate(p);
+    const Vec3f c = max(solid.evaluate(p), Vec3f(0));
     return {c.x, c.y, c.z, 1};
   }
 
