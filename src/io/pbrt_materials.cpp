@@ -96,6 +96,7 @@ struct PbrtMaterials::Impl {
   std::map<std::tuple<int32_t, float, float, float, int32_t, bool>, int32_t> ferryMaterials;
   std::map<std::string, std::shared_ptr<const ImageData>> images;
   std::map<std::string, int32_t> bakedColor, bakedAlpha, solidTextures;
+  std::map<std::string, std::pair<int32_t, float>> bakedBump;
   std::map<std::string, float> averages;
   std::map<std::string, SampledSpectrum> spectrumFiles;
   std::map<int, int32_t> constantAlpha;
@@ -546,6 +547,53 @@ struct PbrtMaterials::Impl {
       }
   }
 
+  // A float texture as a bump map's displacement: baked into a linear grey
+  // texture spanning its range (only the slopes matter), `scale` set to the
+  // range in world units. kNoTexture where it is flat.
+  int32_t bakeBump(const PbrtParam& p, float& scale) {
+    const PbrtTextureDefinition& t = textureOf(p, true);
+    auto it = bakedBump.find(t.name);
+    if (it != bakedBump.end()) {
+      scale = it->second.second;
+      return it->second.first;
+    }
+    int width = 0, height = 0;
+    float frequency = 0;
+    std::set<const PbrtTextureDefinition*> seen;
+    bakeSize(t, width, height, frequency, 0, seen);
+    if (width == 0 || height == 0) {
+      const int side = std::clamp(int(std::ceil(32 * frequency)), 256, kMaxBakeSide);
+      width = std::max(width, side);
+      height = std::max(height, side);
+    }
+    std::vector<float> values(size_t(width) * height);
+    evaluations_ = 0;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        values[size_t(y) * width + x] =
+            average(eval(t, {(x + 0.5f) / width, 1 - (y + 0.5f) / height}, 0));
+    const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+    const float low = *lo, range = *hi - *lo;
+    int32_t id = kNoTexture;
+    scale = 0;
+    if (range > 0 && std::isfinite(range)) {
+      Texture out;
+      out.name = t.name + " (bump)";
+      out.srgb = false;
+      out.width = width;
+      out.height = height;
+      out.wrap = t.className == "imagemap" ? wrapOf(t) : WrapMode::Repeat;
+      out.rgba.assign(values.size() * 4, 255);
+      for (size_t i = 0; i < values.size(); ++i)
+        for (int k = 0; k < 3; ++k) out.rgba[4 * i + k] = toByte((values[i] - low) / range);
+      id = addTexture(std::move(out));
+      scale = range;
+    }
+    reportUnused(t.params, fmt::format("Texture \"{}\" \"{}\"", t.name, t.className));
+    bakedBump.emplace(t.name, std::make_pair(id, scale));
+    return id;
+  }
+
   int32_t bakeAlpha(const PbrtParam& p) {
     const PbrtTextureDefinition& t = textureOf(p, true);
     auto it = bakedAlpha.find(t.name);
@@ -788,6 +836,12 @@ struct PbrtMaterials::Impl {
       m.baseColor = c.value;
       m.baseColorTexture = c.texture;
     };
+    // pbrt-v3's "bumpmap", pbrt-v4's "displacement": a float texture.
+    for (const char* name : {"bumpmap", "displacement"})
+      if (const PbrtParam* bump = p.find(name)) {
+        if (bump->type != "texture") PbrtParams::fail(*bump, "expected a float texture");
+        m.bumpTexture = bakeBump(*bump, m.bumpScale);
+      }
     if (type == "diffuse" || type == "matte") {
       setColor(color(p, {"reflectance", "Kd"}, Vec3f(0.5f)));
       if (type == "matte") m.sigma = std::clamp(scalar(p, "sigma", 0), 0.0f, 90.0f);

@@ -307,7 +307,11 @@ TEST_F(PbrtV4Features, Materials) {
   EXPECT_EQ(scene().textures[size_t(portal.alphaTexture)].sampleAlpha({0.5f, 0.5f}), 0.0f);
   const Material& mostly = material(scene(), "mostly gold");
   EXPECT_FLOAT_EQ(mostly.metallic, 0.75f);  // v4's amount weighs the second
-  EXPECT_TRUE(anyContains(warnings(), "ignored parameter \"texture displacement\""));
+  // v4's displacement texture bumps the shading normal.
+  const Material& leafMaterial = material(scene(), "leaf");
+  EXPECT_NE(leafMaterial.bumpTexture, kNoTexture);
+  EXPECT_NEAR(leafMaterial.bumpScale, 1.0f, 1e-6f);
+  EXPECT_FALSE(anyContains(warnings(), "displacement"));
   EXPECT_TRUE(anyContains(warnings(), "Shape \"nurbs\" is not supported"));
 }
 
@@ -605,6 +609,25 @@ TEST(PbrtParser, SolidTexturesAreEvaluatedInTheirSpace) {
       size_t(scene.materials.at(size_t(scene.meshes[1].material)).baseColorTexture));
   EXPECT_EQ(wrinkled.solid.kind, SolidTextureKind::Wrinkled);
   EXPECT_EQ(wrinkled.solid.octaves, 8);
+}
+
+TEST(PbrtParser, BumpMapsAreBakedWithTheirRange) {
+  const Scene scene = fromText(
+      "WorldBegin\nTexture \"b\" \"float\" \"checkerboard\" \"float tex1\" 0.2 \"float tex2\" "
+      "0.7 \"float uscale\" 4 \"float vscale\" 4\nTexture \"flat\" \"float\" \"constant\" \"float "
+      "value\" 0.3\nMaterial \"matte\" \"texture bumpmap\" \"b\"\nShape \"trianglemesh\" \"point3 "
+      "P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nMaterial \"coateddiffuse\" \"texture "
+      "displacement\" \"flat\"\nShape \"trianglemesh\" \"point3 P\" [0 0 1 1 0 1 0 1 1] "
+      "\"integer indices\" [0 1 2]\nWorldEnd\n");
+  const Material& bumped = scene.materials.at(size_t(scene.meshes.at(0).material));
+  ASSERT_NE(bumped.bumpTexture, kNoTexture);
+  EXPECT_NEAR(bumped.bumpScale, 0.5f, 1e-6f);
+  const Texture& t = scene.textures.at(size_t(bumped.bumpTexture));
+  EXPECT_FALSE(t.srgb);
+  // Linear texels spanning the range: 0 where 0.2, 255 where 0.7.
+  EXPECT_EQ(*std::min_element(t.rgba.begin(), t.rgba.end()), 0);
+  // A flat displacement (pbrt-v4's "displacement") bends nothing.
+  EXPECT_EQ(scene.materials.at(size_t(scene.meshes.at(1).material)).bumpTexture, kNoTexture);
 }
 
 TEST(PbrtParser, AreaLightsAreOneSidedAndOriented) {

@@ -11,6 +11,9 @@ namespace {
 // Paths whose bounce reaches this start playing Russian roulette.
 constexpr uint32_t kRouletteStartBounce = 3;
 
+// The least cosine between the viewer and a shading normal (shadingFrame).
+constexpr float kMinShadingCosine = 0.02f;
+
 // Contributions that cannot be represented are dropped rather than poisoning the image.
 [[gnu::always_inline]] inline bool usable(Vec3f c) {
   return isFinite(c) && maxComponent(c) > 0;
@@ -108,10 +111,22 @@ template <typename Path>
     const PathVertex& vertex, uint32_t sampleIndex) const {
   const Bsdf bsdf = Bsdf::fromMaterial(*vertex.surface.material, vertex.surface.baseColor);
   Vec3f ng = vertex.surface.geometricNormal, ns = vertex.surface.shadingNormal;
-  if (!bsdf.transmits() && dot(ng, vertex.wo) < 0) {
-    // Opaque surfaces are two-sided: shade the side the ray arrived on.
-    ng = -ng;
-    ns = -ns;
+  if (!bsdf.transmits()) {
+    if (dot(ng, vertex.wo) < 0) {
+      // Opaque surfaces are two-sided: shade the side the ray arrived on.
+      ng = -ng;
+      ns = -ns;
+    }
+    // A shading normal (interpolated, bumped, normal-mapped) that turns
+    // away from the viewer would make the surface black there: bend it
+    // towards the geometric normal until the viewer sees its front (as Iray
+    // does, Keller et al. 2017). Light still cannot leak: continuations and
+    // light samples below the geometric surface are dropped.
+    const float facing = dot(ns, vertex.wo);
+    if (facing < kMinShadingCosine) {
+      const float geometric = std::max(dot(ng, vertex.wo), 1e-4f);
+      ns = normalize(ns + ng * ((kMinShadingCosine - facing) / geometric));
+    }
   }
   const Frame frame(ns);
   return VertexScattering{bsdf, ng, frame, frame.toLocal(vertex.wo),

@@ -4,6 +4,63 @@
 
 namespace ferry {
 
+void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
+                          const SurfaceTable::MeshArrays& mesh, const Vec3i& tri, SurfacePoint& s) {
+  // The triangle's dp/du and dp/dv (pbrt's, from its three uvs), in world
+  // space; a triangle whose uvs are degenerate keeps its normal.
+  const Vec2f uv0 = mesh.uvs[tri.x], uv1 = mesh.uvs[tri.y], uv2 = mesh.uvs[tri.z];
+  const Vec2f d02 = uv0 - uv2, d12 = uv1 - uv2;
+  const Vec3f p02 = mesh.positions[tri.x] - mesh.positions[tri.z],
+              p12 = mesh.positions[tri.y] - mesh.positions[tri.z];
+  const float det = d02.x * d12.y - d02.y * d12.x;
+  if (!(std::abs(det) > 1e-12f)) return;
+  const float inv = 1 / det;
+  Vec3f dpdu = transform.transformVector((p02 * d12.y - p12 * d02.y) * inv);
+  Vec3f dpdv = transform.transformVector((p12 * d02.x - p02 * d12.x) * inv);
+  if (!isFinite(dpdu) || !isFinite(dpdv)) return;
+  const Material& material = *s.material;
+  const Vec3f n = s.shadingNormal;
+  Vec3f bent = n;
+  if (material.bumpTexture != kNoTexture) {
+    // pbrt's Bump(): the surface displaced by d(u, v) along the shading
+    // normal; its partial derivatives by finite differences over half a
+    // texel (the slope of the bilinear lookup; pbrt steps by the ray
+    // differentials' footprint, which Ferry's paths do not carry).
+    const Texture& bump = scene.textures[material.bumpTexture];
+    const float du = bump.width > 0 ? 0.5f / float(bump.width) : 0.0005f;
+    const float dv = bump.height > 0 ? 0.5f / float(bump.height) : 0.0005f;
+    auto displacement = [&](Vec2f uv) {
+      return material.bumpScale * bump.evaluate(uv, s.position).x;
+    };
+    const float d = displacement(s.uv);
+    const float ddu = (displacement(s.uv + Vec2f{du, 0}) - d) / du;
+    const float ddv = (displacement(s.uv + Vec2f{0, dv}) - d) / dv;
+    bent = cross(dpdu + n * ddu, dpdv + n * ddv);
+    // The parametrization may be mirrored: keep the side of the normal.
+    if (dot(bent, n) < 0) bent = -bent;
+  } else {
+    // A tangent-space normal map (glTF): x along dp/du, y along dp/dv,
+    // both made orthogonal to the shading normal, the bitangent's sign
+    // following the uvs' handedness.
+    const Vec4f texel = scene.textures[material.normalTexture].sample(s.uv);
+    const Vec3f m{(2 * texel.x - 1) * material.normalScale,
+                  (2 * texel.y - 1) * material.normalScale, 2 * texel.z - 1};
+    const Vec3f t = dpdu - n * dot(n, dpdu);
+    if (!(length(t) > 0)) return;
+    const Vec3f tangent = normalize(t);
+    Vec3f bitangent = cross(n, tangent);
+    if (dot(bitangent, dpdv) < 0) bitangent = -bitangent;
+    bent = tangent * m.x + bitangent * m.y + n * m.z;
+  }
+  const float len = length(bent);
+  if (!(len > 0) || !std::isfinite(len)) return;
+  bent = bent * (1 / len);
+  // On the geometric normal's side, as every shading normal (the shading
+  // frame then keeps the viewer in front of it: path_shading.cpp).
+  if (dot(bent, s.geometricNormal) < 0) return;
+  s.shadingNormal = bent;
+}
+
 std::vector<Affine3f> instanceInverses(const Scene& scene) {
   std::vector<Affine3f> out;
   out.reserve(scene.instances.size());

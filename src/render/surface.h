@@ -53,6 +53,12 @@ struct SurfaceTable {
 };
 SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table, const TraceHit& hit);
 
+// Bends `s`'s shading normal by its material's bump map or normal map (in
+// the triangle's uv parametrization; nothing without uvs). Out of line: few
+// materials have one.
+void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
+                          const SurfaceTable::MeshArrays& mesh, const Vec3i& tri, SurfacePoint& s);
+
 // The hit triangle's corners in world space, each as Affine3f::transformPoint
 // places it (what the light sampler keys emitters by: LightSampler::emitterIndex).
 std::array<Vec3f, 3> worldCorners(const Scene& scene, const SurfaceTable& table,
@@ -99,6 +105,9 @@ inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, con
                    : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
   s.material = mesh.material;
   s.baseColor = s.material->baseColor;
+  if ((s.material->bumpTexture != kNoTexture || s.material->normalTexture != kNoTexture) &&
+      mesh.uvs)
+    perturbShadingNormal(scene, transform, mesh, tri, s);
   if (s.material->baseColorTexture != kNoTexture)
     s.baseColor *= scene.textures[s.material->baseColorTexture].evaluate(s.uv, s.position).xyz();
   return s;

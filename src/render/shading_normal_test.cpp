@@ -1,0 +1,123 @@
+// Bump maps and normal maps (render/surface.cpp, perturbShadingNormal), and
+// the shading frame's treatment of shading normals that turn away from the
+// viewer (path_shading.cpp, shadingFrame):
+//  - a bump map's slope tilts the normal by atan(slope), as pbrt's Bump();
+//  - a normal map's texel is read in the tangent frame of the uvs;
+//  - a plane with strongly tilted shading normals under a white sky is
+//    nowhere black and never brighter than its albedo (no blackening, no
+//    light leaking).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render/render_test_util.h"
+#include "render/surface.h"
+
+namespace ferry {
+namespace {
+
+using namespace ferry::testing;
+
+// A flat 8-bit linear texture of `width` x 1 texels from a function of u.
+template <typename F>
+Texture rampTexture(int width, F value) {
+  Texture t;
+  t.name = "ramp";
+  t.srgb = false;
+  t.width = width;
+  t.height = 1;
+  t.wrap = WrapMode::Clamp;
+  for (int x = 0; x < width; ++x) {
+    const Vec3f v = value((x + 0.5f) / float(width));
+    for (int k = 0; k < 3; ++k)
+      t.rgba.push_back(uint8_t(std::lround(std::clamp(v[k], 0.0f, 1.0f) * 255)));
+    t.rgba.push_back(255);
+  }
+  return t;
+}
+
+// A 4 x 4 square in the xz plane facing +y, u along +x and v along -z.
+Scene texturedSquare(Material material) {
+  Scene scene;
+  scene.name = "square";
+  const int32_t m = scene.addMaterial(material);
+  scene.addSingleInstanceMesh(makeQuad({-2, 0, 2}, {4, 0, 0}, {0, 0, -4}, m));
+  return scene;
+}
+
+SurfacePoint surfaceAtCentre(const Scene& scene) {
+  TraceHit hit;
+  hit.instance = 0;
+  hit.meshSlot = 0;
+  hit.primitive = 0;  // corners 0, 1, 2: barycentrics put the point at uv (0.75, 0.25)
+  hit.u = 0.5f;
+  hit.v = 0.25f;
+  return reconstructSurface(scene, hit);
+}
+
+TEST(ShadingNormals, ABumpRampTiltsTheNormalByItsSlope) {
+  // Displacement 0.8 * u over 4 units of x: slope 0.2 along +x, so the
+  // normal tilts towards -x by atan(0.2).
+  Scene scene;
+  Material material = diffuseMaterial(Vec3f(0.5f));
+  material.bumpScale = 0.8f;
+  material.bumpTexture = 0;
+  scene = texturedSquare(material);
+  scene.textures.push_back(rampTexture(256, [](float u) { return Vec3f(u); }));
+  const SurfacePoint s = surfaceAtCentre(scene);
+  EXPECT_NEAR(s.uv.x, 0.75f, 1e-5f);
+  EXPECT_EQ(s.geometricNormal, Vec3f(0, 1, 0));
+  const float expected = std::atan(0.2f);
+  EXPECT_NEAR(std::atan2(-s.shadingNormal.x, s.shadingNormal.y), expected, 0.01f);
+  EXPECT_NEAR(s.shadingNormal.z, 0, 1e-4f);
+}
+
+TEST(ShadingNormals, ANormalMapIsReadInTheUvTangentFrame) {
+  // Tangent-space (0.6, 0, 0.8): tilted towards +u (+x) by asin(0.6); then
+  // (0, 0.6, 0.8): towards +v, which is -z here.
+  for (const bool alongV : {false, true}) {
+    Material material = diffuseMaterial(Vec3f(0.5f));
+    material.normalTexture = 0;
+    Scene scene = texturedSquare(material);
+    const Vec3f n = alongV ? Vec3f(0, 0.6f, 0.8f) : Vec3f(0.6f, 0, 0.8f);
+    scene.textures.push_back(rampTexture(4, [&](float) { return (n + Vec3f(1)) * 0.5f; }));
+    const SurfacePoint s = surfaceAtCentre(scene);
+    const Vec3f expected = alongV ? Vec3f(0, 0.8f, -0.6f) : Vec3f(0.6f, 0.8f, 0);
+    EXPECT_NEAR(s.shadingNormal.x, expected.x, 0.01f) << alongV;
+    EXPECT_NEAR(s.shadingNormal.y, expected.y, 0.01f) << alongV;
+    EXPECT_NEAR(s.shadingNormal.z, expected.z, 0.01f) << alongV;
+  }
+}
+
+TEST(ShadingNormals, TiltedShadingNormalsNeitherBlackenNorLeak) {
+  // Shading normals tilted 70 degrees towards +x, seen from the +x side at a
+  // grazing angle (where most of them face away from the viewer), under a
+  // white sky, direct light only: every pixel lit, the mean at most the
+  // albedo (the most a Lambertian surface can reflect of a unit sky).
+  const float albedo = 0.5f;
+  Material material = diffuseMaterial(Vec3f(albedo));
+  material.normalTexture = 0;
+  Scene scene = texturedSquare(material);
+  const float tilt = 70 * kPi / 180;
+  const Vec3f n{-std::sin(tilt), 0, std::cos(tilt)};  // towards -u: away from the camera
+  scene.textures.push_back(rampTexture(4, [&](float) { return (n + Vec3f(1)) * 0.5f; }));
+  scene.environment.color = Vec3f(1);
+  CameraView view;
+  view.from = {4, 1.5f, 0};  // 20 degrees above the plane: every pixel sees it
+  view.at = {0, 0, 0};
+  view.fovY = 10;
+  scene.views.push_back(view);
+  RenderSettings settings;
+  settings.width = settings.height = 16;
+  settings.samplesPerPixel = 16;
+  settings.maxDepth = 1;
+  const PixelStatistics stats = renderStatistics(scene, settings, 8);
+  double mean, se;
+  stats.imageMean(0, mean, se);
+  for (const MeanVariance& pixel : stats.channel[0]) EXPECT_GT(pixel.mean, 0.01);
+  EXPECT_LE(mean, albedo + 4 * se + 1e-3);
+  EXPECT_GT(mean, 0.05);
+}
+
+}  // namespace
+}  // namespace ferry
