@@ -35,6 +35,7 @@ enum class RandomDim : uint32_t {
   BsdfV,
   Roulette,
   OwnerPick,
+  MaterialSelect,  // which material of a mix shades the vertex
   Count
 };
 

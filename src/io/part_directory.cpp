@@ -200,6 +200,7 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
     for (Material mat : part.scene.materials) {
       for (int32_t* t : mat.textureSlots())
         if (*t != kNoTexture) *t += textures;
+      if (mat.mixedWith >= 0) mat.mixedWith += materials;
       all.materials.push_back(std::move(mat));
     }
     for (Mesh& mesh : part.scene.meshes) {

@@ -34,7 +34,7 @@ static_assert(std::is_trivially_copyable_v<ProxyV1> && sizeof(ProxyV1) == 32);
 static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // The writers below list every field of these structs: when one gains a
 // field, these fail so that the part format (and kPartFormatVersion) follows.
-static_assert(sizeof(Material) == 136,
+static_assert(sizeof(Material) == 144,
               "Material changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Mesh) == 136, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 80,
@@ -154,6 +154,8 @@ void writeMaterial(FileWriter& w, const Material& m) {
   w.pod(m.bumpScale);
   w.pod(m.normalTexture);
   w.pod(m.normalScale);
+  w.pod(m.mixedWith);
+  w.pod(m.mixAmount);
 }
 
 void writeTexture(FileWriter& w, const Texture& t) {
@@ -191,7 +193,9 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
     if (objectIndex[o] == 0)
       for (int32_t m : scene.objects[o].meshes) meshIndex[m] = 0;
   for (size_t m = 0; m < scene.meshes.size(); ++m)
-    if (meshIndex[m] == 0) materialIndex[scene.meshes[m].material] = 0;
+    if (meshIndex[m] == 0)
+      scene.forEachShadingMaterial(scene.meshes[m].material,
+                                   [&](int32_t k) { materialIndex[size_t(k)] = 0; });
   for (size_t k = 0; k < scene.materials.size(); ++k)
     if (materialIndex[k] == 0) {
       for (int32_t t : scene.materials[k].textures())
@@ -216,6 +220,7 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
       Material mat = scene.materials[k];
       for (int32_t* t : mat.textureSlots())
         if (*t != kNoTexture) *t = textureIndex[*t];
+      if (mat.mixedWith >= 0) mat.mixedWith = materialIndex[size_t(mat.mixedWith)];
       writeMaterial(w, mat);
     }
   w.pod(uint64_t(meshes));
@@ -451,6 +456,8 @@ Material readMaterial(FileReader& r) {
     m.bumpScale = r.pod<float>();
     m.normalTexture = r.pod<int32_t>();
     m.normalScale = r.pod<float>();
+    m.mixedWith = r.pod<int32_t>();
+    m.mixAmount = r.pod<float>();
   }
   return m;
 }

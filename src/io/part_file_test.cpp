@@ -60,7 +60,9 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
          a.emission == b.emission && a.alphaCutoff == b.alphaCutoff &&
          a.emitsBackSide == b.emitsBackSide && a.specular == b.specular &&
          a.specularRoughness == b.specularRoughness && a.specularEta == b.specularEta &&
-         a.coat == b.coat && a.sigma == b.sigma &&
+         a.coat == b.coat && a.sigma == b.sigma && a.bumpScale == b.bumpScale &&
+         a.normalScale == b.normalScale && a.mixAmount == b.mixAmount &&
+         (a.mixedWith < 0) == (b.mixedWith < 0) &&
          sameTexture(a.baseColorTexture, b.baseColorTexture) &&
          sameTexture(a.alphaTexture, b.alphaTexture);
 }
@@ -124,6 +126,9 @@ Written writeDirectory(const std::string& dir, const std::string& partitioner, i
   marble.solid.variation = 0.25f;
   coated.baseColorTexture = int32_t(w.scene.textures.size());
   w.scene.textures.push_back(marble);
+  // Mixed with another material, which the part keeps with it.
+  coated.mixedWith = int32_t(w.scene.materials.size()) - 1;
+  coated.mixAmount = 0.3f;
   Scene lights = lightScene(w.scene);
   PartitionerOptions o;
   o.name = partitioner;

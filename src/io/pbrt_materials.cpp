@@ -63,25 +63,6 @@ bool isV3Material(const std::string& type) {
          type == "mirror";
 }
 
-Material blend(const Material& a, const Material& b, float wb) {
-  wb = std::clamp(wb, 0.0f, 1.0f);
-  const Material& heavy = wb > 0.5f ? b : a;
-  Material m = heavy;
-  auto mix = [&](float x, float y) { return x * (1 - wb) + y * wb; };
-  m.baseColor = lerp(a.baseColor, b.baseColor, wb);
-  // A texture of one side scales the other side's colour too; keep it only
-  // from the heavier side, as an approximation.
-  m.baseColorTexture = heavy.baseColorTexture;
-  m.roughness = mix(a.roughness, b.roughness);
-  m.metallic = mix(a.metallic, b.metallic);
-  m.transmission = mix(a.transmission, b.transmission);
-  m.ior = mix(a.ior, b.ior);
-  // A coat on one side only fades with its weight.
-  m.specular = lerp(a.specular, b.specular, wb);
-  m.sigma = mix(a.sigma, b.sigma);
-  return m;
-}
-
 }  // namespace
 
 struct PbrtMaterials::Impl {
@@ -97,6 +78,7 @@ struct PbrtMaterials::Impl {
   std::map<std::string, std::shared_ptr<const ImageData>> images;
   std::map<std::string, int32_t> bakedColor, bakedAlpha, solidTextures;
   std::map<std::string, std::pair<int32_t, float>> bakedBump;
+  std::map<int32_t, int32_t> mixTargets;  // definition -> its scene material
   std::map<std::string, float> averages;
   std::map<std::string, SampledSpectrum> spectrumFiles;
   std::map<int, int32_t> constantAlpha;
@@ -805,6 +787,16 @@ struct PbrtMaterials::Impl {
     for (const char* n : names) params.find(n);
   }
 
+  // Definition `id` as a scene material of its own (once), for a mix to
+  // switch to.
+  int32_t mixTarget(int32_t id, int depth) {
+    auto found = mixTargets.find(id);
+    if (found != mixTargets.end()) return found->second;
+    const int32_t index = scene.addMaterial(convert(id, depth).m);
+    mixTargets.emplace(id, index);
+    return index;
+  }
+
   Look convert(int32_t id, int depth) {
     if (id < 0) {
       Look look;
@@ -964,9 +956,15 @@ struct PbrtMaterials::Impl {
           throw InputError(def.where, fmt::format("mix material: no material named \"{}\"", name));
         return convert(it->second, depth + 1);
       };
-      Look a = sub(first), b = sub(second);
-      float wb = v4 ? amount : 1 - amount;  // v3's amount weighs the first material
-      m = blend(a.m, b.m, wb);
+      // A mix shades each point with one of the two (render/path_shading:
+      // the second with probability wb): pbrt-v4 picks one by a hash, and
+      // in expectation that is pbrt-v3's weighted sum of the two BSDFs.
+      const Look a = sub(first), b = sub(second);  // (both must exist)
+      // v3's amount weighs the first material, v4's the second.
+      const float wb = std::clamp(v4 ? amount : 1 - amount, 0.0f, 1.0f);
+      m = a.m;
+      m.mixedWith = mixTarget(named.at(second), depth + 1);
+      m.mixAmount = wb;
       look.alpha = wb > 0.5f ? b.alpha : a.alpha;
     } else if (type == "interface" || type == "none" || type.empty()) {
       look.alpha = alphaConstant(0);

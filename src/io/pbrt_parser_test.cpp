@@ -155,10 +155,15 @@ TEST_F(PbrtV3Features, Materials) {
   EXPECT_EQ(glass.transmission, 1);
   EXPECT_FLOAT_EQ(glass.ior, 1.33f);
   EXPECT_EQ(material(scene(), "leather").baseColor, Vec3f(0.5f));
-  // mix: v3's amount weighs the first material.
-  Vec3f mixed = material(scene(), "mixed").baseColor;
-  EXPECT_NEAR(mixed.x, 0.2f, 1e-6);
-  EXPECT_NEAR(mixed.y, 0.025f, 1e-6);
+  // mix: v3's amount weighs the first material: "red matte" shades with
+  // probability 0.25, "black" with 0.75 (its mean colour is the v3 blend).
+  const Material& mixed = material(scene(), "mixed");
+  EXPECT_EQ(mixed.baseColor, Vec3f(0.8f, 0.1f, 0.1f));
+  ASSERT_GE(mixed.mixedWith, 0);
+  EXPECT_FLOAT_EQ(mixed.mixAmount, 0.75f);
+  const Vec3f black = scene().materials.at(size_t(mixed.mixedWith)).baseColor;
+  EXPECT_NEAR(mixed.baseColor.x * 0.25f + black.x * 0.75f, 0.2f, 1e-6);
+  EXPECT_NEAR(mixed.baseColor.y * 0.25f + black.y * 0.75f, 0.025f, 1e-6);
   const Material& uber = material(scene(), "mirror-ish uber");
   EXPECT_EQ(uber.metallic, 1);
   EXPECT_FLOAT_EQ(uber.baseColor.x, 0.9f);
@@ -305,8 +310,12 @@ TEST_F(PbrtV4Features, Materials) {
   const Material& portal = material(scene(), "portal");
   ASSERT_NE(portal.alphaTexture, kNoTexture);
   EXPECT_EQ(scene().textures[size_t(portal.alphaTexture)].sampleAlpha({0.5f, 0.5f}), 0.0f);
+  // A mix shades with the second material with probability "amount" (v4).
   const Material& mostly = material(scene(), "mostly gold");
-  EXPECT_FLOAT_EQ(mostly.metallic, 0.75f);  // v4's amount weighs the second
+  EXPECT_EQ(mostly.coat, Material::Coat::Layered);  // the first: coateddiffuse
+  ASSERT_GE(mostly.mixedWith, 0);
+  EXPECT_FLOAT_EQ(mostly.mixAmount, 0.75f);
+  EXPECT_EQ(scene().materials.at(size_t(mostly.mixedWith)).metallic, 1);  // gold
   // v4's displacement texture bumps the shading normal.
   const Material& leafMaterial = material(scene(), "leaf");
   EXPECT_NE(leafMaterial.bumpTexture, kNoTexture);

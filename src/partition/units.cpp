@@ -32,8 +32,8 @@ UnitSet extractUnits(const Scene& scene, const UnitOptions& options) {
     std::vector<uint32_t>& r = objectResources[o];
     for (int32_t m : scene.objects[o].meshes) {
       r.push_back(uint32_t(m));
-      for (int32_t t : scene.materials[scene.meshes[m].material].textures())
-        if (t != kNoTexture) r.push_back(meshes + uint32_t(t));
+      scene.forEachShadingTexture(scene.meshes[m].material,
+                                  [&](int32_t t) { r.push_back(meshes + uint32_t(t)); });
     }
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());

@@ -106,10 +106,37 @@ template <typename Path>
   if (usable(l)) frameBuffer.add(vertex.pixel, l);
 }
 
+// A mix (Material::mixedWith): one material of the chain, chosen with `u`
+// (each link taken with its mixAmount, u stretched back to [0, 1) for the
+// next), its base colour evaluated where the surface is.
+template <typename Path>
+Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u) const {
+  const Material* material = surface.material;
+  for (size_t n = 0; material->mixedWith >= 0 && n < scene_.materials.size(); ++n) {
+    const float amount = material->mixAmount;
+    if (!(u < amount)) {
+      u = amount < 1 ? (u - amount) / (1 - amount) : 0;
+      break;
+    }
+    u = u / amount;
+    material = &scene_.materials[size_t(material->mixedWith)];
+  }
+  if (material == surface.material) return Bsdf::fromMaterial(*material, surface.baseColor);
+  Vec3f color = material->baseColor;
+  if (material->baseColorTexture != kNoTexture)
+    color *= scene_.textures[size_t(material->baseColorTexture)]
+                 .evaluate(surface.uv, surface.position)
+                 .xyz();
+  return Bsdf::fromMaterial(*material, color);
+}
+
 template <typename Path>
 [[gnu::always_inline]] inline VertexScattering PathShading<Path>::shadingFrame(
     const PathVertex& vertex, uint32_t sampleIndex) const {
-  const Bsdf bsdf = Bsdf::fromMaterial(*vertex.surface.material, vertex.surface.baseColor);
+  const RandomStream random(RandomKey{vertex.pixel, sampleIndex, vertex.bounce, seed_});
+  const Bsdf bsdf = vertex.surface.material->mixedWith < 0
+                        ? Bsdf::fromMaterial(*vertex.surface.material, vertex.surface.baseColor)
+                        : mixedBsdf(vertex.surface, random(RandomDim::MaterialSelect));
   Vec3f ng = vertex.surface.geometricNormal, ns = vertex.surface.shadingNormal;
   if (!bsdf.transmits()) {
     if (dot(ng, vertex.wo) < 0) {
@@ -129,8 +156,7 @@ template <typename Path>
     }
   }
   const Frame frame(ns);
-  return VertexScattering{bsdf, ng, frame, frame.toLocal(vertex.wo),
-                          RandomStream(RandomKey{vertex.pixel, sampleIndex, vertex.bounce, seed_})};
+  return VertexScattering{bsdf, ng, frame, frame.toLocal(vertex.wo), random};
 }
 
 // The continuation is written in place (no copy of a half-written path

@@ -153,6 +153,7 @@ class PathShading {
   inline void addEmission(const PathVertex& vertex, const TraceHit& hit,
                           FrameBuffer& frameBuffer) const;
   inline VertexScattering shadingFrame(const PathVertex& vertex, uint32_t sampleIndex) const;
+  Bsdf mixedBsdf(const SurfacePoint& surface, float u) const;
   inline bool sampleContinuation(const PathVertex& vertex, const VertexScattering& scattering,
                                  Path& continuation) const;
   inline bool survivesRoulette(const PathVertex& vertex, const VertexScattering& scattering,

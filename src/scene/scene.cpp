@@ -74,8 +74,7 @@ void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
     if (keepObject[o])
       for (int32_t m : objects[o].meshes) {
         keepMesh[m] = 1;
-        for (int32_t t : materials[meshes[m].material].textures())
-          if (t != kNoTexture) keepTexture[t] = 1;
+        forEachShadingTexture(meshes[m].material, [&](int32_t t) { keepTexture[size_t(t)] = 1; });
       }
   for (size_t m = 0; m < meshes.size(); ++m)
     if (!keepMesh[m]) {
@@ -98,11 +97,22 @@ void Scene::validate() const {
   };
   for (const Material& m : materials) {
     for (int32_t t : m.textures()) checkTexture(t, "material '" + m.name + "'");
+    if (m.mixedWith != -1 && (m.mixedWith < 0 || size_t(m.mixedWith) >= materials.size()))
+      fail(fmt::format("material '{}' mixes with material {} of {}", m.name, m.mixedWith,
+                       materials.size()));
+    if (!(m.mixAmount >= 0 && m.mixAmount <= 1))
+      fail(fmt::format("material '{}' has a mix amount {} outside [0, 1]", m.name, m.mixAmount));
     if (m.alphaTexture != kNoTexture && textures[m.alphaTexture].isSolid())
       fail(fmt::format("material '{}': a solid texture cannot be a cut-out", m.name));
     if (!isFinite(m.baseColor) || !isFinite(m.emission) || !std::isfinite(m.ior))
       fail(fmt::format("material '{}' has a non-finite parameter", m.name));
   }
+  for (const Material& m : materials) {
+    size_t steps = 0;
+    for (int32_t k = m.mixedWith; k >= 0; k = materials[size_t(k)].mixedWith)
+      if (++steps > materials.size()) fail(fmt::format("material '{}' mixes with itself", m.name));
+  }
+
   for (const Mesh& mesh : meshes) {
     if (mesh.material < 0 || size_t(mesh.material) >= materials.size())
       fail(fmt::format("mesh '{}' refers to material {} of {}", mesh.name, mesh.material,

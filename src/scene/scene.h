@@ -62,6 +62,12 @@ struct Material {
   float bumpScale = 1;
   int32_t normalTexture = kNoTexture;
   float normalScale = 1;
+  // pbrt's mix: at each shading point, materials[mixedWith] is used instead
+  // of this one with probability mixAmount, chosen by the vertex's random
+  // numbers (a pure function of the pixel sample, as pbrt-v4 picks one by a
+  // hash); -1: not a mix. Chains are allowed, cycles are not (validate).
+  int32_t mixedWith = -1;
+  float mixAmount = 0;
 
   bool isEmissive() const { return maxComponent(emission) > 0; }
   // Every texture index the material holds (kNoTexture where unused), for
@@ -166,6 +172,23 @@ struct Scene {
   // "multi-instance" content the partitioners treat as units).
   std::vector<uint32_t> instanceCountPerObject() const;
   // Checks indices, references and numbers; throws InputError naming the element.
+  // `material` and the materials it mixes with (Material::mixedWith), in
+  // chain order: every material shading may use where a mesh has `material`.
+  template <typename Visit>
+  void forEachShadingMaterial(int32_t material, Visit&& visit) const {
+    for (size_t n = 0; material >= 0 && n <= materials.size(); ++n) {
+      visit(material);
+      material = materials[size_t(material)].mixedWith;
+    }
+  }
+  // Every texture those materials read.
+  template <typename Visit>
+  void forEachShadingTexture(int32_t material, Visit&& visit) const {
+    forEachShadingMaterial(material, [&](int32_t m) {
+      for (int32_t t : materials[size_t(m)].textures())
+        if (t != kNoTexture) visit(t);
+    });
+  }
   void validate() const;
   // Mesh::reserveVertexSlack for every mesh (a copy only where a loader left none).
   void reserveVertexSlack();

@@ -52,8 +52,8 @@ MemoryCost ownedMemory(const Scene& scene, const std::vector<int32_t>& instances
   for (size_t m = 0; m < mesh.size(); ++m) {
     if (!mesh[m]) continue;
     cost += meshCost(scene.meshes[m]);
-    for (int32_t t : scene.materials[scene.meshes[m].material].textures())
-      if (t != kNoTexture) texture[t] = 1;
+    scene.forEachShadingTexture(scene.meshes[m].material,
+                                [&](int32_t t) { texture[size_t(t)] = 1; });
   }
   for (size_t t = 0; t < texture.size(); ++t)
     if (texture[t]) cost += textureCost(scene.textures[t]);
