@@ -391,6 +391,21 @@ struct PbrtMaterials::Impl {
               evalParam(t.params, "tex2", Vec3f(1), uv, f, depth)) *
              0.5f;
     }
+    if (c == "dots") {
+      // pbrt-v3's DotsTexture: in each unit cell a dot of radius 0.35 where
+      // the noise at the cell is positive, its centre moved by noise.
+      const Vec2f st = mappingOf(t).apply(uv);
+      const float s = std::floor(st.x + 0.5f), u = std::floor(st.y + 0.5f);
+      if (perlinNoise({s + 0.5f, u + 0.5f, 0.5f}) > 0) {
+        constexpr float kRadius = 0.35f, kMaxShift = 0.5f - kRadius;
+        const float sCenter = s + kMaxShift * perlinNoise({s + 1.5f, u + 2.8f, 0.5f});
+        const float uCenter = u + kMaxShift * perlinNoise({s + 4.5f, u + 9.8f, 0.5f});
+        const float ds = st.x - sCenter, du = st.y - uCenter;
+        if (ds * ds + du * du < kRadius * kRadius)
+          return evalParam(t.params, "inside", Vec3f(1), uv, f, depth);
+      }
+      return evalParam(t.params, "outside", Vec3f(0), uv, f, depth);
+    }
     if (c == "bilerp") {
       Vec2f st = mappingOf(t).apply(uv);
       float s = st.x - std::floor(st.x), u = st.y - std::floor(st.y);
@@ -417,7 +432,7 @@ struct PbrtMaterials::Impl {
       height = std::max(
           height, int(std::min<float>(kMaxBakeSide, img->height * std::max(1.0f, std::abs(m.sv)))));
     }
-    if (t.className == "checkerboard") {
+    if (t.className == "checkerboard" || t.className == "dots") {
       Mapping m = mappingOf(t);
       frequency = std::max({frequency, std::abs(m.su), std::abs(m.sv)});
     }

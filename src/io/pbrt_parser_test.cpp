@@ -620,6 +620,27 @@ TEST(PbrtParser, SolidTexturesAreEvaluatedInTheirSpace) {
   EXPECT_EQ(wrinkled.solid.octaves, 8);
 }
 
+TEST(PbrtParser, DotsAreBakedAsPbrtV3Draws) {
+  const Scene scene = fromText(
+      "WorldBegin\nTexture \"d\" \"color\" \"dots\" \"rgb inside\" [1 0 0] \"rgb outside\" [0 0 1] "
+      "\"float uscale\" 8 \"float vscale\" 8\nMaterial \"matte\" \"texture Kd\" \"d\"\nShape "
+      "\"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nWorldEnd\n");
+  const Material& m = scene.materials.at(size_t(scene.meshes.at(0).material));
+  ASSERT_NE(m.baseColorTexture, kNoTexture);
+  const Texture& t = scene.textures.at(size_t(m.baseColorTexture));
+  // Both colours appear, and dots (at most pi 0.35^2 = 38% of the area) are the minority.
+  int red = 0, blue = 0;
+  for (float v = 0.01f; v < 1; v += 0.02f)
+    for (float u = 0.01f; u < 1; u += 0.02f) {
+      const Vec4f c = t.sample({u, v});
+      red += c.x > 0.5f;
+      blue += c.z > 0.5f;
+    }
+  EXPECT_GT(red, 0);
+  EXPECT_GT(blue, red);
+  EXPECT_LT(red, 0.4 * (red + blue));
+}
+
 TEST(PbrtParser, BumpMapsAreBakedWithTheirRange) {
   const Scene scene = fromText(
       "WorldBegin\nTexture \"b\" \"float\" \"checkerboard\" \"float tex1\" 0.2 \"float tex2\" "
