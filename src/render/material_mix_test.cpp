@@ -16,17 +16,11 @@ using namespace ferry::testing;
 // expected value is the albedo the mix gives.
 double planeMean(Scene scene, int32_t material) {
   scene.addSingleInstanceMesh(makeQuad({-50, 0, 50}, {100, 0, 0}, {0, 0, -100}, material));
-  scene.environment.color = Vec3f(1);
   CameraView view;
   view.from = {0, 2, 1};
   view.at = {0, 0, 0};
   view.fovY = 30;
-  scene.views.push_back(view);
-  RenderSettings settings;
-  settings.width = settings.height = 16;
-  settings.samplesPerPixel = 16;
-  settings.maxDepth = 1;
-  const PixelStatistics stats = renderStatistics(scene, settings, 8);
+  const PixelStatistics stats = renderUnderWhiteSky(scene, view);
   double mean, se;
   stats.imageMean(1, mean, se);
   return mean;

@@ -294,4 +294,17 @@ inline PixelStatistics renderStatistics(Scene& scene, const RenderSettings& sett
   return stats;
 }
 
+// `scene` under a white sky (constant environment 1), seen by `view`, direct
+// light only (max depth 1), 16 x 16 pixels, 16 spp, 8 frames: a Lambertian
+// surface's expected pixel value is then its albedo.
+inline PixelStatistics renderUnderWhiteSky(Scene scene, const CameraView& view) {
+  scene.environment.color = Vec3f(1);
+  scene.views.push_back(view);
+  RenderSettings settings;
+  settings.width = settings.height = 16;
+  settings.samplesPerPixel = 16;
+  settings.maxDepth = 1;
+  return renderStatistics(scene, settings, 8);
+}
+
 }  // namespace ferry::testing

@@ -101,17 +101,11 @@ TEST(ShadingNormals, TiltedShadingNormalsNeitherBlackenNorLeak) {
   const float tilt = 70 * kPi / 180;
   const Vec3f n{-std::sin(tilt), 0, std::cos(tilt)};  // towards -u: away from the camera
   scene.textures.push_back(rampTexture(4, [&](float) { return (n + Vec3f(1)) * 0.5f; }));
-  scene.environment.color = Vec3f(1);
   CameraView view;
   view.from = {4, 1.5f, 0};  // 20 degrees above the plane: every pixel sees it
   view.at = {0, 0, 0};
   view.fovY = 10;
-  scene.views.push_back(view);
-  RenderSettings settings;
-  settings.width = settings.height = 16;
-  settings.samplesPerPixel = 16;
-  settings.maxDepth = 1;
-  const PixelStatistics stats = renderStatistics(scene, settings, 8);
+  const PixelStatistics stats = renderUnderWhiteSky(scene, view);
   double mean, se;
   stats.imageMean(0, mean, se);
   for (const MeanVariance& pixel : stats.channel[0]) EXPECT_GT(pixel.mean, 0.01);
