@@ -495,7 +495,8 @@ class GltfBuilder {
   Scene build() {
     scene_.name = fs::path(path_).stem().string();
     for (const std::string& ext : model_.extensionsUsed) {
-      static const std::set<std::string> known = {"KHR_lights_punctual", "EXT_mesh_gpu_instancing"};
+      static const std::set<std::string> known = {"KHR_lights_punctual", "EXT_mesh_gpu_instancing",
+                                                  "KHR_texture_transform"};
       if (!known.count(ext) && !kMaterialExtensions.count(ext))
         warnings_.once("ext|" + ext,
                        fmt::format("{}: extension {} is not supported and ignored", path_, ext));
@@ -544,6 +545,9 @@ class GltfBuilder {
  private:
   struct MaterialInfo {
     int32_t material = 0;
+    // The texture coordinates (set, KHR_texture_transform) the meshes using
+    // the material carry, and those the emissive texture is baked with.
+    GltfTextureRef meshUvs, emissionUvs;
     std::shared_ptr<const Texture> emissionTexture;  // sRGB; only while loading
     Vec3f emissionFactor{0};
     std::map<std::tuple<int, int, int>, int32_t> emitting;  // quantised colour -> material
@@ -699,27 +703,13 @@ class GltfBuilder {
       for (size_t i = 0; i < n; ++i)
         if (!isFinite(mesh.normals[i])) fail(fmt::format("{}: normal {} is not finite", name, i));
     }
-    const tinygltf::Material* material = nullptr;
-    if (prim.material >= 0) {
-      if (size_t(prim.material) >= model_.materials.size())
-        fail(fmt::format("{}: material {} does not exist ({} materials)", name, prim.material,
-                         model_.materials.size()));
-      material = &model_.materials[size_t(prim.material)];
-    }
-    int texCoordSet = 0;
-    if (material && material->pbrMetallicRoughness.baseColorTexture.index >= 0)
-      texCoordSet = material->pbrMetallicRoughness.baseColorTexture.texCoord;
-    if (int uv = attr(fmt::format("TEXCOORD_{}", texCoordSet).c_str()); uv >= 0) {
-      std::vector<float> v = accessors_.floats(uv, 2, "TEXCOORD");
-      if (v.size() / 2 != n)
-        fail(fmt::format("{}: {} texture coordinates for {} positions", name, v.size() / 2, n));
-      mesh.uvs.resize(n);
-      for (size_t i = 0; i < n; ++i) {
-        if (!std::isfinite(v[2 * i]) || !std::isfinite(v[2 * i + 1]))
-          fail(fmt::format("{}: texture coordinate {} is not finite", name, i));
-        mesh.uvs[i] = {v[2 * i], 1 - v[2 * i + 1]};
-      }
-    }
+    if (prim.material >= 0 && size_t(prim.material) >= model_.materials.size())
+      fail(fmt::format("{}: material {} does not exist ({} materials)", name, prim.material,
+                       model_.materials.size()));
+    // The material first: its textures say which uvs the mesh carries.
+    MaterialInfo& info = materialFor(prim.material);
+    mesh.material = info.material;
+    mesh.uvs = textureCoordinates(prim, info.meshUvs, n, name);
     std::vector<uint32_t> idx;
     if (prim.indices >= 0) {
       idx = accessors_.indices(prim.indices, "indices");
@@ -750,22 +740,47 @@ class GltfBuilder {
       float len = length(nn);
       nn = len > 0 ? nn / len : Vec3f(0, 0, 1);
     }
-    MaterialInfo& info = materialFor(prim.material);
-    mesh.material = info.material;
-    if (!info.emissionTexture || mesh.uvs.empty()) {
-      if (info.emissionTexture)
-        warnings_.once("emission uv", fmt::format("{}: {} has an emissive texture but no texture "
-                                                  "coordinates: uses the factor alone",
-                                                  path_, name));
+    if (!info.emissionTexture) return splitByEmission(std::move(mesh), info, {});
+    std::vector<Vec2f> ownUvs;  // when the emissive texture reads other uvs than the mesh keeps
+    if (!info.emissionUvs.sameUvsAs(info.meshUvs))
+      ownUvs = textureCoordinates(prim, info.emissionUvs, n, name);
+    const std::vector<Vec2f>& emissionUvs =
+        info.emissionUvs.sameUvsAs(info.meshUvs) ? mesh.uvs : ownUvs;
+    if (emissionUvs.empty()) {
+      warnings_.once("emission uv", fmt::format("{}: {} has an emissive texture but no texture "
+                                                "coordinates: uses the factor alone",
+                                                path_, name));
       return splitByEmission(std::move(mesh), info, {});
     }
-    std::vector<Vec3f> emission = emissionPerTriangle(mesh, info);
+    std::vector<Vec3f> emission = emissionPerTriangle(mesh, emissionUvs, info);
     return splitByEmission(std::move(mesh), info, emission);
+  }
+
+  // The primitive's TEXCOORD_<set> as `ref` reads it: its
+  // KHR_texture_transform applied (in glTF's uv space), then v flipped to
+  // Ferry's (v up the image). Empty when the primitive has no such set.
+  std::vector<Vec2f> textureCoordinates(const tinygltf::Primitive& prim, const GltfTextureRef& ref,
+                                        size_t vertices, const std::string& name) {
+    auto it = prim.attributes.find(fmt::format("TEXCOORD_{}", ref.texCoord));
+    if (it == prim.attributes.end()) return {};
+    std::vector<float> v = accessors_.floats(it->second, 2, "TEXCOORD");
+    if (v.size() / 2 != vertices)
+      fail(
+          fmt::format("{}: {} texture coordinates for {} positions", name, v.size() / 2, vertices));
+    std::vector<Vec2f> uvs(vertices);
+    for (size_t i = 0; i < vertices; ++i) {
+      if (!std::isfinite(v[2 * i]) || !std::isfinite(v[2 * i + 1]))
+        fail(fmt::format("{}: texture coordinate {} is not finite", name, i));
+      const Vec2f uv = ref.transform.apply({v[2 * i], v[2 * i + 1]});
+      uvs[i] = {uv.x, 1 - uv.y};
+    }
+    return uvs;
   }
 
   // ---------------------------------------------------------------- emission
 
-  std::vector<Vec3f> emissionPerTriangle(const Mesh& mesh, const MaterialInfo& info) {
+  std::vector<Vec3f> emissionPerTriangle(const Mesh& mesh, const std::vector<Vec2f>& uvs,
+                                         const MaterialInfo& info) {
     const Texture& t = *info.emissionTexture;
     std::vector<Vec3f> e(mesh.indices.size());
     static constexpr float kPoints[4][3] = {{1.f / 3, 1.f / 3, 1.f / 3},
@@ -776,8 +791,8 @@ class GltfBuilder {
       const Vec3i& tri = mesh.indices[i];
       Vec3f sum(0);
       for (const auto& w : kPoints) {
-        Vec2f uv = mesh.uvs[size_t(tri.x)] * w[0] + mesh.uvs[size_t(tri.y)] * w[1] +
-                   mesh.uvs[size_t(tri.z)] * w[2];
+        Vec2f uv =
+            uvs[size_t(tri.x)] * w[0] + uvs[size_t(tri.y)] * w[1] + uvs[size_t(tri.z)] * w[2];
         sum += t.sample(uv).xyz();
       }
       e[i] = sum * 0.25f * info.emissionFactor;
@@ -959,16 +974,34 @@ class GltfBuilder {
     return std::make_shared<Texture>(std::move(texture));
   }
 
-  // A core textureInfo (baseColorTexture, normalTexture, ...), checked; its
-  // extensions are ignored (warned).
+  // A core textureInfo (baseColorTexture, normalTexture, ...), checked, with
+  // its KHR_texture_transform; its other extensions are ignored (warned).
   template <typename Info>
   GltfTextureRef coreTexture(const GltfMaterialValues& values, const Info& info, const char* what,
                              const std::string& material) {
     for (const auto& [ext, v] : info.extensions)
-      warnings_.once("texinfo|" + ext,
-                     fmt::format("{}: texture extension {} ignored (first: material \"{}\")", path_,
-                                 ext, material));
+      if (ext != "KHR_texture_transform")
+        warnings_.once("texinfo|" + ext,
+                       fmt::format("{}: texture extension {} ignored (first: material \"{}\")",
+                                   path_, ext, material));
     return values.texture(info.index, info.texCoord, info.extensions_json_string, what);
+  }
+
+  // The uvs the mesh carries serve the textures looked up while rendering:
+  // the base colour's (and its alpha's), or the normal map's when there is
+  // no base colour texture. A normal map on other uvs uses them anyway.
+  GltfTextureRef meshUvsFor(const GltfTextureRef& baseColor, const GltfTextureRef& normal,
+                            const std::string& material) {
+    if (!baseColor.present()) return normal.present() ? normal : GltfTextureRef{};
+    if (normal.present() && !normal.sameUvsAs(baseColor))
+      warnings_.once(
+          "normal uvs",
+          fmt::format("{}: material \"{}\": normalTexture and baseColorTexture use "
+                      "other texture coordinates (set or KHR_texture_transform); Ferry's "
+                      "meshes have one: the normal map is looked up with the base "
+                      "colour's",
+                      path_, material));
+    return baseColor;
   }
 
   MaterialInfo& materialFor(int index) {
@@ -1037,6 +1070,7 @@ class GltfBuilder {
     if (emissiveRef.present() && maxComponent(emissive) > 0) {
       info.emissionTexture = temporaryTexture(emissiveRef.index, "emissive");
       info.emissionFactor = emissive;
+      info.emissionUvs = emissiveRef;
       if (!info.emissionTexture) m.emission = emissive;
     } else {
       m.emission = emissive;
@@ -1068,6 +1102,7 @@ class GltfBuilder {
         m.alphaTexture = int32_t(scene_.textures.size() - 1);
       }
     }
+    info.meshUvs = meshUvsFor(baseColorRef, normalRef, m.name);
     info.material = scene_.addMaterial(m);
     return materials_.emplace(index, info).first->second;
   }

@@ -32,7 +32,13 @@
 // with one material per quantised emission colour (at most 16 levels per
 // channel), the rest keep no emission. Occlusion maps and other extensions
 // are ignored with one warning each.
-// Texture coordinates: glTF's v runs down the image, Ferry's up; v -> 1 - v.
+// Texture coordinates: a mesh carries one uv set: the TEXCOORD_<n> of its
+// material's base colour texture (else of its normal map, else 0), with that
+// texture's KHR_texture_transform (offset, rotation, scale, texCoord)
+// applied; a normal map on another set or transform is looked up with
+// these (a warning). The emissive texture is baked with its own set and
+// transform. glTF's v runs down the image, Ferry's up: v -> 1 - v after the
+// transform.
 //
 // Lights (KHR_lights_punctual): directional -> sun (irradiance = colour *
 // intensity), point and spot -> small emitters (intensity = colour *

@@ -478,6 +478,98 @@ TEST(GltfMaterials, ClearcoatOnAMetalIsDropped) {
   EXPECT_TRUE(saidOnce(w, "a clear coat on a metallic material is dropped"));
 }
 
+// The quad's vertex i in Ferry's uvs: glTF's (u, v) at the corners are
+// (0, 1), (1, 1), (1, 0), (0, 0).
+Vec2f quadUv(const Scene& s, int vertex) {
+  return s.meshes.at(0).uvs.at(size_t(vertex));
+}
+
+void expectUv(Vec2f got, Vec2f want) {
+  EXPECT_NEAR(got.x, want.x, 1e-6f);
+  EXPECT_NEAR(got.y, want.y, 1e-6f);
+}
+
+TEST(GltfMaterials, TextureTransformIsBakedIntoTheUvs) {
+  QuadFile file;
+  int checker = file.texture(1, 1, {255, 255, 255, 255});
+  // The extension's own example: the lower-left quadrant of the image, turned.
+  Scene s = file.load(
+      {{{"name", "atlas"},
+        {"pbrMetallicRoughness",
+         {{"baseColorTexture",
+           {{"index", checker},
+            {"extensions",
+             {{"KHR_texture_transform",
+               {{"offset", {0, 1}}, {"rotation", 1.57079632679}, {"scale", {0.5, 0.5}}}}}}}}}}}});
+  // glTF (0, 1) -> (0.5, 1), (1, 1) -> (0.5, 0.5), (1, 0) -> (0, 0.5), (0, 0)
+  // -> (0, 1): u in [0, 0.5], v in [0.5, 1] (the lower left); Ferry's v = 1 - v.
+  expectUv(quadUv(s, 0), {0.5f, 0});
+  expectUv(quadUv(s, 1), {0.5f, 0.5f});
+  expectUv(quadUv(s, 2), {0, 0.5f});
+  expectUv(quadUv(s, 3), {0, 0});
+}
+
+TEST(GltfMaterials, TextureCoordinateSetsAreRead) {
+  QuadFile file;
+  int white = file.texture(1, 1, {255, 255, 255, 255});
+  // texCoord 1 (TEXCOORD_1: the set halved), on the textureInfo ...
+  nlohmann::json second = {{"index", white}, {"texCoord", 1}};
+  Scene s = file.load(
+      {{{"name", "second set"}, {"pbrMetallicRoughness", {{"baseColorTexture", second}}}}});
+  expectUv(quadUv(s, 1), {0.5f, 0.5f});
+  // ... or overridden by KHR_texture_transform's, with its offset.
+  nlohmann::json override = {
+      {"index", white},
+      {"extensions", {{"KHR_texture_transform", {{"texCoord", 1}, {"offset", {0.25, 0}}}}}}};
+  s = file.load(
+      {{{"name", "override"}, {"pbrMetallicRoughness", {{"baseColorTexture", override}}}}});
+  expectUv(quadUv(s, 1), {0.75f, 0.5f});
+}
+
+TEST(GltfMaterials, NormalMapOnOtherUvsUsesTheBaseColours) {
+  QuadFile file;
+  int white = file.texture(1, 1, {255, 255, 255, 255});
+  int flat = file.texture(1, 1, {128, 128, 255, 255});
+  std::vector<std::string> w;
+  Scene s = file.load(
+      {{{"name", "mixed"},
+        {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", white}}}}},
+        {"normalTexture",
+         {{"index", flat}, {"extensions", {{"KHR_texture_transform", {{"scale", {2, 2}}}}}}}}}},
+      &w);
+  expectUv(quadUv(s, 1), {1, 0});  // the base colour's: untransformed
+  EXPECT_TRUE(saidOnce(w, "normalTexture and baseColorTexture use other texture coordinates"))
+      << ::testing::PrintToString(w);
+  // Without a base colour texture, the normal map's transform is the mesh's.
+  s = file.load(
+      {{{"name", "bumpy"},
+        {"normalTexture",
+         {{"index", flat}, {"extensions", {{"KHR_texture_transform", {{"scale", {2, 2}}}}}}}}}});
+  expectUv(quadUv(s, 1), {2, -1});
+}
+
+TEST(GltfMaterials, EmissiveTextureIsBakedWithItsOwnTransform) {
+  QuadFile file;
+  // Left texel white, right black; clamped. A transform of scale 0 looks
+  // every point up at the offset: the white texel's centre, or the black one's.
+  int glow = file.texture(2, 1, {255, 255, 255, 255, 0, 0, 0, 255}, /*clamp=*/true);
+  auto emissive = [&](double u) {
+    return nlohmann::json::array(
+        {{{"name", "panel"},
+          {"emissiveFactor", {1, 1, 1}},
+          {"emissiveTexture",
+           {{"index", glow},
+            {"extensions",
+             {{"KHR_texture_transform", {{"offset", {u, 0.5}}, {"scale", {0, 0}}}}}}}}}});
+  };
+  Scene s = file.load(emissive(0.25));
+  ASSERT_EQ(s.meshes.size(), 1u);  // every triangle the same: one emitting mesh
+  EXPECT_NEAR(quadMaterial(s).emission.x, 1, 1e-6f);
+  expectUv(quadUv(s, 1), {1, 0});  // the mesh keeps its own uvs
+  s = file.load(emissive(0.75));
+  EXPECT_FALSE(quadMaterial(s).isEmissive());
+}
+
 TEST(GltfMaterials, EmissionIsOneSidedUnlessDoubleSided) {
   QuadFile file;
   for (bool doubleSided : {false, true}) {
@@ -551,6 +643,12 @@ nlohmann::json withExtension(const char* name, nlohmann::json value) {
   return {{"extensions", {{name, std::move(value)}}}};
 }
 
+nlohmann::json withTransform(nlohmann::json transform) {
+  return {{"pbrMetallicRoughness",
+           {{"baseColorTexture",
+             {{"index", 0}, {"extensions", {{"KHR_texture_transform", std::move(transform)}}}}}}}};
+}
+
 const std::vector<BadMaterial> kBadMaterials = {
     {"negative ior", withExtension("KHR_materials_ior", {{"ior", -1}}),
      "KHR_materials_ior ior is -1: must be 0 or at least 1"},
@@ -592,6 +690,15 @@ const std::vector<BadMaterial> kBadMaterials = {
     {"emissive strength negative",
      withExtension("KHR_materials_emissive_strength", {{"emissiveStrength", -2}}),
      "KHR_materials_emissive_strength emissiveStrength is -2: must be at least 0"},
+    {"transform scale of one", withTransform({{"scale", {1}}}),
+     "baseColorTexture KHR_texture_transform scale is [1], not an array of 2 numbers"},
+    {"transform rotation not a number", withTransform({{"rotation", "left"}}),
+     "baseColorTexture KHR_texture_transform rotation is \"left\", not a number"},
+    {"transform offset not finite", withTransform({{"offset", {0, -1e39}}}),
+     "baseColorTexture KHR_texture_transform offset is -1e+39: not a finite"},
+    {"transform texCoord negative", withTransform({{"texCoord", -1}}),
+     "baseColorTexture KHR_texture_transform texCoord is -1: must be at least 0"},
+    {"transform not an object", withTransform(5), "KHR_texture_transform is 5, not an object"},
     {"normal scale not finite",
      {{"normalTexture", {{"index", 0}, {"scale", 1e39}}}},
      "normalTexture scale is 1e+39: not a finite single-precision number"},
