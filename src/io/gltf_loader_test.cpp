@@ -192,6 +192,20 @@ const std::vector<BadGltf> kBadGltf = {
     {"truncated.glb", "truncated?"},
     {"bad_magic.glb", "not a .glb file"},
     {"lying_length.glb", "truncated?"},
+    {"bad_ior.gltf", "material \"lens\": KHR_materials_ior ior is -1.5: must be 0 or at least 1"},
+    {"bad_clearcoat.gltf",
+     "material \"paint\": KHR_materials_clearcoat clearcoatFactor is 2: must be in [0, 1]"},
+    {"bad_specular_type.gltf",
+     "material \"shiny\": KHR_materials_specular is [1,1,1], not an object"},
+    {"bad_transmission_texture.gltf",
+     "material \"frosted\": KHR_materials_transmission transmissionTexture uses texture 5, which "
+     "does not exist (1 textures)"},
+    {"bad_texture_transform.gltf",
+     "material \"atlas\": baseColorTexture KHR_texture_transform "
+     "scale is \"big\", not an array of 2 numbers"},
+    {"bad_overflowing_factor.gltf",
+     "material \"glass\": KHR_materials_transmission transmissionFactor is 1e+39: not a finite "
+     "single-precision number"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Corpus, GltfCorpusError, testing::ValuesIn(kBadGltf));
