@@ -94,9 +94,9 @@ int GltfMaterialValues::integer(const nlohmann::json& value, const std::string& 
   if (!value.is_number() || value.get<double>() != std::floor(value.get<double>()))
     fail(fmt::format("{} is {}, not an integer", what, shown(value)));
   const double v = value.get<double>();
-  if (v < min || v > std::numeric_limits<int>::max())
-    fail(fmt::format("{} is {}: must be {}", what, shown(value),
-                     rangeText(float(min), std::numeric_limits<float>::max())));
+  if (v < min) fail(fmt::format("{} is {}: must be at least {}", what, shown(value), min));
+  if (v > std::numeric_limits<int>::max())
+    fail(fmt::format("{} is {}: too large", what, shown(value)));
   return int(v);
 }
 
