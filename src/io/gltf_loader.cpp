@@ -1,11 +1,13 @@
 #include "io/gltf_loader.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -18,6 +20,8 @@
 #include "io/byte_stream.h"
 #include "io/default_lighting.h"
 #include "io/gltf_config.h"
+#include "io/gltf_material_values.h"
+#include "io/gltf_specular_layers.h"
 #include "io/image_io.h"
 #include "io/light_emitters.h"
 
@@ -33,6 +37,10 @@ constexpr const char* kGlbBinaryMarker = "ferry-glb-binary-chunk.bin";
 constexpr uint64_t kMaxImagePixels = uint64_t(1) << 28;
 constexpr uint64_t kMaxJsonBytes = uint64_t(1) << 30;
 constexpr int kEmissionLevels = 15;
+// Material extensions Ferry reads (the others are ignored with a warning).
+const std::set<std::string> kMaterialExtensions = {
+    "KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior",
+    "KHR_materials_specular", "KHR_materials_clearcoat"};
 
 std::string urlDecode(const std::string& s) {
   std::string out;
@@ -236,6 +244,9 @@ tinygltf::Model parseModel(const std::string& path, const LoadOptions& options) 
   tinygltf::TinyGLTF loader;
   loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile, &access});
   loader.SetImageLoader(&keepEncodedImage, nullptr);
+  // Material and texture-reference extensions are read from their JSON
+  // (io/gltf_material_values.h says why).
+  loader.SetStoreOriginalJSONForExtrasAndExtensions(true);
   tinygltf::Model model;
   std::string err, warn;
   bool ok;
@@ -484,10 +495,9 @@ class GltfBuilder {
   Scene build() {
     scene_.name = fs::path(path_).stem().string();
     for (const std::string& ext : model_.extensionsUsed) {
-      static const std::set<std::string> known = {
-          "KHR_materials_emissive_strength", "KHR_lights_punctual", "EXT_mesh_gpu_instancing",
-          "KHR_materials_transmission", "KHR_materials_ior"};
-      if (!known.count(ext))
+      static const std::set<std::string> known = {"KHR_lights_punctual", "EXT_mesh_gpu_instancing",
+                                                  "KHR_texture_transform"};
+      if (!known.count(ext) && !kMaterialExtensions.count(ext))
         warnings_.once("ext|" + ext,
                        fmt::format("{}: extension {} is not supported and ignored", path_, ext));
     }
@@ -535,6 +545,9 @@ class GltfBuilder {
  private:
   struct MaterialInfo {
     int32_t material = 0;
+    // The texture coordinates (set, KHR_texture_transform) the meshes using
+    // the material carry, and those the emissive texture is baked with.
+    GltfTextureRef meshUvs, emissionUvs;
     std::shared_ptr<const Texture> emissionTexture;  // sRGB; only while loading
     Vec3f emissionFactor{0};
     std::map<std::tuple<int, int, int>, int32_t> emitting;  // quantised colour -> material
@@ -690,27 +703,13 @@ class GltfBuilder {
       for (size_t i = 0; i < n; ++i)
         if (!isFinite(mesh.normals[i])) fail(fmt::format("{}: normal {} is not finite", name, i));
     }
-    const tinygltf::Material* material = nullptr;
-    if (prim.material >= 0) {
-      if (size_t(prim.material) >= model_.materials.size())
-        fail(fmt::format("{}: material {} does not exist ({} materials)", name, prim.material,
-                         model_.materials.size()));
-      material = &model_.materials[size_t(prim.material)];
-    }
-    int texCoordSet = 0;
-    if (material && material->pbrMetallicRoughness.baseColorTexture.index >= 0)
-      texCoordSet = material->pbrMetallicRoughness.baseColorTexture.texCoord;
-    if (int uv = attr(fmt::format("TEXCOORD_{}", texCoordSet).c_str()); uv >= 0) {
-      std::vector<float> v = accessors_.floats(uv, 2, "TEXCOORD");
-      if (v.size() / 2 != n)
-        fail(fmt::format("{}: {} texture coordinates for {} positions", name, v.size() / 2, n));
-      mesh.uvs.resize(n);
-      for (size_t i = 0; i < n; ++i) {
-        if (!std::isfinite(v[2 * i]) || !std::isfinite(v[2 * i + 1]))
-          fail(fmt::format("{}: texture coordinate {} is not finite", name, i));
-        mesh.uvs[i] = {v[2 * i], 1 - v[2 * i + 1]};
-      }
-    }
+    if (prim.material >= 0 && size_t(prim.material) >= model_.materials.size())
+      fail(fmt::format("{}: material {} does not exist ({} materials)", name, prim.material,
+                       model_.materials.size()));
+    // The material first: its textures say which uvs the mesh carries.
+    MaterialInfo& info = materialFor(prim.material);
+    mesh.material = info.material;
+    mesh.uvs = textureCoordinates(prim, info.meshUvs, n, name);
     std::vector<uint32_t> idx;
     if (prim.indices >= 0) {
       idx = accessors_.indices(prim.indices, "indices");
@@ -741,22 +740,47 @@ class GltfBuilder {
       float len = length(nn);
       nn = len > 0 ? nn / len : Vec3f(0, 0, 1);
     }
-    MaterialInfo& info = materialFor(prim.material);
-    mesh.material = info.material;
-    if (!info.emissionTexture || mesh.uvs.empty()) {
-      if (info.emissionTexture)
-        warnings_.once("emission uv", fmt::format("{}: {} has an emissive texture but no texture "
-                                                  "coordinates: uses the factor alone",
-                                                  path_, name));
+    if (!info.emissionTexture) return splitByEmission(std::move(mesh), info, {});
+    std::vector<Vec2f> ownUvs;  // when the emissive texture reads other uvs than the mesh keeps
+    if (!info.emissionUvs.sameUvsAs(info.meshUvs))
+      ownUvs = textureCoordinates(prim, info.emissionUvs, n, name);
+    const std::vector<Vec2f>& emissionUvs =
+        info.emissionUvs.sameUvsAs(info.meshUvs) ? mesh.uvs : ownUvs;
+    if (emissionUvs.empty()) {
+      warnings_.once("emission uv", fmt::format("{}: {} has an emissive texture but no texture "
+                                                "coordinates: uses the factor alone",
+                                                path_, name));
       return splitByEmission(std::move(mesh), info, {});
     }
-    std::vector<Vec3f> emission = emissionPerTriangle(mesh, info);
+    std::vector<Vec3f> emission = emissionPerTriangle(mesh, emissionUvs, info);
     return splitByEmission(std::move(mesh), info, emission);
+  }
+
+  // The primitive's TEXCOORD_<set> as `ref` reads it: its
+  // KHR_texture_transform applied (in glTF's uv space), then v flipped to
+  // Ferry's (v up the image). Empty when the primitive has no such set.
+  std::vector<Vec2f> textureCoordinates(const tinygltf::Primitive& prim, const GltfTextureRef& ref,
+                                        size_t vertices, const std::string& name) {
+    auto it = prim.attributes.find(fmt::format("TEXCOORD_{}", ref.texCoord));
+    if (it == prim.attributes.end()) return {};
+    std::vector<float> v = accessors_.floats(it->second, 2, "TEXCOORD");
+    if (v.size() / 2 != vertices)
+      fail(
+          fmt::format("{}: {} texture coordinates for {} positions", name, v.size() / 2, vertices));
+    std::vector<Vec2f> uvs(vertices);
+    for (size_t i = 0; i < vertices; ++i) {
+      if (!std::isfinite(v[2 * i]) || !std::isfinite(v[2 * i + 1]))
+        fail(fmt::format("{}: texture coordinate {} is not finite", name, i));
+      const Vec2f uv = ref.transform.apply({v[2 * i], v[2 * i + 1]});
+      uvs[i] = {uv.x, 1 - uv.y};
+    }
+    return uvs;
   }
 
   // ---------------------------------------------------------------- emission
 
-  std::vector<Vec3f> emissionPerTriangle(const Mesh& mesh, const MaterialInfo& info) {
+  std::vector<Vec3f> emissionPerTriangle(const Mesh& mesh, const std::vector<Vec2f>& uvs,
+                                         const MaterialInfo& info) {
     const Texture& t = *info.emissionTexture;
     std::vector<Vec3f> e(mesh.indices.size());
     static constexpr float kPoints[4][3] = {{1.f / 3, 1.f / 3, 1.f / 3},
@@ -767,8 +791,8 @@ class GltfBuilder {
       const Vec3i& tri = mesh.indices[i];
       Vec3f sum(0);
       for (const auto& w : kPoints) {
-        Vec2f uv = mesh.uvs[size_t(tri.x)] * w[0] + mesh.uvs[size_t(tri.y)] * w[1] +
-                   mesh.uvs[size_t(tri.z)] * w[2];
+        Vec2f uv =
+            uvs[size_t(tri.x)] * w[0] + uvs[size_t(tri.y)] * w[1] + uvs[size_t(tri.z)] * w[2];
         sum += t.sample(uv).xyz();
       }
       e[i] = sum * 0.25f * info.emissionFactor;
@@ -837,17 +861,6 @@ class GltfBuilder {
 
   // --------------------------------------------------------------- materials
 
-  const tinygltf::Value* extension(const tinygltf::ExtensionMap& map, const char* name) {
-    auto it = map.find(name);
-    return it == map.end() || !it->second.IsObject() ? nullptr : &it->second;
-  }
-
-  static float number(const tinygltf::Value& obj, const char* key, float fallback) {
-    if (!obj.Has(key)) return fallback;
-    const tinygltf::Value& v = obj.Get(key);
-    return v.IsNumber() || v.IsInt() ? float(v.GetNumberAsDouble()) : fallback;
-  }
-
   WrapMode wrapOf(int textureIndex) {
     const tinygltf::Texture& t = model_.textures[size_t(textureIndex)];
     if (t.sampler < 0 || size_t(t.sampler) >= model_.samplers.size()) return WrapMode::Repeat;
@@ -858,6 +871,7 @@ class GltfBuilder {
   }
 
   // Texture `index` as a scene texture (cached), or kNoTexture with a warning.
+  // `srgb` false: the texels are data (a normal map) and stay as they are.
   int32_t textureFor(int index, const std::string& use, bool srgb) {
     if (index < 0) return kNoTexture;
     auto key = std::make_pair(index, srgb);
@@ -882,6 +896,33 @@ class GltfBuilder {
     std::shared_ptr<const Texture> texture = decodeTexture(index, use);
     temporary_.emplace(index, texture);
     return texture;
+  }
+
+  // The mean of a texture that scales a parameter Ferry does not texture
+  // (metallic, roughness, transmission, the specular and clear-coat
+  // factors): RGBA in [0, 1], the colour channels decoded from sRGB when
+  // `srgb`. Over the whole image: a KHR_texture_transform does not change
+  // it. Without a texture, or one that cannot be read (warned): all 1.
+  Vec4f meanOf(const GltfTextureRef& ref, const std::string& use, bool srgb,
+               const std::string& material) {
+    if (!ref.present()) return Vec4f{1, 1, 1, 1};
+    std::shared_ptr<const Texture> texture = temporaryTexture(ref.index, use);
+    if (!texture || texture->texelCount() == 0) return Vec4f{1, 1, 1, 1};
+    warnings_.once("averaged|" + use,
+                   fmt::format("{}: {} textures are averaged (Ferry does not texture the "
+                               "parameter they scale; first: material \"{}\")",
+                               path_, use, material));
+    std::array<double, 256> decode;
+    for (int i = 0; i < 256; ++i) decode[size_t(i)] = srgb ? srgbToLinear(i / 255.0f) : i / 255.0;
+    double sum[4] = {0, 0, 0, 0};
+    const size_t texels = texture->texelCount();
+    for (size_t i = 0; i < texels; ++i)
+      for (int c = 0; c < 4; ++c) {
+        const uint8_t v = texture->rgba[4 * i + size_t(c)];
+        sum[c] += c < 3 ? decode[v] : v / 255.0;
+      }
+    return {float(sum[0] / double(texels)), float(sum[1] / double(texels)),
+            float(sum[2] / double(texels)), float(sum[3] / double(texels))};
   }
 
   std::shared_ptr<Texture> decodeTexture(int index, const std::string& use) {
@@ -933,85 +974,108 @@ class GltfBuilder {
     return std::make_shared<Texture>(std::move(texture));
   }
 
+  // A core textureInfo (baseColorTexture, normalTexture, ...), checked, with
+  // its KHR_texture_transform; its other extensions are ignored (warned).
+  template <typename Info>
+  GltfTextureRef coreTexture(const GltfMaterialValues& values, const Info& info, const char* what,
+                             const std::string& material) {
+    for (const auto& [ext, v] : info.extensions)
+      if (ext != "KHR_texture_transform")
+        warnings_.once("texinfo|" + ext,
+                       fmt::format("{}: texture extension {} ignored (first: material \"{}\")",
+                                   path_, ext, material));
+    return values.texture(info.index, info.texCoord, info.extensions_json_string, what);
+  }
+
+  // The uvs the mesh carries serve the textures looked up while rendering:
+  // the base colour's (and its alpha's), or the normal map's when there is
+  // no base colour texture. A normal map on other uvs uses them anyway.
+  GltfTextureRef meshUvsFor(const GltfTextureRef& baseColor, const GltfTextureRef& normal,
+                            const std::string& material) {
+    if (!baseColor.present()) return normal.present() ? normal : GltfTextureRef{};
+    if (normal.present() && !normal.sameUvsAs(baseColor))
+      warnings_.once(
+          "normal uvs",
+          fmt::format("{}: material \"{}\": normalTexture and baseColorTexture use "
+                      "other texture coordinates (set or KHR_texture_transform); Ferry's "
+                      "meshes have one: the normal map is looked up with the base "
+                      "colour's",
+                      path_, material));
+    return baseColor;
+  }
+
   MaterialInfo& materialFor(int index) {
     auto it = materials_.find(index);
     if (it != materials_.end()) return it->second;
     MaterialInfo info;
     Material m;
-    m.name = "default";
-    m.baseColor = Vec3f(1);
-    m.roughness = 1;
-    m.metallic = 1;
     if (index < 0) {
       // glTF's default material: white, metallic 1, roughness 1. A white
       // rough metal is a poor grey; use a grey diffuse, as viewers do.
+      m.name = "default";
       m.baseColor = Vec3f(0.8f);
+      m.roughness = 1;
       m.metallic = 0;
       info.material = scene_.addMaterial(m);
       return materials_.emplace(index, info).first->second;
     }
     const tinygltf::Material& g = model_.materials[size_t(index)];
     m.name = g.name.empty() ? fmt::format("material{}", index) : g.name;
+    const GltfMaterialValues values(fmt::format("{}: material \"{}\"", path_, m.name),
+                                    model_.textures.size());
+    const nlohmann::json extensions = values.parseExtensions(g.extensions_json_string, "material");
+    for (const auto& [ext, v] : extensions.items())
+      if (!kMaterialExtensions.count(ext))
+        warnings_.once("matext|" + ext,
+                       fmt::format("{}: material extension {} ignored", path_, ext));
+
     const auto& pbr = g.pbrMetallicRoughness;
+    const GltfTextureRef baseColorRef =
+        coreTexture(values, pbr.baseColorTexture, "baseColorTexture", m.name);
+    const GltfTextureRef metallicRoughnessRef =
+        coreTexture(values, pbr.metallicRoughnessTexture, "metallicRoughnessTexture", m.name);
+    const GltfTextureRef normalRef = coreTexture(values, g.normalTexture, "normalTexture", m.name);
+    const GltfTextureRef emissiveRef =
+        coreTexture(values, g.emissiveTexture, "emissiveTexture", m.name);
+    coreTexture(values, g.occlusionTexture, "occlusionTexture", m.name);
+
     Vec3f base = colorOf(pbr.baseColorFactor, Vec3f(1));
     float alphaFactor = pbr.baseColorFactor.size() == 4 ? float(pbr.baseColorFactor[3]) : 1.0f;
     m.baseColor = min(max(base, Vec3f(0)), Vec3f(1));
-    m.baseColorTexture = textureFor(pbr.baseColorTexture.index, "baseColor", true);
-    for (const auto* info : {&pbr.baseColorTexture, &g.emissiveTexture})
-      for (const auto& [ext, v] : info->extensions)
-        warnings_.once("texinfo|" + ext, fmt::format("{}: texture extension {} ignored (first: "
-                                                     "material \"{}\")",
-                                                     path_, ext, m.name));
+    m.baseColorTexture = textureFor(baseColorRef.index, "baseColor", true);
     m.metallic = std::clamp(float(pbr.metallicFactor), 0.0f, 1.0f);
     m.roughness = std::clamp(float(pbr.roughnessFactor), 0.0f, 1.0f);
-    if (pbr.metallicRoughnessTexture.index >= 0) {
-      auto mr = temporaryTexture(pbr.metallicRoughnessTexture.index, "metallicRoughness");
-      if (mr) {
-        const Texture& tex = *mr;
-        double g = 0, b = 0;
-        size_t texels = tex.texelCount();
-        for (size_t i = 0; i < texels; ++i) {
-          g += tex.rgba[4 * i + 1];
-          b += tex.rgba[4 * i + 2];
-        }
-        if (texels > 0) {
-          m.roughness *= float(g / texels / 255.0);
-          m.metallic *= float(b / texels / 255.0);
-        }
-        warnings_.once("mr texture",
-                       fmt::format("{}: metallicRoughness textures are averaged "
-                                   "(Ferry's metallic and roughness are not textured; "
-                                   "first: material \"{}\")",
-                                   path_, m.name));
-      }
-    }
-    if (g.normalTexture.index >= 0 || g.occlusionTexture.index >= 0)
-      warnings_.once("normal ao",
-                     fmt::format("{}: normal and occlusion textures are ignored", path_));
-    if (const tinygltf::Value* tr = extension(g.extensions, "KHR_materials_transmission")) {
-      m.transmission = std::clamp(number(*tr, "transmissionFactor", 0), 0.0f, 1.0f);
-      if (tr->Has("transmissionTexture"))
-        warnings_.once("transmission texture",
-                       fmt::format("{}: transmission textures are ignored", path_));
-    }
-    if (const tinygltf::Value* ior = extension(g.extensions, "KHR_materials_ior"))
-      m.ior = std::max(number(*ior, "ior", 1.5f), 1.0f);
+    const Vec4f metallicRoughness =
+        meanOf(metallicRoughnessRef, "metallicRoughness", false, m.name);
+    m.roughness *= metallicRoughness.y;
+    m.metallic *= metallicRoughness.z;
+
+    readTransmission(values, extensions, m);
+    const float ior = readIor(values, extensions, m);
+    readSpecularLayers(values, extensions, ior, m);
+    readNormalMap(values, g.normalTexture, normalRef, m);
+    if (g.occlusionTexture.index >= 0)
+      warnings_.once("occlusion", fmt::format("{}: occlusion textures are ignored (a path tracer "
+                                              "traces the occlusion they approximate)",
+                                              path_));
+
+    // Emission. glTF culls the back faces of single-sided materials, so an
+    // emitter is seen, and lights, only from its front (the side its
+    // counter-clockwise winding faces), unless it is double-sided.
+    m.emitsBackSide = g.doubleSided;
     float strength = 1;
-    if (const tinygltf::Value* es = extension(g.extensions, "KHR_materials_emissive_strength"))
-      strength = std::max(number(*es, "emissiveStrength", 1), 0.0f);
+    if (const nlohmann::json* e = values.extension(extensions, "KHR_materials_emissive_strength"))
+      strength = values.number(*e, "KHR_materials_emissive_strength", "emissiveStrength", 1, 0);
     Vec3f emissive = max(colorOf(g.emissiveFactor, Vec3f(0)), Vec3f(0)) * strength;
-    if (g.emissiveTexture.index >= 0 && maxComponent(emissive) > 0) {
-      info.emissionTexture = temporaryTexture(g.emissiveTexture.index, "emissive");
+    if (emissiveRef.present() && maxComponent(emissive) > 0) {
+      info.emissionTexture = temporaryTexture(emissiveRef.index, "emissive");
       info.emissionFactor = emissive;
+      info.emissionUvs = emissiveRef;
       if (!info.emissionTexture) m.emission = emissive;
     } else {
       m.emission = emissive;
     }
-    for (const auto& [ext, v] : g.extensions)
-      if (ext != "KHR_materials_transmission" && ext != "KHR_materials_ior" &&
-          ext != "KHR_materials_emissive_strength")
-        warnings_.once("matext|" + ext,
-                       fmt::format("{}: material extension {} ignored", path_, ext));
+
     if (g.alphaMode == "MASK" || g.alphaMode == "BLEND") {
       m.alphaCutoff = g.alphaMode == "MASK" ? float(g.alphaCutoff) : 0.5f;
       if (g.alphaMode == "BLEND")
@@ -1038,8 +1102,105 @@ class GltfBuilder {
         m.alphaTexture = int32_t(scene_.textures.size() - 1);
       }
     }
+    info.meshUvs = meshUvsFor(baseColorRef, normalRef, m.name);
     info.material = scene_.addMaterial(m);
     return materials_.emplace(index, info).first->second;
+  }
+
+  // KHR_materials_transmission: the factor times the mean of the texture's
+  // red channel. Ferry's dielectric takes over at 0.5 (render/bsdf.h).
+  void readTransmission(const GltfMaterialValues& values, const nlohmann::json& extensions,
+                        Material& m) {
+    const char* what = "KHR_materials_transmission";
+    const nlohmann::json* e = values.extension(extensions, what);
+    if (!e) return;
+    m.transmission = values.number(*e, what, "transmissionFactor", 0, 0, 1);
+    m.transmission *=
+        meanOf(values.texture(*e, what, "transmissionTexture"), "transmission", false, m.name).x;
+  }
+
+  // KHR_materials_ior: 0 or at least 1. The ior refracts (transmission) and
+  // sets the specular layer's Fresnel term. 0 is the spec's legacy value
+  // (F0 = 1, the specular colour is the reflectance): it has no refraction,
+  // so a transmitting material keeps 1.5.
+  float readIor(const GltfMaterialValues& values, const nlohmann::json& extensions, Material& m) {
+    const char* what = "KHR_materials_ior";
+    const nlohmann::json* e = values.extension(extensions, what);
+    if (!e) return 1.5f;
+    const float ior = values.number(*e, what, "ior", 1.5f);
+    if (!(ior == 0 || ior >= 1))
+      values.fail(fmt::format("{} ior is {}: must be 0 or at least 1", what, ior));
+    if (ior >= 1) m.ior = ior;
+    return ior;
+  }
+
+  // The dielectric specular layer glTF puts over every non-metallic base
+  // (KHR_materials_ior, KHR_materials_specular) and KHR_materials_clearcoat,
+  // as Ferry's layered coat (io/gltf_specular_layers.h says how). Metals
+  // stay conductors, which have no coat: a clear coat on one is dropped.
+  void readSpecularLayers(const GltfMaterialValues& values, const nlohmann::json& extensions,
+                          float ior, Material& m) {
+    GltfSpecularLayers layers;
+    layers.ior = ior;
+    layers.roughness = m.roughness;
+    if (const nlohmann::json* e = values.extension(extensions, "KHR_materials_specular")) {
+      const char* what = "KHR_materials_specular";
+      layers.specularFactor = values.number(*e, what, "specularFactor", 1, 0, 1);
+      layers.specularFactor *=
+          meanOf(values.texture(*e, what, "specularTexture"), "specular", false, m.name).w;
+      // The colour may exceed 1: F0 = min(F0(ior) * colour, 1).
+      const Vec3f color = values.color(*e, what, "specularColorFactor", Vec3f(1), 0,
+                                       std::numeric_limits<float>::max());
+      layers.specularColor = color * meanOf(values.texture(*e, what, "specularColorTexture"),
+                                            "specularColor", true, m.name)
+                                         .xyz();
+    }
+    if (const nlohmann::json* e = values.extension(extensions, "KHR_materials_clearcoat")) {
+      const char* what = "KHR_materials_clearcoat";
+      layers.clearcoat = values.number(*e, what, "clearcoatFactor", 0, 0, 1);
+      layers.clearcoat *=
+          meanOf(values.texture(*e, what, "clearcoatTexture"), "clearcoat", false, m.name).x;
+      layers.clearcoatRoughness = values.number(*e, what, "clearcoatRoughnessFactor", 0, 0, 1);
+      layers.clearcoatRoughness *= meanOf(values.texture(*e, what, "clearcoatRoughnessTexture"),
+                                          "clearcoatRoughness", false, m.name)
+                                       .y;
+      if (values.texture(*e, what, "clearcoatNormalTexture").present())
+        warnings_.once("clearcoat normal",
+                       fmt::format("{}: clearcoatNormalTexture is ignored (Ferry's coat uses the "
+                                   "material's normal; first: material \"{}\")",
+                                   path_, m.name));
+    }
+    if (m.metallic >= 0.5f) {
+      if (layers.clearcoat > 0)
+        warnings_.once("clearcoat metal",
+                       fmt::format("{}: a clear coat on a metallic material is dropped (Ferry's "
+                                   "conductor has no coat; first: material \"{}\")",
+                                   path_, m.name));
+      return;
+    }
+    if (layers.clearcoat > 0)
+      warnings_.once("clearcoat",
+                     fmt::format("{}: KHR_materials_clearcoat: Ferry has one coat, the clear coat "
+                                 "and the specular layer under it mixed by clearcoatFactor "
+                                 "(first: material \"{}\")",
+                                 path_, m.name));
+    const FerryCoat coat = ferryCoatOf(layers);
+    m.coat = Material::Coat::Layered;
+    m.specular = coat.tint;
+    m.specularRoughness = coat.roughness;
+    m.specularEta = coat.eta;
+  }
+
+  // normalTexture: a tangent-space normal map, its texels kept as they are
+  // (linear data, not sRGB colour).
+  void readNormalMap(const GltfMaterialValues& values, const tinygltf::NormalTextureInfo& info,
+                     const GltfTextureRef& ref, Material& m) {
+    if (!ref.present()) return;
+    if (!std::isfinite(float(info.scale)))
+      values.fail(fmt::format("normalTexture scale is {}: not a finite single-precision number",
+                              info.scale));
+    m.normalTexture = textureFor(ref.index, "normal", false);
+    m.normalScale = float(info.scale);
   }
 
   // ------------------------------------------------------- cameras and lights

@@ -306,6 +306,31 @@ def gltf_corpus():
 
     write(os.path.join(GLTF, "bad_json.gltf"), b'{ "asset": { "version": "2.0" }, "nodes": [ ')
 
+    # Material extensions with wrong values: the error names the material.
+    def with_material(material, textures=0):
+        t = json.loads(triangle())
+        t["materials"] = [material]
+        t["meshes"][0]["primitives"][0]["material"] = 0
+        if textures:
+            t["textures"] = [{"source": 0}] * textures
+            t["images"] = [{"uri": "checker%20rgba.png"}]
+        return json.dumps(t).encode()
+
+    write(os.path.join(GLTF, "bad_ior.gltf"), with_material(
+        {"name": "lens", "extensions": {"KHR_materials_ior": {"ior": -1.5}}}))
+    write(os.path.join(GLTF, "bad_clearcoat.gltf"), with_material(
+        {"name": "paint", "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 2}}}))
+    write(os.path.join(GLTF, "bad_specular_type.gltf"), with_material(
+        {"name": "shiny", "extensions": {"KHR_materials_specular": [1, 1, 1]}}))
+    write(os.path.join(GLTF, "bad_transmission_texture.gltf"), with_material(
+        {"name": "frosted", "extensions": {"KHR_materials_transmission": {
+            "transmissionFactor": 1, "transmissionTexture": {"index": 5}}}}, textures=1))
+    write(os.path.join(GLTF, "bad_texture_transform.gltf"), with_material(
+        {"name": "atlas", "pbrMetallicRoughness": {"baseColorTexture": {
+            "index": 0, "extensions": {"KHR_texture_transform": {"scale": "big"}}}}}, textures=1))
+    write(os.path.join(GLTF, "bad_overflowing_factor.gltf"), with_material(
+        {"name": "glass", "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1e39}}}))
+
 
 def make_glb(doc, binary):
     j = json.dumps(doc).encode()
