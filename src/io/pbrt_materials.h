@@ -1,13 +1,15 @@
-// pbrt materials and textures mapped onto Ferry's one-lobe Material (base
-// colour with an optional 8-bit texture, roughness, metallic, transmission,
-// ior, emission, alpha cut-out).
+// pbrt materials and textures mapped onto Ferry's Material (base colour with
+// an optional texture, roughness, metallic, transmission, ior, emission,
+// alpha cut-out, a dielectric coat, Oren-Nayar sigma, bump map, mix link).
 //
 // Materials (v3 and v4 names):
 //   diffuse, matte, translucent, diffusetransmission -> diffuse: reflectance
 //       / Kd (plus transmittance for diffusetransmission, clamped to 1: a thin
-//       translucent sheet lit from both sides looks about that bright)
-//   coateddiffuse, plastic, substrate -> diffuse with the base's colour; the
-//       clear coat is not modelled (one warning per type)
+//       translucent sheet lit from both sides looks about that bright);
+//       matte's sigma is Oren-Nayar
+//   plastic -> Kd plus a GGX coat of Ks with pbrt-v3's FresnelDielectric(1.5,
+//       1) (Coat::Additive); substrate -> pbrt-v3's FresnelBlend;
+//       coateddiffuse -> the base under a layered dielectric coat
 //   conductor, metal, coatedconductor -> metallic 1; the colour is the
 //       normal-incidence Fresnel reflectance computed per wavelength from
 //       eta and k (named spectra, .spd files, inline spectra, or rgb per
@@ -16,10 +18,11 @@
 //       thindielectric uses ior 1.01 (light passes straight through a thin
 //       sheet; a solid-glass ior would bend it)
 //   uber -> glass when Kt dominates, a mirror-like conductor when Kr
-//       dominates Kd, else diffuse Kd; opacity becomes a cut-out
+//       dominates Kd, else Kd plus a coat of Ks; opacity becomes a cut-out
 //   disney -> color, metallic, roughness, spectrans
-//   mix -> the two materials' parameters blended by amount (v3's amount
-//       weighs the first, v4's the second), textures from the heavier one
+//   mix -> the first material, switching to the second with probability
+//       amount at each shading point (v3's amount weighs the first, v4's the
+//       second; Material::mixedWith)
 //   interface, none, "" -> invisible (cut out everywhere)
 //   anything else (fourier, measured, hair, subsurface, ...) -> diffuse with
 //       its Kd / reflectance if constant, else grey 0.5, one warning naming it
