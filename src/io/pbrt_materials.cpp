@@ -1034,11 +1034,13 @@ struct PbrtMaterials::Impl {
       }
       setColor(c);
       p.markAllUsed();
-      warnings.once(
-          "material|" + type,
-          fmt::format("material type \"{}\" is not supported: rendered as diffuse ({:.2g}, "
-                      "{:.2g}, {:.2g}) instead (first at {})",
-                      type, c.value.x, c.value.y, c.value.z, def.where.toString()));
+      // (A fourier material whose table is not there was warned about, naming the file.)
+      if (type != "fourier")
+        warnings.once(
+            "material|" + type,
+            fmt::format("material type \"{}\" is not supported: rendered as diffuse ({:.2g}, "
+                        "{:.2g}, {:.2g}) instead (first at {})",
+                        type, c.value.x, c.value.y, c.value.z, def.where.toString()));
     }
     m.baseColor = min(max(m.baseColor, Vec3f(0)), Vec3f(1));
     return look;
