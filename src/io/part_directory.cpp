@@ -193,13 +193,15 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
   partition.proxies = shared.proxies;
   for (const ManifestPart& p : m.parts) {
     LoadedPart part = readPartFile(join(directory, p.file), p.hash);
-    const int32_t textures = int32_t(all.textures.size()),
+    const int32_t tables = int32_t(all.bsdfTables.size()), textures = int32_t(all.textures.size()),
                   materials = int32_t(all.materials.size()), meshes = int32_t(all.meshes.size()),
                   objects = int32_t(all.objects.size());
     for (Texture& t : part.scene.textures) all.textures.push_back(std::move(t));
+    for (auto& t : part.scene.bsdfTables) all.bsdfTables.push_back(std::move(t));
     for (Material mat : part.scene.materials) {
       for (int32_t* t : mat.textureSlots())
         if (*t != kNoTexture) *t += textures;
+      if (mat.bsdfTable != kNoBsdfTable) mat.bsdfTable += tables;
       if (mat.mixedWith >= 0) mat.mixedWith += materials;
       all.materials.push_back(std::move(mat));
     }

@@ -156,6 +156,21 @@ void writeMaterial(FileWriter& w, const Material& m) {
   w.pod(m.normalScale);
   w.pod(m.mixedWith);
   w.pod(m.mixAmount);
+  w.pod(m.bsdfTable);
+}
+
+// The table as read (a0 and recip are derived again when read back).
+void writeBsdfTable(FileWriter& w, const FourierBsdfTable& t) {
+  w.str(t.name);
+  w.pod(t.nMu);
+  w.pod(t.nChannels);
+  w.pod(t.mMax);
+  w.pod(t.eta);
+  w.array(t.mu);
+  w.array(t.cdf);
+  w.array(t.offset);
+  w.array(t.order);
+  w.array(t.coefficients);
 }
 
 void writeTexture(FileWriter& w, const Texture& t) {
@@ -187,7 +202,8 @@ void writeMesh(FileWriter& w, const Mesh& m, int32_t material) {
 void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>& instances,
                   const std::vector<RankSet>* owners, size_t ownerWords) {
   std::vector<int32_t> objectIndex(scene.objects.size(), -1), meshIndex(scene.meshes.size(), -1),
-      materialIndex(scene.materials.size(), -1), textureIndex(scene.textures.size(), -1);
+      materialIndex(scene.materials.size(), -1), textureIndex(scene.textures.size(), -1),
+      tableIndex(scene.bsdfTables.size(), -1);
   for (int32_t i : instances) objectIndex[scene.instances[i].object] = 0;
   for (size_t o = 0; o < scene.objects.size(); ++o)
     if (objectIndex[o] == 0)
@@ -200,6 +216,8 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
     if (materialIndex[k] == 0) {
       for (int32_t t : scene.materials[k].textures())
         if (t != kNoTexture) textureIndex[t] = 0;
+      if (scene.materials[k].bsdfTable != kNoBsdfTable)
+        tableIndex[size_t(scene.materials[k].bsdfTable)] = 0;
     }
   // Kept items get new indices in their original order.
   auto number = [](std::vector<int32_t>& index) {
@@ -209,11 +227,15 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
     return next;
   };
   const int32_t objects = number(objectIndex), meshes = number(meshIndex),
-                materials = number(materialIndex), textures = number(textureIndex);
+                materials = number(materialIndex), textures = number(textureIndex),
+                tables = number(tableIndex);
 
   w.pod(uint64_t(textures));
   for (size_t t = 0; t < scene.textures.size(); ++t)
     if (textureIndex[t] >= 0) writeTexture(w, scene.textures[t]);
+  w.pod(uint64_t(tables));
+  for (size_t t = 0; t < scene.bsdfTables.size(); ++t)
+    if (tableIndex[t] >= 0) writeBsdfTable(w, *scene.bsdfTables[t]);
   w.pod(uint64_t(materials));
   for (size_t k = 0; k < scene.materials.size(); ++k)
     if (materialIndex[k] >= 0) {
@@ -221,6 +243,7 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
       for (int32_t* t : mat.textureSlots())
         if (*t != kNoTexture) *t = textureIndex[*t];
       if (mat.mixedWith >= 0) mat.mixedWith = materialIndex[size_t(mat.mixedWith)];
+      if (mat.bsdfTable != kNoBsdfTable) mat.bsdfTable = tableIndex[size_t(mat.bsdfTable)];
       writeMaterial(w, mat);
     }
   w.pod(uint64_t(meshes));
@@ -459,7 +482,26 @@ Material readMaterial(FileReader& r) {
     m.mixedWith = r.pod<int32_t>();
     m.mixAmount = r.pod<float>();
   }
+  if (r.version() >= 6) m.bsdfTable = r.pod<int32_t>();  // older: no tables
   return m;
+}
+
+std::shared_ptr<const FourierBsdfTable> readBsdfTable(FileReader& r) {
+  auto t = std::make_shared<FourierBsdfTable>();
+  t->name = r.str();
+  t->nMu = r.pod<int32_t>();
+  t->nChannels = r.pod<int32_t>();
+  t->mMax = r.pod<int32_t>();
+  t->eta = r.pod<float>();
+  t->mu = r.array<float>();
+  t->cdf = r.array<float>();
+  t->offset = r.array<uint32_t>();
+  t->order = r.array<int32_t>();
+  t->coefficients = r.array<float>();
+  // The same checks as reading the .bsdf file: sizes, series in range.
+  if (std::string what = t->finish(); !what.empty())
+    r.fail(fmt::format("BSDF table \"{}\": {}", t->name, what));
+  return t;
 }
 
 Texture readTexture(FileReader& r) {
@@ -502,6 +544,8 @@ Mesh readMesh(FileReader& r) {
 // Reads what writeContent wrote; checks every index (Scene::validate).
 void readContent(FileReader& r, Scene& scene, std::vector<RankSet>& owners, size_t ownerWords) {
   for (uint64_t n = r.count(8); n > 0; --n) scene.textures.push_back(readTexture(r));
+  if (r.version() >= 6)
+    for (uint64_t n = r.count(8); n > 0; --n) scene.bsdfTables.push_back(readBsdfTable(r));
   for (uint64_t n = r.count(8); n > 0; --n) scene.materials.push_back(readMaterial(r));
   for (uint64_t n = r.count(8); n > 0; --n) scene.meshes.push_back(readMesh(r));
   for (uint64_t n = r.count(8); n > 0; --n) {

@@ -11,6 +11,7 @@
 
 #include "builtin/builtin.h"
 #include "core/error.h"
+#include "io/fourier_bsdf_file.h"
 #include "io/part_directory.h"
 #include "partition/partitioner.h"
 #include "render/lights.h"
@@ -264,6 +265,49 @@ TEST(PartFiles, OneRankHoldsTheWholeSceneBitForBit) {
   EXPECT_EQ(part.scene.meshes.size(), scene.meshes.size());
   EXPECT_EQ(part.scene.textures.size(), scene.textures.size());
   EXPECT_EQ(summarize(part.scene).memory.total(), summarize(scene).memory.total());
+}
+
+// A tabulated BSDF goes with the materials that name it, renumbered, and is
+// checked again when read; a part without such materials holds none.
+TEST(PartFiles, BsdfTablesGoWithTheirMaterials) {
+  TempDir dir;
+  Scene scene;
+  scene.name = "tables";
+  const fs::path corpus = fs::path(FERRY_SOURCE_DIR) / "tests" / "corpus" / "bsdf";
+  scene.bsdfTables.push_back(readFourierBsdfFile((corpus / "valid.bsdf").string()));
+  scene.bsdfTables.push_back(readFourierBsdfFile((corpus / "valid.bsdf").string()));
+  Material plain, tabulated;
+  tabulated.name = "tabulated";
+  tabulated.bsdfTable = 1;
+  scene.addMaterial(plain);
+  scene.addMaterial(tabulated);
+  for (int32_t k = 0; k < 2; ++k) {
+    Mesh mesh;
+    mesh.name = "quad" + std::to_string(k);
+    mesh.positions = {{0, 0, float(k)}, {1, 0, float(k)}, {1, 1, float(k)}};
+    mesh.indices = {{0, 1, 2}};
+    mesh.material = k;
+    scene.addSingleInstanceMesh(std::move(mesh));
+  }
+  scene.validate();
+  const std::vector<RankSet> owners(2, RankSet::single(0));
+  const std::string both = (dir.path / "both.part").string(),
+                    plainOnly = (dir.path / "plain.part").string();
+  writePartFile(both, scene, {0, 1}, owners, 0, 1);
+  writePartFile(plainOnly, scene, {0}, owners, 0, 1);
+  const LoadedPart a = readPartFile(both), b = readPartFile(plainOnly);
+  ASSERT_EQ(a.scene.bsdfTables.size(), 1u);  // table 0 is named by no material
+  const FourierBsdfTable& t = *a.scene.bsdfTables[0];
+  EXPECT_EQ(t.nMu, 5);
+  EXPECT_EQ(t.coefficients, scene.bsdfTables[1]->coefficients);
+  EXPECT_EQ(t.a0, scene.bsdfTables[1]->a0);
+  EXPECT_EQ(a.scene.materials[1].bsdfTable, 0);
+  EXPECT_EQ(a.scene.materials[0].bsdfTable, kNoBsdfTable);
+  EXPECT_TRUE(b.scene.bsdfTables.empty());
+  // A rank keeps only the tables of what it owns.
+  Scene released = scene;
+  released.releaseAllBut({0});
+  EXPECT_FALSE(released.bsdfTables[1]);
 }
 
 TEST(PartFiles, MergedPartsHoldEveryInstance) {

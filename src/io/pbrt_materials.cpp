@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "io/fourier_bsdf_file.h"
 #include "io/image_io.h"
 
 namespace ferry {
@@ -81,6 +82,7 @@ struct PbrtMaterials::Impl {
   std::map<int32_t, int32_t> mixTargets;  // definition -> its scene material
   std::map<std::string, float> averages;
   std::map<std::string, SampledSpectrum> spectrumFiles;
+  std::map<std::string, int32_t> bsdfTables;  // resolved path -> Scene::bsdfTables
   std::map<int, int32_t> constantAlpha;
   uint64_t evaluations_ = 0;  // of the current bake or average
 
@@ -832,6 +834,41 @@ struct PbrtMaterials::Impl {
     return look;
   }
 
+  // pbrt-v3's fourier material: its "bsdffile" read once per path into
+  // Scene::bsdfTables. A file that is not there is a warning naming it (the
+  // material then renders grey diffuse, as before tables were read); a file
+  // that is there but malformed is an error naming it and where it is named.
+  bool fourierTable(const PbrtParams& p, const PbrtMaterialDefinition& def, Material& m) {
+    const PbrtParam* file = p.find("bsdffile");
+    const std::string name = p.getString("bsdffile", "");
+    const SourceLocation& where = file ? file->where : def.where;
+    std::string path;
+    try {
+      if (name.empty()) throw InputError(where, "no \"string bsdffile\"");
+      path = resolve(name, where);
+    } catch (const InputError& e) {
+      warnings.once("fourier|" + name,
+                    fmt::format("fourier material: {}; rendered as diffuse (0.5, 0.5, 0.5) "
+                                "instead",
+                                e.what()));
+      return false;
+    }
+    auto it = bsdfTables.find(path);
+    if (it == bsdfTables.end()) {
+      std::shared_ptr<const FourierBsdfTable> table;
+      try {
+        table = readFourierBsdfFile(path);
+      } catch (const InputError& e) {
+        throw InputError(where, fmt::format("\"string bsdffile\": {}", e.what()));
+      }
+      scene.bsdfTables.push_back(std::move(table));
+      it = bsdfTables.emplace(path, int32_t(scene.bsdfTables.size() - 1)).first;
+    }
+    m.bsdfTable = it->second;
+    m.baseColor = Vec3f(0.5f);  // (unused by the table; what a viewer of the material sees)
+    return true;
+  }
+
   Look convertDefinition(const PbrtMaterialDefinition& def, int depth) {
     const PbrtParams& p = def.params;
     const std::string& type = def.type;
@@ -981,6 +1018,9 @@ struct PbrtMaterials::Impl {
       m.mixedWith = mixTarget(named.at(second), depth + 1);
       m.mixAmount = wb;
       look.alpha = wb > 0.5f ? b.alpha : a.alpha;
+    } else if (type == "fourier" && fourierTable(p, def, m)) {
+      // (m.bsdfTable set; a file that is not there falls through to the
+      // grey diffuse below, with a warning naming it.)
     } else if (type == "interface" || type == "none" || type.empty()) {
       look.alpha = alphaConstant(0);
     } else {
@@ -994,11 +1034,13 @@ struct PbrtMaterials::Impl {
       }
       setColor(c);
       p.markAllUsed();
-      warnings.once(
-          "material|" + type,
-          fmt::format("material type \"{}\" is not supported: rendered as diffuse ({:.2g}, "
-                      "{:.2g}, {:.2g}) instead (first at {})",
-                      type, c.value.x, c.value.y, c.value.z, def.where.toString()));
+      // (A fourier material whose table is not there was warned about, naming the file.)
+      if (type != "fourier")
+        warnings.once(
+            "material|" + type,
+            fmt::format("material type \"{}\" is not supported: rendered as diffuse ({:.2g}, "
+                        "{:.2g}, {:.2g}) instead (first at {})",
+                        type, c.value.x, c.value.y, c.value.z, def.where.toString()));
     }
     m.baseColor = min(max(m.baseColor, Vec3f(0)), Vec3f(1));
     return look;

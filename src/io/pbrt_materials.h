@@ -24,7 +24,10 @@
 //       amount at each shading point (v3's amount weighs the first, v4's the
 //       second; Material::mixedWith)
 //   interface, none, "" -> invisible (cut out everywhere)
-//   anything else (fourier, measured, hair, subsurface, ...) -> diffuse with
+//   fourier (pbrt-v3) -> its "bsdffile" read (io/fourier_bsdf_file.h) into
+//       Scene::bsdfTables, once per file; a file that is not there is a
+//       warning naming it and grey diffuse 0.5, a malformed one an error
+//   anything else (measured, hair, subsurface, ...) -> diffuse with
 //       its Kd / reflectance if constant, else grey 0.5, one warning naming it
 // Roughness: Ferry's roughness r has GGX alpha = r^2. pbrt-v4 remaps
 // roughness to alpha = sqrt(roughness), pbrt-v3 with its polynomial; u and v

@@ -259,12 +259,68 @@ TEST_F(PbrtV3Features, ShapesAndCounts) {
   EXPECT_TRUE(found);
 }
 
+// pbrt-v3's fourier material reads its table (tests/corpus/bsdf), once per
+// file; a file that is not there is a warning naming it and grey diffuse; a
+// malformed one an error naming it and the line that names it.
+TEST(PbrtFourier, LoadsTheTable) {
+  std::vector<std::string> warnings;
+  const Scene s = fromText(
+      "WorldBegin\n"
+      "MakeNamedMaterial \"a\" \"string type\" \"fourier\" \"string bsdffile\" "
+      "\"../bsdf/valid.bsdf\"\n"
+      "MakeNamedMaterial \"b\" \"string type\" \"fourier\" \"string bsdffile\" "
+      "\"../bsdf/valid.bsdf\"\n"
+      "NamedMaterial \"a\"\nShape \"sphere\"\n"
+      "NamedMaterial \"b\"\nTranslate 3 0 0\nShape \"sphere\"\n",
+      &warnings);
+  ASSERT_EQ(s.bsdfTables.size(), 1u);
+  EXPECT_EQ(s.bsdfTables[0]->nMu, 5);
+  int named = 0;
+  for (const Material& m : s.materials)
+    if (m.bsdfTable == 0) ++named;
+  EXPECT_EQ(named, 2);
+  EXPECT_FALSE(anyContains(warnings, "fourier")) << warnings.front();
+}
+
+TEST(PbrtFourier, AMissingTableIsAWarningAndGreyDiffuse) {
+  std::vector<std::string> warnings;
+  const Scene s = fromText(
+      "WorldBegin\nMaterial \"fourier\" \"string bsdffile\" \"bsdfs/ceramic.bsdf\"\n"
+      "Shape \"sphere\"\n",
+      &warnings);
+  EXPECT_TRUE(s.bsdfTables.empty());
+  ASSERT_FALSE(s.materials.empty());
+  EXPECT_EQ(s.materials.back().bsdfTable, kNoBsdfTable);
+  EXPECT_EQ(s.materials.back().baseColor, Vec3f(0.5f));
+  std::string warning;
+  for (const std::string& w : warnings)
+    if (w.find("fourier material:") != std::string::npos) warning = w;
+  ASSERT_FALSE(warning.empty());
+  EXPECT_NE(warning.find("ceramic.bsdf"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("text.pbrt:2"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("rendered as diffuse (0.5, 0.5, 0.5)"), std::string::npos) << warning;
+  std::printf("%s\n", warning.c_str());
+}
+
+TEST(PbrtFourier, AMalformedTableIsAnErrorNamingItAndTheLine) {
+  try {
+    fromText(
+        "WorldBegin\n\nMaterial \"fourier\" \"string bsdffile\" "
+        "\"../bsdf/offset_out_of_range.bsdf\"\nShape \"sphere\"\n");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("text.pbrt:3"), std::string::npos) << what;
+    EXPECT_NE(what.find("offset_out_of_range.bsdf: entry (2, 1)"), std::string::npos) << what;
+  }
+}
+
 TEST_F(PbrtV3Features, WarnsOnceAboutWhatItSkips) {
   EXPECT_TRUE(anyContains(warnings(), "Sampler ignored"));
   EXPECT_TRUE(anyContains(warnings(), "Integrator ignored"));
-  EXPECT_TRUE(anyContains(warnings(), "material type \"fourier\" is not supported"));
-  EXPECT_TRUE(anyContains(warnings(), "ignored parameter \"string bsdffile\"") ||
-              anyContains(warnings(), "fourier"));
+  // leather.bsdf is not there: a warning naming it, and grey diffuse.
+  EXPECT_TRUE(anyContains(warnings(), "fourier material:"));
+  EXPECT_TRUE(anyContains(warnings(), "leather.bsdf"));
   std::set<std::string> unique(warnings().begin(), warnings().end());
   EXPECT_EQ(unique.size(), warnings().size());
 }

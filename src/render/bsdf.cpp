@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "render/fourier_bsdf.h"
 #include "scene/scene.h"
 
 namespace ferry {
@@ -194,9 +195,19 @@ Bsdf Bsdf::dielectric(float ior, float roughness, Vec3f tint) {
   return b;
 }
 
-// Chosen by the dominant parameter: glass, metal, a coated base, or diffuse
-// (a glTF blend of metal and dielectric takes the larger).
-Bsdf Bsdf::fromMaterial(const Material& material, Vec3f color) {
+Bsdf Bsdf::fourier(const FourierBsdfTable& table) {
+  Bsdf b;
+  b.kind_ = Kind::Fourier;
+  b.table_ = &table;
+  b.tableTransmits_ = table.transmits();
+  return b;
+}
+
+// A table names the BSDF outright; else chosen by the dominant parameter:
+// glass, metal, a coated base, or diffuse (a glTF blend of metal and
+// dielectric takes the larger).
+Bsdf Bsdf::fromMaterial(const Material& material, Vec3f color, const FourierBsdfTable* table) {
+  if (table) return fourier(*table);
   if (material.transmission >= 0.5f) return dielectric(material.ior, material.roughness, color);
   if (material.metallic >= 0.5f) return conductor(color, material.roughness);
   if (maxComponent(material.specular) > 0 && material.coat == Material::Coat::FresnelBlend)
@@ -213,6 +224,8 @@ Vec3f Bsdf::eval(Vec3f wo, Vec3f wi) const {
       return diffuseEval(wo, wi);
     case Kind::Coated:
       return coatEval(wo, wi);
+    case Kind::Fourier:
+      return fourierEval(*table_, wo, wi);
     case Kind::RoughConductor: {
       if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
       Vec3f m = normalize(wo + wi);
@@ -254,6 +267,8 @@ float Bsdf::pdf(Vec3f wo, Vec3f wi) const {
       return wi.z / kPi;
     case Kind::Coated:
       return coatPdf(wo, wi);
+    case Kind::Fourier:
+      return fourierPdf(*table_, wo, wi);
     case Kind::RoughConductor: {
       if (wo.z <= 0 || wi.z <= 0) return 0;
       Vec3f m = normalize(wo + wi);
@@ -313,6 +328,8 @@ bool Bsdf::sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const {
       out.delta = false;
       return true;
     }
+    case Kind::Fourier:
+      return fourierSample(*table_, wo, u, out);
     case Kind::SmoothConductor: {
       if (wo.z <= 0) return false;
       out.wi = {-wo.x, -wo.y, wo.z};

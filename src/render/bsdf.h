@@ -2,14 +2,16 @@
 // Directions point away from the surface: wo towards where the path came
 // from, wi towards where it goes next.
 //
-// A Material maps to one of six kinds (see Bsdf::fromMaterial): diffuse
+// A Material maps to one of seven kinds (see Bsdf::fromMaterial): diffuse
 // (Lambertian, or Oren-Nayar with pbrt's sigma), smooth or rough (GGX)
-// conductor, smooth or rough (GGX, Walter et al. 2007) dielectric, and a
+// conductor, smooth or rough (GGX, Walter et al. 2007) dielectric, a
 // diffuse base under a rough dielectric coat (pbrt's plastic: base + coat, or
-// the base seen through the coat). Rough lobes are sampled with Heitz's
-// visible-normal distribution. Transmitted radiance is not scaled by 1/eta^2: the factors
-// cancel for closed objects, and without them a white BSDF never returns more
-// than it receives, which the energy tests check.
+// the base seen through the coat), and pbrt-v3's tabulated Fourier BSDF
+// (render/fourier_bsdf.h). Rough lobes are sampled with Heitz's
+// visible-normal distribution. The dielectrics' transmitted radiance is not
+// scaled by 1/eta^2: the factors cancel for closed objects, and without them a
+// white BSDF never returns more than it receives, which the energy tests
+// check. (The Fourier BSDF scales it as pbrt-v3 does: its tables are pbrt's.)
 #pragma once
 
 #include "core/math.h"
@@ -17,6 +19,7 @@
 namespace ferry {
 
 struct Material;
+struct FourierBsdfTable;
 
 struct BsdfSample {
   Vec3f wi;
@@ -33,11 +36,17 @@ class Bsdf {
     RoughConductor,
     SmoothDielectric,
     RoughDielectric,
-    Coated
+    Coated,
+    Fourier
   };
 
-  // `color` is the material's base colour times its texture at the hit.
-  static Bsdf fromMaterial(const Material& material, Vec3f color);
+  // `color` is the material's base colour times its texture at the hit;
+  // `table` the scene's table the material names (Material::bsdfTable), or
+  // null.
+  static Bsdf fromMaterial(const Material& material, Vec3f color,
+                           const FourierBsdfTable* table = nullptr);
+  // pbrt-v3's FourierBSDF over `table` (which must outlive the Bsdf).
+  static Bsdf fourier(const FourierBsdfTable& table);
   // `sigmaDegrees`: Oren-Nayar roughness (pbrt-v3's OrenNayar; 0: Lambertian).
   static Bsdf diffuse(Vec3f albedo, float sigmaDegrees = 0);
   // A diffuse base (`base`, Oren-Nayar `sigmaDegrees`) under a GGX coat of
@@ -58,8 +67,11 @@ class Bsdf {
 
   Kind kind() const { return kind_; }
   bool isDelta() const { return kind_ == Kind::SmoothConductor || kind_ == Kind::SmoothDielectric; }
+  // Transmitting BSDFs keep their normals (the sign of wo.z says the side);
+  // the others are shaded on the side the ray arrived from.
   bool transmits() const {
-    return kind_ == Kind::SmoothDielectric || kind_ == Kind::RoughDielectric;
+    return kind_ == Kind::SmoothDielectric || kind_ == Kind::RoughDielectric ||
+           (kind_ == Kind::Fourier && tableTransmits_);
   }
 
   // f(wo, wi) * |cos(wi)|; zero for delta lobes.
@@ -88,6 +100,9 @@ class Bsdf {
   bool layered_ = false;
   bool fresnelBlend_ = false;
   float coatProbability_ = 0;
+  // Fourier: the scene's table.
+  const FourierBsdfTable* table_ = nullptr;
+  bool tableTransmits_ = false;
 };
 
 // Helpers exposed for tests.

@@ -121,13 +121,14 @@ Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u) const {
     u = u / amount;
     material = &scene_.materials[size_t(material->mixedWith)];
   }
-  if (material == surface.material) return Bsdf::fromMaterial(*material, surface.baseColor);
+  if (material == surface.material)
+    return Bsdf::fromMaterial(*material, surface.baseColor, scene_.bsdfTableOf(*material));
   Vec3f color = material->baseColor;
   if (material->baseColorTexture != kNoTexture)
     color *= scene_.textures[size_t(material->baseColorTexture)]
                  .evaluate(surface.uv, surface.position)
                  .xyz();
-  return Bsdf::fromMaterial(*material, color);
+  return Bsdf::fromMaterial(*material, color, scene_.bsdfTableOf(*material));
 }
 
 template <typename Path>
@@ -135,7 +136,8 @@ template <typename Path>
     const PathVertex& vertex, uint32_t sampleIndex) const {
   const RandomStream random(RandomKey{vertex.pixel, sampleIndex, vertex.bounce, seed_});
   const Bsdf bsdf = vertex.surface.material->mixedWith < 0
-                        ? Bsdf::fromMaterial(*vertex.surface.material, vertex.surface.baseColor)
+                        ? Bsdf::fromMaterial(*vertex.surface.material, vertex.surface.baseColor,
+                                             scene_.bsdfTableOf(*vertex.surface.material))
                         : mixedBsdf(vertex.surface, random(RandomDim::MaterialSelect));
   Vec3f ng = vertex.surface.geometricNormal, ns = vertex.surface.shadingNormal;
   if (!bsdf.transmits()) {

@@ -20,7 +20,8 @@ Scene lightScene(const Scene& scene) {
       if (material < 0) {
         Material mat = scene.materials[source.material];
         for (int32_t* t : mat.textureSlots()) *t = kNoTexture;
-        mat.mixedWith = -1;  // emission is the mesh's own material's
+        mat.bsdfTable = kNoBsdfTable;  // the light scene holds no tables
+        mat.mixedWith = -1;            // emission is the mesh's own material's
         material = out.addMaterial(std::move(mat));
       }
       Mesh mesh;

@@ -68,13 +68,14 @@ std::vector<uint32_t> Scene::instanceCountPerObject() const {
 
 void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
   std::vector<uint8_t> keepMesh(meshes.size(), 0), keepTexture(textures.size(), 0),
-      keepObject(objects.size(), 0);
+      keepObject(objects.size(), 0), keepTable(bsdfTables.size(), 0);
   for (int32_t i : keptInstances) keepObject[instances[i].object] = 1;
   for (size_t o = 0; o < objects.size(); ++o)
     if (keepObject[o])
       for (int32_t m : objects[o].meshes) {
         keepMesh[m] = 1;
         forEachShadingTexture(meshes[m].material, [&](int32_t t) { keepTexture[size_t(t)] = 1; });
+        forEachShadingBsdfTable(meshes[m].material, [&](int32_t t) { keepTable[size_t(t)] = 1; });
       }
   for (size_t m = 0; m < meshes.size(); ++m)
     if (!keepMesh[m]) {
@@ -85,6 +86,8 @@ void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
     }
   for (size_t t = 0; t < textures.size(); ++t)
     if (!keepTexture[t]) std::vector<uint8_t>().swap(textures[t].rgba);
+  for (size_t t = 0; t < bsdfTables.size(); ++t)
+    if (!keepTable[t]) bsdfTables[t].reset();
 }
 
 void Scene::validate() const {
@@ -97,6 +100,10 @@ void Scene::validate() const {
   };
   for (const Material& m : materials) {
     for (int32_t t : m.textures()) checkTexture(t, "material '" + m.name + "'");
+    if (m.bsdfTable != kNoBsdfTable &&
+        (m.bsdfTable < 0 || size_t(m.bsdfTable) >= bsdfTables.size()))
+      fail(fmt::format("material '{}' refers to BSDF table {} of {}", m.name, m.bsdfTable,
+                       bsdfTables.size()));
     if (m.mixedWith != -1 && (m.mixedWith < 0 || size_t(m.mixedWith) >= materials.size()))
       fail(fmt::format("material '{}' mixes with material {} of {}", m.name, m.mixedWith,
                        materials.size()));

@@ -15,11 +15,13 @@
 #include <vector>
 
 #include "core/math.h"
+#include "scene/fourier_bsdf_table.h"
 #include "scene/texture.h"
 
 namespace ferry {
 
 constexpr int32_t kNoTexture = -1;
+constexpr int32_t kNoBsdfTable = -1;
 
 struct Material {
   std::string name;
@@ -68,6 +70,10 @@ struct Material {
   // hash); -1: not a mix. Chains are allowed, cycles are not (validate).
   int32_t mixedWith = -1;
   float mixAmount = 0;
+  // pbrt-v3's fourier material: an index into Scene::bsdfTables (kNoBsdfTable:
+  // none). The table is the whole BSDF: the parameters above other than
+  // emission, the cut-out and the bump or normal map are then unused.
+  int32_t bsdfTable = kNoBsdfTable;
 
   bool isEmissive() const { return maxComponent(emission) > 0; }
   // Every texture index the material holds (kNoTexture where unused), for
@@ -147,6 +153,9 @@ struct Scene {
   std::vector<Instance> instances;
   std::vector<Material> materials;
   std::vector<Texture> textures;
+  // Tabulated BSDFs (Material::bsdfTable); shared, as several materials and
+  // copies of the scene may name one. Released ones are null.
+  std::vector<std::shared_ptr<const FourierBsdfTable>> bsdfTables;
   std::vector<SunLight> suns;
   EnvironmentLight environment;
   std::vector<CameraView> views;  // views[0] is the default
@@ -189,11 +198,23 @@ struct Scene {
         if (t != kNoTexture) visit(t);
     });
   }
+  // Every tabulated BSDF those materials use.
+  template <typename Visit>
+  void forEachShadingBsdfTable(int32_t material, Visit&& visit) const {
+    forEachShadingMaterial(material, [&](int32_t m) {
+      if (materials[size_t(m)].bsdfTable != kNoBsdfTable) visit(materials[size_t(m)].bsdfTable);
+    });
+  }
+  // The table material `m` names, or null.
+  const FourierBsdfTable* bsdfTableOf(const Material& m) const {
+    return m.bsdfTable == kNoBsdfTable ? nullptr : bsdfTables[size_t(m.bsdfTable)].get();
+  }
   void validate() const;
   // Mesh::reserveVertexSlack for every mesh (a copy only where a loader left none).
   void reserveVertexSlack();
-  // Frees the geometry and texels no listed instance needs (a rank keeps only
-  // what it owns). Indices stay valid; released meshes and textures are empty.
+  // Frees the geometry, texels and tables no listed instance needs (a rank
+  // keeps only what it owns). Indices stay valid; released meshes and
+  // textures are empty, released tables null.
   void releaseAllBut(const std::vector<int32_t>& keptInstances);
 };
 

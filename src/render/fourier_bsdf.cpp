@@ -1,0 +1,285 @@
+#include "render/fourier_bsdf.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ferry {
+namespace {
+
+constexpr int32_t kMaxChannels = 3;
+
+// The largest i in [0, size - 2] with pred(i) true (pred true, then false).
+template <typename Pred>
+int32_t findInterval(int32_t size, Pred pred) {
+  int32_t first = 0, length = size;
+  while (length > 0) {
+    const int32_t half = length >> 1, middle = first + half;
+    if (pred(middle)) {
+      first = middle + 1;
+      length -= half + 1;
+    } else {
+      length = half;
+    }
+  }
+  return std::clamp(first - 1, 0, size - 2);
+}
+
+// Cosine of the azimuth between -wi (written `wiNeg`) and wo. Where wo has
+// no azimuth (normal incidence) it is measured from +x, as the sampler
+// measures it there; pbrt-v3 takes 1 and samples every direction along the
+// normal, which no density describes.
+float cosAzimuth(Vec3f wo, Vec3f wiNeg) {
+  const float oxy = wo.x * wo.x + wo.y * wo.y, ixy = wiNeg.x * wiNeg.x + wiNeg.y * wiNeg.y;
+  if (ixy == 0) return 1;
+  if (oxy == 0) return std::clamp(wiNeg.x / std::sqrt(ixy), -1.0f, 1.0f);
+  return std::clamp((wo.x * wiNeg.x + wo.y * wiNeg.y) / std::sqrt(oxy * ixy), -1.0f, 1.0f);
+}
+
+// pbrt-v3's scale for radiance transport: radiance crossing the interface
+// (mu_i mu_o > 0) is scaled by (eta_to / eta_from)^2.
+float transportScale(const FourierBsdfTable& t, float muI, float muO) {
+  if (!(muI * muO > 0)) return 1;
+  const float e = muI > 0 ? 1 / t.eta : t.eta;
+  return e * e;
+}
+
+// The 16 entries around (muI, muO) summed with their spline weights into ak
+// (channel c from c * t.mMax); returns the longest series, -1 outside the
+// table. weightsO and offsetO are mu_o's, for the cdf.
+int32_t interpolate(const FourierBsdfTable& t, float muI, float muO, int32_t channels, float* ak,
+                    int32_t& offsetO, float weightsO[4]) {
+  int32_t offsetI;
+  float weightsI[4];
+  if (!fourier::catmullRomWeights(t.mu.data(), t.nMu, muI, offsetI, weightsI) ||
+      !fourier::catmullRomWeights(t.mu.data(), t.nMu, muO, offsetO, weightsO))
+    return -1;
+  std::fill(ak, ak + size_t(channels) * size_t(t.mMax), 0.0f);
+  int32_t longest = 0;
+  for (int32_t b = 0; b < 4; ++b)
+    for (int32_t a = 0; a < 4; ++a) {
+      // (A zero weight marks a node beyond the grid's end.)
+      const float weight = weightsI[a] * weightsO[b];
+      if (weight == 0) continue;
+      int32_t m;
+      const float* series = t.coefficientsAt(offsetI + a, offsetO + b, m);
+      longest = std::max(longest, m);
+      for (int32_t c = 0; c < channels; ++c)
+        for (int32_t k = 0; k < m; ++k) ak[c * t.mMax + k] += weight * series[c * m + k];
+    }
+  return longest;
+}
+
+// 2 pi times the luminance's integral over the sphere of directions wi at
+// mu_o: the normalisation of the sampling density.
+float sampledIntegral(const FourierBsdfTable& t, int32_t offsetO, const float weightsO[4]) {
+  float rho = 0;
+  for (int32_t o = 0; o < 4; ++o)
+    if (weightsO[o] != 0)
+      rho += weightsO[o] * t.cdf[size_t(offsetO + o) * size_t(t.nMu) + size_t(t.nMu - 1)];
+  return rho * (2 * kPi);
+}
+
+// f |cos(wi)| from the interpolated series at cos(phi) (luminance y, given).
+Vec3f value(const FourierBsdfTable& t, const float* ak, int32_t m, float y, float cosPhi,
+            float scale) {
+  y = std::max(0.0f, y);
+  if (t.nChannels == 1) return Vec3f(y * scale);
+  const float r = fourier::series(ak + t.mMax, m, cosPhi);
+  const float b = fourier::series(ak + 2 * t.mMax, m, cosPhi);
+  // pbrt-v3's green from luminance, red and blue.
+  const float g = 1.39829f * y - 0.100913f * b - 0.297375f * r;
+  return max(Vec3f(r, g, b) * scale, Vec3f(0));
+}
+
+// mu_i with density proportional to the spline of a0 over mu_i at mu_o
+// (pbrt-v3's SampleCatmullRom2D over the table's cdf): the cdf row
+// interpolated at mu_o picks the segment, Newton's method with bisection
+// inverts the segment's integral.
+bool sampleMuI(const FourierBsdfTable& t, float muO, float u, float& muI) {
+  const int32_t n = t.nMu;
+  int32_t offset;
+  float w[4];
+  if (!fourier::catmullRomWeights(t.mu.data(), n, muO, offset, w)) return false;
+  auto at = [&](const std::vector<float>& array, int32_t i) {
+    float v = 0;
+    for (int32_t k = 0; k < 4; ++k)
+      if (w[k] != 0) v += array[size_t(offset + k) * size_t(n) + size_t(i)] * w[k];
+    return v;
+  };
+  const float total = at(t.cdf, n - 1);
+  if (!(total > 0)) return false;
+  u *= total;
+  const int32_t i = findInterval(n, [&](int32_t j) { return at(t.cdf, j) <= u; });
+  const float f0 = at(t.a0, i), f1 = at(t.a0, i + 1);
+  const float x0 = t.mu[i], x1 = t.mu[i + 1], width = x1 - x0;
+  if (!(width > 0)) {  // a repeated node (the horizon's 0, held twice)
+    muI = x0;
+    return true;
+  }
+  u = (u - at(t.cdf, i)) / width;
+  const float d0 = i > 0 ? width * (f1 - at(t.a0, i - 1)) / (x1 - t.mu[i - 1]) : f1 - f0;
+  const float d1 = i + 2 < n ? width * (at(t.a0, i + 2) - f0) / (t.mu[i + 2] - x0) : f1 - f0;
+  // First guess: invert the linear interpolant's integral.
+  float s =
+      f0 != f1 ? (f0 - std::sqrt(std::max(0.0f, f0 * f0 + 2 * u * (f1 - f0)))) / (f0 - f1) : u / f0;
+  float lo = 0, hi = 1;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    if (!(s >= lo && s <= hi)) s = 0.5f * (lo + hi);
+    // The Hermite cubic's integral from 0 to s (F) and the cubic (f).
+    const float F = s * (f0 + s * (0.5f * d0 + s * ((1.0f / 3.0f) * (-2 * d0 - d1) + f1 - f0 +
+                                                    s * (0.25f * (d0 + d1) + 0.5f * (f0 - f1)))));
+    const float f =
+        f0 + s * (d0 + s * (-2 * d0 - d1 + 3 * (f1 - f0) + s * (d0 + d1 + 2 * (f0 - f1))));
+    if (std::abs(F - u) < 1e-6f || hi - lo < 1e-6f) break;
+    if (F - u < 0)
+      lo = s;
+    else
+      hi = s;
+    s -= (F - u) / f;
+  }
+  muI = x0 + width * std::clamp(s, 0.0f, 1.0f);
+  return true;
+}
+
+// phi in [0, 2 pi) with density proportional to the series (pbrt-v3's
+// SampleFourier: half the numbers for [0, pi], mirrored for the rest, since
+// the series is even); returns the series at phi.
+float sampleAzimuth(const float* ak, const float* recip, int32_t m, float u, double& phiOut) {
+  const bool mirror = u >= 0.5f;
+  u = mirror ? 1 - 2 * (u - 0.5f) : 2 * u;
+  double lo = 0, hi = kPi, phi = 0.5 * kPi, F = 0, f = 0;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    const double cosPhi = std::cos(phi), sinPhi = std::sqrt(std::max(0.0, 1 - cosPhi * cosPhi));
+    // cos(k phi) and sin(k phi) by Chebyshev's recurrence.
+    double cosPrev = cosPhi, cosCur = 1, sinPrev = -sinPhi, sinCur = 0;
+    F = ak[0] * phi;
+    f = ak[0];
+    for (int32_t k = 1; k < m; ++k) {
+      const double sinNext = 2 * cosPhi * sinCur - sinPrev;
+      const double cosNext = 2 * cosPhi * cosCur - cosPrev;
+      sinPrev = sinCur;
+      sinCur = sinNext;
+      cosPrev = cosCur;
+      cosCur = cosNext;
+      F += ak[k] * recip[k] * sinNext;
+      f += ak[k] * cosNext;
+    }
+    F -= u * ak[0] * kPi;
+    if (F > 0)
+      hi = phi;
+    else
+      lo = phi;
+    if (std::abs(F) < 1e-6 || hi - lo < 1e-6) break;
+    phi -= F / f;
+    if (!(phi > lo && phi < hi)) phi = 0.5 * (lo + hi);
+  }
+  phiOut = mirror ? 2 * kPi - phi : phi;
+  return float(f);
+}
+
+}  // namespace
+
+namespace fourier {
+
+bool catmullRomWeights(const float* nodes, int32_t n, float x, int32_t& offset, float weights[4]) {
+  if (!(x >= nodes[0] && x <= nodes[n - 1])) return false;
+  const int32_t i = findInterval(n, [&](int32_t j) { return nodes[j] <= x; });
+  offset = i - 1;
+  const float x0 = nodes[i], x1 = nodes[i + 1];
+  const float t = (x - x0) / (x1 - x0), t2 = t * t, t3 = t2 * t;
+  // The Hermite basis, the derivatives at x0 and x1 taken as finite
+  // differences over the neighbours (one-sided at the ends), folded into
+  // the four nodes' weights.
+  weights[1] = 2 * t3 - 3 * t2 + 1;
+  weights[2] = -2 * t3 + 3 * t2;
+  const float h10 = t3 - 2 * t2 + t, h11 = t3 - t2;
+  if (i > 0) {
+    const float w0 = h10 * (x1 - x0) / (x1 - nodes[i - 1]);
+    weights[0] = -w0;
+    weights[2] += w0;
+  } else {
+    weights[0] = 0;
+    weights[1] -= h10;
+    weights[2] += h10;
+  }
+  if (i + 2 < n) {
+    const float w3 = h11 * (x1 - x0) / (nodes[i + 2] - x0);
+    weights[1] -= w3;
+    weights[3] = w3;
+  } else {
+    weights[1] -= h11;
+    weights[2] += h11;
+    weights[3] = 0;
+  }
+  return true;
+}
+
+float series(const float* a, int32_t m, double cosPhi) {
+  double sum = 0, cosPrev = cosPhi, cosCur = 1;
+  for (int32_t k = 0; k < m; ++k) {
+    sum += a[k] * cosCur;
+    const double cosNext = 2 * cosPhi * cosCur - cosPrev;
+    cosPrev = cosCur;
+    cosCur = cosNext;
+  }
+  return float(sum);
+}
+
+}  // namespace fourier
+
+Vec3f fourierEval(const FourierBsdfTable& t, Vec3f wo, Vec3f wi) {
+  const float muI = -wi.z, muO = wo.z;
+  if (muI == 0) return Vec3f(0);
+  float ak[kMaxChannels * FourierBsdfTable::kMaxOrder];
+  int32_t offsetO;
+  float weightsO[4];
+  const int32_t m = interpolate(t, muI, muO, t.nChannels, ak, offsetO, weightsO);
+  if (m < 0) return Vec3f(0);
+  const float cosPhi = cosAzimuth(wo, -wi);
+  // f = series / |mu_i|: times |cos(wi)| = |mu_i| leaves the series.
+  return value(t, ak, m, fourier::series(ak, m, cosPhi), cosPhi, transportScale(t, muI, muO));
+}
+
+float fourierPdf(const FourierBsdfTable& t, Vec3f wo, Vec3f wi) {
+  const float muI = -wi.z, muO = wo.z;
+  float ak[FourierBsdfTable::kMaxOrder];
+  int32_t offsetO;
+  float weightsO[4];
+  const int32_t m = interpolate(t, muI, muO, 1, ak, offsetO, weightsO);
+  if (m < 0) return 0;
+  const float rho = sampledIntegral(t, offsetO, weightsO);
+  const float y = fourier::series(ak, m, cosAzimuth(wo, -wi));
+  return rho > 0 && y > 0 ? y / rho : 0;
+}
+
+bool fourierSample(const FourierBsdfTable& t, Vec3f wo, Vec2f u, BsdfSample& out) {
+  const float muO = wo.z;
+  float muI;
+  if (!sampleMuI(t, muO, u.y, muI)) return false;
+  float ak[kMaxChannels * FourierBsdfTable::kMaxOrder];
+  int32_t offsetO;
+  float weightsO[4];
+  const int32_t m = interpolate(t, muI, muO, t.nChannels, ak, offsetO, weightsO);
+  if (m < 0) return false;
+  const float rho = sampledIntegral(t, offsetO, weightsO);
+  double phi;
+  const float y = sampleAzimuth(ak, t.recip.data(), m, u.x, phi);
+  if (!(y > 0 && rho > 0)) return false;
+  // -wi: wo's azimuth turned by phi, at elevation mu_i (from +x where wo
+  // has no azimuth, as cosAzimuth measures it).
+  const float oxy = std::sqrt(wo.x * wo.x + wo.y * wo.y);
+  const float dx = oxy > 0 ? wo.x / oxy : 1, dy = oxy > 0 ? wo.y / oxy : 0;
+  const float sinI = std::sqrt(std::max(0.0f, 1 - muI * muI));
+  const float c = float(std::cos(phi)), s = float(std::sin(phi));
+  // Normalised again: rounding would otherwise compound over bounces (pbrt-v3 does too).
+  out.wi = -normalize(Vec3f(sinI * (c * dx - s * dy), sinI * (s * dx + c * dy), muI));
+  out.delta = false;
+  // The density Y / rho is what fourierPdf gives for this wi; taken from the
+  // direction actually produced, so that MIS and the weight agree with it.
+  out.pdf = fourierPdf(t, wo, out.wi);
+  if (!(out.pdf > 0)) return false;
+  out.weight = fourierEval(t, wo, out.wi) * (1 / out.pdf);
+  return true;
+}
+
+}  // namespace ferry
