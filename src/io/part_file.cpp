@@ -34,7 +34,7 @@ static_assert(std::is_trivially_copyable_v<ProxyV1> && sizeof(ProxyV1) == 32);
 static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // The writers below list every field of these structs: when one gains a
 // field, these fail so that the part format (and kPartFormatVersion) follows.
-static_assert(sizeof(Material) == 144,
+static_assert(sizeof(Material) == 160,
               "Material changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Mesh) == 136, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 80,
@@ -157,6 +157,7 @@ void writeMaterial(FileWriter& w, const Material& m) {
   w.pod(m.mixedWith);
   w.pod(m.mixAmount);
   w.pod(m.bsdfTable);
+  w.pod(m.transmittance);
 }
 
 // The table as read (a0 and recip are derived again when read back).
@@ -482,7 +483,8 @@ Material readMaterial(FileReader& r) {
     m.mixedWith = r.pod<int32_t>();
     m.mixAmount = r.pod<float>();
   }
-  if (r.version() >= 6) m.bsdfTable = r.pod<int32_t>();  // older: no tables
+  if (r.version() >= 6) m.bsdfTable = r.pod<int32_t>();    // older: no tables
+  if (r.version() >= 7) m.transmittance = r.pod<Vec3f>();  // older: opaque
   return m;
 }
 

@@ -33,9 +33,10 @@ namespace ferry {
 // words (ranks 64k .. 64k+63 in word k) and the proxies as boxes then owner
 // words, so parts can be made for more than 64 ranks. Format 1 (up to 64
 // ranks, one word per set, proxies as 32-byte box+mask records) is still read.
-constexpr uint32_t kPartFormatVersion = 6;  // 3: Material::emitsBackSide; 4: coat, sigma;
+constexpr uint32_t kPartFormatVersion = 7;  // 3: Material::emitsBackSide; 4: coat, sigma;
                                             // 5: solid textures, bump and normal maps, mixes;
-                                            // 6: tabulated (Fourier) BSDFs
+                                            // 6: tabulated (Fourier) BSDFs;
+                                            // 7: diffuse transmission
 constexpr uint32_t kOldestPartFormatVersion = 1;
 
 struct WrittenFile {

@@ -890,14 +890,23 @@ struct PbrtMaterials::Impl {
       setColor(color(p, {"reflectance", "Kd"}, Vec3f(0.5f)));
       if (type == "matte") m.sigma = std::clamp(scalar(p, "sigma", 0), 0.0f, 90.0f);
     } else if (type == "translucent") {
-      setColor(color(p, {"Kd"}, Vec3f(0.25f)));
-      consume(p, {"reflect", "transmit"});
+      // pbrt-v3: Kd reflected (times "reflect") and transmitted (times
+      // "transmit") diffusely, plus Ks's glossy reflection and transmission,
+      // which Ferry drops.
+      const Vec3f reflect = untexturedColor(p, "reflect", Vec3f(0.5f));
+      const Vec3f transmit = untexturedColor(p, "transmit", Vec3f(0.5f));
+      Color kd = color(p, {"Kd"}, Vec3f(0.25f));
+      setColor({kd.value * reflect, kd.texture});
+      m.transmittance = untexturedColor(p, "Kd", Vec3f(0.25f)) * transmit;
+      if (maxComponent(untexturedColor(p, "Ks", Vec3f(0.25f))) > 0)
+        layerWarning(type, def.where, "the glossy part (Ks)");
+      consume(p, {"roughness", "remaproughness"});
     } else if (type == "diffusetransmission") {
+      // pbrt-v4: Lambertian reflection and transmission, both times scale.
+      const float s = p.getFloat("scale", 1);
       Color r = color(p, {"reflectance"}, Vec3f(0.25f));
-      Color t = color(p, {"transmittance"}, Vec3f(0.25f));
-      float s = p.getFloat("scale", 1);
-      setColor({min((r.value + t.value) * s, Vec3f(1)),
-                r.texture != kNoTexture ? r.texture : t.texture});
+      setColor({r.value * s, r.texture});
+      m.transmittance = untexturedColor(p, "transmittance", Vec3f(0.25f)) * s;
     } else if (type == "plastic") {
       // pbrt-v3: Lambertian Kd plus a Trowbridge-Reitz reflection of Ks with
       // FresnelDielectric(1.5, 1), i.e. seen from inside the glass: Ferry's

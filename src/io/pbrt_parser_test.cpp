@@ -361,8 +361,10 @@ TEST_F(PbrtV4Features, Materials) {
   EXPECT_EQ(copper.metallic, 1);
   EXPECT_GT(copper.baseColor.x, copper.baseColor.y);
   EXPECT_GT(copper.baseColor.y, copper.baseColor.z);
-  Vec3f leaf = material(scene(), "leaf").baseColor;
-  EXPECT_NEAR(leaf.y, 0.7f, 1e-6);
+  // diffusetransmission: reflectance and transmittance kept apart.
+  const Material& leaf = material(scene(), "leaf");
+  EXPECT_EQ(leaf.baseColor, Vec3f(0.2f, 0.4f, 0.1f));
+  EXPECT_EQ(leaf.transmittance, Vec3f(0.1f, 0.3f, 0.05f));
   const Material& portal = material(scene(), "portal");
   ASSERT_NE(portal.alphaTexture, kNoTexture);
   EXPECT_EQ(scene().textures[size_t(portal.alphaTexture)].sampleAlpha({0.5f, 0.5f}), 0.0f);
@@ -373,7 +375,7 @@ TEST_F(PbrtV4Features, Materials) {
   EXPECT_FLOAT_EQ(mostly.mixAmount, 0.75f);
   EXPECT_EQ(scene().materials.at(size_t(mostly.mixedWith)).metallic, 1);  // gold
   // v4's displacement texture bumps the shading normal.
-  const Material& leafMaterial = material(scene(), "leaf");
+  const Material& leafMaterial = leaf;
   EXPECT_NE(leafMaterial.bumpTexture, kNoTexture);
   EXPECT_NEAR(leafMaterial.bumpScale, 1.0f, 1e-6f);
   EXPECT_FALSE(anyContains(warnings(), "displacement"));
@@ -628,6 +630,12 @@ TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
   EXPECT_EQ(defaults.specular, Vec3f(0.25f));
   // Remapped as pbrt-v3's RoughnessToAlpha(0.1) = 0.4615.
   EXPECT_NEAR(defaults.specularRoughness * defaults.specularRoughness, 0.4615f, 1e-3f);
+  // v3 translucent: Kd split by reflect and transmit (its glossy Ks dropped).
+  const Material translucent = only(
+      "Material \"translucent\" \"rgb Kd\" [0.5 0.5 0.5] \"rgb reflect\" [0.2 0.2 0.2] "
+      "\"rgb transmit\" [0.6 0.6 0.6]");
+  EXPECT_NEAR(translucent.baseColor.x, 0.1f, 1e-6f);
+  EXPECT_NEAR(translucent.transmittance.x, 0.3f, 1e-6f);
   // matte: sigma in degrees.
   EXPECT_EQ(only("Material \"matte\" \"float sigma\" 20").sigma, 20.0f);
   EXPECT_EQ(only("Material \"matte\"").sigma, 0.0f);

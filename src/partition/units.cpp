@@ -22,11 +22,13 @@ UnitSet extractUnits(const Scene& scene, const UnitOptions& options) {
   const uint32_t meshes = uint32_t(scene.meshes.size());
   set.meshResources = meshes;
   set.objectCount = uint32_t(scene.objects.size());
-  set.resourceBytes.reserve(meshes + scene.textures.size());
+  const uint32_t tables = meshes + uint32_t(scene.textures.size());  // first table's resource
+  set.resourceBytes.reserve(tables + scene.bsdfTables.size());
   for (const Mesh& m : scene.meshes) set.resourceBytes.push_back(meshCost(m).total());
   for (const Texture& t : scene.textures) set.resourceBytes.push_back(textureCost(t).total());
+  for (const auto& t : scene.bsdfTables) set.resourceBytes.push_back(bsdfTableCost(*t).total());
 
-  // Resources of each object: its meshes and their materials' textures.
+  // Resources of each object: its meshes and their materials' textures and tables.
   std::vector<std::vector<uint32_t>> objectResources(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o) {
     std::vector<uint32_t>& r = objectResources[o];
@@ -34,6 +36,8 @@ UnitSet extractUnits(const Scene& scene, const UnitOptions& options) {
       r.push_back(uint32_t(m));
       scene.forEachShadingTexture(scene.meshes[m].material,
                                   [&](int32_t t) { r.push_back(meshes + uint32_t(t)); });
+      scene.forEachShadingBsdfTable(scene.meshes[m].material,
+                                    [&](int32_t t) { r.push_back(tables + uint32_t(t)); });
     }
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());

@@ -195,6 +195,16 @@ Bsdf Bsdf::dielectric(float ior, float roughness, Vec3f tint) {
   return b;
 }
 
+Bsdf Bsdf::diffuseTransmission(Vec3f reflectance, Vec3f transmittance) {
+  Bsdf b;
+  b.kind_ = Kind::DiffuseTransmission;
+  b.color_ = max(reflectance, Vec3f(0));
+  b.specular_ = max(transmittance, Vec3f(0));
+  const float r = maxComponent(b.color_), t = maxComponent(b.specular_);
+  b.coatProbability_ = r + t > 0 ? t / (r + t) : 0;  // the probability of transmitting
+  return b;
+}
+
 Bsdf Bsdf::fourier(const FourierBsdfTable& table) {
   Bsdf b;
   b.kind_ = Kind::Fourier;
@@ -210,6 +220,8 @@ Bsdf Bsdf::fromMaterial(const Material& material, Vec3f color, const FourierBsdf
   if (table) return fourier(*table);
   if (material.transmission >= 0.5f) return dielectric(material.ior, material.roughness, color);
   if (material.metallic >= 0.5f) return conductor(color, material.roughness);
+  if (maxComponent(material.transmittance) > 0)
+    return diffuseTransmission(color, material.transmittance);
   if (maxComponent(material.specular) > 0 && material.coat == Material::Coat::FresnelBlend)
     return fresnelBlend(color, material.specular, material.specularRoughness);
   if (maxComponent(material.specular) > 0)
@@ -220,6 +232,9 @@ Bsdf Bsdf::fromMaterial(const Material& material, Vec3f color, const FourierBsdf
 
 Vec3f Bsdf::eval(Vec3f wo, Vec3f wi) const {
   switch (kind_) {
+    case Kind::DiffuseTransmission:
+      if (wo.z == 0 || wi.z == 0) return Vec3f(0);
+      return (wo.z * wi.z > 0 ? color_ : specular_) * (std::abs(wi.z) / kPi);
     case Kind::Diffuse:
       return diffuseEval(wo, wi);
     case Kind::Coated:
@@ -262,6 +277,9 @@ Vec3f Bsdf::eval(Vec3f wo, Vec3f wi) const {
 
 float Bsdf::pdf(Vec3f wo, Vec3f wi) const {
   switch (kind_) {
+    case Kind::DiffuseTransmission:
+      if (wo.z == 0 || wi.z == 0) return 0;
+      return (wo.z * wi.z > 0 ? 1 - coatProbability_ : coatProbability_) * std::abs(wi.z) / kPi;
     case Kind::Diffuse:
       if (wo.z <= 0 || wi.z <= 0) return 0;
       return wi.z / kPi;
@@ -303,6 +321,18 @@ float Bsdf::pdf(Vec3f wo, Vec3f wi) const {
 
 bool Bsdf::sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const {
   switch (kind_) {
+    case Kind::DiffuseTransmission: {
+      if (wo.z == 0) return false;
+      const bool transmit = uLobe < coatProbability_;
+      out.wi = sampleCosineHemisphere(u);
+      if (out.wi.z <= 0) return false;
+      if ((wo.z < 0) != transmit) out.wi.z = -out.wi.z;  // onto wo's side, or through
+      out.pdf = pdf(wo, out.wi);
+      if (!(out.pdf > 0)) return false;
+      out.weight = eval(wo, out.wi) * (1 / out.pdf);
+      out.delta = false;
+      return true;
+    }
     case Kind::Diffuse: {
       if (wo.z <= 0) return false;
       out.wi = sampleCosineHemisphere(u);

@@ -37,7 +37,8 @@ class Bsdf {
     SmoothDielectric,
     RoughDielectric,
     Coated,
-    Fourier
+    Fourier,
+    DiffuseTransmission
   };
 
   // `color` is the material's base colour times its texture at the hit;
@@ -62,6 +63,11 @@ class Bsdf {
   // base `rd` and a GGX coat whose Schlick Fresnel reflects `rs` at normal
   // incidence; the base fades where the coat reflects more.
   static Bsdf fresnelBlend(Vec3f rd, Vec3f rs, float roughness);
+  // A thin diffuse sheet (pbrt-v4's DiffuseTransmissionBxDF): Lambertian
+  // reflection of `reflectance` on the side light arrives from, Lambertian
+  // transmission of `transmittance` to the other; sampled by the two
+  // albedos' largest channels, as pbrt-v4.
+  static Bsdf diffuseTransmission(Vec3f reflectance, Vec3f transmittance);
   static Bsdf conductor(Vec3f f0, float roughness);
   static Bsdf dielectric(float ior, float roughness, Vec3f tint = Vec3f(1));
 
@@ -71,7 +77,7 @@ class Bsdf {
   // the others are shaded on the side the ray arrived from.
   bool transmits() const {
     return kind_ == Kind::SmoothDielectric || kind_ == Kind::RoughDielectric ||
-           (kind_ == Kind::Fourier && tableTransmits_);
+           kind_ == Kind::DiffuseTransmission || (kind_ == Kind::Fourier && tableTransmits_);
   }
 
   // f(wo, wi) * |cos(wi)|; zero for delta lobes.
@@ -96,7 +102,7 @@ class Bsdf {
   float orenA_ = 1, orenB_ = 0;
   // Coated: the coat's tint, whether the base is seen through it, and the
   // probability of sampling the coat rather than the base.
-  Vec3f specular_{0};
+  Vec3f specular_{0};  // Coated: the coat's tint; DiffuseTransmission: the transmittance
   bool layered_ = false;
   bool fresnelBlend_ = false;
   float coatProbability_ = 0;

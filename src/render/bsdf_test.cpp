@@ -123,6 +123,13 @@ std::vector<LobeCase> roughCases() {
     cases.push_back({"diffuse_wo" + degrees(t), Bsdf::diffuse(Vec3f(1)), direction(t)});
   for (float t : outside)
     cases.push_back({"orennayar_s30_wo" + degrees(t), Bsdf::diffuse(Vec3f(1), 30), direction(t)});
+  // Diffuse transmission, from either side (its normals are kept).
+  for (float t : {0.0f, 45.0f, 85.0f, 120.0f, 175.0f}) {
+    cases.push_back({"transmission_r5t5_wo" + degrees(t),
+                     Bsdf::diffuseTransmission(Vec3f(0.5f), Vec3f(0.5f)), direction(t)});
+    cases.push_back({"transmission_r2t7_wo" + degrees(t),
+                     Bsdf::diffuseTransmission(Vec3f(0.2f), Vec3f(0.7f)), direction(t)});
+  }
   // Coats: pbrt-v3's plastic (additive, seen from inside the glass: eta 1 /
   // 1.5) with half-white base and coat, so that the sum stays below one; and
   // layered coats over a white base. (Roughness from 0.3: the quadrature

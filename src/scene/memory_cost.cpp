@@ -1,5 +1,7 @@
 #include "scene/memory_cost.h"
 
+#include "scene/fourier_bsdf_table.h"
+
 #include "core/math.h"
 #include "scene/scene.h"
 
@@ -54,6 +56,12 @@ MemoryCost textureCost(uint64_t texelCount) {
 
 MemoryCost textureCost(const Texture& texture) {
   return textureCost(texture.texelCount());
+}
+
+MemoryCost bsdfTableCost(const FourierBsdfTable& table) {
+  MemoryCost c;
+  c.texels = table.bytes();
+  return c;
 }
 
 MemoryCost instanceCost(uint64_t instanceCount) {

@@ -17,7 +17,7 @@ struct MemoryCost {
   uint64_t normals = 0;
   uint64_t uvs = 0;
   uint64_t indices = 0;
-  uint64_t texels = 0;
+  uint64_t texels = 0;     // textures' texels and tabulated BSDFs' coefficients
   uint64_t instances = 0;  // instance records (transform, ids) and their Embree instance geometry
   uint64_t accel = 0;      // estimated BVH bytes (bottom level per object, top level per instance)
 
@@ -54,6 +54,8 @@ MemoryCost meshCost(uint64_t vertexCount, uint64_t triangleCount, bool hasNormal
 MemoryCost meshCost(const Mesh& mesh);
 MemoryCost textureCost(uint64_t texelCount);
 MemoryCost textureCost(const Texture& texture);
+struct FourierBsdfTable;
+MemoryCost bsdfTableCost(const FourierBsdfTable& table);
 MemoryCost instanceCost(uint64_t instanceCount);
 
 }  // namespace ferry

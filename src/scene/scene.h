@@ -74,6 +74,11 @@ struct Material {
   // none). The table is the whole BSDF: the parameters above other than
   // emission, the cut-out and the bump or normal map are then unused.
   int32_t bsdfTable = kNoBsdfTable;
+  // Diffuse transmission (pbrt-v4's diffusetransmission, pbrt-v3's
+  // translucent): light passing through a thin sheet (a leaf, paper) leaves
+  // the other side cosine-distributed with this albedo; the base colour is
+  // then the sheet's diffuse reflectance. 0: opaque.
+  Vec3f transmittance{0, 0, 0};
 
   bool isEmissive() const { return maxComponent(emission) > 0; }
   // Every texture index the material holds (kNoTexture where unused), for

@@ -34,6 +34,7 @@ SceneSummary summarize(const Scene& scene) {
     s.texels += t.texelCount();
     s.memory += textureCost(t);
   }
+  for (const auto& table : scene.bsdfTables) s.memory += bsdfTableCost(*table);
   s.suns = scene.suns.size();
   s.environments = scene.environment.isBlack() ? 0 : 1;
   s.views = scene.views.size();
@@ -43,7 +44,7 @@ SceneSummary summarize(const Scene& scene) {
 
 MemoryCost ownedMemory(const Scene& scene, const std::vector<int32_t>& instances) {
   std::vector<uint8_t> object(scene.objects.size(), 0), mesh(scene.meshes.size(), 0),
-      texture(scene.textures.size(), 0);
+      texture(scene.textures.size(), 0), table(scene.bsdfTables.size(), 0);
   for (int32_t i : instances) object[scene.instances[i].object] = 1;
   MemoryCost cost = instanceCost(instances.size());
   for (size_t o = 0; o < object.size(); ++o)
@@ -54,9 +55,13 @@ MemoryCost ownedMemory(const Scene& scene, const std::vector<int32_t>& instances
     cost += meshCost(scene.meshes[m]);
     scene.forEachShadingTexture(scene.meshes[m].material,
                                 [&](int32_t t) { texture[size_t(t)] = 1; });
+    scene.forEachShadingBsdfTable(scene.meshes[m].material,
+                                  [&](int32_t t) { table[size_t(t)] = 1; });
   }
   for (size_t t = 0; t < texture.size(); ++t)
     if (texture[t]) cost += textureCost(scene.textures[t]);
+  for (size_t t = 0; t < table.size(); ++t)
+    if (table[t]) cost += bsdfTableCost(*scene.bsdfTables[t]);
   return cost;
 }
 
