@@ -947,9 +947,20 @@ struct PbrtMaterials::Impl {
       m.metallic = 1;
       m.roughness = roughness(p, prefix, type == "metal" ? 0.01f : 0.0f, v3);
       if (type == "coatedconductor") {
-        consume(p, {"interface.roughness", "interface.uroughness", "interface.vroughness",
-                    "interface.eta", "thickness", "albedo", "g", "maxdepth", "nsamples"});
-        layerWarning(type, def.where, "the dielectric coat");
+        // pbrt-v4: the conductor under a dielectric interface (a random walk
+        // between them); Ferry's layered coat, as for coateddiffuse.
+        m.specular = Vec3f(1);
+        m.specularRoughness = roughness(p, "interface.", 0.0f, false);
+        m.coat = Material::Coat::Layered;
+        m.specularEta = 1.5f;
+        if (const PbrtParam* eta = p.find("interface.eta")) {
+          if (eta->type == "spectrum")
+            m.specularEta = spectrumOf(*eta).at(550);
+          else
+            m.specularEta = p.getFloat("interface.eta", 1.5f);
+        }
+        m.specularEta = std::max(m.specularEta, 1.01f);
+        consume(p, {"thickness", "albedo", "g", "maxdepth", "nsamples"});
       }
     } else if (type == "mirror") {
       setColor(color(p, {"Kr"}, Vec3f(0.9f)));

@@ -653,6 +653,16 @@ TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
   EXPECT_FLOAT_EQ(coated.specularEta, 1.4f);
   EXPECT_FLOAT_EQ(coated.specularRoughness, std::sqrt(std::sqrt(0.04f)));  // v4: alpha = sqrt(r)
   EXPECT_EQ(coated.coat, Material::Coat::Layered);
+  // v4 coatedconductor: the conductor under a layered coat of the interface's eta.
+  const Material coatedMetal = only(
+      "Material \"coatedconductor\" \"float interface.eta\" 1.6 \"float "
+      "interface.roughness\" 0.09 \"float conductor.roughness\" 0.25");
+  EXPECT_EQ(coatedMetal.metallic, 1);
+  EXPECT_EQ(coatedMetal.specular, Vec3f(1));
+  EXPECT_FLOAT_EQ(coatedMetal.specularEta, 1.6f);
+  EXPECT_NEAR(coatedMetal.specularRoughness * coatedMetal.specularRoughness, 0.3f, 1e-5f);
+  EXPECT_NEAR(coatedMetal.roughness * coatedMetal.roughness, 0.5f, 1e-5f);
+  EXPECT_EQ(coatedMetal.coat, Material::Coat::Layered);
   // substrate: Ashikhmin-Shirley, Ks the coat's reflectance at normal incidence.
   const Material substrate = only("Material \"substrate\" \"rgb Ks\" [0.04 0.05 0.06]");
   EXPECT_EQ(substrate.specular, Vec3f(0.04f, 0.05f, 0.06f));

@@ -71,6 +71,20 @@ bool refract(Vec3f wo, Vec3f m, float eta, Vec3f& wi) {
   return true;
 }
 
+// A GGX conductor's f * cos(wi) and sampling density (visible normals).
+Vec3f schlick(Vec3f f0, float cosTheta);
+Vec3f roughConductorEval(Vec3f wo, Vec3f wi, Vec3f f0, float alpha) {
+  if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
+  const Vec3f m = normalize(wo + wi);
+  return schlick(f0, dot(wo, m)) * (ggxD(m, alpha) * ggxG2(wo, wi, alpha) / (4 * wo.z));
+}
+float roughConductorPdf(Vec3f wo, Vec3f wi, float alpha) {
+  if (wo.z <= 0 || wi.z <= 0) return 0;
+  const Vec3f m = normalize(wo + wi);
+  const float cosOM = dot(wo, m);
+  return cosOM > 0 ? visibleNormalPdf(wo, m, alpha) / (4 * cosOM) : 0;
+}
+
 Vec3f schlick(Vec3f f0, float cosTheta) {
   float c = std::clamp(1 - cosTheta, 0.0f, 1.0f);
   float c5 = c * c * c * c * c;
@@ -120,6 +134,13 @@ Bsdf Bsdf::coated(Vec3f base, Vec3f specular, float roughness, float eta, bool l
   return b;
 }
 
+Bsdf Bsdf::coatedConductor(Vec3f f0, float baseRoughness, Vec3f specular, float roughness,
+                           float eta) {
+  Bsdf b = coated(f0, specular, roughness, eta, true);
+  b.baseAlpha_ = std::max(baseRoughness * baseRoughness, 2e-3f);
+  return b;
+}
+
 Bsdf Bsdf::fresnelBlend(Vec3f rd, Vec3f rs, float roughness) {
   Bsdf b = coated(rd, rs, roughness, 1.5f, false);
   b.fresnelBlend_ = true;
@@ -161,7 +182,8 @@ Vec3f Bsdf::coatEval(Vec3f wo, Vec3f wi) const {
     const Vec3f schlickF = specular_ + (Vec3f(1) - specular_) * pow5(1 - cosIM);
     return base * wi.z + schlickF * (ggxD(m, alpha_) / (4 * cosIM * std::max(wi.z, wo.z)) * wi.z);
   }
-  Vec3f base = diffuseEval(wo, wi);
+  Vec3f base =
+      baseAlpha_ > 0 ? roughConductorEval(wo, wi, color_, baseAlpha_) : diffuseEval(wo, wi);
   if (layered_)
     base = base * ((1 - fresnelDielectric(wo.z, ior_)) * (1 - fresnelDielectric(wi.z, ior_)));
   const Vec3f m = normalize(wo + wi);
@@ -175,7 +197,8 @@ float Bsdf::coatPdf(Vec3f wo, Vec3f wi) const {
   const Vec3f m = normalize(wo + wi);
   const float cosOM = dot(wo, m);
   const float glossy = cosOM > 0 ? visibleNormalPdf(wo, m, alpha_) / (4 * cosOM) : 0;
-  return coatProbability_ * glossy + (1 - coatProbability_) * (wi.z / kPi);
+  const float base = baseAlpha_ > 0 ? roughConductorPdf(wo, wi, baseAlpha_) : wi.z / kPi;
+  return coatProbability_ * glossy + (1 - coatProbability_) * base;
 }
 
 Bsdf Bsdf::conductor(Vec3f f0, float roughness) {
@@ -219,6 +242,9 @@ Bsdf Bsdf::fourier(const FourierBsdfTable& table) {
 Bsdf Bsdf::fromMaterial(const Material& material, Vec3f color, const FourierBsdfTable* table) {
   if (table) return fourier(*table);
   if (material.transmission >= 0.5f) return dielectric(material.ior, material.roughness, color);
+  if (material.metallic >= 0.5f && maxComponent(material.specular) > 0)
+    return coatedConductor(color, material.roughness, material.specular, material.specularRoughness,
+                           material.specularEta);
   if (material.metallic >= 0.5f) return conductor(color, material.roughness);
   if (maxComponent(material.transmittance) > 0)
     return diffuseTransmission(color, material.transmittance);
@@ -241,13 +267,8 @@ Vec3f Bsdf::eval(Vec3f wo, Vec3f wi) const {
       return coatEval(wo, wi);
     case Kind::Fourier:
       return fourierEval(*table_, wo, wi);
-    case Kind::RoughConductor: {
-      if (wo.z <= 0 || wi.z <= 0) return Vec3f(0);
-      Vec3f m = normalize(wo + wi);
-      float d = ggxD(m, alpha_);
-      float g = ggxG2(wo, wi, alpha_);
-      return schlick(color_, dot(wo, m)) * (d * g / (4 * wo.z));
-    }
+    case Kind::RoughConductor:
+      return roughConductorEval(wo, wi, color_, alpha_);
     case Kind::RoughDielectric: {
       if (wo.z == 0 || wi.z == 0) return Vec3f(0);
       // Work on the side of wo.
@@ -287,11 +308,8 @@ float Bsdf::pdf(Vec3f wo, Vec3f wi) const {
       return coatPdf(wo, wi);
     case Kind::Fourier:
       return fourierPdf(*table_, wo, wi);
-    case Kind::RoughConductor: {
-      if (wo.z <= 0 || wi.z <= 0) return 0;
-      Vec3f m = normalize(wo + wi);
-      return visibleNormalPdf(wo, m, alpha_) / (4 * dot(wo, m));
-    }
+    case Kind::RoughConductor:
+      return roughConductorPdf(wo, wi, alpha_);
     case Kind::RoughDielectric: {
       if (wo.z == 0 || wi.z == 0) return 0;
       bool outside = wo.z > 0;
@@ -345,9 +363,10 @@ bool Bsdf::sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const {
     }
     case Kind::Coated: {
       if (wo.z <= 0) return false;
-      if (uLobe < coatProbability_) {
-        const Vec3f m = sampleVisibleNormal(wo, alpha_, u);
-        out.wi = reflect(wo, m);
+      if (uLobe < coatProbability_ || baseAlpha_ > 0) {
+        // The coat's microfacets, or the conductor base's.
+        const float alpha = uLobe < coatProbability_ ? alpha_ : baseAlpha_;
+        out.wi = reflect(wo, sampleVisibleNormal(wo, alpha, u));
       } else {
         out.wi = sampleCosineHemisphere(u);
       }

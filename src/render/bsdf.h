@@ -63,6 +63,11 @@ class Bsdf {
   // base `rd` and a GGX coat whose Schlick Fresnel reflects `rs` at normal
   // incidence; the base fades where the coat reflects more.
   static Bsdf fresnelBlend(Vec3f rd, Vec3f rs, float roughness);
+  // A GGX conductor (reflectance `f0` at normal incidence, Ferry roughness
+  // `baseRoughness`) under a layered dielectric coat as coated()'s (pbrt-v4's
+  // coatedconductor, approximated: the base times (1 - F) in and out).
+  static Bsdf coatedConductor(Vec3f f0, float baseRoughness, Vec3f specular, float roughness,
+                              float eta);
   // A thin diffuse sheet (pbrt-v4's DiffuseTransmissionBxDF): Lambertian
   // reflection of `reflectance` on the side light arrives from, Lambertian
   // transmission of `transmittance` to the other; sampled by the two
@@ -105,6 +110,7 @@ class Bsdf {
   Vec3f specular_{0};  // Coated: the coat's tint; DiffuseTransmission: the transmittance
   bool layered_ = false;
   bool fresnelBlend_ = false;
+  float baseAlpha_ = 0;  // Coated: > 0 for a conductor base (its GGX alpha), 0 for diffuse
   float coatProbability_ = 0;
   // Fourier: the scene's table.
   const FourierBsdfTable* table_ = nullptr;

@@ -141,6 +141,8 @@ std::vector<LobeCase> roughCases() {
                        Bsdf::coated(Vec3f(0.5f), Vec3f(0.5f), r, 1 / 1.5f, false), direction(t)});
       cases.push_back({"layered_r" + rough + "_wo" + degrees(t),
                        Bsdf::coated(Vec3f(1), Vec3f(1), r, 1.5f, true, 20), direction(t)});
+      cases.push_back({"coatedmetal_r" + rough + "_wo" + degrees(t),
+                       Bsdf::coatedConductor(Vec3f(1), 0.5f, Vec3f(1), r, 1.5f), direction(t)});
       cases.push_back({"fresnelblend_r" + rough + "_wo" + degrees(t),
                        Bsdf::fresnelBlend(Vec3f(1), Vec3f(0.3f), r), direction(t)});
     }
