@@ -1,0 +1,63 @@
+// A tabulated (pbrt-v3 fourier) material in a render, not only as a lobe:
+// a plane of paint.bsdf under a white sky, direct light only, seen from one
+// direction through a narrow camera, renders the table's directional albedo
+// for that direction (estimated independently from the BSDF's own samples).
+// Checks the wiring from Material::bsdfTable through shading, the frame's
+// orientation and the light samples' use of eval().
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "io/fourier_bsdf_file.h"
+#include "render/bsdf.h"
+#include "render/render_test_util.h"
+
+namespace ferry {
+namespace {
+
+using namespace ferry::testing;
+
+TEST(FourierRender, APaintedPlaneUnderAWhiteSkyShowsTheTablesAlbedo) {
+  const std::filesystem::path path =
+      std::filesystem::path(FERRY_SHARED_SCENES) / "breakfast" / "bsdfs" / "paint.bsdf";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "paint.bsdf is not available";
+  Scene scene;
+  scene.bsdfTables.push_back(readFourierBsdfFile(path.string()));
+  Material paint = diffuseMaterial(Vec3f(0.5f));
+  paint.bsdfTable = 0;
+  const int32_t m = scene.addMaterial(paint);
+  scene.addSingleInstanceMesh(makeQuad({-50, 0, 50}, {100, 0, 0}, {0, 0, -100}, m));
+  // Looking down at 50 degrees from the normal, 1-degree field of view.
+  const float theta = 50 * kPi / 180;
+  CameraView view;
+  view.from = {0, 10 * std::cos(theta), 10 * std::sin(theta)};
+  view.at = {0, 0, 0};
+  view.fovY = 1;
+  const PixelStatistics stats = renderUnderWhiteSky(scene, view);
+
+  // The albedo for wo = the direction to the camera, in the shading frame
+  // (z the normal): the mean of the sampled weights over the upper hemisphere.
+  const Bsdf bsdf = Bsdf::fourier(*scene.bsdfTables[0]);
+  const Vec3f wo{0, std::sin(theta), std::cos(theta)};
+  TestRng rng(3);
+  MeanVariance albedo[3];
+  for (int i = 0; i < 400000; ++i) {
+    BsdfSample s;
+    const bool ok = bsdf.sample(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, s);
+    for (int k = 0; k < 3; ++k) albedo[k].add(ok && s.wi.z > 0 ? s.weight[k] : 0.0);
+  }
+  const double z = twoSidedNormalQuantile(sidak(0.01, 3));
+  for (int k = 0; k < 3; ++k) {
+    double mean, se;
+    stats.imageMean(k, mean, se);
+    const double bound =
+        z * std::hypot(se, albedo[k].standardError()) + 2 * kHalfRelativeError * albedo[k].mean;
+    std::printf("[ fourier  ] ch%d: render %.5f +- %.1e, albedo %.5f +- %.1e\n", k, mean, se,
+                albedo[k].mean, albedo[k].standardError());
+    EXPECT_GT(mean, 0.05) << k;
+    EXPECT_NEAR(mean, albedo[k].mean, bound) << k;
+  }
+}
+
+}  // namespace
+}  // namespace ferry
