@@ -518,16 +518,23 @@ struct PbrtMaterials::Impl {
     return id;
   }
 
-  void bakeGrid(const PbrtTextureDefinition& t, Texture& out, bool alpha) {
-    int width = 0, height = 0;
+  // The grid a texture is baked on: its images' resolution, else enough
+  // texels for its finest pattern (at least 256 a side).
+  void bakeResolution(const PbrtTextureDefinition& t, int& width, int& height) {
+    width = height = 0;
     float frequency = 0;
     std::set<const PbrtTextureDefinition*> seen;
     bakeSize(t, width, height, frequency, 0, seen);
     if (width == 0 || height == 0) {
-      int side = std::clamp(int(std::ceil(32 * frequency)), 256, kMaxBakeSide);
+      const int side = std::clamp(int(std::ceil(32 * frequency)), 256, kMaxBakeSide);
       width = std::max(width, side);
       height = std::max(height, side);
     }
+  }
+
+  void bakeGrid(const PbrtTextureDefinition& t, Texture& out, bool alpha) {
+    int width, height;
+    bakeResolution(t, width, height);
     out.width = width;
     out.height = height;
     out.wrap = WrapMode::Repeat;
@@ -556,15 +563,8 @@ struct PbrtMaterials::Impl {
       scale = it->second.second;
       return it->second.first;
     }
-    int width = 0, height = 0;
-    float frequency = 0;
-    std::set<const PbrtTextureDefinition*> seen;
-    bakeSize(t, width, height, frequency, 0, seen);
-    if (width == 0 || height == 0) {
-      const int side = std::clamp(int(std::ceil(32 * frequency)), 256, kMaxBakeSide);
-      width = std::max(width, side);
-      height = std::max(height, side);
-    }
+    int width, height;
+    bakeResolution(t, width, height);
     std::vector<float> values(size_t(width) * height);
     evaluations_ = 0;
     for (int y = 0; y < height; ++y)

@@ -108,26 +108,19 @@ template <typename Path>
 
 // A mix (Material::mixedWith): one material of the chain, chosen with `u`
 // (each link taken with its mixAmount, u stretched back to [0, 1) for the
-// next), its base colour evaluated where the surface is.
+// next link), its base colour evaluated where the surface is.
 template <typename Path>
 Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u) const {
   const Material* material = surface.material;
   for (size_t n = 0; material->mixedWith >= 0 && n < scene_.materials.size(); ++n) {
     const float amount = material->mixAmount;
-    if (!(u < amount)) {
-      u = amount < 1 ? (u - amount) / (1 - amount) : 0;
-      break;
-    }
+    if (!(u < amount)) break;  // this one
     u = u / amount;
     material = &scene_.materials[size_t(material->mixedWith)];
   }
-  if (material == surface.material)
-    return Bsdf::fromMaterial(*material, surface.baseColor, scene_.bsdfTableOf(*material));
-  Vec3f color = material->baseColor;
-  if (material->baseColorTexture != kNoTexture)
-    color *= scene_.textures[size_t(material->baseColorTexture)]
-                 .evaluate(surface.uv, surface.position)
-                 .xyz();
+  const Vec3f color = material == surface.material
+                          ? surface.baseColor
+                          : materialBaseColor(scene_, *material, surface.uv, surface.position);
   return Bsdf::fromMaterial(*material, color, scene_.bsdfTableOf(*material));
 }
 

@@ -53,6 +53,14 @@ struct SurfaceTable {
 };
 SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table, const TraceHit& hit);
 
+// A material's base colour at a shading point: its colour times its
+// texture there (an image at uv, a solid texture at p).
+inline Vec3f materialBaseColor(const Scene& scene, const Material& material, Vec2f uv, Vec3f p) {
+  if (material.baseColorTexture == kNoTexture) return material.baseColor;
+  return material.baseColor *
+         scene.textures[size_t(material.baseColorTexture)].evaluate(uv, p).xyz();
+}
+
 // Bends `s`'s shading normal by its material's bump map or normal map (in
 // the triangle's uv parametrization; nothing without uvs). Out of line: few
 // materials have one.
@@ -104,12 +112,10 @@ inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, con
   s.uv = !mesh.uvs ? Vec2f{hit.u, hit.v}
                    : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
   s.material = mesh.material;
-  s.baseColor = s.material->baseColor;
   if ((s.material->bumpTexture != kNoTexture || s.material->normalTexture != kNoTexture) &&
       mesh.uvs)
     perturbShadingNormal(scene, transform, mesh, tri, s);
-  if (s.material->baseColorTexture != kNoTexture)
-    s.baseColor *= scene.textures[s.material->baseColorTexture].evaluate(s.uv, s.position).xyz();
+  s.baseColor = materialBaseColor(scene, *s.material, s.uv, s.position);
   return s;
 }
 
