@@ -13,6 +13,9 @@
 #     another version: a clear error naming the file, a non-zero exit, no hang.
 #  4. --report writes a CSV of the largest part per rank count with a column
 #     per partitioner (and a PNG); --show-partition writes a picture.
+#  6. --predict-forwards renders a sample through the parts in one process:
+#     at the render's own size, depth and seed it counts exactly the rays
+#     the 8-rank MPI render forwards (it is the same renderer).
 #  5. Partitioning does not hold a second copy of the scene: its peak resident
 #     memory stays below what all the part files hold together.
 set -euo pipefail
@@ -71,6 +74,25 @@ assert want == got, f"ranks hold {got}, the manifest says {want}"
 assert max(want) < m["input_bytes"], "some rank holds the whole scene"
 PY
 done
+# 6. The predictor at the render's own size is the render's own count.
+"$ferry" partition "$island" --ranks 8 --partitioner best -o "$work/predicted" -q \
+  --predict-forwards --predict-size 48x32 --predict-paths 1536 --predict-depth 3 \
+  --look-from 0,40,120 --look-at 0,0,0
+for view in default "command line"; do
+  if [ "$view" = default ]; then camera=(--view default); else camera=(--look-from 0,40,120 --look-at 0,0,0); fi
+  mpirun_n 8 "$ferry" render "$work/predicted" --size 48x32 --spp 1 --max-depth 3 --seed 1 -q \
+    --threads 1 "${camera[@]}" -o "$work/predicted.pfm" --stats "$work/predicted.json"
+  python3 - "$work/predicted/manifest.json" "$work/predicted.json" "$view" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1])); s = json.load(open(sys.argv[2]))
+p = {e["view"]: e for e in m["predictions"]}
+assert set(p) == {"default", "beach", "overview", "command line"}, list(p)
+want = s["render"]["total"]["exchange"]["rays_forwarded"]
+got = p[sys.argv[3]]["rays_forwarded"]
+assert got == want and want > 0, f"{sys.argv[3]}: predicted {got}, the render forwarded {want}"
+print(f"  predicted = forwarded for {sys.argv[3]}: {got}")
+PY
+done
 # Landscape too, once (its alpha-cut leaves and textures go through the files).
 landscape="builtin:landscape?scale=0.05"
 "$ferry" render "$landscape" $island_args -o "$work/landscape.pfm"
@@ -115,6 +137,9 @@ expect_failure "manifest of another version" "another version" mpirun --oversubs
 restore
 expect_failure "unknown partitioner" "unknown partitioner" mpirun --oversubscribe -np 2 "$ferry" render "$cornell" $cornell_args --partitioner kd-tree -o "$work/x.pfm"
 expect_failure "partition without output" "give -o DIR" "$ferry" partition "$cornell" --ranks 2
+expect_failure "prediction without output" "goes with -o DIR" "$ferry" partition "$cornell" --ranks 2 --report "$work/r.csv" --predict-forwards
+expect_failure "camera without prediction" "go with --predict-forwards" "$ferry" partition "$cornell" --ranks 2 -o "$work/c" --look-from 0,0,1 --look-at 0,0,0
+expect_failure "half a camera" "go together" "$ferry" partition "$cornell" --ranks 2 -o "$work/c" --predict-forwards --look-from 0,0,1
 if [ $failures -ne 0 ]; then echo "partition_test: $failures failures"; exit 1; fi
 
 echo "== 4. report and picture"

@@ -19,7 +19,9 @@
 #include "report/partition_report.h"
 #include "scene/light_scene.h"
 #include "scene/scene_summary.h"
+#include "session/forward_prediction.h"
 #include "session/session_settings.h"
+#include "trace/path.h"
 
 namespace ferry {
 namespace {
@@ -31,6 +33,7 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
   p.breakObjects = !o.keepObjectsWhole;
   p.replicationBudget = o.replicationBudget;
   p.meshProxies = o.meshProxies;
+  p.seed = o.seed;
   if (!(p.replicationBudget >= 0 && p.replicationBudget <= 1))
     throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
                                  p.replicationBudget));
@@ -53,28 +56,52 @@ std::string defaultPlotPath(const std::string& report) {
   return p.string();
 }
 
-int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const PartitionerOptions& p,
-               int ranks) {
-  auto start = Clock::now();
-  Scene scene = loadScene(o.scene);
-  const double loadSeconds = secondsSince(start);
-  const SceneSummary summary = summarize(scene);
-  const Scene lights = lightScene(scene);  // from the scene as given, before any rewrite
-  PartitionStats stats;
-  Partition partition = partitionScene(scene, ranks, p, &stats);
-  partition.checkCovers(scene);
-  PartDirectoryInfo info;
-  info.scene = o.scene;
-  info.partitioner = p.name;
-  info.options = optionsJson(p);
-  info.summary = summary.toJson();
-  info.inputBytes = stats.inputBytes;
-  info.replicatedBytes = stats.replicatedBytes;
-  info.partitionSeconds = stats.seconds;
-  auto writeStart = Clock::now();
-  Manifest m = writePartDirectory(o.output, scene, partition, lights, info);
-  const double writeSeconds = secondsSince(writeStart);
-  if (o.quiet) return 0;
+// The views --predict-forwards predicts for: every named view of the scene
+// (its default one if it names none), and the command line's camera.
+std::vector<PredictionView> predictionViews(const Scene& scene, const PartitionCommandOptions& o) {
+  std::vector<PredictionView> views;
+  for (const CameraView& v : scene.views) views.push_back({v.name, std::nullopt});
+  if (views.empty()) views.push_back({"", std::nullopt});
+  if (std::optional<CameraView> c = cameraFromFlags(o.camera)) views.push_back({c->name, c});
+  return views;
+}
+
+ForwardPredictionOptions predictionOptions(const PartitionCommandOptions& o) {
+  ForwardPredictionOptions p;
+  parseImageSize(o.predictSize, p.width, p.height);
+  if (o.predictPaths < 1 || o.predictPaths > kMaxPixels)
+    throw InputError(
+        fmt::format("--predict-paths {}: expected 1 to {}", o.predictPaths, kMaxPixels));
+  if (o.predictDepth < 0 || o.predictDepth > 64)
+    throw InputError(fmt::format("--predict-depth {}: expected 0 to 64", o.predictDepth));
+  p.samplePaths = o.predictPaths;
+  p.maxDepth = o.predictDepth;
+  return p;
+}
+
+// Predicts, prints and records the predictions in the directory's manifest.
+void predictAndRecord(const PartitionCommandOptions& o, const std::vector<PredictionView>& views,
+                      const ForwardPredictionOptions& options) {
+  const std::vector<ForwardPrediction> predictions = predictForwards(o.output, views, options);
+  Manifest m = readManifest(o.output);
+  m.predictions = nlohmann::json::array();
+  for (const ForwardPrediction& p : predictions) m.predictions.push_back(p.toJson());
+  writeManifest(o.output, m);
+  if (o.quiet) return;
+  int width = 0, height = 0;
+  predictionSampleSize(options, width, height);
+  fmt::print("predicted rays forwarded ({}x{} paths sampled for {}x{}, depth {}):\n", width, height,
+             options.width, options.height, options.maxDepth);
+  fmt::print("  {:<16} {:>10} {:>14} {:>9}\n", "view", "per path", "in the image", "seconds");
+  for (const ForwardPrediction& p : predictions)
+    fmt::print("  {:<16} {:>10.3f} {:>14.0f} {:>9.2f}\n", p.view, p.forwardsPerPath(),
+               p.forwardsPerPath() * double(options.width) * double(options.height), p.seconds);
+}
+
+// What `ferry partition -o DIR` made, for the terminal.
+void printPartsSummary(const PartitionCommandOptions& o, PartitionerKind kind,
+                       const PartitionerOptions& p, int ranks, const PartitionStats& stats,
+                       const Manifest& m, double loadSeconds, double writeSeconds) {
   fmt::print(
       "partitioned {} ({} estimated) for {} ranks with {}: {} units, {} distinct parts, {} "
       "proxies\n",
@@ -101,6 +128,41 @@ int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const Par
              stats.seconds, writeSeconds, formatBytes(readProcessMemory().peakResidentBytes));
   fmt::print("wrote {} ({} files, {}; shared data {})\n", o.output, m.parts.size() + 2,
              formatBytes(fileBytes), formatBytes(m.shared.bytes));
+}
+
+int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const PartitionerOptions& p,
+               int ranks) {
+  auto start = Clock::now();
+  Scene scene = loadScene(o.scene);
+  const double loadSeconds = secondsSince(start);
+  // Checked before the work: a bad view or flag fails in a second, not after the write.
+  std::vector<PredictionView> views;
+  ForwardPredictionOptions prediction;
+  if (o.predictForwards) {
+    views = predictionViews(scene, o);
+    prediction = predictionOptions(o);
+  }
+  const SceneSummary summary = summarize(scene);
+  const Scene lights = lightScene(scene);  // from the scene as given, before any rewrite
+  PartitionStats stats;
+  Partition partition = partitionScene(scene, ranks, p, &stats);
+  partition.checkCovers(scene);
+  PartDirectoryInfo info;
+  info.scene = o.scene;
+  info.partitioner = p.name;
+  info.options = optionsJson(p);
+  info.summary = summary.toJson();
+  info.inputBytes = stats.inputBytes;
+  info.replicatedBytes = stats.replicatedBytes;
+  info.partitionSeconds = stats.seconds;
+  auto writeStart = Clock::now();
+  Manifest m = writePartDirectory(o.output, scene, partition, lights, info);
+  const double writeSeconds = secondsSince(writeStart);
+  if (!o.quiet) printPartsSummary(o, kind, p, ranks, stats, m, loadSeconds, writeSeconds);
+  if (o.predictForwards) {
+    scene = Scene{};  // the parts are loaded from the directory, as ranks load them
+    predictAndRecord(o, views, prediction);
+  }
   return 0;
 }
 
@@ -157,6 +219,21 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       ->capture_default_str();
   cmd->add_option("--mesh-proxies", o.meshProxies, "object-proxies: boxes per non-instanced mesh")
       ->capture_default_str();
+  cmd->add_option("--seed", o.seed, "random, ray-guided: the seed of their samples")
+      ->capture_default_str();
+  cmd->add_flag(
+      "--predict-forwards", o.predictForwards,
+      "After writing, predict the rays forwarded per camera path for each named view (and a\n"
+      "--look-from camera) by rendering a sample of paths through the parts, every rank a\n"
+      "thread of this process (no MPI); printed and written into manifest.json");
+  cmd->add_option("--predict-paths", o.predictPaths, "Camera paths the prediction samples")
+      ->capture_default_str();
+  cmd->add_option("--predict-size", o.predictSize,
+                  "The image predicted for: its aspect shapes the sample")
+      ->capture_default_str();
+  cmd->add_option("--predict-depth", o.predictDepth, "Maximum path depth of the prediction")
+      ->capture_default_str();
+  addCameraFlags(cmd, o.camera);
   cmd->add_flag("-q,--quiet", o.quiet, "Print nothing but errors");
 }
 
@@ -167,6 +244,10 @@ int runPartition(const PartitionCommandOptions& o) {
     throw InputError(
         "ferry partition: give -o DIR (write parts) or --report FILE.csv (largest part per rank "
         "count)");
+  if (o.predictForwards && o.output.empty())
+    throw InputError("--predict-forwards goes with -o DIR (it renders from the parts)");
+  if (o.camera.given() && !o.predictForwards)
+    throw InputError("--look-from and --look-at go with --predict-forwards in ferry partition");
   int first = 0, last = 0;
   parseRankRange(o.ranks, first, last);
   if (!o.report.empty()) {

@@ -4,7 +4,10 @@
 // Also the `--show-partition` pictures of `ferry render`.
 #pragma once
 
+#include <cstdint>
 #include <string>
+
+#include "app/camera_flags.h"
 
 #include "partition/partitioner.h"
 
@@ -27,7 +30,16 @@ struct PartitionCommandOptions {
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
   int meshProxies = 64;
+  uint32_t seed = 1;  // random, ray-guided: their samples
   bool quiet = false;
+  // --predict-forwards: after writing, estimate the rays forwarded per camera
+  // path for each named view (and the --look-from camera), without MPI
+  // (session/forward_prediction.h); printed and kept in manifest.json.
+  bool predictForwards = false;
+  uint64_t predictPaths = 16384;
+  std::string predictSize = "2560x1080";
+  int predictDepth = 5;
+  CameraFlags camera;
 };
 
 void addPartitionCommand(CLI::App& app, PartitionCommandOptions& options);

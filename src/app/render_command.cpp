@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <optional>
 
+#include "app/camera_flags.h"
 #include "app/partition_command.h"
 #include "app/progress.h"
 #include "core/clock.h"
@@ -42,23 +43,6 @@ LoadOptions sceneLoadOptions(const RenderOptions& o, const Communicator& comm) {
     };
   }
   return l;
-}
-
-// "x,y,z" -> a vector; throws InputError naming the flag.
-Vec3f parseVector(const std::string& flag, const std::string& text) {
-  Vec3f v;
-  size_t start = 0;
-  for (int i = 0; i < 3; ++i) {
-    const size_t end = i < 2 ? text.find(',', start) : text.size();
-    const std::string part = end == std::string::npos ? "" : text.substr(start, end - start);
-    char* rest = nullptr;
-    const float f = part.empty() ? 0.0f : std::strtof(part.c_str(), &rest);
-    if (part.empty() || rest != part.c_str() + part.size() || !std::isfinite(f))
-      throw InputError(fmt::format("{} '{}': expected three numbers x,y,z", flag, text));
-    v[i] = f;
-    start = end + 1;
-  }
-  return v;
 }
 
 }  // namespace
@@ -109,25 +93,7 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   s.scene = o.scene;
   s.load = sceneLoadOptions(o, comm);
   s.threads = o.threads;
-  if (!o.lookFrom.empty() || !o.lookAt.empty()) {
-    if (o.lookFrom.empty() || o.lookAt.empty())
-      throw InputError("--look-from and --look-at go together");
-    CameraView c;
-    c.name = "command line";
-    c.from = parseVector("--look-from", o.lookFrom);
-    c.at = parseVector("--look-at", o.lookAt);
-    if (!o.up.empty()) c.up = parseVector("--up", o.up);
-    if (o.fov != 0) c.fovY = o.fov;
-    if (!(length(c.at - c.from) > 0))
-      throw InputError("--look-from and --look-at must be different points");
-    if (!(length(cross(normalize(c.at - c.from), c.up)) > 1e-4f))
-      throw InputError("--up must not be parallel to the view direction");
-    if (!(c.fovY > 0.01f && c.fovY < 179))
-      throw InputError(fmt::format("--fov {}: expected 0.01 to 179 degrees", o.fov));
-    s.render.camera = c;
-  } else if (!o.up.empty() || o.fov != 0) {
-    throw InputError("--up and --fov go with --look-from and --look-at");
-  }
+  s.render.camera = cameraFromFlags(o.camera);
   return s;
 }
 
@@ -268,13 +234,7 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
   command->add_flag("--env-fallback", o.envFallback,
                     "Render a scene whose environment map is missing with a constant white\n"
                     "environment instead (the file is named in a warning)");
-  command
-      ->add_option("--look-from", o.lookFrom,
-                   "A camera given outright, instead of a named view: its position x,y,z")
-      ->type_name("X,Y,Z");
-  command->add_option("--look-at", o.lookAt, "The point it looks at, x,y,z")->type_name("X,Y,Z");
-  command->add_option("--up", o.up, "Its up direction (default 0,1,0)")->type_name("X,Y,Z");
-  command->add_option("--fov", o.fov, "Its vertical field of view in degrees (default 45)");
+  addCameraFlags(command, o.camera);
 }
 
 void parseImageSize(const std::string& text, int& width, int& height) {

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <string>
 
+#include "app/camera_flags.h"
+
 namespace CLI {
 class App;
 }
@@ -58,9 +60,8 @@ struct RenderOptions {
   // --show-partition[=N]: draw the partition instead of rendering (0: off;
   // -1: for as many ranks as MPI runs; N: for N ranks).
   int showPartition = 0;
-  // --look-from/--look-at/--up/--fov: a camera given outright ("x,y,z").
-  std::string lookFrom, lookAt, up;
-  float fov = 0;  // 0: the view's
+  // --look-from/--look-at/--up/--fov: a camera given outright.
+  CameraFlags camera;
   // `ferry view` shares these options but writes no image file.
   bool writesImage = true;
 };

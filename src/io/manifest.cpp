@@ -64,6 +64,7 @@ nlohmann::json Manifest::toJson() const {
     parts.push_back(e);
   }
   j["parts"] = parts;
+  if (!predictions.empty()) j["predictions"] = predictions;
   return j;
 }
 
@@ -114,6 +115,9 @@ Manifest readManifest(const std::string& directory) {
     m.replicatedBytes = j.value("replicated_bytes", uint64_t(0));
     m.proxies = j.value("proxies", uint64_t(0));
     m.partitionSeconds = j.value("partition_seconds", 0.0);
+    m.predictions = j.value("predictions", nlohmann::json::array());
+    if (!m.predictions.is_array())
+      throw InputError(fmt::format("{}: predictions must be an array", path));
     readFile(j.at("shared"), m.shared, path);
     const nlohmann::json& parts = j.at("parts");
     if (m.ranks < 1 || m.ranks > (m.version == 1 ? 64 : kMaxRanks) || !parts.is_array() ||

@@ -46,6 +46,9 @@ struct Manifest {
   float filmScale = 1;  // the scene's Film scale (Scene::filmScale)
   ManifestFile shared;
   std::vector<ManifestPart> parts;
+  // `ferry partition --predict-forwards`: ForwardPrediction::toJson() per
+  // view (an array; empty when none was asked for).
+  nlohmann::json predictions = nlohmann::json::array();
 
   nlohmann::json toJson() const;
 };

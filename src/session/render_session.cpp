@@ -223,6 +223,12 @@ void RenderSession::setImageSize(int width, int height) {
   settings_.render.height = height;
 }
 
+void RenderSession::setView(const std::string& view, const std::optional<CameraView>& camera) {
+  if (!camera) rank_->scene.view(view);  // an unknown name fails here, before any collective
+  settings_.render.view = view;
+  settings_.render.camera = camera;
+}
+
 const Scene& RenderSession::scene() const {
   return rank_->scene;
 }

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -138,6 +139,10 @@ class RenderSession {
 
   // Before run(): renders at this size instead (a scene's own, pbrt's Film).
   void setImageSize(int width, int height);
+  // Before run(): renders this view instead (a named one, or `camera` if
+  // given); throws InputError for an unknown name. run() may be called again
+  // after it (the bandwidth predictor renders several views from one load).
+  void setView(const std::string& view, const std::optional<CameraView>& camera);
   // Rank 0, before run() (not collective): continues the render held in a
   // checkpoint (io/checkpoint_file.h): run() starts after its frames, with
   // its image. Throws InputError naming the file if it cannot be read, or

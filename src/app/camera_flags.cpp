@@ -1,0 +1,62 @@
+#include "app/camera_flags.h"
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdlib>
+
+#include "core/error.h"
+
+namespace ferry {
+
+void addCameraFlags(CLI::App* command, CameraFlags& f) {
+  command
+      ->add_option("--look-from", f.lookFrom,
+                   "A camera given outright, instead of a named view: its position x,y,z")
+      ->type_name("X,Y,Z");
+  command->add_option("--look-at", f.lookAt, "The point it looks at, x,y,z")->type_name("X,Y,Z");
+  command->add_option("--up", f.up, "Its up direction (default 0,1,0)")->type_name("X,Y,Z");
+  command->add_option("--fov", f.fov, "Its vertical field of view in degrees (default 45)");
+}
+
+Vec3f parseVectorFlag(const std::string& flag, const std::string& text) {
+  Vec3f v;
+  size_t start = 0;
+  for (int i = 0; i < 3; ++i) {
+    const size_t end = i < 2 ? text.find(',', start) : text.size();
+    const std::string part = end == std::string::npos ? "" : text.substr(start, end - start);
+    char* rest = nullptr;
+    const float f = part.empty() ? 0.0f : std::strtof(part.c_str(), &rest);
+    if (part.empty() || rest != part.c_str() + part.size() || !std::isfinite(f))
+      throw InputError(fmt::format("{} '{}': expected three numbers x,y,z", flag, text));
+    v[i] = f;
+    start = end + 1;
+  }
+  return v;
+}
+
+std::optional<CameraView> cameraFromFlags(const CameraFlags& f) {
+  if (!f.given()) {
+    if (!f.up.empty() || f.fov != 0)
+      throw InputError("--up and --fov go with --look-from and --look-at");
+    return std::nullopt;
+  }
+  if (f.lookFrom.empty() || f.lookAt.empty())
+    throw InputError("--look-from and --look-at go together");
+  CameraView c;
+  c.name = "command line";
+  c.from = parseVectorFlag("--look-from", f.lookFrom);
+  c.at = parseVectorFlag("--look-at", f.lookAt);
+  if (!f.up.empty()) c.up = parseVectorFlag("--up", f.up);
+  if (f.fov != 0) c.fovY = f.fov;
+  if (!(length(c.at - c.from) > 0))
+    throw InputError("--look-from and --look-at must be different points");
+  if (!(length(cross(normalize(c.at - c.from), c.up)) > 1e-4f))
+    throw InputError("--up must not be parallel to the view direction");
+  if (!(c.fovY > 0.01f && c.fovY < 179))
+    throw InputError(fmt::format("--fov {}: expected 0.01 to 179 degrees", f.fov));
+  return c;
+}
+
+}  // namespace ferry
