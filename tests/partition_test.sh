@@ -22,7 +22,7 @@ set -euo pipefail
 ferry=$1
 source_dir=$2
 source "$source_dir/tests/tools/multirank_test_env.sh"
-partitioners="spatial-simple spatial-sah object-naive object-proxies bvh-style best"
+partitioners="spatial-simple spatial-sah object-naive object-proxies bvh-style best ray-guided"
 start=$SECONDS
 
 

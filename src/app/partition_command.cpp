@@ -22,6 +22,7 @@
 #include "session/forward_prediction.h"
 #include "session/session_settings.h"
 #include "trace/path.h"
+#include "trace/ray_sampler.h"
 
 namespace ferry {
 namespace {
@@ -34,6 +35,10 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
   p.replicationBudget = o.replicationBudget;
   p.meshProxies = o.meshProxies;
   p.seed = o.seed;
+  p.rayPaths = o.rayPaths;
+  if (p.rayPaths < 1 || p.rayPaths > (uint64_t(1) << 26))
+    throw InputError(
+        fmt::format("--ray-paths {}: expected 1 to {}", p.rayPaths, uint64_t(1) << 26));
   if (!(p.replicationBudget >= 0 && p.replicationBudget <= 1))
     throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
                                  p.replicationBudget));
@@ -110,7 +115,13 @@ void printPartsSummary(const PartitionCommandOptions& o, PartitionerKind kind,
   if (stats.split.objectsBroken || stats.split.meshesCut)
     fmt::print("  rewritten first: {} objects broken into meshes, {} meshes cut into {} pieces\n",
                stats.split.objectsBroken, stats.split.meshesCut, stats.split.piecesMade);
-  if (kind == PartitionerKind::Best)
+  if (kind == PartitionerKind::RayGuided)
+    fmt::print(
+        "  sampled {} rays in {:.2f} s ({} pass two or more units); the splits separate {} "
+        "({:.2f} per sampled ray)\n",
+        stats.sampledRays, stats.sampleSeconds, stats.sampledRaysAcrossUnits, stats.separatedRays,
+        double(stats.separatedRays) / double(std::max<uint64_t>(1, stats.sampledRays)));
+  if (kind == PartitionerKind::Best || kind == PartitionerKind::RayGuided)
     fmt::print("  replicated {} units, {} over all ranks (budget {:.1f}% = {})\n",
                stats.replicatedUnits, formatBytes(stats.replicatedBytes), 100 * p.replicationBudget,
                formatBytes(uint64_t(p.replicationBudget * double(stats.inputBytes))));
@@ -145,7 +156,7 @@ int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const Par
   const SceneSummary summary = summarize(scene);
   const Scene lights = lightScene(scene);  // from the scene as given, before any rewrite
   PartitionStats stats;
-  Partition partition = partitionScene(scene, ranks, p, &stats);
+  Partition partition = partitionScene(scene, ranks, withRaySample(scene, p), &stats);
   partition.checkCovers(scene);
   PartDirectoryInfo info;
   info.scene = o.scene;
@@ -221,6 +232,10 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       ->capture_default_str();
   cmd->add_option("--seed", o.seed, "random, ray-guided: the seed of their samples")
       ->capture_default_str();
+  cmd->add_option("--ray-paths", o.rayPaths,
+                  "ray-guided: paths in its ray sample (each a few rays), traced from cameras\n"
+                  "spread around and inside the scene, never from its named views")
+      ->capture_default_str();
   cmd->add_flag(
       "--predict-forwards", o.predictForwards,
       "After writing, predict the rays forwarded per camera path for each named view (and a\n"
@@ -288,7 +303,7 @@ int runShowPartition(const RenderOptions& o, const Communicator& comm) {
         applyPartitionerFlags(o, settings);
         const PartitionerOptions p = partitionerOptions(settings, ranks);
         scene = loadScene(o.scene);
-        partition = partitionScene(scene, ranks, p);
+        partition = partitionScene(scene, ranks, withRaySample(scene, p));
         title = fmt::format("{}: {}{}, {} ranks", scene.name, p.name,
                             p.breakObjects ? "" : " (objects whole)", ranks);
       }

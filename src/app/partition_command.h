@@ -30,7 +30,8 @@ struct PartitionCommandOptions {
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
   int meshProxies = 64;
-  uint32_t seed = 1;  // random, ray-guided: their samples
+  uint32_t seed = 1;          // random, ray-guided: their samples
+  uint64_t rayPaths = 65536;  // ray-guided
   bool quiet = false;
   // --predict-forwards: after writing, estimate the rays forwarded per camera
   // path for each named view (and the --look-from camera), without MPI

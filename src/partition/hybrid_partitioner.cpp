@@ -34,7 +34,8 @@ struct PartContent {
 
 ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& parts,
                                       const std::vector<RankSet>& partRanks,
-                                      std::vector<RankSet>& owners, uint64_t budget) {
+                                      std::vector<RankSet>& owners, uint64_t budget,
+                                      uint64_t maxPartBytes) {
   ReplicationResult result;
   if (parts.size() < 2) return result;
   Box3f world;
@@ -71,13 +72,16 @@ ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& p
   uint64_t left = budget;
   for (uint32_t u : candidates) {
     uint64_t cost = 0;
+    bool fits = true;
     std::vector<size_t> missing;
     for (size_t k = 0; k < parts.size(); ++k) {
       if (std::binary_search(parts[k].units.begin(), parts[k].units.end(), u)) continue;
       missing.push_back(k);
-      cost += content[k].marginal(units, u) * uint64_t(partRanks[k].count());
+      const uint64_t added = content[k].marginal(units, u);
+      cost += added * uint64_t(partRanks[k].count());
+      fits &= maxPartBytes == 0 || parts[k].bytes + added <= maxPartBytes;
     }
-    if (missing.empty() || cost > left) continue;
+    if (missing.empty() || cost > left || !fits) continue;
     left -= cost;
     result.addedBytes += cost;
     ++result.replicatedUnits;

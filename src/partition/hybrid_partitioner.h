@@ -27,10 +27,12 @@ constexpr double kLargeAreaFraction = 1.0 / 4096.0;
 
 // Adds copies of spatially large units to every part, largest surface area per
 // byte first, as long as the bytes added over all ranks stay within `budget`
-// (a unit that does not fit is skipped; smaller ones may still fit). Updates
-// `parts` (units, bytes) and `owners` (per unit).
+// (a unit that does not fit is skipped; smaller ones may still fit), and,
+// when `maxPartBytes` > 0, no part grows beyond it. Updates `parts` (units,
+// bytes) and `owners` (per unit).
 ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& parts,
                                       const std::vector<RankSet>& partRanks,
-                                      std::vector<RankSet>& owners, uint64_t budget);
+                                      std::vector<RankSet>& owners, uint64_t budget,
+                                      uint64_t maxPartBytes = 0);
 
 }  // namespace ferry

@@ -5,38 +5,48 @@
 
 namespace ferry {
 
-bool CentroidSplitter::split(const Part& part, Part& left, Part& right) {
-  if (part.units.size() < 2) return false;
-  const auto& units = units_.units;
+std::vector<std::vector<Vec3f>> unitKeyFamilies(const UnitSet& set, const Part& part,
+                                                bool groupCandidates,
+                                                std::vector<uint8_t>& placed) {
+  const auto& units = set.units;
   const size_t n = part.units.size();
-  // Units without geometry always go left: they need an owner, not a place.
-  std::vector<uint8_t> placed(n);
+  placed.assign(n, 0);
   std::vector<Vec3f> own(n);
   for (size_t k = 0; k < n; ++k) {
     placed[k] = !units[part.units[k]].bounds.empty();
     if (placed[k]) own[k] = units[part.units[k]].bounds.center();
   }
-  // Candidate families: each a key point per unit, sorted against 3 x 7 planes.
   std::vector<std::vector<Vec3f>> families = {own};
-  if (groupCandidates_) {
-    std::vector<Box3f> groupBox(units_.objectCount);
-    bool anyShared = false;
-    std::vector<uint32_t> seen(units_.objectCount, 0);
+  if (!groupCandidates) return families;
+  std::vector<Box3f> groupBox(set.objectCount);
+  bool anyShared = false;
+  std::vector<uint32_t> seen(set.objectCount, 0);
+  for (size_t k = 0; k < n; ++k) {
+    const int32_t g = units[part.units[k]].object;
+    if (g < 0 || !placed[k]) continue;
+    anyShared |= seen[g]++ > 0;
+    groupBox[g].extend(units[part.units[k]].bounds);
+  }
+  if (anyShared) {
+    std::vector<Vec3f> grouped = own;
     for (size_t k = 0; k < n; ++k) {
       const int32_t g = units[part.units[k]].object;
-      if (g < 0 || !placed[k]) continue;
-      anyShared |= seen[g]++ > 0;
-      groupBox[g].extend(units[part.units[k]].bounds);
+      if (g >= 0 && placed[k]) grouped[k] = groupBox[g].center();
     }
-    if (anyShared) {
-      std::vector<Vec3f> grouped = own;
-      for (size_t k = 0; k < n; ++k) {
-        const int32_t g = units[part.units[k]].object;
-        if (g >= 0 && placed[k]) grouped[k] = groupBox[g].center();
-      }
-      families.push_back(std::move(grouped));
-    }
+    families.push_back(std::move(grouped));
   }
+  return families;
+}
+
+bool CentroidSplitter::split(const Part& part, Part& left, Part& right) {
+  if (part.units.size() < 2) return false;
+  const auto& units = units_.units;
+  const size_t n = part.units.size();
+  // Units without geometry always go left: they need an owner, not a place.
+  std::vector<uint8_t> placed;
+  const std::vector<std::vector<Vec3f>> families =
+      unitKeyFamilies(units_, part, groupCandidates_, placed);
+  const std::vector<Vec3f>& own = families[0];
 
   double best = std::numeric_limits<double>::infinity();
   int bestFamily = -1;

@@ -36,6 +36,14 @@ class CentroidSplitter final : public PartSplitter {
   bool groupCandidates_;
 };
 
+// The key points a split sorts a part's units by, one family per way of
+// sorting (k indexes part.units): the units' own box centres, and with
+// `groupCandidates` (when some object has several instances in the part)
+// the centre of the box around each object's instances in the part.
+// `placed[k]`: the unit has geometry (units without always go left).
+std::vector<std::vector<Vec3f>> unitKeyFamilies(const UnitSet& units, const Part& part,
+                                                bool groupCandidates, std::vector<uint8_t>& placed);
+
 // object-naive: one proxy per unit, its box.
 std::vector<Proxy> unitBoxProxies(const UnitSet& units, const std::vector<RankSet>& owners);
 

@@ -10,6 +10,7 @@
 #include "partition/hybrid_partitioner.h"
 #include "partition/object_partitioner.h"
 #include "partition/proxies.h"
+#include "partition/ray_guided_partitioner.h"
 #include "partition/spatial_partitioner.h"
 #include "partition/split_loop.h"
 #include "partition/units.h"
@@ -36,7 +37,7 @@ Prepared prepare(Scene& scene, const PartitionerOptions& o) {
   p.inputBytes = summarize(scene).memory.total();
   SceneSplitOptions split;
   split.breakSingleInstanceObjects = o.breakObjects;
-  if (o.name == "best")
+  if (o.name == "best" || o.name == "ray-guided")
     split.maxPieceBytes = o.maxPieceBytes > 0
                               ? o.maxPieceBytes
                               : std::max<uint64_t>(1, p.inputBytes / kBestPiecesPerScene);
@@ -73,7 +74,7 @@ uint64_t PartitionStats::maxRankBytes() const {
 const std::vector<std::string>& partitionerNames() {
   static const std::vector<std::string> names = {"spatial-simple", "spatial-sah", "object-naive",
                                                  "object-proxies", "bvh-style",   "best",
-                                                 "round-robin",    "random"};
+                                                 "ray-guided",     "round-robin", "random"};
   return names;
 }
 
@@ -126,14 +127,32 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
     s.inputBytes = p.inputBytes;
     s.split = std::move(p.split);
     s.units = p.units.units.size();
-    std::unique_ptr<PartSplitter> splitter = makeSplitter(o.name, p.units);
-    std::vector<Part> parts = runSplitLoop(*splitter, ranks);
+    std::vector<Part> parts;
+    if (o.name == "ray-guided") {
+      if (!o.raySample)
+        throw InternalError("the ray-guided partitioner was given no ray sample (withRaySample)");
+      const RayIncidence incidence = rayIncidence(p.units, *o.raySample);
+      RayGuidedSplitter splitter(p.units, incidence, ranks);
+      parts = runSplitLoop(splitter, ranks);
+      refinePartsByRays(p.units, incidence, parts,
+                        kRayGuidedFinalBalance * double(p.inputBytes) / double(ranks));
+      s.sampledRays = o.raySample->rays.size();
+      s.sampledRaysAcrossUnits = incidence.rays();
+      s.separatedRays = estimatedForwards(incidence, parts, p.units.units.size());
+      s.sampleSeconds = o.raySample->seconds;
+    } else {
+      std::unique_ptr<PartSplitter> splitter = makeSplitter(o.name, p.units);
+      parts = runSplitLoop(*splitter, ranks);
+    }
     s.parts = int(parts.size());
     const std::vector<RankSet> partRanks = assignRanks(parts, ranks);
     std::vector<RankSet> owners = unitOwners(p.units, parts, partRanks);
-    if (o.name == "best") {
+    if (o.name == "best" || o.name == "ray-guided") {
+      // ray-guided keeps its balance (no part above kRayGuidedMaxPart x an even share).
+      const uint64_t cap =
+          o.name == "ray-guided" ? uint64_t(kRayGuidedMaxPart * double(p.inputBytes) / ranks) : 0;
       ReplicationResult r = replicateLargeUnits(p.units, parts, partRanks, owners,
-                                                replicationBudget(o, p.inputBytes));
+                                                replicationBudget(o, p.inputBytes), cap);
       s.replicatedBytes = r.addedBytes;
       s.replicatedUnits = r.replicatedUnits;
     }

@@ -14,6 +14,8 @@
 //   best            large meshes first cut into tight pieces, then as
 //                   bvh-style, then spatially large but cheap content
 //                   replicated on every rank up to a budget (default 5%)
+//   ray-guided      as best, but each split takes, among balanced ones, the
+//                   one a sample of rays crosses least (ray_guided_partitioner.h)
 //   round-robin     instances dealt in turn (tests)
 //   random          random replication and overlapping proxies (tests)
 //
@@ -22,10 +24,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "partition/partition.h"
+#include "partition/ray_sample.h"
 #include "partition/scene_split.h"
 
 namespace ferry {
@@ -43,7 +47,11 @@ struct PartitionerOptions {
   double replicationBudget = 0.05;  // best: copies may add this fraction of the input's bytes
   int meshProxies = 64;             // object-proxies: boxes per non-instanced mesh
   uint64_t maxPieceBytes = 0;  // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
-  uint32_t seed = 1;           // random
+  uint32_t seed = 1;           // random; ray-guided: its sample
+  // ray-guided: the rays it weighs splits with (trace/ray_sampler.h makes
+  // them: withRaySample), and how many paths that sample has.
+  std::shared_ptr<const RaySample> raySample;
+  uint64_t rayPaths = 65536;
 };
 
 struct PartitionStats {
@@ -58,6 +66,12 @@ struct PartitionStats {
   uint64_t units = 0;
   SceneSplitReport split;
   double seconds = 0;
+  // ray-guided: its sample (rays, and those passing two or more units), and
+  // how many of those its splits separate (its estimate of the forwarding).
+  uint64_t sampledRays = 0;
+  uint64_t sampledRaysAcrossUnits = 0;
+  uint64_t separatedRays = 0;
+  double sampleSeconds = 0;
 
   uint64_t maxRankBytes() const;
 };
@@ -76,6 +90,7 @@ enum class PartitionerKind {
   ObjectProxies,
   BvhStyle,
   Best,
+  RayGuided,
   RoundRobin,
   Random
 };

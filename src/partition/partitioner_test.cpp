@@ -19,6 +19,7 @@
 #include "partition/units.h"
 #include "scene/scene.h"
 #include "scene/scene_summary.h"
+#include "trace/ray_sampler.h"
 
 namespace ferry {
 namespace {
@@ -91,7 +92,8 @@ TEST(Partitioners, EveryPartitionerCoversAllContentAtManyRankCounts) {
           SCOPED_TRACE(fmt::format("{} {} ranks {} break {}", spec, name, ranks, breakObjects));
           Scene scene = builtinScene(spec);
           PartitionStats stats;
-          Partition p = partitionScene(scene, ranks, named(name, breakObjects), &stats);
+          Partition p =
+              partitionScene(scene, ranks, withRaySample(scene, named(name, breakObjects)), &stats);
           ASSERT_EQ(p.ranks, ranks);
           ASSERT_EQ(p.instanceOwners.size(), scene.instances.size());
           ASSERT_NO_THROW(p.checkCovers(scene));
@@ -116,7 +118,7 @@ TEST(Partitioners, RewrittenSceneHasTheSameTrianglesAndMaterials) {
       SCOPED_TRACE(fmt::format("{} {}", spec, name));
       Scene scene = original;
       PartitionStats stats;
-      partitionScene(scene, 4, named(name), &stats);
+      partitionScene(scene, 4, withRaySample(scene, named(name)), &stats);
       scene.validate();
       EXPECT_EQ(placedTriangles(scene), before);
       EXPECT_EQ(stats.split.originalInstance.size(), scene.instances.size());
@@ -235,7 +237,8 @@ TEST(Partitioners, ReplicationStaysWithinItsBudget) {
 TEST(Partitioners, AreDeterministic) {
   for (const std::string& name : partitionerNames()) {
     Scene a = builtinScene(kIsland), b = builtinScene(kIsland);
-    Partition pa = partitionScene(a, 5, named(name)), pb = partitionScene(b, 5, named(name));
+    Partition pa = partitionScene(a, 5, withRaySample(a, named(name))),
+              pb = partitionScene(b, 5, withRaySample(b, named(name)));
     EXPECT_EQ(pa.instanceOwners, pb.instanceOwners) << name;
     ASSERT_EQ(pa.proxies.size(), pb.proxies.size()) << name;
     for (size_t k = 0; k < pa.proxies.size(); ++k) {
@@ -249,7 +252,7 @@ TEST(Partitioners, AreDeterministic) {
 TEST(Partitioners, ProxyStylesDifferAsDescribed) {
   auto run = [](const std::string& name, int ranks, PartitionStats& s, Scene& scene) {
     scene = builtinScene(kIsland);
-    return partitionScene(scene, ranks, named(name), &s);
+    return partitionScene(scene, ranks, withRaySample(scene, named(name)), &s);
   };
   PartitionStats s;
   Scene scene;
@@ -278,7 +281,7 @@ TEST(Partitioners, CheckCoversCatchesAGap) {
   for (const std::string& name : paperPartitionerNames()) {
     SCOPED_TRACE(name);
     Scene scene = builtinScene(kIsland);
-    Partition p = partitionScene(scene, 4, named(name));
+    Partition p = partitionScene(scene, 4, withRaySample(scene, named(name)));
     ASSERT_NO_THROW(p.checkCovers(scene));
     // The proxy with the largest volume surely matters.
     size_t largest = 0;
@@ -315,9 +318,22 @@ TEST(Partitioners, MaxPartCurvesStartAtTheWholeAndNeverGrowWithoutReplication) {
     for (int ranks : {3, 8}) {
       Scene again = builtinScene(kIsland);
       PartitionStats s;
-      partitionScene(again, ranks, named(name), &s);
+      partitionScene(again, ranks, withRaySample(again, named(name)), &s);
       EXPECT_EQ(curve[ranks - 1], s.maxRankBytes()) << "ranks " << ranks;
     }
+  }
+}
+
+// The ray-guided partitioner's balance (issue 16: the largest part at most
+// 1.3 x total / N at 8 ranks), on both built-in landscapes.
+TEST(Partitioners, RayGuidedKeepsTheLargestPartWithin130PercentOfAnEvenShare) {
+  for (const char* spec : {kIsland, kLandscape}) {
+    Scene scene = builtinScene(spec);
+    PartitionStats s;
+    partitionScene(scene, 8, withRaySample(scene, named("ray-guided")), &s);
+    EXPECT_LE(double(s.maxRankBytes()), 1.3 * double(s.inputBytes) / 8) << spec;
+    EXPECT_GT(s.sampledRays, 0u);
+    EXPECT_GT(s.separatedRays, 0u);
   }
 }
 
@@ -327,16 +343,17 @@ TEST(Partitioners, ObjectAndHybridPartitionsShrinkTheLargestPart) {
   for (std::string name : {"object-naive", "bvh-style", "best"}) {
     Scene scene = builtinScene(kLandscape);
     PartitionStats s;
-    partitionScene(scene, 8, named(name), &s);
+    partitionScene(scene, 8, withRaySample(scene, named(name)), &s);
     EXPECT_LT(double(s.maxRankBytes()), 0.6 * double(s.inputBytes)) << name;
   }
 }
 
 TEST(Partitioners, UnknownNamesAndRankCountsAreInputErrors) {
   Scene scene = builtinScene(kCornell);
-  EXPECT_THROW(partitionScene(scene, 2, named("kd-tree")), InputError);
-  EXPECT_THROW(partitionScene(scene, 0, named("best")), InputError);
-  EXPECT_THROW(partitionScene(scene, kMaxRanks + 1, named("best")), InputError);
+  EXPECT_THROW(partitionScene(scene, 2, withRaySample(scene, named("kd-tree"))), InputError);
+  EXPECT_THROW(partitionScene(scene, 0, withRaySample(scene, named("best"))), InputError);
+  EXPECT_THROW(partitionScene(scene, kMaxRanks + 1, withRaySample(scene, named("best"))),
+               InputError);
   EXPECT_THROW(checkPartitionerName("spatial"), InputError);
 }
 
@@ -349,6 +366,7 @@ TEST(Partitioners, EveryNameParsesToItsKindAndBack) {
   EXPECT_EQ(parsePartitioner("object-proxies"), PartitionerKind::ObjectProxies);
   EXPECT_EQ(parsePartitioner("bvh-style"), PartitionerKind::BvhStyle);
   EXPECT_EQ(parsePartitioner("best"), PartitionerKind::Best);
+  EXPECT_EQ(parsePartitioner("ray-guided"), PartitionerKind::RayGuided);
   EXPECT_EQ(parsePartitioner("round-robin"), PartitionerKind::RoundRobin);
   EXPECT_EQ(parsePartitioner("random"), PartitionerKind::Random);
   try {
@@ -357,7 +375,7 @@ TEST(Partitioners, EveryNameParsesToItsKindAndBack) {
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()),
               "unknown partitioner 'Best' (partitioners: spatial-simple, spatial-sah, "
-              "object-naive, object-proxies, bvh-style, best, round-robin, random)");
+              "object-naive, object-proxies, bvh-style, best, ray-guided, round-robin, random)");
   }
   EXPECT_THROW(parsePartitioner(""), InputError);
 }
@@ -365,10 +383,10 @@ TEST(Partitioners, EveryNameParsesToItsKindAndBack) {
 // Above 64 ranks owner sets grow past one word: the spare ranks (the Cornell
 // box has 8 instances) hold copies, including ranks 64 and above.
 TEST(Partitioners, MoreThan64RanksGetCopiesBeyondRank63) {
-  for (const char* name : {"best", "spatial-sah", "round-robin", "random"}) {
+  for (const char* name : {"best", "ray-guided", "spatial-sah", "round-robin", "random"}) {
     SCOPED_TRACE(name);
     Scene scene = builtinScene(kCornell);
-    Partition p = partitionScene(scene, 70, named(name));
+    Partition p = partitionScene(scene, 70, withRaySample(scene, named(name)));
     p.checkCovers(scene);
     bool beyond = false;
     for (const RankSet& owners : p.instanceOwners) beyond = beyond || owners.highest() >= 64;
@@ -382,7 +400,7 @@ TEST(Partitioners, MoreThan64RanksGetCopiesBeyondRank63) {
 TEST(SplitLoop, SpareRanksGetCopiesOfTheCostliestParts) {
   Scene scene = builtinScene(kCornell);  // 8 instances: 13 ranks need copies
   PartitionStats s;
-  Partition p = partitionScene(scene, 13, named("bvh-style"), &s);
+  Partition p = partitionScene(scene, 13, withRaySample(scene, named("bvh-style")), &s);
   EXPECT_LT(s.parts, 13);
   int replicated = 0;
   for (const RankSet& m : p.instanceOwners) replicated += m.count() > 1;

@@ -24,6 +24,7 @@
 #include "render/wavefront_renderer.h"
 #include "trace/embree_backend.h"
 #include "trace/path.h"
+#include "trace/ray_sampler.h"
 
 namespace ferry {
 
@@ -73,7 +74,7 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     // given, before the partitioner rewrites it and ranks release geometry.
     lights = std::make_unique<LightSampler>(scene);
     const PartitionerOptions options = partitionerOptions(settings, comm.size());
-    partition = partitionScene(scene, comm.size(), options);
+    partition = partitionScene(scene, comm.size(), withRaySample(scene, options));
     partitionerName = options.name;
     owned = partition.instancesOf(comm.rank());
     scene.releaseAllBut(owned);
