@@ -35,6 +35,8 @@
 #   bash bench/distribution_cost.sh [FERRY]             (default build/ferry)
 #   SCENE='builtin:island' SIZE=640x360 SPP=1 FRAMES=3 ROUNDS=3 CORES=$(nproc) \
 #     PARTITION=best EXCHANGES="overlapped bulk" bash bench/distribution_cost.sh
+# The camera: the scene's default view, VIEW=name, or any camera with
+# LOOK_FROM=x,y,z LOOK_AT=x,y,z (and UP=x,y,z FOV=degrees), as ferry render's flags.
 set -euo pipefail
 ferry=$(realpath "${1:-build/ferry}")
 SCENE=${SCENE:-builtin:island}
@@ -47,6 +49,12 @@ RANKS=${RANKS:-1 2 4 8}
 PARTITION=${PARTITION:-best}
 EXCHANGES=${EXCHANGES:-overlapped bulk}
 THREADS=${THREADS:-split}
+camera=()
+[ -n "${VIEW:-}" ] && camera+=(--view "$VIEW")
+[ -n "${LOOK_FROM:-}" ] && camera+=(--look-from "$LOOK_FROM")
+[ -n "${LOOK_AT:-}" ] && camera+=(--look-at "$LOOK_AT")
+[ -n "${UP:-}" ] && camera+=(--up "$UP")
+[ -n "${FOV:-}" ] && camera+=(--fov "$FOV")
 BASELINE=${BASELINE:+$(realpath "$BASELINE")}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_btl_vader_single_copy_mechanism=none OMPI_MCA_mpi_yield_when_idle=1
@@ -62,13 +70,13 @@ run() {
   [ "$THREADS" = all ] && threads=$CORES
   mpirun --oversubscribe --bind-to none -np "$n" "$binary" render "$SCENE" --size "$SIZE" --spp "$SPP" --frames "$FRAMES" \
     --threads "$threads" --forwarding "$mode" --partition "$PARTITION" -q -o "$work/out.pfm" \
-    --stats "$work/$tag.json" "$@"
+    --stats "$work/$tag.json" "${camera[@]}" "$@"
 }
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
   "$(free -g | awk '/Mem:/ {print $2}') GiB; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $CORES cores for every configuration," \
-  "partition $PARTITION, threads $THREADS"
+  "partition $PARTITION, threads $THREADS, camera ${camera[*]:-default view}"
 
 for round in $(seq "$ROUNDS"); do
   for n in $RANKS; do

@@ -19,7 +19,7 @@ if ! /usr/bin/python3 -c "import matplotlib" 2>/dev/null && ! python3 -c "import
 fi
 
 export NET=local RATES_LOCAL="local again" SIZE=48x20 SCALE=0.05 FRAMES=1 SCENES=island
-export VIEWS_island=default PARTITIONERS="spatial-sah best" PICTURES=0
+export VIEWS_island=default PARTITIONERS="spatial-sah best ray-guided" PICTURES=0
 
 mkdir -p "$work/ok"
 OUT="$work/ok" bash "$src/bench/paper-eval" "$ferry" > "$work/ok.log" 2>&1 || { cat "$work/ok.log"; fail "paper-eval failed"; }
@@ -33,6 +33,9 @@ grep -q "^| island | default | .*(1.0×)" "$md" || fail "Table 1 row missing: $(
 grep -q "identical counts" "$md" || fail "determinism note missing"
 grep -q "| island | default | best | broadcast |" "$md" || fail "forwarding-mode row missing"
 grep -q "^## Against the paper" "$md" || fail "comparison missing"
+grep -q "^## The bandwidth predictor" "$md" || fail "prediction table missing"
+grep -q "^| island | default | ray-guided | " "$md" || grep -q "^## The ray-guided partitioner against the six" "$md" \
+  || fail "ray-guided section missing"
 echo "ok: $(grep -c '' "$md") lines; $(grep -m1 '^  island ' "$work/ok.log" | xargs)"
 
 # A failing run: named, non-zero, nothing written.
