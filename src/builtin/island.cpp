@@ -119,12 +119,12 @@ class IslandPlanner {
     addMaterials(addTextures());
     ElementMeshes base;
     addGroundTiles(plan_, shape_, grid_, kGroundTiles, mat_.terrain, base);
-    const int rings = int(scaledResolution(96, scale_, 12, 2048));
-    const int segments = scaledMultiple(384, scale_, kPeakSectors, 48, 8192);
+    const int rings = int(scaledResolution(48, scale_, 12, 2048));
+    const int segments = scaledMultiple(192, scale_, kPeakSectors, 48, 8192);
     addPeak(plan_, shape_, 0, grid_, rings, segments, kPeakSectors, mat_.terrain, "isMountainA",
             base);
     addPeak(plan_, shape_, 1, grid_, std::max(8, rings * 2 / 3),
-            scaledMultiple(256, scale_, kPeakSectors, 48, 8192), kPeakSectors, mat_.terrain,
+            scaledMultiple(128, scale_, kPeakSectors, 48, 8192), kPeakSectors, mat_.terrain,
             "isMountainB", base);
     addCliffs(plan_, shape_, int(scaledResolution(48, scale_, 8, 1024)), mat_.rock, base);
     addBeach(plan_, shape_, scaledMultiple(480, scale_, kBeachPieces, 33, 8193),

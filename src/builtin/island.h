@@ -19,12 +19,12 @@
 //     32x), and below s = 1 about sqrt(s) times it (at least one),
 //   - below s = 1 isIronwoodA1's giant tree also thins (fewer leaves and
 //     roots), so small scales make small scenes.
-// At s = 1: 2.1 M unique and 5.2e8 instanced triangles, 163 K instances,
-// 291 MiB estimated (ratios after the published Moana figures, docs/scenes.md).
-// At s = 0.1: 0.75 M unique triangles, 16 K instances (for tests).
+// At s = 1: 1.8 M unique and 4.3e8 instanced triangles, 126 K instances,
+// 245 MiB estimated (ratios after the published Moana figures, docs/scenes.md).
+// At s = 0.1: 0.64 M unique triangles, 13 K instances (for tests).
 // At s = kIslandLargeScale = 100 the description (made without generating)
-// is 7.7e7 unique and 5.4e10 instanced triangles, 16 M instances and an
-// estimated 14 GiB: meant for `ferry info` and for spreading over ranks,
+// is 6.7e7 unique and 4.4e10 instanced triangles, 13 M instances and an
+// estimated 11 GiB: meant for `ferry info` and for spreading over ranks,
 // not for generating on one small machine.
 #pragma once
 

@@ -60,30 +60,30 @@ std::vector<ElementSpecies> islandSpecies() {
   return {
       // Terrain elements, with the species (and the number of variants of
       // each) that Disney's element files instance over them.
-      {"isMountainA", "breadfruit", K::Broadleaf, 1500, 1, onPeak(0, 0.15f, 0.95f), kTreeRule},
-      {"isMountainA", "palm", K::Palm, 300, 16, onPeak(0, 0.3f, 0.95f), kPalmRule},
-      {"isMountainA", "canopy", K::Broadleaf, 800, 1, onPeak(0, 0.1f, 0.9f), kTreeRule},
-      {"isMountainA", "lowgrowth", K::Grass, 20000, 2, onPeak(0, 0.1f, 0.95f, true), kGrassRule},
-      {"isMountainB", "breadfruit", K::Broadleaf, 900, 1, onPeak(1, 0.1f, 0.95f), kTreeRule},
-      {"isMountainB", "palm", K::Palm, 200, 12, onPeak(1, 0.3f, 0.95f), kPalmRule},
-      {"isMountainB", "fern", K::Fern, 6000, 14, onPeak(1, 0.1f, 0.95f, true), kFernRule},
-      {"isMountainB", "canopy", K::Broadleaf, 600, 4, onPeak(1, 0.1f, 0.9f), kTreeRule},
+      {"isMountainA", "breadfruit", K::Breadfruit, 300, 1, onPeak(0, 0.15f, 0.95f), kTreeRule},
+      {"isMountainA", "palm", K::Palm, 150, 16, onPeak(0, 0.3f, 0.95f), kPalmRule},
+      {"isMountainA", "canopy", K::Canopy, 400, 1, onPeak(0, 0.1f, 0.9f), kTreeRule},
+      {"isMountainA", "lowgrowth", K::Grass, 1500, 2, onPeak(0, 0.1f, 0.95f, true), kGrassRule},
+      {"isMountainB", "breadfruit", K::Breadfruit, 200, 1, onPeak(1, 0.1f, 0.95f), kTreeRule},
+      {"isMountainB", "palm", K::Palm, 100, 12, onPeak(1, 0.3f, 0.95f), kPalmRule},
+      {"isMountainB", "fern", K::Fern, 1500, 14, onPeak(1, 0.1f, 0.95f, true), kFernRule},
+      {"isMountainB", "canopy", K::Canopy, 300, 4, onPeak(1, 0.1f, 0.9f), kTreeRule},
       {"isDunesA", "palmdebris", K::Debris, 3000, 4, band(2.2f, 4.2f, 0.25f, 0.82f), kDebrisRule},
-      {"isDunesA", "muskfern", K::Fern, 8000, 13, band(2.2f, 4.2f, 0.25f, 0.82f, 1, 140, true),
+      {"isDunesA", "muskfern", K::Fern, 14000, 13, band(2.2f, 4.2f, 0.25f, 0.82f, 1, 140, true),
        kFernRule},
-      {"isDunesA", "hibiscusflower", K::Flowers, 6000, 7,
+      {"isDunesA", "hibiscusflower", K::Flowers, 10000, 7,
        band(2.2f, 4.2f, 0.25f, 0.82f, 1, 140, true), kFlowerRule},
       {"isDunesB", "pandanus", K::Pandanus, 200, 1, band(-1.0f, 1.2f, 0.25f, 0.82f, 0.5f, 60),
        kPalmRule},
       {"isDunesB", "roots", K::Debris, 6000, 14, band(-1.0f, 1.2f, 0.25f, 0.82f), kDebrisRule},
       {"isDunesB", "ironwood", K::Broadleaf, 400, 2, band(-1.0f, 1.2f, 0.25f, 0.82f), kTreeRule},
-      {"isBeach", "pebble", K::Pebble, 20000, 14, band(beach0, beach1, 0.86f, 1.03f, -1, 3, true),
+      {"isBeach", "pebble", K::Pebble, 8000, 14, band(beach0, beach1, 0.86f, 1.03f, -1, 3, true),
        kPebbleRule},
-      {"isBeach", "groundcover", K::Pebble, 15000, 22,
+      {"isBeach", "groundcover", K::Pebble, 6000, 22,
        band(beach0, beach1, 0.86f, 1.0f, -1, 3, true), kPebbleRule},
       {"isBeach", "stone", K::Stone, 3000, 6, band(beach0, beach1, 0.9f, 1.04f, -1.5f, 3),
        kStoneRule},
-      {"isBeach", "shell", K::Shell, 15000, 14, band(beach0, beach1, 0.88f, 1.03f, -1, 3, true),
+      {"isBeach", "shell", K::Shell, 6000, 14, band(beach0, beach1, 0.88f, 1.03f, -1, 3, true),
        kPebbleRule},
       {"isBeach", "palmdebris", K::Debris, 1500, 4, band(beach0, beach1, 0.86f, 0.99f, 0.1f, 3),
        kDebrisRule},
@@ -115,15 +115,15 @@ std::vector<ElementSpecies> islandSpecies() {
       {"isPandanusA", "pandanus", K::Pandanus, 300, 1, band(-0.8f, 0.6f, 0.75f, 0.9f, 0.5f, 20),
        kPalmRule},
       {"isHibiscus", "hibiscus", K::Bush, 1500, 1, band(2.3f, 3.4f, 0.4f, 0.8f), kBushRule},
-      {"isHibiscus", "flower", K::Flowers, 3000, 1, band(2.3f, 3.4f, 0.4f, 0.8f, 1, 140, true),
+      {"isHibiscus", "flower", K::Flowers, 6000, 1, band(2.3f, 3.4f, 0.4f, 0.8f, 1, 140, true),
        kFlowerRule},
       {"isHibiscusYoung", "hibiscus", K::YoungBush, 2000, 1, band(3.4f, 4.4f, 0.35f, 0.8f),
        kBushRule},
       {"isGardeniaA", "gardenia", K::Bush, 1200, 1, band(0.6f, 1.5f, 0.4f, 0.8f), kBushRule},
-      {"isGardeniaA", "flower", K::Flowers, 2000, 1, band(0.6f, 1.5f, 0.4f, 0.8f, 1, 140, true),
+      {"isGardeniaA", "flower", K::Flowers, 4000, 1, band(0.6f, 1.5f, 0.4f, 0.8f, 1, 140, true),
        kFlowerRule},
-      {"isKava", "kava", K::Bush, 1500, 1, band(1.3f, 2.3f, 0.3f, 0.75f), kBushRule},
-      {"isNaupakaA", "naupaka", K::Bush, 2500, 1, band(beach0, beach1, 0.8f, 0.87f, 0.5f, 10),
+      {"isKava", "kava", K::Bush, 3000, 1, band(1.3f, 2.3f, 0.3f, 0.75f), kBushRule},
+      {"isNaupakaA", "naupaka", K::Bush, 5000, 1, band(beach0, beach1, 0.8f, 0.87f, 0.5f, 10),
        kBushRule},
   };
 }
@@ -132,7 +132,9 @@ PlantDesign designPlant(PlantKind kind, int v, uint32_t seed) {
   HashRng rng(seed, 0xa7a, uint32_t(kind), uint32_t(v));
   const uint32_t key = streamKey(seed, 0xd5, uint32_t(kind), uint32_t(v));
   switch (kind) {
-    case PlantKind::Broadleaf: {
+    case PlantKind::Broadleaf:
+    case PlantKind::Breadfruit:
+    case PlantKind::Canopy: {
       TreeParams p;
       p.trunkLength = rng.uniform(6, 9);
       p.trunkRadius = rng.uniform(0.22f, 0.32f);
@@ -144,6 +146,15 @@ PlantDesign designPlant(PlantKind kind, int v, uint32_t seed) {
                   {4, 4, 4, 0.45f, 0.55f, 40, 0.3f, 0.1f, 0.4f}};
       p.leavesPerTip = 96;
       p.leafSize = 0.8f;
+      // The mountains' trees are the original's low-detail ones ("...Baked",
+      // "canopyOnly_lo"): fewer, larger leaf cards.
+      if (kind == PlantKind::Breadfruit) {
+        p.leavesPerTip = 48;
+        p.leafSize = 1.1f;
+      } else if (kind == PlantKind::Canopy) {
+        p.leavesPerTip = 16;
+        p.leafSize = 1.8f;
+      }
       return designTree(p, key);
     }
     case PlantKind::Palm:

@@ -26,7 +26,9 @@ constexpr std::array<const char*, 20> kIslandElements = {
 
 // The stand-in shapes, each a design from plants.h with its own parameters.
 enum class PlantKind {
-  Broadleaf,  // breadfruit, ironwood, bay cedar, canopy trees
+  Broadleaf,   // ironwood, bay cedar
+  Breadfruit,  // lower detail
+  Canopy,      // lowest detail: a crown of large leaf cards
   Palm,
   DeadPalm,
   Pandanus,
