@@ -37,13 +37,13 @@ int scaledMultiple(float base, double scale, int multiple, int lo, int hi) {
 }
 
 struct IslandTextures {
-  int32_t terrain, rock, sand, bark, leaves, banyanLeaves, palmBark, palmFronds, fern, grass, petal;
+  int32_t terrain, rock, sand, bark, leaves, giantLeaves, palmBark, palmFronds, fern, grass, petal;
 };
 
 // Roles to materials for the plants; some kinds override a role.
 struct IslandMaterials {
   int32_t terrain, sand, rock, ocean, seabed, bark, leaves, palmBark, palmFronds, deadFronds,
-      coconut, fern, grass, seaweed, stem, flowerCentre, driftwood, shell, banyanBark, banyanLeaves,
+      coconut, fern, grass, seaweed, stem, flowerCentre, driftwood, shell, giantBark, giantLeaves,
       lanternGlow, flame, lanternPole;
   std::array<int32_t, 3> petals, corals;
 
@@ -193,8 +193,8 @@ IslandTextures IslandPlanner::addTextures() {
     return leafClusterTexture("island-leaves", 512, seed + 4, {0.16f, 0.36f, 0.06f},
                               {0.03f, 0.11f, 0.02f}, 11);
   });
-  t.banyanLeaves = texture("banyan-leaves", 512, 512, [=] {
-    return leafClusterTexture("banyan-leaves", 512, seed + 5, {0.1f, 0.26f, 0.05f},
+  t.giantLeaves = texture("giant-ironwood-leaves", 512, 512, [=] {
+    return leafClusterTexture("giant-ironwood-leaves", 512, seed + 5, {0.1f, 0.26f, 0.05f},
                               {0.02f, 0.07f, 0.015f}, 15);
   });
   t.palmBark = texture("palm-bark", 256, 256, [=] {
@@ -259,8 +259,8 @@ void IslandPlanner::addMaterials(const IslandTextures& tex) {
   mat.corals = {material("coral-pink", {0.75f, 0.35f, 0.4f}, tex.rock, false, 0.8f),
                 material("coral-orange", {0.85f, 0.5f, 0.25f}, tex.rock, false, 0.8f),
                 material("coral-violet", {0.45f, 0.3f, 0.6f}, tex.rock, false, 0.8f)};
-  mat.banyanBark = material("banyan-bark", {0.85f, 0.82f, 0.78f}, tex.bark);
-  mat.banyanLeaves = material("banyan-leaves", Vec3f(1), tex.banyanLeaves, true, 0.6f);
+  mat.giantBark = material("giant-ironwood-bark", {0.85f, 0.82f, 0.78f}, tex.bark);
+  mat.giantLeaves = material("giant-ironwood-leaves", Vec3f(1), tex.giantLeaves, true, 0.6f);
   Material glow;
   glow.name = "lantern-glow";
   glow.baseColor = {0.8f, 0.7f, 0.5f};
@@ -371,7 +371,7 @@ void IslandPlanner::addGiantIronwood() {
   PlantDesign design = designTree(giant, streamKey(seed_, 0xba2));
   int32_t object =
       addPlantObject(plan_, "isIronwoodA1/ironwood", design, [mat = mat_](PartRole role) {
-        return role == PartRole::Leaves ? mat.banyanLeaves : mat.banyanBark;
+        return role == PartRole::Leaves ? mat.giantLeaves : mat.giantBark;
       });
   const uint64_t count = scaledCount(4, scale_);
   ScatterRule rule;
