@@ -19,7 +19,6 @@
 namespace ferry::builtin {
 namespace {
 
-constexpr Vec3f kDeepSeabed{0.06f, 0.1f, 0.1f};
 constexpr int kGroundTiles = 16;  // per side
 constexpr int kPeakSectors = 8;
 constexpr int kBeachPieces = 3;

@@ -2,9 +2,11 @@
 // its 20 elements by name, and what each one instances: the plant element's
 // own plant (its copies over the element's region) and the species each
 // element scatters over its region (Moana's per-element "instanced
-// primitives"), with counts at scale 1. The numbers come from the published
-// figures cited in docs/scenes.md, scaled down; none is tuned towards a
-// rendering or partitioning result.
+// primitives"), with counts at scale 1. The species and their numbers of
+// variants are those of Disney's element files, the prototypes' sizes those
+// of its archives; the instance counts, not published per element, are set
+// so that the island-wide ratios match the published ones (docs/scenes.md).
+// None is tuned towards a rendering or partitioning result.
 #pragma once
 
 #include <array>

@@ -11,7 +11,6 @@ namespace {
 
 constexpr float kHillHeight = 48;
 constexpr float kGroundCap = 80;  // soft ceiling of the ground heightfield
-constexpr Vec3f kDeepSeabed{0.06f, 0.1f, 0.1f};
 
 // Turns an angle difference into [0, 2 pi).
 float wrapAngle(float a) {

@@ -29,6 +29,7 @@ constexpr float kGroundHalfSize = 1.45f * (1 + kCoastVariation) * kCoastRadius;
 constexpr float kBeachTheta0 = 0.6f, kBeachTheta1 = 2.55f;  // the south shore, facing +z
 constexpr float kBeachRho0 = 0.84f, kBeachRho1 = 1.05f;
 constexpr float kNoHeight = -std::numeric_limits<float>::infinity();
+constexpr Vec3f kDeepSeabed{0.06f, 0.1f, 0.1f};  // the seabed's colour, and the deep ground's
 
 // A volcanic cone with ridges; its apex (at r = 0) is its highest point.
 struct Peak {
