@@ -54,12 +54,13 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
     sp_proxies = {s: max(manifests[s, p]["proxies"] for p in spatial) for s in scenes}
     best_proxies = {s: manifests[s, "best"]["proxies"] for s in scenes}
     head = "**Why `best` forwards more than spatial here.** " if more else "**Why.** "
-    txt = (head + "First, at 8 ranks the spatial partitions hardly partition these scenes: the largest spatial "
+    txt = (head + "First, at 8 ranks every spatial rank holds much of these scenes: the largest spatial "
            "part holds " + ", ".join(f"{100 * sp_largest[s]:.0f}% of the {s}" for s in scenes)
            + " (`best`: " + ", ".join(f"{100 * best_largest[s]:.0f}%" for s in scenes) + "). "
            "The landscape's largest piece is one terrain mesh (a third of its bytes; docs/partitioning.md) "
-           "spanning every domain, so every spatial rank holds nearly all of it; the island's ground is its "
-           "elements' tiles and set pieces (docs/scenes.md). The spatial proxies are "
+           "spanning every domain, so every spatial rank holds nearly all of it. The island's ground is its "
+           "elements' tiles and set pieces (docs/scenes.md), so a spatial rank holds less of it, and why "
+           "`best` still forwards more there has not been analysed. The spatial proxies are "
            + " and ".join(f"{sp_proxies[s]}" for s in scenes) + " disjoint domain boxes: a ray is forwarded "
            "only when it leaves its rank's domain without a hit. `best` has "
            + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (one per instance or terrain "
