@@ -145,7 +145,7 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
     out.append(txt)
     out.append(
         "**Other differences.** The scenes are Ferry's procedural stand-ins for Moana's island and pbrt's "
-        "landscape (docs/partitioning.md), not the originals; 1 path per pixel at a smaller image than the "
+        "landscape, built from their published figures (docs/scenes.md), not the originals; 1 path per pixel at a smaller image than the "
         "paper's, so the absolute counts are smaller by the pixel ratio (the per-path table compares like "
         "with like); CPU ranks (Embree) instead of GPUs (OptiX); max depth 5.")
     return out
