@@ -54,25 +54,27 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
     sp_proxies = {s: max(manifests[s, p]["proxies"] for p in spatial) for s in scenes}
     best_proxies = {s: manifests[s, "best"]["proxies"] for s in scenes}
     head = "**Why `best` forwards more than spatial here.** " if more else "**Why.** "
-    txt = (head + "First, at 8 ranks the spatial partitions hardly partition these scenes: the largest spatial "
+    txt = (head + "First, at 8 ranks every spatial rank holds much of these scenes: the largest spatial "
            "part holds " + ", ".join(f"{100 * sp_largest[s]:.0f}% of the {s}" for s in scenes)
            + " (`best`: " + ", ".join(f"{100 * best_largest[s]:.0f}%" for s in scenes) + "). "
-           "Each built-in scene's largest piece is one terrain mesh (61% of the island's bytes, a third of "
-           "the landscape's; docs/partitioning.md) spanning every domain, so every spatial rank holds "
-           "nearly all of it, and its proxies are "
+           "The landscape's largest piece is one terrain mesh (a third of its bytes; docs/partitioning.md) "
+           "spanning every domain, so every spatial rank holds nearly all of it. The island's ground is its "
+           "elements' tiles and set pieces (docs/scenes.md), so a spatial rank holds less of it, and why "
+           "`best` still forwards more there has not been analysed. The spatial proxies are "
            + " and ".join(f"{sp_proxies[s]}" for s in scenes) + " disjoint domain boxes: a ray is forwarded "
            "only when it leaves its rank's domain without a hit. `best` has "
            + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (one per instance or terrain "
            "piece) that overlap wherever plants of different ranks stand together, and a ray passing such "
            "proxies in front of its hit must visit each of their owners. ")
     if more:
-        txt += ("Second, in our scenes every plant species is spread over the whole terrain "
-                "(docs/partitioning.md), so plants of several ranks stand together everywhere; on the landscape, "
+        txt += ("Second, on the landscape every plant species is spread over the whole terrain "
+                "(docs/partitioning.md; the island's species grow in their elements' regions, docs/scenes.md), "
+                "so plants of several ranks stand together everywhere; on the landscape, "
                 "keeping each species' instances together (which `best` does to save memory) was measured to "
-                "raise forwards from 1.5 to 3.6 per path (docs/partitioning.md, scale 0.25). The paper's Moana "
-                "island is a different scene (far more geometry above the ground, vegetation that varies by "
-                "region); that its `best` forwards less there is the paper's result, which these stand-in "
-                "scenes do not reproduce (we have not run the real Moana island). ")
+                "raise forwards from 1.5 to 3.6 per path (docs/partitioning.md, scale 0.25). The built-in island "
+                "is a stand-in built from the Moana island's published structure (docs/scenes.md), not the "
+                "original; that the paper's `best` forwards less there is the paper's result, which we have "
+                "not measured on the real Moana island. ")
     txt += f"Per camera path, our `best` forwards {per_path} rays, the paper's 0.04–1.0."
     out.append(txt)
 
@@ -143,7 +145,7 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
     out.append(txt)
     out.append(
         "**Other differences.** The scenes are Ferry's procedural stand-ins for Moana's island and pbrt's "
-        "landscape (docs/partitioning.md), not the originals; 1 path per pixel at a smaller image than the "
+        "landscape, built from their published figures (docs/scenes.md), not the originals; 1 path per pixel at a smaller image than the "
         "paper's, so the absolute counts are smaller by the pixel ratio (the per-path table compares like "
         "with like); CPU ranks (Embree) instead of GPUs (OptiX); max depth 5.")
     return out

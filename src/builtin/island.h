@@ -1,26 +1,30 @@
-// builtin:island, a tropical island after Disney's Moana island scene: one
-// large textured heightfield terrain, set pieces overlapping it (a volcanic
-// mountain, sea cliffs, a sand beach), an ocean, a giant banyan as the hero
-// object, and ten instanced species spread or clustered over the land (trees,
-// palms, bushes, ferns, grass, flowers, rocks, boulders, driftwood), lit by a
-// sun, a sky and a campfire with lanterns on the beach.
+// builtin:island, a tropical island after Disney's Moana island scene
+// (docs/scenes.md): its 20 elements by name (isBayCedarA1 .. osOcean), each
+// several meshes. The terrain elements (two volcanic peaks, dunes, beach,
+// coastline, lava cliffs, reef, ocean) are the ground cut into tiles by
+// region plus their set pieces; every element instances its own species over
+// its own region, and each plant element copies its own plant there, so what
+// grows varies over the island. Lit by a sun, a sky and a campfire with
+// lanterns on the beach.
 //
-// Views: "default" (from the shore towards the mountain), "beach" (low on
-// the beach, at the campfire) and "overview" (high above the whole island).
+// Views: "default" (from the shore towards the peaks), "beach" (low on the
+// beach, at the campfire) and "overview" (high above the whole island).
 //
 // Scale s (default 1) keeps the island's size and grows its detail:
 //   - instances of every species: s times the scale-1 count (at least 1),
-//   - terrain cells per side: 1024 sqrt(s) (64 .. 16384), set pieces likewise,
-//   - terrain texture: about 1024 sqrt(s) texels per side (256 .. 8192),
-//   - variants per species: floor(sqrt(s)) times the scale-1 number (up to 32x),
-//   - banyans: floor(sqrt(s)) (at least one); below s = 1 the banyan also
-//     thins (fewer leaves and roots), so small scales make small scenes.
-// At s = 1: 2.9 M unique and 1.9e8 instanced triangles, 71 K instances,
-// about 1 s of CPU time to generate (spread over the cores), 110 MB resident.
-// At s = 0.1: 0.6 M unique triangles, 7 K instances (for tests).
+//   - ground cells per side: 16 tiles of 32 sqrt(s) (4 .. 512) cells; the
+//     peaks, cliffs, beach and reef likewise grow with sqrt(s) per side,
+//   - ground texture: about 768 sqrt(s) texels per side (256 .. 8192),
+//   - variants per species: floor(sqrt(s)) times the scale-1 number (up to
+//     32x), and below s = 1 about sqrt(s) times it (at least one),
+//   - below s = 1 isIronwoodA1's giant tree also thins (fewer leaves and
+//     roots), so small scales make small scenes.
+// At s = 1: 1.8 M unique and 4.3e8 instanced triangles, 126 K instances,
+// 245 MiB estimated (ratios after the published Moana figures, docs/scenes.md).
+// At s = 0.1: 0.64 M unique triangles, 13 K instances (for tests).
 // At s = kIslandLargeScale = 100 the description (made without generating)
-// is 2.4e8 unique and 2.0e10 instanced triangles, 7.1 M instances and an
-// estimated 23 GiB: meant for `ferry info` and for spreading over ranks,
+// is 6.7e7 unique and 4.4e10 instanced triangles, 13 M instances and an
+// estimated 11 GiB: meant for `ferry info` and for spreading over ranks,
 // not for generating on one small machine.
 #pragma once
 

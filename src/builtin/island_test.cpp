@@ -1,74 +1,184 @@
-// The island's shape as a benchmark scene: many instanced species of
-// production-like size, a hero object, lights, and a scale knob that reaches
-// 1e10 instanced triangles in its description.
+// The island after Disney's Moana island: its 20 elements, each several
+// meshes, with its own species in its own region; counts that `ferry info`
+// gives without generating equal to what is generated; a scale knob that
+// reaches 1e10 instanced triangles in its description.
 #include "builtin/island.h"
 
 #include <chrono>
+#include <cmath>
 #include <map>
+#include <set>
 
 #include <gtest/gtest.h>
 
 #include "builtin/builtin.h"
+#include "builtin/island_elements.h"
+#include "builtin/island_shape.h"
+#include "builtin/vegetation.h"
+#include "scene/memory_cost.h"
 #include "scene/scene_summary.h"
 
 namespace ferry {
 namespace {
+
+using builtin::kIslandElements;
 
 const Scene& island() {
   static const Scene scene = generateBuiltin(parseBuiltinSpec("builtin:island"));
   return scene;
 }
 
-struct SpeciesStats {
-  uint64_t instances = 0;
-  uint64_t minTriangles = UINT64_MAX, maxTriangles = 0;
-  int objects = 0;
+const Scene& smallIsland() {
+  static const Scene scene = generateBuiltin(parseBuiltinSpec("builtin:island?scale=0.1"));
+  return scene;
+}
+
+std::string elementOf(const std::string& objectName) {
+  return objectName.substr(0, objectName.find('/'));
+}
+
+struct ElementStats {
+  uint64_t objects = 0, meshes = 0, triangles = 0, instances = 0, instancedTriangles = 0;
+  uint64_t bytes = 0;  // unique geometry and instances, by the memory model
+  uint64_t largestMeshBytes = 0;
+  bool operator==(const ElementStats&) const = default;
 };
 
-// Objects are named "<species>/<variant>"; single set pieces have no '/'.
-std::map<std::string, SpeciesStats> speciesStats(const Scene& scene) {
-  std::vector<uint32_t> counts = scene.instanceCountPerObject();
-  std::map<std::string, SpeciesStats> stats;
-  for (size_t o = 0; o < scene.objects.size(); ++o) {
-    const std::string& name = scene.objects[o].name;
-    size_t slash = name.find('/');
-    if (slash == std::string::npos) continue;
+// From the plan's counts alone, as `ferry info` sees them.
+std::map<std::string, ElementStats> describedElements(const builtin::ScenePlan& plan) {
+  std::map<std::string, ElementStats> stats;
+  std::vector<uint64_t> instances(plan.objects.size(), 0);
+  for (const builtin::InstanceBatch& b : plan.batches) instances[size_t(b.object)] += b.count;
+  for (size_t o = 0; o < plan.objects.size(); ++o) {
+    ElementStats& s = stats[elementOf(plan.objects[o].name)];
     uint64_t triangles = 0;
-    for (int32_t m : scene.objects[o].meshes) triangles += scene.meshes[m].triangleCount();
-    SpeciesStats& s = stats[name.substr(0, slash)];
-    s.instances += counts[o];
-    s.minTriangles = std::min(s.minTriangles, triangles);
-    s.maxTriangles = std::max(s.maxTriangles, triangles);
+    for (int32_t m : plan.objects[o].meshes) {
+      const builtin::MeshRecipe& r = plan.meshes[size_t(m)];
+      uint64_t bytes =
+          meshCost(r.counts.vertices, r.counts.triangles, r.hasNormals, r.hasUvs).total();
+      s.bytes += bytes;
+      s.largestMeshBytes = std::max(s.largestMeshBytes, bytes);
+      triangles += r.counts.triangles;
+      ++s.meshes;
+    }
     ++s.objects;
+    s.triangles += triangles;
+    s.instances += instances[o];
+    s.instancedTriangles += instances[o] * triangles;
+    s.bytes += instanceCost(instances[o]).total();
   }
   return stats;
 }
 
-TEST(Island, HasAtLeastEightMultiInstanceSpeciesOfProductionSize) {
-  std::map<std::string, SpeciesStats> stats = speciesStats(island());
-  EXPECT_GE(stats.size(), 8u);
-  uint64_t fewest = UINT64_MAX, most = 0;
-  for (const auto& [name, s] : stats) {
-    SCOPED_TRACE(name);
-    EXPECT_GE(s.minTriangles, 1000u);
-    EXPECT_LE(s.maxTriangles, 500000u);
-    EXPECT_GT(s.instances, uint64_t(s.objects));  // instanced more than once per variant
-    fewest = std::min(fewest, s.instances);
-    most = std::max(most, s.instances);
+// From the generated scene.
+std::map<std::string, ElementStats> generatedElements(const Scene& scene) {
+  std::map<std::string, ElementStats> stats;
+  std::vector<uint32_t> counts = scene.instanceCountPerObject();
+  for (size_t o = 0; o < scene.objects.size(); ++o) {
+    ElementStats& s = stats[elementOf(scene.objects[o].name)];
+    uint64_t triangles = 0;
+    for (int32_t m : scene.objects[o].meshes) {
+      uint64_t bytes = meshCost(scene.meshes[size_t(m)]).total();
+      s.bytes += bytes;
+      s.largestMeshBytes = std::max(s.largestMeshBytes, bytes);
+      triangles += scene.meshes[size_t(m)].triangleCount();
+      ++s.meshes;
+    }
+    ++s.objects;
+    s.triangles += triangles;
+    s.instances += counts[o];
+    s.instancedTriangles += counts[o] * triangles;
+    s.bytes += instanceCost(counts[o]).total();
   }
-  // From tens to tens of thousands of instances per species.
-  EXPECT_GE(fewest, 10u);
-  EXPECT_LT(fewest, 100u);
-  EXPECT_GE(most, 10000u);
-  EXPECT_LT(most, 100000u);
+  return stats;
 }
 
-TEST(Island, EverySpeciesObjectIsSeveralMeshesOrARock) {
-  const Scene& scene = island();
-  int multiMesh = 0;
-  for (const Object& o : scene.objects)
-    if (o.name.find('/') != std::string::npos && o.meshes.size() >= 2) ++multiMesh;
-  EXPECT_GT(multiMesh, 8);
+bool isTerrainElement(const std::string& e) {
+  return e == "isMountainA" || e == "isMountainB" || e == "isBeach" || e == "isDunesA" ||
+         e == "isDunesB" || e == "isCoastline" || e == "isLavaRocks" || e == "isCoral" ||
+         e == "osOcean";
+}
+
+TEST(Island, IsMoanasTwentyElementsEachOfSeveralMeshes) {
+  std::map<std::string, ElementStats> stats = describedElements(builtin::planIsland(1, 1));
+  std::set<std::string> expected(kIslandElements.begin(), kIslandElements.end());
+  ASSERT_EQ(expected.size(), 20u);
+  std::set<std::string> names;
+  for (const auto& [name, s] : stats) names.insert(name);
+  EXPECT_EQ(names, expected);  // every object belongs to one of them, named "<element>/..."
+  for (const auto& [name, s] : stats) {
+    SCOPED_TRACE(name);
+    EXPECT_GE(s.meshes, 2u);
+    EXPECT_GE(s.instances, 1u);
+    if (isTerrainElement(name)) EXPECT_GE(s.meshes, 5u);  // the ground in pieces, set pieces
+  }
+}
+
+TEST(Island, NoMeshHoldsMuchOfTheIsland) {
+  // The previous island's terrain was one mesh of 61% of its bytes; Moana's
+  // ground is its elements' meshes.
+  std::map<std::string, ElementStats> stats = describedElements(builtin::planIsland(1, 1));
+  uint64_t total = 0, largest = 0, terrain = 0;
+  for (const auto& [name, s] : stats) {
+    total += s.bytes;
+    largest = std::max(largest, s.largestMeshBytes);
+    if (isTerrainElement(name)) terrain += s.bytes;
+  }
+  EXPECT_LT(double(largest), 0.15 * double(total));
+  // Neither the terrain elements nor the plant elements dominate.
+  EXPECT_GT(double(terrain), 0.3 * double(total));
+  EXPECT_LT(double(terrain), 0.8 * double(total));
+}
+
+// Instances per element follow the element table (island_elements.cpp): its
+// species at `scale`, a terrain element's base object, isIronwoodA1's giant trees
+// and the beach's campfire and four lanterns.
+TEST(Island, InstanceCountsFollowTheElementTable) {
+  for (double scale : {0.05, 0.1, 1.0, 4.0}) {
+    SCOPED_TRACE(scale);
+    std::map<std::string, uint64_t> expected;
+    for (const char* e : kIslandElements) expected[e] = isTerrainElement(e) ? 1 : 0;
+    for (const builtin::ElementSpecies& sp : builtin::islandSpecies())
+      expected[sp.element] += builtin::scaledCount(sp.count, scale);
+    expected["isIronwoodA1"] += builtin::scaledCount(4, scale);
+    expected["isBeach"] += 5;
+    std::map<std::string, ElementStats> stats = describedElements(builtin::planIsland(scale, 1));
+    for (const auto& [name, n] : expected) EXPECT_EQ(stats[name].instances, n) << name;
+  }
+}
+
+TEST(Island, InfoCountsEqualWhatIsGeneratedPerElement) {
+  std::map<std::string, ElementStats> described =
+      describedElements(builtin::planIsland(0.1, BuiltinParams{}.seed));
+  std::map<std::string, ElementStats> generated = generatedElements(smallIsland());
+  ASSERT_EQ(described.size(), generated.size());
+  for (const auto& [name, s] : described) EXPECT_EQ(s, generated[name]) << name;
+}
+
+TEST(Island, EachElementsPlantsGrowInItsOwnRegion) {
+  const Scene& scene = smallIsland();
+  builtin::IslandShape shape(BuiltinParams{}.seed);
+  std::map<std::string, builtin::Region> regions;
+  for (const builtin::ElementSpecies& sp : builtin::islandSpecies())
+    regions[sp.element + "/" + sp.name] = sp.region;
+  std::map<std::string, uint64_t> checked;
+  std::map<std::string, Box3f> extent;
+  for (const Instance& inst : scene.instances) {
+    const std::string& name = scene.objects[size_t(inst.object)].name;
+    auto it = regions.find(name.substr(0, name.rfind('/')));
+    if (it == regions.end()) continue;  // base objects, the giant trees, campfire and lanterns
+    Vec2f p{inst.transform.t.x, inst.transform.t.z};
+    EXPECT_TRUE(shape.inRegion(it->second, p, shape.where(p.x, p.y))) << name;
+    ++checked[elementOf(name)];
+    extent[elementOf(name)].extend(inst.transform.t);
+  }
+  EXPECT_EQ(checked.size(), 20u - 1u);  // every element but the ocean scatters something
+  // What grows varies by region: the reef is under water, the beach's
+  // species stay on the south shore, the mountains' on their slopes.
+  EXPECT_LT(extent["isCoral"].upper.y, 0);
+  EXPECT_GT(extent["isBeach"].lower.z, 0);  // the beach faces +z
+  EXPECT_LT(extent["isMountainA"].center().z, 0);
+  EXPECT_GT(extent["isMountainA"].upper.y, 40);
 }
 
 TEST(Island, LeavesAreAlphaCutCardsSharingOneTexture) {
@@ -77,7 +187,7 @@ TEST(Island, LeavesAreAlphaCutCardsSharingOneTexture) {
   for (const Material& m : scene.materials)
     if (m.name == "leaves") leafTexture = m.alphaTexture;
   ASSERT_NE(leafTexture, kNoTexture);
-  const Texture& t = scene.textures[leafTexture];
+  const Texture& t = scene.textures[size_t(leafTexture)];
   size_t holes = 0, solid = 0;
   for (size_t i = 3; i < t.rgba.size(); i += 4) (t.rgba[i] < 128 ? holes : solid)++;
   EXPECT_GT(holes, t.texelCount() / 10);
@@ -85,60 +195,71 @@ TEST(Island, LeavesAreAlphaCutCardsSharingOneTexture) {
   // Trees, bushes and flowers all use it.
   int users = 0;
   for (const Mesh& m : scene.meshes)
-    if (scene.materials[m.material].alphaTexture == leafTexture) ++users;
+    if (scene.materials[size_t(m.material)].alphaTexture == leafTexture) ++users;
   EXPECT_GE(users, 3);
 }
 
-TEST(Island, HasAHeroTerrainOceanAndLights) {
+TEST(Island, HasAGiantTreeTexturedGroundOceanAndLights) {
   const Scene& scene = island();
   std::vector<uint32_t> counts = scene.instanceCountPerObject();
-  bool hero = false, terrain = false, ocean = false;
+  bool giant = false, ground = false, ocean = false;
   for (size_t o = 0; o < scene.objects.size(); ++o) {
     uint64_t triangles = 0;
-    for (int32_t m : scene.objects[o].meshes) triangles += scene.meshes[m].triangleCount();
+    for (int32_t m : scene.objects[o].meshes) triangles += scene.meshes[size_t(m)].triangleCount();
     const std::string& name = scene.objects[o].name;
-    if (name == "banyan") {
-      hero = true;
+    if (name == "isIronwoodA1/ironwood") {
+      giant = true;
       EXPECT_GT(triangles, 300000u);
-      EXPECT_GE(counts[o], 1u);
-      EXPECT_LE(counts[o], 3u);
+      EXPECT_EQ(counts[o], 4u);
     }
-    if (name == "island-terrain") {
-      terrain = true;
+    if (name == "isDunesA/base") {
+      ground = true;
       EXPECT_EQ(counts[o], 1u);
-      EXPECT_GT(triangles, 1000000u);
-      const Mesh& m = scene.meshes[scene.objects[o].meshes[0]];
+      const Mesh& m = scene.meshes[size_t(scene.objects[o].meshes[0])];
       EXPECT_FALSE(m.uvs.empty());
       EXPECT_FALSE(m.normals.empty());
-      const Material& mat = scene.materials[m.material];
+      const Material& mat = scene.materials[size_t(m.material)];
       ASSERT_NE(mat.baseColorTexture, kNoTexture);
-      EXPECT_GE(scene.textures[mat.baseColorTexture].width, 1024);
+      EXPECT_GE(scene.textures[size_t(mat.baseColorTexture)].width, 1024);
     }
-    if (name == "ocean") {
+    for (int32_t m : scene.objects[o].meshes) {
+      if (scene.meshes[size_t(m)].name != "osOcean/water-0") continue;
       ocean = true;
-      const Material& water = scene.materials[scene.meshes[scene.objects[o].meshes[0]].material];
+      const Material& water = scene.materials[size_t(scene.meshes[size_t(m)].material)];
       EXPECT_EQ(water.transmission, 1.0f);
       EXPECT_FLOAT_EQ(water.ior, 1.33f);
       EXPECT_GT(water.roughness, 0.0f);  // rough, so light samples reach the sea (see island.cpp)
     }
   }
-  EXPECT_TRUE(hero);
-  EXPECT_TRUE(terrain);
+  EXPECT_TRUE(giant);
+  EXPECT_TRUE(ground);
   EXPECT_TRUE(ocean);
   SceneSummary s = summarize(scene);
   EXPECT_EQ(s.suns, 1u);
   EXPECT_EQ(s.environments, 1u);
   EXPECT_GE(s.emissiveMeshes, 3u);
   EXPECT_LT(s.emissiveTriangles, 5000u);  // small lanterns and a campfire
-  EXPECT_GE(s.objects, 20u);
 }
 
 TEST(Island, ScaleOneStaysModest) {
   SceneSummary s = describeBuiltin(parseBuiltinSpec("builtin:island"));
   EXPECT_GT(s.triangles, 1000000u);
-  EXPECT_LT(s.triangles, 6000000u);  // a few million unique triangles at most
-  EXPECT_GT(s.instancedTriangles, 50000000u);
-  EXPECT_LT(s.memory.total(), uint64_t(1500) << 20);
+  EXPECT_LT(s.triangles, 4000000u);  // a few million unique triangles at most
+  EXPECT_GT(s.instancedTriangles, 200000000u);
+  EXPECT_LT(s.memory.total(), uint64_t(400) << 20);
+  // Ratios near the published Moana figures (docs/scenes.md): about 0.075
+  // instances per unique triangle and 316 instanced per unique triangle.
+  double instancesPerTriangle = double(s.instances) / double(s.triangles);
+  double instancedPerUnique = double(s.instancedTriangles) / double(s.triangles);
+  EXPECT_GT(instancesPerTriangle, 0.05);
+  EXPECT_LT(instancesPerTriangle, 0.11);
+  EXPECT_GT(instancedPerUnique, 150);
+  EXPECT_LT(instancedPerUnique, 500);
+}
+
+TEST(Island, SmallScalesStaySmall) {
+  SceneSummary s = describeBuiltin(parseBuiltinSpec("builtin:island?scale=0.1"));
+  EXPECT_LT(s.triangles, 1000000u);
 }
 
 TEST(Island, LargeScaleDescribesHugeContentQuickly) {
@@ -149,7 +270,7 @@ TEST(Island, LargeScaleDescribesHugeContentQuickly) {
   SceneSummary s = describeBuiltin(p);
   double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_GT(s.instancedTriangles, 10'000'000'000ull);
-  EXPECT_GT(s.triangles, 100'000'000ull);
+  EXPECT_GT(s.triangles, 50'000'000ull);
   EXPECT_LT(seconds, 2.0);
   // Far beyond the large scale the description still answers at once.
   p.scale = 1e6;
@@ -169,32 +290,13 @@ TEST(Island, ScaleGrowsInstancesAndShrinksToATinyScene) {
   EXPECT_LT(tiny.triangles, one.triangles);
   EXPECT_LT(one.triangles, four.triangles);
   EXPECT_NEAR(double(four.instances) / double(one.instances), 4.0, 0.2);
-  // Every species keeps at least one instance at tiny scales.
+  // Every element keeps its species at tiny scales, each with an instance.
   Scene scene = generateBuiltin(parseBuiltinSpec("builtin:island?scale=0.001"));
-  std::map<std::string, SpeciesStats> stats = speciesStats(scene);
-  EXPECT_GE(stats.size(), 8u);
-  for (const auto& [name, st] : stats) EXPECT_GE(st.instances, 1u) << name;
-}
-
-TEST(Island, InstancesStandOnLandAndSpreadOverTheIsland) {
-  const Scene& scene = island();
-  std::map<std::string, Box3f> extent;
-  for (const Instance& inst : scene.instances) {
-    const std::string& name = scene.objects[inst.object].name;
-    size_t slash = name.find('/');
-    if (slash == std::string::npos) continue;
-    extent[name.substr(0, slash)].extend(inst.transform.t);
-  }
-  for (const char* spread : {"grass", "tree", "rock", "palm"}) {
-    ASSERT_TRUE(extent.count(spread)) << spread;
-    Vec3f size = extent[spread].size();
-    EXPECT_GT(size.x, 400) << spread;  // across most of a ~900 m island
-    EXPECT_GT(size.z, 400) << spread;
-  }
-  // Palms grow by the sea, trees inland and higher up.
-  EXPECT_LT(extent["palm"].upper.y, 12);
-  EXPECT_GT(extent["tree"].upper.y, 20);
-  for (const auto& [name, box] : extent) EXPECT_GT(box.lower.y, -6) << name;
+  std::map<std::string, ElementStats> stats = generatedElements(scene);
+  EXPECT_EQ(stats.size(), 20u);
+  std::vector<uint32_t> counts = scene.instanceCountPerObject();
+  for (size_t o = 0; o < scene.objects.size(); ++o)
+    EXPECT_GE(counts[o], 1u) << scene.objects[o].name;
 }
 
 }  // namespace
