@@ -38,9 +38,28 @@ std::vector<std::vector<Vec3f>> unitKeyFamilies(const UnitSet& set, const Part& 
   return families;
 }
 
+size_t planeSides(const UnitSet& units, const Part& part, const std::vector<uint8_t>& placed,
+                  const std::vector<Vec3f>& key, const SplitPlane& plane, CostCounter& leftCost,
+                  CostCounter& rightCost, Box3f& leftBox, Box3f& rightBox) {
+  leftCost.clear();
+  rightCost.clear();
+  size_t leftCount = 0;
+  for (size_t k = 0; k < part.units.size(); ++k) {
+    const uint32_t u = part.units[k];
+    if (!placed[k] || key[k][plane.axis] < plane.position) {
+      leftCost.add(u);
+      leftBox.extend(units.units[u].bounds);
+      ++leftCount;
+    } else {
+      rightCost.add(u);
+      rightBox.extend(units.units[u].bounds);
+    }
+  }
+  return leftCount;
+}
+
 bool CentroidSplitter::split(const Part& part, Part& left, Part& right) {
   if (part.units.size() < 2) return false;
-  const auto& units = units_.units;
   const size_t n = part.units.size();
   // Units without geometry always go left: they need an owner, not a place.
   std::vector<uint8_t> placed;
@@ -58,21 +77,9 @@ bool CentroidSplitter::split(const Part& part, Part& left, Part& right) {
     for (size_t k = 0; k < n; ++k)
       if (placed[k]) keyBounds.extend(key[k]);
     for (const SplitPlane& plane : candidatePlanes(keyBounds)) {
-      leftCost.clear();
-      rightCost.clear();
       Box3f leftBox, rightBox;
-      size_t leftCount = 0;
-      for (size_t k = 0; k < n; ++k) {
-        const uint32_t u = part.units[k];
-        if (!placed[k] || key[k][plane.axis] < plane.position) {
-          leftCost.add(u);
-          leftBox.extend(units[u].bounds);
-          ++leftCount;
-        } else {
-          rightCost.add(u);
-          rightBox.extend(units[u].bounds);
-        }
-      }
+      const size_t leftCount =
+          planeSides(units_, part, placed, key, plane, leftCost, rightCost, leftBox, rightBox);
       if (leftCount == 0 || leftCount == n) continue;
       double cost = splitCost(part.domain, part.bytes, leftBox, leftCost.bytes(), rightBox,
                               rightCost.bytes());

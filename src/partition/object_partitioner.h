@@ -44,6 +44,13 @@ class CentroidSplitter final : public PartSplitter {
 std::vector<std::vector<Vec3f>> unitKeyFamilies(const UnitSet& units, const Part& part,
                                                 bool groupCandidates, std::vector<uint8_t>& placed);
 
+// The two sides `plane` makes of a part's units, sorted by `key` (units
+// without geometry go left): their costs (counters cleared first) and boxes.
+// Returns how many units went left.
+size_t planeSides(const UnitSet& units, const Part& part, const std::vector<uint8_t>& placed,
+                  const std::vector<Vec3f>& key, const SplitPlane& plane, CostCounter& leftCost,
+                  CostCounter& rightCost, Box3f& leftBox, Box3f& rightBox);
+
 // object-naive: one proxy per unit, its box.
 std::vector<Proxy> unitBoxProxies(const UnitSet& units, const std::vector<RankSet>& owners);
 

@@ -48,24 +48,13 @@ int64_t PartAssignment::scoreChange(size_t i, int to) const {
   return change;
 }
 
-uint64_t PartAssignment::released(size_t i, int part) const {
+uint64_t PartAssignment::bytesWhereUsers(size_t i, int part, uint32_t users) const {
   const Unit& u = set_.units[members_[i]];
   const size_t base = size_t(part) * set_.resourceBytes.size();
   uint64_t b = u.ownBytes;
   for (uint32_t j = 0; j < u.resourceCount; ++j) {
     const uint32_t r = set_.resources[u.firstResource + j];
-    if (refs_[base + r] == 1) b += set_.resourceBytes[r];
-  }
-  return b;
-}
-
-uint64_t PartAssignment::added(size_t i, int part) const {
-  const Unit& u = set_.units[members_[i]];
-  const size_t base = size_t(part) * set_.resourceBytes.size();
-  uint64_t b = u.ownBytes;
-  for (uint32_t j = 0; j < u.resourceCount; ++j) {
-    const uint32_t r = set_.resources[u.firstResource + j];
-    if (refs_[base + r] == 0) b += set_.resourceBytes[r];
+    if (refs_[base + r] == users) b += set_.resourceBytes[r];
   }
   return b;
 }

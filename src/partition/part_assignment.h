@@ -56,8 +56,11 @@ class PartAssignment {
  private:
   // Score change of moving index k to part `to` (negative: better).
   int64_t scoreChange(size_t k, int to) const;
-  uint64_t released(size_t k, int part) const;
-  uint64_t added(size_t k, int part) const;
+  // Bytes `part` frees when index k leaves it, and takes when k joins it:
+  // k's records and the resources of k that `users` units there use (1: only k).
+  uint64_t bytesWhereUsers(size_t k, int part, uint32_t users) const;
+  uint64_t released(size_t k, int part) const { return bytesWhereUsers(k, part, 1); }
+  uint64_t added(size_t k, int part) const { return bytesWhereUsers(k, part, 0); }
   void add(size_t k, int part);
   void remove(size_t k, int part);
   void move(size_t k, int to);

@@ -61,6 +61,16 @@ std::unique_ptr<PartSplitter> makeSplitter(const std::string& name, const UnitSe
   return std::make_unique<CentroidSplitter>(units, name == "best");
 }
 
+// `best` after its splits: parts above kBestFinalBalance x an even share give
+// units (single instances, an object's instances together, or a shared
+// mesh's users) to lighter parts (part_assignment.h, without rays: bytes
+// only), so that its largest part stays near an even share.
+void balanceBest(const Prepared& p, int ranks, std::vector<Part>& parts) {
+  if (int(parts.size()) != ranks) return;  // copies of parts: nothing to move
+  refinePartsByRays(p.units, RayIncidence{}, parts,
+                    kBestFinalBalance * double(p.inputBytes) / double(ranks));
+}
+
 uint64_t replicationBudget(const PartitionerOptions& o, uint64_t inputBytes) {
   return uint64_t(std::max(0.0, o.replicationBudget) * double(inputBytes));
 }
@@ -144,14 +154,16 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
     } else {
       std::unique_ptr<PartSplitter> splitter = makeSplitter(o.name, p.units);
       parts = runSplitLoop(*splitter, ranks);
+      if (o.name == "best") balanceBest(p, ranks, parts);
     }
     s.parts = int(parts.size());
     const std::vector<RankSet> partRanks = assignRanks(parts, ranks);
     std::vector<RankSet> owners = unitOwners(p.units, parts, partRanks);
     if (o.name == "best" || o.name == "ray-guided") {
-      // ray-guided keeps its balance (no part above kRayGuidedMaxPart x an even share).
-      const uint64_t cap =
-          o.name == "ray-guided" ? uint64_t(kRayGuidedMaxPart * double(p.inputBytes) / ranks) : 0;
+      // Both keep their balance: no part above kBestMaxPart or
+      // kRayGuidedMaxPart x an even share.
+      const double share = double(p.inputBytes) / double(ranks);
+      const uint64_t cap = uint64_t((o.name == "best" ? kBestMaxPart : kRayGuidedMaxPart) * share);
       ReplicationResult r = replicateLargeUnits(p.units, parts, partRanks, owners,
                                                 replicationBudget(o, p.inputBytes), cap);
       s.replicatedBytes = r.addedBytes;
@@ -190,9 +202,11 @@ std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& 
     if (o.name == "best" && parts.size() > 1) {
       // One rank per part here (masks only count copies: one bit each).
       std::vector<Part> copy = parts;
+      balanceBest(p, int(copy.size()), copy);
       std::vector<RankSet> oneRank(copy.size(), RankSet::single(0));
       std::vector<RankSet> owners(p.units.units.size());
-      replicateLargeUnits(p.units, copy, oneRank, owners, budget);
+      replicateLargeUnits(p.units, copy, oneRank, owners, budget,
+                          uint64_t(kBestMaxPart * double(p.inputBytes) / double(copy.size())));
       for (const Part& part : copy) largest = std::max(largest, part.bytes);
     } else {
       for (const Part& part : parts) largest = std::max(largest, part.bytes);

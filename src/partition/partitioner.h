@@ -12,7 +12,8 @@
 //   bvh-style       instances as units (objects replicated where instances
 //                   land); one proxy per instance or non-instanced mesh
 //   best            large meshes first cut into tight pieces, then as
-//                   bvh-style, then spatially large but cheap content
+//                   bvh-style, then parts over 1.2x an even share give units
+//                   to lighter ones, then spatially large but cheap content
 //                   replicated on every rank up to a budget (default 5%)
 //   ray-guided      as best, but each split takes, among balanced ones, the
 //                   one a sample of rays crosses least (ray_guided_partitioner.h)
@@ -38,6 +39,10 @@ struct Scene;
 
 // `best` cuts meshes costing more than the input's bytes / this.
 constexpr int kBestPiecesPerScene = 256;
+// `best` brings its parts within kBestFinalBalance x an even share after the
+// splits, and its replication fills none above kBestMaxPart x (issue 16).
+constexpr double kBestFinalBalance = 1.2;
+constexpr double kBestMaxPart = 1.25;
 
 struct PartitionerOptions {
   std::string name = "best";

@@ -70,7 +70,6 @@ RayGuidedSplitter::RayGuidedSplitter(const UnitSet& units, const RayIncidence& i
 bool RayGuidedSplitter::split(const Part& part, Part& left, Part& right) {
   const size_t n = part.units.size();
   if (n < 2) return false;
-  const auto& units = units_.units;
   std::vector<uint8_t> placed;
   const std::vector<std::vector<Vec3f>> families =
       unitKeyFamilies(units_, part, /*groupCandidates=*/true, placed);
@@ -163,21 +162,9 @@ bool RayGuidedSplitter::split(const Part& part, Part& left, Part& right) {
   for (size_t c = 0; c < candidates.size(); ++c) {
     const Candidate& cand = candidates[c];
     const std::vector<Vec3f>& key = families[cand.family];
-    leftCost.clear();
-    rightCost.clear();
     Box3f leftBox, rightBox;
-    size_t leftCount = 0;
-    for (size_t k = 0; k < n; ++k) {
-      const uint32_t u = part.units[k];
-      if (!placed[k] || key[k][cand.plane.axis] < cand.plane.position) {
-        leftCost.add(u);
-        leftBox.extend(units[u].bounds);
-        ++leftCount;
-      } else {
-        rightCost.add(u);
-        rightBox.extend(units[u].bounds);
-      }
-    }
+    const size_t leftCount =
+        planeSides(units_, part, placed, key, cand.plane, leftCost, rightCost, leftBox, rightBox);
     if (leftCount == 0 || leftCount == n) continue;
     const size_t i = 3 * cand.family + size_t(cand.plane.axis);
     const uint64_t separated =
@@ -231,9 +218,9 @@ void refinePartsByRays(const UnitSet& units, const RayIncidence& incidence,
     }
   std::vector<uint32_t> members(units.units.size());
   for (uint32_t u = 0; u < members.size(); ++u) members[u] = u;
-  Hypergraph rays;
+  Hypergraph rays;  // (none at all: balancing by bytes alone)
   rays.units = incidence.units;
-  rays.offsets = incidence.offsets;
+  if (!incidence.offsets.empty()) rays.offsets = incidence.offsets;
   PartAssignment assignment(units, std::move(members), rays, int(parts.size()), std::move(partOf));
   assignment.rebalance(limit);
   assignment.refine(std::max(limit, double(assignment.largest())));
