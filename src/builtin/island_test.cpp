@@ -110,7 +110,9 @@ TEST(Island, IsMoanasTwentyElementsEachOfSeveralMeshes) {
     SCOPED_TRACE(name);
     EXPECT_GE(s.meshes, 2u);
     EXPECT_GE(s.instances, 1u);
-    if (isTerrainElement(name)) EXPECT_GE(s.meshes, 5u);  // the ground in pieces, set pieces
+    if (isTerrainElement(name)) {
+      EXPECT_GE(s.meshes, 5u);  // the ground in pieces, set pieces
+    }
   }
 }
 

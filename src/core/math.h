@@ -181,6 +181,24 @@ struct Box3f {
     return !(b.lower.x > upper.x || b.lower.y > upper.y || b.lower.z > upper.z ||
              b.upper.x < lower.x || b.upper.y < lower.y || b.upper.z < lower.z);
   }
+  // The slab test: narrows [t0, t1] to where origin + t direction lies in
+  // the box (touching counts), `inverse` being 1 / direction per axis;
+  // false, leaving t0 > t1, when nothing is left. A NaN (0 * inf: the origin
+  // on a slab plane of a zero direction) counts as inside that slab. Inline:
+  // the proxy query runs it for every node and leaf box it meets (13 % of a
+  // forwarding rank's time as a call).
+  [[gnu::always_inline]] bool clipRay(Vec3f origin, Vec3f inverse, float& t0, float& t1) const {
+    for (int a = 0; a < 3; ++a) {
+      float lo = (lower[a] - origin[a]) * inverse[a];
+      float hi = (upper[a] - origin[a]) * inverse[a];
+      if (lo > hi) std::swap(lo, hi);
+      if (!(lo <= hi)) continue;
+      t0 = std::max(t0, lo);
+      t1 = std::min(t1, hi);
+      if (t0 > t1) return false;
+    }
+    return true;
+  }
 };
 
 // Row-major 3x3 linear part plus translation: p' = L * p + t.

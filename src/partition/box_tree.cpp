@@ -7,19 +7,10 @@ namespace {
 
 constexpr uint32_t kLeafSize = 4;
 
-// Whether the segment [0, tmax] meets `box` (slab test, touching counts).
+// Whether the segment [0, tmax] meets `box` (touching counts).
 bool segmentMeets(const Box3f& box, Vec3f origin, Vec3f inverse, float tmax) {
   float t0 = 0, t1 = tmax;
-  for (int a = 0; a < 3; ++a) {
-    float lo = (box.lower[a] - origin[a]) * inverse[a];
-    float hi = (box.upper[a] - origin[a]) * inverse[a];
-    if (lo > hi) std::swap(lo, hi);
-    if (!(lo <= hi)) continue;  // NaN (0 * inf): the origin lies on that slab's plane
-    t0 = std::max(t0, lo);
-    t1 = std::min(t1, hi);
-    if (t0 > t1) return false;
-  }
-  return true;
+  return box.clipRay(origin, inverse, t0, t1);
 }
 
 }  // namespace

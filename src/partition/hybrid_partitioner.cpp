@@ -47,10 +47,7 @@ ReplicationResult replicateLargeUnits(const UnitSet& units, std::vector<Part>& p
   for (uint32_t u = 0; u < units.units.size(); ++u) {
     const Box3f& b = units.units[u].bounds;
     if (b.empty() || b.surfaceArea() < minimumArea) continue;
-    uint64_t alone = units.units[u].ownBytes;
-    for (uint32_t k = 0; k < units.units[u].resourceCount; ++k)
-      alone += units.resourceBytes[units.resources[units.units[u].firstResource + k]];
-    areaPerByte[u] = b.surfaceArea() / double(std::max<uint64_t>(1, alone));
+    areaPerByte[u] = b.surfaceArea() / double(std::max<uint64_t>(1, aloneBytes(units, u)));
     candidates.push_back(u);
   }
   if (candidates.empty()) return result;

@@ -159,11 +159,13 @@ void PartAssignment::rebalance(double limit) {
       damage = double(score_) - double(scoreBefore);
       return from;
     };
+    auto undo = [&](const std::vector<uint32_t>& group, const std::vector<uint16_t>& from) {
+      for (size_t g = 0; g < group.size(); ++g) move(group[g], from[g]);
+    };
     auto consider = [&](const std::vector<uint32_t>& group, int to) {
       if (to == part_[group[0]]) return;
       double removed = 0, damage = 0;
-      const std::vector<uint16_t> from = tryGroup(group, to, removed, damage);
-      for (size_t g = 0; g < group.size(); ++g) move(group[g], from[g]);  // back
+      undo(group, tryGroup(group, to, removed, damage));
       if (removed > 0) candidates.push_back({(damage + 1) / removed, group, to});
     };
     std::vector<std::vector<uint32_t>> byObject(k * set_.objectCount);
@@ -213,7 +215,7 @@ void PartAssignment::rebalance(double limit) {
       double removed = 0, damage = 0;
       const std::vector<uint16_t> from = tryGroup(c.members, c.to, removed, damage);
       if (removed <= 0) {
-        for (size_t g = 0; g < c.members.size(); ++g) move(c.members[g], from[g]);
+        undo(c.members, from);  // no longer helps
         continue;
       }
       moved += c.members.size();

@@ -67,7 +67,7 @@ std::unique_ptr<PartSplitter> makeSplitter(const std::string& name, const UnitSe
 // only), so that its largest part stays near an even share.
 void balanceBest(const Prepared& p, int ranks, std::vector<Part>& parts) {
   if (int(parts.size()) != ranks) return;  // copies of parts: nothing to move
-  refinePartsByRays(p.units, RayIncidence{}, parts,
+  refinePartsByRays(p.units, Hypergraph{}, parts,
                     kBestFinalBalance * double(p.inputBytes) / double(ranks));
 }
 

@@ -20,17 +20,6 @@ struct Candidate {
   SplitPlane plane;
 };
 
-// What a unit costs alone (its records and every resource it uses): the
-// weight byte quantiles are taken over. Shared resources make this an upper
-// bound; the candidates' real cost is counted exactly.
-uint64_t aloneBytes(const UnitSet& set, uint32_t u) {
-  const Unit& unit = set.units[u];
-  uint64_t bytes = unit.ownBytes;
-  for (uint32_t k = 0; k < unit.resourceCount; ++k)
-    bytes += set.resourceBytes[set.resources[unit.firstResource + k]];
-  return bytes;
-}
-
 // How many of the sorted values lie below `x`.
 size_t countBelow(const std::vector<float>& sorted, float x) {
   return size_t(std::lower_bound(sorted.begin(), sorted.end(), x) - sorted.begin());
@@ -43,7 +32,6 @@ RayIncidence rayIncidence(const std::vector<UnitBox>& unitBoxes, const RaySample
   for (size_t b = 0; b < boxes.size(); ++b) boxes[b] = unitBoxes[b].box;
   const BoxTree tree(boxes);
   RayIncidence incidence;
-  incidence.offsets.push_back(0);
   std::vector<uint32_t> found;
   for (const RaySegment& ray : sample.rays) {
     found.clear();
@@ -115,7 +103,9 @@ bool RayGuidedSplitter::split(const Part& part, Part& left, Part& right) {
     std::sort(highs[i].begin(), highs[i].end());
   }
 
-  // Candidate planes: byte quantiles and equidistant planes, per family and axis.
+  // Candidate planes: byte quantiles and equidistant planes, per family and
+  // axis. The quantiles weigh each unit alone (shared resources make that an
+  // upper bound; the candidates' real cost is counted exactly).
   std::vector<uint64_t> weight(n);
   uint64_t total = 0;
   for (size_t k = 0; k < n; ++k)
@@ -218,10 +208,8 @@ void refinePartsByRays(const UnitSet& units, const RayIncidence& incidence,
     }
   std::vector<uint32_t> members(units.units.size());
   for (uint32_t u = 0; u < members.size(); ++u) members[u] = u;
-  Hypergraph rays;  // (none at all: balancing by bytes alone)
-  rays.units = incidence.units;
-  if (!incidence.offsets.empty()) rays.offsets = incidence.offsets;
-  PartAssignment assignment(units, std::move(members), rays, int(parts.size()), std::move(partOf));
+  PartAssignment assignment(units, std::move(members), incidence, int(parts.size()),
+                            std::move(partOf));
   assignment.rebalance(limit);
   assignment.refine(std::max(limit, double(assignment.largest())));
   for (Part& part : parts) part.units.clear();

@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "partition/object_partitioner.h"
+#include "partition/part_assignment.h"
 #include "partition/proxies.h"
 #include "partition/ray_sample.h"
 #include "partition/split_loop.h"
@@ -48,13 +49,10 @@ namespace ferry {
 
 // The units each sampled ray passes (one of their proxy boxes overlaps its
 // segment: the boxes the partition's proxies will have, so the estimate
-// counts what the forwarding operator will do), as compressed rows: ray r's
-// units are units[offsets[r], offsets[r + 1]).
-struct RayIncidence {
-  std::vector<uint64_t> offsets;
-  std::vector<uint32_t> units;
-  uint64_t rays() const { return offsets.empty() ? 0 : offsets.size() - 1; }
-};
+// counts what the forwarding operator will do): the hypergraph the parts are
+// refined on, rows of unit ids. Rays through fewer than two units are left
+// out (no partition separates them).
+using RayIncidence = Hypergraph;
 RayIncidence rayIncidence(const std::vector<UnitBox>& boxes, const RaySample& sample);
 
 class RayGuidedSplitter final : public PartSplitter {
@@ -73,8 +71,9 @@ class RayGuidedSplitter final : public PartSplitter {
 
 // After the splits: the parts refined together (part_assignment.h), every
 // part brought within `limit` bytes where moves can, and units moved to
-// parts their rays already touch where that lowers the estimate. Skipped
-// above kMaxRefinedParts parts (it keeps a counter per ray and part).
+// parts their rays already touch where that lowers the estimate (with no
+// rays, as `best` calls it: balanced by bytes alone). Skipped above
+// kMaxRefinedParts parts (it keeps a counter per ray and part).
 constexpr size_t kMaxRefinedParts = 256;
 // The limit the parts are refined to, times total / N (the goal is
 // 1.3; replication adds up to its budget / N on top).

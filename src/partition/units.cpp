@@ -136,4 +136,12 @@ uint64_t costOf(const UnitSet& units, const std::vector<uint32_t>& members) {
   return c.bytes();
 }
 
+uint64_t aloneBytes(const UnitSet& units, uint32_t unit) {
+  const Unit& u = units.units[unit];
+  uint64_t bytes = u.ownBytes;
+  for (uint32_t k = 0; k < u.resourceCount; ++k)
+    bytes += units.resourceBytes[units.resources[u.firstResource + k]];
+  return bytes;
+}
+
 }  // namespace ferry

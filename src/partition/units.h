@@ -75,4 +75,7 @@ class CostCounter {
 
 uint64_t costOf(const UnitSet& units, const std::vector<uint32_t>& members);
 
+// What a unit costs alone: its records and every resource it uses.
+uint64_t aloneBytes(const UnitSet& units, uint32_t unit);
+
 }  // namespace ferry

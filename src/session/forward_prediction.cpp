@@ -81,16 +81,15 @@ std::vector<ForwardPrediction> predictForwards(const std::string& directory,
       const SessionReport report = session.run(sink);
       if (!comm.isRoot()) continue;
       ForwardPrediction& p = predictions[v];
-      p.view = views[v].camera ? views[v].name : session.scene().view(views[v].name).name;
       p.camera = views[v].camera ? *views[v].camera : session.scene().view(views[v].name);
+      p.view = views[v].camera ? views[v].name : p.camera.name;
       p.sampleWidth = settings.render.width;
       p.sampleHeight = settings.render.height;
-      for (const FrameStats& f : report.stats.frames) {
-        p.cameraPaths += f.cameraPaths;
-        const ExchangeCounters e = f.exchangeTotal();
-        p.raysForwarded += e.raysForwarded;
-        p.bytesSent += e.bytesSent;
-      }
+      const FrameStats total = report.stats.total();
+      const ExchangeCounters exchange = total.exchangeTotal();
+      p.cameraPaths = total.cameraPaths;
+      p.raysForwarded = exchange.raysForwarded;
+      p.bytesSent = exchange.bytesSent;
       p.seconds = secondsSince(start);
     }
   });

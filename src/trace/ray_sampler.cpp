@@ -20,14 +20,7 @@ constexpr float kPi = 3.14159265358979f;
 void boxSpan(const Box3f& box, Vec3f origin, Vec3f direction, float& enter, float& exit) {
   enter = 0;
   exit = kInfinity;
-  for (int a = 0; a < 3; ++a) {
-    const float inv = 1.0f / direction[a];
-    float lo = (box.lower[a] - origin[a]) * inv, hi = (box.upper[a] - origin[a]) * inv;
-    if (lo > hi) std::swap(lo, hi);
-    if (!(lo <= hi)) continue;  // NaN: origin on a slab plane of a zero direction
-    enter = std::max(enter, lo);
-    exit = std::min(exit, hi);
-  }
+  box.clipRay(origin, {1.0f / direction.x, 1.0f / direction.y, 1.0f / direction.z}, enter, exit);
 }
 
 Vec3f uniformSphere(float u, float v) {
