@@ -40,14 +40,16 @@ run_scene "builtin:cornell" "--size 40x40 --spp 2 --max-depth 4"
 run_scene "builtin:island?scale=0.05" "--size 48x32 --spp 1 --max-depth 3"
 # The bulk exchange (the paper's rounds), and the overlapped one at small
 # chunks (many chunks and bounces in flight at once) and with two threads a
-# rank: the same image, bit for bit (tie pixels aside).
+# rank, and best's proxies merged to a few union boxes (more forwarding):
+# the same image, bit for bit (tie pixels aside).
 island="builtin:island?scale=0.05"
 island_args="--size 48x32 --spp 1 --max-depth 3 --seed 3"
 "$ferry" render "$island" $island_args -q -o "$work/island-ref.pfm"
 for ranks in 3 5; do
   for variant in "--exchange bulk --threads 1" "--chunk 50 --threads 1" \
     "--chunk 7 --path-layout replay --threads 1" "--chunk 300 --threads 2" \
-    "--forwarding ring --chunk 100 --threads 1"; do
+    "--forwarding ring --chunk 100 --threads 1" \
+    "--partition best --max-proxies 24 --threads 1"; do
     out="$work/variant.pfm"
     # shellcheck disable=SC2086
     mpirun_n "$ranks" "$ferry" render "$island" $island_args -q $variant \

@@ -34,6 +34,7 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
   p.breakObjects = !o.keepObjectsWhole;
   p.replicationBudget = o.replicationBudget;
   p.meshProxies = o.meshProxies;
+  p.maxProxies = o.maxProxies;
   p.seed = o.seed;
   p.rayPaths = o.rayPaths;
   if (p.rayPaths < 1 || p.rayPaths > (uint64_t(1) << 26))
@@ -48,11 +49,9 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
 }
 
 nlohmann::json optionsJson(const PartitionerOptions& p) {
-  return {{"break_objects", p.breakObjects},
-          {"replication_budget", p.replicationBudget},
-          {"mesh_proxies", p.meshProxies},
-          {"max_piece_bytes", p.maxPieceBytes},
-          {"seed", p.seed}};
+  return {{"break_objects", p.breakObjects},    {"replication_budget", p.replicationBudget},
+          {"mesh_proxies", p.meshProxies},      {"max_proxies", p.maxProxies},
+          {"max_piece_bytes", p.maxPieceBytes}, {"seed", p.seed}};
 }
 
 std::string defaultPlotPath(const std::string& report) {
@@ -109,9 +108,12 @@ void printPartsSummary(const PartitionCommandOptions& o, PartitionerKind kind,
                        const Manifest& m, double loadSeconds, double writeSeconds) {
   fmt::print(
       "partitioned {} ({} estimated) for {} ranks with {}: {} units, {} distinct parts, {} "
-      "proxies\n",
+      "proxies{}\n",
       o.scene, formatBytes(stats.inputBytes), ranks, p.name, stats.units, stats.parts,
-      stats.proxies);
+      stats.proxies,
+      stats.unmergedProxies > stats.proxies
+          ? fmt::format(" (merged from {}: --max-proxies)", stats.unmergedProxies)
+          : "");
   if (stats.split.objectsBroken || stats.split.meshesCut)
     fmt::print("  rewritten first: {} objects broken into meshes, {} meshes cut into {} pieces\n",
                stats.split.objectsBroken, stats.split.meshesCut, stats.split.piecesMade);
@@ -229,6 +231,11 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
                   "scene's bytes")
       ->capture_default_str();
   cmd->add_option("--mesh-proxies", o.meshProxies, "object-proxies: boxes per non-instanced mesh")
+      ->capture_default_str();
+  cmd->add_option("--max-proxies", o.maxProxies,
+                  "Merge proxies with the same owners into union boxes until there are at most\n"
+                  "this many (0: never). Every rank holds every proxy (~280 B each); merged boxes\n"
+                  "only cost rays sent through their gaps")
       ->capture_default_str();
   cmd->add_option("--seed", o.seed, "random, ray-guided: the seed of their samples")
       ->capture_default_str();

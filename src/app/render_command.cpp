@@ -142,6 +142,7 @@ void applyPartitionerFlags(const RenderOptions& o, SessionSettings& settings) {
   if (!o.partition.empty()) settings.partitioner = parsePartitioner(o.partition);
   settings.keepObjectsWhole = o.keepObjectsWhole;
   settings.replicationBudget = o.replicationBudget;
+  settings.maxProxies = o.maxProxies;
   settings.render.seed = o.seed;
   if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
     throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
@@ -229,6 +230,13 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
       ->add_option(
           "--replication-budget", o.replicationBudget,
           "best: copies of large, cheap content may add this fraction of the scene's bytes")
+      ->capture_default_str();
+  command
+      ->add_option(
+          "--max-proxies", o.maxProxies,
+          "Merge proxies with the same owners into union boxes until there are at most\n"
+          "this many (0: never). Every rank holds every proxy (~280 B each); merged boxes\n"
+          "only cost rays sent through their gaps")
       ->capture_default_str();
   command->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
   command->add_flag("--env-fallback", o.envFallback,

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "app/camera_flags.h"
+#include "partition/proxy_merge.h"
 
 namespace CLI {
 class App;
@@ -57,6 +58,7 @@ struct RenderOptions {
   std::string partition;  // empty: best on more than one rank
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
+  uint64_t maxProxies = kDefaultMaxProxies;
   // --show-partition[=N]: draw the partition instead of rendering (0: off;
   // -1: for as many ranks as MPI runs; N: for N ranks).
   int showPartition = 0;

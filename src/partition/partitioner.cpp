@@ -180,6 +180,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
     else
       partition.proxies = instanceProxies(scene, p.units, owners, 1);
   }
+  s.unmergedProxies = partition.proxies.size();
+  partition.proxies = mergeProxies(std::move(partition.proxies), o.maxProxies);
   s.proxies = partition.proxies.size();
   if (stats)  // a pass over the scene per rank: only when asked for
     for (int r = 0; r < ranks; ++r)

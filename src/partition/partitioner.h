@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "partition/partition.h"
+#include "partition/proxy_merge.h"
 #include "partition/ray_sample.h"
 #include "partition/scene_split.h"
 
@@ -51,6 +52,8 @@ struct PartitionerOptions {
   bool breakObjects = true;
   double replicationBudget = 0.05;  // best: copies may add this fraction of the input's bytes
   int meshProxies = 64;             // object-proxies: boxes per non-instanced mesh
+  // Proxies are merged down to this many (proxy_merge.h); 0: no limit.
+  uint64_t maxProxies = kDefaultMaxProxies;
   uint64_t maxPieceBytes = 0;  // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
   uint32_t seed = 1;           // random; ray-guided: its sample
   // ray-guided: the rays it weighs splits with (trace/ray_sampler.h makes
@@ -68,6 +71,7 @@ struct PartitionStats {
   uint64_t replicatedUnits = 0;
   std::vector<uint64_t> rankBytes;  // memory estimate of what each rank holds
   uint64_t proxies = 0;
+  uint64_t unmergedProxies = 0;  // before mergeProxies (equal to proxies when none were merged)
   uint64_t units = 0;
   SceneSplitReport split;
   double seconds = 0;

@@ -44,6 +44,7 @@ struct SessionSettings {
   double timeLimitSeconds = 0;
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
+  uint64_t maxProxies = kDefaultMaxProxies;  // partition/proxy_merge.h
 };
 
 // The partitioner options a session with `settings` partitions with on `ranks` ranks.

@@ -1,0 +1,36 @@
+// Proxies merged down to a budget.
+//
+// Every rank holds every proxy (and a BVH over them), so their number is
+// memory and set-up time on every rank: one proxy per instance is 3.8 M
+// proxies for the island at scale 30, about 1 GB on each of its 8 ranks
+// (docs/memory.md). A proxy says only "these ranks have content here", so the
+// union box of proxies with the same owners is still a proxy satisfying the
+// partition invariant (every point of an instance lies in a proxy whose
+// owners all hold it); what merging costs is rays sent to the owners through
+// the gaps of the union. So the boxes are merged where that costs least:
+// proxies are grouped by owner set, each group starts as one union box, and
+// the box with the largest surface area (rays entering a box are in
+// proportion to it) is split in two, by a binned sweep over its members'
+// centres choosing the planes that leave the least summed area, until the
+// budget is reached or every box holds one proxy. Deterministic, like the
+// partitioners: every rank merging the same proxies gets the same boxes.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "partition/partition.h"
+
+namespace ferry {
+
+// The default of `--max-proxies`: about 70 MB on every rank (proxies, their
+// BVH and their owner masks: ~280 B each). Above the built-ins at scale 1
+// with every partitioner, so their partitions are as without a budget.
+constexpr uint64_t kDefaultMaxProxies = uint64_t(1) << 18;
+
+// `proxies` unchanged if there are at most `maxProxies` (or maxProxies is 0),
+// else at most max(maxProxies, number of distinct owner sets) union boxes,
+// ordered by owner set and then as the top-down splits leave them.
+std::vector<Proxy> mergeProxies(std::vector<Proxy> proxies, uint64_t maxProxies);
+
+}  // namespace ferry
