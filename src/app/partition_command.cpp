@@ -4,10 +4,13 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
 
 #include "app/render_command.h"
+#include "builtin/builtin.h"
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/process_memory.h"
@@ -18,6 +21,8 @@
 #include "report/partition_picture.h"
 #include "report/partition_report.h"
 #include "scene/light_scene.h"
+#include "scene/memory_cost.h"
+#include "scene/mesh_store.h"
 #include "scene/scene_summary.h"
 #include "session/forward_prediction.h"
 #include "session/session_settings.h"
@@ -143,10 +148,87 @@ void printPartsSummary(const PartitionCommandOptions& o, PartitionerKind kind,
              formatBytes(fileBytes), formatBytes(m.shared.bytes));
 }
 
+// What partitioning holds besides the geometry, per instance: the instance
+// (52 B), its unit, world box, owners, proxy and the partitioners' working
+// arrays. Measured on the island at scale 30 out of core (docs/memory.md).
+constexpr uint64_t kPartitionBytesPerInstance = 400;
+
+// Where the geometry goes while partitioning (--memory-budget).
+struct GeometryPlan {
+  uint64_t budget = 0;
+  bool outOfCore = false;  // meshes kept in a spill file (scene/mesh_store.h)
+  std::string why;         // for the summary
+};
+
+// A built-in is described first (counts, no geometry): its geometry is kept
+// out of memory only when the whole would not fit the budget, and the
+// partition is refused if even the records would not. A scene file cannot be
+// weighed before it is read: with a budget given, its meshes are stored as
+// they are read (pbrt streams its shapes and plymesh files; OBJ, glTF and a
+// lone PLY are read whole first).
+GeometryPlan planGeometry(const PartitionCommandOptions& o) {
+  GeometryPlan g;
+  const bool given = !o.memoryBudget.empty();
+  g.budget = given ? parseBytes(o.memoryBudget, "--memory-budget") : physicalMemoryBytes() / 2;
+  if (!isBuiltinSpec(o.scene)) {
+    g.outOfCore = given;
+    g.why = given ? "a scene file, with a budget: meshes stored as read" : "";
+    return g;
+  }
+  const SceneSummary s = describeScene(o.scene);
+  const uint64_t geometry = s.memory.vertices + s.memory.normals + s.memory.uvs + s.memory.indices;
+  const uint64_t records = s.instances * kPartitionBytesPerInstance + s.memory.texels;
+  if (geometry + records <= g.budget) return g;
+  if (records > g.budget)
+    throw InputError(fmt::format(
+        "{}: {} instances and {} of textures need about {} to partition even with the geometry "
+        "out of memory, more than --memory-budget {}",
+        o.scene, s.instances, formatBytes(s.memory.texels), formatBytes(records),
+        formatBytes(g.budget)));
+  g.outOfCore = true;
+  g.why = fmt::format("{} of geometry and {} of records and textures exceed the budget",
+                      formatBytes(geometry), formatBytes(records));
+  return g;
+}
+
+// The spill file: next to the output, unlinked as soon as it is open.
+std::string spillPath(const std::string& output) {
+  std::filesystem::path target = std::filesystem::absolute(output).lexically_normal();
+  if (target.filename().empty()) target = target.parent_path();
+  std::error_code ec;
+  std::filesystem::create_directories(target.parent_path(), ec);
+  return (target.parent_path() /
+          fmt::format(".{}.geometry.{}", target.filename().string(), ::getpid()))
+      .string();
+}
+
+// With the geometry out of memory, each mesh is read back whole when it is
+// cut or written: one larger than the budget cannot be partitioned.
+void checkLargestMesh(const Scene& scene, const GeometryPlan& g, const std::string& spec) {
+  for (const Mesh& m : scene.meshes) {
+    const uint64_t bytes =
+        meshCost(m).vertices + meshCost(m).normals + meshCost(m).uvs + meshCost(m).indices;
+    if (2 * bytes > g.budget)
+      throw InputError(fmt::format(
+          "{}: mesh '{}' alone holds {} of arrays; reading it back and cutting it needs about "
+          "twice that, more than --memory-budget {}",
+          spec, m.name, formatBytes(bytes), formatBytes(g.budget)));
+  }
+}
+
 int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const PartitionerOptions& p,
                int ranks) {
   auto start = Clock::now();
-  Scene scene = loadScene(o.scene);
+  const GeometryPlan geometryPlan = planGeometry(o);
+  if (geometryPlan.outOfCore && kind == PartitionerKind::RayGuided)
+    throw InputError(
+        "--partitioner ray-guided traces its ray sample through the whole scene in memory: it "
+        "cannot partition with the geometry out of memory (use best, or a larger "
+        "--memory-budget)");
+  LoadOptions load;
+  if (geometryPlan.outOfCore) load.meshStore = std::make_shared<MeshStore>(spillPath(o.output));
+  Scene scene = loadScene(o.scene, load);
+  if (geometryPlan.outOfCore) checkLargestMesh(scene, geometryPlan, o.scene);
   const double loadSeconds = secondsSince(start);
   // Checked before the work: a bad view or flag fails in a second, not after the write.
   std::vector<PredictionView> views;
@@ -171,7 +253,12 @@ int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const Par
   auto writeStart = Clock::now();
   Manifest m = writePartDirectory(o.output, scene, partition, lights, info);
   const double writeSeconds = secondsSince(writeStart);
-  if (!o.quiet) printPartsSummary(o, kind, p, ranks, stats, m, loadSeconds, writeSeconds);
+  if (!o.quiet) {
+    printPartsSummary(o, kind, p, ranks, stats, m, loadSeconds, writeSeconds);
+    if (geometryPlan.outOfCore)
+      fmt::print("  geometry out of memory ({}): {} spilled, budget {}\n", geometryPlan.why,
+                 formatBytes(scene.meshStore->bytes()), formatBytes(geometryPlan.budget));
+  }
   if (o.predictForwards) {
     scene = Scene{};  // the parts are loaded from the directory, as ranks load them
     predictAndRecord(o, views, prediction);
@@ -232,6 +319,11 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       ->capture_default_str();
   cmd->add_option("--mesh-proxies", o.meshProxies, "object-proxies: boxes per non-instanced mesh")
       ->capture_default_str();
+  cmd->add_option(
+      "--memory-budget", o.memoryBudget,
+      "Memory to partition in, e.g. 2GiB (default: half the machine's). A scene whose\n"
+      "geometry would not fit is partitioned with its meshes in a temporary spill file\n"
+      "next to -o, read back one at a time to cut and write them: the parts are the same");
   cmd->add_option("--max-proxies", o.maxProxies,
                   "Merge proxies with the same owners into union boxes until there are at most\n"
                   "this many (0: never). Every rank holds every proxy (~280 B each); merged boxes\n"

@@ -34,6 +34,9 @@ struct PartitionCommandOptions {
   uint32_t seed = 1;          // random, ray-guided: their samples
   uint64_t rayPaths = 65536;  // ray-guided
   bool quiet = false;
+  // --memory-budget: partition without holding the geometry when it would
+  // not fit (empty: half the machine's memory; see partition_command.cpp).
+  std::string memoryBudget;
   // --predict-forwards: after writing, estimate the rays forwarded per camera
   // path for each named view (and the --look-from camera), without MPI
   // (session/forward_prediction.h); printed and kept in manifest.json.

@@ -129,8 +129,8 @@ std::vector<std::string> builtinNames() {
   return names;
 }
 
-Scene generateBuiltin(const BuiltinParams& params) {
-  return builtin::materializePlan(planFor(params));
+Scene generateBuiltin(const BuiltinParams& params, std::shared_ptr<MeshStore> store) {
+  return builtin::materializePlan(planFor(params), std::move(store));
 }
 
 SceneSummary describeBuiltin(const BuiltinParams& params) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "scene/mesh_store.h"
 #include "scene/scene.h"
 #include "scene/scene_summary.h"
 
@@ -26,7 +27,8 @@ bool isBuiltinSpec(const std::string& spec);  // starts with "builtin:"
 BuiltinParams parseBuiltinSpec(const std::string& spec);
 std::vector<std::string> builtinNames();
 
-Scene generateBuiltin(const BuiltinParams& params);
+// With `store`, meshes are kept in it, not in memory (scene/mesh_store.h).
+Scene generateBuiltin(const BuiltinParams& params, std::shared_ptr<MeshStore> store = nullptr);
 SceneSummary describeBuiltin(const BuiltinParams& params);
 
 }  // namespace ferry

@@ -108,7 +108,7 @@ SceneSummary describePlan(const ScenePlan& plan) {
   return s;
 }
 
-Scene materializePlan(const ScenePlan& plan) {
+Scene materializePlan(const ScenePlan& plan, std::shared_ptr<MeshStore> store) {
   constexpr uint64_t kMaxIndex = uint64_t(std::numeric_limits<int32_t>::max());
   for (const MeshRecipe& m : plan.meshes)
     if (m.counts.vertices > kMaxIndex)
@@ -155,6 +155,7 @@ Scene materializePlan(const ScenePlan& plan) {
           r.counts.vertices, r.counts.triangles, r.hasNormals, r.hasUvs));
     m.name = r.name;
     m.material = r.material;
+    if (store) store->store(m);
     scene.meshes[job - plan.textures.size()] = std::move(m);
   });
 
@@ -176,6 +177,7 @@ Scene materializePlan(const ScenePlan& plan) {
   scene.environment.color = plan.environmentColor;
   if (plan.environmentImage) scene.environment.image = plan.environmentImage();
   scene.views = plan.views;
+  scene.meshStore = std::move(store);
   return scene;
 }
 

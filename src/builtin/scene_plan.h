@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "builtin/shapes.h"
+#include "scene/mesh_store.h"
 #include "scene/scene.h"
 #include "scene/scene_summary.h"
 
@@ -92,6 +93,8 @@ void addDaylight(ScenePlan& plan, Vec3f towardsSun, Vec3f zenith, Vec3f horizon,
 
 SceneSummary describePlan(const ScenePlan& plan);
 // Throws InternalError if a recipe makes something other than it promised.
-Scene materializePlan(const ScenePlan& plan);
+// With `store`, each mesh goes to it as soon as it is made (Mesh::stored):
+// the meshes are never all in memory (ferry partition --memory-budget).
+Scene materializePlan(const ScenePlan& plan, std::shared_ptr<MeshStore> store = nullptr);
 
 }  // namespace ferry::builtin

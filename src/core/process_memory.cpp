@@ -1,5 +1,7 @@
 #include "core/process_memory.h"
 
+#include <unistd.h>
+
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -19,6 +21,11 @@ ProcessMemory readProcessMemory() {
     if (key == "VmHWM:") m.peakResidentBytes = kib * 1024;
   }
   return m;
+}
+
+uint64_t physicalMemoryBytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), size = ::sysconf(_SC_PAGESIZE);
+  return pages > 0 && size > 0 ? uint64_t(pages) * uint64_t(size) : 0;
 }
 
 }  // namespace ferry

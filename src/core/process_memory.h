@@ -12,4 +12,7 @@ struct ProcessMemory {
 
 ProcessMemory readProcessMemory();
 
+// The machine's physical memory (0 if unknown).
+uint64_t physicalMemoryBytes();
+
 }  // namespace ferry

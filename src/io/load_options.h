@@ -5,11 +5,14 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <set>
 #include <string>
 
 namespace ferry {
+
+class MeshStore;
 
 struct LoadOptions {
   // A missing environment map (pbrt's `LightSource "infinite" "mapname"`) is
@@ -24,6 +27,11 @@ struct LoadOptions {
   // The most triangles one generated shape (pbrt's loopsubdiv) may have;
   // more is an InputError naming the shape, not a huge allocation.
   uint64_t maxGeneratedTriangles = uint64_t(1) << 26;
+  // Out-of-core loading (ferry partition --memory-budget): meshes go to this
+  // store as they are finished (built-ins as generated, pbrt shapes and
+  // plymesh files as parsed), so the scene's geometry is never all in
+  // memory. OBJ, glTF and a lone PLY are read whole first, then stored.
+  std::shared_ptr<MeshStore> meshStore;
 };
 
 // Warnings of one load, each said once: a pbrt file with a million shapes

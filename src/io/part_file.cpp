@@ -36,7 +36,8 @@ static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // field, these fail so that the part format (and kPartFormatVersion) follows.
 static_assert(sizeof(Material) == 160,
               "Material changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(Mesh) == 136, "Mesh changed: update part_file.cpp and kPartFormatVersion");
+// (Mesh::stored is not written: a part holds its meshes' arrays; 136 before it.)
+static_assert(sizeof(Mesh) == 200, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 80,
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Texture) == 144,
@@ -249,7 +250,10 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
     }
   w.pod(uint64_t(meshes));
   for (size_t m = 0; m < scene.meshes.size(); ++m)
-    if (meshIndex[m] >= 0) writeMesh(w, scene.meshes[m], materialIndex[scene.meshes[m].material]);
+    if (meshIndex[m] >= 0) {
+      Mesh scratch;  // a stored mesh is read back for as long as it is written
+      writeMesh(w, scene.geometry(int32_t(m), scratch), materialIndex[scene.meshes[m].material]);
+    }
   w.pod(uint64_t(objects));
   std::vector<int32_t> list;
   for (size_t o = 0; o < scene.objects.size(); ++o)

@@ -1,5 +1,7 @@
 #include "io/pbrt_parser.h"
 
+#include "scene/mesh_store.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -1100,7 +1102,20 @@ class Parser {
     }
   }
 
+  // Out-of-core loading (LoadOptions::meshStore): the meshes finished so far
+  // go to the store, so a scene of many plymesh files is never all in
+  // memory; the current curve batch, still growing, stays until a later
+  // shape ends it (loadScene stores what is left at the end).
+  void storeFinishedMeshes() {
+    if (!options_.meshStore) return;
+    for (; storedUpTo_ < scene_.meshes.size(); ++storedUpTo_) {
+      if (curveBatch_ && size_t(curveBatch_->mesh) == storedUpTo_) break;
+      options_.meshStore->store(scene_.meshes[storedUpTo_]);
+    }
+  }
+
   int32_t addMesh(Mesh mesh) {
+    storeFinishedMeshes();
     orientEmitter(mesh);
     if (currentObject_) {
       if (!sameTransform(state_.ctm, Affine3f::identity())) bake(mesh, state_.ctm);
@@ -1348,6 +1363,7 @@ class Parser {
     Affine3f ctm;
   };
   std::optional<CurveBatch> curveBatch_;
+  size_t storedUpTo_ = 0;  // meshes below this index went to options_.meshStore
   std::optional<CameraDefinition> camera_;
   int filmWidth_ = 1280, filmHeight_ = 720;
   std::vector<InfiniteLight> infiniteLights_;

@@ -11,6 +11,7 @@
 #include "io/obj_loader.h"
 #include "io/pbrt_parser.h"
 #include "io/ply_reader.h"
+#include "scene/mesh_store.h"
 
 namespace ferry {
 namespace {
@@ -26,7 +27,7 @@ std::string lowerExtension(const std::string& path) {
 
 Scene loadScene(const std::string& spec, const LoadOptions& options) {
   if (isBuiltinSpec(spec)) {
-    Scene scene = generateBuiltin(parseBuiltinSpec(spec));
+    Scene scene = generateBuiltin(parseBuiltinSpec(spec), options.meshStore);
     scene.reserveVertexSlack();  // so the trace backend shares every vertex array
     return scene;
   }
@@ -49,6 +50,10 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
   }
   scene.validate();
   scene.reserveVertexSlack();  // so the trace backend shares every vertex array
+  if (options.meshStore) {     // loaded whole (pbrt stored its meshes as it went)
+    for (Mesh& mesh : scene.meshes) options.meshStore->store(mesh);
+    scene.meshStore = options.meshStore;
+  }
   return scene;
 }
 

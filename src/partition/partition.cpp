@@ -160,11 +160,12 @@ void Partition::checkCovers(const Scene& scene) const {
     // instance's box, only its geometry: check each mesh, then each triangle.
     const Instance& inst = scene.instances[i];
     for (int32_t m : scene.objects[inst.object].meshes) {
-      const Mesh& mesh = scene.meshes[m];
-      if (mesh.indices.empty()) continue;
-      const Box3f meshBox = inst.transform.transformBox(mesh.bounds());
+      if (scene.meshes[m].triangleCount() == 0) continue;
+      const Box3f meshBox = inst.transform.transformBox(scene.meshes[m].bounds());
       const std::vector<const Box3f*> meshNear = eligible(meshBox, owners);
       if (covered(meshBox, meshNear, 2000)) continue;
+      Mesh scratch;  // a stored mesh is read back only here, when its box is not covered
+      const Mesh& mesh = scene.geometry(m, scratch);
       std::vector<const Box3f*> triNear;
       for (size_t t = 0; t < mesh.indices.size(); ++t) {
         Box3f tri;

@@ -20,12 +20,13 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
         continue;
       }
       for (int32_t m : scene.objects[inst.object].meshes) {
-        const Mesh& mesh = scene.meshes[m];
-        if (mesh.indices.empty()) continue;
+        if (scene.meshes[m].triangleCount() == 0) continue;
         if (meshBoxes <= 1) {
-          boxes.push_back({u, inst.transform.transformBox(mesh.bounds())});
+          boxes.push_back({u, inst.transform.transformBox(scene.meshes[m].bounds())});
           continue;
         }
+        Mesh scratch;
+        const Mesh& mesh = scene.geometry(m, scratch);
         for (const auto& cluster : clusterTriangles(mesh, inst.transform, meshBoxes))
           boxes.push_back({u, trianglesBounds(mesh, inst.transform, cluster)});
       }

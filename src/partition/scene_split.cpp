@@ -6,6 +6,7 @@
 
 #include "partition/triangle_clusters.h"
 #include "scene/memory_cost.h"
+#include "scene/mesh_store.h"
 #include "scene/scene.h"
 
 namespace ferry {
@@ -60,17 +61,22 @@ SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& opt
     for (size_t m = 0; m < meshCount; ++m) {
       if (!placed[m]) continue;
       const uint64_t cost = meshCost(scene.meshes[m]).total();
-      if (cost <= options.maxPieceBytes || scene.meshes[m].indices.size() < 2) continue;
+      if (cost <= options.maxPieceBytes || scene.meshes[m].triangleCount() < 2) continue;
       const int want = int(std::min<uint64_t>(
           kMaxPiecesPerMesh, (cost + options.maxPieceBytes - 1) / options.maxPieceBytes));
+      Mesh scratch;  // a stored mesh is read back, cut, and its pieces stored again
+      const Mesh& source = scene.geometry(int32_t(m), scratch);
       std::vector<std::vector<uint32_t>> clusters =
-          clusterTriangles(scene.meshes[m], Affine3f::identity(), want);
+          clusterTriangles(source, Affine3f::identity(), want);
       if (clusters.size() < 2) continue;
-      remap.assign(scene.meshes[m].positions.size(), -1);
+      remap.assign(source.positions.size(), -1);
       std::vector<Mesh> made;
       made.reserve(clusters.size());
-      for (size_t k = 0; k < clusters.size(); ++k)
-        made.push_back(extractPiece(scene.meshes[m], clusters[k], int(k), remap));
+      for (size_t k = 0; k < clusters.size(); ++k) {
+        made.push_back(extractPiece(source, clusters[k], int(k), remap));
+        if (scene.meshes[m].stored) scene.meshStore->store(made.back());
+      }
+      scratch = Mesh{};
       scene.meshes[m] = std::move(made[0]);
       pieces[m].push_back(int32_t(m));
       for (size_t k = 1; k < made.size(); ++k) {

@@ -15,7 +15,8 @@ Scene lightScene(const Scene& scene) {
         emissiveMeshesPerObject[o].push_back(m);
   for (const Instance& inst : scene.instances) {
     for (int32_t m : emissiveMeshesPerObject[inst.object]) {
-      const Mesh& source = scene.meshes[m];
+      Mesh scratch;
+      const Mesh& source = scene.geometry(m, scratch);
       int32_t& material = materialOf[source.material];
       if (material < 0) {
         Material mat = scene.materials[source.material];

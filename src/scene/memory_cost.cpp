@@ -44,8 +44,7 @@ MemoryCost meshCost(uint64_t vertexCount, uint64_t triangleCount, bool hasNormal
 }
 
 MemoryCost meshCost(const Mesh& mesh) {
-  return meshCost(mesh.vertexCount(), mesh.triangleCount(), !mesh.normals.empty(),
-                  !mesh.uvs.empty());
+  return meshCost(mesh.vertexCount(), mesh.triangleCount(), mesh.hasNormals(), mesh.hasUvs());
 }
 
 MemoryCost textureCost(uint64_t texelCount) {

@@ -3,13 +3,39 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "scene/mesh_store.h"
 
 namespace ferry {
 
 Box3f Mesh::bounds() const {
+  if (stored) return stored->bounds;
   Box3f b;
   for (const Vec3f& p : positions) b.extend(p);
   return b;
+}
+
+std::string Mesh::arrayProblem() const {
+  if (!normals.empty() && normals.size() != positions.size())
+    return fmt::format("mesh '{}' has {} normals for {} positions", name, normals.size(),
+                       positions.size());
+  if (!uvs.empty() && uvs.size() != positions.size())
+    return fmt::format("mesh '{}' has {} uvs for {} positions", name, uvs.size(), positions.size());
+  const auto n = static_cast<int64_t>(positions.size());
+  for (size_t t = 0; t < indices.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (indices[t][k] < 0 || indices[t][k] >= n)
+        return fmt::format("mesh '{}' triangle {} uses vertex {} of {}", name, t, indices[t][k], n);
+  for (size_t v = 0; v < positions.size(); ++v)
+    if (!isFinite(positions[v])) return fmt::format("mesh '{}' vertex {} is not finite", name, v);
+  return {};
+}
+
+const Mesh& Scene::geometry(int32_t m, Mesh& scratch) const {
+  const Mesh& mesh = meshes[size_t(m)];
+  if (!mesh.stored) return mesh;
+  FERRY_CHECK(meshStore != nullptr);
+  scratch = meshStore->load(mesh);
+  return scratch;
 }
 
 int32_t Scene::addSingleInstanceMesh(Mesh mesh) {
@@ -124,21 +150,7 @@ void Scene::validate() const {
     if (mesh.material < 0 || size_t(mesh.material) >= materials.size())
       fail(fmt::format("mesh '{}' refers to material {} of {}", mesh.name, mesh.material,
                        materials.size()));
-    if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
-      fail(fmt::format("mesh '{}' has {} normals for {} positions", mesh.name, mesh.normals.size(),
-                       mesh.positions.size()));
-    if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
-      fail(fmt::format("mesh '{}' has {} uvs for {} positions", mesh.name, mesh.uvs.size(),
-                       mesh.positions.size()));
-    const auto n = static_cast<int64_t>(mesh.positions.size());
-    for (size_t t = 0; t < mesh.indices.size(); ++t)
-      for (int k = 0; k < 3; ++k)
-        if (mesh.indices[t][k] < 0 || mesh.indices[t][k] >= n)
-          fail(fmt::format("mesh '{}' triangle {} uses vertex {} of {}", mesh.name, t,
-                           mesh.indices[t][k], n));
-    for (size_t v = 0; v < mesh.positions.size(); ++v)
-      if (!isFinite(mesh.positions[v]))
-        fail(fmt::format("mesh '{}' vertex {} is not finite", mesh.name, v));
+    if (std::string problem = mesh.arrayProblem(); !problem.empty()) fail(problem);
   }
   for (const Object& o : objects)
     for (int32_t m : o.meshes)

@@ -91,6 +91,20 @@ struct Material {
   }
 };
 
+// Where a mesh's arrays are when they are not in memory: out-of-core
+// partitioning (scene/mesh_store.h) writes them to a spill file as they are
+// made and keeps this in their place, so everything that weighs or places
+// meshes (costs, bounds, units, proxies) works without the arrays, and what
+// needs the triangles reads them back one mesh at a time (Scene::geometry).
+struct StoredMesh {
+  uint64_t offset = 0;  // in the MeshStore's file
+  uint64_t vertices = 0;
+  uint64_t triangles = 0;
+  bool normals = false;
+  bool uvs = false;
+  Box3f bounds;
+};
+
 struct Mesh {
   std::string name;
   std::vector<Vec3f> positions;
@@ -98,10 +112,15 @@ struct Mesh {
   std::vector<Vec2f> uvs;      // empty, or one per position
   std::vector<Vec3i> indices;  // 32-bit triangle indices into positions
   int32_t material = 0;
+  std::optional<StoredMesh> stored;  // set: the arrays above are empty and in Scene::meshStore
 
-  uint64_t triangleCount() const { return indices.size(); }
-  uint64_t vertexCount() const { return positions.size(); }
+  uint64_t triangleCount() const { return stored ? stored->triangles : indices.size(); }
+  uint64_t vertexCount() const { return stored ? stored->vertices : positions.size(); }
+  bool hasNormals() const { return stored ? stored->normals : !normals.empty(); }
+  bool hasUvs() const { return stored ? stored->uvs : !uvs.empty(); }
   Box3f bounds() const;
+  // What is wrong with the arrays (sizes, indices, finite positions), or empty.
+  std::string arrayProblem() const;
   // A trace backend may read a few bytes past the last position (Embree
   // reads 16 bytes at the last vertex): with one element of spare capacity it
   // shares the array, else it keeps a padded copy. Loaders leave the spare
@@ -151,6 +170,8 @@ struct CameraView {
   bool leftHanded = false;
 };
 
+class MeshStore;
+
 struct Scene {
   std::string name;
   std::vector<Mesh> meshes;
@@ -172,6 +193,13 @@ struct Scene {
   // pbrt's Film "scale" (v3) and "iso" / 100 (v4's imaging ratio at a 1 s
   // exposure): multiplies the radiance written to the image.
   float filmScale = 1;
+
+  // The arrays of stored meshes (Mesh::stored); null when every mesh is in memory.
+  std::shared_ptr<MeshStore> meshStore;
+
+  // Mesh `m` with its arrays: the mesh itself, or for a stored one a copy
+  // read back from meshStore into `scratch` (one mesh at a time in memory).
+  const Mesh& geometry(int32_t m, Mesh& scratch) const;
 
   // Adds a mesh (with vertex slack) as its own object with one identity
   // instance; returns the object.

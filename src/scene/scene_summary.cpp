@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
 
+#include "core/error.h"
 #include "scene/scene.h"
 
 namespace ferry {
@@ -87,6 +90,33 @@ std::string formatBytes(uint64_t bytes) {
     ++u;
   }
   return fmt::format("{:.2f} {}", v, units[u]);
+}
+
+uint64_t parseBytes(const std::string& text, const std::string& what) {
+  auto bad = [&] {
+    return InputError(fmt::format(
+        "{} '{}': expected a size such as 2GiB, 500MiB, 3GB or a number of bytes", what, text));
+  };
+  size_t end = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &end);
+  } catch (const std::exception&) {
+    throw bad();
+  }
+  std::string unit = text.substr(end);
+  unit.erase(0, unit.find_first_not_of(' '));
+  static const std::pair<const char*, double> units[] = {
+      {"", 1},       {"B", 1},        {"K", 0x1p10},   {"KiB", 0x1p10}, {"KB", 1e3},
+      {"M", 0x1p20}, {"MiB", 0x1p20}, {"MB", 1e6},     {"G", 0x1p30},   {"GiB", 0x1p30},
+      {"GB", 1e9},   {"T", 0x1p40},   {"TiB", 0x1p40}, {"TB", 1e12}};
+  for (const auto& [name, scale] : units)
+    if (unit == name) {
+      const double bytes = value * scale;
+      if (!(bytes >= 1 && bytes < 0x1p63)) throw bad();
+      return uint64_t(bytes);
+    }
+  throw bad();
 }
 
 nlohmann::json SceneSummary::toJson() const {

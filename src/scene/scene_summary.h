@@ -47,5 +47,8 @@ MemoryCost ownedMemory(const Scene& scene, const std::vector<int32_t>& instances
 // 1234567 -> "1.23 M"; bytes -> "1.18 MiB".
 std::string formatCount(uint64_t n);
 std::string formatBytes(uint64_t bytes);
+// "2GiB", "1.5 GiB", "500MB", "64M", "4096": bytes (K/M/G/T and KiB.. are
+// powers of 1024, KB.. powers of 1000). Throws InputError naming `what`.
+uint64_t parseBytes(const std::string& text, const std::string& what);
 
 }  // namespace ferry

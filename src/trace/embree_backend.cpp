@@ -359,6 +359,7 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
                                  const IdForSlot& idForSlot) {
   for (size_t slot = 0; slot < object.meshes.size(); ++slot) {
     const Mesh& mesh = scene_.meshes[object.meshes[slot]];
+    FERRY_CHECK(!mesh.stored);  // stored meshes are for partitioning, never traced
     if (mesh.indices.empty()) continue;
     RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_TRIANGLE);
     // Embree only reads shared buffers; its API takes them as void*.

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/clock.h"
+#include "core/error.h"
 #include "core/random.h"
 #include "scene/scene.h"
 #include "trace/embree_backend.h"
@@ -124,6 +125,10 @@ RaySample sampleSceneRays(const Scene& scene, const RaySamplerOptions& o) {
   sample.paths = o.paths;
   sample.seed = o.seed;
   if (scene.instances.empty() || scene.worldBounds().empty()) return sample;
+  if (scene.meshStore)
+    throw InputError(
+        "the ray-guided partitioner traces its ray sample through the whole scene in memory: it "
+        "does not partition under --memory-budget (use best, or a larger budget)");
   const std::unique_ptr<TraceBackend> tracer = makeEmbreeBackend(scene);
   const PathSampler sampler(scene, *tracer, o);
   // Per block of paths, then joined in path order: the same rays whatever
