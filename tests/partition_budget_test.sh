@@ -70,6 +70,14 @@ grep -q "meshes cut" "$work/log" || fail "pbrt: no mesh was cut (the test wants 
 same_parts "$work/pin" "$work/pout" "pbrt plymesh scene, 3 ranks"
 echo "  pbrt plymesh scene: the same parts with the meshes stored as parsed"
 
+# --max-proxies: best's one proxy per instance merged down to the budget,
+# said in the summary and kept in the manifest's options.
+"$ferry" partition "$island" --ranks 3 --partitioner best -o "$work/merged" --max-proxies 100 \
+  > "$work/log" || fail "partition with --max-proxies"
+grep -q "100 proxies (merged from" "$work/log" || { fail "no merge in the summary"; cat "$work/log"; }
+grep -q '"max_proxies": 100' "$work/merged/manifest.json" || fail "max_proxies not in the manifest"
+echo "  --max-proxies: merged and recorded"
+
 # Errors: one message, exit non-zero, nothing written.
 expect_error() {
   local pattern=$1
