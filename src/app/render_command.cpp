@@ -119,6 +119,21 @@ std::string applySceneDefaults(const RenderOptions& o, RenderSession& session) {
   return o.output;
 }
 
+}  // namespace
+
+std::string setupIntervalsText(const SetupTimes& times, std::string_view until) {
+  std::string out;
+  for (const auto& field : kSetupTimes) {
+    if (field.key == until) break;
+    const double seconds = times.*field.member;
+    if (seconds == 0) continue;  // e.g. no partitioning for a part directory
+    out += fmt::format("{}{} {:.2f}", out.empty() ? "" : ", ", field.key, seconds);
+  }
+  return out;
+}
+
+namespace {
+
 void printSummary(const RenderSession& session, const SessionReport& report, int ranks,
                   const std::string& output) {
   fmt::print("{}", report.stats.summaryText(ranks));
@@ -130,6 +145,12 @@ void printSummary(const RenderSession& session, const SessionReport& report, int
              "memory per rank", formatBytes(maxOf(memory.estimated)),
              formatBytes(session.summary().memory.total()), formatBytes(maxOf(memory.embree)),
              formatBytes(maxOf(memory.residentPeak)));
+  const size_t slowest = slowestSetup(report.setup);
+  if (slowest < report.setup.size())
+    fmt::print("  {:<22}{:.2f} s; {}: {} s\n", "time to first pixel",
+               report.setup[slowest].firstPixel,
+               ranks > 1 ? fmt::format("slowest rank {}", slowest) : std::string("set-up"),
+               setupIntervalsText(report.setup[slowest], "first_pixel"));
   fmt::print("  {:<22}{} ({} sent by direct send)\n", "composite",
              fmt::format("{:.3f} s", report.compositeSeconds), formatBytes(report.compositeBytes));
   if (report.revisits) fmt::print("  {:<22}{}\n", "REVISITS", report.revisits);
@@ -320,8 +341,7 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
     session.emplace(settings, comm);
     sink.emplace(applySceneDefaults(o, *session));
     if (!o.resume.empty() && comm.isRoot()) session->resumeFrom(o.resume);
-    loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", session->loadSeconds(),
-                               session->buildSeconds()));
+    loading.finish(setupIntervalsText(session->setupTimes(), "agree") + " s");
   } catch (const std::exception& e) {
     error = e.what();
   }

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "app/camera_flags.h"
 #include "partition/proxy_merge.h"
@@ -15,6 +16,7 @@ namespace ferry {
 
 class Communicator;
 struct SessionSettings;
+struct SetupTimes;
 
 struct RenderOptions {
   std::string scene = "builtin:island";
@@ -74,6 +76,9 @@ void addRenderCommand(CLI::App& app, RenderOptions& options);
 void addRenderingOptions(CLI::App* command, RenderOptions& options);
 // The flags, checked, as a session's settings: every mode parsed once.
 SessionSettings sessionSettings(const RenderOptions& options, const Communicator& comm);
+// A set-up's intervals up to (not including) the one named `until`, as
+// "start 0.10, load 7.28, build 2.93" (kSetupTimes; intervals of 0 left out).
+std::string setupIntervalsText(const SetupTimes& times, std::string_view until);
 // Renders on every rank of `comm`; returns this rank's exit code. Errors every
 // rank meets while setting up are agreed on and reported once; an error on
 // one rank while rendering ends all ranks (see Communicator).

@@ -49,8 +49,7 @@ int runView(const ViewOptions& o, const Communicator& comm) {
     Progress loading("load", 1, talk);
     loading.update(0, o.render.scene);
     session.emplace(settings, comm);
-    loading.finish(fmt::format("{:.2f} s load, {:.2f} s build", session->loadSeconds(),
-                               session->buildSeconds()));
+    loading.finish(setupIntervalsText(session->setupTimes(), "agree") + " s");
     if (comm.isRoot()) {
       const Scene& scene = session->scene();
       const RenderSettings& r = session->settings().render;

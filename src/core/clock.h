@@ -11,4 +11,9 @@ inline double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
+// When this process started, as near as the program can tell: read during
+// static initialization, before main() (so before MPI's start-up), after the
+// dynamic loader. What a rank's time to first pixel is counted from.
+Clock::time_point processStart();
+
 }  // namespace ferry

@@ -3,6 +3,8 @@
 #include <malloc.h>
 
 #include <algorithm>
+#include <chrono>
+#include <iterator>
 #include <numeric>
 #include <span>
 
@@ -41,19 +43,35 @@ struct RenderSession::Rank {
   std::unique_ptr<LightSampler> lights;
   SceneSummary summary;  // of the whole scene, before releasing what this rank does not own
   MemoryCost ownedEstimate;
-  double loadSeconds = 0, buildSeconds = 0;
+  SetupTimes setup;
+  Clock::time_point lapStart = processStart();  // where the next interval of `setup` begins
+  bool firstPixel = false;                      // setup complete (run() reached its first frame)
 
   Rank(const SessionSettings& settings, const Communicator& comm);
   // The one place the session names the trace backend: this rank's trace
   // structures over its instances, and what Embree holds for them.
   void buildTraceStructures(Instancing instancing);
+  // Ends the interval since the last lap as `field` of `setup` (until the first pixel).
+  void lap(double SetupTimes::*field) {
+    if (firstPixel) return;
+    const Clock::time_point now = Clock::now();
+    setup.*field = std::chrono::duration<double>(now - lapStart).count();
+    lapStart = now;
+  }
+  // Called just before the first frame's camera rays: ends the set-up.
+  void reachFirstPixel() {
+    lap(&SetupTimes::renderer);
+    if (firstPixel) return;
+    setup.firstPixel = std::chrono::duration<double>(lapStart - processStart()).count();
+    firstPixel = true;
+  }
 };
 
 RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm) {
   if (settings.threads > 0)
     threadLimit = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, settings.threads);
-  auto start = Clock::now();
+  lap(&SetupTimes::start);
   if (isPartDirectory(settings.scene)) {
     // A part directory: this rank reads only its own part and the shared data.
     RankPart part = loadRankPart(settings.scene, comm.rank(), comm.size());
@@ -65,14 +83,19 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     scene.filmScale = part.manifest.filmScale;
     owned.resize(scene.instances.size());
     std::iota(owned.begin(), owned.end(), 0);
+    ownedEstimate = ownedMemory(scene, owned);
+    lap(&SetupTimes::load);
     lights = std::make_unique<LightSampler>(part.lights);
+    lap(&SetupTimes::lights);
   } else {
     scene = loadScene(settings.scene, settings.load);
     scene.view(settings.render.view);  // fail on an unknown view before building anything
     summary = summarize(scene);
+    lap(&SetupTimes::load);
     // Light data is small and needed everywhere: take it from the scene as
     // given, before the partitioner rewrites it and ranks release geometry.
     lights = std::make_unique<LightSampler>(scene);
+    lap(&SetupTimes::lights);
     const PartitionerOptions options = partitionerOptions(settings, comm.size());
     partition = partitionScene(scene, comm.size(), withRaySample(scene, options));
     partitionerName = options.name;
@@ -80,19 +103,18 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     scene.releaseAllBut(owned);
     // Hand the freed geometry back to the system, so resident memory shows what the rank holds.
     malloc_trim(0);
+    ownedEstimate = ownedMemory(scene, owned);
+    lap(&SetupTimes::partition);
   }
-  ownedEstimate = ownedMemory(scene, owned);
-  loadSeconds = secondsSince(start);
   maybeInjectFailure("load", comm.rank());
   buildTraceStructures(settings.instancing);
 }
 
 void RenderSession::Rank::buildTraceStructures(Instancing instancing) {
-  auto start = Clock::now();
   geometry = makeEmbreeBackend(scene, owned, instancing);
-  buildSeconds = secondsSince(start);
   embreeBytes = geometry->bytes().now;
   embreePeakBytes = geometry->bytes().peak;
+  lap(&SetupTimes::build);
 }
 
 namespace {
@@ -239,11 +261,8 @@ const SceneSummary& RenderSession::summary() const {
 const std::string& RenderSession::partitionerName() const {
   return rank_->partitionerName;
 }
-double RenderSession::loadSeconds() const {
-  return rank_->loadSeconds;
-}
-double RenderSession::buildSeconds() const {
-  return rank_->buildSeconds;
+const SetupTimes& RenderSession::setupTimes() const {
+  return rank_->setup;
 }
 
 SessionReport RenderSession::run(FrameSink& sink, const SessionProgress& progress) {
@@ -275,6 +294,19 @@ namespace {
 // samples so far, times the Film's scale (pbrt).
 float imageScale(const Scene& scene, int frames, int samplesPerPixel) {
   return scene.filmScale / float(frames * samplesPerPixel);
+}
+
+// Every rank's set-up times, on every rank (one collective).
+std::vector<SetupTimes> rankSetupTimes(const Communicator& comm, const SetupTimes& times) {
+  const size_t n = size_t(comm.size()), fields = std::size(kSetupTimes);
+  std::vector<double> mine(n * fields, 0.0);
+  for (size_t k = 0; k < fields; ++k)
+    mine[size_t(comm.rank()) * fields + k] = times.*kSetupTimes[k].member;
+  const std::vector<double> all = comm.sum(std::span<const double>(mine));
+  std::vector<SetupTimes> out(n);
+  for (size_t r = 0; r < n; ++r)
+    for (size_t k = 0; k < fields; ++k) out[r].*kSetupTimes[k].member = all[r * fields + k];
+  return out;
 }
 
 // Every rank's memory now, on every rank (one collective).
@@ -327,7 +359,9 @@ template <typename Path>
 void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames,
                                           double sliceSeconds) {
   Rank& rank = *rank_;
+  rank.lap(&SetupTimes::agree);
   std::unique_ptr<RayTraversal<Path>> traversal = makeTraversal<Path>(nullptr);
+  rank.lap(&SetupTimes::proxies);
   RenderSettings render = settings_.render;
   render.frames = 1;
   if (!render.camera) render.camera = rank.scene.view(render.view);
@@ -366,6 +400,7 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
         std::min<uint32_t>(uint32_t(std::min(bySeconds, 64.0)), pixels / 4096), 1, 64);
     FrameStats mine;
     bool abandon = false;
+    rank.reachFirstPixel();
     const auto frameStart = Clock::now();
     for (uint32_t slice = 0; slice < slices && !abandon; ++slice) {
       const uint32_t first = uint32_t(uint64_t(pixels) * slice / slices);
@@ -410,20 +445,22 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
 template <typename Path>
 SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgress& progress) {
   Rank& rank = *rank_;
+  // A resumed render starts after the checkpoint's frames, with its image on
+  // rank 0 (the other ranks add to zero: the composite is the same sum).
+  int firstFrame = resume_ ? resume_->frames : 0;
+  comm_.broadcast(firstFrame);
+  rank.lap(&SetupTimes::agree);
   const RenderSettings& render = settings_.render;
   DistributedTraversal<Path>* distributed = nullptr;
   std::unique_ptr<RayTraversal<Path>> traversal = makeTraversal<Path>(&distributed);
+  rank.lap(&SetupTimes::proxies);
   WavefrontRenderer<Path> renderer(rank.scene, *rank.geometry, *rank.lights, *traversal, render);
   FrameBuffer frameBuffer(render.width, render.height);
   const FrameSink::Frames frames = sink.frames();
   const FrameSink::Pixels pixels = sink.pixels();
   SessionReport report;
   RenderStats& stats = report.stats;
-  uint64_t compositeBytes = 0;  // this rank's, over every composite
-  // A resumed render starts after the checkpoint's frames, with its image on
-  // rank 0 (the other ranks add to zero: the composite is the same sum).
-  int firstFrame = resume_ ? resume_->frames : 0;
-  comm_.broadcast(firstFrame);
+  uint64_t compositeBytes = 0;        // this rank's, over every composite
   int lastFrame = render.frames - 1;  // earlier if the time limit says so
   auto compositeAfter = [&](int frame, double& seconds) {
     auto start = Clock::now();
@@ -466,6 +503,7 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
     double secondsLeft = -1;
     if (settings_.timeLimitSeconds > 0)
       secondsLeft = std::max(0.0, settings_.timeLimitSeconds - secondsSince(runStart));
+    rank.reachFirstPixel();
     FrameStats mine = renderer.renderFrame(frame, frameBuffer, [&](int done, int total) {
       if (progress) progress({frame, done, total, false, secondsLeft});
     });
@@ -497,6 +535,7 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
   report.compositeBytes = comm_.sum(compositeBytes);
   report.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
                              double(rank.embreePeakBytes));
+  report.setup = rankSetupTimes(comm_, rank.setup);
   report.raysReceived = comm_.sum(distributed ? distributed->received() : 0);
   report.revisits = comm_.sum(distributed ? distributed->revisits() : 0);
   report.pathLayout = layoutName<Path>();

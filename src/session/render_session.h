@@ -42,16 +42,46 @@ struct RankMemory {
   std::vector<double> residentPeak;  // peak resident set
 };
 
+// Where a rank's time to its first pixel went, in seconds: consecutive
+// intervals from the process's start (core/clock.h) to the first frame's
+// first camera ray (the renderer's first act in a frame), so they add up to
+// firstPixel. Named once, in kSetupTimes (the JSON, the sum over ranks and
+// the summary walk it).
+struct SetupTimes {
+  double start = 0;       // process start to the session: MPI's start-up, flags, settings
+  double load = 0;        // reading the scene, or this rank's part and the shared data
+  double partition = 0;   // on the fly: the ray sample, partitioning, dropping what others own
+  double lights = 0;      // the light sampler
+  double build = 0;       // the trace structures (Embree's BVHs)
+  double agree = 0;       // from set-up to run(): the command's agreement on set-up errors (this
+                          // rank waiting for the slowest), the image sink, a checkpoint read
+  double proxies = 0;     // the traversal: on many ranks the proxy BVH and owner masks
+  double renderer = 0;    // the renderer (camera, light tables) and the frame buffer
+  double firstPixel = 0;  // all of the above: process start to the first camera ray
+};
+inline constexpr StatsField<SetupTimes, double> kSetupTimes[] = {
+    {nullptr, "start", &SetupTimes::start},
+    {nullptr, "load", &SetupTimes::load},
+    {nullptr, "partition", &SetupTimes::partition},
+    {nullptr, "lights", &SetupTimes::lights},
+    {nullptr, "build", &SetupTimes::build},
+    {nullptr, "agree", &SetupTimes::agree},
+    {nullptr, "proxies", &SetupTimes::proxies},
+    {nullptr, "renderer", &SetupTimes::renderer},
+    {nullptr, "first_pixel", &SetupTimes::firstPixel},
+};
+
 // What a session measured, the same on every rank.
 struct SessionReport {
   RenderStats stats;  // per frame, summed over ranks (seconds: the slowest rank)
   RankMemory memory;
-  uint64_t raysReceived = 0;    // counted by receivers (stats count senders)
-  uint64_t revisits = 0;        // rays that came back to a rank they had visited (must be 0)
-  uint64_t compositeBytes = 0;  // sent by direct send over all composites and ranks
-  double compositeSeconds = 0;  // the final image's composite, slowest rank
-  std::string pathLayout;       // mask8, mask64 or replay
-  size_t pathBytes = 0;         // sizeof the path on the wire
+  std::vector<SetupTimes> setup;  // per rank: its first run()'s set-up (run() again: the same)
+  uint64_t raysReceived = 0;      // counted by receivers (stats count senders)
+  uint64_t revisits = 0;          // rays that came back to a rank they had visited (must be 0)
+  uint64_t compositeBytes = 0;    // sent by direct send over all composites and ranks
+  double compositeSeconds = 0;    // the final image's composite, slowest rank
+  std::string pathLayout;         // mask8, mask64 or replay
+  size_t pathBytes = 0;           // sizeof the path on the wire
 };
 
 // How far run() is: called after every sample of every frame, then once
@@ -160,8 +190,9 @@ class RenderSession {
   // The partitioner that made the parts: a part directory's (from its
   // manifest) or the one run on the fly.
   const std::string& partitionerName() const;
-  double loadSeconds() const;
-  double buildSeconds() const;
+  // This rank's set-up so far: up to the first pixel once run() has begun
+  // its first frame.
+  const SetupTimes& setupTimes() const;
 
  private:
   struct Rank;

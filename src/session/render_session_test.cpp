@@ -1,11 +1,13 @@
 // A render session on one rank, in this process: the sink gets the images it
-// asks for, of the right size and not black, and a part directory's stats
-// name the partitioner that made the parts.
+// asks for, of the right size and not black, a part directory's stats name
+// the partitioner that made the parts, and the set-up's intervals add up to
+// the first pixel.
 #include "session/render_session.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -188,6 +190,46 @@ TEST(RenderSession, PartDirectoryStatsNameThePartitionerThatMadeTheParts) {
   ASSERT_EQ(sink.images.size(), 1u);
   EXPECT_TRUE(nonBlack(sink.images[0].linear));
   fs::remove_all(dir);
+}
+
+// Where the time to the first pixel went: every rank's intervals, from the
+// process's start, add up to its first pixel, and the stats name them all
+// (the slowest rank's too). 3 ranks in process, partitioning on the fly.
+TEST(RenderSession, SetUpIntervalsAddUpToTheFirstPixelOnEveryRank) {
+  SessionSettings settings = cornellSettings();
+  settings.partitioner = PartitionerKind::Best;
+  nlohmann::json stats;
+  runRanks(3, [&](const Communicator& comm) {
+    RenderSession session(settings, comm);
+    EXPECT_EQ(session.setupTimes().firstPixel, 0);  // not reached yet
+    RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+    const SessionReport report = session.run(sink);
+    ASSERT_EQ(report.setup.size(), 3u);
+    const SetupTimes& mine = report.setup[size_t(comm.rank())];
+    EXPECT_EQ(mine.firstPixel, session.setupTimes().firstPixel);
+    double sum = 0;
+    for (const auto& field : kSetupTimes) {
+      EXPECT_GE(mine.*field.member, 0) << field.key;
+      if (field.member != &SetupTimes::firstPixel) sum += mine.*field.member;
+    }
+    EXPECT_GT(mine.load, 0);
+    EXPECT_GT(mine.partition, 0);
+    EXPECT_GT(mine.build, 0);
+    EXPECT_NEAR(sum, mine.firstPixel, 1e-9 * std::max(1.0, mine.firstPixel));
+    if (comm.isRoot()) stats = sessionStatsJson(session, report, {"out.pfm", 1.0});
+  });
+  const nlohmann::json& seconds = stats.at("seconds");
+  for (const auto& field : kSetupTimes) {
+    EXPECT_TRUE(seconds.contains(field.key)) << field.key;
+    EXPECT_TRUE(seconds.at("slowest").contains(field.key)) << field.key;
+  }
+  EXPECT_EQ(seconds.at("total"), 1.0);
+  ASSERT_EQ(seconds.at("per_rank").size(), 3u);
+  EXPECT_EQ(seconds.at("per_rank")[2].at("rank"), 2);
+  EXPECT_EQ(seconds.at("load"), seconds.at("per_rank")[0].at("load"));
+  const size_t slowest = seconds.at("slowest").at("rank").get<size_t>();
+  ASSERT_LT(slowest, 3u);
+  EXPECT_EQ(seconds.at("slowest"), seconds.at("per_rank")[slowest]);
 }
 
 // Scripted like a viewer: frames accumulate; a camera change waiting while

@@ -17,6 +17,14 @@ double maxOf(const std::vector<double>& v) {
 
 }  // namespace
 
+size_t slowestSetup(const std::vector<SetupTimes>& setup) {
+  auto ownWork = [](const SetupTimes& t) { return t.firstPixel - t.agree; };
+  size_t slowest = 0;
+  for (size_t rank = 1; rank < setup.size(); ++rank)
+    if (ownWork(setup[rank]) > ownWork(setup[slowest])) slowest = rank;
+  return slowest;
+}
+
 nlohmann::json sessionStatsJson(const RenderSession& session, const SessionReport& report,
                                 const StatsContext& context) {
   const SessionSettings& s = session.settings();
@@ -61,9 +69,23 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                  {"max_embree_bytes", maxOf(memory.embree)},
                  {"max_peak_resident_bytes", maxOf(memory.residentPeak)},
                  {"per_rank", perRank}};
-  j["seconds"] = {{"load", session.loadSeconds()},
-                  {"build", session.buildSeconds()},
-                  {"total", context.totalSeconds}};
+  // Set-up: rank 0's at the top (its "load" and "build" as ever), the
+  // slowest rank's under "slowest", every rank's under "per_rank".
+  auto setupJson = [](const SetupTimes& t, size_t rank) {
+    nlohmann::json out;
+    for (const auto& field : kSetupTimes) out[field.key] = t.*field.member;
+    out["rank"] = rank;
+    return out;
+  };
+  nlohmann::json setupPerRank = nlohmann::json::array();
+  for (size_t rank = 0; rank < report.setup.size(); ++rank)
+    setupPerRank.push_back(setupJson(report.setup[rank], rank));
+  if (report.setup.empty()) setupPerRank.push_back(setupJson({}, 0));
+  j["seconds"] = setupPerRank[0];
+  j["seconds"].erase("rank");
+  j["seconds"]["total"] = context.totalSeconds;
+  j["seconds"]["slowest"] = setupPerRank[slowestSetup(report.setup)];
+  j["seconds"]["per_rank"] = setupPerRank;
   return j;
 }
 
