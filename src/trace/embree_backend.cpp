@@ -2,7 +2,6 @@
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
-#include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -453,30 +452,19 @@ void EmbreeBackend::commitObjectScenes(std::span<const int32_t> objects) {
 }
 
 void EmbreeBackend::attachInstances(std::span<const int32_t> instances) {
-  // Made in parallel, attached in order: attaching takes the scene's lock,
-  // which threads attaching at once only fight over (island?scale=4, 503 K
-  // instances on 2 threads: 0.17 s one by one, 0.25-0.35 s all in parallel,
-  // 0.08-0.10 s made in parallel and attached here, 0.03 s of it attaching).
-  // Each has its own instance id, so the order they are made in changes nothing.
-  std::vector<RTCGeometry> made(instances.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, instances.size(), 4096), [&](const auto& range) {
-    for (size_t k = range.begin(); k < range.end(); ++k) {
-      const Instance& inst = scene_.instances[instances[k]];
-      RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_INSTANCE);
-      rtcSetGeometryInstancedScene(g, embree_.objectScenes.at(inst.object));
-      float xfm[12];
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) xfm[r * 4 + c] = inst.transform.l[r][c];
-        xfm[r * 4 + 3] = inst.transform.t[r];
-      }
-      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
-      rtcCommitGeometry(g);
-      made[k] = g;
+  for (int32_t instanceId : instances) {
+    const Instance& inst = scene_.instances[instanceId];
+    RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, embree_.objectScenes.at(inst.object));
+    float xfm[12];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) xfm[r * 4 + c] = inst.transform.l[r][c];
+      xfm[r * 4 + 3] = inst.transform.t[r];
     }
-  });
-  for (size_t k = 0; k < instances.size(); ++k) {
-    rtcAttachGeometryByID(embree_.top, made[k], static_cast<unsigned>(instances[k]));
-    rtcReleaseGeometry(made[k]);
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(embree_.top, g, static_cast<unsigned>(instanceId));
+    rtcReleaseGeometry(g);
   }
   checkBuild("placing instances");
 }
