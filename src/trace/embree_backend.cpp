@@ -2,15 +2,11 @@
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
-#include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
-#include <functional>
 #include <mutex>
 #include <string>
 #include <unordered_map>
@@ -100,10 +96,7 @@ void alphaFilter(const RTCFilterFunctionNArguments* args) {
 }
 
 // Bytes now and at the peak: Embree's (its memory-monitor callback) and the
-// backend's own padded vertex copies. Atomic: Embree calls the monitor from
-// any of its build threads, and several objects' builds run at once
-// (EmbreeBackend::commitObjectScenes); the peak is the highest sum any
-// single update reached.
+// backend's own padded vertex copies.
 struct MemoryCounters {
   std::atomic<int64_t> now{0}, peak{0};
   void add(int64_t bytes) {
@@ -259,20 +252,13 @@ class EmbreeBackend final : public TraceBackend {
   }
   TraceHit hitOf(const RTCRayHit& rh) const;
   // The vertex array Embree reads for `mesh`: the scene's own when it has a
-  // spare element, else a padded copy kept here. On the constructing thread
-  // only (meshes are attached before any build runs).
+  // spare element, else a padded copy kept here.
   const Vec3f* sharedPositions(const Mesh& mesh);
   // Embree geometries for the meshes of `object`, each attached to `target`
   // by the id idForSlot(slot) returns.
   template <typename IdForSlot>
   void attachMeshes(const Object& object, RTCScene target, const IdForSlot& idForSlot);
-  // An Embree scene for `objectId` with its meshes attached, not committed.
-  void newObjectScene(int32_t objectId);
-  // Builds the scenes of `objects` (made by newObjectScene), several at once.
-  void commitObjectScenes(std::span<const int32_t> objects);
-  // Instance geometries in the top-level scene for `instances` (their
-  // objects' scenes built), each by its instance id.
-  void attachInstances(std::span<const int32_t> instances);
+  RTCScene objectScene(int32_t objectId);
   void checkBuild(const char* what);
 
   const Scene& scene_;
@@ -319,30 +305,31 @@ EmbreeBackend::EmbreeBackend(const Scene& scene, std::span<const int32_t> ownedI
   };
   topLevelBase_ = uint32_t(scene.instances.size());  // instances keep their own ids below
 
-  // Top-level meshes (their ids in instance order), and a scene for every
-  // instanced object, built concurrently; then the instances over them (ids
-  // their own), the same structures and ids as building them one by one.
   embree_.top = rtcNewScene(embree_.device);
-  std::vector<int32_t> instancedObjects, placedInstances;
   for (int32_t instanceId : ownedInstances) {
     const Instance& inst = scene.instances[instanceId];
-    ++instanceCount_;
     if (atTopLevel(inst)) {
       attachMeshes(scene.objects[inst.object], embree_.top, [&](int32_t slot) {
         topLevelMeshes_.push_back({instanceId, slot});
         return unsigned(topLevelBase_ + topLevelMeshes_.size() - 1);
       });
       ++topLevelObjects_;
+      ++instanceCount_;
       continue;
     }
-    placedInstances.push_back(instanceId);
-    if (!embree_.objectScenes.contains(inst.object)) {
-      newObjectScene(inst.object);
-      instancedObjects.push_back(inst.object);
+    RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, objectScene(inst.object));
+    float xfm[12];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) xfm[r * 4 + c] = inst.transform.l[r][c];
+      xfm[r * 4 + 3] = inst.transform.t[r];
     }
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(embree_.top, g, static_cast<unsigned>(instanceId));
+    rtcReleaseGeometry(g);
+    ++instanceCount_;
   }
-  commitObjectScenes(instancedObjects);
-  attachInstances(placedInstances);
   rtcCommitScene(embree_.top);
   checkBuild("building the instance level");
 }
@@ -395,78 +382,15 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
   }
 }
 
-void EmbreeBackend::newObjectScene(int32_t objectId) {
+RTCScene EmbreeBackend::objectScene(int32_t objectId) {
+  auto it = embree_.objectScenes.find(objectId);
+  if (it != embree_.objectScenes.end()) return it->second;
   RTCScene s = rtcNewScene(embree_.device);
   embree_.objectScenes.emplace(objectId, s);  // released with the others if the build throws
   attachMeshes(scene_.objects[objectId], s, [](int32_t slot) { return unsigned(slot); });
-}
-
-void EmbreeBackend::commitObjectScenes(std::span<const int32_t> objects) {
-  // Largest first (triangles; object id breaks ties), so that the last
-  // builds to start are short ones and no thread is left alone on a big one
-  // at the end.
-  std::vector<std::pair<uint64_t, int32_t>> bySize;
-  uint64_t total = 0;
-  for (int32_t objectId : objects) {
-    uint64_t triangles = 0;
-    for (int32_t mesh : scene_.objects[objectId].meshes)
-      triangles += scene_.meshes[mesh].indices.size();
-    bySize.push_back({triangles, objectId});
-    total += triangles;
-  }
-  std::sort(bySize.begin(), bySize.end(), std::greater<>());
-  const uint64_t threads = uint64_t(std::max<size_t>(
-      1, std::min<size_t>(
-             size_t(tbb::this_task_arena::max_concurrency()),
-             tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism))));
-  // An object with more than a thread's share of the triangles is built
-  // alone, on every thread (Embree's builder parallelizes a large object
-  // well). Building several at once holds their build temporaries (about
-  // 32 bytes a triangle, then the nodes) at once; without this bound T
-  // threads could hold T large objects' temporaries, with it at most as much
-  // as all instanced triangles together.
-  size_t alone = 0;
-  while (alone < bySize.size() && bySize[alone].first * threads > total) ++alone;
-  for (size_t k = 0; k < alone; ++k) rtcCommitScene(embree_.objectScenes.at(bySize[k].second));
-  // The rest, several at once: each build parallelizes itself (Embree's TBB
-  // tasks), but a small object's barely does, and hundreds of plants built
-  // one after another leave threads idle. Each task takes the largest
-  // object left. rtcCommitScene may be called from TBB workers concurrently
-  // (rtcCommitScene(3); not rtcJoinCommitScene, which is for user threads
-  // joining one build): Embree isolates each build in its own task group, so
-  // a thread waiting inside one build only helps that build, never starts
-  // another object's task in the middle of it. Errors reach errors_ through
-  // the device's callback from whichever thread met them (the device's own
-  // error code is per thread, so checkBuild on this thread relies on errors_).
-  std::atomic<size_t> next{alone};
-  auto commitNext = [&] {
-    for (size_t k; (k = next.fetch_add(1)) < bySize.size();)
-      rtcCommitScene(embree_.objectScenes.at(bySize[k].second));
-  };
-  const size_t tasks = std::min<size_t>(threads, bySize.size() - alone);
-  if (tasks > 1)
-    tbb::parallel_for(size_t(0), tasks, [&](size_t) { commitNext(); });
-  else
-    commitNext();
+  rtcCommitScene(s);
   checkBuild("building an object");
-}
-
-void EmbreeBackend::attachInstances(std::span<const int32_t> instances) {
-  for (int32_t instanceId : instances) {
-    const Instance& inst = scene_.instances[instanceId];
-    RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(g, embree_.objectScenes.at(inst.object));
-    float xfm[12];
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) xfm[r * 4 + c] = inst.transform.l[r][c];
-      xfm[r * 4 + 3] = inst.transform.t[r];
-    }
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
-    rtcCommitGeometry(g);
-    rtcAttachGeometryByID(embree_.top, g, static_cast<unsigned>(instanceId));
-    rtcReleaseGeometry(g);
-  }
-  checkBuild("placing instances");
+  return s;
 }
 
 TraceHit EmbreeBackend::hitOf(const RTCRayHit& rh) const {

@@ -2,8 +2,7 @@
 // this rank owns. Two-level: one Embree scene per instanced object, placed by
 // instance geometries in a top-level scene; with Instancing::Shared the
 // meshes of an object placed once, untransformed, sit in the top-level scene
-// itself (trace_backend.h). The objects' scenes are built concurrently, then
-// the top level over them. Queues are traced with Embree's stream API
+// itself (trace_backend.h). Queues are traced with Embree's stream API
 // (rtcIntersect1M / rtcOccluded1M) in batches of 256 rays, written once in
 // Embree's ray layout (docs/performance.md for why). Embree's headers and
 // types stay in the .cpp.
