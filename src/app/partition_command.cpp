@@ -176,7 +176,7 @@ GeometryPlan planGeometry(const PartitionCommandOptions& o) {
     return g;
   }
   const SceneSummary s = describeScene(o.scene);
-  const uint64_t geometry = s.memory.vertices + s.memory.normals + s.memory.uvs + s.memory.indices;
+  const uint64_t geometry = s.memory.meshArrays();
   const uint64_t records = s.instances * kPartitionBytesPerInstance + s.memory.texels;
   if (geometry + records <= g.budget) return g;
   if (records > g.budget)
@@ -206,8 +206,7 @@ std::string spillPath(const std::string& output) {
 // cut or written: one larger than the budget cannot be partitioned.
 void checkLargestMesh(const Scene& scene, const GeometryPlan& g, const std::string& spec) {
   for (const Mesh& m : scene.meshes) {
-    const uint64_t bytes =
-        meshCost(m).vertices + meshCost(m).normals + meshCost(m).uvs + meshCost(m).indices;
+    const uint64_t bytes = meshCost(m).meshArrays();
     if (2 * bytes > g.budget)
       throw InputError(fmt::format(
           "{}: mesh '{}' alone holds {} of arrays; reading it back and cutting it needs about "

@@ -21,7 +21,9 @@ struct MemoryCost {
   uint64_t instances = 0;  // instance records (transform, ids) and their Embree instance geometry
   uint64_t accel = 0;      // estimated BVH bytes (bottom level per object, top level per instance)
 
-  uint64_t total() const { return vertices + normals + uvs + indices + texels + instances + accel; }
+  // The mesh arrays alone (what a mesh store keeps out of memory).
+  uint64_t meshArrays() const { return vertices + normals + uvs + indices; }
+  uint64_t total() const { return meshArrays() + texels + instances + accel; }
   MemoryCost& operator+=(const MemoryCost& o);
   MemoryCost scaled(uint64_t times) const;
 };

@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <type_traits>
 
 #include "core/error.h"
 
@@ -15,6 +16,23 @@ namespace {
 template <typename T>
 uint64_t arrayBytes(const std::vector<T>& v) {
   return uint64_t(v.size()) * sizeof(T);
+}
+
+// Runs `call` (pread or pwrite: fd, buffer, count, offset) until all `n`
+// bytes from offset `at` are done; `failed(why)` throws.
+template <typename Buffer, typename Call, typename Failed>
+void transfer(Call call, int fd, Buffer* data, uint64_t n, uint64_t& at, Failed failed) {
+  auto* p = reinterpret_cast<std::conditional_t<std::is_const_v<Buffer>, const char, char>*>(data);
+  while (n > 0) {
+    const ssize_t done = call(fd, p, n, off_t(at));
+    if (done <= 0) {
+      if (done < 0 && errno == EINTR) continue;
+      failed(done < 0 ? std::strerror(errno) : "short transfer");
+    }
+    p += done;
+    at += uint64_t(done);
+    n -= uint64_t(done);
+  }
 }
 
 }  // namespace
@@ -46,18 +64,10 @@ void MeshStore::store(Mesh& mesh) {
   s.offset = end_.fetch_add(bytes);  // this mesh's range, reserved
   uint64_t at = s.offset;
   auto put = [&](const void* data, uint64_t n) {
-    const char* p = static_cast<const char*>(data);
-    while (n > 0) {
-      const ssize_t w = ::pwrite(fd_, p, n, off_t(at));
-      if (w <= 0) {
-        if (w < 0 && errno == EINTR) continue;
-        throw InputError(fmt::format("{}: writing mesh '{}' to the geometry spill file failed ({})",
-                                     path_, mesh.name, w < 0 ? std::strerror(errno) : "no space"));
-      }
-      p += w;
-      at += uint64_t(w);
-      n -= uint64_t(w);
-    }
+    transfer(::pwrite, fd_, data, n, at, [&](const char* why) {
+      throw InputError(fmt::format("{}: writing mesh '{}' to the geometry spill file failed ({})",
+                                   path_, mesh.name, why));
+    });
   };
   put(mesh.positions.data(), arrayBytes(mesh.positions));
   put(mesh.normals.data(), arrayBytes(mesh.normals));
@@ -78,18 +88,10 @@ Mesh MeshStore::load(const Mesh& stored) const {
   m.material = stored.material;
   uint64_t at = s.offset;
   auto get = [&](void* data, uint64_t n) {
-    char* p = static_cast<char*>(data);
-    while (n > 0) {
-      const ssize_t r = ::pread(fd_, p, n, off_t(at));
-      if (r <= 0) {
-        if (r < 0 && errno == EINTR) continue;
-        throw InputError(fmt::format("{}: reading mesh '{}' back from the spill file failed ({})",
-                                     path_, stored.name, r < 0 ? std::strerror(errno) : "short"));
-      }
-      p += r;
-      at += uint64_t(r);
-      n -= uint64_t(r);
-    }
+    transfer(::pread, fd_, data, n, at, [&](const char* why) {
+      throw InputError(fmt::format("{}: reading mesh '{}' back from the spill file failed ({})",
+                                   path_, stored.name, why));
+    });
   };
   m.positions.reserve(s.vertices + 1);  // Embree's one element of slack
   m.positions.resize(s.vertices);
