@@ -744,8 +744,8 @@ class GltfBuilder {
     std::vector<Vec2f> ownUvs;  // when the emissive texture reads other uvs than the mesh keeps
     if (!info.emissionUvs.sameUvsAs(info.meshUvs))
       ownUvs = textureCoordinates(prim, info.emissionUvs, n, name);
-    const std::vector<Vec2f>& emissionUvs =
-        info.emissionUvs.sameUvsAs(info.meshUvs) ? mesh.uvs : ownUvs;
+    const std::span<const Vec2f> emissionUvs =
+        info.emissionUvs.sameUvsAs(info.meshUvs) ? mesh.uvs.span() : std::span<const Vec2f>(ownUvs);
     if (emissionUvs.empty()) {
       warnings_.once("emission uv", fmt::format("{}: {} has an emissive texture but no texture "
                                                 "coordinates: uses the factor alone",
@@ -779,7 +779,7 @@ class GltfBuilder {
 
   // ---------------------------------------------------------------- emission
 
-  std::vector<Vec3f> emissionPerTriangle(const Mesh& mesh, const std::vector<Vec2f>& uvs,
+  std::vector<Vec3f> emissionPerTriangle(const Mesh& mesh, std::span<const Vec2f> uvs,
                                          const MaterialInfo& info) {
     const Texture& t = *info.emissionTexture;
     std::vector<Vec3f> e(mesh.indices.size());

@@ -36,11 +36,12 @@ static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // field, these fail so that the part format (and kPartFormatVersion) follows.
 static_assert(sizeof(Material) == 160,
               "Material changed: update part_file.cpp and kPartFormatVersion");
-// (Mesh::stored is not written: a part holds its meshes' arrays; 136 before it.)
-static_assert(sizeof(Mesh) == 200, "Mesh changed: update part_file.cpp and kPartFormatVersion");
+// (Mesh::stored is not written: a part holds its meshes' arrays; 136 before
+// it; the arrays became SharedArrays at 360, and 184 for Texture, same fields.)
+static_assert(sizeof(Mesh) == 360, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 80,
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(Texture) == 144,
+static_assert(sizeof(Texture) == 184,
               "Texture changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(SunLight) == 28,
               "SunLight changed: update part_file.cpp and kPartFormatVersion");
@@ -97,6 +98,10 @@ class FileWriter {
   }
   template <typename T>
   void array(const std::vector<T>& v) {
+    array(v.data(), v.size());
+  }
+  template <typename T>
+  void array(const SharedArray<T>& v) {
     array(v.data(), v.size());
   }
 
@@ -340,6 +345,10 @@ class MappedFile {
     uint64_t from = (begin + page - 1) / page * page, to = end / page * page;
     if (data_ && to > from) ::madvise(const_cast<uint8_t*>(data_) + from, to - from, MADV_DONTNEED);
   }
+  // Rendering reads the shared arrays at hits, in no order (was sequential for the hash check).
+  void adviseRandomAccess() const {
+    if (data_) ::madvise(const_cast<uint8_t*>(data_), size_, MADV_NORMAL);
+  }
 
  private:
   std::string path_;
@@ -378,6 +387,7 @@ Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind,
     hash.update(file.data() + at, n);
     file.release(at, at + n);
   }
+  file.adviseRandomAccess();  // the arrays stay mapped for rendering: no early eviction
   if (hash.digest() != h.payloadHash)
     throw bad("corrupt (hash mismatch: the file changed after it was written)");
   if (expectedHash != 0 && h.payloadHash != expectedHash)
@@ -388,8 +398,8 @@ Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind,
 
 class FileReader {
  public:
-  FileReader(const MappedFile& file, std::string path)
-      : file_(file), path_(std::move(path)), at_(kHeaderBytes) {}
+  FileReader(std::shared_ptr<const MappedFile> file, std::string path)
+      : keeper_(std::move(file)), file_(*keeper_), path_(std::move(path)), at_(kHeaderBytes) {}
   // The file's part format version (fields added later are read only from newer files).
   uint32_t version() const { return version_; }
   const std::string& path() const { return path_; }
@@ -415,11 +425,8 @@ class FileReader {
   std::vector<T> array() {
     static_assert(std::is_trivially_copyable_v<T>);
     uint64_t count = pod<uint64_t>();
-    if (at_ % 16) {
-      need(16 - at_ % 16);
-      at_ += 16 - at_ % 16;
-    }
-    if (count > (file_.size() - at_) / sizeof(T)) fail("an array runs past the end");
+    alignTo16();
+    checkArray<T>(count);
     std::vector<T> v;
     if (count) {
       // One element of slack: Embree reads 16 bytes at the last vertex.
@@ -430,6 +437,19 @@ class FileReader {
     file_.release(at_, at_ + count * sizeof(T));
     at_ += count * sizeof(T);
     return v;
+  }
+  // The same array, not copied: the elements stay in the mapping, which the
+  // returned array keeps alive (zero-copy loading of mesh and texel arrays).
+  template <typename T>
+  SharedArray<T> sharedArray() {
+    const uint64_t count = pod<uint64_t>();
+    alignTo16();
+    checkArray<T>(count);
+    const uint64_t end = at_ + count * sizeof(T);
+    SharedArray<T> a = SharedArray<T>::shared(reinterpret_cast<const T*>(file_.data() + at_), count,
+                                              keeper_, file_.size() - end >= sizeof(T));
+    at_ = end;
+    return a;
   }
   // A count of records that each take at least `minimumBytes`.
   uint64_t count(size_t minimumBytes) {
@@ -449,6 +469,18 @@ class FileReader {
   void need(uint64_t n) const {
     if (n > file_.size() - at_) fail("a record runs past the end");
   }
+  void alignTo16() {
+    if (at_ % 16) {
+      need(16 - at_ % 16);
+      at_ += 16 - at_ % 16;
+    }
+  }
+  template <typename T>
+  void checkArray(uint64_t count) const {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if (count > (file_.size() - at_) / sizeof(T)) fail("an array runs past the end");
+  }
+  std::shared_ptr<const MappedFile> keeper_;
   const MappedFile& file_;
   std::string path_;
   uint64_t at_;
@@ -519,7 +551,7 @@ Texture readTexture(FileReader& r) {
   if (wrap > uint8_t(WrapMode::Mirror)) r.fail("bad wrap mode");
   t.wrap = WrapMode(wrap);
   t.srgb = r.pod<uint8_t>() != 0;
-  t.rgba = r.array<uint8_t>();
+  t.rgba = r.sharedArray<uint8_t>();
   if (t.width < 0 || t.height < 0 || t.rgba.size() != t.texelCount() * 4)
     r.fail("texture size mismatch");
   if (r.version() >= 5) {  // older: images only
@@ -540,10 +572,10 @@ Mesh readMesh(FileReader& r) {
   Mesh m;
   m.name = r.str();
   m.material = r.pod<int32_t>();
-  m.positions = r.array<Vec3f>();
-  m.normals = r.array<Vec3f>();
-  m.uvs = r.array<Vec2f>();
-  m.indices = r.array<Vec3i>();
+  m.positions = r.sharedArray<Vec3f>();
+  m.normals = r.sharedArray<Vec3f>();
+  m.uvs = r.sharedArray<Vec2f>();
+  m.indices = r.sharedArray<Vec3i>();
   return m;
 }
 
@@ -627,8 +659,8 @@ WrittenFile writePartFile(const std::string& path, const Scene& scene,
 }
 
 LoadedPart readPartFile(const std::string& path, uint64_t expectedHash) {
-  MappedFile file(path);
-  Header h = checkFile(file, path, kKindPart, expectedHash);
+  auto file = std::make_shared<const MappedFile>(path);
+  Header h = checkFile(*file, path, kKindPart, expectedHash);
   FileReader r(file, path);
   r.setVersion(h.version);
   LoadedPart part;
@@ -685,8 +717,8 @@ WrittenFile writeSharedFile(const std::string& path, const SharedData& shared) {
 }
 
 SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
-  MappedFile file(path);
-  const Header h = checkFile(file, path, kKindShared, expectedHash);
+  auto file = std::make_shared<const MappedFile>(path);
+  const Header h = checkFile(*file, path, kKindShared, expectedHash);
   FileReader r(file, path);
   r.setVersion(h.version);
   SharedData shared;

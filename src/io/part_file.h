@@ -6,7 +6,10 @@
 // everything after the header, and a hash of the header itself), then the
 // payload: records of fixed-size fields and length-prefixed arrays, each
 // array 16-byte aligned in the file, so loading is one memory-mapped pass
-// that checks the hash and copies each array once.
+// that checks the hash. The mesh and texel arrays are not copied: the loaded
+// scene shares them with the mapping (core/shared_array.h), which stays open
+// as long as any of them is used, and the Embree backend shares them in turn,
+// so a rank holds its part's geometry once (docs/memory.md).
 //
 // A part holds one rank's content: its instances (in scene order, with the
 // mask of every rank holding each), the objects, meshes, materials and

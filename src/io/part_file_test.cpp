@@ -39,10 +39,10 @@ struct TempDir {
   std::string operator/(const std::string& name) const { return (path / name).string(); }
 };
 
-template <typename T>
-bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
+template <typename Array>  // std::vector or SharedArray
+bool sameBytes(const Array& a, const Array& b) {
   return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
 }
 
 bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Material& b) {

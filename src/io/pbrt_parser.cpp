@@ -1183,7 +1183,7 @@ class Parser {
                    fmt::format("{}: the shape's normals all lie in its faces' planes (they carry "
                                "no shading information): ignored, the faces' own normals are used",
                                where.toString()));
-    std::vector<Vec3f>().swap(mesh.normals);
+    mesh.normals.clear();
   }
 
   // ----------------------------------------------------------------- finish

@@ -14,7 +14,7 @@ namespace ferry {
 namespace {
 
 template <typename T>
-uint64_t arrayBytes(const std::vector<T>& v) {
+uint64_t arrayBytes(const SharedArray<T>& v) {
   return uint64_t(v.size()) * sizeof(T);
 }
 
@@ -73,10 +73,7 @@ void MeshStore::store(Mesh& mesh) {
   put(mesh.normals.data(), arrayBytes(mesh.normals));
   put(mesh.uvs.data(), arrayBytes(mesh.uvs));
   put(mesh.indices.data(), arrayBytes(mesh.indices));
-  std::vector<Vec3f>().swap(mesh.positions);
-  std::vector<Vec3f>().swap(mesh.normals);
-  std::vector<Vec2f>().swap(mesh.uvs);
-  std::vector<Vec3i>().swap(mesh.indices);
+  mesh.releaseArrays();
   mesh.stored = s;
 }
 

@@ -104,14 +104,9 @@ void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
         forEachShadingBsdfTable(meshes[m].material, [&](int32_t t) { keepTable[size_t(t)] = 1; });
       }
   for (size_t m = 0; m < meshes.size(); ++m)
-    if (!keepMesh[m]) {
-      std::vector<Vec3f>().swap(meshes[m].positions);
-      std::vector<Vec3f>().swap(meshes[m].normals);
-      std::vector<Vec2f>().swap(meshes[m].uvs);
-      std::vector<Vec3i>().swap(meshes[m].indices);
-    }
+    if (!keepMesh[m]) meshes[m].releaseArrays();
   for (size_t t = 0; t < textures.size(); ++t)
-    if (!keepTexture[t]) std::vector<uint8_t>().swap(textures[t].rgba);
+    if (!keepTexture[t]) textures[t].rgba.clear();
   for (size_t t = 0; t < bsdfTables.size(); ++t)
     if (!keepTable[t]) bsdfTables[t].reset();
 }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "core/shared_array.h"
 #include "scene/fourier_bsdf_table.h"
 #include "scene/texture.h"
 
@@ -107,10 +108,11 @@ struct StoredMesh {
 
 struct Mesh {
   std::string name;
-  std::vector<Vec3f> positions;
-  std::vector<Vec3f> normals;  // empty, or one per position
-  std::vector<Vec2f> uvs;      // empty, or one per position
-  std::vector<Vec3i> indices;  // 32-bit triangle indices into positions
+  // Owned, or shared with a rank's mapped part file (core/shared_array.h).
+  SharedArray<Vec3f> positions;
+  SharedArray<Vec3f> normals;  // empty, or one per position
+  SharedArray<Vec2f> uvs;      // empty, or one per position
+  SharedArray<Vec3i> indices;  // 32-bit triangle indices into positions
   int32_t material = 0;
   std::optional<StoredMesh> stored;  // set: the arrays above are empty and in Scene::meshStore
 
@@ -122,12 +124,20 @@ struct Mesh {
   // What is wrong with the arrays (sizes, indices, finite positions), or empty.
   std::string arrayProblem() const;
   // A trace backend may read a few bytes past the last position (Embree
-  // reads 16 bytes at the last vertex): with one element of spare capacity it
-  // shares the array, else it keeps a padded copy. Loaders leave the spare
-  // element (reserveVertexSlack where they finish a mesh; loadScene checks).
-  bool hasVertexSlack() const { return positions.capacity() > positions.size(); }
+  // reads 16 bytes at the last vertex): with one element of spare capacity (or
+  // readable bytes after a mapped array) it shares the array, else it keeps a
+  // padded copy. Loaders leave the spare element (reserveVertexSlack where
+  // they finish a mesh; loadScene checks); part files always have it.
+  bool hasVertexSlack() const { return positions.hasSpareElement(); }
   void reserveVertexSlack() {
     if (!positions.empty() && !hasVertexSlack()) positions.reserve(positions.size() + 1);
+  }
+  // Frees the arrays (or lets go of the mapping they share).
+  void releaseArrays() {
+    positions.clear();
+    normals.clear();
+    uvs.clear();
+    indices.clear();
   }
 };
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "core/shared_array.h"
 #include "scene/solid_texture.h"
 
 namespace ferry {
@@ -20,7 +21,9 @@ struct Texture {
   WrapMode wrap = WrapMode::Repeat;
   // Colour channels hold sRGB-encoded values; sample() returns linear colour.
   bool srgb = true;
-  std::vector<uint8_t> rgba;  // width * height * 4, row 0 at the top (v = 1)
+  // width * height * 4, row 0 at the top (v = 1); owned, or shared with a
+  // rank's mapped part file (core/shared_array.h)
+  SharedArray<uint8_t> rgba;
   // A solid texture (pbrt's marble, fbm, wrinkled, windy) has no texels: it
   // is evaluated at the shading point (evaluate()).
   SolidTexture solid;

@@ -192,6 +192,54 @@ TEST(RenderSession, PartDirectoryStatsNameThePartitionerThatMadeTheParts) {
   fs::remove_all(dir);
 }
 
+// Zero-copy loading: a rank rendering its part keeps the part's mesh and
+// texel arrays in the file's mapping (nothing copied them on the way into
+// the scene, the Embree backend or the renderer), with the spare bytes after
+// the last vertex that let Embree share them too.
+TEST(RenderSession, PartGeometryStaysInTheMappedPartFile) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("ferry-session-mapped-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  const std::string source = "builtin:island?scale=0.05";
+  {
+    Scene scene = loadScene(source);
+    const Scene lights = lightScene(scene);
+    PartitionerOptions options;
+    const Partition partition = partitionScene(scene, 1, options);
+    PartDirectoryInfo info;
+    info.scene = source;
+    info.partitioner = options.name;
+    info.summary = summarize(scene).toJson();
+    writePartDirectory(dir.string(), scene, partition, lights, info);
+  }
+  SessionSettings settings = cornellSettings();
+  settings.scene = dir.string();
+  RenderSession session(settings, oneRank());
+  RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+  session.run(sink);
+  ASSERT_EQ(sink.images.size(), 1u);
+  EXPECT_TRUE(nonBlack(sink.images[0].linear));
+  const Scene& scene = session.scene();
+  size_t meshes = 0, textures = 0;
+  for (const Mesh& m : scene.meshes) {
+    if (m.positions.empty()) continue;
+    ++meshes;
+    EXPECT_TRUE(m.positions.isShared() && m.indices.isShared()) << m.name;
+    EXPECT_TRUE(m.normals.empty() || m.normals.isShared()) << m.name;
+    EXPECT_TRUE(m.uvs.empty() || m.uvs.isShared()) << m.name;
+    EXPECT_TRUE(m.hasVertexSlack()) << m.name;
+    EXPECT_EQ(m.positions.ownedBytes() + m.indices.ownedBytes(), 0u) << m.name;
+  }
+  for (const Texture& t : scene.textures)
+    if (!t.rgba.empty()) {
+      ++textures;
+      EXPECT_TRUE(t.rgba.isShared()) << t.name;
+    }
+  EXPECT_GT(meshes, 10u);
+  EXPECT_GT(textures, 0u);
+  fs::remove_all(dir);
+}
+
 // Where the time to the first pixel went: every rank's intervals, from the
 // process's start, add up to its first pixel, and the stats name them all
 // (the slowest rank's too). 3 ranks in process, partitioning on the fly.
