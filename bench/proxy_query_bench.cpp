@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "core/floating_point_mode.h"
 #include "io/scene_loader.h"
 #include "partition/partitioner.h"
 #include "render/camera.h"
@@ -243,6 +244,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
 }  // namespace ferry
 
 int main(int argc, char** argv) {
+  ferry::useFixedFloatingPointMode();  // as ferry runs
   benchmark::Initialize(&argc, argv);
   ferry::RatioReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);

@@ -45,6 +45,7 @@
 #include <vector>
 
 #include "builtin/builtin.h"
+#include "core/floating_point_mode.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
 #include "render/ray_traversal.h"
@@ -307,6 +308,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
 }  // namespace ferry
 
 int main(int argc, char** argv) {
+  ferry::useFixedFloatingPointMode();  // as ferry runs
   // Defaults that make one run a fair comparison on a shared machine; any flag given overrides
   // them.
   std::vector<char*> args(argv, argv + argc);

@@ -10,10 +10,13 @@
 #include "app/render_command.h"
 #include "app/view_command.h"
 #include "core/error.h"
+#include "core/floating_point_mode.h"
 #include "mpi/mpi_communicator.h"
 
 int main(int argc, char** argv) {
   using namespace ferry;
+  // Before any thread or TBB call, so that every thread shades alike.
+  useFixedFloatingPointMode();
   CLI::App app{
       "Ferry: a data-parallel path tracer. Renders scenes spread over MPI ranks that each hold\n"
       "part of the scene, forwarding rays between them (Wald and Parker, \"Data Parallel Path\n"

@@ -2,12 +2,14 @@
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
+#include <tbb/parallel_for_each.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <mutex>
+#include <numeric>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -201,7 +203,8 @@ struct EmbreeHandles {
   EmbreeHandles& operator=(const EmbreeHandles&) = delete;
   ~EmbreeHandles() {
     if (top) rtcReleaseScene(top);
-    for (auto& [id, s] : objectScenes) rtcReleaseScene(s);
+    for (auto& [id, s] : objectScenes)
+      if (s) rtcReleaseScene(s);
     if (device) rtcReleaseDevice(device);
   }
 };
@@ -258,7 +261,12 @@ class EmbreeBackend final : public TraceBackend {
   // by the id idForSlot(slot) returns.
   template <typename IdForSlot>
   void attachMeshes(const Object& object, RTCScene target, const IdForSlot& idForSlot);
-  RTCScene objectScene(int32_t objectId);
+  // The scene of an object placed through an instance (built by buildObjectScenes).
+  RTCScene objectScene(int32_t objectId) const;
+  // Builds a scene for each of `objects`, concurrently: a rank's instanced
+  // objects are many and mostly small, too small for Embree's own parallel
+  // build to keep the threads busy one object at a time.
+  void buildObjectScenes(const std::vector<int32_t>& objects);
   void checkBuild(const char* what);
 
   const Scene& scene_;
@@ -275,6 +283,7 @@ class EmbreeBackend final : public TraceBackend {
   uint64_t instanceCount_ = 0;
   std::vector<std::unique_ptr<AlphaCutout>> cutouts_;
   std::unordered_map<const Mesh*, std::vector<Vec3f>> paddedPositions_;
+  std::mutex buildMutex_;  // guards the two above while objects build concurrently
   // Last, so released first: Embree calls the counters and reads the buffers above until then.
   EmbreeHandles embree_;
 };
@@ -304,6 +313,16 @@ EmbreeBackend::EmbreeBackend(const Scene& scene, std::span<const int32_t> ownedI
            inst.transform.isIdentity();
   };
   topLevelBase_ = uint32_t(scene.instances.size());  // instances keep their own ids below
+
+  // Every object placed through an instance gets its own scene, all built
+  // before the top level, concurrently (buildObjectScenes).
+  std::vector<int32_t> instancedObjects;
+  for (int32_t instanceId : ownedInstances) {
+    const Instance& inst = scene.instances[instanceId];
+    if (!atTopLevel(inst) && embree_.objectScenes.emplace(inst.object, nullptr).second)
+      instancedObjects.push_back(inst.object);
+  }
+  buildObjectScenes(instancedObjects);
 
   embree_.top = rtcNewScene(embree_.device);
   for (int32_t instanceId : ownedInstances) {
@@ -344,6 +363,7 @@ void EmbreeBackend::checkBuild(const char* what) {
 
 const Vec3f* EmbreeBackend::sharedPositions(const Mesh& mesh) {
   if (mesh.hasVertexSlack()) return mesh.positions.data();
+  std::lock_guard lock(buildMutex_);  // objects are built concurrently
   auto [it, added] = paddedPositions_.try_emplace(&mesh);
   if (added) {
     std::vector<Vec3f>& copy = it->second;
@@ -371,8 +391,12 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
                                mesh.indices.size());
     const AlphaCutout cutout = AlphaCutout::of(scene_, mesh);
     if (cutout.active()) {
-      cutouts_.push_back(std::make_unique<AlphaCutout>(cutout));
-      rtcSetGeometryUserData(g, cutouts_.back().get());
+      auto owned = std::make_unique<AlphaCutout>(cutout);
+      rtcSetGeometryUserData(g, owned.get());
+      {
+        std::lock_guard lock(buildMutex_);  // objects are built concurrently
+        cutouts_.push_back(std::move(owned));
+      }
       rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
       rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
     }
@@ -382,15 +406,31 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
   }
 }
 
-RTCScene EmbreeBackend::objectScene(int32_t objectId) {
-  auto it = embree_.objectScenes.find(objectId);
-  if (it != embree_.objectScenes.end()) return it->second;
-  RTCScene s = rtcNewScene(embree_.device);
-  embree_.objectScenes.emplace(objectId, s);  // released with the others if the build throws
-  attachMeshes(scene_.objects[objectId], s, [](int32_t slot) { return unsigned(slot); });
-  rtcCommitScene(s);
+RTCScene EmbreeBackend::objectScene(int32_t objectId) const {
+  return embree_.objectScenes.at(objectId);
+}
+
+void EmbreeBackend::buildObjectScenes(const std::vector<int32_t>& objects) {
+  // Made here, one thread, so the map is only read below (and every scene is
+  // released with the others if a build throws).
+  for (int32_t o : objects) embree_.objectScenes[o] = rtcNewScene(embree_.device);
+  // Largest first, so that the last builds to start are the short ones. An
+  // object's BVH is the same whichever thread builds it and whatever else
+  // builds beside it (EmbreeTraceBackend.ConcurrentBuildsAnswerAsOneThreadDoes).
+  std::vector<uint64_t> triangles(objects.size(), 0);
+  for (size_t k = 0; k < objects.size(); ++k)
+    for (int32_t m : scene_.objects[objects[k]].meshes)
+      triangles[k] += scene_.meshes[m].triangleCount();
+  std::vector<size_t> order(objects.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return triangles[a] > triangles[b]; });
+  tbb::parallel_for_each(order.begin(), order.end(), [&](size_t k) {
+    const RTCScene s = embree_.objectScenes.at(objects[k]);
+    attachMeshes(scene_.objects[objects[k]], s, [](int32_t slot) { return unsigned(slot); });
+    rtcCommitScene(s);  // Embree builds in parallel inside, on the same TBB workers
+  });
   checkBuild("building an object");
-  return s;
 }
 
 TraceHit EmbreeBackend::hitOf(const RTCRayHit& rh) const {

@@ -5,11 +5,14 @@
 #include "trace/embree_backend.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <cstring>
 #include <memory>
 
 #include "builtin/builtin.h"
+#include "core/floating_point_mode.h"
 #include "core/random.h"
 #include "scene/scene.h"
 #include "trace/path.h"
@@ -113,6 +116,41 @@ TEST(EmbreeTraceBackend, SharedAndAlwaysInstancingAnswerAlikeOnTheCornellBox) {
 TEST(EmbreeTraceBackend, SharedAndAlwaysInstancingAnswerAlikeOnTheIsland) {
   // Terrain and water are placed once; the plants are instanced many times.
   expectSameAnswers("builtin:island?scale=0.05", true);
+}
+
+// Instanced objects' BVHs are built concurrently, and Embree builds each in
+// parallel too: the trees, and so every hit (distance, triangle, barycentrics
+// bit for bit), must not depend on how many threads built them.
+TEST(EmbreeTraceBackend, ConcurrentBuildsAnswerAsOneThreadDoes) {
+  const Scene scene = generateBuiltin(parseBuiltinSpec("builtin:island?scale=0.05"));
+  std::unique_ptr<TraceBackend> oneThread;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    oneThread = makeEmbreeBackend(scene, {}, Instancing::Always);
+  }
+  const std::unique_ptr<TraceBackend> concurrent = makeEmbreeBackend(scene, {}, Instancing::Always);
+  EXPECT_GT(concurrent->built().objects, 50u);
+  const std::vector<TraceRay> rays = randomRays(scene.worldBounds(), 20000);
+  size_t hits = 0;
+  for (const TraceRay& r : rays) {
+    const TraceHit a = oneThread->intersect(r), b = concurrent->intersect(r);
+    ASSERT_EQ(std::memcmp(&a, &b, sizeof(TraceHit)), 0);
+    hits += a.instance >= 0;
+  }
+  EXPECT_GT(hits, rays.size() / 4);
+}
+
+// Embree switches the floating-point mode inside its builds; the mode the
+// renderer's threads run in is the one main() set, before and after.
+TEST(EmbreeTraceBackend, BuildsLeaveTheFloatingPointModeAsMainSetIt) {
+  const Scene scene = generateBuiltin(parseBuiltinSpec("builtin:island?scale=0.05"));
+  const std::unique_ptr<TraceBackend> backend = makeEmbreeBackend(scene);
+  EXPECT_TRUE(floatingPointModeIsFixed());
+  std::atomic<int> outside{0};
+  tbb::parallel_for(0, 10000, [&](int) {
+    if (!floatingPointModeIsFixed()) ++outside;
+  });
+  EXPECT_EQ(outside.load(), 0);
 }
 
 }  // namespace
