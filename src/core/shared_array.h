@@ -34,10 +34,41 @@ class SharedArray {
 
   SharedArray() = default;
   // Implicit, so that code building a std::vector assigns it as before.
-  SharedArray(std::vector<T> owned) : owned_(std::move(owned)) {}
-  SharedArray(std::initializer_list<T> values) : owned_(values) {}
+  SharedArray(std::vector<T> owned) : owned_(std::move(owned)) { sync(); }
+  SharedArray(std::initializer_list<T> values) : owned_(values) { sync(); }
   template <typename It>
-  SharedArray(It first, It last) : owned_(first, last) {}
+  SharedArray(It first, It last) : owned_(first, last) {
+    sync();
+  }
+  SharedArray(const SharedArray& other)
+      : owned_(other.owned_),
+        shared_(other.shared_),
+        sharedSpare_(other.sharedSpare_),
+        keeper_(other.keeper_) {
+    sync(other.size_);
+  }
+  SharedArray(SharedArray&& other) noexcept
+      : owned_(std::move(other.owned_)),
+        shared_(other.shared_),
+        sharedSpare_(other.sharedSpare_),
+        keeper_(std::move(other.keeper_)) {
+    sync(other.size_);
+    other.reset();
+  }
+  SharedArray& operator=(const SharedArray& other) {
+    if (this != &other) *this = SharedArray(other);
+    return *this;
+  }
+  SharedArray& operator=(SharedArray&& other) noexcept {
+    if (this == &other) return *this;
+    owned_ = std::move(other.owned_);
+    shared_ = other.shared_;
+    sharedSpare_ = other.sharedSpare_;
+    keeper_ = std::move(other.keeper_);
+    sync(other.size_);
+    other.reset();
+    return *this;
+  }
 
   // `size` elements at `data`, alive as long as `keeper` is (a mapping).
   // `spareElement`: at least one more element's bytes are readable after the
@@ -48,23 +79,28 @@ class SharedArray {
     SharedArray a;
     if (size == 0) return a;
     a.shared_ = data;
-    a.sharedSize_ = size;
     a.keeper_ = std::move(keeper);
     a.sharedSpare_ = spareElement;
+    a.sync(size);
     return a;
   }
 
+  // Reads are branch-free (data_ and size_ always describe the elements):
+  // shading reads mesh arrays at every hit.
   bool isShared() const { return keeper_ != nullptr; }
-  size_t size() const { return isShared() ? sharedSize_ : owned_.size(); }
-  bool empty() const { return size() == 0; }
-  const T* data() const { return isShared() ? shared_ : owned_.data(); }
-  const T& operator[](size_t i) const { return data()[i]; }
-  const T& at(size_t i) const { return isShared() ? (check(i), shared_[i]) : owned_.at(i); }
-  const T* begin() const { return data(); }
-  const T* end() const { return data() + size(); }
-  const T& front() const { return data()[0]; }
-  const T& back() const { return data()[size() - 1]; }
-  std::span<const T> span() const { return {data(), size()}; }
+  size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  const T* data() const { return data_; }
+  const T& operator[](size_t i) const { return data_[i]; }
+  const T& at(size_t i) const {
+    if (i >= size_) throw std::out_of_range("SharedArray::at");
+    return data_[i];
+  }
+  const T* begin() const { return data_; }
+  const T* end() const { return data_ + size_; }
+  const T& front() const { return data_[0]; }
+  const T& back() const { return data_[size_ - 1]; }
+  std::span<const T> span() const { return {data_, size_}; }
   operator std::span<const T>() const { return span(); }
   // At least one element's bytes readable after the last, without a copy.
   bool hasSpareElement() const {
@@ -75,44 +111,43 @@ class SharedArray {
   size_t ownedBytes() const { return owned_.capacity() * sizeof(T); }
 
   // Everything below may change the elements: a shared array becomes owned first.
-  std::vector<T>& owned() {
-    if (isShared()) {
-      std::vector<T> copy;
-      copy.reserve(sharedSize_ + (sharedSpare_ ? 1 : 0));  // keeps the spare element's promise
-      copy.assign(shared_, shared_ + sharedSize_);
-      *this = SharedArray(std::move(copy));
-    }
-    return owned_;
+  T* data() { return own().data(); }
+  T& operator[](size_t i) { return own()[i]; }
+  T& at(size_t i) { return own().at(i); }
+  T* begin() { return own().data(); }
+  T* end() { return own().data() + size_; }
+  T& back() { return own().back(); }
+  void push_back(const T& v) {
+    change([&](std::vector<T>& o) { o.push_back(v); });
   }
-  T* data() { return owned().data(); }
-  T& operator[](size_t i) { return owned()[i]; }
-  T& at(size_t i) { return owned().at(i); }
-  T* begin() { return owned().data(); }
-  T* end() { return owned().data() + owned_.size(); }
-  T& back() { return owned().back(); }
-  void push_back(const T& v) { owned().push_back(v); }
   template <typename... Args>
-  T& emplace_back(Args&&... args) {
-    return owned().emplace_back(std::forward<Args>(args)...);
+  void emplace_back(Args&&... args) {
+    change([&](std::vector<T>& o) { o.emplace_back(std::forward<Args>(args)...); });
   }
-  void pop_back() { owned().pop_back(); }
-  void reserve(size_t n) { owned().reserve(n); }
-  void resize(size_t n) { owned().resize(n); }
-  void resize(size_t n, const T& v) { owned().resize(n, v); }
+  void pop_back() {
+    change([](std::vector<T>& o) { o.pop_back(); });
+  }
+  void reserve(size_t n) {
+    change([&](std::vector<T>& o) { o.reserve(n); });
+  }
+  void resize(size_t n) {
+    change([&](std::vector<T>& o) { o.resize(n); });
+  }
+  void resize(size_t n, const T& v) {
+    change([&](std::vector<T>& o) { o.resize(n, v); });
+  }
   template <typename It>
   void assign(It first, It last) {
-    std::vector<T> v(first, last);
-    *this = SharedArray(std::move(v));
+    *this = SharedArray(std::vector<T>(first, last));
   }
   void assign(size_t n, const T& v) { *this = SharedArray(std::vector<T>(n, v)); }
   template <typename It>
   void insert(const T* at, It first, It last) {
-    const size_t offset = size_t(at - data());
-    std::vector<T>& v = owned();
-    v.insert(v.begin() + ptrdiff_t(offset), first, last);
+    const size_t offset = size_t(at - data_);
+    change([&](std::vector<T>& o) { o.insert(o.begin() + ptrdiff_t(offset), first, last); });
   }
   void shrink_to_fit() {
-    if (!isShared()) owned_.shrink_to_fit();
+    if (!isShared()) change([](std::vector<T>& o) { o.shrink_to_fit(); });
   }
   // Empties the array and lets go of the shared memory (or frees the vector).
   void clear() { *this = SharedArray(); }
@@ -125,15 +160,39 @@ class SharedArray {
   }
 
  private:
-  void check(size_t i) const {
-    if (i >= sharedSize_) throw std::out_of_range("SharedArray::at");
+  // The owned vector, a shared array first copied into it.
+  std::vector<T>& own() {
+    if (isShared()) {
+      std::vector<T> copy;
+      copy.reserve(size_ + (sharedSpare_ ? 1 : 0));  // keeps the spare element's promise
+      copy.assign(shared_, shared_ + size_);
+      *this = SharedArray(std::move(copy));
+    }
+    return owned_;
+  }
+  template <typename Change>
+  void change(Change&& f) {
+    f(own());
+    sync();
+  }
+  // data_ and size_ from whichever holds the elements.
+  void sync(size_t sharedSize = 0) {
+    data_ = isShared() ? shared_ : owned_.data();
+    size_ = isShared() ? sharedSize : owned_.size();
+  }
+  void reset() {
+    owned_.clear();
+    shared_ = nullptr;
+    keeper_.reset();
+    sync();
   }
 
   std::vector<T> owned_;
   const T* shared_ = nullptr;
-  size_t sharedSize_ = 0;
   bool sharedSpare_ = false;
   std::shared_ptr<const void> keeper_;  // set: the elements are at shared_
+  const T* data_ = nullptr;             // the elements: shared_ or owned_.data()
+  size_t size_ = 0;
 };
 
 }  // namespace ferry
