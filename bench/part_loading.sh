@@ -73,6 +73,10 @@ for k in keys:
     if len(names) == 2 and rows["base"][k]:
         line += f"   {rows['new'][k] / rows['base'][k]:8.3f}"
     print(line)
+intervals = ["start", "load", "lights", "build", "agree", "proxies", "renderer"]
+print("\nslowest rank's set-up, median seconds: " + ", ".join(intervals))
+for n in names:
+    print(f"  {n:5} " + " ".join(f"{med([s['seconds']['slowest'][k] for s in runs[n]]):6.2f}" for k in intervals))
 print("\nper rank (last round), MiB: part file | estimated | Embree retained | peak resident" +
       "".join(f" {n}" for n in names))
 last = {n: runs[n][-1]["memory"]["per_rank"] for n in names}
