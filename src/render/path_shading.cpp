@@ -110,7 +110,8 @@ template <typename Path>
 // (each link taken with its mixAmount, u stretched back to [0, 1) for the
 // next link), its base colour evaluated where the surface is.
 template <typename Path>
-Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u) const {
+Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u,
+                                  const Material*& chosen) const {
   const Material* material = surface.material;
   for (size_t n = 0; material->mixedWith >= 0 && n < scene_.materials.size(); ++n) {
     const float amount = material->mixAmount;
@@ -121,6 +122,7 @@ Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u) const {
   const Vec3f color = material == surface.material
                           ? surface.baseColor
                           : materialBaseColor(scene_, *material, surface.uv, surface.position);
+  chosen = material;
   return Bsdf::fromMaterial(*material, color, scene_.bsdfTableOf(*material));
 }
 
@@ -128,11 +130,17 @@ template <typename Path>
 [[gnu::always_inline]] inline VertexScattering PathShading<Path>::shadingFrame(
     const PathVertex& vertex, uint32_t sampleIndex) const {
   const RandomStream random(RandomKey{vertex.pixel, sampleIndex, vertex.bounce, seed_});
-  const Bsdf bsdf = vertex.surface.material->mixedWith < 0
-                        ? Bsdf::fromMaterial(*vertex.surface.material, vertex.surface.baseColor,
-                                             scene_.bsdfTableOf(*vertex.surface.material))
-                        : mixedBsdf(vertex.surface, random(RandomDim::MaterialSelect));
-  Vec3f ng = vertex.surface.geometricNormal, ns = vertex.surface.shadingNormal;
+  const SurfacePoint& surface = vertex.surface;
+  const Material* chosen = surface.material;
+  const Bsdf bsdf =
+      chosen->mixedWith < 0
+          ? Bsdf::fromMaterial(*chosen, surface.baseColor, scene_.bsdfTableOf(*chosen))
+          : mixedBsdf(surface, random(RandomDim::MaterialSelect), chosen);
+  Vec3f ng = surface.geometricNormal, ns = surface.shadingNormal;
+  // The mix picked another material: the normal is bent by its map (or by
+  // none), not by the first material's.
+  if (chosen != surface.material && surface.hasDerivatives)
+    ns = bentNormal(scene_, *chosen, surface, surface.smoothNormal, surface.dpdu, surface.dpdv);
   if (!bsdf.transmits()) {
     if (dot(ng, vertex.wo) < 0) {
       // Opaque surfaces are two-sided: shade the side the ray arrived on.

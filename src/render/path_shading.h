@@ -153,7 +153,8 @@ class PathShading {
   inline void addEmission(const PathVertex& vertex, const TraceHit& hit,
                           FrameBuffer& frameBuffer) const;
   inline VertexScattering shadingFrame(const PathVertex& vertex, uint32_t sampleIndex) const;
-  Bsdf mixedBsdf(const SurfacePoint& surface, float u) const;
+  // `chosen`: the material of the chain the mix picked.
+  Bsdf mixedBsdf(const SurfacePoint& surface, float u, const Material*& chosen) const;
   inline bool sampleContinuation(const PathVertex& vertex, const VertexScattering& scattering,
                                  Path& continuation) const;
   inline bool survivesRoulette(const PathVertex& vertex, const VertexScattering& scattering,

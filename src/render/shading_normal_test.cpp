@@ -113,5 +113,44 @@ TEST(ShadingNormals, TiltedShadingNormalsNeitherBlackenNorLeak) {
   EXPECT_GT(mean, 0.05);
 }
 
+// A mix bends the normal by the map of the material it picks: a mix that
+// always picks the normal-mapped material renders exactly as that material,
+// and one that always picks the plain material from a normal-mapped first
+// renders exactly as the plain one (pbrt's mix chooses the whole material,
+// its bump map with it).
+TEST(ShadingNormals, AMixBendsTheNormalByTheMaterialItPicks) {
+  const float tilt = 60 * kPi / 180;
+  const Vec3f n{-std::sin(tilt), 0, std::cos(tilt)};
+  auto render = [&](const std::vector<Material>& materials, int32_t used) {
+    Scene scene;
+    scene.name = "square";
+    for (const Material& m : materials) scene.addMaterial(m);
+    scene.addSingleInstanceMesh(makeQuad({-2, 0, 2}, {4, 0, 0}, {0, 0, -4}, used));
+    scene.textures.push_back(rampTexture(4, [&](float) { return (n + Vec3f(1)) * 0.5f; }));
+    CameraView view;
+    view.from = {4, 1.5f, 0};
+    view.at = {0, 0, 0};
+    view.fovY = 10;
+    std::vector<double> means;
+    for (const MeanVariance& pixel : renderUnderWhiteSky(scene, view).channel[0])
+      means.push_back(pixel.mean);
+    return means;
+  };
+  const Material plain = diffuseMaterial(Vec3f(0.5f));
+  Material mapped = plain;
+  mapped.normalTexture = 0;
+  Material picksMapped = plain;  // materials[2] -> materials[1], always
+  picksMapped.mixedWith = 1;
+  picksMapped.mixAmount = 1;
+  Material picksPlain = mapped;  // materials[3] -> materials[0], always
+  picksPlain.mixedWith = 0;
+  picksPlain.mixAmount = 1;
+  const std::vector<Material> materials{plain, mapped, picksMapped, picksPlain};
+  const std::vector<double> plainImage = render(materials, 0), mappedImage = render(materials, 1);
+  ASSERT_NE(plainImage, mappedImage);  // the map matters from this view
+  EXPECT_EQ(render(materials, 2), mappedImage);
+  EXPECT_EQ(render(materials, 3), plainImage);
+}
+
 }  // namespace
 }  // namespace ferry

@@ -15,11 +15,20 @@ void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
   const float det = d02.x * d12.y - d02.y * d12.x;
   if (!(std::abs(det) > 1e-12f)) return;
   const float inv = 1 / det;
-  Vec3f dpdu = transform.transformVector((p02 * d12.y - p12 * d02.y) * inv);
-  Vec3f dpdv = transform.transformVector((p12 * d02.x - p02 * d12.x) * inv);
+  const Vec3f dpdu = transform.transformVector((p02 * d12.y - p12 * d02.y) * inv);
+  const Vec3f dpdv = transform.transformVector((p12 * d02.x - p02 * d12.x) * inv);
   if (!isFinite(dpdu) || !isFinite(dpdv)) return;
-  const Material& material = *s.material;
-  const Vec3f n = s.shadingNormal;
+  if (s.material->mixedWith >= 0) {
+    s.hasDerivatives = true;
+    s.smoothNormal = s.shadingNormal;
+    s.dpdu = dpdu;
+    s.dpdv = dpdv;
+  }
+  s.shadingNormal = bentNormal(scene, *s.material, s, s.shadingNormal, dpdu, dpdv);
+}
+
+Vec3f bentNormal(const Scene& scene, const Material& material, const SurfacePoint& s, Vec3f n,
+                 Vec3f dpdu, Vec3f dpdv) {
   Vec3f bent = n;
   if (material.bumpTexture != kNoTexture) {
     // pbrt's Bump(): the surface displaced by d(u, v) along the shading
@@ -38,7 +47,7 @@ void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
     bent = cross(dpdu + n * ddu, dpdv + n * ddv);
     // The parametrization may be mirrored: keep the side of the normal.
     if (dot(bent, n) < 0) bent = -bent;
-  } else {
+  } else if (material.normalTexture != kNoTexture) {
     // A tangent-space normal map (glTF): x along dp/du, y along dp/dv,
     // both made orthogonal to the shading normal, the bitangent's sign
     // following the uvs' handedness.
@@ -46,19 +55,21 @@ void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
     const Vec3f m{(2 * texel.x - 1) * material.normalScale,
                   (2 * texel.y - 1) * material.normalScale, 2 * texel.z - 1};
     const Vec3f t = dpdu - n * dot(n, dpdu);
-    if (!(length(t) > 0)) return;
+    if (!(length(t) > 0)) return n;
     const Vec3f tangent = normalize(t);
     Vec3f bitangent = cross(n, tangent);
     if (dot(bitangent, dpdv) < 0) bitangent = -bitangent;
     bent = tangent * m.x + bitangent * m.y + n * m.z;
+  } else {
+    return n;
   }
   const float len = length(bent);
-  if (!(len > 0) || !std::isfinite(len)) return;
+  if (!(len > 0) || !std::isfinite(len)) return n;
   bent = bent * (1 / len);
   // On the geometric normal's side, as every shading normal (the shading
   // frame then keeps the viewer in front of it: path_shading.cpp).
-  if (dot(bent, s.geometricNormal) < 0) return;
-  s.shadingNormal = bent;
+  if (dot(bent, s.geometricNormal) < 0) return n;
+  return bent;
 }
 
 std::vector<Affine3f> instanceInverses(const Scene& scene) {

@@ -20,6 +20,12 @@ struct SurfacePoint {
   Vec2f uv;
   const Material* material = nullptr;
   Vec3f baseColor;  // material colour times its texture
+  // For a mix (Material::mixedWith) on a mesh with uvs: the shading normal
+  // before any bump or normal map, and the triangle's world-space dp/du and
+  // dp/dv, so that the material the mix picks bends the normal by its own
+  // map (bentNormal); hasDerivatives false otherwise.
+  bool hasDerivatives = false;
+  Vec3f smoothNormal, dpdu, dpdv;
 };
 
 // `inverses` (from instanceInverses, one per instance) saves inverting the
@@ -61,11 +67,24 @@ inline Vec3f materialBaseColor(const Scene& scene, const Material& material, Vec
          scene.textures[size_t(material.baseColorTexture)].evaluate(uv, p).xyz();
 }
 
+// Whether `material` bends shading normals (a bump map or a normal map).
+inline bool hasNormalPerturbation(const Material& material) {
+  return material.bumpTexture != kNoTexture || material.normalTexture != kNoTexture;
+}
+
 // Bends `s`'s shading normal by its material's bump map or normal map (in
-// the triangle's uv parametrization; nothing without uvs). Out of line: few
-// materials have one.
+// the triangle's uv parametrization; nothing without uvs), and for a mix
+// keeps what bentNormal needs for the other materials. Out of line: few
+// materials have either.
 void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
                           const SurfaceTable::MeshArrays& mesh, const Vec3i& tri, SurfacePoint& s);
+
+// `n` bent by `material`'s bump or normal map at `s` (its uv and position),
+// with the triangle's world-space dp/du and dp/dv; `n` itself where the
+// material has no map or the bent normal would be unusable or below the
+// geometric surface.
+Vec3f bentNormal(const Scene& scene, const Material& material, const SurfacePoint& s, Vec3f n,
+                 Vec3f dpdu, Vec3f dpdv);
 
 // The hit triangle's corners in world space, each as Affine3f::transformPoint
 // places it (what the light sampler keys emitters by: LightSampler::emitterIndex).
@@ -112,8 +131,7 @@ inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, con
   s.uv = !mesh.uvs ? Vec2f{hit.u, hit.v}
                    : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
   s.material = mesh.material;
-  if ((s.material->bumpTexture != kNoTexture || s.material->normalTexture != kNoTexture) &&
-      mesh.uvs)
+  if ((hasNormalPerturbation(*s.material) || s.material->mixedWith >= 0) && mesh.uvs)
     perturbShadingNormal(scene, transform, mesh, tri, s);
   s.baseColor = materialBaseColor(scene, *s.material, s.uv, s.position);
   return s;
