@@ -12,8 +12,13 @@ constexpr int kLeafSize = 4;
 
 // The next float above t >= 0 (nextafter(t, inf) without the libm call,
 // which showed in profiles): one step of the bit pattern; infinity stays.
+// Above 0 (and the denormals) it is the smallest normal float: Ferry runs
+// with denormals read as zero (core/floating_point_mode.h), so the smallest
+// denormal would compare equal to 0 and a tie at t = 0 (the ray starting
+// inside two proxies) would lose its lower index.
 inline float nextAbove(float t) {
   if (t == kInfinity) return t;
+  if (t < std::numeric_limits<float>::min()) return std::numeric_limits<float>::min();
   return std::bit_cast<float>(std::bit_cast<uint32_t>(t) + 1u);
 }
 }  // namespace
