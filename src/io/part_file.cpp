@@ -96,12 +96,8 @@ class FileWriter {
     if (offset_ % 16) put(zeros, 16 - offset_ % 16, true);
     put(data, count * sizeof(T), true);
   }
-  template <typename T>
-  void array(const std::vector<T>& v) {
-    array(v.data(), v.size());
-  }
-  template <typename T>
-  void array(const SharedArray<T>& v) {
+  template <typename Array>  // std::vector or SharedArray
+  void array(const Array& v) {
     array(v.data(), v.size());
   }
 
@@ -399,7 +395,7 @@ Header checkFile(const MappedFile& file, const std::string& path, uint32_t kind,
 class FileReader {
  public:
   FileReader(std::shared_ptr<const MappedFile> file, std::string path)
-      : keeper_(std::move(file)), file_(*keeper_), path_(std::move(path)), at_(kHeaderBytes) {}
+      : file_(std::move(file)), path_(std::move(path)), at_(kHeaderBytes) {}
   // The file's part format version (fields added later are read only from newer files).
   uint32_t version() const { return version_; }
   const std::string& path() const { return path_; }
@@ -410,14 +406,14 @@ class FileReader {
     static_assert(std::is_trivially_copyable_v<T>);
     need(sizeof(T));
     T v;
-    std::memcpy(&v, file_.data() + at_, sizeof(T));
+    std::memcpy(&v, file_->data() + at_, sizeof(T));
     at_ += sizeof(T);
     return v;
   }
   std::string str() {
     uint32_t n = pod<uint32_t>();
     need(n);
-    std::string s(reinterpret_cast<const char*>(file_.data() + at_), n);
+    std::string s(reinterpret_cast<const char*>(file_->data() + at_), n);
     at_ += n;
     return s;
   }
@@ -432,9 +428,9 @@ class FileReader {
       // One element of slack: Embree reads 16 bytes at the last vertex.
       v.reserve(count + 1);
       v.resize(count);
-      std::memcpy(v.data(), file_.data() + at_, count * sizeof(T));
+      std::memcpy(v.data(), file_->data() + at_, count * sizeof(T));
     }
-    file_.release(at_, at_ + count * sizeof(T));
+    file_->release(at_, at_ + count * sizeof(T));
     at_ += count * sizeof(T);
     return v;
   }
@@ -446,20 +442,20 @@ class FileReader {
     alignTo16();
     checkArray<T>(count);
     const uint64_t end = at_ + count * sizeof(T);
-    SharedArray<T> a = SharedArray<T>::shared(reinterpret_cast<const T*>(file_.data() + at_), count,
-                                              keeper_, file_.size() - end >= sizeof(T));
+    SharedArray<T> a = SharedArray<T>::shared(reinterpret_cast<const T*>(file_->data() + at_),
+                                              count, file_, file_->size() - end >= sizeof(T));
     at_ = end;
     return a;
   }
   // A count of records that each take at least `minimumBytes`.
   uint64_t count(size_t minimumBytes) {
     uint64_t n = pod<uint64_t>();
-    if (n > (file_.size() - at_) / std::max<size_t>(1, minimumBytes))
+    if (n > (file_->size() - at_) / std::max<size_t>(1, minimumBytes))
       fail("a count runs past the end");
     return n;
   }
   void end() {
-    if (pod<uint32_t>() != kEndMarker || at_ != file_.size()) fail("the end marker is missing");
+    if (pod<uint32_t>() != kEndMarker || at_ != file_->size()) fail("the end marker is missing");
   }
   [[noreturn]] void fail(const std::string& what) const {
     throw InputError(fmt::format("{}: corrupt ({} at byte {})", path_, what, at_));
@@ -467,7 +463,7 @@ class FileReader {
 
  private:
   void need(uint64_t n) const {
-    if (n > file_.size() - at_) fail("a record runs past the end");
+    if (n > file_->size() - at_) fail("a record runs past the end");
   }
   void alignTo16() {
     if (at_ % 16) {
@@ -478,10 +474,10 @@ class FileReader {
   template <typename T>
   void checkArray(uint64_t count) const {
     static_assert(std::is_trivially_copyable_v<T>);
-    if (count > (file_.size() - at_) / sizeof(T)) fail("an array runs past the end");
+    if (count > (file_->size() - at_) / sizeof(T)) fail("an array runs past the end");
   }
-  std::shared_ptr<const MappedFile> keeper_;
-  const MappedFile& file_;
+  // Shared with the arrays read from it (sharedArray), which keep it mapped.
+  std::shared_ptr<const MappedFile> file_;
   std::string path_;
   uint64_t at_;
   uint32_t version_ = kPartFormatVersion;
