@@ -9,7 +9,9 @@
 #   2. rays forwarded, bytes sent and exchange rounds per frame for every
 #      forwarding mode (proxies, ring, broadcast) at 4 and 8 ranks, from the
 #      --stats counters ("render"."total"."exchange");
-#   3. memory per rank (estimated, Embree retained, resident), from --stats.
+#   3. memory per rank (estimated, Embree retained, resident), from --stats;
+#   CPU seconds per frame summed over ranks ("cpu_seconds"), against 1 rank:
+#   the work that distribution adds, apart from waiting and time-slicing.
 # Every mpirun gets --bind-to none: Open MPI binds each rank to one core when
 # it starts at most two, which left the 1-rank baseline's two threads on one
 # core (0.51 s/frame instead of 0.28 on the island: every ratio measured
@@ -115,6 +117,21 @@ for n in ranks:
     threads = cores if threads_mode == "all" else max(1, cores // n)
     print(f"  {n} rank(s) x {threads} thread(s): {frame[n]:7.3f} s/frame   ratio {frame[n] / base:5.2f}"
           f"   (frames: {', '.join(f'{f:.2f}' for r in range(1, rounds + 1) for f in [x['seconds'] for x in load(f'time-{n}-{r}')['render']['frames']])})")
+
+# CPU time per frame, summed over ranks and threads ("cpu_seconds", absent
+# from builds before it was counted): the work distribution adds, apart from
+# the waiting and time-slicing that stretch wall clock.
+def median_cpu(tag_of):
+    values = [f["cpu_seconds"] for r in range(1, rounds + 1) for f in load(tag_of(r))["render"]["frames"]
+              if "cpu_seconds" in f]
+    return statistics.median(values) if values else None
+cpu1 = median_cpu(lambda r: f"time-{ranks[0]}-{r}")
+if cpu1:
+    print("\nCPU time per frame, summed over ranks and threads (median; ratio to 1 rank: the work distribution adds)")
+    for n in ranks:
+        c = median_cpu(lambda r: f"time-{n}-{r}")
+        print(f"  {n} rank(s): {c:7.3f} CPU s/frame   ratio {c / cpu1:5.2f}"
+              f"   (the cores were busy {100 * c / (cores * frame[n]):3.0f}% of the frame)")
 
 def median_frame(tag_of):
     return statistics.median([f["seconds"] for r in range(1, rounds + 1)

@@ -2,9 +2,9 @@
 // (proxy-guided primaries, paper Section 3.3) and where a ray is forwarded:
 // the closest proxy along a ray whose owners the ray has not visited. At 8
 // ranks this query was 81 % of all stage time (issue 13), so it is measured
-// here on its own, side by side with the ProxyBvh of da05014 (a median split
-// over centres, children visited in a fixed order: `BaselineProxyBvh` below,
-// kept only as this benchmark's baseline), in one run.
+// here on its own, side by side with the binary ProxyBvh of 8896a05
+// (`BaselineProxyBvh` below, kept only as this benchmark's baseline), in one
+// run.
 //
 // Proxies: the island's 8-rank `best` partition (the default scale: about
 // 78 K proxies), and the same proxies tiled 5 x 5 over the plane with the
@@ -20,58 +20,102 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "core/floating_point_mode.h"
+#include "core/random.h"
 #include "io/scene_loader.h"
 #include "partition/partitioner.h"
+#include "render/bsdf.h"
 #include "render/camera.h"
 #include "scene/scene.h"
+#include "trace/embree_backend.h"
 #include "trace/proxy_bvh.h"
 
 namespace ferry {
 namespace {
 
-// The ProxyBvh of da05014: median split on the longest axis of the centres,
-// leaves of 4, children pushed left-then-right, ties to the lower index.
+// The ProxyBvh of 8896a05, kept only as this benchmark's baseline: the same
+// binned-SAH tree, binary, one box test at a time, children visited nearer
+// first. (Before it, da05014's median split with children in a fixed order
+// was 3.6-3.9x slower than this one: docs/data-parallel.md.)
 class BaselineProxyBvh {
+  // The next float above t >= 0, the smallest normal one above 0 (denormals read as 0).
+  static float nextAbove(float t) {
+    if (t == kInfinity) return t;
+    if (t < std::numeric_limits<float>::min()) return std::numeric_limits<float>::min();
+    return std::bit_cast<float>(std::bit_cast<uint32_t>(t) + 1u);
+  }
+
  public:
   explicit BaselineProxyBvh(const std::vector<Proxy>& proxies) : proxies_(proxies) {
     for (const Proxy& p : proxies_) masks_.push_back(p.owners.mask());
     order_.resize(proxies_.size());
     for (size_t i = 0; i < order_.size(); ++i) order_[i] = int32_t(i);
-    if (!proxies_.empty()) build(0, int32_t(proxies_.size()), 0);
+    std::vector<Vec3f> centers;
+    for (const Proxy& p : proxies_) centers.push_back(p.bounds.center());
+    if (!proxies_.empty()) build(0, int32_t(proxies_.size()), 0, centers);
   }
+  size_t nodeCount() const { return nodes_.size(); }
   ProxyBvh::Hit closest(Vec3f origin, Vec3f direction, float tmax, RankMask excluded) const {
     ProxyBvh::Hit best;
-    Vec3f inv{1 / direction.x, 1 / direction.y, 1 / direction.z};
-    int32_t stack[128];
+    const Vec3f inv{1 / direction.x, 1 / direction.y, 1 / direction.z};
+    auto mayImprove = [&](float t, int32_t minIndex) {
+      return t < best.tEnter || (t == best.tEnter && minIndex < best.proxy);
+    };
+    struct Entry {
+      int32_t node;
+      float t;
+      int32_t minIndex;
+    };
+    Entry stack[128];
     int top = 0;
-    stack[top++] = 0;
+    float tRoot;
+    if ((nodes_[0].owners & ~excluded) == 0 ||
+        !intersectBox(nodes_[0].bounds, origin, inv, tmax, tRoot))
+      return best;
+    stack[top++] = {0, tRoot, nodes_[0].minIndex};
     while (top > 0) {
-      const Node& node = nodes_[stack[--top]];
-      if ((node.owners & ~excluded) == 0) continue;
-      float tNode;
-      if (!intersectBox(node.bounds, origin, inv,
-                        std::min(tmax, std::nextafter(best.tEnter, kInfinity)), tNode))
-        continue;
+      const Entry e = stack[--top];
+      if (!mayImprove(e.t, e.minIndex)) continue;
+      const Node& node = nodes_[size_t(e.node)];
       if (node.left < 0) {
         for (int32_t i = node.first; i < node.first + node.count; ++i) {
-          int32_t id = order_[i];
+          const int32_t id = order_[size_t(i)];
           if (masks_[size_t(id)] & excluded) continue;
           float t;
-          if (!intersectBox(proxies_[id].bounds, origin, inv, tmax, t)) continue;
+          if (!intersectBox(proxies_[size_t(id)].bounds, origin, inv, tmax, t)) continue;
           if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) best = {id, t};
         }
-      } else {
-        stack[top++] = node.right;
-        stack[top++] = node.left;
+        continue;
       }
+      const float limit = std::min(tmax, nextAbove(best.tEnter));
+      Entry near{-1, 0, 0}, far{-1, 0, 0};
+      for (int32_t k : {node.left, node.right}) {
+        const Node& child = nodes_[size_t(k)];
+        float t;
+        if ((child.owners & ~excluded) == 0 || !intersectBox(child.bounds, origin, inv, limit, t) ||
+            !mayImprove(t, child.minIndex))
+          continue;
+        const Entry entry{k, t, child.minIndex};
+        if (near.node < 0) {
+          near = entry;
+        } else if (entry.t < near.t || (entry.t == near.t && entry.minIndex < near.minIndex)) {
+          far = near;
+          near = entry;
+        } else {
+          far = entry;
+        }
+      }
+      if (far.node >= 0) stack[top++] = far;
+      if (near.node >= 0) stack[top++] = near;
     }
     return best;
   }
@@ -80,37 +124,75 @@ class BaselineProxyBvh {
   struct Node {
     Box3f bounds;
     RankMask owners = 0;
-    int32_t left = -1, right = -1, first = 0, count = 0;
+    int32_t left = -1, right = -1, first = 0, count = 0, minIndex = 0;
   };
-  int32_t build(int32_t first, int32_t count, int depth) {
-    int32_t index = int32_t(nodes_.size());
+  int32_t build(int32_t first, int32_t count, int depth, const std::vector<Vec3f>& centers) {
+    constexpr int kBins = 16;
+    const int32_t index = int32_t(nodes_.size());
     nodes_.push_back({});
-    Box3f bounds, centers;
+    Box3f bounds, centerBounds;
     RankMask owners = 0;
+    int32_t minIndex = std::numeric_limits<int32_t>::max();
     for (int32_t i = first; i < first + count; ++i) {
-      bounds.extend(proxies_[order_[i]].bounds);
-      centers.extend(proxies_[order_[i]].bounds.center());
-      owners |= masks_[size_t(order_[i])];
+      const int32_t id = order_[size_t(i)];
+      bounds.extend(proxies_[size_t(id)].bounds);
+      centerBounds.extend(centers[size_t(id)]);
+      owners |= masks_[size_t(id)];
+      minIndex = std::min(minIndex, id);
     }
-    nodes_[index].bounds = bounds;
-    nodes_[index].owners = owners;
+    nodes_[size_t(index)].bounds = bounds;
+    nodes_[size_t(index)].owners = owners;
+    nodes_[size_t(index)].minIndex = minIndex;
     if (count <= 4 || depth > 60) {
-      nodes_[index].first = first;
-      nodes_[index].count = count;
+      nodes_[size_t(index)].first = first;
+      nodes_[size_t(index)].count = count;
       return index;
     }
-    int axis = centers.longestAxis();
+    int bestAxis = -1, bestBin = 0;
+    float bestCost = kInfinity;
+    const Vec3f extent = centerBounds.size();
+    auto binOf = [&](int axis, int32_t id) {
+      const float f = (centers[size_t(id)][axis] - centerBounds.lower[axis]) / extent[axis];
+      return std::clamp(int(f * kBins), 0, kBins - 1);
+    };
+    for (int axis = 0; axis < 3; ++axis) {
+      if (!(extent[axis] > 0)) continue;
+      Box3f binBounds[kBins];
+      int binCount[kBins] = {};
+      for (int32_t i = first; i < first + count; ++i) {
+        const int b = binOf(axis, order_[size_t(i)]);
+        binBounds[b].extend(proxies_[size_t(order_[size_t(i)])].bounds);
+        ++binCount[b];
+      }
+      float rightArea[kBins];
+      int rightCount[kBins];
+      Box3f acc;
+      int n = 0;
+      for (int b = kBins - 1; b > 0; --b) {
+        acc.extend(binBounds[b]);
+        n += binCount[b];
+        rightArea[b] = acc.surfaceArea();
+        rightCount[b] = n;
+      }
+      acc = Box3f{};
+      n = 0;
+      for (int b = 1; b < kBins; ++b) {
+        acc.extend(binBounds[b - 1]);
+        n += binCount[b - 1];
+        if (n == 0 || rightCount[b] == 0) continue;
+        const float cost = acc.surfaceArea() * float(n) + rightArea[b] * float(rightCount[b]);
+        if (cost < bestCost) bestAxis = axis, bestBin = b, bestCost = cost;
+      }
+    }
     int32_t mid = first + count / 2;
-    std::nth_element(order_.begin() + first, order_.begin() + mid, order_.begin() + first + count,
-                     [&](int32_t a, int32_t b) {
-                       float ca = proxies_[a].bounds.center()[axis],
-                             cb = proxies_[b].bounds.center()[axis];
-                       return ca < cb || (ca == cb && a < b);
-                     });
-    int32_t left = build(first, mid - first, depth + 1);
-    int32_t right = build(mid, first + count - mid, depth + 1);
-    nodes_[index].left = left;
-    nodes_[index].right = right;
+    if (bestAxis >= 0)
+      mid = int32_t(std::partition(order_.begin() + first, order_.begin() + first + count,
+                                   [&](int32_t id) { return binOf(bestAxis, id) < bestBin; }) -
+                    order_.begin());
+    const int32_t left = build(first, mid - first, depth + 1, centers);
+    const int32_t right = build(mid, first + count - mid, depth + 1, centers);
+    nodes_[size_t(index)].left = left;
+    nodes_[size_t(index)].right = right;
     return index;
   }
   const std::vector<Proxy>& proxies_;
@@ -124,16 +206,27 @@ constexpr int kWidth = 640, kHeight = 360;
 
 struct Ray {
   Vec3f origin, direction;
+  float tmax = kInfinity;
 };
+
+// The three kinds of query a rank makes, as ray sets:
+//   0 camera:  camera rays, nothing excluded, no tmax (who owns a camera path);
+//   1 to hit:  the same rays up to their hit in the whole scene, rank 0
+//              visited (the forwarding decision after a camera ray's trace);
+//   2 bounce:  from each hit, a direction on the upper hemisphere (a diffuse
+//              bounce off the ground) up to its own hit, rank 0 visited (the
+//              decision after a continuation's trace).
+constexpr int kRaySets = 3;
+constexpr RankMask kExcluded[kRaySets] = {0, 1, 1};
 
 struct Case {
   std::vector<Proxy> proxies;
-  std::vector<Ray> rays;
+  std::vector<Ray> rays[kRaySets];
   std::unique_ptr<ProxyBvh> tree;
   std::unique_ptr<BaselineProxyBvh> baseline;
 };
 
-// The island's 8-rank best partition and its first view's camera rays.
+// The island's 8-rank best partition and its first view's rays.
 const Case& islandCase(int tiles) {
   static std::map<int, std::unique_ptr<Case>> cases;
   auto& slot = cases[tiles];
@@ -157,58 +250,90 @@ const Case& islandCase(int tiles) {
         c.proxies.push_back(p);
       }
     }
+  const std::unique_ptr<TraceBackend> geometry = makeEmbreeBackend(scene);
   Camera camera(view, kWidth, kHeight);
   for (int y = 0; y < kHeight; ++y)
-    for (int x = 0; x < kWidth; ++x)
-      c.rays.push_back({camera.origin(), camera.direction(float(x) + 0.5f, float(y) + 0.5f)});
+    for (int x = 0; x < kWidth; ++x) {
+      const Ray primary{camera.origin(), camera.direction(float(x) + 0.5f, float(y) + 0.5f)};
+      c.rays[0].push_back(primary);
+      const TraceHit hit = geometry->intersect({primary.origin, primary.direction});
+      c.rays[1].push_back({primary.origin, primary.direction, hit.t});
+      if (!hit.valid()) continue;
+      const uint32_t pixel = uint32_t(y * kWidth + x);
+      const Vec2f u{random01(RandomKey{pixel, 0, 0, 7}, RandomDim::OwnerPick),
+                    random01(RandomKey{pixel, 1, 0, 7}, RandomDim::OwnerPick)};
+      const Vec3f local = sampleCosineHemisphere(u);  // about +z; the island's up is +y
+      const Vec3f dir{local.x, local.z, local.y};
+      const Vec3f origin = primary.origin + primary.direction * (hit.t * (1 - 1e-4f));
+      c.rays[2].push_back({origin, dir, geometry->intersect({origin, dir, 1e-3f}).t});
+    }
   c.tree = std::make_unique<ProxyBvh>(c.proxies);
   c.baseline = std::make_unique<BaselineProxyBvh>(c.proxies);
-  for (RankMask excluded : {RankMask(0), RankMask(1)})
-    for (const Ray& r : c.rays) {
-      ProxyBvh::Hit a = c.tree->closest(r.origin, r.direction, kInfinity, excluded);
-      ProxyBvh::Hit b = c.baseline->closest(r.origin, r.direction, kInfinity, excluded);
+  for (int set = 0; set < kRaySets; ++set)
+    for (const Ray& r : c.rays[set]) {
+      ProxyBvh::Hit a = c.tree->closest(r.origin, r.direction, r.tmax, kExcluded[set]);
+      ProxyBvh::Hit b = c.baseline->closest(r.origin, r.direction, r.tmax, kExcluded[set]);
       if (a.proxy != b.proxy || a.tEnter != b.tEnter) {
-        std::fprintf(stderr, "proxy_query_bench: the trees disagree (%d vs %d)\n", a.proxy,
-                     b.proxy);
+        std::fprintf(
+            stderr,
+            "proxy_query_bench: the trees disagree (%d at %.9g vs %d at %.9g), set %d, tmax %.9g\n",
+            a.proxy, a.tEnter, b.proxy, b.tEnter, set, r.tmax);
+        const Vec3f inv{1 / r.direction.x, 1 / r.direction.y, 1 / r.direction.z};
+        for (int32_t id : {a.proxy, b.proxy}) {
+          float t = -1;
+          bool h = intersectBox(c.proxies[size_t(id)].bounds, r.origin, inv, r.tmax, t);
+          std::fprintf(stderr, "  proxy %d: hit %d t %.9g owners %llx\n", id, h, t,
+                       (unsigned long long)c.proxies[size_t(id)].owners.mask());
+        }
         std::abort();
       }
     }
-  std::fprintf(stderr, "proxy_query_bench: %zu proxies, %zu rays, %zu tree nodes\n",
-               c.proxies.size(), c.rays.size(), c.tree->nodeCount());
+  std::fprintf(stderr,
+               "proxy_query_bench: %zu proxies, %zu + %zu + %zu rays, %zu binary nodes, %zu "
+               "%d-wide nodes\n",
+               c.proxies.size(), c.rays[0].size(), c.rays[1].size(), c.rays[2].size(),
+               c.baseline->nodeCount(), c.tree->nodeCount(), ProxyBvh::kWidth);
   return c;
 }
 
 template <bool kBaseline>
 void BM_Query(benchmark::State& state) {
   const Case& c = islandCase(int(state.range(0)));
-  const RankMask excluded = RankMask(state.range(1));
+  const int set = int(state.range(1));
+  const std::vector<Ray>& rays = c.rays[set];
   int64_t found = 0;
   for (auto _ : state) {
-    for (const Ray& r : c.rays) {
-      ProxyBvh::Hit h = kBaseline ? c.baseline->closest(r.origin, r.direction, kInfinity, excluded)
-                                  : c.tree->closest(r.origin, r.direction, kInfinity, excluded);
+    for (const Ray& r : rays) {
+      ProxyBvh::Hit h = kBaseline
+                            ? c.baseline->closest(r.origin, r.direction, r.tmax, kExcluded[set])
+                            : c.tree->closest(r.origin, r.direction, r.tmax, kExcluded[set]);
       found += h.found();
     }
   }
   benchmark::DoNotOptimize(found);
-  state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(c.rays.size()));
+  state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(rays.size()));
   state.counters["us_per_query"] =
-      benchmark::Counter(double(state.iterations()) * double(c.rays.size()) * 1e-6,
+      benchmark::Counter(double(state.iterations()) * double(rays.size()) * 1e-6,
                          benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
-// Args: tiles (1: 78 K proxies, 5: ~2 M), excluded mask (0: camera rays, 1: rank 0 visited).
+// Args: tiles (1: the island's proxies, 5: 25 times as many), ray set (0 camera, 1 to hit, 2
+// bounce).
 BENCHMARK_TEMPLATE(BM_Query, true)
     ->Name("Baseline")
     ->Args({1, 0})
     ->Args({1, 1})
+    ->Args({1, 2})
     ->Args({5, 0})
+    ->Args({5, 2})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_Query, false)
     ->Name("ProxyBvh")
     ->Args({1, 0})
     ->Args({1, 1})
+    ->Args({1, 2})
     ->Args({5, 0})
+    ->Args({5, 2})
     ->Unit(benchmark::kMillisecond);
 
 // Prints Baseline / ProxyBvh time per query for each case.
@@ -221,15 +346,14 @@ class RatioReporter : public benchmark::ConsoleReporter {
       std::string name = run.benchmark_name();
       std::string args = name.substr(name.find('/'));
       // CPU time per query, in microseconds (this machine is shared: CPU
-      // time is steadier than wall time).
-      const double queries = double(kWidth) * double(kHeight);
+      // time is steadier than wall time; the counter is a rate over CPU time).
       (name.rfind("Baseline", 0) == 0 ? baseline_ : tree_)[args] =
-          run.GetAdjustedCPUTime() * 1e3 / queries;  // ms -> us
+          double(run.counters.at("us_per_query"));
     }
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
-    std::printf("\nCPU time per query (args: tiles/excluded), baseline and ProxyBvh:\n");
+    std::printf("\nCPU time per query (args: tiles/ray set), baseline and ProxyBvh:\n");
     for (const auto& [args, base] : baseline_)
       if (tree_.count(args))
         std::printf("  %-8s %.3f us  %.3f us  %.2fx faster\n", args.c_str(), base, tree_.at(args),

@@ -1,5 +1,7 @@
 #include "core/clock.h"
 
+#include <ctime>
+
 namespace ferry {
 namespace {
 
@@ -11,6 +13,12 @@ const Clock::time_point kProcessStart = Clock::now();
 
 Clock::time_point processStart() {
   return kProcessStart;
+}
+
+double processCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + double(t.tv_nsec) * 1e-9;
 }
 
 }  // namespace ferry

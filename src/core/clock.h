@@ -16,4 +16,9 @@ inline double secondsSince(Clock::time_point t) {
 // dynamic loader. What a rank's time to first pixel is counted from.
 Clock::time_point processStart();
 
+// CPU time this process has used so far, every thread, user and system, in
+// seconds. Beside wall-clock times it tells work from waiting: ranks that
+// time-slice the same cores stretch each other's wall clock, not their CPU time.
+double processCpuSeconds();
+
 }  // namespace ferry

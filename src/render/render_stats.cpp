@@ -45,6 +45,7 @@ ExchangeCounters FrameStats::exchangeTotal() const {
 
 void FrameStats::merge(const FrameStats& o) {
   seconds = std::max(seconds, o.seconds);
+  cpuSeconds += o.cpuSeconds;
   for (const auto& field : kFrameCounters) this->*field.member += o.*field.member;
   if (perBounce.size() < o.perBounce.size()) perBounce.resize(o.perBounce.size());
   for (size_t i = 0; i < o.perBounce.size(); ++i) perBounce[i] += o.perBounce[i];
@@ -55,6 +56,7 @@ nlohmann::json FrameStats::toJson() const {
   nlohmann::json j;
   j["frame"] = frame;
   j["seconds"] = seconds;
+  j["cpu_seconds"] = cpuSeconds;
   for (const auto& field : kFrameCounters) slot(j, field) = this->*field.member;
   j["traces"]["total"] = raysTraced();
   j["rays_per_second"] = seconds > 0 ? double(raysTraced()) / seconds : 0.0;
@@ -130,6 +132,8 @@ std::string RenderStats::summaryText(int ranks) const {
   row("frames", fmt::format("{} in {:.3f} s ({:.3f} s/frame)", frames.size(), t.seconds,
                             frames.empty() ? 0.0 : t.seconds / frames.size()));
   row("ranks", fmt::format("{}", ranks));
+  row("CPU time", fmt::format("{:.3f} s ({:.3f} s/frame, summed over ranks and threads)",
+                              t.cpuSeconds, frames.empty() ? 0.0 : t.cpuSeconds / frames.size()));
   row("camera paths", formatCount(t.cameraPaths));
   row("rays traced", fmt::format("{} ({} closest, {} shadow, {} re-trace)",
                                  formatCount(t.raysTraced()), formatCount(t.closestTraces),

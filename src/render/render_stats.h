@@ -40,6 +40,7 @@ struct StageTimes {
 struct FrameStats {
   int frame = 0;
   double seconds = 0;        // wall clock of the frame (max over ranks when merged)
+  double cpuSeconds = 0;     // CPU time of the frame, every thread (summed when merged)
   uint64_t cameraPaths = 0;  // primary rays generated (kept by this rank)
   uint64_t continuationRays = 0;
   uint64_t shadowRays = 0;
@@ -57,7 +58,7 @@ struct FrameStats {
 
   ExchangeCounters exchangeTotal() const;
   uint64_t raysTraced() const { return closestTraces + occlusionTraces + retraces; }
-  // Adds another rank's counters (seconds: the maximum).
+  // Adds another rank's counters (seconds: the maximum; CPU seconds: the sum).
   void merge(const FrameStats& other);
   nlohmann::json toJson() const;
 

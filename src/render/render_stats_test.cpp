@@ -17,6 +17,7 @@ FrameStats distinctStats(uint64_t base, size_t bounces) {
   FrameStats s;
   s.frame = 3;
   s.seconds = double(base) / 8;
+  s.cpuSeconds = double(base) / 16;
   uint64_t next = base;
   for (const auto& field : kFrameCounters) s.*field.member = next++;
   s.perBounce.resize(bounces);
@@ -56,15 +57,17 @@ TEST(RenderStats, EveryCounterAppearsInTheJsonUnderItsKey) {
     EXPECT_EQ(at(j, field).get<double>(), s.times.*field.member) << field.key;
   EXPECT_EQ(j.at("traces").at("total").get<uint64_t>(), s.raysTraced());
   EXPECT_EQ(j.at("frame").get<int>(), 3);
+  EXPECT_EQ(j.at("cpu_seconds").get<double>(), s.cpuSeconds);
 }
 
 // The layout scripts read (bench/, tests/tools/check_stats.py): nothing more, nothing less.
 TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
   const nlohmann::json j = distinctStats(1, 1).toJson();
-  EXPECT_EQ(keysOf(j), (std::set<std::string>{
-                           "frame", "seconds", "camera_paths", "continuation_rays", "shadow_rays",
-                           "traces", "rays_per_second", "exchange", "exchange_per_bounce",
-                           "stage_seconds", "primary_bytes_sent", "termination_waves"}));
+  EXPECT_EQ(keysOf(j),
+            (std::set<std::string>{"frame", "seconds", "cpu_seconds", "camera_paths",
+                                   "continuation_rays", "shadow_rays", "traces", "rays_per_second",
+                                   "exchange", "exchange_per_bounce", "stage_seconds",
+                                   "primary_bytes_sent", "termination_waves"}));
   EXPECT_EQ(keysOf(j.at("traces")),
             (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses",
                                    "proxy_queries", "replay_queries", "primary_queries", "total"}));
@@ -75,12 +78,13 @@ TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
             (std::set<std::string>{"generate", "trace", "exchange", "shade", "wait", "composite"}));
 }
 
-TEST(RenderStats, MergeAddsEveryCounterAndKeepsTheSlowestSeconds) {
+TEST(RenderStats, MergeAddsEveryCounterAndCpuTimeAndKeepsTheSlowestSeconds) {
   FrameStats a = distinctStats(10, 1);
   const FrameStats b = distinctStats(1000, 3);
   const FrameStats before = a;
   a.merge(b);
   EXPECT_EQ(a.seconds, std::max(before.seconds, b.seconds));
+  EXPECT_EQ(a.cpuSeconds, before.cpuSeconds + b.cpuSeconds);
   for (const auto& field : kFrameCounters)
     EXPECT_EQ(a.*field.member, before.*field.member + b.*field.member) << field.key;
   ASSERT_EQ(a.perBounce.size(), 3u);
@@ -103,6 +107,7 @@ TEST(RenderStats, CounterArraysRoundTrip) {
   back.setStageTimeValues(s.stageTimeValues());
   back.frame = s.frame;
   back.seconds = s.seconds;
+  back.cpuSeconds = s.cpuSeconds;
   EXPECT_EQ(back.toJson(), s.toJson());
   EXPECT_THROW(back.setCounterValues(std::span<const uint64_t>(counters).first(2)), InternalError);
 }

@@ -48,6 +48,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   FrameStats stats;
   stats.frame = frame;
   auto frameStart = Clock::now();
+  const double cpuStart = processCpuSeconds();
   FERRY_CHECK_LE(firstPixel, lastPixel);
   FERRY_CHECK_LE(lastPixel, uint32_t(settings_.width) * uint32_t(settings_.height));
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
@@ -91,6 +92,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
     if (progress) progress(s + 1, settings_.samplesPerPixel);
   }
   stats.seconds = secondsSince(frameStart);
+  stats.cpuSeconds = processCpuSeconds() - cpuStart;
   return stats;
 }
 

@@ -119,16 +119,20 @@ void RenderSession::Rank::buildTraceStructures(Instancing instancing) {
 
 namespace {
 
-// Sums every counter over ranks (seconds: the slowest rank).
+// Sums every counter over ranks (seconds: the slowest rank; CPU seconds: the sum).
 FrameStats sumOverRanks(const Communicator& comm, const FrameStats& mine) {
   FrameStats local = mine;
   local.perBounce.resize(size_t(comm.max(double(mine.perBounce.size()))));
   const std::vector<uint64_t> counters = local.counterValues();
-  const std::vector<double> times = local.stageTimeValues();
+  std::vector<double> times = local.stageTimeValues();
+  times.push_back(mine.cpuSeconds);
   FrameStats out;
   out.frame = mine.frame;
   out.setCounterValues(comm.sum(std::span<const uint64_t>(counters)));
-  out.setStageTimeValues(comm.sum(std::span<const double>(times)));
+  std::vector<double> summed = comm.sum(std::span<const double>(times));
+  out.cpuSeconds = summed.back();
+  summed.pop_back();
+  out.setStageTimeValues(summed);
   out.seconds = comm.max(mine.seconds);
   return out;
 }

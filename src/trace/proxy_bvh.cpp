@@ -2,13 +2,14 @@
 
 #include <algorithm>
 #include <bit>
-#include <cmath>
+#include <cstring>
 #include <limits>
 #include <type_traits>
 
 namespace ferry {
 namespace {
 constexpr int kLeafSize = 4;
+constexpr int kWidth = ProxyBvh::kWidth;
 
 // The next float above t >= 0 (nextafter(t, inf) without the libm call,
 // which showed in profiles): one step of the bit pattern; infinity stays.
@@ -21,48 +22,9 @@ inline float nextAbove(float t) {
   if (t < std::numeric_limits<float>::min()) return std::numeric_limits<float>::min();
   return std::bit_cast<float>(std::bit_cast<uint32_t>(t) + 1u);
 }
-}  // namespace
 
-ProxyBvh::ProxyBvh(std::vector<Proxy> proxies) : proxies_(std::move(proxies)) {
-  bool wide = false;
-  for (const Proxy& p : proxies_) {
-    ownerMasks_.push_back(p.owners.mask());
-    wide = wide || !p.owners.fitsInMask();
-  }
-  if (wide) wideUnion_.push_back({});  // marks the BVH wide; filled per node by build
-  order_.resize(proxies_.size());
-  for (size_t i = 0; i < order_.size(); ++i) order_[i] = int32_t(i);
-  if (proxies_.empty()) return;
-  std::vector<Vec3f> centers(proxies_.size());
-  for (size_t i = 0; i < proxies_.size(); ++i) centers[i] = proxies_[i].bounds.center();
-  build(0, int32_t(proxies_.size()), 0, centers);
-  children_.resize(nodes_.size());
-  for (size_t n = 0; n < nodes_.size(); ++n) {
-    if (nodes_[n].left < 0) continue;
-    Children& c = children_[n];
-    const int32_t kids[2] = {nodes_[n].left, nodes_[n].right};
-    for (int k = 0; k < 2; ++k) {
-      const Node& child = nodes_[size_t(kids[k])];
-      c.bounds[k] = child.bounds;
-      c.owners[k] = child.ownersUnion;
-      c.minIndex[k] = child.minIndex;
-      c.node[k] = kids[k];
-    }
-  }
-  // Leaves read their proxies' boxes and masks in leaf order (one stream).
-  leafBounds_.resize(order_.size());
-  leafMasks_.resize(order_.size());
-  for (size_t i = 0; i < order_.size(); ++i) {
-    leafBounds_[i] = proxies_[size_t(order_[i])].bounds;
-    leafMasks_[i] = ownerMasks_[size_t(order_[i])];
-  }
-}
-
-namespace {
-
-// Binned SAH over the centres along one axis of [first, first + count):
-// returns the best split position (items with bin < split go left) and its
-// cost, or cost infinity if every centre falls into one bin.
+// Binned SAH over the centres: the best split position along one axis
+// (items with bin < split go left) and its cost.
 constexpr int kBins = 16;
 struct SplitChoice {
   int axis = -1;
@@ -72,36 +34,62 @@ struct SplitChoice {
 
 }  // namespace
 
-int32_t ProxyBvh::build(int32_t first, int32_t count, int depth,
-                        const std::vector<Vec3f>& centers) {
-  int32_t index = int32_t(nodes_.size());
-  nodes_.push_back({});
+// Builds the binary tree (binned SAH), then collapses it into kWidth-wide nodes.
+struct ProxyBvh::Builder {
+  ProxyBvh& bvh;
+  std::vector<int32_t> order;
+  std::vector<Vec3f> centers;
+  std::vector<RankMask> masks;
+  std::vector<BinaryNode> binary;
+  std::vector<RankSet> binaryOwners;  // per binary node, only when not narrow
+
+  int32_t build(int32_t first, int32_t count, int depth);
+  int32_t collapse(int32_t binaryNode);
+};
+
+ProxyBvh::ProxyBvh(std::vector<Proxy> proxies) : proxies_(std::move(proxies)) {
+  Builder b{*this, {}, {}, {}, {}, {}};
+  for (const Proxy& p : proxies_) {
+    b.masks.push_back(p.owners.mask());
+    narrow_ = narrow_ && p.owners.fitsInMask();
+  }
+  if (proxies_.empty()) return;
+  b.order.resize(proxies_.size());
+  for (size_t i = 0; i < b.order.size(); ++i) b.order[i] = int32_t(i);
+  b.centers.resize(proxies_.size());
+  for (size_t i = 0; i < proxies_.size(); ++i) b.centers[i] = proxies_[i].bounds.center();
+  b.build(0, int32_t(proxies_.size()), 0);
+  b.collapse(0);
+}
+
+int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
+  const std::vector<Proxy>& proxies = bvh.proxies_;
+  int32_t index = int32_t(binary.size());
+  binary.push_back({});
   Box3f bounds, centerBounds;
   RankMask owners = 0;
   RankSet wideOwners;
   int32_t minIndex = std::numeric_limits<int32_t>::max();
   for (int32_t i = first; i < first + count; ++i) {
-    const int32_t id = order_[i];
-    const Proxy& p = proxies_[id];
-    bounds.extend(p.bounds);
+    const int32_t id = order[size_t(i)];
+    bounds.extend(proxies[size_t(id)].bounds);
     centerBounds.extend(centers[size_t(id)]);
-    owners |= ownerMasks_[size_t(id)];
+    owners |= masks[size_t(id)];
     minIndex = std::min(minIndex, id);
-    if (!narrow()) wideOwners |= p.owners;
+    if (!bvh.narrow_) wideOwners |= proxies[size_t(id)].owners;
   }
-  nodes_[index].bounds = bounds;
-  nodes_[index].ownersUnion = owners;
-  nodes_[index].minIndex = minIndex;
-  if (!narrow()) {
-    if (wideUnion_.size() <= size_t(index)) wideUnion_.resize(size_t(index) + 1);
-    wideUnion_[size_t(index)] = std::move(wideOwners);
+  binary[size_t(index)].bounds = bounds;
+  binary[size_t(index)].ownersUnion = owners;
+  binary[size_t(index)].minIndex = minIndex;
+  if (!bvh.narrow_) {
+    binaryOwners.resize(binary.size());
+    binaryOwners[size_t(index)] = std::move(wideOwners);
   }
-  auto makeLeaf = [&] {
-    nodes_[index].first = first;
-    nodes_[index].count = count;
+  if (count <= kLeafSize || depth > 60) {
+    binary[size_t(index)].first = first;
+    binary[size_t(index)].count = count;
     return index;
-  };
-  if (count <= kLeafSize || depth > 60) return makeLeaf();
+  }
 
   // Binned surface-area heuristic over the centres, on all three axes: the
   // query is "the closest box along a ray", whose cost is the boxes a ray
@@ -117,8 +105,8 @@ int32_t ProxyBvh::build(int32_t first, int32_t count, int depth,
     Box3f binBounds[kBins];
     int binCount[kBins] = {};
     for (int32_t i = first; i < first + count; ++i) {
-      const int b = binOf(axis, order_[i]);
-      binBounds[b].extend(proxies_[order_[i]].bounds);
+      const int b = binOf(axis, order[size_t(i)]);
+      binBounds[b].extend(proxies[size_t(order[size_t(i)])].bounds);
       ++binCount[b];
     }
     // Sweep from the right, then from the left.
@@ -144,28 +132,128 @@ int32_t ProxyBvh::build(int32_t first, int32_t count, int depth,
   }
   int32_t mid;
   if (best.axis >= 0) {
-    auto middle = std::partition(order_.begin() + first, order_.begin() + first + count,
+    auto middle = std::partition(order.begin() + first, order.begin() + first + count,
                                  [&](int32_t id) { return binOf(best.axis, id) < best.bin; });
-    mid = int32_t(middle - order_.begin());
+    mid = int32_t(middle - order.begin());
   } else {
     // Every centre in one point: a median split by index keeps the tree balanced.
     mid = first + count / 2;
   }
-  int32_t left = build(first, mid - first, depth + 1, centers);
-  int32_t right = build(mid, first + count - mid, depth + 1, centers);
-  nodes_[index].left = left;
-  nodes_[index].right = right;
+  int32_t left = build(first, mid - first, depth + 1);
+  int32_t right = build(mid, first + count - mid, depth + 1);
+  binary[size_t(index)].left = left;
+  binary[size_t(index)].right = right;
+  return index;
+}
+
+// A wide node's children: starting from the binary node's own children, the
+// child with the largest surface area is opened (an inner node into its two
+// children, a leaf into its proxies) while the result still fits in kWidth
+// slots, so a node covers the top few binary levels below it.
+int32_t ProxyBvh::Builder::collapse(int32_t binaryNode) {
+  struct Item {
+    int32_t binary;  // >= 0: a binary node; else ~proxy
+  };
+  auto opened = [&](int32_t b, std::vector<Item>& out) {
+    const BinaryNode& n = binary[size_t(b)];
+    if (n.left >= 0) {
+      out.push_back({n.left});
+      out.push_back({n.right});
+    } else {
+      for (int32_t i = n.first; i < n.first + n.count; ++i) out.push_back({~order[size_t(i)]});
+    }
+  };
+  auto openCount = [&](int32_t b) {
+    const BinaryNode& n = binary[size_t(b)];
+    return n.left >= 0 ? 2 : n.count;
+  };
+  std::vector<Item> items;
+  opened(binaryNode, items);
+  for (;;) {
+    int pick = -1;
+    float area = -1;
+    for (size_t k = 0; k < items.size(); ++k) {
+      const int32_t b = items[k].binary;
+      if (b < 0 || int(items.size()) - 1 + openCount(b) > kWidth) continue;
+      const float a = binary[size_t(b)].bounds.surfaceArea();
+      if (a > area) area = a, pick = int(k);
+    }
+    if (pick < 0) break;
+    const int32_t b = items[size_t(pick)].binary;
+    items.erase(items.begin() + pick);
+    opened(b, items);
+  }
+
+  const int32_t index = int32_t(bvh.nodes_.size());
+  bvh.nodes_.emplace_back();
+  if (!bvh.narrow_) bvh.slotOwners_.resize(bvh.nodes_.size() * kWidth);
+  {
+    Node& node = bvh.nodes_.back();
+    for (int k = 0; k < kWidth; ++k) {
+      for (int a = 0; a < 3; ++a) node.lower[a][k] = kInfinity, node.upper[a][k] = -kInfinity;
+      node.owners[k] = 0;
+      node.minIndex[k] = std::numeric_limits<int32_t>::max();
+      node.child[k] = 0;
+    }
+  }
+  for (size_t k = 0; k < items.size(); ++k) {
+    const int32_t b = items[k].binary;
+    Box3f box;
+    RankMask owners;
+    int32_t minIndex, child;
+    if (b < 0) {
+      const int32_t id = ~b;
+      box = bvh.proxies_[size_t(id)].bounds;
+      owners = masks[size_t(id)];
+      minIndex = id;
+      child = b;
+      bvh.nodes_[size_t(index)].proxySlots |= 1u << k;
+      if (!bvh.narrow_)
+        bvh.slotOwners_[size_t(index) * kWidth + k] = bvh.proxies_[size_t(id)].owners;
+    } else {
+      box = binary[size_t(b)].bounds;
+      owners = binary[size_t(b)].ownersUnion;
+      minIndex = binary[size_t(b)].minIndex;
+      child = collapse(b);  // appends nodes: `node` is looked up again below
+      if (!bvh.narrow_) bvh.slotOwners_[size_t(index) * kWidth + k] = binaryOwners[size_t(b)];
+    }
+    Node& node = bvh.nodes_[size_t(index)];
+    for (int a = 0; a < 3; ++a) node.lower[a][k] = box.lower[a], node.upper[a][k] = box.upper[a];
+    node.owners[k] = owners;
+    node.minIndex[k] = minIndex;
+    node.child[k] = child;
+  }
   return index;
 }
 
 namespace {
-// The two ways of asking "are all of these owners excluded / is any excluded".
+// The two ways of asking which slots' owners are excluded. A node's slot is
+// skipped when every owner below it is excluded; a proxy's when any is.
 struct MaskExclusion {
   RankMask excluded;
 };
 struct SetExclusion {
   const RankSet& excluded;
 };
+
+using Floats = float __attribute__((vector_size(4 * kWidth)));
+using Ints = int32_t __attribute__((vector_size(4 * kWidth)));
+
+inline Floats load(const float* p) {
+  Floats v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline Floats splat(float x) {
+  Floats v;
+  for (int k = 0; k < kWidth; ++k) v[k] = x;
+  return v;
+}
+inline uint32_t bits(Ints m) {
+  uint32_t out = 0;
+  for (int k = 0; k < kWidth; ++k) out |= uint32_t(m[k] != 0) << k;
+  return out;
+}
 }  // namespace
 
 ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax,
@@ -189,77 +277,89 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
   Hit best;
   if (nodes_.empty()) return best;
   const Vec3f inv{1 / direction.x, 1 / direction.y, 1 / direction.z};
-  // Whether every proxy below node n is excluded.
-  auto excludedNode = [&](int32_t n) {
-    if constexpr (kMask)
-      return (nodes_[size_t(n)].ownersUnion & ~ex.excluded) == 0;
-    else
-      return wideUnion_[size_t(n)].isSubsetOf(ex.excluded);
+  const Floats o[3] = {splat(origin.x), splat(origin.y), splat(origin.z)};
+  const Floats invV[3] = {splat(inv.x), splat(inv.y), splat(inv.z)};
+  // The slots of node n that may hold an answer, by owners alone.
+  auto eligible = [&](int32_t n) {
+    const Node& node = nodes_[size_t(n)];
+    uint32_t out = 0;
+    for (int k = 0; k < kWidth; ++k) {
+      bool skip;
+      const bool proxy = (node.proxySlots >> k) & 1u;
+      if constexpr (kMask) {
+        skip = proxy ? (node.owners[k] & ex.excluded) != 0 : (node.owners[k] & ~ex.excluded) == 0;
+      } else {
+        const RankSet& owners = slotOwners_[size_t(n) * kWidth + size_t(k)];
+        skip = proxy ? owners.intersects(ex.excluded)
+                     : owners.isSubsetOf(ex.excluded);  // an unused slot: empty, a subset
+      }
+      out |= uint32_t(!skip) << k;
+    }
+    return out;
   };
-  // Whether a subtree entered at tNode, whose least proxy index is
-  // minIndex, may still hold a better proxy: its proxies are entered at
-  // tNode or later, so it can only tie with the best so far at tNode, and a
-  // tie goes to the lower index.
+  // A subtree entered at tNode whose least proxy index is minIndex may still
+  // hold a better proxy: its proxies are entered at tNode or later, so it can
+  // only tie with the best so far at tNode, and a tie goes to the lower index.
   auto mayImprove = [&](float tNode, int32_t minIndex) {
     return tNode < best.tEnter || (tNode == best.tEnter && minIndex < best.proxy);
   };
-  // Closest first: children are visited nearer (then lower index) first, so
-  // the best answer is found early and prunes the rest. An entry carries its
-  // node's least index, so popping it reads nothing more.
+  // Closest first: a node's children are pushed farthest first, so the best
+  // answer is found early and prunes the rest. An entry carries its node's
+  // least index, so popping it reads nothing more.
   struct Entry {
     int32_t node;
     float t;
     int32_t minIndex;
   };
-  Entry stack[128];
+  Entry stack[64 * kWidth];
   int top = 0;
-  float tRoot;
-  if (excludedNode(0) || !intersectBox(nodes_[0].bounds, origin, inv, tmax, tRoot)) return best;
-  stack[top++] = {0, tRoot, nodes_[0].minIndex};
+  stack[top++] = {0, 0.0f, 0};
   while (top > 0) {
     const Entry e = stack[--top];
     if (!mayImprove(e.t, e.minIndex)) continue;
     const Node& node = nodes_[size_t(e.node)];
-    if (node.left < 0) {
-      for (int32_t i = node.first; i < node.first + node.count; ++i) {
-        const int32_t id = order_[size_t(i)];
-        if constexpr (kMask) {
-          if (leafMasks_[size_t(i)] & ex.excluded) continue;
-        } else {
-          if (proxies_[size_t(id)].owners.intersects(ex.excluded)) continue;
-        }
-        float t;
-        if (!intersectBox(leafBounds_[size_t(i)], origin, inv, tmax, t)) continue;
-        if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) best = {id, t};
-      }
-      continue;
-    }
+    // Every slot's box at once, exactly as intersectBox (Box3f::clipRay)
+    // computes it lane by lane, so that answers do not depend on the width:
+    // per axis the slab distances, swapped when reversed, an axis skipped
+    // where one is NaN (the origin on a slab plane of a flat direction),
+    // entry = max, exit = min, a hit when entry <= exit and entry < limit.
     // Strictly closer, or equally close (a lower index may still win the tie).
     const float limit = std::min(tmax, nextAbove(best.tEnter));
-    const Children& c = children_[size_t(e.node)];
-    Entry near{-1, 0, 0}, far{-1, 0, 0};
-    for (int k = 0; k < 2; ++k) {
-      bool excluded;
-      if constexpr (kMask)
-        excluded = (c.owners[k] & ~ex.excluded) == 0;
-      else
-        excluded = excludedNode(c.node[k]);
-      float t;
-      if (excluded || !intersectBox(c.bounds[k], origin, inv, limit, t) ||
-          !mayImprove(t, c.minIndex[k]))
-        continue;
-      const Entry entry{c.node[k], t, c.minIndex[k]};
-      if (near.node < 0) {
-        near = entry;
-      } else if (entry.t < near.t || (entry.t == near.t && entry.minIndex < near.minIndex)) {
-        far = near;
-        near = entry;
-      } else {
-        far = entry;
-      }
+    Floats t0 = splat(0.0f), t1 = splat(limit);
+    for (int a = 0; a < 3; ++a) {
+      const Floats lo = (load(node.lower[a]) - o[a]) * invV[a];
+      const Floats hi = (load(node.upper[a]) - o[a]) * invV[a];
+      const Ints swap = lo > hi;
+      const Floats near = swap ? hi : lo, far = swap ? lo : hi;
+      const Ints ordered = near <= far;
+      t0 = (ordered & (t0 < near)) ? near : t0;
+      t1 = (ordered & (far < t1)) ? far : t1;
     }
-    if (far.node >= 0) stack[top++] = far;
-    if (near.node >= 0) stack[top++] = near;
+    const Ints hit = (t0 <= t1) & (t0 < splat(limit));
+    uint32_t candidates = bits(hit) & eligible(e.node);
+    if (candidates == 0) continue;
+    // Proxies first: they may lower the bar for this node's subtrees.
+    for (uint32_t p = candidates & node.proxySlots; p != 0; p &= p - 1) {
+      const int k = std::countr_zero(p);
+      const float t = t0[k];
+      const int32_t id = node.minIndex[k];
+      if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) best = {id, t};
+    }
+    // Subtrees nearest (then lowest index) on top of the stack.
+    Entry sub[kWidth];
+    int count = 0;
+    for (uint32_t s = candidates & ~node.proxySlots; s != 0; s &= s - 1) {
+      const int k = std::countr_zero(s);
+      const Entry entry{node.child[k], t0[k], node.minIndex[k]};
+      if (!mayImprove(entry.t, entry.minIndex)) continue;
+      int j = count++;
+      for (; j > 0 && (sub[j - 1].t < entry.t ||
+                       (sub[j - 1].t == entry.t && sub[j - 1].minIndex < entry.minIndex));
+           --j)
+        sub[j] = sub[j - 1];
+      sub[j] = entry;
+    }
+    for (int j = 0; j < count; ++j) stack[top++] = sub[j];
   }
   return best;
 }

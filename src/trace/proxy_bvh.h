@@ -4,9 +4,7 @@
 // proxy index, so every rank answers identically.
 #pragma once
 
-#include <algorithm>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "core/math.h"
@@ -34,41 +32,46 @@ class ProxyBvh {
   // test instead of one above 64 ranks).
   Hit closest(Vec3f origin, Vec3f direction, float tmax, const RankSet& excluded) const;
   // True when every owner is below rank 64 (the RankMask query is exact).
-  bool narrow() const { return wideUnion_.empty(); }
+  bool narrow() const { return narrow_; }
 
   const std::vector<Proxy>& proxies() const { return proxies_; }
   size_t nodeCount() const { return nodes_.size(); }
+
+  // Children per node. The query tests a node's children together, 8 lanes
+  // of one vector operation per slab (AVX with x86-64-v3): a binary tree
+  // spent most of its time descending one box test at a time (issue 13: the
+  // forwarding decision after every trace was the largest cost at 8 ranks).
+  static constexpr int kWidth = 8;
 
  private:
   template <typename Excluded>
   Hit closestImpl(Vec3f origin, Vec3f direction, float tmax, const Excluded& excluded) const;
 
-  struct Node {
+  // Up to kWidth children, each a node or a single proxy, structure of
+  // arrays so that one load fills a lane per child. An unused slot has no
+  // owners and is never entered.
+  struct alignas(32) Node {
+    float lower[3][kWidth];
+    float upper[3][kWidth];
+    RankMask owners[kWidth];   // a node: the union below it; a proxy: its owners (narrow)
+    int32_t minIndex[kWidth];  // least proxy index below (a proxy: its index): prunes ties
+    int32_t child[kWidth];     // a node's index, or ~index of a proxy
+    uint32_t proxySlots = 0;   // bit k: slot k holds a proxy
+  };
+  // The binary SAH tree the wide one is collapsed from (construction only).
+  struct BinaryNode {
     Box3f bounds;
-    RankMask ownersUnion = 0;  // lets a subtree whose proxies are all excluded be skipped (narrow)
+    RankMask ownersUnion = 0;
     int32_t left = -1, right = -1;  // children; -1 in a leaf
-    int32_t first = 0, count = 0;   // leaf range in order_
-    int32_t minIndex = 0;           // least proxy index below: prunes ties (closestImpl)
+    int32_t first = 0, count = 0;   // leaf range in order
+    int32_t minIndex = 0;
   };
-  int32_t build(int32_t first, int32_t count, int depth, const std::vector<Vec3f>& centers);
-  // An inner node's two children as the query reads them: both boxes, owner
-  // masks and least indices in one record (one cache line or two), instead
-  // of a load from each child node before deciding whether to enter it.
-  struct Children {
-    Box3f bounds[2];
-    RankMask owners[2];
-    int32_t minIndex[2];
-    int32_t node[2];
-  };
+  struct Builder;
 
   std::vector<Proxy> proxies_;
-  std::vector<RankMask> ownerMasks_;  // per proxy (narrow)
-  std::vector<RankSet> wideUnion_;    // per node, only when some owner is rank 64 or above
-  std::vector<int32_t> order_;
-  std::vector<Box3f> leafBounds_;    // proxies' boxes in leaf order (order_)
-  std::vector<RankMask> leafMasks_;  // their owner masks (narrow), in leaf order
-  std::vector<Node> nodes_;
-  std::vector<Children> children_;  // per node (inner nodes only are read)
+  bool narrow_ = true;
+  std::vector<Node> nodes_;          // nodes_[0] is the root
+  std::vector<RankSet> slotOwners_;  // per node and slot, only when not narrow
 };
 
 // Whether the ray enters `box` before tmax; entry distance clamped at 0
