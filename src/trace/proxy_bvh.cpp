@@ -9,6 +9,9 @@
 namespace ferry {
 namespace {
 constexpr int kLeafSize = 4;
+// Depth to which the binary tree splits by SAH; then by halves, so any tree
+// is at most kMaxSahDepth + 32 deep.
+constexpr int kMaxSahDepth = 60;
 constexpr int kWidth = ProxyBvh::kWidth;
 
 // The next float above t >= 0 (nextafter(t, inf) without the libm call,
@@ -85,11 +88,15 @@ int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
     binaryOwners.resize(binary.size());
     binaryOwners[size_t(index)] = std::move(wideOwners);
   }
-  if (count <= kLeafSize || depth > 60) {
+  if (count <= kLeafSize) {
     binary[size_t(index)].first = first;
     binary[size_t(index)].count = count;
     return index;
   }
+  // Below kMaxSahDepth the split is a median by index: a leaf never holds
+  // more proxies than a node has slots, and the depth stays bounded (the
+  // query's stack) whatever the SAH did above.
+  const bool sah = depth <= kMaxSahDepth;
 
   // Binned surface-area heuristic over the centres, on all three axes: the
   // query is "the closest box along a ray", whose cost is the boxes a ray
@@ -100,7 +107,7 @@ int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
     const float f = (centers[size_t(id)][axis] - centerBounds.lower[axis]) / extent[axis];
     return std::clamp(int(f * kBins), 0, kBins - 1);
   };
-  for (int axis = 0; axis < 3; ++axis) {
+  for (int axis = 0; axis < 3 && sah; ++axis) {
     if (!(extent[axis] > 0)) continue;
     Box3f binBounds[kBins];
     int binCount[kBins] = {};
@@ -136,7 +143,8 @@ int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
                                  [&](int32_t id) { return binOf(best.axis, id) < best.bin; });
     mid = int32_t(middle - order.begin());
   } else {
-    // Every centre in one point: a median split by index keeps the tree balanced.
+    // Every centre in one point, or deeper than kMaxSahDepth: a median split
+    // by index keeps the tree balanced.
     mid = first + count / 2;
   }
   int32_t left = build(first, mid - first, depth + 1);
@@ -311,7 +319,7 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
     float t;
     int32_t minIndex;
   };
-  Entry stack[64 * kWidth];
+  Entry stack[(kMaxSahDepth + 34) * kWidth];  // at most kWidth - 1 siblings wait per level
   int top = 0;
   stack[top++] = {0, 0.0f, 0};
   while (top > 0) {

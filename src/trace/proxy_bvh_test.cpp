@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/random.h"
 
 namespace ferry {
@@ -153,6 +155,25 @@ TEST(ProxyBvh, TiesAndFlatRaysMatchBruteForce) {
     }
   }
   EXPECT_GT(ties, 100);  // the case is exercised
+}
+
+// Centres spaced exponentially make the binned SAH split off a few proxies
+// per level (a deep, lopsided tree); answers as brute force.
+TEST(ProxyBvh, SkewedProxiesMatchBruteForce) {
+  std::vector<Proxy> proxies;
+  for (int i = 0; i < 400; ++i) {
+    const float x = std::ldexp(1.0f, i / 4) * (1 + float(i % 4) / 4);
+    proxies.push_back({{{x, 0, 0}, {x * 1.001f, 1, 1}}, RankSet::single(i % 3)});
+  }
+  ProxyBvh bvh(proxies);
+  for (uint32_t k = 0; k < 2000; ++k) {
+    const Vec3f o(std::ldexp(1.0f, int(uniform(k, 40) * 100)), uniform(k, 41), -1);
+    const Vec3f d = normalize(Vec3f(uniform(k, 42) - 0.5f, 0.0f, 1.0f));
+    const RankMask excluded = RankMask(1) << (k % 3);
+    const ProxyBvh::Hit a = bvh.closest(o, d, kInfinity, excluded);
+    const ProxyBvh::Hit b = bruteForce(proxies, o, d, kInfinity, RankSet::fromMask(excluded));
+    ASSERT_EQ(a.proxy, b.proxy) << "ray " << k;
+  }
 }
 
 TEST(ProxyBvh, AxisParallelRaysAndOriginInside) {
