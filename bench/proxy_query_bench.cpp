@@ -278,13 +278,6 @@ const Case& islandCase(int tiles) {
             stderr,
             "proxy_query_bench: the trees disagree (%d at %.9g vs %d at %.9g), set %d, tmax %.9g\n",
             a.proxy, a.tEnter, b.proxy, b.tEnter, set, r.tmax);
-        const Vec3f inv{1 / r.direction.x, 1 / r.direction.y, 1 / r.direction.z};
-        for (int32_t id : {a.proxy, b.proxy}) {
-          float t = -1;
-          bool h = intersectBox(c.proxies[size_t(id)].bounds, r.origin, inv, r.tmax, t);
-          std::fprintf(stderr, "  proxy %d: hit %d t %.9g owners %llx\n", id, h, t,
-                       (unsigned long long)c.proxies[size_t(id)].owners.mask());
-        }
         std::abort();
       }
     }

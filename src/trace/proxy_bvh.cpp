@@ -344,7 +344,9 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
       t1 = (ordered & (far < t1)) ? far : t1;
     }
     const Ints hit = (t0 <= t1) & (t0 < splat(limit));
-    uint32_t candidates = bits(hit) & eligible(e.node);
+    uint32_t candidates = bits(hit);
+    if (candidates == 0) continue;  // owners are read only for slots the ray enters
+    candidates &= eligible(e.node);
     if (candidates == 0) continue;
     // Proxies first: they may lower the bar for this node's subtrees.
     for (uint32_t p = candidates & node.proxySlots; p != 0; p &= p - 1) {
