@@ -84,4 +84,24 @@ for instancing in shared always; do
 done
 echo "3 ranks, --instancing shared against always:"
 $compare "$work/instancing-always.pfm" "$work/instancing-shared.pfm" --rel 0 --abs 0
+# Light paths: rays that start at the emitter, on whichever rank generates
+# the pixel's paths, and shadow rays to the camera that add to any pixel on
+# any rank: the same image at 3 and 5 ranks, both exchanges, the replay
+# layout, and two threads a rank.
+cornell_light="--size 40x40 --spp 2 --max-depth 4 --seed 3 --light-paths on"
+"$ferry" render "builtin:cornell" $cornell_light -q -o "$work/light-ref.pfm" --stats "$work/light-ref.json"
+python3 -c "import json,sys; t=json.load(open(sys.argv[1]))['render']['total']; assert t['light_paths'] > 0, t" \
+  "$work/light-ref.json"
+for ranks in 3 5; do
+  for variant in "--threads 1" "--exchange bulk --threads 1" "--path-layout replay --chunk 60 --threads 1" \
+    "--partition random --forwarding broadcast --threads 2"; do
+    out="$work/light.pfm"
+    # shellcheck disable=SC2086
+    mpirun_n "$ranks" "$ferry" render "builtin:cornell" $cornell_light -q $variant -o "$out" \
+      --stats "$out.json"
+    echo "light paths, ranks $ranks, $variant:"
+    $compare "$work/light-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0.002
+    check_stats "$out.json"
+  done
+done
 echo "distributed_test: all passed"

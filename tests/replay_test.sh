@@ -28,7 +28,7 @@ import json, sys
 s = json.load(open(sys.argv[1]))["settings"]
 assert s["path_layout"] == sys.argv[3], s["path_layout"]
 assert s["ranks"] == int(sys.argv[2]), s["ranks"]
-assert s["path_bytes"] == (36 if sys.argv[3] in ("replay", "mask8") else 48), s["path_bytes"]
+assert s["path_bytes"] == {"mask8": 36, "replay": 40, "mask64": 56}[sys.argv[3]], s["path_bytes"]
 PY
 }
 

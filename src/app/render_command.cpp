@@ -87,6 +87,12 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   if (o.mis != "on" && o.mis != "off")
     throw InputError(fmt::format("--mis {}: expected on or off", o.mis));
   s.render.lightStrategy = o.mis == "on" ? LightStrategy::Mis : LightStrategy::LightSamples;
+  if (o.lightPaths == "on" || o.lightPaths == "off")
+    s.lightPaths = o.lightPaths == "on";
+  else if (o.lightPaths != "auto")
+    throw InputError(fmt::format("--light-paths {}: expected auto, on or off", o.lightPaths));
+  if (s.lightPaths.value_or(false) && s.render.lightStrategy != LightStrategy::Mis)
+    throw InputError("--light-paths on needs --mis on (light paths are weighed by MIS)");
   s.render.seed = o.seed;
   s.render.view = o.view;
   s.render.toneMapping.exposure = o.exposure;
@@ -189,6 +195,12 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                    "Multiple importance sampling: on (light and BSDF samples both find emitters\n"
                    "and the environment map, weighed by the power heuristic) or off (emitters\n"
                    "only through light samples, as the paper)")
+      ->capture_default_str();
+  command
+      ->add_option("--light-paths", o.lightPaths,
+                   "Light paths: on (each pixel sample also traces a path from an emitter and\n"
+                   "connects it to the camera, weighed by MIS: light through glass, small\n"
+                   "apertures), off, or auto (on when the pbrt scene's Integrator is bdpt)")
       ->capture_default_str();
   command->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   command->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")

@@ -51,6 +51,7 @@ struct RenderOptions {
   // --mis: "on" weighs light and BSDF samples (multiple importance
   // sampling); "off" counts emitters only through light samples.
   std::string mis = "on";
+  std::string lightPaths = "auto";  // --light-paths: auto, on or off
   // --instancing: "shared" gives an Embree instance level only to objects a
   // rank places more than once or transformed; "always" to every object.
   std::string instancing = "shared";

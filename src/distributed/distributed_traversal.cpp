@@ -19,7 +19,14 @@
 #include "distributed/ray_routing.h"
 
 namespace ferry {
-namespace {}  // namespace
+namespace {
+
+// Broadcast mode: what finds a reply's original among a rank's rays.
+uint64_t replyKey(const PathCore& p) {
+  return uint64_t(p.pixel()) * 4 + (p.isShadow() ? 1 : 0) + (p.has(kPathLight) ? 2 : 0);
+}
+
+}  // namespace
 
 ExchangeMode parseExchangeMode(const std::string& name) {
   if (name == "auto") return ExchangeMode::Auto;
@@ -346,14 +353,14 @@ void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path> rays, RayQueu
   PathQueue<Path> replies = exchange(received, replyTo, counters, stats);
 
   // The closest hit wins; any occluder occludes. A rank makes at most one path
-  // and one shadow ray per pixel per wavefront, so (pixel, kind) finds the original.
+  // and one shadow ray per pixel per wavefront, and as many of a light path
+  // (whose pixel() is its index), so (pixel, kind, light) finds the original.
   auto start = Clock::now();
   std::unordered_map<uint64_t, size_t> original;
   original.reserve(rays.size());
-  for (size_t i = 0; i < rays.size(); ++i)
-    original[uint64_t(rays[i].pixel()) * 2 + (rays[i].isShadow() ? 1 : 0)] = i;
+  for (size_t i = 0; i < rays.size(); ++i) original[replyKey(rays[i])] = i;
   for (const Path& reply : replies) {
-    auto it = original.find(uint64_t(reply.pixel()) * 2 + (reply.isShadow() ? 1 : 0));
+    auto it = original.find(replyKey(reply));
     FERRY_CHECK(it != original.end());
     Path& p = rays[it->second];
     if constexpr (!Path::kReplay) p.visited |= reply.visited;

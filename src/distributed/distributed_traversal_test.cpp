@@ -45,6 +45,7 @@ std::unique_ptr<TraceBackend> buildGeometry(Scene& scene, const std::vector<int3
 struct SceneCase {
   std::string name, spec;
   int width, height, samplesPerPixel, maxDepth;
+  bool lightPaths = false;
 };
 
 RenderSettings settingsFor(const SceneCase& c) {
@@ -54,6 +55,7 @@ RenderSettings settingsFor(const SceneCase& c) {
   s.samplesPerPixel = c.samplesPerPixel;
   s.maxDepth = c.maxDepth;
   s.seed = 3;
+  s.lightPaths = c.lightPaths;
   return s;
 }
 
@@ -262,11 +264,15 @@ TEST_P(DistributedInProcess, EqualsTheOneRankImage) {
 
 const SceneCase kCornell{"cornell", "builtin:cornell", 40, 40, 2, 4};
 const SceneCase kIsland{"island", "builtin:island?scale=0.05", 48, 27, 1, 3};
+// Light paths: rays that start at the emitter (on any rank) and shadow rays
+// to the camera that add to any pixel.
+const SceneCase kCornellLightPaths{"cornell_light_paths", "builtin:cornell", 40, 40, 2, 4, true};
 
 std::vector<Case> allCases() {
   std::vector<Case> cases;
   for (const SceneCase& scene : {kCornell, kIsland})
     for (const char* partitioner : {"round-robin", "best"}) cases.push_back({scene, partitioner});
+  cases.push_back({kCornellLightPaths, "best"});
   return cases;
 }
 

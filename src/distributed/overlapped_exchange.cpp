@@ -221,9 +221,11 @@ void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t first,
     } else if (nextPixel < mine.size()) {
       const size_t n = std::min<size_t>(mine.size() - nextPixel, chunkPixels_);
       BounceRays<Path>& first = at(0);
+      const size_t before = first.made.size();
+      // (Camera paths, and with light paths those too.)
       shading.cameraPaths(std::span<const uint32_t>(mine.data() + nextPixel, n), first.made, stats);
       nextPixel += n;
-      made += n;
+      made += first.made.size() - before;
     } else {
       // Nothing here to do: is the sample over everywhere?
       auto start = Clock::now();

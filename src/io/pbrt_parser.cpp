@@ -596,9 +596,17 @@ class Parser {
     } else if (name == "Film") {
       std::string type = string(in, n);
       film(type, params(in), where);
-    } else if (name == "Sampler" || name == "Integrator" || name == "SurfaceIntegrator" ||
-               name == "VolumeIntegrator" || name == "PixelFilter" || name == "Accelerator" ||
-               name == "Renderer") {
+    } else if (name == "Integrator") {
+      std::string type = string(in, n);
+      scene_.integrator = type;
+      skipped(name, params(in), where,
+              integratorWantsLightPaths(type)
+                  ? fmt::format("\"{}\": Ferry renders it as camera paths and light paths "
+                                "combined by MIS (--light-paths)",
+                                type)
+                  : fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type));
+    } else if (name == "Sampler" || name == "SurfaceIntegrator" || name == "VolumeIntegrator" ||
+               name == "PixelFilter" || name == "Accelerator" || name == "Renderer") {
       std::string type = string(in, n);
       skipped(name, params(in), where,
               fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type));

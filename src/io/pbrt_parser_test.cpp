@@ -116,6 +116,13 @@ TEST_F(PbrtV3Features, CameraAndFilm) {
   EXPECT_EQ(scene().filmScale, 2);  // "float scale" [ 2 ]: the radiance written is doubled
 }
 
+// The Integrator is named (light paths follow a bidirectional one) and
+// otherwise skipped with a warning.
+TEST_F(PbrtV3Features, IntegratorIsRecorded) {
+  EXPECT_EQ(scene().integrator, "path");
+  EXPECT_FALSE(integratorWantsLightPaths(scene().integrator));
+}
+
 TEST_F(PbrtV3Features, Lights) {
   EXPECT_EQ(scene().environment.color, Vec3f(1, 1, 1));  // 0.5 times "rgb scale" 2
   EXPECT_FALSE(scene().environment.image);
@@ -346,6 +353,11 @@ TEST_F(PbrtV4Features, LeftHandedCameraAndPortraitFov) {
   EXPECT_EQ(scene().filmFilename, "v4.png");
   EXPECT_EQ(scene().filmScale, 4);  // "float iso" 400: pbrt-v4's imaging ratio at 1 s
   EXPECT_TRUE(anyContains(warnings(), "lensradius ignored"));
+}
+
+TEST_F(PbrtV4Features, BidirectionalIntegratorAsksForLightPaths) {
+  EXPECT_EQ(scene().integrator, "bdpt");
+  EXPECT_TRUE(integratorWantsLightPaths(scene().integrator));
 }
 
 TEST_F(PbrtV4Features, Materials) {

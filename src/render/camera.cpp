@@ -1,5 +1,6 @@
 #include "render/camera.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "scene/scene.h"
@@ -29,6 +30,16 @@ bool Camera::project(Vec3f d, float& x, float& y) const {
   float sy = dot(d, up_) / z / tanHalfY_;
   x = (sx + 1) * 0.5f * width_;
   y = (1 - sy) * 0.5f * height_;
+  return true;
+}
+
+bool Camera::pixelOf(Vec3f point, uint32_t& pixel) const {
+  float x, y;
+  if (!project(point - origin_, x, y)) return false;
+  if (!(x >= 0 && y >= 0 && x < float(width_) && y < float(height_))) return false;
+  const uint32_t px = std::min(uint32_t(x), uint32_t(width_ - 1));
+  const uint32_t py = std::min(uint32_t(y), uint32_t(height_ - 1));
+  pixel = py * uint32_t(width_) + px;
   return true;
 }
 

@@ -1,6 +1,8 @@
 // A pinhole camera made from a named scene view and the image size.
 #pragma once
 
+#include <cstdint>
+
 #include "core/math.h"
 
 namespace ferry {
@@ -21,6 +23,17 @@ class Camera {
   }
   // Inverse: the image position a world direction projects to; false if behind.
   bool project(Vec3f direction, float& x, float& y) const;
+
+  // For light tracing (a light path's vertex connected to the camera):
+  // The pixel `point` projects to; false if outside the image or behind.
+  bool pixelOf(Vec3f point, uint32_t& pixel) const;
+  // The cosine between the viewing axis and unit `direction` from the camera.
+  float cosToAxis(Vec3f direction) const { return dot(direction, forward_); }
+  // The image plane's area at distance 1 (all pixels): a camera ray's
+  // direction density over the whole image is 1 / (area cos^3), and the
+  // importance a light path's splat carries is 1 / (area cos^4) (pbrt's
+  // PerspectiveCamera::We), one light path per pixel.
+  float planeArea() const { return 4 * tanHalfX_ * tanHalfY_; }
 
  private:
   Vec3f origin_;

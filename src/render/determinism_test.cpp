@@ -136,11 +136,13 @@ struct WholeImageTraversal final : RayTraversal<Path> {
 // limit; chunk > 0 sets the pixels per thread of a one-rank wavefront, -1
 // sends the whole image through each wavefront.
 template <typename Path>
-std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false, int chunk = 0) {
+std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false, int chunk = 0,
+                          bool lightPaths = false) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
   Scene scene = busyScene();
   RenderSettings s = busySettings(seed);
   s.retraceAll = retraceAll;
+  s.lightPaths = lightPaths;
   if (chunk > 0) s.chunkPixels = uint32_t(chunk);
   const std::unique_ptr<TraceBackend> backend = makeEmbreeBackend(scene);
   const TraceBackend& geometry = *backend;
@@ -220,6 +222,25 @@ TEST(Determinism, PixelChunksDoNotChangeTheImage) {
     EXPECT_TRUE(bitIdentical(whole, chunked))
         << differingPixels(whole, chunked) << " pixels differ, chunk " << chunk;
   }
+}
+
+// Light paths add to any pixel from any thread (atomically, in fixed
+// point): the image still must not depend on threads, chunks, the whole-image
+// wavefront, re-tracing or the mask width; and they must change it.
+TEST(Determinism, LightPathsAreBitIdenticalAcrossThreadsChunksAndLayouts) {
+  std::vector<Vec3f> one = render<Path8>(1, 1, false, 0, true);
+  EXPECT_FALSE(bitIdentical(one, render<Path8>(1, 1))) << "light paths changed nothing";
+  std::vector<Vec3f> two = render<Path8>(1, 2, false, 0, true);
+  EXPECT_TRUE(bitIdentical(one, two)) << differingPixels(one, two) << " pixels differ (threads)";
+  for (int chunk : {-1, 100}) {
+    std::vector<Vec3f> other = render<Path8>(1, 2, false, chunk, true);
+    EXPECT_TRUE(bitIdentical(one, other))
+        << differingPixels(one, other) << " differ, chunk " << chunk;
+  }
+  std::vector<Vec3f> wide = render<Path64>(1, 2, true, 0, true);
+  EXPECT_TRUE(bitIdentical(one, wide)) << differingPixels(one, wide) << " differ (Path64, retrace)";
+  std::vector<Vec3f> replay = render<PathReplay>(1, 2, false, 0, true);
+  EXPECT_TRUE(bitIdentical(one, replay)) << differingPixels(one, replay) << " differ (replay)";
 }
 
 TEST(Determinism, DifferentSeedsGiveDifferentImages) {

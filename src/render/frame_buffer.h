@@ -10,12 +10,13 @@
 // pixel per wavefront (MIS), and the ranks' partial sums add up to exactly
 // the one-rank image, bit for bit, at any rank count.
 //
-// Writes are not atomic: the renderer adds to a pixel from one thread at a
-// time (one rank's chunks are disjoint pixel ranges; a whole-image wavefront
-// shades a pixel sample's path or its shadow ray, never both, in one pass).
+// Adds are atomic (relaxed): light paths (render/path_shading.h) add to
+// whatever pixel their vertex projects to, from any thread; the sum is the
+// same in any order.
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -37,9 +38,9 @@ class FrameBuffer {
   // Adds one contribution. NaN and negative values add nothing.
   void add(uint32_t pixel, Vec3f value) {
     int64_t* s = &sum_[size_t(pixel) * 3];
-    s[0] += toFixed(value.x);
-    s[1] += toFixed(value.y);
-    s[2] += toFixed(value.z);
+    std::atomic_ref<int64_t>(s[0]).fetch_add(toFixed(value.x), std::memory_order_relaxed);
+    std::atomic_ref<int64_t>(s[1]).fetch_add(toFixed(value.y), std::memory_order_relaxed);
+    std::atomic_ref<int64_t>(s[2]).fetch_add(toFixed(value.z), std::memory_order_relaxed);
   }
   static int64_t toFixed(float v) {
     if (!(v > 0)) return 0;  // also NaN

@@ -105,6 +105,16 @@ LightSampler::LightSampler(const Scene& scene)
       }
     }
   }
+  if (!triangles_.empty()) {
+    std::vector<float> powers;
+    double sum = 0;
+    for (const EmissiveTriangle& t : triangles_) {
+      powers.push_back(t.power);
+      sum += t.power;
+    }
+    emittedPower_ = float(sum * kPi);
+    emissionByPower_ = Distribution1D(std::move(powers));
+  }
   if (triangles_.size() > kMaxIndividualTriangles) {
     for (size_t begin = 0; begin < triangles_.size(); begin += kTrianglesPerGroup) {
       Group g;
@@ -303,6 +313,7 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
   if (groups_.empty()) {
     if (!sampleTriangle(triangles_[index], p, u, out)) return false;
     out.pdf *= selection;
+    out.emitter = uint32_t(index);
     return true;
   }
   const Group& g = groups_[index];
@@ -314,7 +325,46 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
   Vec2f uTriangle{std::clamp((u.x - lo) / std::max(probability, 1e-12f), 0.0f, 0.99999994f), u.y};
   if (!sampleTriangle(triangles_[g.triangles[local]], p, uTriangle, out)) return false;
   out.pdf *= selection * probability;
+  out.emitter = g.triangles[local];
   return true;
+}
+
+bool LightSampler::sampleEmission(float uSelect, Vec2f uPosition, Vec2f uDirection,
+                                  EmissionSample& out) const {
+  if (triangles_.empty()) return false;
+  float selection;
+  const int index = emissionByPower_.sampleDiscrete(uSelect, selection);
+  const EmissiveTriangle& t = triangles_[size_t(index)];
+  if (!(selection > 0)) return false;
+  const float su = std::sqrt(uPosition.x);
+  const float b1 = 1 - su, b2 = uPosition.y * su;
+  out.position = t.p0 + t.e1 * b1 + t.e2 * b2;
+  out.normal = t.normal;
+  out.emitter = uint32_t(index);
+  out.radiance = t.radiance;
+  out.pdfPosition = selection / t.area;
+  float side = 1;
+  Vec2f u = uDirection;
+  if (!t.oneSided) {
+    // Either side with probability 1/2, u.x stretched back to [0, 1).
+    if (u.x < 0.5f) {
+      side = -1;
+      u.x = u.x * 2;
+    } else {
+      u.x = std::min((u.x - 0.5f) * 2, 0.99999994f);
+    }
+    out.normal = out.normal * side;
+  }
+  const Vec3f local = sampleCosineHemisphere(u);
+  if (!(local.z > 0)) return false;
+  out.direction = Frame(out.normal).toWorld(local);
+  out.pdfDirection = local.z * (t.oneSided ? (1 / kPi) : (0.5f / kPi));
+  return out.pdfPosition > 0 && out.pdfDirection > 0;
+}
+
+float LightSampler::emissionPositionPdf(uint32_t emitter) const {
+  if (emitter >= triangles_.size()) return 0;
+  return emissionByPower_.discreteProbability(int(emitter)) / triangles_[emitter].area;
 }
 
 uint32_t LightSampler::emitterIndex(const std::array<Vec3f, 3>& corners) const {

@@ -37,6 +37,18 @@ struct LightSample {
   Vec3f radiance;              // emitted radiance along -direction
   float pdf = 0;               // solid angle, including the light's selection probability
   bool mis = false;            // a BSDF sample can find it too (an emitter or environment map)
+  uint32_t emitter = 0xffffffffu;  // the emissive triangle sampled (else kNotAnEmitter)
+};
+
+// Light leaving an emitter (light tracing's first vertex and direction).
+struct EmissionSample {
+  Vec3f position;
+  Vec3f normal;     // the emitting side's unit normal
+  Vec3f direction;  // unit, leaving the emitter
+  Vec3f radiance;   // emitted along direction
+  uint32_t emitter = 0;
+  float pdfPosition = 0;   // area density, selection included (emissionPositionPdf)
+  float pdfDirection = 0;  // solid angle: cos / pi, halved for a two-sided emitter
 };
 
 class LightSampler {
@@ -73,6 +85,18 @@ class LightSampler {
   // which sample(from, ...) picks that direction (selection included).
   Vec3f environmentAlong(Vec3f direction) const { return environmentRadiance(direction); }
   float environmentPdf(Vec3f from, Vec3f direction) const;
+
+  // Light tracing: an emissive triangle chosen by power, a point uniform on
+  // it, a cosine-weighted direction on its emitting side (either side of a
+  // two-sided one, by uDirection.x). False when there is no emissive triangle.
+  bool sampleEmission(float uSelect, Vec2f uPosition, Vec2f uDirection, EmissionSample& out) const;
+  // The area density with which sampleEmission picks a point on `emitter`.
+  float emissionPositionPdf(uint32_t emitter) const;
+  // The emissive triangles' total power (pi times the sum of luminance times
+  // area): a light path's throughput is about this.
+  float totalEmittedPower() const { return emittedPower_; }
+  // Whether `emitter` emits from both sides (its direction density halves).
+  bool emitsBothSides(uint32_t emitter) const { return !triangles_[emitter].oneSided; }
 
   bool empty() const;
   size_t emissiveTriangleCount() const { return triangles_.size(); }
@@ -123,7 +147,9 @@ class LightSampler {
   Distribution2D environmentDistribution_;
   float environmentWeight_ = 0;
   std::vector<EmissiveTriangle> triangles_;
-  std::vector<Group> groups_;  // empty when every triangle is its own candidate
+  std::vector<Group> groups_;       // empty when every triangle is its own candidate
+  Distribution1D emissionByPower_;  // over triangles_, for sampleEmission
+  float emittedPower_ = 0;
   // emitterIndex's table: a hash of the sorted corners' bits -> triangle.
   std::unordered_map<uint64_t, uint32_t> triangleByCorners_;
 };

@@ -19,22 +19,47 @@ constexpr float kMinShadingCosine = 0.02f;
   return isFinite(c) && maxComponent(c) > 0;
 }
 
+// A light path's random keys: its bounces offset by this (camera paths use
+// the bounce itself), its emission at the offset alone.
+constexpr uint32_t kLightPathKey = 0x40000000u;
+
+inline float square(float x) {
+  return x * x;
+}
+// A density as a path stores it (both sides of an MIS weight read the same).
+inline float stored(float pdf) {
+  return unpackDensity(packDensity(pdf));
+}
+// A light path's emission direction density over the emitted cosine: 1 / pi,
+// or 1 / (2 pi) for a two-sided emitter.
+inline float emissionDensityOverCosine(bool bothSides) {
+  return bothSides ? 0.5f / kPi : 1 / kPi;
+}
+
 }  // namespace
 
 template <typename Path>
 PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth,
-                               uint32_t seed, LightStrategy strategy)
+                               uint32_t seed, LightStrategy strategy, const Camera* lightPathCamera)
     : scene_(scene),
       lights_(lights),
       surfaces_(scene),
       maxDepth_(maxDepth),
       seed_(seed),
-      strategy_(strategy) {}
+      strategy_(strategy) {
+  if (lightPathCamera && strategy == LightStrategy::Mis && lights.emissiveTriangleCount() > 0 &&
+      lights.totalEmittedPower() > 0) {
+    camera_ = lightPathCamera;
+    lightPathScale_ = lights.totalEmittedPower();
+  }
+}
 
 template <typename Path>
 typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
     const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
     FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const {
+  if (path.has(kPathLight))
+    return shadeLightPath(path, hit, sampleIndex, bounce, continuation, shadowRay);
   if (!path.hasHit()) {
     addEscapedLight(path, frameBuffer);
     return {};
@@ -42,13 +67,165 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
   const PathVertex vertex = surfaceVertex(path, hit, bounce);
   addEmission(vertex, hit, frameBuffer);
   if (bounce >= maxDepth_) return {};
-  const VertexScattering scattering = shadingFrame(vertex, sampleIndex);
+  const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
+  const float lightBase = camera_ ? cameraLightBase(path, vertex, scattering) : 0.0f;
   Spawned spawned;
-  spawned.continuation = sampleContinuation(vertex, scattering, continuation);
+  spawned.continuation = sampleContinuation(vertex, scattering, lightBase, continuation);
   // (A delta vertex takes no light sample: its emission on the next vertex
   // counts in full instead.)
   if (!scattering.bsdf.isDelta() && strategy_ != LightStrategy::BsdfSamples)
-    spawned.shadowRay = sampleLight(vertex, scattering, shadowRay);
+    spawned.shadowRay = sampleLight(vertex, scattering, lightBase, shadowRay);
+  return spawned;
+}
+
+// The camera path's light-path ratio at vertex i, all but its reverse
+// density rev_i: at the first hit the inverse of the camera's density of it
+// over the whole image (area measure; 0 at a delta vertex, which a light
+// path cannot connect to the camera), after that the ratio the path brought
+// over this vertex's cosine.
+template <typename Path>
+[[gnu::always_inline]] inline float PathShading<Path>::cameraLightBase(
+    const Path& path, const PathVertex& vertex, const VertexScattering& scattering) const {
+  const float cosIn = std::abs(dot(vertex.surface.geometricNormal, vertex.wo));
+  if (!(cosIn > 0)) return 0;
+  if (vertex.bounce > 0) return path.lightRatio ? unpackDensity(path.lightRatio) / cosIn : 0.0f;
+  if (scattering.bsdf.isDelta()) return 0;
+  const Vec3f toPoint = vertex.surface.position - vertex.from;
+  const float dist2 = dot(toPoint, toPoint);
+  const float cosAxis = camera_->cosToAxis(toPoint * (1 / std::sqrt(dist2)));
+  if (!(cosAxis > 0)) return 0;
+  return camera_->planeArea() * cosAxis * cosAxis * cosAxis * dist2 / cosIn;
+}
+
+template <typename Path>
+bool PathShading<Path>::emission(uint32_t index, uint32_t sampleIndex, EmissionSample& out) const {
+  const RandomStream random(RandomKey{index, sampleIndex, kLightPathKey, seed_});
+  return lights_.sampleEmission(random(RandomDim::LightSelect),
+                                {random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)},
+                                {random(RandomDim::BsdfU), random(RandomDim::BsdfV)}, out);
+}
+
+template <typename Path>
+bool PathShading<Path>::makeLightPath(uint32_t index, uint32_t sampleIndex, Path& out) const {
+  if (!camera_) return false;
+  EmissionSample e;
+  if (!emission(index, sampleIndex, e)) return false;
+  const float cosine = dot(e.direction, e.normal);
+  if (!(cosine > 0)) return false;
+  // Throughput Le cos / (p_position p_direction), stored over the total power.
+  const float q = cosine / (e.pdfPosition * e.pdfDirection);
+  const Vec3f weight = e.radiance * (q / lightPathScale_);
+  if (!usable(weight) || !std::isfinite(q)) return false;
+  // The other strategies' density over the light path's, so far: 1 / p_position
+  // and cos / p_direction (the rest comes at the next vertices), squared.
+  makeRay(out, offsetRayOrigin(e.position, e.normal), e.direction, kInfinity, weight, index,
+          kPathLight, 0, square(q));
+  return true;
+}
+
+// A light path at vertex y_j: connect to the camera (the t = 1 strategy,
+// pbrt-v3's ConnectBDPT), then scatter on, with the adjoint's shading-normal
+// correction (Veach 1997, 5.3; pbrt's CorrectShadingNormal). The path's wo
+// points back to the light.
+template <typename Path>
+typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
+    const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
+    Path& continuation, Path& shadowRay) const {
+  // A light path connects at scattering vertices 1..maxDepth (a camera path
+  // of as many scattering events), and scatters on while the next can.
+  if (!path.hasHit() || !camera_ || bounce >= maxDepth_) return {};
+  const PathVertex vertex = surfaceVertex(path, hit, bounce);
+  const VertexScattering scattering = shadingFrame(vertex, sampleIndex, kLightPathKey + 1 + bounce);
+  const Bsdf& bsdf = scattering.bsdf;
+  const Vec3f ng = scattering.ng;
+  const Vec3f position = vertex.surface.position;
+  const float cosIn = std::abs(dot(vertex.surface.geometricNormal, vertex.wo));
+  if (!(cosIn > 0)) return {};
+  const float ratio = unpackDensity(path.lightRatio);
+  // At the first vertex the light sample could have found the emitter too:
+  // its density from here, for the factor (1 + (p_light / p_bsdf)^2).
+  float lightSamplePdf = 0;
+  if (bounce == 0 && !bsdf.isDelta()) {
+    EmissionSample e;
+    if (emission(vertex.pixel, sampleIndex, e))
+      lightSamplePdf = lights_.emitterPdf(position, e.emitter, e.position);
+  }
+  auto withLightSample = [&](float bsdfPdf) {
+    return lightSamplePdf > 0 && bsdfPdf > 0 ? 1 + square(lightSamplePdf / bsdfPdf) : 1.0f;
+  };
+  Spawned spawned;
+
+  // The connection to the camera.
+  if (!bsdf.isDelta()) {
+    const Vec3f toCamera = camera_->origin() - position;
+    const bool front = dot(toCamera, ng) > 0;
+    const Vec3f origin = offsetRayOrigin(position, front ? ng : -ng);
+    uint32_t pixel;
+    if ((bsdf.transmits() || front) && camera_->pixelOf(origin, pixel)) {
+      const float dist2 = dot(toCamera, toCamera);
+      const Vec3f wc = toCamera * (1 / std::sqrt(dist2));
+      const float cosAxis = camera_->cosToAxis(-wc);
+      const Vec3f wcLocal = scattering.frame.toLocal(wc);
+      const float cosCamera = std::abs(dot(vertex.surface.geometricNormal, wc));
+      if (cosAxis > 0 && cosCamera > 0) {
+        const float area = camera_->planeArea();
+        // f(camera, light) |cos_s light| |cos_g camera| / |cos_g light|, times
+        // the importance 1 / (area cos^4) and cos_axis / d^2.
+        const float importance = 1 / (area * square(square(cosAxis)));
+        const Vec3f f = bsdf.eval(wcLocal, scattering.woLocal);
+        // The camera path's density of this vertex (the image, in area
+        // measure) and of the next one towards the light, over the light
+        // path's; squared and summed with the light sample's.
+        const float cameraPdf = cosCamera / (area * cosAxis * cosAxis * cosAxis * dist2);
+        const float forward = stored(bsdf.pdf(wcLocal, scattering.woLocal));
+        const float others =
+            ratio * square(forward / cosIn) * square(cameraPdf) * withLightSample(forward);
+        const float weight = 1 / (1 + others);
+        const Vec3f contribution =
+            vertex.throughput * f *
+            (lightPathScale_ * cosCamera / cosIn * importance * cosAxis / dist2 * weight);
+        if (usable(contribution) && std::isfinite(others)) {
+          makeRay(shadowRay, origin, wc, kInfinity, contribution, vertex.pixel,
+                  kPathShadow | kPathLight);
+          shadowRay.tmax = std::sqrt(dot(camera_->origin() - origin, camera_->origin() - origin)) /
+                           length(shadowRay.dir()) * (1 - 1e-4f);
+          spawned.shadowRay = true;
+        }
+      }
+    }
+  }
+
+  // The continuation, while a longer path can still connect.
+  if (bounce + 1 >= maxDepth_) return spawned;
+  const RandomStream& random = scattering.random;
+  BsdfSample bs;
+  const Vec2f u{random(RandomDim::BsdfU), random(RandomDim::BsdfV)};
+  if (!bsdf.sample(scattering.woLocal, random(RandomDim::BsdfLobe), u, bs)) return spawned;
+  const Vec3f wi = scattering.frame.toWorld(bs.wi);
+  if (!bsdf.transmits() && dot(wi, ng) <= 0) return spawned;
+  const float cosOut = std::abs(dot(vertex.surface.geometricNormal, wi));
+  const float shadingOut = std::abs(bs.wi.z), shadingIn = std::abs(scattering.woLocal.z);
+  if (!(cosOut > 0) || !(shadingOut > 0)) return spawned;
+  // The adjoint: the light arriving along wo leaves along wi as a camera
+  // path would see it, f(wi, wo) (not the f(wo, wi) sample() weighs with:
+  // a rough dielectric's is not symmetric). Delta lobes are (Ferry's
+  // dielectrics drop 1 / eta^2).
+  const Vec3f adjoint =
+      bs.delta ? bs.weight
+               : bsdf.eval(bs.wi, scattering.woLocal) * (shadingOut / (shadingIn * bs.pdf));
+  Vec3f weight = vertex.throughput * adjoint * (shadingIn * cosOut / (cosIn * shadingOut));
+  if (!survivesRoulette(vertex, scattering, weight) || !usable(weight)) return spawned;
+  // The camera path's density at this vertex towards the light, over the
+  // light path's cosine here; then this direction's cosine over the light
+  // path's density of it (delta lobes: density 1 both ways).
+  const float forward = bs.delta ? 1.0f : stored(bsdf.pdf(bs.wi, scattering.woLocal));
+  const float reverse = bs.delta ? 1.0f : stored(bs.pdf);
+  float next = ratio * square(forward / cosIn) * square(cosOut / reverse);
+  if (!bs.delta) next *= withLightSample(forward);
+  if (!std::isfinite(next)) return spawned;
+  const Vec3f origin = offsetRayOrigin(position, dot(wi, ng) > 0 ? ng : -ng);
+  makeRay(continuation, origin, wi, kInfinity, weight, vertex.pixel, kPathLight, 0, next);
+  spawned.continuation = true;
   return spawned;
 }
 
@@ -81,6 +258,7 @@ template <typename Path>
                     path.has(kPathAfterSpecular),
                     path.origin,
                     path.bsdfPdf(),
+                    path.lightRatio,
                     reconstructSurface(scene_, surfaces_, hit)};
 }
 
@@ -96,7 +274,22 @@ template <typename Path>
   // A one-sided emitter lights only the side its winding normal faces.
   if (!material.emitsBackSide && !(dot(vertex.surface.geometricNormal, vertex.wo) > 0)) return;
   float weight = 1;
-  if (!full) {
+  if (camera_ && vertex.bounce > 0) {
+    // Against the light sample (unless after a delta vertex) and the light
+    // path that could have made the same path (its first vertex here).
+    const uint32_t emitter = lights_.emitterIndex(worldCorners(scene_, surfaces_, hit));
+    if (emitter != LightSampler::kNotAnEmitter) {
+      const float lightSample =
+          vertex.afterSpecular
+              ? 0.0f
+              : lights_.emitterPdf(vertex.from, emitter, vertex.surface.position) / vertex.bsdfPdf;
+      const float lightPath = unpackDensity(vertex.lightRatio) *
+                              lights_.emissionPositionPdf(emitter) *
+                              emissionDensityOverCosine(lights_.emitsBothSides(emitter));
+      weight = 1 / (1 + square(lightSample) + square(lightPath));
+      if (!std::isfinite(weight)) weight = 0;
+    }
+  } else if (!full) {
     const uint32_t emitter = lights_.emitterIndex(worldCorners(scene_, surfaces_, hit));
     if (emitter != LightSampler::kNotAnEmitter)
       weight = powerHeuristic(vertex.bsdfPdf,
@@ -128,8 +321,8 @@ Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u,
 
 template <typename Path>
 [[gnu::always_inline]] inline VertexScattering PathShading<Path>::shadingFrame(
-    const PathVertex& vertex, uint32_t sampleIndex) const {
-  const RandomStream random(RandomKey{vertex.pixel, sampleIndex, vertex.bounce, seed_});
+    const PathVertex& vertex, uint32_t sampleIndex, uint32_t keyBounce) const {
+  const RandomStream random(RandomKey{vertex.pixel, sampleIndex, keyBounce, seed_});
   const SurfacePoint& surface = vertex.surface;
   const Material* chosen = surface.material;
   const Bsdf bsdf =
@@ -167,7 +360,8 @@ template <typename Path>
 // dimensions, so the order of computing them is free.
 template <typename Path>
 [[gnu::always_inline]] inline bool PathShading<Path>::sampleContinuation(
-    const PathVertex& vertex, const VertexScattering& scattering, Path& continuation) const {
+    const PathVertex& vertex, const VertexScattering& scattering, float lightBase,
+    Path& continuation) const {
   const RandomStream& random = scattering.random;
   BsdfSample bs;
   const Vec2f u{random(RandomDim::BsdfU), random(RandomDim::BsdfV)};
@@ -179,8 +373,20 @@ template <typename Path>
   Vec3f weight = vertex.throughput * bs.weight;
   if (!survivesRoulette(vertex, scattering, weight) || !usable(weight)) return false;
   const Vec3f origin = offsetRayOrigin(vertex.surface.position, dot(wi, ng) > 0 ? ng : -ng);
+  // With light paths: the ratio times this vertex's reverse density (none at
+  // the first: the camera is not sampled), its cosine towards the next
+  // vertex, over the density stored for it (delta lobes: 1 both ways).
+  float lightRatio = 0;
+  if (lightBase > 0) {
+    const float reverse = vertex.bounce == 0 || bs.delta
+                              ? 1.0f
+                              : stored(scattering.bsdf.pdf(bs.wi, scattering.woLocal));
+    lightRatio = lightBase * reverse * std::abs(dot(vertex.surface.geometricNormal, wi)) /
+                 (bs.delta ? 1.0f : stored(bs.pdf));
+    if (!std::isfinite(lightRatio)) lightRatio = 0;
+  }
   makeRay(continuation, origin, wi, kInfinity, weight, vertex.pixel,
-          bs.delta ? uint32_t(kPathAfterSpecular) : 0u, bs.delta ? 0.0f : bs.pdf);
+          bs.delta ? uint32_t(kPathAfterSpecular) : 0u, bs.delta ? 0.0f : bs.pdf, lightRatio);
   return true;
 }
 
@@ -200,7 +406,8 @@ template <typename Path>
 // carrying the contribution the light makes if nothing is in the way.
 template <typename Path>
 [[gnu::always_inline]] inline bool PathShading<Path>::sampleLight(
-    const PathVertex& vertex, const VertexScattering& scattering, Path& shadowRay) const {
+    const PathVertex& vertex, const VertexScattering& scattering, float lightBase,
+    Path& shadowRay) const {
   const RandomStream& random = scattering.random;
   const Bsdf& bsdf = scattering.bsdf;
   const Vec3f position = vertex.surface.position;
@@ -213,11 +420,24 @@ template <typename Path>
   const Vec3f f = bsdf.eval(scattering.woLocal, wiLocal);
   // Weighed against the BSDF sample that could find the same light, with
   // the BSDF density as a continuation would store it.
-  const float weight =
+  float weight =
       strategy_ == LightStrategy::Mis && ls.mis
           ? powerHeuristic(ls.pdf,
                            unpackDensity(packDensity(bsdf.pdf(scattering.woLocal, wiLocal))))
           : 1.0f;
+  if (lightBase > 0 && ls.emitter != LightSampler::kNotAnEmitter) {
+    // And against the light path that could have made it: the camera
+    // path's ratio with this vertex's reverse density towards the light,
+    // the emitter's densities, over the light sample's.
+    const float reverse = vertex.bounce == 0 ? 1.0f : stored(bsdf.pdf(wiLocal, scattering.woLocal));
+    const float lightPath = lightBase * reverse *
+                            std::abs(dot(vertex.surface.geometricNormal, ls.direction)) *
+                            lights_.emissionPositionPdf(ls.emitter) *
+                            emissionDensityOverCosine(lights_.emitsBothSides(ls.emitter)) / ls.pdf;
+    const float bsdfSample = stored(bsdf.pdf(scattering.woLocal, wiLocal)) / ls.pdf;
+    weight = 1 / (1 + square(bsdfSample) + square(lightPath));
+    if (!std::isfinite(weight)) weight = 0;
+  }
   const Vec3f contribution = vertex.throughput * f * ls.radiance * (weight / ls.pdf);
   // Only light arriving on the geometric side it is evaluated for.
   const Vec3f ng = scattering.ng;

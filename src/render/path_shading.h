@@ -28,6 +28,28 @@
 // two threads add to one pixel at once (and the fixed-point frame buffer
 // makes the order irrelevant).
 //
+// Light paths (light tracing; on when the scene asks for bidirectional
+// transport, pbrt's Integrator "bdpt", or with --light-paths on): besides
+// one camera path, each pixel sample starts one light path at an emitter
+// (chosen by power, cosine-weighted direction). At every non-delta vertex
+// it scatters from, it connects to the camera: a shadow ray to the camera
+// carrying its contribution to the pixel the vertex projects to (pbrt-v3's
+// bdpt strategy t = 1; pixel() of that ray is the light path's index, the
+// pixel is recomputed from its origin, Camera::pixelOf). So a path of length
+// k is found three ways: the camera path hits the emitter, the camera path's
+// light sample, the light path's connection, and each counts with the power
+// heuristic over all three (Veach 1997; for the breakfast scene's lamps
+// behind frosted glass only the light path finds the walls' light well).
+// The three densities of a whole path are known only at its end, so each
+// path carries one running ratio (lightRatio, 16 bits): a camera path the
+// light path's density of its vertices over its own (factors
+// rev_i cos_{i-1} / (fwd_{i-1} cos_i), the squared distances cancel), a
+// light path the sum of squares of the other two strategies' over its own.
+// Delta lobes count density 1 on both sides (as pbrt's remap0). The light
+// path's throughput is stored divided by the emitters' total power, so that
+// halves hold it. Contributions then land on any pixel from any thread: the
+// frame buffer adds atomically.
+//
 // The vertex travels through the steps as two structs: PathVertex (where the
 // path is, what it brings) and VertexScattering (how the vertex scatters), so
 // a step that needs more (a layered BSDF, a bumped shading normal) changes
@@ -40,6 +62,7 @@
 #include "core/math.h"
 #include "core/random.h"
 #include "render/bsdf.h"
+#include "render/camera.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
 #include "render/surface.h"
@@ -54,11 +77,12 @@ struct Scene;
 struct PathVertex {
   uint32_t pixel;
   uint32_t bounce;
-  Vec3f throughput;    // of the path arriving here
-  Vec3f wo;            // unit, back towards where the path came from
-  bool afterSpecular;  // the previous vertex was the camera or a delta lobe
-  Vec3f from;          // the ray's origin: the previous vertex
-  float bsdfPdf;       // the previous vertex's BSDF density for wo (as stored)
+  Vec3f throughput;     // of the path arriving here
+  Vec3f wo;             // unit, back towards where the path came from
+  bool afterSpecular;   // the previous vertex was the camera or a delta lobe
+  Vec3f from;           // the ray's origin: the previous vertex
+  float bsdfPdf;        // the previous vertex's BSDF density for wo (as stored)
+  uint16_t lightRatio;  // as the path stores it (see "Light paths")
   SurfacePoint surface;
 };
 
@@ -76,9 +100,10 @@ struct VertexScattering {
 template <typename Path>
 [[gnu::always_inline]] inline Vec3f makeRay(Path& p, Vec3f origin, Vec3f direction, float tmax,
                                             Vec3f weight, uint32_t pixel, uint32_t flags,
-                                            float bsdfPdf = 0) {
+                                            float bsdfPdf = 0, float lightRatio = 0) {
   p.origin = origin;
   p.bsdfDensity = packDensity(bsdfPdf);
+  p.lightRatio = packDensity(lightRatio);
   Vec3f stored = p.setDirAndWeight(direction, weight);
   p.tmax = tmax;
   p.setPixelAndFlags(pixel, flags);
@@ -131,8 +156,25 @@ class PathShading {
  public:
   // `maxDepth`: scattering events (1 = direct lighting only); `seed`: the
   // render's random seed; `strategy`: which samples find emitters and the sky.
+  // `lightPathCamera`: light paths connect to it (null: no light paths; they
+  // need MIS and an emissive triangle, else there are none either).
   PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed,
-              LightStrategy strategy = LightStrategy::Mis);
+              LightStrategy strategy = LightStrategy::Mis, const Camera* lightPathCamera = nullptr);
+
+  // Whether pixel samples start light paths.
+  bool lightPaths() const { return camera_ != nullptr; }
+  // Light path `index` (one per pixel, the pixel's index) of sample
+  // `sampleIndex`: its first ray, from an emitter. False if none.
+  bool makeLightPath(uint32_t index, uint32_t sampleIndex, Path& out) const;
+  // The pixel an unoccluded shadow ray adds its light to: its pixel, or for
+  // a light path's ray to the camera where its origin projects.
+  bool shadowRayPixel(const Path& shadowRay, uint32_t& pixel) const {
+    if (!shadowRay.has(kPathLight)) {
+      pixel = shadowRay.pixel();
+      return true;
+    }
+    return camera_ && camera_->pixelOf(shadowRay.origin, pixel);
+  }
 
   // What shading one path made: each is written only when made.
   struct Spawned {
@@ -152,15 +194,26 @@ class PathShading {
   inline PathVertex surfaceVertex(const Path& path, const TraceHit& hit, uint32_t bounce) const;
   inline void addEmission(const PathVertex& vertex, const TraceHit& hit,
                           FrameBuffer& frameBuffer) const;
-  inline VertexScattering shadingFrame(const PathVertex& vertex, uint32_t sampleIndex) const;
+  // `keyBounce`: the random key's bounce (a light path's are offset).
+  inline VertexScattering shadingFrame(const PathVertex& vertex, uint32_t sampleIndex,
+                                       uint32_t keyBounce) const;
   // `chosen`: the material of the chain the mix picked.
   Bsdf mixedBsdf(const SurfacePoint& surface, float u, const Material*& chosen) const;
+  // `lightBase`: with light paths, the camera path's ratio up to this
+  // vertex but for its reverse density (0: none).
   inline bool sampleContinuation(const PathVertex& vertex, const VertexScattering& scattering,
-                                 Path& continuation) const;
+                                 float lightBase, Path& continuation) const;
   inline bool survivesRoulette(const PathVertex& vertex, const VertexScattering& scattering,
                                Vec3f& weight) const;
   inline bool sampleLight(const PathVertex& vertex, const VertexScattering& scattering,
-                          Path& shadowRay) const;
+                          float lightBase, Path& shadowRay) const;
+  // Light paths: the camera path's ratio at its vertex (see lightRatio).
+  inline float cameraLightBase(const Path& path, const PathVertex& vertex,
+                               const VertexScattering& scattering) const;
+  // A light path at a surface: its connection to the camera and its continuation.
+  Spawned shadeLightPath(const Path& path, const TraceHit& hit, uint32_t sampleIndex,
+                         uint32_t bounce, Path& continuation, Path& shadowRay) const;
+  bool emission(uint32_t index, uint32_t sampleIndex, EmissionSample& out) const;
 
   const Scene& scene_;
   const LightSampler& lights_;
@@ -168,6 +221,8 @@ class PathShading {
   uint32_t maxDepth_;
   uint32_t seed_;
   LightStrategy strategy_;
+  const Camera* camera_ = nullptr;  // light paths connect to it (null: none)
+  float lightPathScale_ = 1;        // light path throughputs are stored divided by it
 };
 
 }  // namespace ferry

@@ -35,7 +35,8 @@ class SampleShading {
   virtual ~SampleShading() = default;
   // The camera ray of `pixel` for this sample, as its path stores it.
   virtual TraceRay cameraRay(uint32_t pixel) const = 0;
-  // Appends the camera paths of `pixels` to `out`, in that order.
+  // Appends the camera paths of `pixels` to `out`, in that order, and with
+  // light paths (render/path_shading.h) theirs after them: any number.
   virtual void cameraPaths(std::span<const uint32_t> pixels, PathQueue<Path>& out,
                            FrameStats& stats) = 0;
   // Shades rays of bounce `bounce` whose traversal ended here: shadow rays

@@ -135,6 +135,7 @@ std::string RenderStats::summaryText(int ranks) const {
   row("CPU time", fmt::format("{:.3f} s ({:.3f} s/frame, summed over ranks and threads)",
                               t.cpuSeconds, frames.empty() ? 0.0 : t.cpuSeconds / frames.size()));
   row("camera paths", formatCount(t.cameraPaths));
+  if (t.lightPaths) row("light paths", formatCount(t.lightPaths));
   row("rays traced", fmt::format("{} ({} closest, {} shadow, {} re-trace)",
                                  formatCount(t.raysTraced()), formatCount(t.closestTraces),
                                  formatCount(t.occlusionTraces), formatCount(t.retraces)));

@@ -42,6 +42,7 @@ struct FrameStats {
   double seconds = 0;        // wall clock of the frame (max over ranks when merged)
   double cpuSeconds = 0;     // CPU time of the frame, every thread (summed when merged)
   uint64_t cameraPaths = 0;  // primary rays generated (kept by this rank)
+  uint64_t lightPaths = 0;   // light paths started at emitters (render/path_shading.h)
   uint64_t continuationRays = 0;
   uint64_t shadowRays = 0;
   uint64_t closestTraces = 0;    // local closest-hit traces (a forwarded ray counts per rank)
@@ -82,6 +83,7 @@ struct StatsField {
 
 inline constexpr StatsField<FrameStats, uint64_t> kFrameCounters[] = {
     {nullptr, "camera_paths", &FrameStats::cameraPaths},
+    {nullptr, "light_paths", &FrameStats::lightPaths},
     {nullptr, "continuation_rays", &FrameStats::continuationRays},
     {nullptr, "shadow_rays", &FrameStats::shadowRays},
     {"traces", "closest", &FrameStats::closestTraces},

@@ -64,7 +64,7 @@ TEST(RenderStats, EveryCounterAppearsInTheJsonUnderItsKey) {
 TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
   const nlohmann::json j = distinctStats(1, 1).toJson();
   EXPECT_EQ(keysOf(j),
-            (std::set<std::string>{"frame", "seconds", "cpu_seconds", "camera_paths",
+            (std::set<std::string>{"frame", "seconds", "cpu_seconds", "camera_paths", "light_paths",
                                    "continuation_rays", "shadow_rays", "traces", "rays_per_second",
                                    "exchange", "exchange_per_bounce", "stage_seconds",
                                    "primary_bytes_sent", "termination_waves"}));

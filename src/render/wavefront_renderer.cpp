@@ -28,7 +28,7 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
       camera_(settings.camera ? *settings.camera : scene.view(settings.view), settings.width,
               settings.height),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
-               settings.lightStrategy) {
+               settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr) {
   if (uint64_t(settings.width) * uint64_t(settings.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.width,
                                  settings.height, kMaxPixels));
@@ -149,6 +149,21 @@ TraceRay WavefrontRenderer<Path>::cameraTraceRay(uint32_t sampleIndex, uint32_t 
 }
 
 template <typename Path>
+size_t WavefrontRenderer<Path>::appendLightPaths(uint32_t sampleIndex,
+                                                 std::span<const uint32_t> pixels,
+                                                 PathQueue<Path>& out) const {
+  if (!shading_.lightPaths()) return 0;
+  // Made in place, then compacted in order (an emitter sample may fail).
+  const size_t first = out.size();
+  out.resize(first + pixels.size());
+  size_t made = first;
+  for (uint32_t pixel : pixels)
+    if (shading_.makeLightPath(pixel, sampleIndex, out[made])) ++made;
+  out.resize(made);
+  return made - first;
+}
+
+template <typename Path>
 void WavefrontRenderer<Path>::makeCameraPaths(uint32_t sampleIndex,
                                               std::span<const uint32_t> pixels, Path* out) const {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 2048), [&](const auto& range) {
@@ -176,6 +191,7 @@ class WavefrontRenderer<Path>::SampleStages final : public SampleShading<Path> {
     out.resize(first + pixels.size());
     renderer_.makeCameraPaths(sampleIndex_, pixels, out.data() + first);
     stats.cameraPaths += pixels.size();
+    stats.lightPaths += renderer_.appendLightPaths(sampleIndex_, pixels, out);
     stats.times.generate += secondsSince(start);
   }
   void shade(uint32_t bounce, RayQueues<Path>& ready, std::vector<TraceHit>& hits,
@@ -224,6 +240,12 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     forPixels(first, last, [&](uint32_t pixel, uint32_t px, uint32_t py) {
       cameraRay(pixel, px, py, rays[pixel - first]);
     });
+    stats.cameraPaths += rays.size();
+    if (shading_.lightPaths()) {
+      ws.primaryPixels.resize(pixels);
+      for (uint32_t i = 0; i < pixels; ++i) ws.primaryPixels[i] = first + i;
+      stats.lightPaths += appendLightPaths(sampleIndex, ws.primaryPixels, rays);
+    }
   } else {
     // Many ranks: the traversal says which pixels' paths are this rank's
     // (proxy-guided, one collective), then their camera rays go into the
@@ -234,8 +256,10 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     const std::vector<uint32_t>& mine = ws.primaryPixels;
     rays.resize(mine.size());
     makeCameraPaths(sampleIndex, mine, rays.data());
+    stats.cameraPaths += rays.size();
+    // This rank's pixels' light paths too: each index on exactly one rank.
+    stats.lightPaths += appendLightPaths(sampleIndex, mine, rays);
   }
-  stats.cameraPaths += rays.size();
   stats.times.generate += secondsSince(start);
 }
 
@@ -254,14 +278,14 @@ void WavefrontRenderer<Path>::addUnoccludedLight(const PathQueue<Path>& shadowRa
   auto addRange = [&](size_t begin, size_t end) {
     for (size_t i = begin; i != end; ++i) {
       const Path& ray = shadowRays[i];
-      if (!ray.has(kPathOccluded)) frameBuffer.add(ray.pixel(), ray.weight());
+      uint32_t pixel;
+      if (!ray.has(kPathOccluded) && shading_.shadowRayPixel(ray, pixel))
+        frameBuffer.add(pixel, ray.weight());
     }
   };
   if (chunked()) {
     addRange(0, shadowRays.size());
   } else {
-    // A pixel has at most one shadow ray per wavefront: the blocks add to
-    // different pixels.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, shadowRays.size(), kBlock),
                       [&](const auto& range) { addRange(range.begin(), range.end()); });
   }

@@ -50,6 +50,10 @@ struct RenderSettings {
   // Which samples find emitters and the sky (render/path_shading.h): MIS of
   // light and BSDF samples (--mis on), light samples only (--mis off).
   LightStrategy lightStrategy = LightStrategy::Mis;
+  // Light paths (render/path_shading.h): one per pixel sample, connected to
+  // the camera, weighed by MIS against the camera path's two strategies.
+  // Needs MIS and an emissive triangle (else there are none).
+  bool lightPaths = false;
   // One rank: pixels that go through the wavefront together, on one thread
   // (WavefrontRenderer::renderFrame). Any value gives the same image.
   uint32_t chunkPixels = 8192;
@@ -105,6 +109,10 @@ class WavefrontRenderer {
   TraceRay cameraTraceRay(uint32_t sampleIndex, uint32_t pixel) const;
   // The camera paths of `pixels` into out[0, pixels.size()), in parallel.
   void makeCameraPaths(uint32_t sampleIndex, std::span<const uint32_t> pixels, Path* out) const;
+  // With light paths: the light paths of `pixels` (one each, same index)
+  // appended to `out`, in pixel order; returns how many.
+  size_t appendLightPaths(uint32_t sampleIndex, std::span<const uint32_t> pixels,
+                          PathQueue<Path>& out) const;
   // The camera rays of pixels [first, last) for this sample, into ws.rays.
   void generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
                           FrameStats& stats);

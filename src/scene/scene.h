@@ -182,6 +182,12 @@ struct CameraView {
 
 class MeshStore;
 
+// Whether pbrt's Integrator `type` transports light from the emitters too
+// (bdpt, mlt, pbrt-v4's lightpath, vcm): Ferry then adds light paths.
+inline bool integratorWantsLightPaths(const std::string& type) {
+  return type == "bdpt" || type == "mlt" || type == "lightpath" || type == "vcm";
+}
+
 struct Scene {
   std::string name;
   std::vector<Mesh> meshes;
@@ -203,6 +209,9 @@ struct Scene {
   // pbrt's Film "scale" (v3) and "iso" / 100 (v4's imaging ratio at a 1 s
   // exposure): multiplies the radiance written to the image.
   float filmScale = 1;
+  // pbrt's Integrator, as named ("bdpt", "path", ...; empty: none): a
+  // bidirectional one turns light paths on (render/path_shading.h).
+  std::string integrator;
 
   // The arrays of stored meshes (Mesh::stored); null when every mesh is in memory.
   std::shared_ptr<MeshStore> meshStore;

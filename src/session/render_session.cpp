@@ -177,6 +177,8 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
   checkRankCount(comm.size(), settings.pathLayout);
   settings_.render.retraceAll = settings.retrace == Retrace::All;
   rank_ = std::make_unique<Rank>(settings_, comm_);
+  settings_.render.lightPaths =
+      settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
 }
 
 RenderSession::~RenderSession() = default;
@@ -189,13 +191,15 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
   // that a mismatch can name the ones that differ.
   const std::string summary = rank_->summary.toJson().dump();
   const CameraView& v = r.camera ? *r.camera : rank_->scene.view(r.view);
-  const std::string description = fmt::format(
-      "scene={} (content {}); size={}x{}; spp={}; max-depth={}; light-strategy={}; seed={}; "
-      "view={} from "
-      "({}, {}, {}) at ({}, {}, {}) up ({}, {}, {}) fov {}",
-      settings_.scene, hashToHex(hash64(summary.data(), summary.size())), r.width, r.height,
-      r.samplesPerPixel, r.maxDepth, lightStrategyName(r.lightStrategy), r.seed, v.name, v.from.x,
-      v.from.y, v.from.z, v.at.x, v.at.y, v.at.z, v.up.x, v.up.y, v.up.z, v.fovY);
+  const std::string description =
+      fmt::format(
+          "scene={} (content {}); size={}x{}; spp={}; max-depth={}; light-strategy={}; seed={}; "
+          "view={} from "
+          "({}, {}, {}) at ({}, {}, {}) up ({}, {}, {}) fov {}",
+          settings_.scene, hashToHex(hash64(summary.data(), summary.size())), r.width, r.height,
+          r.samplesPerPixel, r.maxDepth, lightStrategyName(r.lightStrategy), r.seed, v.name,
+          v.from.x, v.from.y, v.from.z, v.at.x, v.at.y, v.at.z, v.up.x, v.up.y, v.up.z, v.fovY) +
+      (r.lightPaths ? "; light-paths=on" : "");
   return {hash64(description.data(), description.size()), description};
 }
 

@@ -24,6 +24,9 @@ struct SessionSettings {
   // retraceAll is the session's to set, from `retrace`.
   RenderSettings render;
   int threads = 0;  // worker threads per rank (0: all cores)
+  // Light paths (--light-paths on/off); none given: as the scene's
+  // integrator asks (integratorWantsLightPaths). Sets render.lightPaths.
+  std::optional<bool> lightPaths;
 
   ForwardingMode forwarding = ForwardingMode::Proxies;
   ExchangeMode exchange = ExchangeMode::Auto;

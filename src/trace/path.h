@@ -29,13 +29,22 @@ enum PathFlags : uint32_t {
                                  // emission hit next counts (no light sample covered it)
   kPathTraversed = 1u << 3,      // traversal is complete: sent to a rank only to be shaded
   kPathReply = 1u << 4,          // broadcast mode: a copy returning its result to its origin
+  kPathLight = 1u << 5,          // a light path (pixel() is its light path index), or its
+                                 // shadow ray to the camera (the pixel is where origin projects)
   kPathFlagMask = 0x3fu,
 };
 constexpr int kPixelBits = 26;  // 67 M pixels, e.g. 8192 x 8192
 constexpr uint32_t kMaxPixels = 1u << kPixelBits;
 
 // What every layout shares: the ray, its throughput, the previous vertex's
-// BSDF density, and pixel + flags (32 bytes).
+// BSDF density, and pixel + flags (32 bytes). Each layout adds its rank
+// history and `lightRatio`: for light tracing (render/path_shading.h,
+// "light paths"), packed as bsdfDensity, a camera path carries the running
+// ratio of a light path's density of its vertices to its own (what its MIS
+// weights against a light path connected to the camera need), a light path
+// the running sum of squared ratios the other way; 0 without light paths.
+// (It is not in PathCore: a base's tail padding is not reused, and Path8
+// would grow to 40 bytes.)
 struct PathCore {
   Vec3f origin;
   uint32_t direction;  // octahedral (core/octahedral.h): 2 x 16 bits
@@ -94,11 +103,12 @@ struct PathCore {
 static_assert(sizeof(PathCore) == 32);
 
 // The mask layouts: RankMask is uint8_t (up to 8 ranks, 36 bytes) or
-// uint64_t (up to 64 ranks, 48 bytes).
+// uint64_t (up to 64 ranks, 56 bytes).
 template <typename RankMask>
 struct PathT : PathCore {
-  RankMask visited;    // ranks this ray has been traced on
-  RankMask hitOwners;  // ranks holding the content of the closest hit so far (0: no hit)
+  RankMask visited;     // ranks this ray has been traced on
+  RankMask hitOwners;   // ranks holding the content of the closest hit so far (0: no hit)
+  uint16_t lightRatio;  // see PathCore
 
   using Mask = RankMask;
   static constexpr bool kReplay = false;
@@ -123,7 +133,8 @@ struct PathT : PathCore {
 // kept as the one rank that found it, which therefore holds it (the mask
 // layouts keep every owner of the hit content, so a replica may shade; here
 // the finished ray goes to that one rank). Two 16-bit rank ids replace the
-// two masks, so the path is 36 bytes, the paper's compact size, at any rank
+// two masks, so the path is 40 bytes (36, the paper's compact size, before light tracing
+// needed lightRatio) at any rank
 // count up to 65535 (0xffff means "none"). No more state is needed: the
 // visited ranks are a prefix of the ray's walk through the proxies, which
 // does not depend on tmax (see replayWalk), so the proxy distance reached so
@@ -132,6 +143,7 @@ struct PathReplay : PathCore {
   static constexpr uint16_t kNoRank = 0xffff;
   uint16_t generatingRank;  // where the ray was made and first traced (kNoRank: not yet traced)
   uint16_t hitRank;         // the rank that found the closest hit so far (kNoRank: no hit)
+  uint16_t lightRatio;      // see PathCore
 
   static constexpr bool kReplay = true;
 
@@ -150,9 +162,10 @@ struct PathReplay : PathCore {
 using Path8 = PathT<uint8_t>;
 using Path64 = PathT<uint64_t>;
 static_assert(sizeof(Path8) == 36, "the paper's compact path is 36 bytes up to 8 ranks");
-static_assert(sizeof(Path64) == 48, "the wide path (up to 64 ranks) is 48 bytes");
-static_assert(sizeof(PathReplay) == 36,
-              "the replay path (any rank count) is 36 bytes: two 16-bit rank ids instead of masks");
+static_assert(sizeof(Path64) == 56, "the wide path (up to 64 ranks) is 56 bytes");
+static_assert(sizeof(PathReplay) == 40,
+              "the replay path (any rank count) is 40 bytes: two 16-bit rank ids instead of "
+              "masks, and lightRatio (docs/architecture.md: the path's size)");
 static_assert(std::is_trivially_copyable_v<Path8> && std::is_trivially_copyable_v<Path64> &&
                   std::is_trivially_copyable_v<PathReplay>,
               "paths are sent over MPI as bytes");

@@ -76,7 +76,7 @@ TEST(Path, PixelAndFlagsRoundTrip) {
 // The replay layout keeps the mask layouts' shared fields where they are (the
 // first 32 bytes), so the ray itself travels identically in every layout.
 TEST(Path, ReplayLayoutSharesTheRayAndKeepsTwoRankIds) {
-  EXPECT_EQ(sizeof(PathReplay), 36u);
+  EXPECT_EQ(sizeof(PathReplay), 40u);
   auto bytesAt = [](const auto& path, size_t offset) {
     uint16_t v;
     std::memcpy(&v, reinterpret_cast<const char*>(&path) + offset, 2);
