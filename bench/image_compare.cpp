@@ -204,6 +204,26 @@ int run(const Options& options) {
   const double n = 3.0 * double(rBlocks.pixels.size());
   const double rmse =
       sum > 0 ? std::sqrt(squares / n) / (sum / n) : std::numeric_limits<double>::quiet_NaN();
+  // Where the error is: blocks by their squared error, largest first, and
+  // the share of the total the worst 1 % and 5 % hold (a few blocks holding
+  // most of it is a local difference: a material, a light, fireflies).
+  std::vector<std::pair<double, size_t>> blockErrors(rBlocks.pixels.size());
+  for (size_t i = 0; i < rBlocks.pixels.size(); ++i) {
+    double e = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double d = fBlocks.pixels[i][c] - rBlocks.pixels[i][c];
+      e += d * d;
+    }
+    blockErrors[i] = {e, i};
+  }
+  std::sort(blockErrors.begin(), blockErrors.end(), std::greater<>());
+  auto shareOfWorst = [&](double fraction) {
+    const size_t k = std::max<size_t>(1, size_t(fraction * double(blockErrors.size())));
+    double part = 0;
+    for (size_t i = 0; i < k && i < blockErrors.size(); ++i) part += blockErrors[i].first;
+    return squares > 0 ? part / squares : 0.0;
+  };
+  const double worst1 = shareOfWorst(0.01), worst5 = shareOfWorst(0.05);
 
   const auto signedOrNa = [](double v) {
     return std::isnan(v) ? std::string("n/a") : fmt::format("{:+.4f}", v);
@@ -220,6 +240,12 @@ int run(const Options& options) {
   fmt::print("{:<10} {:>12.6g} {:>12.6g} {:>9}\n", "luminance", rLum, fLum,
              signedOrNa(bias(fLum, rLum)));
   fmt::print("block relative RMSE  {}\n", std::isnan(rmse) ? "n/a" : fmt::format("{:.4f}", rmse));
+  fmt::print(
+      "worst blocks         1 % of the blocks hold {:.1f} % of the squared error, 5 % hold "
+      "{:.1f} %; the worst at block ({}, {})\n",
+      100 * worst1, 100 * worst5,
+      blockErrors.empty() ? 0 : blockErrors[0].second % size_t(width / b),
+      blockErrors.empty() ? 0 : blockErrors[0].second / size_t(width / b));
 
   // The tone scale comes from the reference alone, so two images compared
   // with the same reference get the same picture of it.
@@ -248,6 +274,15 @@ int run(const Options& options) {
     out["channels"]["luminance"] = {
         {"reference_mean", rLum}, {"image_mean", fLum}, {"bias", bias(fLum, rLum)}};
     out["block_relative_rmse"] = rmse;  // NaN is written as null
+    out["squared_error_share_of_worst_blocks"] = {{"1%", worst1}, {"5%", worst5}};
+    nlohmann::json worst = nlohmann::json::array();
+    for (size_t i = 0; i < std::min<size_t>(10, blockErrors.size()); ++i)
+      worst.push_back({{"x", blockErrors[i].second % size_t(width / b)},
+                       {"y", blockErrors[i].second / size_t(width / b)},
+                       {"share", squares > 0 ? blockErrors[i].first / squares : 0.0},
+                       {"reference_luminance", luminance(rBlocks.pixels[blockErrors[i].second])},
+                       {"image_luminance", luminance(fBlocks.pixels[blockErrors[i].second])}});
+    out["worst_blocks"] = worst;
     out["tone_scale"] = toneScale;
     out["difference_range"] = options.diffRange;
     writeFileAtomically(options.json, [&](const std::string& temp) {

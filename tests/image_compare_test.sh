@@ -41,6 +41,8 @@ write_pfm("scaled.pfm", 16, 16, lambda x, y: reference(x, y, 1.1))
 # Already at the comparison size: the reference's 4x4 means, checkerboard gone.
 write_pfm("small.pfm", 4, 4, lambda x, y: tuple(c * (1.0 if x < 2 else 3.0) for c in (1, 2, 0.5)))
 write_pfm("odd.pfm", 6, 6, lambda x, y: (1, 1, 1))
+# Twice the reference in the top-left 8x8 pixels only: one block of four differs.
+write_pfm("local.pfm", 16, 16, lambda x, y: reference(x, y, 2.0 if x < 8 and y < 8 else 1.0))
 EOF
 
 # Checks the JSON against the expected bias (every channel and luminance) and RMSE.
@@ -69,6 +71,21 @@ expect small.json 0 0
 # (1.1 stored as a float: the bias is 0.1 to within 1e-7.)
 "$compare" ref.pfm scaled.pfm --block 2 --json scaled.json > /dev/null
 expect scaled.json 0.1 "$(python3 -c 'print(0.1 * 8.75 ** 0.5 / (7 / 3))')"
+
+# Where the error is: all of it in the top-left block, the worst (the worst
+# 1 % and 5 % of 4 blocks are that one block).
+"$compare" ref.pfm local.pfm --block 2 --json local.json > /dev/null
+python3 - <<'EOF'
+import json
+d = json.load(open("local.json"))
+shares = d["squared_error_share_of_worst_blocks"]
+assert abs(shares["1%"] - 1) < 1e-9 and abs(shares["5%"] - 1) < 1e-9, shares
+w = d["worst_blocks"]
+assert (w[0]["x"], w[0]["y"]) == (0, 0) and abs(w[0]["share"] - 1) < 1e-9, w[0]
+assert abs(w[0]["image_luminance"] - 2 * w[0]["reference_luminance"]) < 1e-6, w[0]
+assert all(b["share"] == 0 for b in w[1:]), w
+print("  local.pfm: the one differing block holds all the squared error")
+EOF
 
 # The side-by-side picture: three 4x4 panels and two 4-pixel gaps.
 python3 - <<'EOF'
