@@ -10,9 +10,12 @@
 // pixel per wavefront (MIS), and the ranks' partial sums add up to exactly
 // the one-rank image, bit for bit, at any rank count.
 //
-// Adds are atomic (relaxed): light paths (render/path_shading.h) add to
-// whatever pixel their vertex projects to, from any thread; the sum is the
-// same in any order.
+// Adds are plain while the renderer adds to a pixel from one thread at a
+// time (one rank's chunks are disjoint pixel ranges; a whole-image wavefront
+// adds a pixel sample's shadow ray and shades its path in separate passes).
+// Light paths (render/path_shading.h) add to whatever pixel their vertex
+// projects to, from any thread: the renderer then makes adds atomic
+// (relaxed; setAtomicAdds), which costs a locked add per channel.
 #pragma once
 
 #include <algorithm>
@@ -38,10 +41,18 @@ class FrameBuffer {
   // Adds one contribution. NaN and negative values add nothing.
   void add(uint32_t pixel, Vec3f value) {
     int64_t* s = &sum_[size_t(pixel) * 3];
-    std::atomic_ref<int64_t>(s[0]).fetch_add(toFixed(value.x), std::memory_order_relaxed);
-    std::atomic_ref<int64_t>(s[1]).fetch_add(toFixed(value.y), std::memory_order_relaxed);
-    std::atomic_ref<int64_t>(s[2]).fetch_add(toFixed(value.z), std::memory_order_relaxed);
+    if (atomicAdds_) {
+      std::atomic_ref<int64_t>(s[0]).fetch_add(toFixed(value.x), std::memory_order_relaxed);
+      std::atomic_ref<int64_t>(s[1]).fetch_add(toFixed(value.y), std::memory_order_relaxed);
+      std::atomic_ref<int64_t>(s[2]).fetch_add(toFixed(value.z), std::memory_order_relaxed);
+    } else {
+      s[0] += toFixed(value.x);
+      s[1] += toFixed(value.y);
+      s[2] += toFixed(value.z);
+    }
   }
+  // Whether add() may be called for one pixel from several threads at once.
+  void setAtomicAdds(bool atomic) { atomicAdds_ = atomic; }
   static int64_t toFixed(float v) {
     if (!(v > 0)) return 0;  // also NaN
     if (v > kMaxContribution) v = kMaxContribution;
@@ -64,6 +75,7 @@ class FrameBuffer {
  private:
   int width_, height_;
   std::vector<int64_t> sum_;
+  bool atomicAdds_ = false;
 };
 
 // Exposure (in stops), the ACES filmic curve (Narkowicz's fit), then sRGB.

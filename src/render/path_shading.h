@@ -48,7 +48,7 @@
 // Delta lobes count density 1 on both sides (as pbrt's remap0). The light
 // path's throughput is stored divided by the emitters' total power, so that
 // halves hold it. Contributions then land on any pixel from any thread: the
-// frame buffer adds atomically.
+// frame buffer then adds atomically (FrameBuffer::setAtomicAdds).
 //
 // The vertex travels through the steps as two structs: PathVertex (where the
 // path is, what it brings) and VertexScattering (how the vertex scatters), so

@@ -51,6 +51,8 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   const double cpuStart = processCpuSeconds();
   FERRY_CHECK_LE(firstPixel, lastPixel);
   FERRY_CHECK_LE(lastPixel, uint32_t(settings_.width) * uint32_t(settings_.height));
+  // Light paths add to any pixel from any thread.
+  if (shading_.lightPaths()) frameBuffer.setAtomicAdds(true);
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
     if (traversal_.runsSamples()) {
