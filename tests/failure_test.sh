@@ -59,6 +59,8 @@ one_message "bad size" "--size" mpirun --oversubscribe -np 3 "$ferry" render "$s
 one_message "bad flag" "--no-such-flag" mpirun --oversubscribe -np 3 "$ferry" render "$scene" --no-such-flag -o "$work/out.png"
 one_message "bad exchange" "--exchange" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --exchange sometimes -o "$work/out.png"
 one_message "overlapped broadcast" "broadcast" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --exchange overlapped --forwarding broadcast -o "$work/out.png"
+one_message "bad light paths" "--light-paths" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --light-paths sometimes -o "$work/out.png"
+one_message "light paths without MIS" "--mis on" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --light-paths on --mis off -o "$work/out.png"
 one_message "bad output format" "unknown image format" mpirun --oversubscribe -np 2 "$ferry" render "$scene" "${args[@]}" -o "$work/out.gif"
 
 if [ $failures -ne 0 ]; then echo "failure_test: $failures failures"; exit 1; fi
