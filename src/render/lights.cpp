@@ -199,12 +199,15 @@ bool LightSampler::sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u,
   return out.pdf > 0;
 }
 
+// A point uniform on `t` from (u.x, u.y) (light samples and emission alike).
+Vec3f LightSampler::uniformPoint(const EmissiveTriangle& t, Vec2f u) {
+  const float su = std::sqrt(u.x);
+  return t.p0 + t.e1 * (1 - su) + t.e2 * (u.y * su);
+}
+
 bool LightSampler::sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u,
                                   LightSample& out) const {
-  float su = std::sqrt(u.x);
-  float b1 = 1 - su, b2 = u.y * su;
-  Vec3f q = t.p0 + t.e1 * b1 + t.e2 * b2;
-  Vec3f d = q - p;
+  Vec3f d = uniformPoint(t, u) - p;
   float dist2 = dot(d, d);
   if (dist2 <= 0) return false;
   float dist = std::sqrt(dist2);
@@ -336,24 +339,20 @@ bool LightSampler::sampleEmission(float uSelect, Vec2f uPosition, Vec2f uDirecti
   const int index = emissionByPower_.sampleDiscrete(uSelect, selection);
   const EmissiveTriangle& t = triangles_[size_t(index)];
   if (!(selection > 0)) return false;
-  const float su = std::sqrt(uPosition.x);
-  const float b1 = 1 - su, b2 = uPosition.y * su;
-  out.position = t.p0 + t.e1 * b1 + t.e2 * b2;
+  out.position = uniformPoint(t, uPosition);
   out.normal = t.normal;
   out.emitter = uint32_t(index);
   out.radiance = t.radiance;
   out.pdfPosition = selection / t.area;
-  float side = 1;
   Vec2f u = uDirection;
   if (!t.oneSided) {
     // Either side with probability 1/2, u.x stretched back to [0, 1).
     if (u.x < 0.5f) {
-      side = -1;
+      out.normal = -out.normal;
       u.x = u.x * 2;
     } else {
       u.x = std::min((u.x - 0.5f) * 2, 0.99999994f);
     }
-    out.normal = out.normal * side;
   }
   const Vec3f local = sampleCosineHemisphere(u);
   if (!(local.z > 0)) return false;

@@ -129,6 +129,7 @@ class LightSampler {
   Vec2f directionToUv(Vec3f d) const;
   Vec3f uvToDirection(Vec2f uv) const;
   bool sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u, LightSample& out) const;
+  static Vec3f uniformPoint(const EmissiveTriangle& t, Vec2f u);
   bool sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u, LightSample& out) const;
 
   std::vector<SunLight> suns_;

@@ -68,7 +68,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
   addEmission(vertex, hit, frameBuffer);
   if (bounce >= maxDepth_) return {};
   const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
-  const float lightBase = camera_ ? cameraLightBase(path, vertex, scattering) : 0.0f;
+  const float lightBase = camera_ ? cameraLightBase(vertex, scattering) : 0.0f;
   Spawned spawned;
   spawned.continuation = sampleContinuation(vertex, scattering, lightBase, continuation);
   // (A delta vertex takes no light sample: its emission on the next vertex
@@ -85,10 +85,10 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
 // over this vertex's cosine.
 template <typename Path>
 [[gnu::always_inline]] inline float PathShading<Path>::cameraLightBase(
-    const Path& path, const PathVertex& vertex, const VertexScattering& scattering) const {
+    const PathVertex& vertex, const VertexScattering& scattering) const {
   const float cosIn = std::abs(dot(vertex.surface.geometricNormal, vertex.wo));
   if (!(cosIn > 0)) return 0;
-  if (vertex.bounce > 0) return path.lightRatio ? unpackDensity(path.lightRatio) / cosIn : 0.0f;
+  if (vertex.bounce > 0) return unpackDensity(vertex.lightRatio) / cosIn;
   if (scattering.bsdf.isDelta()) return 0;
   const Vec3f toPoint = vertex.surface.position - vertex.from;
   const float dist2 = dot(toPoint, toPoint);
@@ -187,8 +187,8 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
         if (usable(contribution) && std::isfinite(others)) {
           makeRay(shadowRay, origin, wc, kInfinity, contribution, vertex.pixel,
                   kPathShadow | kPathLight);
-          shadowRay.tmax = std::sqrt(dot(camera_->origin() - origin, camera_->origin() - origin)) /
-                           length(shadowRay.dir()) * (1 - 1e-4f);
+          shadowRay.tmax =
+              length(camera_->origin() - origin) / length(shadowRay.dir()) * (1 - 1e-4f);
           spawned.shadowRay = true;
         }
       }
@@ -273,27 +273,28 @@ template <typename Path>
   if (!material.isEmissive() || (!full && strategy_ != LightStrategy::Mis)) return;
   // A one-sided emitter lights only the side its winding normal faces.
   if (!material.emitsBackSide && !(dot(vertex.surface.geometricNormal, vertex.wo) > 0)) return;
+  // With light paths, every emitter hit after the camera ray is weighed
+  // against the light sample (unless after a delta vertex) and the light
+  // path that could have made the same path (its first vertex here).
+  const bool againstLightPaths = camera_ && vertex.bounce > 0;
   float weight = 1;
-  if (camera_ && vertex.bounce > 0) {
-    // Against the light sample (unless after a delta vertex) and the light
-    // path that could have made the same path (its first vertex here).
+  if (!full || againstLightPaths) {
     const uint32_t emitter = lights_.emitterIndex(worldCorners(scene_, surfaces_, hit));
     if (emitter != LightSampler::kNotAnEmitter) {
-      const float lightSample =
-          vertex.afterSpecular
-              ? 0.0f
-              : lights_.emitterPdf(vertex.from, emitter, vertex.surface.position) / vertex.bsdfPdf;
-      const float lightPath = unpackDensity(vertex.lightRatio) *
-                              lights_.emissionPositionPdf(emitter) *
-                              emissionDensityOverCosine(lights_.emitsBothSides(emitter));
-      weight = 1 / (1 + square(lightSample) + square(lightPath));
-      if (!std::isfinite(weight)) weight = 0;
+      const float lightSamplePdf =
+          vertex.afterSpecular ? 0.0f
+                               : lights_.emitterPdf(vertex.from, emitter, vertex.surface.position);
+      if (againstLightPaths) {
+        const float lightPath = unpackDensity(vertex.lightRatio) *
+                                lights_.emissionPositionPdf(emitter) *
+                                emissionDensityOverCosine(lights_.emitsBothSides(emitter));
+        const float lightSample = vertex.afterSpecular ? 0.0f : lightSamplePdf / vertex.bsdfPdf;
+        weight = 1 / (1 + square(lightSample) + square(lightPath));
+        if (!std::isfinite(weight)) weight = 0;
+      } else {
+        weight = powerHeuristic(vertex.bsdfPdf, lightSamplePdf);
+      }
     }
-  } else if (!full) {
-    const uint32_t emitter = lights_.emitterIndex(worldCorners(scene_, surfaces_, hit));
-    if (emitter != LightSampler::kNotAnEmitter)
-      weight = powerHeuristic(vertex.bsdfPdf,
-                              lights_.emitterPdf(vertex.from, emitter, vertex.surface.position));
   }
   const Vec3f l = vertex.throughput * material.emission * weight;
   if (usable(l)) frameBuffer.add(vertex.pixel, l);
@@ -420,11 +421,9 @@ template <typename Path>
   const Vec3f f = bsdf.eval(scattering.woLocal, wiLocal);
   // Weighed against the BSDF sample that could find the same light, with
   // the BSDF density as a continuation would store it.
-  float weight =
-      strategy_ == LightStrategy::Mis && ls.mis
-          ? powerHeuristic(ls.pdf,
-                           unpackDensity(packDensity(bsdf.pdf(scattering.woLocal, wiLocal))))
-          : 1.0f;
+  const bool weighed = strategy_ == LightStrategy::Mis && ls.mis;
+  const float bsdfPdf = weighed ? stored(bsdf.pdf(scattering.woLocal, wiLocal)) : 0.0f;
+  float weight = weighed ? powerHeuristic(ls.pdf, bsdfPdf) : 1.0f;
   if (lightBase > 0 && ls.emitter != LightSampler::kNotAnEmitter) {
     // And against the light path that could have made it: the camera
     // path's ratio with this vertex's reverse density towards the light,
@@ -434,8 +433,7 @@ template <typename Path>
                             std::abs(dot(vertex.surface.geometricNormal, ls.direction)) *
                             lights_.emissionPositionPdf(ls.emitter) *
                             emissionDensityOverCosine(lights_.emitsBothSides(ls.emitter)) / ls.pdf;
-    const float bsdfSample = stored(bsdf.pdf(scattering.woLocal, wiLocal)) / ls.pdf;
-    weight = 1 / (1 + square(bsdfSample) + square(lightPath));
+    weight = 1 / (1 + square(bsdfPdf / ls.pdf) + square(lightPath));
     if (!std::isfinite(weight)) weight = 0;
   }
   const Vec3f contribution = vertex.throughput * f * ls.radiance * (weight / ls.pdf);

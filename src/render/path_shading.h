@@ -208,8 +208,7 @@ class PathShading {
   inline bool sampleLight(const PathVertex& vertex, const VertexScattering& scattering,
                           float lightBase, Path& shadowRay) const;
   // Light paths: the camera path's ratio at its vertex (see lightRatio).
-  inline float cameraLightBase(const Path& path, const PathVertex& vertex,
-                               const VertexScattering& scattering) const;
+  inline float cameraLightBase(const PathVertex& vertex, const VertexScattering& scattering) const;
   // A light path at a surface: its connection to the camera and its continuation.
   Spawned shadeLightPath(const Path& path, const TraceHit& hit, uint32_t sampleIndex,
                          uint32_t bounce, Path& continuation, Path& shadowRay) const;
