@@ -39,6 +39,7 @@
 
 #include "core/error.h"
 #include "io/image_io.h"
+#include "render/camera.h"
 
 namespace {
 
@@ -51,8 +52,9 @@ struct Options {
   int block = 4;
   std::string sideBySide;
   std::string json;
-  float exposure = 0;      // stops on top of the automatic scale
-  float diffRange = 0.5f;  // the difference saturates at +-this times the mean luminance
+  float exposure = 0;         // stops on top of the automatic scale
+  float diffRange = 0.5f;     // the difference saturates at +-this times the mean luminance
+  std::string referenceCrop;  // x0,x1,y0,y1: compare with this part of the reference only
 };
 
 // Doubles throughout: the means and sums of squares run over a million
@@ -166,8 +168,23 @@ void writeSideBySide(const std::string& path, int width, int height,
   writePng(path, total, height, rgba);
 }
 
+// The part of `in` a crop window selects, with pbrt's (and ferry render
+// --crop's) rounding, so that a cropped render meets the same pixels.
+Image cropped(const Image& in, const CropWindow& crop) {
+  const FilmWindow w = filmWindow(in.width, in.height, crop);
+  Image out{w.width, w.height, {}};
+  out.pixels.reserve(size_t(w.width) * size_t(w.height));
+  for (int y = w.y0; y < w.y0 + w.height; ++y)
+    for (int x = w.x0; x < w.x0 + w.width; ++x)
+      out.pixels.push_back(in.pixels[size_t(y) * in.width + x]);
+  return out;
+}
+
 int run(const Options& options) {
-  const Image reference = load(options.reference);
+  const Image reference = options.referenceCrop.empty()
+                              ? load(options.reference)
+                              : cropped(load(options.reference),
+                                        parseCropWindow("--reference-crop", options.referenceCrop));
   const Image image = load(options.image);
 
   int width = 0, height = 0;
@@ -311,6 +328,9 @@ int main(int argc, char** argv) {
   app.add_option("--side-by-side", options.sideBySide,
                  "Write reference | image | difference at the comparison size to this PNG");
   app.add_option("--json", options.json, "Write the figures as JSON to this file");
+  app.add_option("--reference-crop", options.referenceCrop,
+                 "Compare with this part of the reference only, X0,X1,Y0,Y1 as fractions (y down), "
+                 "as ferry render --crop renders it");
   app.add_option("--exposure", options.exposure,
                  "Stops added to the pictures' tone scale (which maps the reference's mean "
                  "luminance to 0.18)")

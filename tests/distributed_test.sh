@@ -104,4 +104,12 @@ for ranks in 3 5; do
     check_stats "$out.json"
   done
 done
+# A crop window (--crop) with light paths: the same part of the image on 1
+# and 3 ranks (camera paths keyed by the film's pixel, light paths splat
+# into the window only).
+"$ferry" render "builtin:cornell" $cornell_light --crop 0.2,0.7,0.1,0.55 -q -o "$work/crop-ref.pfm"
+mpirun_n 3 "$ferry" render "builtin:cornell" $cornell_light --crop 0.2,0.7,0.1,0.55 -q --threads 1 \
+  -o "$work/crop.pfm"
+echo "crop window with light paths, 3 ranks:"
+$compare "$work/crop-ref.pfm" "$work/crop.pfm" --rel 0 --abs 0 --outliers 0.002
 echo "distributed_test: all passed"

@@ -43,6 +43,8 @@ write_pfm("small.pfm", 4, 4, lambda x, y: tuple(c * (1.0 if x < 2 else 3.0) for 
 write_pfm("odd.pfm", 6, 6, lambda x, y: (1, 1, 1))
 # Twice the reference in the top-left 8x8 pixels only: one block of four differs.
 write_pfm("local.pfm", 16, 16, lambda x, y: reference(x, y, 2.0 if x < 8 and y < 8 else 1.0))
+# A crop of the right half, as ferry render --crop 0.5,1,0,1 renders it.
+write_pfm("right.pfm", 8, 16, lambda x, y: reference(x + 8, y))
 EOF
 
 # Checks the JSON against the expected bias (every channel and luminance) and RMSE.
@@ -87,6 +89,19 @@ assert all(b["share"] == 0 for b in w[1:]), w
 print("  local.pfm: the one differing block holds all the squared error")
 EOF
 
+# --reference-crop compares with that part of the reference: its right half
+# equals right.pfm.
+"$compare" ref.pfm right.pfm --reference-crop 0.5,1,0,1 --size 2x4 --block 1 --json right.json > /dev/null
+python3 - <<'EOF'
+import json
+d = json.load(open("right.json"))
+assert d["size"] == [2, 4], d["size"]
+for name, ch in d["channels"].items():
+    assert abs(ch["bias"]) < 1e-6, (name, ch)
+assert abs(d["block_relative_rmse"]) < 1e-6, d["block_relative_rmse"]
+print("  right.pfm against the reference cropped to its right half: equal")
+EOF
+
 # The side-by-side picture: three 4x4 panels and two 4-pixel gaps.
 python3 - <<'EOF'
 import struct
@@ -115,6 +130,7 @@ fails "missing image" "missing.exr: no such file" ref.pfm missing.exr
 fails "missing reference" "nothing.pfm: no such file" nothing.pfm ref.pfm
 fails "no integer ratio" "odd.pfm: 6x6 is not an integer multiple" ref.pfm odd.pfm
 fails "block does not divide" "--block 3" ref.pfm same.pfm --block 3
+fails "bad reference crop" "--reference-crop" ref.pfm right.pfm --reference-crop 0.5,0.4,0,1
 
 "$compare" --help | grep -q "block relative RMSE   = sqrt" || {
   echo "image_compare_test: --help does not define the block relative RMSE" >&2

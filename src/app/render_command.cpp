@@ -81,6 +81,7 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   applyPartitionerFlags(o, s);
   checkRankCount(comm.size(), s.pathLayout);
   parseImageSize(o.size, s.render.width, s.render.height);
+  if (!o.crop.empty()) s.render.crop = parseCropWindow("--crop", o.crop);
   s.render.samplesPerPixel = o.samplesPerPixel;
   s.render.frames = o.frames;
   s.render.maxDepth = o.maxDepth;
@@ -113,6 +114,10 @@ std::string applySceneDefaults(const RenderOptions& o, RenderSession& session) {
     int width = 0, height = 0;
     parseImageSize(fmt::format("{}x{}", *scene.filmWidth, *scene.filmHeight), width, height);
     session.setImageSize(width, height);
+  }
+  if (o.crop.empty() && scene.filmCrop) {
+    const auto& c = *scene.filmCrop;
+    session.setCrop({c[0], c[1], c[2], c[3]});
   }
   if (o.outputGiven || scene.filmFilename.empty()) return o.output;
   if (imageFormatOf(scene.filmFilename)) {
@@ -184,6 +189,9 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                    "builtin:furnace, with parameters as builtin:island?scale=4&seed=7")
       ->capture_default_str();
   command->add_option("--size", o.size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  command->add_option("--crop", o.crop,
+                      "Render only this part of the image, X0,X1,Y0,Y1 as fractions of its\n"
+                      "width and height, y down (pbrt's cropwindow); the output holds that part");
   command->add_option("--spp", o.samplesPerPixel, "Samples (paths) per pixel in each frame")
       ->capture_default_str();
   command
@@ -352,6 +360,8 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
     loading.update(0, o.scene);
     session.emplace(settings, comm);
     sink.emplace(applySceneDefaults(o, *session));
+    // A crop that holds no pixel of the final image size fails here, agreed.
+    session->settings().render.window();
     if (!o.resume.empty() && comm.isRoot()) session->resumeFrom(o.resume);
     loading.finish(setupIntervalsText(session->setupTimes(), "agree") + " s");
   } catch (const std::exception& e) {

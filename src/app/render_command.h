@@ -21,6 +21,7 @@ struct SetupTimes;
 struct RenderOptions {
   std::string scene = "builtin:island";
   std::string size = "1280x720";
+  std::string crop;  // --crop x0,x1,y0,y1 (fractions); empty: the whole image
   int samplesPerPixel = 1;
   int frames = 1;
   int maxDepth = 5;

@@ -50,6 +50,7 @@ nlohmann::json Manifest::toJson() const {
   j["ranks"] = ranks;
   j["summary"] = summary;
   j["film_scale"] = filmScale;
+  if (filmCrop) j["film_crop"] = *filmCrop;
   j["input_bytes"] = inputBytes;
   j["replicated_bytes"] = replicatedBytes;
   j["proxies"] = proxies;
@@ -111,6 +112,13 @@ Manifest readManifest(const std::string& directory) {
     m.filmScale = j.value("film_scale", 1.0f);  // absent in directories made before it existed
     if (!(m.filmScale > 0) || !std::isfinite(m.filmScale))
       throw InputError(fmt::format("{}: bad film_scale {}", path, m.filmScale));
+    if (j.contains("film_crop")) {
+      const auto crop = j.at("film_crop").get<std::vector<float>>();
+      if (crop.size() != 4 || !(crop[0] >= 0 && crop[0] < crop[1] && crop[1] <= 1) ||
+          !(crop[2] >= 0 && crop[2] < crop[3] && crop[3] <= 1))
+        throw InputError(fmt::format("{}: bad film_crop", path));
+      m.filmCrop = std::array<float, 4>{crop[0], crop[1], crop[2], crop[3]};
+    }
     m.inputBytes = j.value("input_bytes", uint64_t(0));
     m.replicatedBytes = j.value("replicated_bytes", uint64_t(0));
     m.proxies = j.value("proxies", uint64_t(0));

@@ -7,7 +7,9 @@
 // refused with a message saying so.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,7 +45,8 @@ struct Manifest {
   uint64_t replicatedBytes = 0;
   uint64_t proxies = 0;
   double partitionSeconds = 0;
-  float filmScale = 1;  // the scene's Film scale (Scene::filmScale)
+  float filmScale = 1;                           // the scene's Film scale (Scene::filmScale)
+  std::optional<std::array<float, 4>> filmCrop;  // Scene::filmCrop
   ManifestFile shared;
   std::vector<ManifestPart> parts;
   // `ferry partition --predict-forwards`: ForwardPrediction::toJson() per

@@ -121,6 +121,7 @@ Manifest writeParts(const std::string& directory, const Scene& scene, const Part
   m.proxies = partition.proxies.size();
   m.partitionSeconds = info.partitionSeconds;
   m.filmScale = scene.filmScale;
+  m.filmCrop = scene.filmCrop;
   for (int r = 0; r < partition.ranks; ++r) {
     const std::vector<int32_t> owned = partition.instancesOf(r);
     ManifestPart p;

@@ -694,6 +694,15 @@ class Parser {
       filmScale *= iso / 100;
     }
     scene_.filmScale = filmScale;
+    if (const PbrtParam* crop = p.find("cropwindow")) {
+      const std::vector<float>& c = crop->floats;
+      if (crop->type != "float" || c.size() != 4 || !(c[0] >= 0 && c[0] < c[1] && c[1] <= 1) ||
+          !(c[2] >= 0 && c[2] < c[3] && c[3] <= 1))
+        fail(where,
+             "Film: \"float cropwindow\" expects four fractions x0 x1 y0 y1 with "
+             "0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1");
+      scene_.filmCrop = std::array<float, 4>{c[0], c[1], c[2], c[3]};
+    }
     reportUnused(p, fmt::format("Film \"{}\"", type));
   }
 

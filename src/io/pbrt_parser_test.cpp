@@ -114,6 +114,8 @@ TEST_F(PbrtV3Features, CameraAndFilm) {
   EXPECT_EQ(scene().filmHeight, 100);
   EXPECT_EQ(scene().filmFilename, "features.exr");
   EXPECT_EQ(scene().filmScale, 2);  // "float scale" [ 2 ]: the radiance written is doubled
+  ASSERT_TRUE(scene().filmCrop.has_value());  // "float cropwindow" [ 0.25 0.75 0 0.5 ]
+  EXPECT_EQ(*scene().filmCrop, (std::array<float, 4>{0.25f, 0.75f, 0, 0.5f}));
 }
 
 // The Integrator is named (light paths follow a bidirectional one) and
@@ -816,6 +818,7 @@ const std::vector<BadPbrt> kBadPbrt = {
     {"projective.pbrt", "projective.pbrt", 2, 1, "projective transforms are not supported"},
     {"huge_film.pbrt", "huge_film.pbrt", 1, 1, "Film: resolution 1000000 x 10"},
     {"bad_film_scale.pbrt", "bad_film_scale.pbrt", 1, 1, "\"float scale\" -2 must be positive"},
+    {"bad_cropwindow.pbrt", "bad_cropwindow.pbrt", 1, 1, "\"float cropwindow\" expects four"},
     {"binary.pbrt", "binary.pbrt", 3, 1, "unexpected byte 0x00"},
     {"absurd_subdivision.pbrt", "absurd_subdivision.pbrt", 2, 1, "30 levels of subdivision"},
     {"missing_envmap.pbrt", "missing_envmap.pbrt", 2, 1,

@@ -195,19 +195,27 @@ TEST(RealScenes, DamagedHelmet) {
 }
 
 TEST(RealScenes, FilmGivesSizeAndOutputWhenTheCommandLineDoesNot) {
-  // The corpus's features_v3.pbrt asks for 200 x 100 pixels in features.exr.
+  // The corpus's features_v3.pbrt asks for 200 x 100 pixels in features.exr,
+  // cropped to [0.25, 0.75) x [0, 0.5): 100 x 50 of them.
   fs::path dir = fs::temp_directory_path() / ("ferry_film_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   fs::path scene = fs::path(FERRY_SOURCE_DIR) / "tests" / "corpus" / "pbrt" / "features_v3.pbrt";
   CommandResult r = ferry("render " + shellQuote(scene.string()) + " -q --spp 1", dir);
   ASSERT_EQ(r.status, 0) << r.err;
   HdrImage out = readHdrImage((dir / "features.exr").string());
-  EXPECT_EQ(out.width, 200);
-  EXPECT_EQ(out.height, 100);
-  // Given on the command line, --size and -o win.
+  EXPECT_EQ(out.width, 100);
+  EXPECT_EQ(out.height, 50);
+  // Given on the command line, --size, --crop and -o win (the film's crop
+  // still applies to another size).
   r = ferry("render " + shellQuote(scene.string()) + " -q --spp 1 --size 20x10 -o small.pfm", dir);
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_EQ(readPfm((dir / "small.pfm").string()).width, 20);
+  EXPECT_EQ(readPfm((dir / "small.pfm").string()).width, 10);
+  EXPECT_EQ(readPfm((dir / "small.pfm").string()).height, 5);
+  r = ferry("render " + shellQuote(scene.string()) +
+                " -q --spp 1 --size 20x10 --crop 0,1,0,1 -o whole.pfm",
+            dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(readPfm((dir / "whole.pfm").string()).width, 20);
   fs::remove_all(dir);
 }
 

@@ -2,13 +2,71 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 
+#include <fmt/format.h>
+
+#include "core/error.h"
 #include "scene/scene.h"
 
 namespace ferry {
 
+FilmWindow filmWindow(int filmWidth, int filmHeight, const CropWindow& crop) {
+  auto valid = [](float lo, float hi) { return lo >= 0 && lo < hi && hi <= 1; };
+  if (!valid(crop.x0, crop.x1) || !valid(crop.y0, crop.y1))
+    throw InputError(
+        fmt::format("crop window {},{},{},{}: expected fractions x0,x1,y0,y1 of the "
+                    "image with 0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1",
+                    crop.x0, crop.x1, crop.y0, crop.y1));
+  FilmWindow w;
+  w.filmWidth = filmWidth;
+  w.filmHeight = filmHeight;
+  // pbrt-v3's Film: croppedPixelBounds from ceil(fullResolution x fraction).
+  auto bound = [](int resolution, float fraction) {
+    return std::clamp(int(std::ceil(double(resolution) * double(fraction))), 0, resolution);
+  };
+  w.x0 = bound(filmWidth, crop.x0);
+  w.y0 = bound(filmHeight, crop.y0);
+  w.width = bound(filmWidth, crop.x1) - w.x0;
+  w.height = bound(filmHeight, crop.y1) - w.y0;
+  if (w.width < 1 || w.height < 1)
+    throw InputError(fmt::format("crop window {},{},{},{} holds no pixel of the {}x{} image",
+                                 crop.x0, crop.x1, crop.y0, crop.y1, filmWidth, filmHeight));
+  return w;
+}
+
+CropWindow parseCropWindow(const std::string& flag, const std::string& text) {
+  float v[4];
+  size_t start = 0;
+  for (int i = 0; i < 4; ++i) {
+    const size_t end = i < 3 ? text.find(',', start) : text.size();
+    const std::string part = end == std::string::npos ? "" : text.substr(start, end - start);
+    char* rest = nullptr;
+    v[i] = part.empty() ? 0.0f : std::strtof(part.c_str(), &rest);
+    if (part.empty() || rest != part.c_str() + part.size() || !std::isfinite(v[i]))
+      throw InputError(fmt::format("{} '{}': expected four numbers x0,x1,y0,y1", flag, text));
+    start = end + 1;
+  }
+  const CropWindow crop{v[0], v[1], v[2], v[3]};
+  try {
+    filmWindow(1 << 20, 1 << 20, crop);  // the fractions' checks, before any image is made
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{} {}", flag, e.what()));
+  }
+  return crop;
+}
+
 Camera::Camera(const CameraView& view, int width, int height)
-    : origin_(view.from), width_(width), height_(height) {
+    : Camera(view, FilmWindow{width, height, 0, 0, width, height}) {}
+
+Camera::Camera(const CameraView& view, const FilmWindow& window)
+    : origin_(view.from),
+      x0_(window.x0),
+      y0_(window.y0),
+      width_(window.width),
+      height_(window.height) {
+  const int width = window.filmWidth, height = window.filmHeight;
   forward_ = normalize(view.at - view.from);
   Vec3f upHint = view.up;
   if (length(cross(forward_, upHint)) < 1e-6f)
@@ -26,16 +84,17 @@ Camera::Camera(const CameraView& view, int width, int height)
 bool Camera::project(Vec3f d, float& x, float& y) const {
   float z = dot(d, forward_);
   if (z <= 0) return false;
-  float sx = dot(d, right_) / z / tanHalfX_;
-  float sy = dot(d, up_) / z / tanHalfY_;
-  x = (sx + 1) * 0.5f * width_;
-  y = (1 - sy) * 0.5f * height_;
+  // direction()'s plane position, inverted.
+  x = (dot(d, right_) / z + tanHalfX_) / xScale_;
+  y = (tanHalfY_ - dot(d, up_) / z) / yScale_;
   return true;
 }
 
 bool Camera::pixelOf(Vec3f point, uint32_t& pixel) const {
   float x, y;
   if (!project(point - origin_, x, y)) return false;
+  x -= float(x0_);
+  y -= float(y0_);
   if (!(x >= 0 && y >= 0 && x < float(width_) && y < float(height_))) return false;
   const uint32_t px = std::min(uint32_t(x), uint32_t(width_ - 1));
   const uint32_t py = std::min(uint32_t(y), uint32_t(height_ - 1));

@@ -137,12 +137,13 @@ struct WholeImageTraversal final : RayTraversal<Path> {
 // sends the whole image through each wavefront.
 template <typename Path>
 std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false, int chunk = 0,
-                          bool lightPaths = false) {
+                          bool lightPaths = false, CropWindow crop = {}) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
   Scene scene = busyScene();
   RenderSettings s = busySettings(seed);
   s.retraceAll = retraceAll;
   s.lightPaths = lightPaths;
+  s.crop = crop;
   if (chunk > 0) s.chunkPixels = uint32_t(chunk);
   const std::unique_ptr<TraceBackend> backend = makeEmbreeBackend(scene);
   const TraceBackend& geometry = *backend;
@@ -154,7 +155,7 @@ std::vector<Vec3f> render(uint32_t seed, int threads, bool retraceAll = false, i
     traversalHolder = std::make_unique<LocalTraversal<Path>>(geometry);
   RayTraversal<Path>& traversal = *traversalHolder;
   WavefrontRenderer<Path> renderer(scene, geometry, lights, traversal, s);
-  FrameBuffer fb(s.width, s.height);
+  FrameBuffer fb(s.imageWidth(), s.imageHeight());
   for (int f = 0; f < s.frames; ++f) {
     FrameStats stats = renderer.renderFrame(f, fb);
     EXPECT_EQ(stats.retraceMisses, 0u);
@@ -241,6 +242,24 @@ TEST(Determinism, LightPathsAreBitIdenticalAcrossThreadsChunksAndLayouts) {
   EXPECT_TRUE(bitIdentical(one, wide)) << differingPixels(one, wide) << " differ (Path64, retrace)";
   std::vector<Vec3f> replay = render<PathReplay>(1, 2, false, 0, true);
   EXPECT_TRUE(bitIdentical(one, replay)) << differingPixels(one, replay) << " differ (replay)";
+}
+
+// A crop window (--crop, pbrt's cropwindow) renders the whole image's
+// pixels there, bit for bit: random numbers are keyed by the film's pixel.
+TEST(Determinism, ACropIsThePartOfTheWholeImage) {
+  const std::vector<Vec3f> whole = render<Path8>(1, 2);
+  const RenderSettings settings = busySettings(1);
+  const CropWindow crop{0.25f, 0.8f, 0.3f, 0.6f};
+  const FilmWindow w = filmWindow(settings.width, settings.height, crop);
+  ASSERT_LT(w.width, settings.width);
+  ASSERT_LT(w.height, settings.height);
+  const std::vector<Vec3f> part = render<Path8>(1, 2, false, 0, false, crop);
+  ASSERT_EQ(part.size(), size_t(w.width) * size_t(w.height));
+  std::vector<Vec3f> expected;
+  for (int y = w.y0; y < w.y0 + w.height; ++y)
+    for (int x = w.x0; x < w.x0 + w.width; ++x)
+      expected.push_back(whole[size_t(y) * size_t(settings.width) + size_t(x)]);
+  EXPECT_TRUE(bitIdentical(part, expected)) << differingPixels(part, expected) << " pixels differ";
 }
 
 TEST(Determinism, DifferentSeedsGiveDifferentImages) {

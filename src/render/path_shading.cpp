@@ -40,13 +40,18 @@ inline float emissionDensityOverCosine(bool bothSides) {
 
 template <typename Path>
 PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth,
-                               uint32_t seed, LightStrategy strategy, const Camera* lightPathCamera)
+                               uint32_t seed, LightStrategy strategy, const Camera* lightPathCamera,
+                               const FilmWindow* window)
     : scene_(scene),
       lights_(lights),
       surfaces_(scene),
       maxDepth_(maxDepth),
       seed_(seed),
       strategy_(strategy) {
+  if (window && !window->whole()) {
+    window_ = *window;
+    cropped_ = true;
+  }
   if (lightPathCamera && strategy == LightStrategy::Mis && lights.emissiveTriangleCount() > 0 &&
       lights.totalEmittedPower() > 0) {
     camera_ = lightPathCamera;
@@ -99,7 +104,7 @@ template <typename Path>
 
 template <typename Path>
 bool PathShading<Path>::emission(uint32_t index, uint32_t sampleIndex, EmissionSample& out) const {
-  const RandomStream random(RandomKey{index, sampleIndex, kLightPathKey, seed_});
+  const RandomStream random(RandomKey{randomPixel(index), sampleIndex, kLightPathKey, seed_});
   return lights_.sampleEmission(random(RandomDim::LightSelect),
                                 {random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)},
                                 {random(RandomDim::BsdfU), random(RandomDim::BsdfV)}, out);
@@ -323,7 +328,7 @@ Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u,
 template <typename Path>
 [[gnu::always_inline]] inline VertexScattering PathShading<Path>::shadingFrame(
     const PathVertex& vertex, uint32_t sampleIndex, uint32_t keyBounce) const {
-  const RandomStream random(RandomKey{vertex.pixel, sampleIndex, keyBounce, seed_});
+  const RandomStream random(RandomKey{randomPixel(vertex.pixel), sampleIndex, keyBounce, seed_});
   const SurfacePoint& surface = vertex.surface;
   const Material* chosen = surface.material;
   const Bsdf bsdf =

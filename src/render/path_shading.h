@@ -158,8 +158,15 @@ class PathShading {
   // render's random seed; `strategy`: which samples find emitters and the sky.
   // `lightPathCamera`: light paths connect to it (null: no light paths; they
   // need MIS and an emissive triangle, else there are none either).
+  // `window`: the part of the film the image is (a crop); random numbers
+  // are keyed by the film's pixel (null: the image is the film).
   PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed,
-              LightStrategy strategy = LightStrategy::Mis, const Camera* lightPathCamera = nullptr);
+              LightStrategy strategy = LightStrategy::Mis, const Camera* lightPathCamera = nullptr,
+              const FilmWindow* window = nullptr);
+
+  // The pixel index random numbers of image pixel `pixel` are keyed by:
+  // its index in the whole film.
+  uint32_t randomPixel(uint32_t pixel) const { return cropped_ ? window_.filmPixel(pixel) : pixel; }
 
   // Whether pixel samples start light paths.
   bool lightPaths() const { return camera_ != nullptr; }
@@ -222,6 +229,8 @@ class PathShading {
   LightStrategy strategy_;
   const Camera* camera_ = nullptr;  // light paths connect to it (null: none)
   float lightPathScale_ = 1;        // light path throughputs are stored divided by it
+  FilmWindow window_;
+  bool cropped_ = false;
 };
 
 }  // namespace ferry

@@ -243,7 +243,7 @@ struct RenderSetup {
   // Renders frame `frame` into a fresh buffer and returns its per-pixel mean
   // (the buffer's sums divided by the samples per pixel).
   std::vector<Vec3f> frameMean(int frame, FrameStats* statsOut = nullptr) {
-    FrameBuffer fb(settings.width, settings.height);
+    FrameBuffer fb(settings.imageWidth(), settings.imageHeight());
     FrameStats stats = renderer->renderFrame(frame, fb);
     if (statsOut) *statsOut = stats;
     std::vector<Vec3f> out = fb.sum();
@@ -285,7 +285,7 @@ struct PixelStatistics {
 inline PixelStatistics renderStatistics(Scene& scene, const RenderSettings& settings, int frames) {
   RenderSetup setup(scene, settings);
   PixelStatistics stats;
-  stats.init(settings.width, settings.height);
+  stats.init(settings.imageWidth(), settings.imageHeight());
   for (int f = 0; f < frames; ++f) {
     FrameStats fs;
     stats.addFrame(setup.frameMean(f, &fs));

@@ -25,20 +25,21 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
     : geometry_(geometry),
       traversal_(traversal),
       settings_(settings),
-      camera_(settings.camera ? *settings.camera : scene.view(settings.view), settings.width,
-              settings.height),
+      window_(settings.window()),
+      camera_(settings.camera ? *settings.camera : scene.view(settings.view), window_),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
-               settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr) {
-  if (uint64_t(settings.width) * uint64_t(settings.height) > kMaxPixels)
-    throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.width,
-                                 settings.height, kMaxPixels));
+               settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr, &window_) {
+  if (uint64_t(settings.imageWidth()) * uint64_t(settings.imageHeight()) > kMaxPixels)
+    throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.imageWidth(),
+                                 settings.imageHeight(), kMaxPixels));
 }
 
 template <typename Path>
 FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuffer,
                                                 const ProgressCallback& progress) {
-  return renderPixels(frame, 0, uint32_t(settings_.width) * uint32_t(settings_.height), frameBuffer,
-                      progress);
+  return renderPixels(frame, 0,
+                      uint32_t(settings_.imageWidth()) * uint32_t(settings_.imageHeight()),
+                      frameBuffer, progress);
 }
 
 template <typename Path>
@@ -50,7 +51,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   auto frameStart = Clock::now();
   const double cpuStart = processCpuSeconds();
   FERRY_CHECK_LE(firstPixel, lastPixel);
-  FERRY_CHECK_LE(lastPixel, uint32_t(settings_.width) * uint32_t(settings_.height));
+  FERRY_CHECK_LE(lastPixel, uint32_t(settings_.imageWidth()) * uint32_t(settings_.imageHeight()));
   // Light paths add to any pixel from any thread.
   if (shading_.lightPaths()) frameBuffer.setAtomicAdds(true);
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
@@ -136,9 +137,10 @@ void concatenateBlocks(const PathQueue<Path>& staging, size_t stride,
 template <typename Path>
 void WavefrontRenderer<Path>::makeCameraPath(uint32_t sampleIndex, uint32_t pixel, uint32_t px,
                                              uint32_t py, Path& path) const {
-  RandomStream random(RandomKey{pixel, sampleIndex, 0, settings_.seed});
-  float x = float(px) + random(RandomDim::PixelJitterX);
-  float y = float(py) + random(RandomDim::PixelJitterY);
+  RandomStream random(RandomKey{shading_.randomPixel(pixel), sampleIndex, 0, settings_.seed});
+  // The film's pixel (a crop's image is offset in it), then the jitter.
+  float x = float(px + uint32_t(window_.x0)) + random(RandomDim::PixelJitterX);
+  float y = float(py + uint32_t(window_.y0)) + random(RandomDim::PixelJitterY);
   makeRay(path, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
           kPathAfterSpecular);
 }
@@ -220,7 +222,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
   ws.rays.shadowRays.clear();
   auto start = Clock::now();
   const uint32_t pixels = last - first;
-  const uint32_t width = uint32_t(settings_.width);
+  const uint32_t width = this->width();
   auto cameraRay = [&](uint32_t pixel, uint32_t px, uint32_t py, Path& p) {
     makeCameraPath(sampleIndex, pixel, px, py, p);
   };

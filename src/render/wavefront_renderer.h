@@ -34,8 +34,13 @@ namespace ferry {
 struct Scene;
 
 struct RenderSettings {
-  int width = 1280;
+  int width = 1280;  // the film; the image is the part `crop` selects
   int height = 720;
+  CropWindow crop;  // --crop, pbrt's cropwindow
+  FilmWindow window() const { return filmWindow(width, height, crop); }
+  // The image rendered: the film, or the crop window's part of it.
+  int imageWidth() const { return crop.whole() ? width : window().width; }
+  int imageHeight() const { return crop.whole() ? height : window().height; }
   int samplesPerPixel = 1;  // per frame
   int frames = 1;
   int maxDepth = 5;  // scattering events; 1 = direct lighting only
@@ -104,7 +109,7 @@ class WavefrontRenderer {
   // Pixel `pixel`'s (at px, py) camera path for sample `sampleIndex`.
   void makeCameraPath(uint32_t sampleIndex, uint32_t pixel, uint32_t px, uint32_t py,
                       Path& path) const;
-  uint32_t width() const { return uint32_t(settings_.width); }
+  uint32_t width() const { return uint32_t(settings_.imageWidth()); }
   // The camera ray of `pixel`'s path, as the proxy-guided ownership asks it.
   TraceRay cameraTraceRay(uint32_t sampleIndex, uint32_t pixel) const;
   // The camera paths of `pixels` into out[0, pixels.size()), in parallel.
@@ -144,6 +149,7 @@ class WavefrontRenderer {
   const TraceBackend& geometry_;  // shading's re-traces
   RayTraversal<Path>& traversal_;
   RenderSettings settings_;
+  FilmWindow window_;  // the part of the film the image is
   Camera camera_;
   PathShading<Path> shading_;
   Workspace workspace_;  // many ranks: the one whole-image wavefront

@@ -209,6 +209,9 @@ struct Scene {
   // pbrt's Film "scale" (v3) and "iso" / 100 (v4's imaging ratio at a 1 s
   // exposure): multiplies the radiance written to the image.
   float filmScale = 1;
+  // pbrt's Film "cropwindow": x0, x1, y0, y1, fractions of the image, y down
+  // (render/camera.h's CropWindow); absent: the whole image.
+  std::optional<std::array<float, 4>> filmCrop;
   // pbrt's Integrator, as named ("bdpt", "path", ...; empty: none): a
   // bidirectional one turns light paths on (render/path_shading.h).
   std::string integrator;

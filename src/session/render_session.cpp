@@ -81,6 +81,7 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     partition = std::move(part.partition);
     partitionerName = part.manifest.partitioner;
     scene.filmScale = part.manifest.filmScale;
+    scene.filmCrop = part.manifest.filmCrop;
     owned.resize(scene.instances.size());
     std::iota(owned.begin(), owned.end(), 0);
     ownedEstimate = ownedMemory(scene, owned);
@@ -199,7 +200,10 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
           settings_.scene, hashToHex(hash64(summary.data(), summary.size())), r.width, r.height,
           r.samplesPerPixel, r.maxDepth, lightStrategyName(r.lightStrategy), r.seed, v.name,
           v.from.x, v.from.y, v.from.z, v.at.x, v.at.y, v.at.z, v.up.x, v.up.y, v.up.z, v.fovY) +
-      (r.lightPaths ? "; light-paths=on" : "");
+      (r.lightPaths ? "; light-paths=on" : "") +
+      (r.crop.whole()
+           ? std::string()
+           : fmt::format("; crop={},{},{},{}", r.crop.x0, r.crop.x1, r.crop.y0, r.crop.y1));
   return {hash64(description.data(), description.size()), description};
 }
 
@@ -252,6 +256,10 @@ void RenderSession::resumeFrom(const std::string& path) {
 void RenderSession::setImageSize(int width, int height) {
   settings_.render.width = width;
   settings_.render.height = height;
+}
+
+void RenderSession::setCrop(const CropWindow& crop) {
+  settings_.render.crop = crop;
 }
 
 void RenderSession::setView(const std::string& view, const std::optional<CameraView>& camera) {
@@ -376,7 +384,7 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
   auto renderer = std::make_unique<WavefrontRenderer<Path>>(rank.scene, *rank.geometry,
                                                             *rank.lights, *traversal, render);
   // Reused from frame to frame; made anew only when the image size changes.
-  FrameBuffer frameBuffer(render.width, render.height);
+  FrameBuffer frameBuffer(render.imageWidth(), render.imageHeight());
   int accumulated = 0;
   uint64_t compositeBytes = 0, abandoned = 0;
   double lastFrameSeconds = 0;  // the slowest rank's, of the last whole frame
@@ -385,11 +393,11 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
     if (comm_.isRoot()) change = control->takeChange();
     comm_.broadcast(change);
     if (change.flags & ViewChange::kQuit) break;
-    const int oldWidth = render.width, oldHeight = render.height;
+    const int oldWidth = render.imageWidth(), oldHeight = render.imageHeight();
     change.applyTo(*render.camera, render);
     if (change.flags & (ViewChange::kCamera | ViewChange::kSettings)) {
-      if (render.width != oldWidth || render.height != oldHeight)
-        frameBuffer = FrameBuffer(render.width, render.height);
+      if (render.imageWidth() != oldWidth || render.imageHeight() != oldHeight)
+        frameBuffer = FrameBuffer(render.imageWidth(), render.imageHeight());
       else
         frameBuffer.clear();
       accumulated = 0;
@@ -402,7 +410,7 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
     // rest of the frame instead of waiting for it (what was added is cleared
     // with the accumulation the change restarts). Each slice costs a
     // distributed render the overlap at its end, so short frames stay whole.
-    const uint32_t pixels = uint32_t(render.width) * uint32_t(render.height);
+    const uint32_t pixels = uint32_t(render.imageWidth()) * uint32_t(render.imageHeight());
     const double bySeconds = sliceSeconds > 0 ? lastFrameSeconds / sliceSeconds : 64;
     const uint32_t slices = std::clamp<uint32_t>(
         std::min<uint32_t>(uint32_t(std::min(bySeconds, 64.0)), pixels / 4096), 1, 64);
@@ -463,7 +471,7 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
   std::unique_ptr<RayTraversal<Path>> traversal = makeTraversal<Path>(&distributed);
   rank.lap(&SetupTimes::proxies);
   WavefrontRenderer<Path> renderer(rank.scene, *rank.geometry, *rank.lights, *traversal, render);
-  FrameBuffer frameBuffer(render.width, render.height);
+  FrameBuffer frameBuffer(render.imageWidth(), render.imageHeight());
   const FrameSink::Frames frames = sink.frames();
   const FrameSink::Pixels pixels = sink.pixels();
   SessionReport report;
@@ -495,8 +503,8 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
     if (!comm_.isRoot()) return;
     Checkpoint c;
     std::tie(c.identity, c.description) = imageIdentity();
-    c.width = render.width;
-    c.height = render.height;
+    c.width = render.imageWidth();
+    c.height = render.imageHeight();
     c.frames = frame + 1;
     c.samplesPerPixel = render.samplesPerPixel;
     c.sums = std::move(sums);

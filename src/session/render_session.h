@@ -23,6 +23,7 @@
 
 #include "distributed/distributed_traversal.h"
 #include "mpi/communicator.h"
+#include "render/camera.h"
 #include "render/render_stats.h"
 #include "scene/scene.h"
 #include "scene/scene_summary.h"
@@ -169,6 +170,8 @@ class RenderSession {
 
   // Before run(): renders at this size instead (a scene's own, pbrt's Film).
   void setImageSize(int width, int height);
+  // Before run(): renders only this part of the image (pbrt's cropwindow).
+  void setCrop(const CropWindow& crop);
   // Before run(): renders this view instead (a named one, or `camera` if
   // given); throws InputError for an unknown name. run() may be called again
   // after it (the bandwidth predictor renders several views from one load).

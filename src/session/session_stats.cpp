@@ -35,6 +35,9 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
   j["scene"] = session.summary().toJson();
   j["settings"] = {{"width", r.width},
                    {"height", r.height},
+                   {"crop", {r.crop.x0, r.crop.x1, r.crop.y0, r.crop.y1}},
+                   {"image_width", r.imageWidth()},
+                   {"image_height", r.imageHeight()},
                    {"spp", r.samplesPerPixel},
                    {"frames", r.frames},
                    {"max_depth", r.maxDepth},
