@@ -57,9 +57,6 @@ class Camera {
   }
   // Inverse: the film position a world direction projects to; false if behind.
   bool project(Vec3f direction, float& x, float& y) const;
-  // The window's corner in the film.
-  int x0() const { return x0_; }
-  int y0() const { return y0_; }
 
   // For light tracing (a light path's vertex connected to the camera):
   // The image pixel `point` projects to; false if outside the image (the

@@ -29,17 +29,15 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
       camera_(settings.camera ? *settings.camera : scene.view(settings.view), window_),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
                settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr, &window_) {
-  if (uint64_t(settings.imageWidth()) * uint64_t(settings.imageHeight()) > kMaxPixels)
-    throw InputError(fmt::format("image of {}x{} has more than {} pixels", settings.imageWidth(),
-                                 settings.imageHeight(), kMaxPixels));
+  if (uint64_t(window_.width) * uint64_t(window_.height) > kMaxPixels)
+    throw InputError(fmt::format("image of {}x{} has more than {} pixels", window_.width,
+                                 window_.height, kMaxPixels));
 }
 
 template <typename Path>
 FrameStats WavefrontRenderer<Path>::renderFrame(int frame, FrameBuffer& frameBuffer,
                                                 const ProgressCallback& progress) {
-  return renderPixels(frame, 0,
-                      uint32_t(settings_.imageWidth()) * uint32_t(settings_.imageHeight()),
-                      frameBuffer, progress);
+  return renderPixels(frame, 0, pixelCount(), frameBuffer, progress);
 }
 
 template <typename Path>
@@ -51,7 +49,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   auto frameStart = Clock::now();
   const double cpuStart = processCpuSeconds();
   FERRY_CHECK_LE(firstPixel, lastPixel);
-  FERRY_CHECK_LE(lastPixel, uint32_t(settings_.imageWidth()) * uint32_t(settings_.imageHeight()));
+  FERRY_CHECK_LE(lastPixel, pixelCount());
   // Light paths add to any pixel from any thread.
   if (shading_.lightPaths()) frameBuffer.setAtomicAdds(true);
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {

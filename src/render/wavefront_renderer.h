@@ -39,8 +39,8 @@ struct RenderSettings {
   CropWindow crop;  // --crop, pbrt's cropwindow
   FilmWindow window() const { return filmWindow(width, height, crop); }
   // The image rendered: the film, or the crop window's part of it.
-  int imageWidth() const { return crop.whole() ? width : window().width; }
-  int imageHeight() const { return crop.whole() ? height : window().height; }
+  int imageWidth() const { return window().width; }
+  int imageHeight() const { return window().height; }
   int samplesPerPixel = 1;  // per frame
   int frames = 1;
   int maxDepth = 5;  // scattering events; 1 = direct lighting only
@@ -109,7 +109,8 @@ class WavefrontRenderer {
   // Pixel `pixel`'s (at px, py) camera path for sample `sampleIndex`.
   void makeCameraPath(uint32_t sampleIndex, uint32_t pixel, uint32_t px, uint32_t py,
                       Path& path) const;
-  uint32_t width() const { return uint32_t(settings_.imageWidth()); }
+  uint32_t width() const { return uint32_t(window_.width); }  // of the image
+  uint32_t pixelCount() const { return uint32_t(window_.width) * uint32_t(window_.height); }
   // The camera ray of `pixel`'s path, as the proxy-guided ownership asks it.
   TraceRay cameraTraceRay(uint32_t sampleIndex, uint32_t pixel) const;
   // The camera paths of `pixels` into out[0, pixels.size()), in parallel.
