@@ -55,6 +55,10 @@ struct Options {
   float exposure = 0;         // stops on top of the automatic scale
   float diffRange = 0.5f;     // the difference saturates at +-this times the mean luminance
   std::string referenceCrop;  // x0,x1,y0,y1: compare with this part of the reference only
+  // x0,x1,y0,y1 windows (fractions of the compared image, y down) whose
+  // blocks are left out of the block figures: where the reference is known
+  // to be wrong (docs/fidelity.md).
+  std::vector<std::string> exclude;
 };
 
 // Doubles throughout: the means and sums of squares run over a million
@@ -207,31 +211,52 @@ int run(const Options& options) {
   const Image rBlocks = boxAverage(r, width / b, height / b, "the reference");
   const Image fBlocks = boxAverage(f, width / b, height / b, "the image");
 
+  // The blocks the figures count: those whose centre lies in no --exclude window.
+  const int blocksX = width / b, blocksY = height / b;
+  std::vector<CropWindow> excluded;
+  for (const std::string& text : options.exclude)
+    excluded.push_back(parseCropWindow("--exclude", text));
+  std::vector<char> counted(rBlocks.pixels.size(), 1);
+  size_t excludedBlocks = 0;
+  for (int by = 0; by < blocksY; ++by)
+    for (int bx = 0; bx < blocksX; ++bx) {
+      const double cx = (bx + 0.5) / blocksX, cy = (by + 0.5) / blocksY;
+      for (const CropWindow& w : excluded)
+        if (cx >= w.x0 && cx < w.x1 && cy >= w.y0 && cy < w.y1) {
+          counted[size_t(by) * size_t(blocksX) + size_t(bx)] = 0;
+          ++excludedBlocks;
+          break;
+        }
+    }
+  if (excludedBlocks == counted.size())
+    throw InputError("--exclude: the windows cover every block; nothing is left to compare");
+
   const Rgb rMean = mean(r.pixels);
   const Rgb fMean = mean(f.pixels);
   const double rLum = luminance(rMean);  // luminance is linear: the mean's is the mean
   const double fLum = luminance(fMean);
   double squares = 0, sum = 0;
   for (size_t i = 0; i < rBlocks.pixels.size(); ++i)
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 3 && counted[i]; ++c) {
       const double d = fBlocks.pixels[i][c] - rBlocks.pixels[i][c];
       squares += d * d;
       sum += rBlocks.pixels[i][c];
     }
-  const double n = 3.0 * double(rBlocks.pixels.size());
+  const double n = 3.0 * double(rBlocks.pixels.size() - excludedBlocks);
   const double rmse =
       sum > 0 ? std::sqrt(squares / n) / (sum / n) : std::numeric_limits<double>::quiet_NaN();
   // Where the error is: blocks by their squared error, largest first, and
   // the share of the total the worst 1 % and 5 % hold (a few blocks holding
   // most of it is a local difference: a material, a light, fireflies).
-  std::vector<std::pair<double, size_t>> blockErrors(rBlocks.pixels.size());
+  std::vector<std::pair<double, size_t>> blockErrors;
   for (size_t i = 0; i < rBlocks.pixels.size(); ++i) {
+    if (!counted[i]) continue;
     double e = 0;
     for (int c = 0; c < 3; ++c) {
       const double d = fBlocks.pixels[i][c] - rBlocks.pixels[i][c];
       e += d * d;
     }
-    blockErrors[i] = {e, i};
+    blockErrors.emplace_back(e, i);
   }
   std::sort(blockErrors.begin(), blockErrors.end(), std::greater<>());
   auto shareOfWorst = [&](double fraction) {
@@ -249,6 +274,9 @@ int run(const Options& options) {
   fmt::print("image      {} ({}x{})\n", options.image, image.width, image.height);
   fmt::print("compared   at {}x{}, {}x{}-pixel blocks ({}x{} blocks)\n", width, height, b, b,
              width / b, height / b);
+  if (excludedBlocks > 0)
+    fmt::print("excluded   {} of {} blocks (--exclude; the block figures below leave them out)\n",
+               excludedBlocks, counted.size());
   fmt::print("{:<10} {:>12} {:>12} {:>9}\n", "channel", "reference", "image", "bias");
   const char* names[3] = {"R", "G", "B"};
   for (int c = 0; c < 3; ++c)
@@ -268,12 +296,18 @@ int run(const Options& options) {
   // with the same reference get the same picture of it.
   const double toneScale = (rLum > 0 ? 0.18 / rLum : 1.0) * std::exp2(double(options.exposure));
   if (!options.sideBySide.empty()) {
+    // Excluded blocks are grey in the difference picture.
+    std::vector<uint8_t> difference = differenceMap(f, r, rLum > 0 ? rLum : 1.0, options.diffRange);
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        if (!counted[size_t(y / b) * size_t(blocksX) + size_t(x / b)])
+          for (int c = 0; c < 3; ++c) difference[(size_t(y) * size_t(width) + size_t(x)) * 4 + c] = 96;
     writeSideBySide(options.sideBySide, width, height,
-                    {toneMap(r, toneScale), toneMap(f, toneScale),
-                     differenceMap(f, r, rLum > 0 ? rLum : 1.0, options.diffRange)});
+                    {toneMap(r, toneScale), toneMap(f, toneScale), std::move(difference)});
     fmt::print(
         "wrote      {}: reference | image | difference (both x{:.4g}, clamped, sRGB; difference: "
-        "luminance (image - reference) / reference mean, red > 0 > blue, full at +-{:g})\n",
+        "luminance (image - reference) / reference mean, red > 0 > blue, full at +-{:g}; "
+        "excluded blocks grey)\n",
         options.sideBySide, toneScale, options.diffRange);
   }
   if (!options.json.empty()) {
@@ -291,6 +325,8 @@ int run(const Options& options) {
     out["channels"]["luminance"] = {
         {"reference_mean", rLum}, {"image_mean", fLum}, {"bias", bias(fLum, rLum)}};
     out["block_relative_rmse"] = rmse;  // NaN is written as null
+    out["excluded_blocks"] = excludedBlocks;
+    out["exclude"] = options.exclude;
     out["squared_error_share_of_worst_blocks"] = {{"1%", worst1}, {"5%", worst5}};
     nlohmann::json worst = nlohmann::json::array();
     for (size_t i = 0; i < std::min<size_t>(10, blockErrors.size()); ++i)
@@ -331,6 +367,11 @@ int main(int argc, char** argv) {
   app.add_option("--reference-crop", options.referenceCrop,
                  "Compare with this part of the reference only, X0,X1,Y0,Y1 as fractions (y down), "
                  "as ferry render --crop renders it");
+  app.add_option("--exclude", options.exclude,
+                 "Leave the blocks whose centre lies in this window, X0,X1,Y0,Y1 as fractions of "
+                 "the compared image (y down), out of the block RMSE and the worst blocks "
+                 "(repeatable; the bias still covers the whole image): for parts where the "
+                 "reference is known to be wrong");
   app.add_option("--exposure", options.exposure,
                  "Stops added to the pictures' tone scale (which maps the reference's mean "
                  "luminance to 0.18)")

@@ -102,6 +102,24 @@ assert abs(d["block_relative_rmse"]) < 1e-6, d["block_relative_rmse"]
 print("  right.pfm against the reference cropped to its right half: equal")
 EOF
 
+# --exclude leaves the blocks whose centre lies in a window out of the block
+# figures: without the top-left block, local.pfm equals the reference there;
+# the bias still covers the whole image (the top-left block's four pixels of
+# value 1 doubled: R mean 2.25 from 2; bias 0.125). The excluded block is grey
+# in the difference picture.
+"$compare" ref.pfm local.pfm --block 2 --exclude 0,0.5,0,0.5 --json excluded.json \
+  --side-by-side excluded.png > excluded.txt
+grep -q "excluded   1 of 4 blocks" excluded.txt
+python3 - <<'EOF2'
+import json
+d = json.load(open("excluded.json"))
+assert d["excluded_blocks"] == 1 and d["exclude"] == ["0,0.5,0,0.5"], d
+assert abs(d["block_relative_rmse"]) < 1e-9, d["block_relative_rmse"]
+assert abs(d["channels"]["R"]["bias"] - 0.125) < 1e-6, d["channels"]["R"]
+assert all((b["x"], b["y"]) != (0, 0) for b in d["worst_blocks"]), d["worst_blocks"]
+print("  local.pfm with its differing block excluded: RMSE 0, bias over the whole image")
+EOF2
+
 # The side-by-side picture: three 4x4 panels and two 4-pixel gaps.
 python3 - <<'EOF'
 import struct
@@ -131,8 +149,10 @@ fails "missing reference" "nothing.pfm: no such file" nothing.pfm ref.pfm
 fails "no integer ratio" "odd.pfm: 6x6 is not an integer multiple" ref.pfm odd.pfm
 fails "block does not divide" "--block 3" ref.pfm same.pfm --block 3
 fails "bad reference crop" "--reference-crop" ref.pfm right.pfm --reference-crop 0.5,0.4,0,1
+fails "bad exclude window" "--exclude" ref.pfm same.pfm --exclude 0,1,0
+fails "everything excluded" "cover every block" ref.pfm same.pfm --exclude 0,1,0,1
 
-"$compare" --help | grep -q "block relative RMSE   = sqrt" || {
+"$compare" --help | grep "block relative RMSE   = sqrt" > /dev/null || {
   echo "image_compare_test: --help does not define the block relative RMSE" >&2
   exit 1
 }
