@@ -301,7 +301,8 @@ int run(const Options& options) {
     for (int y = 0; y < height; ++y)
       for (int x = 0; x < width; ++x)
         if (!counted[size_t(y / b) * size_t(blocksX) + size_t(x / b)])
-          for (int c = 0; c < 3; ++c) difference[(size_t(y) * size_t(width) + size_t(x)) * 4 + c] = 96;
+          for (int c = 0; c < 3; ++c)
+            difference[(size_t(y) * size_t(width) + size_t(x)) * 4 + c] = 96;
     writeSideBySide(options.sideBySide, width, height,
                     {toneMap(r, toneScale), toneMap(f, toneScale), std::move(difference)});
     fmt::print(

@@ -106,8 +106,9 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
 
 namespace {
 
-// The image size and file a scene asks for (pbrt's Film) when the command
-// line does not say; returns the output file.
+// The image size, crop and file a scene asks for (pbrt's Film), and its
+// path depth (its Integrator's maxdepth), when the command line does not
+// say; returns the output file.
 std::string applySceneDefaults(const RenderOptions& o, RenderSession& session) {
   const Scene& scene = session.scene();
   if (!o.sizeGiven && scene.filmWidth && scene.filmHeight) {
@@ -119,6 +120,7 @@ std::string applySceneDefaults(const RenderOptions& o, RenderSession& session) {
     const auto& c = *scene.filmCrop;
     session.setCrop({c[0], c[1], c[2], c[3]});
   }
+  if (!o.maxDepthGiven && scene.integratorMaxDepth) session.setMaxDepth(*scene.integratorMaxDepth);
   if (o.outputGiven || scene.filmFilename.empty()) return o.output;
   if (imageFormatOf(scene.filmFilename)) {
     checkOutputPath(scene.filmFilename);
@@ -196,7 +198,8 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
       ->capture_default_str();
   command
       ->add_option("--max-depth", o.maxDepth,
-                   "Maximum scattering events per path (1: direct light only, 0: emitters only)")
+                   "Maximum scattering events per path (1: direct light only, 0: emitters only);\n"
+                   "default: a pbrt scene's Integrator \"maxdepth\", else 5")
       ->capture_default_str();
   command
       ->add_option("--mis", o.mis,
@@ -343,6 +346,7 @@ void addRenderCommand(CLI::App& app, RenderOptions& o) {
       "and the proxies as box outlines, to -o (PNG); =N: for N ranks (default: the MPI ranks)");
   render->callback([&o, render]() {
     o.sizeGiven = render->get_option("--size")->count() > 0;
+    o.maxDepthGiven = render->get_option("--max-depth")->count() > 0;
     o.outputGiven = render->get_option("--output")->count() > 0;
   });
 }

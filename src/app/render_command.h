@@ -36,6 +36,7 @@ struct RenderOptions {
   bool envFallback = false;
   // Whether --size / -o were given; if not, a scene's own (pbrt's Film) apply.
   bool sizeGiven = false;
+  bool maxDepthGiven = false;  // else the scene's Integrator maxdepth, if it has one
   bool outputGiven = false;
   std::string forwarding = "proxies";
   std::string exchange = "auto";

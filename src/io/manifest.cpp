@@ -51,6 +51,8 @@ nlohmann::json Manifest::toJson() const {
   j["summary"] = summary;
   j["film_scale"] = filmScale;
   if (filmCrop) j["film_crop"] = *filmCrop;
+  if (!integrator.empty()) j["integrator"] = integrator;
+  if (integratorMaxDepth) j["integrator_max_depth"] = *integratorMaxDepth;
   j["input_bytes"] = inputBytes;
   j["replicated_bytes"] = replicatedBytes;
   j["proxies"] = proxies;
@@ -118,6 +120,13 @@ Manifest readManifest(const std::string& directory) {
           !(crop[2] >= 0 && crop[2] < crop[3] && crop[3] <= 1))
         throw InputError(fmt::format("{}: bad film_crop", path));
       m.filmCrop = std::array<float, 4>{crop[0], crop[1], crop[2], crop[3]};
+    }
+    m.integrator = j.value("integrator", std::string());
+    if (j.contains("integrator_max_depth")) {
+      m.integratorMaxDepth = j.at("integrator_max_depth").get<int>();
+      if (*m.integratorMaxDepth < 0)
+        throw InputError(
+            fmt::format("{}: bad integrator_max_depth {}", path, *m.integratorMaxDepth));
     }
     m.inputBytes = j.value("input_bytes", uint64_t(0));
     m.replicatedBytes = j.value("replicated_bytes", uint64_t(0));

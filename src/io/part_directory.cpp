@@ -122,6 +122,8 @@ Manifest writeParts(const std::string& directory, const Scene& scene, const Part
   m.partitionSeconds = info.partitionSeconds;
   m.filmScale = scene.filmScale;
   m.filmCrop = scene.filmCrop;
+  m.integrator = scene.integrator;
+  m.integratorMaxDepth = scene.integratorMaxDepth;
   for (int r = 0; r < partition.ranks; ++r) {
     const std::vector<int32_t> owned = partition.instancesOf(r);
     ManifestPart p;

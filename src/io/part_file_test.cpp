@@ -402,10 +402,16 @@ TEST(PartFiles, ManifestFromAnotherVersionOrBrokenIsRefused) {
   e = errorOf([&] { loadRankPart(dir.path.string(), 0, 2); });
   EXPECT_NE(e.find("not valid JSON"), std::string::npos) << e;
   j["version"] = kPartFormatVersion;
+  const nlohmann::json partFile = j["parts"][1]["file"];
   j["parts"][1]["file"] = "../elsewhere.fpart";
   std::ofstream(manifest) << j.dump();
   e = errorOf([&] { loadRankPart(dir.path.string(), 0, 2); });
   EXPECT_NE(e.find("bad file name"), std::string::npos) << e;
+  j["parts"][1]["file"] = partFile;
+  j["integrator_max_depth"] = -3;
+  std::ofstream(manifest) << j.dump();
+  e = errorOf([&] { loadRankPart(dir.path.string(), 0, 2); });
+  EXPECT_NE(e.find("bad integrator_max_depth -3"), std::string::npos) << e;
   fs::remove(manifest);
   EXPECT_FALSE(isPartDirectory(dir.path.string()));
 }

@@ -599,12 +599,21 @@ class Parser {
     } else if (name == "Integrator") {
       std::string type = string(in, n);
       scene_.integrator = type;
-      skipped(name, params(in), where,
-              integratorWantsLightPaths(type)
-                  ? fmt::format("\"{}\": Ferry renders it as camera paths and light paths "
-                                "combined by MIS (--light-paths)",
-                                type)
-                  : fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type));
+      PbrtParams p = params(in);
+      if (p.find("maxdepth")) {
+        const int depth = p.getInt("maxdepth", 5);
+        if (depth < 0)
+          fail(where, fmt::format("Integrator: \"integer maxdepth\" {} must be 0 or more", depth));
+        scene_.integratorMaxDepth = depth;
+      }
+      skipped(
+          name, p, where,
+          (integratorWantsLightPaths(type)
+               ? fmt::format("\"{}\": Ferry renders it as camera paths and light paths "
+                             "combined by MIS (--light-paths)",
+                             type)
+               : fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type)) +
+              (scene_.integratorMaxDepth ? "; its \"maxdepth\" is the default --max-depth" : ""));
     } else if (name == "Sampler" || name == "SurfaceIntegrator" || name == "VolumeIntegrator" ||
                name == "PixelFilter" || name == "Accelerator" || name == "Renderer") {
       std::string type = string(in, n);

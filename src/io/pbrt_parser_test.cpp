@@ -123,6 +123,7 @@ TEST_F(PbrtV3Features, CameraAndFilm) {
 TEST_F(PbrtV3Features, IntegratorIsRecorded) {
   EXPECT_EQ(scene().integrator, "path");
   EXPECT_FALSE(integratorWantsLightPaths(scene().integrator));
+  EXPECT_FALSE(scene().integratorMaxDepth.has_value());  // no "maxdepth": Ferry's default
 }
 
 TEST_F(PbrtV3Features, Lights) {
@@ -360,6 +361,7 @@ TEST_F(PbrtV4Features, LeftHandedCameraAndPortraitFov) {
 TEST_F(PbrtV4Features, BidirectionalIntegratorAsksForLightPaths) {
   EXPECT_EQ(scene().integrator, "bdpt");
   EXPECT_TRUE(integratorWantsLightPaths(scene().integrator));
+  EXPECT_EQ(scene().integratorMaxDepth, 7);  // "integer maxdepth" 7
 }
 
 TEST_F(PbrtV4Features, Materials) {
@@ -819,6 +821,7 @@ const std::vector<BadPbrt> kBadPbrt = {
     {"huge_film.pbrt", "huge_film.pbrt", 1, 1, "Film: resolution 1000000 x 10"},
     {"bad_film_scale.pbrt", "bad_film_scale.pbrt", 1, 1, "\"float scale\" -2 must be positive"},
     {"bad_cropwindow.pbrt", "bad_cropwindow.pbrt", 1, 1, "\"float cropwindow\" expects four"},
+    {"bad_maxdepth.pbrt", "bad_maxdepth.pbrt", 1, 1, "\"integer maxdepth\" -1 must be 0 or more"},
     {"binary.pbrt", "binary.pbrt", 3, 1, "unexpected byte 0x00"},
     {"absurd_subdivision.pbrt", "absurd_subdivision.pbrt", 2, 1, "30 levels of subdivision"},
     {"missing_envmap.pbrt", "missing_envmap.pbrt", 2, 1,

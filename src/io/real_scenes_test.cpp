@@ -219,5 +219,38 @@ TEST(RealScenes, FilmGivesSizeAndOutputWhenTheCommandLineDoesNot) {
   fs::remove_all(dir);
 }
 
+// pbrt's Integrator "integer maxdepth" is the path depth when --max-depth is
+// not given, also from a part directory (its manifest keeps it, and the
+// Integrator's name, which turns light paths on for "bdpt").
+TEST(RealScenes, IntegratorMaxDepthIsTheDefaultDepth) {
+  fs::path dir = fs::temp_directory_path() / ("ferry_depth_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // features_v4.pbrt: Integrator "bdpt" "integer maxdepth" 7.
+  fs::path scene = fs::path(FERRY_SOURCE_DIR) / "tests" / "corpus" / "pbrt" / "features_v4.pbrt";
+  auto maxDepth = [&](const std::string& stats) {
+    std::ifstream in(dir / stats);
+    return nlohmann::json::parse(in).at("settings").at("max_depth").get<int>();
+  };
+  auto lightPaths = [&](const std::string& stats) {
+    std::ifstream in(dir / stats);
+    return nlohmann::json::parse(in).at("render").at("frames").at(0).at("light_paths").get<int>();
+  };
+  const std::string common = " -q --spp 1 --size 8x16 -o out.pfm --stats ";
+  CommandResult r = ferry("render " + shellQuote(scene.string()) + common + "scene.json", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(maxDepth("scene.json"), 7);
+  EXPECT_GT(lightPaths("scene.json"), 0);
+  r = ferry("render " + shellQuote(scene.string()) + common + "flag.json --max-depth 2", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(maxDepth("flag.json"), 2);
+  r = ferry("partition " + shellQuote(scene.string()) + " -q --ranks 1 -o parts", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = ferry("render parts" + common + "parts.json", dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(maxDepth("parts.json"), 7);
+  EXPECT_GT(lightPaths("parts.json"), 0);
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace ferry

@@ -215,6 +215,10 @@ struct Scene {
   // pbrt's Integrator, as named ("bdpt", "path", ...; empty: none): a
   // bidirectional one turns light paths on (render/path_shading.h).
   std::string integrator;
+  // Its "integer maxdepth", if given: the render's --max-depth when the
+  // command line does not say (pbrt counts depth as Ferry does: 1 is direct
+  // light only; both default to 5).
+  std::optional<int> integratorMaxDepth;
 
   // The arrays of stored meshes (Mesh::stored); null when every mesh is in memory.
   std::shared_ptr<MeshStore> meshStore;

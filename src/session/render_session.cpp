@@ -82,6 +82,8 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     partitionerName = part.manifest.partitioner;
     scene.filmScale = part.manifest.filmScale;
     scene.filmCrop = part.manifest.filmCrop;
+    scene.integrator = part.manifest.integrator;
+    scene.integratorMaxDepth = part.manifest.integratorMaxDepth;
     owned.resize(scene.instances.size());
     std::iota(owned.begin(), owned.end(), 0);
     ownedEstimate = ownedMemory(scene, owned);
@@ -260,6 +262,11 @@ void RenderSession::setImageSize(int width, int height) {
 
 void RenderSession::setCrop(const CropWindow& crop) {
   settings_.render.crop = crop;
+}
+
+void RenderSession::setMaxDepth(int maxDepth) {
+  FERRY_CHECK_GE(maxDepth, 0);
+  settings_.render.maxDepth = maxDepth;
 }
 
 void RenderSession::setView(const std::string& view, const std::optional<CameraView>& camera) {

@@ -172,6 +172,9 @@ class RenderSession {
   void setImageSize(int width, int height);
   // Before run(): renders only this part of the image (pbrt's cropwindow).
   void setCrop(const CropWindow& crop);
+  // Before run(): the maximum path depth (RenderSettings::maxDepth), a
+  // scene's own (pbrt's Integrator maxdepth).
+  void setMaxDepth(int maxDepth);
   // Before run(): renders this view instead (a named one, or `camera` if
   // given); throws InputError for an unknown name. run() may be called again
   // after it (the bandwidth predictor renders several views from one load).
