@@ -78,6 +78,9 @@ Vec3f bilinear(const HdrImage& img, float x, float y, bool wrapX) {
 struct AreaLight {
   Vec3f radiance;
   bool twoSided = false;  // pbrt's "bool twosided" (default: only the front emits)
+  // pbrt-v4's "float power": the radiance is scaled so that each pbrt shape
+  // it lights emits this many watts (applied per shape, with its area).
+  std::optional<float> power;
 };
 
 struct GraphicsState {
@@ -823,6 +826,10 @@ class Parser {
       e.where = where;
       e.intensity =
           materials_.constantColor(p, "I", Vec3f(1), SpectrumUse::Illuminant) * lightScale(p);
+      // pbrt-v4's "float power" (watts; absent or <= 0: not used): the
+      // intensity is scaled by power / k_e, k_e the solid angle a unit
+      // intensity fills (pbrt-v4's PointLight and SpotLight::Create).
+      const float power = p.getFloat("power", -1);
       Vec3f from = p.getPoint3("from").value_or(Vec3f(0, 0, 0));
       e.position = state_.ctm.transformPoint(from);
       if (type == "spot") {
@@ -830,12 +837,24 @@ class Parser {
         Vec3f d = state_.ctm.transformVector(to - from);
         if (!(length(d) > 0)) fail(where, "spot light: from and to are the same point");
         e.direction = normalize(d);
-        e.coneDegrees = std::clamp(p.getFloat("coneangle", 30), 0.5f, 90.0f);
-        p.find("conedeltaangle");  // the tube's opening makes its own soft edge
+        const float cone = p.getFloat("coneangle", 30);
+        e.coneDegrees = std::clamp(cone, 0.5f, 90.0f);
+        // The tube's opening makes its own soft edge; the delta counts in the power.
+        const float delta = p.getFloat("conedeltaangle", 5);
+        if (power > 0) {
+          const float cosEnd = std::cos(cone * kPi / 180);
+          const float cosStart = std::cos((cone - delta) * kPi / 180);
+          e.intensity *= power / (2 * kPi * ((1 - cosStart) + (cosStart - cosEnd) / 2));
+        }
       } else {
         // v3 point lights place themselves with the CTM too (from is in light space).
         e.direction = Vec3f(0, 0, 1);
+        if (power > 0 && type == "point") e.intensity *= power / (4 * kPi);
       }
+      if (power > 0 && (type == "goniometric" || type == "projection"))
+        warnings_.once("light power|" + type,
+                       fmt::format("{}: \"float power\" ignored (its image is; first at {})", what,
+                                   where.toString()));
       if (!isFinite(e.position)) fail(where, "light position is not finite");
       pointEmitters_.push_back(e);
     } else {
@@ -863,8 +882,10 @@ class Parser {
                                                     "supported: uniform L is used (at {})",
                                                     where.toString()));
     }
+    std::optional<float> power;
+    if (const float watts = p.getFloat("power", -1); watts > 0) power = watts;
     reportUnused(p, "AreaLightSource \"diffuse\"");
-    state_.areaLight = AreaLight{L, twoSided};
+    state_.areaLight = AreaLight{L, twoSided, power};
   }
 
   // ----------------------------------------------------------------- shapes
@@ -905,6 +926,11 @@ class Parser {
       curveBatch_.reset();
       Mesh mesh;
       std::string plyPath;
+      // pbrt-v4's area light "power" is per pbrt shape: the area of one (an
+      // analytic shape's, in its own space as pbrt computes it), or the count
+      // of triangles or patches a mesh is, each of them a shape in pbrt.
+      float shapeArea = 0;
+      size_t meshShapes = 0;
       if (type == "trianglemesh") {
         mesh = triangleMesh(p, where);
       } else if (type == "plymesh") {
@@ -925,6 +951,7 @@ class Parser {
           fail(where,
                fmt::format("bilinearmesh: {} normals for {} points", normals.size(), pos.size()));
         mesh = tessellateBilinearPatches(pos, indices, uvsOf(p, pos.size(), where), normals);
+        meshShapes = indices.size() / 4;
       } else if (type == "loopsubdiv") {
         const PbrtParam* P = p.getArray("P", {"point3"});
         const PbrtParam* idx = p.getArray("indices", {"integer"});
@@ -938,14 +965,23 @@ class Parser {
         mesh = loopSubdivide(points(P), tris, std::max(levels, 0), options_.maxGeneratedTriangles);
       } else if (type == "sphere") {
         float r = p.getFloat("radius", 1);
+        const float zMin = std::clamp(p.getFloat("zmin", -r), -r, r);
+        const float zMax = std::clamp(p.getFloat("zmax", r), -r, r);
+        const float phiMax = std::clamp(p.getFloat("phimax", 360), 0.0f, 360.0f) * kPi / 180;
         mesh = tessellateSphere(r, p.getFloat("zmin", -r), p.getFloat("zmax", r),
                                 p.getFloat("phimax", 360));
+        shapeArea = phiMax * r * std::abs(zMax - zMin);
       } else if (type == "disk") {
-        mesh = tessellateDisk(p.getFloat("height", 0), p.getFloat("radius", 1),
-                              p.getFloat("innerradius", 0), p.getFloat("phimax", 360));
+        const float r = p.getFloat("radius", 1), ri = p.getFloat("innerradius", 0);
+        const float phiMax = std::clamp(p.getFloat("phimax", 360), 0.0f, 360.0f) * kPi / 180;
+        mesh = tessellateDisk(p.getFloat("height", 0), r, ri, p.getFloat("phimax", 360));
+        shapeArea = phiMax * 0.5f * std::abs(r * r - ri * ri);
       } else if (type == "cylinder") {
-        mesh = tessellateCylinder(p.getFloat("radius", 1), p.getFloat("zmin", -1),
-                                  p.getFloat("zmax", 1), p.getFloat("phimax", 360));
+        const float r = p.getFloat("radius", 1);
+        const float zMin = p.getFloat("zmin", -1), zMax = p.getFloat("zmax", 1);
+        const float phiMax = std::clamp(p.getFloat("phimax", 360), 0.0f, 360.0f) * kPi / 180;
+        mesh = tessellateCylinder(r, zMin, zMax, p.getFloat("phimax", 360));
+        shapeArea = std::abs(zMax - zMin) * r * phiMax;
       } else if (type == "heightfield") {
         const PbrtParam* pz = p.getArray("Pz", {"float"});
         if (!pz) fail(where, "heightfield needs \"float Pz\"");
@@ -957,10 +993,13 @@ class Parser {
                                    where.toString()));
         return;
       }
+      if (type == "trianglemesh") meshShapes = mesh.indices.size();
+      Vec3f emission = state_.areaLight ? state_.areaLight->radiance : Vec3f(0);
+      if (state_.areaLight && state_.areaLight->power)
+        emission *= powerScale(type, mesh, shapeArea, meshShapes, where);
       const int32_t alpha = materials_.shapeAlpha(p);
       const int32_t material = materials_.materialFor(
-          state_.material, state_.areaLight ? state_.areaLight->radiance : Vec3f(0), alpha,
-          !state_.areaLight || state_.areaLight->twoSided);
+          state_.material, emission, alpha, !state_.areaLight || state_.areaLight->twoSided);
       if (!plyPath.empty()) {
         p.find("displacement");
         p.find("edgelength");
@@ -982,6 +1021,50 @@ class Parser {
       if (!e.where().file.empty()) throw;
       throw InputError(where, fmt::format("{}: {}", what, e.what()));
     }
+  }
+
+  // What the area light's radiance is multiplied by for its "power"
+  // (pbrt-v4's DiffuseAreaLight::Create): power / (sides x area x pi), the
+  // area one pbrt shape's: `shapeArea` for an analytic shape, else the mean
+  // world-space area of the mesh's `meshShapes` triangles or patches. pbrt
+  // gives each of those the power; Ferry one radiance to the mesh, the same
+  // total power, which is pbrt's exactly when their areas are equal (else a
+  // warning says so).
+  float powerScale(const std::string& type, const Mesh& mesh, float shapeArea, size_t meshShapes,
+                   const SourceLocation& where) {
+    const AreaLight& light = *state_.areaLight;
+    const float sides = light.twoSided ? 2.0f : 1.0f;
+    if (shapeArea > 0) return *light.power / (sides * shapeArea * kPi);
+    if (meshShapes == 0 || mesh.indices.empty()) {
+      warnings_.once("area power|" + type,
+                     fmt::format("AreaLightSource \"float power\" is not applied to Shape \"{}\" "
+                                 "(its radiance is used as given; first at {})",
+                                 type, where.toString()));
+      return 1;
+    }
+    double total = 0;
+    float smallest = std::numeric_limits<float>::max(), largest = 0;
+    for (const Vec3i& t : mesh.indices) {
+      const Vec3f a = state_.ctm.transformPoint(mesh.positions[size_t(t.x)]);
+      const Vec3f b = state_.ctm.transformPoint(mesh.positions[size_t(t.y)]);
+      const Vec3f c = state_.ctm.transformPoint(mesh.positions[size_t(t.z)]);
+      const float area = 0.5f * length(cross(b - a, c - a));
+      total += area;
+      smallest = std::min(smallest, area);
+      largest = std::max(largest, area);
+    }
+    const double mean = total / double(meshShapes);
+    if (!(mean > 0)) return 1;
+    // (A bilinear mesh's patches are not told apart after tessellation.)
+    const bool unequal = type == "trianglemesh" ? largest > smallest * 1.001f : meshShapes > 1;
+    if (unequal)
+      warnings_.once("area power unequal",
+                     fmt::format("AreaLightSource \"float power\" on a Shape \"{}\" of {} "
+                                 "pieces: pbrt-v4 gives each piece that power, Ferry the whole "
+                                 "mesh the same total at one radiance, which differs where the "
+                                 "pieces' areas do (first at {})",
+                                 type, meshShapes, where.toString()));
+    return float(*light.power / (sides * mean * kPi));
   }
 
   Mesh triangleMesh(const PbrtParams& p, const SourceLocation& where) {
@@ -1019,6 +1102,11 @@ class Parser {
   }
 
   void curves(const PbrtParams& p, const SourceLocation& where) {
+    if (state_.areaLight && state_.areaLight->power)
+      warnings_.once("area power|curves",
+                     fmt::format("AreaLightSource \"float power\" is not applied to Shape "
+                                 "\"curves\" (its radiance is used as given; first at {})",
+                                 where.toString()));
     CurveDescription c;
     const PbrtParam* P = p.getArray("P", {"point3"});
     if (!P) fail(where, "curves needs \"point3 P\"");

@@ -426,6 +426,58 @@ TEST_F(PbrtV4Features, ShapesLightsAttributesAndImport) {
 
 // ------------------------------------------------------------------ details
 
+// pbrt-v4's "float power" (watts) scales a light as pbrt-v4's Create
+// functions do: by power / k_e, k_e what a unit light emits.
+Vec3f brightestEmission(const Scene& s) {
+  Vec3f out(0);
+  for (const Material& m : s.materials)
+    if (luminance(m.emission) > luminance(out)) out = m.emission;
+  return out;
+}
+
+TEST(PbrtParser, V4PointAndSpotPowerScaleTheIntensity) {
+  auto emission = [](const std::string& light) {
+    return brightestEmission(fromText("WorldBegin\nShape \"sphere\"\n" + light + "\n"));
+  };
+  const Vec3f point = emission(R"(LightSource "point" "rgb I" [ 1 1 1 ])");
+  const Vec3f pointPower = emission(R"(LightSource "point" "rgb I" [ 1 1 1 ] "float power" 100)");
+  EXPECT_NEAR(pointPower.y / point.y, 100 / (4 * kPi), 1e-3);
+  const std::string spot = R"(LightSource "spot" "rgb I" [ 1 1 1 ] "float coneangle" 20 )";
+  const Vec3f spotPlain = emission(spot);
+  const Vec3f spotPower = emission(spot + R"("float conedeltaangle" 5 "float power" 100)");
+  const float cosEnd = std::cos(20 * kPi / 180), cosStart = std::cos(15 * kPi / 180);
+  EXPECT_NEAR(spotPower.y / spotPlain.y,
+              100 / (2 * kPi * ((1 - cosStart) + (cosStart - cosEnd) / 2)), 1e-2);
+}
+
+TEST(PbrtParser, V4AreaPowerIsPerPbrtShape) {
+  auto emission = [](const std::string& shape, std::vector<std::string>* warnings = nullptr) {
+    return brightestEmission(fromText(
+        "WorldBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ] \"float power\" 10\n" + shape +
+            "\n",
+        warnings));
+  };
+  // A sphere of radius 2: pbrt's area phi_max r (z_max - z_min) = 16 pi.
+  EXPECT_NEAR(emission(R"(Shape "sphere" "float radius" 2)").y, 10 / (16 * kPi * kPi), 1e-5);
+  // A disk of radius 1 under Scale 3: pbrt takes the disk's own area, pi.
+  EXPECT_NEAR(emission("Scale 3 3 3 Shape \"disk\"").y, 10 / (kPi * kPi), 1e-4);
+  // A 2 x 2 quad of two triangles: each triangle (area 2) emits the power.
+  std::vector<std::string> warnings;
+  EXPECT_NEAR(emission(R"(Shape "trianglemesh" "point3 P" [ 0 0 0 2 0 0 2 2 0 0 2 0 ]
+                          "integer indices" [ 0 1 2 0 2 3 ])",
+                       &warnings)
+                  .y,
+              10 / (2 * kPi), 1e-4);
+  EXPECT_FALSE(anyContains(warnings, "power"));
+  // Triangles of unequal area: the same total power, with a warning.
+  EXPECT_NEAR(emission(R"(Shape "trianglemesh" "point3 P" [ 0 0 0 2 0 0 2 2 0 0 4 0 ]
+                          "integer indices" [ 0 1 2 0 2 3 ])",
+                       &warnings)
+                  .y,
+              10 / (3 * kPi), 1e-4);  // mean area (2 + 4) / 2
+  EXPECT_TRUE(anyContains(warnings, "each piece that power"));
+}
+
 TEST(PbrtParser, TransformsComposeAsInPbrt) {
   Scene s = fromText(R"(WorldBegin
 Translate 1 0 0
