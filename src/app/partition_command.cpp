@@ -42,6 +42,9 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
   p.maxProxies = o.maxProxies;
   p.seed = o.seed;
   p.rayPaths = o.rayPaths;
+  p.maxPart = o.maxPart;
+  if (!(p.maxPart >= 1 && p.maxPart <= 1e6))
+    throw InputError(fmt::format("--max-part {}: expected a factor of at least 1", p.maxPart));
   if (p.rayPaths < 1 || p.rayPaths > (uint64_t(1) << 26))
     throw InputError(
         fmt::format("--ray-paths {}: expected 1 to {}", p.rayPaths, uint64_t(1) << 26));
@@ -54,9 +57,13 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
 }
 
 nlohmann::json optionsJson(const PartitionerOptions& p) {
-  return {{"break_objects", p.breakObjects},    {"replication_budget", p.replicationBudget},
-          {"mesh_proxies", p.meshProxies},      {"max_proxies", p.maxProxies},
-          {"max_piece_bytes", p.maxPieceBytes}, {"seed", p.seed}};
+  return {{"break_objects", p.breakObjects},
+          {"replication_budget", p.replicationBudget},
+          {"mesh_proxies", p.meshProxies},
+          {"max_proxies", p.maxProxies},
+          {"max_piece_bytes", p.maxPieceBytes},
+          {"seed", p.seed},
+          {"max_part", p.maxPart}};
 }
 
 std::string defaultPlotPath(const std::string& report) {
@@ -317,6 +324,10 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
                   "scene's bytes")
       ->capture_default_str();
   cmd->add_option("--mesh-proxies", o.meshProxies, "object-proxies: boxes per non-instanced mesh")
+      ->capture_default_str();
+  cmd->add_option("--max-part", o.maxPart,
+                  "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"
+                  "a larger factor trades memory per rank for fewer forwarded rays")
       ->capture_default_str();
   cmd->add_option(
       "--memory-budget", o.memoryBudget,

@@ -33,6 +33,7 @@ struct PartitionCommandOptions {
   uint64_t maxProxies = kDefaultMaxProxies;
   uint32_t seed = 1;          // random, ray-guided: their samples
   uint64_t rayPaths = 65536;  // ray-guided
+  double maxPart = 1.25;      // ray-guided: --max-part
   bool quiet = false;
   // --memory-budget: partition without holding the geometry when it would
   // not fit (empty: half the machine's memory; see partition_command.cpp).

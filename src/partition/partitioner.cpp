@@ -143,10 +143,11 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
         throw InternalError("the ray-guided partitioner was given no ray sample (withRaySample)");
       const RayIncidence incidence =
           rayIncidence(unitProxyBoxes(scene, p.units, o.meshProxies), *o.raySample);
-      RayGuidedSplitter splitter(p.units, incidence, ranks);
+      RayGuidedSplitter splitter(p.units, incidence, ranks, o.maxPart);
       parts = runSplitLoop(splitter, ranks);
-      refinePartsByRays(p.units, incidence, parts,
-                        kRayGuidedFinalBalance * double(p.inputBytes) / double(ranks));
+      refinePartsByRays(
+          p.units, incidence, parts,
+          (o.maxPart - kRayGuidedRefineMargin) * double(p.inputBytes) / double(ranks));
       s.sampledRays = o.raySample->rays.size();
       s.sampledRaysAcrossUnits = incidence.rays();
       s.separatedRays = estimatedForwards(incidence, parts, p.units.units.size());
@@ -163,7 +164,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       // Both keep their balance: no part above kBestMaxPart or
       // kRayGuidedMaxPart x an even share.
       const double share = double(p.inputBytes) / double(ranks);
-      const uint64_t cap = uint64_t((o.name == "best" ? kBestMaxPart : kRayGuidedMaxPart) * share);
+      const uint64_t cap = uint64_t(
+          (o.name == "best" ? kBestMaxPart : o.maxPart + kRayGuidedReplicationMargin) * share);
       ReplicationResult r = replicateLargeUnits(p.units, parts, partRanks, owners,
                                                 replicationBudget(o, p.inputBytes), cap);
       s.replicatedBytes = r.addedBytes;

@@ -60,6 +60,8 @@ struct PartitionerOptions {
   // them: withRaySample), and how many paths that sample has.
   std::shared_ptr<const RaySample> raySample;
   uint64_t rayPaths = 65536;
+  // ray-guided: the largest part it aims at, times total / N (--max-part).
+  double maxPart = 1.25;  // kRayGuidedDefaultMaxPart
 };
 
 struct PartitionStats {

@@ -46,13 +46,14 @@ RayIncidence rayIncidence(const std::vector<UnitBox>& unitBoxes, const RaySample
   return incidence;
 }
 
-RayGuidedSplitter::RayGuidedSplitter(const UnitSet& units, const RayIncidence& incidence, int ranks)
+RayGuidedSplitter::RayGuidedSplitter(const UnitSet& units, const RayIncidence& incidence, int ranks,
+                                     double maxPart)
     : PartSplitter(units),
       incidence_(incidence),
       fallback_(units, /*groupCandidates=*/true),
       localOf_(units.units.size(), -1) {
   const int levels = std::max(1, int(std::ceil(std::log2(std::max(2, ranks)))));
-  beta_ = 0.5 * std::pow(1.25, 1.0 / levels);
+  beta_ = 0.5 * std::pow(maxPart, 1.0 / levels);
 }
 
 bool RayGuidedSplitter::split(const Part& part, Part& left, Part& right) {

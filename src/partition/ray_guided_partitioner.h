@@ -13,10 +13,12 @@
 // splits balanced enough, the one that separates the fewest.
 //
 // Balance: each side may hold at most `beta` of its parent's bytes, beta =
-// 0.5 x 1.25^(1/levels) with levels = ceil(log2 N): after the levels of
-// splits N ranks need, the largest part holds at most 1.25 x total / N (the
-// issue's goal is 1.3; replication and shared meshes need the rest). When no
-// candidate is that balanced, the most balanced one is taken.
+// 0.5 x M^(1/levels) with levels = ceil(log2 N) and M the largest part
+// asked for (--max-part, default kRayGuidedDefaultMaxPart = 1.25): after the
+// levels of splits N ranks need, the largest part holds at most M x total /
+// N (the goal is 1.3; replication and shared meshes need the rest).
+// When no candidate is that balanced, the most balanced one is taken. A
+// larger M trades memory for fewer forwarded rays.
 //
 // Each split is then refined (part_assignment.h): moves of units, of an
 // object's instances and of the users of a shared mesh bring the sides
@@ -55,9 +57,13 @@ namespace ferry {
 using RayIncidence = Hypergraph;
 RayIncidence rayIncidence(const std::vector<UnitBox>& boxes, const RaySample& sample);
 
+// The largest part the splits aim at by default, times total / N.
+constexpr double kRayGuidedDefaultMaxPart = 1.25;
+
 class RayGuidedSplitter final : public PartSplitter {
  public:
-  RayGuidedSplitter(const UnitSet& units, const RayIncidence& incidence, int ranks);
+  RayGuidedSplitter(const UnitSet& units, const RayIncidence& incidence, int ranks,
+                    double maxPart = kRayGuidedDefaultMaxPart);
   bool split(const Part& part, Part& left, Part& right) override;
 
   double balance() const { return beta_; }
@@ -75,11 +81,13 @@ class RayGuidedSplitter final : public PartSplitter {
 // rays, as `best` calls it: balanced by bytes alone). Skipped above
 // kMaxRefinedParts parts (it keeps a counter per ray and part).
 constexpr size_t kMaxRefinedParts = 256;
-// The limit the parts are refined to, times total / N (the goal is
-// 1.3; replication adds up to its budget / N on top).
-constexpr double kRayGuidedFinalBalance = 1.2;
-// What `best`'s replication may fill a part up to, afterwards (times total / N).
-constexpr double kRayGuidedMaxPart = 1.3;
+// The parts are refined to (the largest part asked for - this) x total / N:
+// 1.2 by default (the goal is 1.3; replication adds up to its
+// budget / N on top).
+constexpr double kRayGuidedRefineMargin = 0.05;
+// `best`'s replication may then fill a part up to (the largest part asked
+// for + this) x total / N: 1.3 by default.
+constexpr double kRayGuidedReplicationMargin = 0.05;
 void refinePartsByRays(const UnitSet& units, const RayIncidence& incidence,
                        std::vector<Part>& parts, double limit);
 
