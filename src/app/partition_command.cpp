@@ -43,14 +43,10 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
   p.seed = o.seed;
   p.rayPaths = o.rayPaths;
   p.maxPart = o.maxPart;
-  if (!(p.maxPart >= 1 && p.maxPart <= 1e6))
-    throw InputError(fmt::format("--max-part {}: expected a factor of at least 1", p.maxPart));
+  checkPartitionerFlags(p.replicationBudget, p.maxPart);
   if (p.rayPaths < 1 || p.rayPaths > (uint64_t(1) << 26))
     throw InputError(
         fmt::format("--ray-paths {}: expected 1 to {}", p.rayPaths, uint64_t(1) << 26));
-  if (!(p.replicationBudget >= 0 && p.replicationBudget <= 1))
-    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
-                                 p.replicationBudget));
   if (p.meshProxies < 1 || p.meshProxies > 4096)
     throw InputError(fmt::format("--mesh-proxies {}: expected 1 to 4096", p.meshProxies));
   return p;

@@ -176,11 +176,10 @@ void applyPartitionerFlags(const RenderOptions& o, SessionSettings& settings) {
   if (!o.partition.empty()) settings.partitioner = parsePartitioner(o.partition);
   settings.keepObjectsWhole = o.keepObjectsWhole;
   settings.replicationBudget = o.replicationBudget;
+  settings.maxPart = o.maxPart;
   settings.maxProxies = o.maxProxies;
   settings.render.seed = o.seed;
-  if (!(o.replicationBudget >= 0 && o.replicationBudget <= 1))
-    throw InputError(fmt::format("--replication-budget {}: expected a fraction from 0 to 1",
-                                 o.replicationBudget));
+  checkPartitionerFlags(o.replicationBudget, o.maxPart);
 }
 
 void addRenderingOptions(CLI::App* command, RenderOptions& o) {
@@ -274,6 +273,11 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
       ->add_option(
           "--replication-budget", o.replicationBudget,
           "best: copies of large, cheap content may add this fraction of the scene's bytes")
+      ->capture_default_str();
+  command
+      ->add_option("--max-part", o.maxPart,
+                   "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"
+                   "a larger factor trades memory per rank for fewer forwarded rays")
       ->capture_default_str();
   command
       ->add_option(

@@ -63,6 +63,7 @@ struct RenderOptions {
   std::string partition;  // empty: best on more than one rank
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
+  double maxPart = 1.25;  // ray-guided: --max-part
   uint64_t maxProxies = kDefaultMaxProxies;
   // --show-partition[=N]: draw the partition instead of rendering (0: off;
   // -1: for as many ranks as MPI runs; N: for N ranks).

@@ -8,6 +8,7 @@ PartitionerOptions partitionerOptions(const SessionSettings& settings, int ranks
                                                             : PartitionerKind::RoundRobin));
   p.breakObjects = !settings.keepObjectsWhole;
   p.replicationBudget = settings.replicationBudget;
+  p.maxPart = settings.maxPart;
   p.maxProxies = settings.maxProxies;
   p.seed = settings.render.seed;
   return p;

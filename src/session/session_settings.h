@@ -47,6 +47,7 @@ struct SessionSettings {
   double timeLimitSeconds = 0;
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
+  double maxPart = 1.25;  // ray-guided: the largest part it aims at (PartitionerOptions::maxPart)
   uint64_t maxProxies = kDefaultMaxProxies;  // partition/proxy_merge.h
 };
 
