@@ -235,19 +235,9 @@ int run(const Options& options) {
   const Rgb fMean = mean(f.pixels);
   const double rLum = luminance(rMean);  // luminance is linear: the mean's is the mean
   const double fLum = luminance(fMean);
+  // Each counted block's squared error (over its channels), for the RMSE
+  // and for where the error is.
   double squares = 0, sum = 0;
-  for (size_t i = 0; i < rBlocks.pixels.size(); ++i)
-    for (int c = 0; c < 3 && counted[i]; ++c) {
-      const double d = fBlocks.pixels[i][c] - rBlocks.pixels[i][c];
-      squares += d * d;
-      sum += rBlocks.pixels[i][c];
-    }
-  const double n = 3.0 * double(rBlocks.pixels.size() - excludedBlocks);
-  const double rmse =
-      sum > 0 ? std::sqrt(squares / n) / (sum / n) : std::numeric_limits<double>::quiet_NaN();
-  // Where the error is: blocks by their squared error, largest first, and
-  // the share of the total the worst 1 % and 5 % hold (a few blocks holding
-  // most of it is a local difference: a material, a light, fireflies).
   std::vector<std::pair<double, size_t>> blockErrors;
   for (size_t i = 0; i < rBlocks.pixels.size(); ++i) {
     if (!counted[i]) continue;
@@ -255,9 +245,17 @@ int run(const Options& options) {
     for (int c = 0; c < 3; ++c) {
       const double d = fBlocks.pixels[i][c] - rBlocks.pixels[i][c];
       e += d * d;
+      sum += rBlocks.pixels[i][c];
     }
+    squares += e;
     blockErrors.emplace_back(e, i);
   }
+  const double n = 3.0 * double(blockErrors.size());
+  const double rmse =
+      sum > 0 ? std::sqrt(squares / n) / (sum / n) : std::numeric_limits<double>::quiet_NaN();
+  // Where the error is: blocks by their squared error, largest first, and
+  // the share of the total the worst 1 % and 5 % hold (a few blocks holding
+  // most of it is a local difference: a material, a light, fireflies).
   std::sort(blockErrors.begin(), blockErrors.end(), std::greater<>());
   auto shareOfWorst = [&](double fraction) {
     const size_t k = std::max<size_t>(1, size_t(fraction * double(blockErrors.size())));

@@ -3,10 +3,8 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
-#include <cmath>
-#include <cstdlib>
-
 #include "core/error.h"
+#include "core/number_list.h"
 
 namespace ferry {
 
@@ -21,19 +19,10 @@ void addCameraFlags(CLI::App* command, CameraFlags& f) {
 }
 
 Vec3f parseVectorFlag(const std::string& flag, const std::string& text) {
-  Vec3f v;
-  size_t start = 0;
-  for (int i = 0; i < 3; ++i) {
-    const size_t end = i < 2 ? text.find(',', start) : text.size();
-    const std::string part = end == std::string::npos ? "" : text.substr(start, end - start);
-    char* rest = nullptr;
-    const float f = part.empty() ? 0.0f : std::strtof(part.c_str(), &rest);
-    if (part.empty() || rest != part.c_str() + part.size() || !std::isfinite(f))
-      throw InputError(fmt::format("{} '{}': expected three numbers x,y,z", flag, text));
-    v[i] = f;
-    start = end + 1;
-  }
-  return v;
+  float v[3];
+  if (!parseNumberList(text, v))
+    throw InputError(fmt::format("{} '{}': expected three numbers x,y,z", flag, text));
+  return {v[0], v[1], v[2]};
 }
 
 std::optional<CameraView> cameraFromFlags(const CameraFlags& f) {

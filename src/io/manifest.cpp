@@ -10,6 +10,7 @@
 #include "core/hash64.h"
 #include "io/image_io.h"
 #include "io/part_file.h"
+#include "scene/scene.h"
 
 namespace ferry {
 namespace {
@@ -116,8 +117,7 @@ Manifest readManifest(const std::string& directory) {
       throw InputError(fmt::format("{}: bad film_scale {}", path, m.filmScale));
     if (j.contains("film_crop")) {
       const auto crop = j.at("film_crop").get<std::vector<float>>();
-      if (crop.size() != 4 || !(crop[0] >= 0 && crop[0] < crop[1] && crop[1] <= 1) ||
-          !(crop[2] >= 0 && crop[2] < crop[3] && crop[3] <= 1))
+      if (crop.size() != 4 || !isCropWindow(crop[0], crop[1], crop[2], crop[3]))
         throw InputError(fmt::format("{}: bad film_crop", path));
       m.filmCrop = std::array<float, 4>{crop[0], crop[1], crop[2], crop[3]};
     }

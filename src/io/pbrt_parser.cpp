@@ -708,8 +708,7 @@ class Parser {
     scene_.filmScale = filmScale;
     if (const PbrtParam* crop = p.find("cropwindow")) {
       const std::vector<float>& c = crop->floats;
-      if (crop->type != "float" || c.size() != 4 || !(c[0] >= 0 && c[0] < c[1] && c[1] <= 1) ||
-          !(c[2] >= 0 && c[2] < c[3] && c[3] <= 1))
+      if (crop->type != "float" || c.size() != 4 || !isCropWindow(c[0], c[1], c[2], c[3]))
         fail(where,
              "Film: \"float cropwindow\" expects four fractions x0 x1 y0 y1 with "
              "0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1");
@@ -963,25 +962,24 @@ class Parser {
         std::memcpy(static_cast<void*>(tris.data()), idx->ints.data(), tris.size() * sizeof(Vec3i));
         int levels = p.has("levels") ? p.getInt("levels", 3) : p.getInt("nlevels", 3);
         mesh = loopSubdivide(points(P), tris, std::max(levels, 0), options_.maxGeneratedTriangles);
-      } else if (type == "sphere") {
-        float r = p.getFloat("radius", 1);
-        const float zMin = std::clamp(p.getFloat("zmin", -r), -r, r);
-        const float zMax = std::clamp(p.getFloat("zmax", r), -r, r);
-        const float phiMax = std::clamp(p.getFloat("phimax", 360), 0.0f, 360.0f) * kPi / 180;
-        mesh = tessellateSphere(r, p.getFloat("zmin", -r), p.getFloat("zmax", r),
-                                p.getFloat("phimax", 360));
-        shapeArea = phiMax * r * std::abs(zMax - zMin);
-      } else if (type == "disk") {
-        const float r = p.getFloat("radius", 1), ri = p.getFloat("innerradius", 0);
-        const float phiMax = std::clamp(p.getFloat("phimax", 360), 0.0f, 360.0f) * kPi / 180;
-        mesh = tessellateDisk(p.getFloat("height", 0), r, ri, p.getFloat("phimax", 360));
-        shapeArea = phiMax * 0.5f * std::abs(r * r - ri * ri);
-      } else if (type == "cylinder") {
-        const float r = p.getFloat("radius", 1);
-        const float zMin = p.getFloat("zmin", -1), zMax = p.getFloat("zmax", 1);
-        const float phiMax = std::clamp(p.getFloat("phimax", 360), 0.0f, 360.0f) * kPi / 180;
-        mesh = tessellateCylinder(r, zMin, zMax, p.getFloat("phimax", 360));
-        shapeArea = std::abs(zMax - zMin) * r * phiMax;
+      } else if (type == "sphere" || type == "disk" || type == "cylinder") {
+        // pbrt's own Area() of the shape, in its object space, for "power".
+        const float r = p.getFloat("radius", 1), phiMaxDegrees = p.getFloat("phimax", 360);
+        const float phiMax = std::clamp(phiMaxDegrees, 0.0f, 360.0f) * kPi / 180;
+        if (type == "sphere") {
+          const float zMin = p.getFloat("zmin", -r), zMax = p.getFloat("zmax", r);
+          mesh = tessellateSphere(r, zMin, zMax, phiMaxDegrees);
+          auto clampZ = [&](float z) { return std::clamp(z, -std::abs(r), std::abs(r)); };
+          shapeArea = phiMax * std::abs(r) * std::abs(clampZ(zMax) - clampZ(zMin));
+        } else if (type == "disk") {
+          const float ri = p.getFloat("innerradius", 0);
+          mesh = tessellateDisk(p.getFloat("height", 0), r, ri, phiMaxDegrees);
+          shapeArea = phiMax * 0.5f * std::abs(r * r - ri * ri);
+        } else {
+          const float zMin = p.getFloat("zmin", -1), zMax = p.getFloat("zmax", 1);
+          mesh = tessellateCylinder(r, zMin, zMax, phiMaxDegrees);
+          shapeArea = std::abs(zMax - zMin) * std::abs(r) * phiMax;
+        }
       } else if (type == "heightfield") {
         const PbrtParam* pz = p.getArray("Pz", {"float"});
         if (!pz) fail(where, "heightfield needs \"float Pz\"");

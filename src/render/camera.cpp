@@ -2,19 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <string>
 
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/number_list.h"
 #include "scene/scene.h"
 
 namespace ferry {
 
 FilmWindow filmWindow(int filmWidth, int filmHeight, const CropWindow& crop) {
-  auto valid = [](float lo, float hi) { return lo >= 0 && lo < hi && hi <= 1; };
-  if (!valid(crop.x0, crop.x1) || !valid(crop.y0, crop.y1))
+  if (!isCropWindow(crop.x0, crop.x1, crop.y0, crop.y1))
     throw InputError(
         fmt::format("crop window {},{},{},{}: expected fractions x0,x1,y0,y1 of the "
                     "image with 0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1",
@@ -38,16 +37,8 @@ FilmWindow filmWindow(int filmWidth, int filmHeight, const CropWindow& crop) {
 
 CropWindow parseCropWindow(const std::string& flag, const std::string& text) {
   float v[4];
-  size_t start = 0;
-  for (int i = 0; i < 4; ++i) {
-    const size_t end = i < 3 ? text.find(',', start) : text.size();
-    const std::string part = end == std::string::npos ? "" : text.substr(start, end - start);
-    char* rest = nullptr;
-    v[i] = part.empty() ? 0.0f : std::strtof(part.c_str(), &rest);
-    if (part.empty() || rest != part.c_str() + part.size() || !std::isfinite(v[i]))
-      throw InputError(fmt::format("{} '{}': expected four numbers x0,x1,y0,y1", flag, text));
-    start = end + 1;
-  }
+  if (!parseNumberList(text, v))
+    throw InputError(fmt::format("{} '{}': expected four numbers x0,x1,y0,y1", flag, text));
   const CropWindow crop{v[0], v[1], v[2], v[3]};
   try {
     filmWindow(1 << 20, 1 << 20, crop);  // the fractions' checks, before any image is made

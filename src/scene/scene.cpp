@@ -161,4 +161,8 @@ void Scene::validate() const {
   }
 }
 
+bool isCropWindow(float x0, float x1, float y0, float y1) {
+  return x0 >= 0 && x0 < x1 && x1 <= 1 && y0 >= 0 && y0 < y1 && y1 <= 1;
+}
+
 }  // namespace ferry

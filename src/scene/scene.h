@@ -277,4 +277,8 @@ struct Scene {
   void releaseAllBut(const std::vector<int32_t>& keptInstances);
 };
 
+// Whether x0, x1, y0, y1 are a crop window's fractions (Scene::filmCrop,
+// render/camera.h's CropWindow): 0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1.
+bool isCropWindow(float x0, float x1, float y0, float y1);
+
 }  // namespace ferry
