@@ -12,8 +12,11 @@
 // partition; a stand-in, since partitioning scale=30 itself needs 4.5 GB).
 // Rays: the camera rays of the island's first view at 640x360, one per pixel
 // centre, nothing excluded (the primary-ownership query); and the same rays
-// with rank 0 excluded (a forwarding decision after a local trace).
-// Each benchmark checks that both trees answer every query identically.
+// with rank r excluded (a forwarding decision after a local trace on rank r,
+// the rank that owns most of what the view sees).
+// Each benchmark checks that every tree answers every query identically. A
+// third tree, `OwnApart`, is the one rank r builds (ProxyBvh with its own
+// proxies apart): for the ray sets with rank r excluded it never enters them.
 //
 //   build/bench/proxy_query_bench                      (ratios printed at the end)
 //   build/bench/proxy_query_bench --benchmark_repetitions=5
@@ -211,18 +214,25 @@ struct Ray {
 
 // The three kinds of query a rank makes, as ray sets:
 //   0 camera:  camera rays, nothing excluded, no tmax (who owns a camera path);
-//   1 to hit:  the same rays up to their hit in the whole scene, rank 0
+//   1 to hit:  the same rays up to their hit in the whole scene, rank r
 //              visited (the forwarding decision after a camera ray's trace);
 //   2 bounce:  from each hit, a direction on the upper hemisphere (a diffuse
-//              bounce off the ground) up to its own hit, rank 0 visited (the
-//              decision after a continuation's trace).
-constexpr int kRaySets = 3;
-constexpr RankMask kExcluded[kRaySets] = {0, 1, 1};
+//              bounce off the ground) up to its own hit, rank r visited (the
+//              decision after a continuation's trace);
+//   3 own:     those of set 2 that start inside a proxy of rank r alone (a
+//              bounce off rank r's own content: the decisions rank r makes
+//              after tracing its continuations, where its own proxies crowd
+//              around the origin).
+constexpr int kRaySets = 4;
+// r: the rank whose own proxies hold the most origins of set 2.
 
 struct Case {
   std::vector<Proxy> proxies;
   std::vector<Ray> rays[kRaySets];
   std::unique_ptr<ProxyBvh> tree;
+  std::unique_ptr<ProxyBvh> split;  // rank r's own proxies in a tree of their own
+  int ownRank = 0;                  // r
+  RankMask excluded(int set) const { return set == 0 ? 0 : RankMask(1) << ownRank; }
   std::unique_ptr<BaselineProxyBvh> baseline;
 };
 
@@ -268,12 +278,26 @@ const Case& islandCase(int tiles) {
       c.rays[2].push_back({origin, dir, geometry->intersect({origin, dir, 1e-3f}).t});
     }
   c.tree = std::make_unique<ProxyBvh>(c.proxies);
+  // Set 3 and r: origins inside a box of rank r alone (entered at 0).
+  auto ownedBy = [&](int rank) {
+    std::vector<Ray> own;
+    for (const Ray& r : c.rays[2])
+      if (c.tree->closest(r.origin, r.direction, 1e-30f, ~(RankMask(1) << rank)).found())
+        own.push_back(r);
+    return own;
+  };
+  for (int rank = 0; rank < 8; ++rank) {
+    std::vector<Ray> own = ownedBy(rank);
+    if (own.size() > c.rays[3].size()) c.rays[3] = std::move(own), c.ownRank = rank;
+  }
+  c.split = std::make_unique<ProxyBvh>(c.proxies, c.ownRank);
   c.baseline = std::make_unique<BaselineProxyBvh>(c.proxies);
   for (int set = 0; set < kRaySets; ++set)
     for (const Ray& r : c.rays[set]) {
-      ProxyBvh::Hit a = c.tree->closest(r.origin, r.direction, r.tmax, kExcluded[set]);
-      ProxyBvh::Hit b = c.baseline->closest(r.origin, r.direction, r.tmax, kExcluded[set]);
-      if (a.proxy != b.proxy || a.tEnter != b.tEnter) {
+      ProxyBvh::Hit a = c.tree->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      ProxyBvh::Hit b = c.baseline->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      ProxyBvh::Hit s = c.split->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      if (a.proxy != b.proxy || a.tEnter != b.tEnter || s.proxy != a.proxy) {
         std::fprintf(
             stderr,
             "proxy_query_bench: the trees disagree (%d at %.9g vs %d at %.9g), set %d, tmax %.9g\n",
@@ -282,14 +306,19 @@ const Case& islandCase(int tiles) {
       }
     }
   std::fprintf(stderr,
-               "proxy_query_bench: %zu proxies, %zu + %zu + %zu rays, %zu binary nodes, %zu "
-               "%d-wide nodes\n",
+               "proxy_query_bench: %zu proxies, %zu + %zu + %zu + %zu rays, %zu binary nodes, %zu "
+               "%d-wide nodes; rank r = %d (%zu own-only proxies)\n",
                c.proxies.size(), c.rays[0].size(), c.rays[1].size(), c.rays[2].size(),
-               c.baseline->nodeCount(), c.tree->nodeCount(), ProxyBvh::kWidth);
+               c.rays[3].size(), c.baseline->nodeCount(), c.tree->nodeCount(), ProxyBvh::kWidth,
+               c.ownRank, c.split->ownOnlyCount());
   return c;
 }
 
-template <bool kBaseline>
+// The trees measured: the baseline, ProxyBvh, and ProxyBvh with rank r's own
+// proxies apart (what rank r builds: its decisions exclude rank r).
+enum class Tree { Baseline, Wide, Split };
+
+template <Tree kTree>
 void BM_Query(benchmark::State& state) {
   const Case& c = islandCase(int(state.range(0)));
   const int set = int(state.range(1));
@@ -297,9 +326,10 @@ void BM_Query(benchmark::State& state) {
   int64_t found = 0;
   for (auto _ : state) {
     for (const Ray& r : rays) {
-      ProxyBvh::Hit h = kBaseline
-                            ? c.baseline->closest(r.origin, r.direction, r.tmax, kExcluded[set])
-                            : c.tree->closest(r.origin, r.direction, r.tmax, kExcluded[set]);
+      ProxyBvh::Hit h = kTree == Tree::Baseline
+                            ? c.baseline->closest(r.origin, r.direction, r.tmax, c.excluded(set))
+                            : (kTree == Tree::Wide ? *c.tree : *c.split)
+                                  .closest(r.origin, r.direction, r.tmax, c.excluded(set));
       found += h.found();
     }
   }
@@ -311,25 +341,36 @@ void BM_Query(benchmark::State& state) {
 }
 
 // Args: tiles (1: the island's proxies, 5: 25 times as many), ray set (0 camera, 1 to hit, 2
-// bounce).
-BENCHMARK_TEMPLATE(BM_Query, true)
+// bounce, 3 bounce off rank r's own content).
+BENCHMARK_TEMPLATE(BM_Query, Tree::Baseline)
     ->Name("Baseline")
     ->Args({1, 0})
     ->Args({1, 1})
     ->Args({1, 2})
+    ->Args({1, 3})
     ->Args({5, 0})
     ->Args({5, 2})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_TEMPLATE(BM_Query, false)
+BENCHMARK_TEMPLATE(BM_Query, Tree::Wide)
     ->Name("ProxyBvh")
     ->Args({1, 0})
     ->Args({1, 1})
     ->Args({1, 2})
+    ->Args({1, 3})
+    ->Args({5, 0})
+    ->Args({5, 2})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_Query, Tree::Split)
+    ->Name("OwnApart")
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Args({1, 3})
     ->Args({5, 0})
     ->Args({5, 2})
     ->Unit(benchmark::kMillisecond);
 
-// Prints Baseline / ProxyBvh time per query for each case.
+// Prints the time per query of each tree for each case, and the ratios.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
@@ -337,24 +378,30 @@ class RatioReporter : public benchmark::ConsoleReporter {
     for (const Run& run : runs) {
       if (run.run_type != Run::RT_Iteration) continue;
       std::string name = run.benchmark_name();
-      std::string args = name.substr(name.find('/'));
       // CPU time per query, in microseconds (this machine is shared: CPU
       // time is steadier than wall time; the counter is a rate over CPU time).
-      (name.rfind("Baseline", 0) == 0 ? baseline_ : tree_)[args] =
+      perQuery_[name.substr(name.find('/'))][name.substr(0, name.find('/'))] =
           double(run.counters.at("us_per_query"));
     }
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
-    std::printf("\nCPU time per query (args: tiles/ray set), baseline and ProxyBvh:\n");
-    for (const auto& [args, base] : baseline_)
-      if (tree_.count(args))
-        std::printf("  %-8s %.3f us  %.3f us  %.2fx faster\n", args.c_str(), base, tree_.at(args),
-                    base / tree_.at(args));
+    std::printf(
+        "\nCPU time per query (args: tiles/ray set); Baseline, ProxyBvh,  OwnApart (rank r's own "
+        "proxies apart):\n");
+    for (const auto& [args, trees] : perQuery_) {
+      auto at = [&](const char* tree) { return trees.count(tree) ? trees.at(tree) : 0.0; };
+      const double base = at("Baseline"), wide = at("ProxyBvh"), split = at("OwnApart");
+      std::printf(
+          "  %-8s %.3f us  %.3f us  %.3f us   ProxyBvh %.2fx faster than Baseline, "
+          "OwnApart %.2fx faster than ProxyBvh\n",
+          args.c_str(), base, wide, split, wide > 0 ? base / wide : 0.0,
+          split > 0 ? wide / split : 0.0);
+    }
   }
 
  private:
-  std::map<std::string, double> baseline_, tree_;
+  std::map<std::string, std::map<std::string, double>> perQuery_;
 };
 
 }  // namespace

@@ -67,7 +67,7 @@ DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,
       mode_(mode),
       exchange_(resolveExchangeMode(exchange, mode)),
       chunkPixels_(std::max(1u, chunkPixels)),
-      proxies_(partition.proxies) {
+      proxies_(partition.proxies, comm.rank()) {
   FERRY_CHECK_LE(comm.size(), kMaxRanks);
   if constexpr (!Path::kReplay) {
     FERRY_CHECK_LE(comm.size(), sizeof(typename Path::Mask) * 8);

@@ -1,6 +1,7 @@
 #include "trace/proxy_bvh.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstring>
 #include <limits>
@@ -50,19 +51,29 @@ struct ProxyBvh::Builder {
   int32_t collapse(int32_t binaryNode);
 };
 
-ProxyBvh::ProxyBvh(std::vector<Proxy> proxies) : proxies_(std::move(proxies)) {
+ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank)
+    : proxies_(std::move(proxies)), ownRank_(ownRank) {
   Builder b{*this, {}, {}, {}, {}, {}};
   for (const Proxy& p : proxies_) {
     b.masks.push_back(p.owners.mask());
     narrow_ = narrow_ && p.owners.fitsInMask();
   }
   if (proxies_.empty()) return;
-  b.order.resize(proxies_.size());
-  for (size_t i = 0; i < b.order.size(); ++i) b.order[i] = int32_t(i);
+  // The shared tree's proxies first, then those owned by ownRank alone.
+  auto ownOnly = [&](const Proxy& p) {
+    return ownRank >= 0 && p.owners.count() == 1 && p.owners.contains(ownRank);
+  };
+  b.order.reserve(proxies_.size());
+  for (size_t i = 0; i < proxies_.size(); ++i)
+    if (!ownOnly(proxies_[i])) b.order.push_back(int32_t(i));
+  const int32_t shared = int32_t(b.order.size());
+  for (size_t i = 0; i < proxies_.size(); ++i)
+    if (ownOnly(proxies_[i])) b.order.push_back(int32_t(i));
+  ownOnlyCount_ = proxies_.size() - size_t(shared);
   b.centers.resize(proxies_.size());
   for (size_t i = 0; i < proxies_.size(); ++i) b.centers[i] = proxies_[i].bounds.center();
-  b.build(0, int32_t(proxies_.size()), 0);
-  b.collapse(0);
+  if (shared > 0) sharedRoot_ = b.collapse(b.build(0, shared, 0));
+  if (ownOnlyCount_ > 0) ownRoot_ = b.collapse(b.build(shared, int32_t(ownOnlyCount_), 0));
 }
 
 int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
@@ -281,9 +292,85 @@ ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax,
 template <typename Excluded>
 ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
                                     const Excluded& ex) const {
-  constexpr bool kMask = std::is_same_v<Excluded, MaskExclusion>;
+  bool ownSearched = ownRoot_ >= 0;
+  if (ownSearched) {
+    if constexpr (std::is_same_v<Excluded, MaskExclusion>)
+      ownSearched = !((ex.excluded >> ownRank_) & 1u);  // narrow: ownRank_ < 64
+    else
+      ownSearched = !ex.excluded.contains(ownRank_);
+  }
   Hit best;
-  if (nodes_.empty()) return best;
+  if (!ownSearched) {
+    if (sharedRoot_ >= 0) search<DepthFirst>({sharedRoot_, -1}, origin, direction, tmax, ex, best);
+  } else {
+    // Both trees, nearest node first across the two: searched one after the
+    // other, the first tree's answer is often far and bounds the second
+    // badly (twice the work of one tree for camera rays).
+    search<BestFirst>({sharedRoot_, ownRoot_}, origin, direction, tmax, ex, best);
+  }
+  return best;
+}
+
+namespace {
+// A search entry: a node, where the ray enters it, and the least proxy
+// index below it (so that popping it reads nothing more).
+struct Entry {
+  int32_t node;
+  float t;
+  int32_t minIndex;
+};
+// Nearer first, then lower index.
+inline bool nearer(const Entry& a, const Entry& b) {
+  return a.t < b.t || (a.t == b.t && a.minIndex < b.minIndex);
+}
+}  // namespace
+
+// Depth first, a node's children nearest on top of the stack (the best
+// answer is found early and prunes the rest): the cheapest order within one
+// tree. At most kWidth - 1 siblings wait per level.
+struct ProxyBvh::DepthFirst {
+  Entry stack[(kMaxSahDepth + 34) * kWidth + 2];
+  int top = 0;
+  bool empty() const { return top == 0; }
+  Entry pop() { return stack[--top]; }
+  // `sub` sorted farthest first.
+  void push(const Entry* sub, int count) {
+    for (int j = 0; j < count; ++j) stack[top++] = sub[j];
+  }
+  static constexpr bool kStopAtFirstWorse = false;
+};
+
+// Best first: a heap of entries, nearest on top; the first entry that cannot
+// improve ends the search (every other is farther). For two trees at once.
+struct ProxyBvh::BestFirst {
+  std::vector<Entry>& heap;
+  BestFirst() : heap(scratch()) { heap.clear(); }
+  static std::vector<Entry>& scratch() {
+    thread_local std::vector<Entry> entries;
+    return entries;
+  }
+  static bool later(const Entry& a, const Entry& b) { return nearer(b, a); }
+  bool empty() const { return heap.empty(); }
+  Entry pop() {
+    std::pop_heap(heap.begin(), heap.end(), later);
+    const Entry e = heap.back();
+    heap.pop_back();
+    return e;
+  }
+  void push(const Entry* sub, int count) {
+    for (int j = 0; j < count; ++j) {
+      heap.push_back(sub[j]);
+      std::push_heap(heap.begin(), heap.end(), later);
+    }
+  }
+  static constexpr bool kStopAtFirstWorse = true;
+};
+
+// The closest-first search from `roots` (-1: none), improving on `best`.
+template <typename Order, typename Excluded>
+void ProxyBvh::search(std::array<int32_t, 2> roots, Vec3f origin, Vec3f direction, float tmax,
+                      const Excluded& ex, Hit& best) const {
+  constexpr bool kMask = std::is_same_v<Excluded, MaskExclusion>;
   const Vec3f inv{1 / direction.x, 1 / direction.y, 1 / direction.z};
   const Floats o[3] = {splat(origin.x), splat(origin.y), splat(origin.z)};
   const Floats invV[3] = {splat(inv.x), splat(inv.y), splat(inv.z)};
@@ -311,20 +398,20 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
   auto mayImprove = [&](float tNode, int32_t minIndex) {
     return tNode < best.tEnter || (tNode == best.tEnter && minIndex < best.proxy);
   };
-  // Closest first: a node's children are pushed farthest first, so the best
-  // answer is found early and prunes the rest. An entry carries its node's
-  // least index, so popping it reads nothing more.
-  struct Entry {
-    int32_t node;
-    float t;
-    int32_t minIndex;
-  };
-  Entry stack[(kMaxSahDepth + 34) * kWidth];  // at most kWidth - 1 siblings wait per level
-  int top = 0;
-  stack[top++] = {0, 0.0f, 0};
-  while (top > 0) {
-    const Entry e = stack[--top];
-    if (!mayImprove(e.t, e.minIndex)) continue;
+  Order frontier;
+  {
+    Entry start[2];
+    int count = 0;
+    for (int32_t root : roots)
+      if (root >= 0) start[count++] = {root, 0.0f, 0};
+    frontier.push(start, count);
+  }
+  while (!frontier.empty()) {
+    const Entry e = frontier.pop();
+    if (!mayImprove(e.t, e.minIndex)) {
+      if constexpr (Order::kStopAtFirstWorse) break;
+      continue;
+    }
     const Node& node = nodes_[size_t(e.node)];
     // Every slot's box at once, exactly as intersectBox (Box3f::clipRay)
     // computes it lane by lane, so that answers do not depend on the width:
@@ -355,7 +442,7 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
       const int32_t id = node.minIndex[k];
       if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) best = {id, t};
     }
-    // Subtrees nearest (then lowest index) on top of the stack.
+    // Subtrees, sorted farthest first (the stack pops the nearest first).
     Entry sub[kWidth];
     int count = 0;
     for (uint32_t s = candidates & ~node.proxySlots; s != 0; s &= s - 1) {
@@ -363,15 +450,11 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
       const Entry entry{node.child[k], t0[k], node.minIndex[k]};
       if (!mayImprove(entry.t, entry.minIndex)) continue;
       int j = count++;
-      for (; j > 0 && (sub[j - 1].t < entry.t ||
-                       (sub[j - 1].t == entry.t && sub[j - 1].minIndex < entry.minIndex));
-           --j)
-        sub[j] = sub[j - 1];
+      for (; j > 0 && nearer(sub[j - 1], entry); --j) sub[j] = sub[j - 1];
       sub[j] = entry;
     }
-    for (int j = 0; j < count; ++j) stack[top++] = sub[j];
+    frontier.push(sub, count);
   }
-  return best;
 }
 
 }  // namespace ferry

@@ -4,6 +4,7 @@
 // proxy index, so every rank answers identically.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -15,7 +16,17 @@ namespace ferry {
 class ProxyBvh {
  public:
   ProxyBvh() = default;
-  explicit ProxyBvh(std::vector<Proxy> proxies);
+  // With `ownRank` >= 0, the proxies owned by that rank alone go in a tree
+  // of their own, which a query excluding `ownRank` never enters: a rank's
+  // forwarding decisions always exclude itself (it has just traced the ray),
+  // and near where its rays start most proxies are its own, which one shared
+  // tree made every decision descend to and reject (issue 13; measured in
+  // bench/proxy_query_bench and docs/data-parallel.md). A query that does
+  // not exclude `ownRank` (which rank owns a camera path, replay walks)
+  // searches both trees, nearest node first across the two. The answers are
+  // those of one tree: the split only sets apart proxies that cannot be
+  // answers to the queries that skip them.
+  explicit ProxyBvh(std::vector<Proxy> proxies, int ownRank = -1);
 
   struct Hit {
     int32_t proxy = -1;
@@ -36,6 +47,8 @@ class ProxyBvh {
 
   const std::vector<Proxy>& proxies() const { return proxies_; }
   size_t nodeCount() const { return nodes_.size(); }
+  // Proxies in the tree a query excluding the own rank never enters.
+  size_t ownOnlyCount() const { return ownOnlyCount_; }
 
   // Children per node. The query tests a node's children together, 8 lanes
   // of one vector operation per slab (AVX with x86-64-v3): a binary tree
@@ -46,6 +59,11 @@ class ProxyBvh {
  private:
   template <typename Excluded>
   Hit closestImpl(Vec3f origin, Vec3f direction, float tmax, const Excluded& excluded) const;
+  struct DepthFirst;
+  struct BestFirst;
+  template <typename Order, typename Excluded>
+  void search(std::array<int32_t, 2> roots, Vec3f origin, Vec3f direction, float tmax,
+              const Excluded& excluded, Hit& best) const;
 
   // Up to kWidth children, each a node or a single proxy, structure of
   // arrays so that one load fills a lane per child. An unused slot has no
@@ -70,7 +88,11 @@ class ProxyBvh {
 
   std::vector<Proxy> proxies_;
   bool narrow_ = true;
-  std::vector<Node> nodes_;          // nodes_[0] is the root
+  std::vector<Node> nodes_;
+  int32_t sharedRoot_ = -1;  // every proxy but those owned by ownRank_ alone
+  int32_t ownRoot_ = -1;     // those, when ownRank_ >= 0
+  int ownRank_ = -1;
+  size_t ownOnlyCount_ = 0;
   std::vector<RankSet> slotOwners_;  // per node and slot, only when not narrow
 };
 

@@ -176,6 +176,63 @@ TEST(ProxyBvh, SkewedProxiesMatchBruteForce) {
   }
 }
 
+// A rank's own proxies in a tree of their own (the tree its forwarding
+// decisions never enter) leave every answer as it was: with and without the
+// own rank excluded, on random boxes with replicas, on the tie grid, at and
+// above 64 ranks, and when the own rank owns every proxy or none.
+TEST(ProxyBvh, OwnTreeLeavesTheAnswersUnchanged) {
+  std::vector<Proxy> grid;  // many equal entry distances
+  for (int i = 0; i < 2000; ++i) {
+    const auto cell = [&](int d) { return float(int(uniform(uint32_t(i), d) * 10)); };
+    Box3f b;
+    b.extend(Vec3f(cell(0), cell(1), cell(2)));
+    b.extend(Vec3f(cell(0), cell(1), cell(2)) + Vec3f(float(1 + i % 3)));
+    RankSet owners = RankSet::single(int(uniform(uint32_t(i), 3) * 4));
+    if (i % 4 == 0) owners.insert(int(uniform(uint32_t(i), 4) * 4));
+    grid.push_back({b, owners});
+  }
+  struct Case {
+    std::vector<Proxy> proxies;
+    int ranks, own;
+  };
+  const Case cases[] = {{randomProxies(400, 3, 5), 3, 0},
+                        {randomProxies(400, 8, 6), 8, 5},
+                        {randomProxies(400, 70, 7), 70, 66},  // set owners
+                        {grid, 4, 2},
+                        {randomProxies(100, 1, 8), 1, 0},   // every proxy the own rank's
+                        {randomProxies(100, 4, 9), 4, 9}};  // none of them
+  for (const Case& c : cases) {
+    const ProxyBvh one(c.proxies);
+    const ProxyBvh split(c.proxies, c.own);
+    if (c.own < c.ranks) EXPECT_GT(split.ownOnlyCount(), 0u) << c.ranks;
+    if (c.ranks == 1) EXPECT_EQ(split.ownOnlyCount(), c.proxies.size());
+    for (uint32_t k = 0; k < 3000; ++k) {
+      const Vec3f o =
+          c.ranks == 4 && c.own == 2
+              ? Vec3f(float(int(uniform(k, 50) * 12)) - 1, float(int(uniform(k, 51) * 12)) - 1,
+                      float(int(uniform(k, 52) * 12)) - 1)
+              : Vec3f(uniform(k, 50), uniform(k, 51), uniform(k, 52)) * 14.0f - Vec3f(2);
+      Vec3f d = normalize(Vec3f(uniform(k, 53), uniform(k, 54), uniform(k, 55)) - Vec3f(0.5f));
+      if (k % 3 == 0) d = Vec3f(k % 2 ? 1.0f : -1.0f, 0, 0);  // flat: ties and NaN slabs
+      const float tmax = k % 4 == 0 ? kInfinity : uniform(k, 56) * 20;
+      RankSet excluded;
+      if (k % 2 == 0) excluded.insert(c.own);  // a forwarding decision
+      for (int r = 0; r < c.ranks; ++r)
+        if (uniform(k * 131 + uint32_t(r), 57) < 0.3f) excluded.insert(r);
+      const ProxyBvh::Hit a = split.closest(o, d, tmax, excluded);
+      const ProxyBvh::Hit b = one.closest(o, d, tmax, excluded);
+      const ProxyBvh::Hit brute = bruteForce(c.proxies, o, d, tmax, excluded);
+      ASSERT_EQ(a.proxy, b.proxy) << "ray " << k << " ranks " << c.ranks;
+      ASSERT_EQ(a.proxy, brute.proxy) << "ray " << k << " ranks " << c.ranks;
+      if (a.found()) EXPECT_EQ(a.tEnter, b.tEnter);
+      if (c.ranks <= 64) {
+        const ProxyBvh::Hit m = split.closest(o, d, tmax, excluded.mask());
+        ASSERT_EQ(m.proxy, a.proxy) << "ray " << k;
+      }
+    }
+  }
+}
+
 TEST(ProxyBvh, AxisParallelRaysAndOriginInside) {
   std::vector<Proxy> proxies = {{{{0, 0, 0}, {1, 1, 1}}, RankSet::single(0)},
                                 {{{2, 0, 0}, {3, 1, 1}}, RankSet::single(1)}};
