@@ -234,6 +234,7 @@ struct Case {
   int ownRank = 0;                  // r
   RankMask excluded(int set) const { return set == 0 ? 0 : RankMask(1) << ownRank; }
   std::unique_ptr<BaselineProxyBvh> baseline;
+  std::vector<std::unique_ptr<ProxyBvh>> splitOf;  // every rank's split tree
 };
 
 // The island's 8-rank best partition and its first view's rays.
@@ -291,6 +292,8 @@ const Case& islandCase(int tiles) {
     if (own.size() > c.rays[3].size()) c.rays[3] = std::move(own), c.ownRank = rank;
   }
   c.split = std::make_unique<ProxyBvh>(c.proxies, c.ownRank);
+  for (int rank = 0; rank < 8; ++rank)
+    c.splitOf.push_back(std::make_unique<ProxyBvh>(c.proxies, rank));
   c.baseline = std::make_unique<BaselineProxyBvh>(c.proxies);
   for (int set = 0; set < kRaySets; ++set)
     for (const Ray& r : c.rays[set]) {
@@ -370,6 +373,38 @@ BENCHMARK_TEMPLATE(BM_Query, Tree::Split)
     ->Args({5, 2})
     ->Unit(benchmark::kMillisecond);
 
+// The same ray set on every rank of the 8, each excluding itself (set 0:
+// nothing), with one tree (ProxyBvh) or each rank's split tree: the average
+// cost over the ranks, whose own proxies lie in the view or do not.
+template <bool kSplit>
+void BM_EveryRank(benchmark::State& state) {
+  const Case& c = islandCase(int(state.range(0)));
+  const int set = int(state.range(1));
+  const std::vector<Ray>& rays = c.rays[set];
+  int64_t found = 0;
+  for (auto _ : state)
+    for (int rank = 0; rank < 8; ++rank) {
+      const ProxyBvh& tree = kSplit ? *c.splitOf[size_t(rank)] : *c.tree;
+      const RankMask excluded = set == 0 ? 0 : RankMask(1) << rank;
+      for (const Ray& r : rays)
+        found += tree.closest(r.origin, r.direction, r.tmax, excluded).found();
+    }
+  benchmark::DoNotOptimize(found);
+  state.counters["us_per_query"] =
+      benchmark::Counter(double(state.iterations()) * 8.0 * double(rays.size()) * 1e-6,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK_TEMPLATE(BM_EveryRank, false)
+    ->Name("ProxyBvhEveryRank")
+    ->Args({1, 0})
+    ->Args({1, 2})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_EveryRank, true)
+    ->Name("OwnApartEveryRank")
+    ->Args({1, 0})
+    ->Args({1, 2})
+    ->Unit(benchmark::kMillisecond);
+
 // Prints the time per query of each tree for each case, and the ratios.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
@@ -398,6 +433,13 @@ class RatioReporter : public benchmark::ConsoleReporter {
           args.c_str(), base, wide, split, wide > 0 ? base / wide : 0.0,
           split > 0 ? wide / split : 0.0);
     }
+    std::printf(
+        "\nEvery rank of the 8, each excluding itself (set 0: nothing); ProxyBvh, OwnApart:\n");
+    for (const auto& [args, trees] : perQuery_)
+      if (trees.count("ProxyBvhEveryRank") && trees.count("OwnApartEveryRank"))
+        std::printf("  %-8s %.3f us  %.3f us   OwnApart %.2fx faster than ProxyBvh\n", args.c_str(),
+                    trees.at("ProxyBvhEveryRank"), trees.at("OwnApartEveryRank"),
+                    trees.at("ProxyBvhEveryRank") / trees.at("OwnApartEveryRank"));
   }
 
  private:

@@ -1,7 +1,6 @@
 #include "trace/proxy_bvh.h"
 
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <cstring>
 #include <limits>
@@ -299,76 +298,19 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
     else
       ownSearched = !ex.excluded.contains(ownRank_);
   }
+  // Both trees at once (below): searched one after the other, the first
+  // tree's answer is often far and bounds the second badly (1.2-1.9x the
+  // time of one tree for camera rays in bench/proxy_query_bench).
   Hit best;
-  if (!ownSearched) {
-    if (sharedRoot_ >= 0) search<DepthFirst>({sharedRoot_, -1}, origin, direction, tmax, ex, best);
-  } else {
-    // Both trees, nearest node first across the two: searched one after the
-    // other, the first tree's answer is often far and bounds the second
-    // badly (twice the work of one tree for camera rays).
-    search<BestFirst>({sharedRoot_, ownRoot_}, origin, direction, tmax, ex, best);
-  }
+  search(sharedRoot_, ownSearched ? ownRoot_ : -1, origin, direction, tmax, ex, best);
   return best;
 }
 
-namespace {
-// A search entry: a node, where the ray enters it, and the least proxy
-// index below it (so that popping it reads nothing more).
-struct Entry {
-  int32_t node;
-  float t;
-  int32_t minIndex;
-};
-// Nearer first, then lower index.
-inline bool nearer(const Entry& a, const Entry& b) {
-  return a.t < b.t || (a.t == b.t && a.minIndex < b.minIndex);
-}
-}  // namespace
-
-// Depth first, a node's children nearest on top of the stack (the best
-// answer is found early and prunes the rest): the cheapest order within one
-// tree. At most kWidth - 1 siblings wait per level.
-struct ProxyBvh::DepthFirst {
-  Entry stack[(kMaxSahDepth + 34) * kWidth + 2];
-  int top = 0;
-  bool empty() const { return top == 0; }
-  Entry pop() { return stack[--top]; }
-  // `sub` sorted farthest first.
-  void push(const Entry* sub, int count) {
-    for (int j = 0; j < count; ++j) stack[top++] = sub[j];
-  }
-  static constexpr bool kStopAtFirstWorse = false;
-};
-
-// Best first: a heap of entries, nearest on top; the first entry that cannot
-// improve ends the search (every other is farther). For two trees at once.
-struct ProxyBvh::BestFirst {
-  std::vector<Entry>& heap;
-  BestFirst() : heap(scratch()) { heap.clear(); }
-  static std::vector<Entry>& scratch() {
-    thread_local std::vector<Entry> entries;
-    return entries;
-  }
-  static bool later(const Entry& a, const Entry& b) { return nearer(b, a); }
-  bool empty() const { return heap.empty(); }
-  Entry pop() {
-    std::pop_heap(heap.begin(), heap.end(), later);
-    const Entry e = heap.back();
-    heap.pop_back();
-    return e;
-  }
-  void push(const Entry* sub, int count) {
-    for (int j = 0; j < count; ++j) {
-      heap.push_back(sub[j]);
-      std::push_heap(heap.begin(), heap.end(), later);
-    }
-  }
-  static constexpr bool kStopAtFirstWorse = true;
-};
-
-// The closest-first search from `roots` (-1: none), improving on `best`.
-template <typename Order, typename Excluded>
-void ProxyBvh::search(std::array<int32_t, 2> roots, Vec3f origin, Vec3f direction, float tmax,
+// The closest-first search of the trees at `rootA` and `rootB` (-1: none),
+// improving on `best`. The two roots' children start the search together,
+// sorted as one node's would be, so that two trees cost about what one does.
+template <typename Excluded>
+void ProxyBvh::search(int32_t rootA, int32_t rootB, Vec3f origin, Vec3f direction, float tmax,
                       const Excluded& ex, Hit& best) const {
   constexpr bool kMask = std::is_same_v<Excluded, MaskExclusion>;
   const Vec3f inv{1 / direction.x, 1 / direction.y, 1 / direction.z};
@@ -398,21 +340,20 @@ void ProxyBvh::search(std::array<int32_t, 2> roots, Vec3f origin, Vec3f directio
   auto mayImprove = [&](float tNode, int32_t minIndex) {
     return tNode < best.tEnter || (tNode == best.tEnter && minIndex < best.proxy);
   };
-  Order frontier;
-  {
-    Entry start[2];
-    int count = 0;
-    for (int32_t root : roots)
-      if (root >= 0) start[count++] = {root, 0.0f, 0};
-    frontier.push(start, count);
-  }
-  while (!frontier.empty()) {
-    const Entry e = frontier.pop();
-    if (!mayImprove(e.t, e.minIndex)) {
-      if constexpr (Order::kStopAtFirstWorse) break;
-      continue;
-    }
-    const Node& node = nodes_[size_t(e.node)];
+  // Closest first: a node's children are pushed farthest first, so the best
+  // answer is found early and prunes the rest. An entry carries its node's
+  // least index, so popping it reads nothing more.
+  struct Entry {
+    int32_t node;
+    float t;
+    int32_t minIndex;
+  };
+  Entry stack[(kMaxSahDepth + 34) * kWidth + kWidth];  // kWidth - 1 siblings wait per level
+  int top = 0;
+  // Tests node n's slots: proxies may improve `best`; subtrees that may hold
+  // a better one go into sub[0, count), nearest (then lowest index) last.
+  auto expand = [&](int32_t n, Entry* sub, int& count) {
+    const Node& node = nodes_[size_t(n)];
     // Every slot's box at once, exactly as intersectBox (Box3f::clipRay)
     // computes it lane by lane, so that answers do not depend on the width:
     // per axis the slab distances, swapped when reversed, an axis skipped
@@ -432,9 +373,9 @@ void ProxyBvh::search(std::array<int32_t, 2> roots, Vec3f origin, Vec3f directio
     }
     const Ints hit = (t0 <= t1) & (t0 < splat(limit));
     uint32_t candidates = bits(hit);
-    if (candidates == 0) continue;  // owners are read only for slots the ray enters
-    candidates &= eligible(e.node);
-    if (candidates == 0) continue;
+    if (candidates == 0) return;  // owners are read only for slots the ray enters
+    candidates &= eligible(n);
+    if (candidates == 0) return;
     // Proxies first: they may lower the bar for this node's subtrees.
     for (uint32_t p = candidates & node.proxySlots; p != 0; p &= p - 1) {
       const int k = std::countr_zero(p);
@@ -442,18 +383,32 @@ void ProxyBvh::search(std::array<int32_t, 2> roots, Vec3f origin, Vec3f directio
       const int32_t id = node.minIndex[k];
       if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) best = {id, t};
     }
-    // Subtrees, sorted farthest first (the stack pops the nearest first).
-    Entry sub[kWidth];
-    int count = 0;
     for (uint32_t s = candidates & ~node.proxySlots; s != 0; s &= s - 1) {
       const int k = std::countr_zero(s);
       const Entry entry{node.child[k], t0[k], node.minIndex[k]};
       if (!mayImprove(entry.t, entry.minIndex)) continue;
       int j = count++;
-      for (; j > 0 && nearer(sub[j - 1], entry); --j) sub[j] = sub[j - 1];
+      for (; j > 0 && (sub[j - 1].t < entry.t ||
+                       (sub[j - 1].t == entry.t && sub[j - 1].minIndex < entry.minIndex));
+           --j)
+        sub[j] = sub[j - 1];
       sub[j] = entry;
     }
-    frontier.push(sub, count);
+  };
+  {
+    Entry sub[2 * kWidth];
+    int count = 0;
+    for (int32_t root : {rootA, rootB})
+      if (root >= 0) expand(root, sub, count);
+    for (int j = 0; j < count; ++j) stack[top++] = sub[j];
+  }
+  while (top > 0) {
+    const Entry e = stack[--top];
+    if (!mayImprove(e.t, e.minIndex)) continue;
+    Entry sub[kWidth];
+    int count = 0;
+    expand(e.node, sub, count);
+    for (int j = 0; j < count; ++j) stack[top++] = sub[j];
   }
 }
 

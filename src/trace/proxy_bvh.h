@@ -4,7 +4,6 @@
 // proxy index, so every rank answers identically.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -23,7 +22,7 @@ class ProxyBvh {
   // tree made every decision descend to and reject (issue 13; measured in
   // bench/proxy_query_bench and docs/data-parallel.md). A query that does
   // not exclude `ownRank` (which rank owns a camera path, replay walks)
-  // searches both trees, nearest node first across the two. The answers are
+  // searches both trees together. The answers are
   // those of one tree: the split only sets apart proxies that cannot be
   // answers to the queries that skip them.
   explicit ProxyBvh(std::vector<Proxy> proxies, int ownRank = -1);
@@ -59,10 +58,8 @@ class ProxyBvh {
  private:
   template <typename Excluded>
   Hit closestImpl(Vec3f origin, Vec3f direction, float tmax, const Excluded& excluded) const;
-  struct DepthFirst;
-  struct BestFirst;
-  template <typename Order, typename Excluded>
-  void search(std::array<int32_t, 2> roots, Vec3f origin, Vec3f direction, float tmax,
+  template <typename Excluded>
+  void search(int32_t rootA, int32_t rootB, Vec3f origin, Vec3f direction, float tmax,
               const Excluded& excluded, Hit& best) const;
 
   // Up to kWidth children, each a node or a single proxy, structure of
