@@ -137,11 +137,20 @@ def median_frame(tag_of):
     return statistics.median([f["seconds"] for r in range(1, rounds + 1)
                               for f in load(tag_of(r))["render"]["frames"]])
 
-print("\nby exchange (same rounds; ratio to the same 1-rank frames; wait share: of the stage time summed over ranks)")
+# Stage seconds summed over ranks and over the frames after the first: the
+# first frame's generate stage also holds the wait for the slowest rank's
+# set-up (its first collective), which is not a frame's work.
+def stage_seconds(s):
+    frames = s["render"]["frames"]
+    frames = frames[1:] if len(frames) > 1 else frames
+    return {k: sum(f["stage_seconds"].get(k, 0) for f in frames) for k in frames[0]["stage_seconds"]}, len(frames)
+
+print("\nby exchange (same rounds; ratio to the same 1-rank frames; wait share: of the stage time summed over ranks,"
+      " frames after the first)")
 for exchange in exchanges:
     for n in ranks[1:]:
         t = median_frame(lambda r: f"{exchange}-{n}-{r}")
-        st = load(f"{exchange}-{n}-1")["render"]["total"]["stage_seconds"]
+        st = stage_seconds(load(f"{exchange}-{n}-1"))[0]
         stages = sum(st.get(k, 0) for k in ("generate", "trace", "exchange", "shade", "wait"))
         waiting = st.get("wait", 0) if exchange == "overlapped" else st["exchange"]
         print(f"  {exchange:10} {n} ranks: {t:7.3f} s/frame   ratio {t / base:5.2f}"
@@ -158,16 +167,17 @@ if baseline != "none":
         print(f"  {n} rank(s): {frame[n]:7.3f} s against {base_n:7.3f} s   ratio {frame[n] / base_n:5.2f}"
               f"   (baseline's own ratio to 1 rank: {base_n / base_1:5.2f})")
 
-print("\nwhere the time goes (round 1, per frame): rays traced and forwarded (exact), stage seconds summed over ranks")
+print("\nwhere the time goes (round 1, per frame): rays traced and forwarded (exact), stage seconds summed over ranks"
+      " (frames after the first)")
 for n in ranks:
     s = load(f"time-{n}-1")
     t, f = s["render"]["total"], len(s["render"]["frames"])
-    st = t["stage_seconds"]
+    st, stage_frames = stage_seconds(s)
     print(f"  {n} rank(s): traced {t['traces']['total'] / f:9.0f} (closest {t['traces']['closest'] / f:.0f},"
           f" shadow {t['traces']['occlusion'] / f:.0f}, re-trace {t['traces']['retrace'] / f:.0f}),"
           f" forwarded {t['exchange']['rays_forwarded'] / f:8.0f};"
           f" proxy queries per camera path {t['traces']['proxy_queries'] / max(1, t['camera_paths']):.2f};"
-          f" s: " + ", ".join(f"{k} {st.get(k, 0) / f:.2f}" for k in ("generate", "trace", "exchange", "shade", "wait"))
+          f" s: " + ", ".join(f"{k} {st.get(k, 0) / stage_frames:.2f}" for k in ("generate", "trace", "exchange", "shade", "wait"))
           + f" (generate {100 * st['generate'] / max(1e-12, sum(st.get(k, 0) for k in ('generate', 'trace', 'exchange', 'shade', 'wait'))):.0f}%)")
 
 print("\nrays forwarded per frame (exact counters; bytes and rounds per frame too)")

@@ -55,7 +55,7 @@ for n in 1 $RANKS; do
   profile "$n" 1
 done
 
-python3 - "$work" "$FRAMES" 1 $RANKS <<'EOF'
+python3 - "$work" "$FRAMES" $RANKS <<'EOF'
 import collections, re, subprocess, sys
 work, frames = sys.argv[1], int(sys.argv[2])
 ranks = [int(r) for r in sys.argv[3:]]
