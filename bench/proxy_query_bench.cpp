@@ -344,34 +344,14 @@ void BM_Query(benchmark::State& state) {
 }
 
 // Args: tiles (1: the island's proxies, 5: 25 times as many), ray set (0 camera, 1 to hit, 2
-// bounce, 3 bounce off rank r's own content).
-BENCHMARK_TEMPLATE(BM_Query, Tree::Baseline)
-    ->Name("Baseline")
-    ->Args({1, 0})
-    ->Args({1, 1})
-    ->Args({1, 2})
-    ->Args({1, 3})
-    ->Args({5, 0})
-    ->Args({5, 2})
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_TEMPLATE(BM_Query, Tree::Wide)
-    ->Name("ProxyBvh")
-    ->Args({1, 0})
-    ->Args({1, 1})
-    ->Args({1, 2})
-    ->Args({1, 3})
-    ->Args({5, 0})
-    ->Args({5, 2})
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_TEMPLATE(BM_Query, Tree::Split)
-    ->Name("OwnApart")
-    ->Args({1, 0})
-    ->Args({1, 1})
-    ->Args({1, 2})
-    ->Args({1, 3})
-    ->Args({5, 0})
-    ->Args({5, 2})
-    ->Unit(benchmark::kMillisecond);
+// bounce, 3 bounce off rank r's own content); the same cases for every tree.
+void everyCase(benchmark::internal::Benchmark* b) {
+  b->Args({1, 0})->Args({1, 1})->Args({1, 2})->Args({1, 3})->Args({5, 0})->Args({5, 2});
+  b->Unit(benchmark::kMillisecond);
+}
+BENCHMARK_TEMPLATE(BM_Query, Tree::Baseline)->Name("Baseline")->Apply(everyCase);
+BENCHMARK_TEMPLATE(BM_Query, Tree::Wide)->Name("ProxyBvh")->Apply(everyCase);
+BENCHMARK_TEMPLATE(BM_Query, Tree::Split)->Name("OwnApart")->Apply(everyCase);
 
 // The same ray set on every rank of the 8, each excluding itself (set 0:
 // nothing), with one tree (ProxyBvh) or each rank's split tree: the average
