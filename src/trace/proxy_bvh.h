@@ -22,9 +22,9 @@ class ProxyBvh {
   // tree made every decision descend to and reject (issue 13; measured in
   // bench/proxy_query_bench and docs/data-parallel.md). A query that does
   // not exclude `ownRank` (which rank owns a camera path, replay walks)
-  // searches both trees together. The answers are
-  // those of one tree: the split only sets apart proxies that cannot be
-  // answers to the queries that skip them.
+  // searches both trees together. The answers are those of one tree: the
+  // split only sets apart proxies that cannot answer the queries that skip
+  // them.
   explicit ProxyBvh(std::vector<Proxy> proxies, int ownRank = -1);
 
   struct Hit {
