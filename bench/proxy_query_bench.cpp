@@ -230,11 +230,12 @@ struct Case {
   std::vector<Proxy> proxies;
   std::vector<Ray> rays[kRaySets];
   std::unique_ptr<ProxyBvh> tree;
-  std::unique_ptr<ProxyBvh> split;  // rank r's own proxies in a tree of their own
-  int ownRank = 0;                  // r
+  int ownRank = 0;  // r
   RankMask excluded(int set) const { return set == 0 ? 0 : RankMask(1) << ownRank; }
   std::unique_ptr<BaselineProxyBvh> baseline;
-  std::vector<std::unique_ptr<ProxyBvh>> splitOf;  // every rank's split tree
+  std::vector<std::unique_ptr<ProxyBvh>>
+      splitOf;  // every rank's own proxies in a tree of their own
+  const ProxyBvh& split() const { return *splitOf[size_t(ownRank)]; }  // rank r's
 };
 
 // The island's 8-rank best partition and its first view's rays.
@@ -291,7 +292,6 @@ const Case& islandCase(int tiles) {
     std::vector<Ray> own = ownedBy(rank);
     if (own.size() > c.rays[3].size()) c.rays[3] = std::move(own), c.ownRank = rank;
   }
-  c.split = std::make_unique<ProxyBvh>(c.proxies, c.ownRank);
   for (int rank = 0; rank < 8; ++rank)
     c.splitOf.push_back(std::make_unique<ProxyBvh>(c.proxies, rank));
   c.baseline = std::make_unique<BaselineProxyBvh>(c.proxies);
@@ -299,7 +299,7 @@ const Case& islandCase(int tiles) {
     for (const Ray& r : c.rays[set]) {
       ProxyBvh::Hit a = c.tree->closest(r.origin, r.direction, r.tmax, c.excluded(set));
       ProxyBvh::Hit b = c.baseline->closest(r.origin, r.direction, r.tmax, c.excluded(set));
-      ProxyBvh::Hit s = c.split->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      ProxyBvh::Hit s = c.split().closest(r.origin, r.direction, r.tmax, c.excluded(set));
       if (a.proxy != b.proxy || a.tEnter != b.tEnter || s.proxy != a.proxy) {
         std::fprintf(
             stderr,
@@ -313,7 +313,7 @@ const Case& islandCase(int tiles) {
                "%d-wide nodes; rank r = %d (%zu own-only proxies)\n",
                c.proxies.size(), c.rays[0].size(), c.rays[1].size(), c.rays[2].size(),
                c.rays[3].size(), c.baseline->nodeCount(), c.tree->nodeCount(), ProxyBvh::kWidth,
-               c.ownRank, c.split->ownOnlyCount());
+               c.ownRank, c.split().ownOnlyCount());
   return c;
 }
 
@@ -331,7 +331,7 @@ void BM_Query(benchmark::State& state) {
     for (const Ray& r : rays) {
       ProxyBvh::Hit h = kTree == Tree::Baseline
                             ? c.baseline->closest(r.origin, r.direction, r.tmax, c.excluded(set))
-                            : (kTree == Tree::Wide ? *c.tree : *c.split)
+                            : (kTree == Tree::Wide ? *c.tree : c.split())
                                   .closest(r.origin, r.direction, r.tmax, c.excluded(set));
       found += h.found();
     }

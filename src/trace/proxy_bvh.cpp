@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <type_traits>
 
 namespace ferry {
@@ -62,12 +63,12 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank)
   auto ownOnly = [&](const Proxy& p) {
     return ownRank >= 0 && p.owners.count() == 1 && p.owners.contains(ownRank);
   };
-  b.order.reserve(proxies_.size());
-  for (size_t i = 0; i < proxies_.size(); ++i)
-    if (!ownOnly(proxies_[i])) b.order.push_back(int32_t(i));
-  const int32_t shared = int32_t(b.order.size());
-  for (size_t i = 0; i < proxies_.size(); ++i)
-    if (ownOnly(proxies_[i])) b.order.push_back(int32_t(i));
+  b.order.resize(proxies_.size());
+  std::iota(b.order.begin(), b.order.end(), 0);
+  const int32_t shared =
+      int32_t(std::stable_partition(b.order.begin(), b.order.end(),
+                                    [&](int32_t id) { return !ownOnly(proxies_[size_t(id)]); }) -
+              b.order.begin());
   ownOnlyCount_ = proxies_.size() - size_t(shared);
   b.centers.resize(proxies_.size());
   for (size_t i = 0; i < proxies_.size(); ++i) b.centers[i] = proxies_[i].bounds.center();
