@@ -319,7 +319,9 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
                   "best: copies of spatially large, cheap content may add this fraction of the "
                   "scene's bytes")
       ->capture_default_str();
-  cmd->add_option("--mesh-proxies", o.meshProxies, "object-proxies: boxes per non-instanced mesh")
+  cmd->add_option("--mesh-proxies", o.meshProxies,
+                  "object-proxies, best, ray-guided: boxes per non-instanced mesh or mesh\n"
+                  "piece, made by BVH build steps on its triangles (braiding); 1: its box")
       ->capture_default_str();
   cmd->add_option("--max-part", o.maxPart,
                   "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"

@@ -185,7 +185,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       partition.proxies = domainProxies(parts, partRanks);
     else if (o.name == "object-naive")
       partition.proxies = unitBoxProxies(p.units, owners);
-    else if (o.name == "object-proxies" || o.name == "ray-guided")
+    else if (o.name == "object-proxies" || o.name == "ray-guided" || o.name == "best")
+      // best: its mesh pieces braided too (docs/partitioning.md, "best's proxies").
       partition.proxies = instanceProxies(scene, p.units, owners, o.meshProxies);
     else
       partition.proxies = instanceProxies(scene, p.units, owners, 1);

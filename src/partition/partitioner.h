@@ -14,7 +14,9 @@
 //   best            large meshes first cut into tight pieces, then as
 //                   bvh-style, then parts over 1.2x an even share give units
 //                   to lighter ones, then spatially large but cheap content
-//                   replicated on every rank up to a budget (default 5%)
+//                   replicated on every rank up to a budget (default 5%);
+//                   proxies: one per instance, and 64 per mesh piece by
+//                   braiding, as object-proxies (Ferry's, beyond the paper)
 //   ray-guided      as best, but each split takes, among balanced ones, the
 //                   one a sample of rays crosses least (ray_guided_partitioner.h)
 //   round-robin     instances dealt in turn (tests)
@@ -51,7 +53,7 @@ struct PartitionerOptions {
   // keep all non-instanced content whole, as one unit.
   bool breakObjects = true;
   double replicationBudget = 0.05;  // best: copies may add this fraction of the input's bytes
-  int meshProxies = 64;             // object-proxies: boxes per non-instanced mesh
+  int meshProxies = 64;  // object-proxies, best, ray-guided: boxes per non-instanced mesh
   // Proxies are merged down to this many (proxy_merge.h); 0: no limit.
   uint64_t maxProxies = kDefaultMaxProxies;
   uint64_t maxPieceBytes = 0;  // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
