@@ -149,8 +149,8 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
     if (o.name == "ray-guided") {
       if (!o.raySample)
         throw InternalError("the ray-guided partitioner was given no ray sample (withRaySample)");
-      const RayIncidence incidence =
-          rayIncidence(unitProxyBoxes(scene, p.units, o.meshProxies), *o.raySample);
+      const RayIncidence incidence = rayIncidence(
+          unitProxyBoxes(scene, p.units, o.meshProxies, o.instanceProxies), *o.raySample);
       RayGuidedSplitter splitter(p.units, incidence, ranks, o.maxPart);
       parts = runSplitLoop(splitter, ranks);
       refinePartsByRays(
@@ -187,7 +187,7 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       partition.proxies = unitBoxProxies(p.units, owners);
     else if (o.name == "object-proxies" || o.name == "ray-guided" || o.name == "best")
       // best: its mesh pieces braided too (docs/partitioning.md, "best's proxies").
-      partition.proxies = instanceProxies(scene, p.units, owners, o.meshProxies);
+      partition.proxies = instanceProxies(scene, p.units, owners, o.meshProxies, o.instanceProxies);
     else
       partition.proxies = instanceProxies(scene, p.units, owners, 1);
   }

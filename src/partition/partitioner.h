@@ -54,6 +54,10 @@ struct PartitionerOptions {
   bool breakObjects = true;
   double replicationBudget = 0.05;  // best: copies may add this fraction of the input's bytes
   int meshProxies = 64;  // object-proxies, best, ray-guided: boxes per non-instanced mesh
+  // object-proxies, best, ray-guided: boxes per instance of an instanced
+  // object, per mesh of the object (1: the object's box). More cut forwards
+  // and cost every rank proxy memory (docs/partitioning.md).
+  int instanceProxies = 1;
   // Proxies are merged down to this many (proxy_merge.h); 0: no limit.
   uint64_t maxProxies = kDefaultMaxProxies;
   uint64_t maxPieceBytes = 0;  // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)

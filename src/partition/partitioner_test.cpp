@@ -278,6 +278,23 @@ TEST(Partitioners, ProxyStylesDifferAsDescribed) {
   }
 }
 
+TEST(Partitioners, BraidedInstancesKeepThePartsAndCoverTheContent) {
+  // --instance-proxies: the same parts and more proxies, still covering
+  // every instance's geometry (checkCovers; tighter: proxies_test.cpp).
+  for (const std::string name : {"object-proxies", "best"}) {
+    SCOPED_TRACE(name);
+    PartitionerOptions one = named(name), four = named(name);
+    one.maxProxies = four.maxProxies = 0;
+    four.instanceProxies = 4;
+    Scene a = builtinScene(kIsland), b = builtinScene(kIsland);
+    const Partition pa = partitionScene(a, 5, one);
+    const Partition pb = partitionScene(b, 5, four);
+    EXPECT_EQ(pa.instanceOwners, pb.instanceOwners);
+    EXPECT_GT(pb.proxies.size(), pa.proxies.size());
+    EXPECT_NO_THROW(pb.checkCovers(b));
+  }
+}
+
 TEST(Partitioners, CheckCoversCatchesAGap) {
   // Each partitioner's proxies are needed: take one away (or shrink one) and
   // some content is no longer covered.

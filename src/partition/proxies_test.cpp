@@ -1,0 +1,65 @@
+#include "partition/proxies.h"
+
+#include <gtest/gtest.h>
+
+#include "render/render_test_util.h"
+#include "scene/scene.h"
+
+namespace ferry {
+namespace {
+
+using testing::diffuseMaterial;
+using testing::makeQuad;
+
+// A palm: a thin trunk 10 high and a wide crown on top, one mesh, placed twice.
+Scene twoPalms() {
+  Scene scene;
+  scene.materials.push_back(diffuseMaterial({0.5f, 0.5f, 0.5f}));
+  Mesh palm = makeQuad({0, 0, 0}, {0.1f, 0, 0}, {0, 10, 0}, 0);
+  const Mesh crown = makeQuad({-3, 10, -3}, {6, 0, 0}, {0, 0, 6}, 0);
+  for (const auto& t : crown.indices) palm.indices.push_back({t[0] + 4, t[1] + 4, t[2] + 4});
+  palm.positions.insert(palm.positions.end(), crown.positions.begin(), crown.positions.end());
+  palm.uvs.insert(palm.uvs.end(), crown.uvs.begin(), crown.uvs.end());
+  scene.meshes.push_back(palm);
+  scene.objects.push_back({"palm", {0}});
+  for (float x : {0.0f, 20.0f}) {
+    Instance instance;
+    instance.transform.t = {x, 0, 0};
+    scene.instances.push_back(instance);
+  }
+  return scene;
+}
+
+bool inside(const Box3f& b, Vec3f p) {
+  for (int a = 0; a < 3; ++a)
+    if (p[a] < b.lower[a] || p[a] > b.upper[a]) return false;
+  return true;
+}
+
+TEST(InstanceProxies, BraidedInstancesLeaveTheGapsOfTheirObject) {
+  const Scene scene = twoPalms();
+  const UnitSet units = extractUnits(scene, {});
+  const std::vector<RankSet> owners(units.units.size(), RankSet::single(0));
+  const std::vector<Proxy> one = instanceProxies(scene, units, owners, 1, 1);
+  const std::vector<Proxy> two = instanceProxies(scene, units, owners, 1, 2);
+  ASSERT_EQ(one.size(), 2u);  // a box per instance
+  ASSERT_EQ(two.size(), 4u);  // trunk and crown, per instance
+  for (float x : {0.0f, 20.0f}) {
+    // Beside the trunk, under the crown: in the instance's box, in none of its pieces.
+    const Vec3f gap{x + 2, 5, 2};
+    int inOne = 0, inTwo = 0;
+    for (const Proxy& p : one) inOne += inside(p.bounds, gap);
+    for (const Proxy& p : two) inTwo += inside(p.bounds, gap);
+    EXPECT_EQ(inOne, 1);
+    EXPECT_EQ(inTwo, 0);
+    // Every vertex, placed, is still in one of the pieces.
+    for (Vec3f v : scene.meshes[0].positions) {
+      int in = 0;
+      for (const Proxy& p : two) in += inside(p.bounds, v + Vec3f{x, 0, 0});
+      EXPECT_GE(in, 1);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ferry
