@@ -4,7 +4,6 @@
 #include <bit>
 #include <cstring>
 #include <limits>
-#include <numeric>
 #include <type_traits>
 
 namespace ferry {
@@ -58,18 +57,20 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank)
     b.masks.push_back(p.owners.mask());
     narrow_ = narrow_ && p.owners.fitsInMask();
   }
-  if (proxies_.empty()) return;
+  // A proxy whose box is empty stands for nothing and is left out: its slab
+  // distances would swap and let every ray in.
+  for (size_t i = 0; i < proxies_.size(); ++i)
+    if (!proxies_[i].bounds.empty()) b.order.push_back(int32_t(i));
+  if (b.order.empty()) return;
   // The shared tree's proxies first, then those owned by ownRank alone.
   auto ownOnly = [&](const Proxy& p) {
     return ownRank >= 0 && p.owners.count() == 1 && p.owners.contains(ownRank);
   };
-  b.order.resize(proxies_.size());
-  std::iota(b.order.begin(), b.order.end(), 0);
   const int32_t shared =
       int32_t(std::stable_partition(b.order.begin(), b.order.end(),
                                     [&](int32_t id) { return !ownOnly(proxies_[size_t(id)]); }) -
               b.order.begin());
-  ownOnlyCount_ = proxies_.size() - size_t(shared);
+  ownOnlyCount_ = b.order.size() - size_t(shared);
   b.centers.resize(proxies_.size());
   for (size_t i = 0; i < proxies_.size(); ++i) b.centers[i] = proxies_[i].bounds.center();
   if (shared > 0) sharedRoot_ = b.collapse(b.build(0, shared, 0));

@@ -89,6 +89,39 @@ TEST(ProxyBvh, WideOwnerSetsMatchBruteForce) {
 
 // What the replay layout relies on: the answer with a finite tmax is the
 // answer with no limit if that enters before tmax, and nothing otherwise.
+TEST(ProxyBvh, AnEmptyBoxIsNeverEntered) {
+  // An empty box's slab distances swap (lower above upper), so a plain slab
+  // test lets every ray in; the tree leaves such proxies out.
+  std::vector<Proxy> proxies = randomProxies(100, 4, 7);
+  for (size_t k = 0; k < proxies.size(); k += 3) proxies[k].bounds = Box3f{};
+  proxies[1].bounds = {{0, 0, 0}, {-1, 1, 1}};  // empty on one axis
+  const ProxyBvh bvh(proxies);
+  std::vector<Proxy> kept = proxies;
+  for (Proxy& p : kept)
+    if (p.bounds.empty()) p.owners = RankSet{};  // never eligible in the brute force
+  int found = 0;
+  for (uint32_t i = 0; i < 2000; ++i) {
+    auto u = [&](uint32_t k) { return uniform(90000 + i, k); };
+    const Vec3f o{u(0) * 30 - 10, u(1) * 30 - 10, u(2) * 30 - 10};
+    const Vec3f d = normalize(Vec3f{u(3) - 0.5f, u(4) - 0.5f, u(5) - 0.5f});
+    const ProxyBvh::Hit a = bvh.closest(o, d, kInfinity, RankMask(0));
+    ProxyBvh::Hit b;
+    const Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
+    for (size_t k = 0; k < kept.size(); ++k) {
+      float t;
+      if (!kept[k].bounds.empty() && intersectBox(kept[k].bounds, o, inv, kInfinity, t) &&
+          t < b.tEnter)
+        b = {int32_t(k), t};
+    }
+    ASSERT_EQ(a.proxy, b.proxy);
+    if (a.found()) {
+      EXPECT_FALSE(proxies[size_t(a.proxy)].bounds.empty());
+      ++found;
+    }
+  }
+  EXPECT_GT(found, 100);
+}
+
 TEST(ProxyBvh, SmallerTmaxOnlyCutsTheFarEnd) {
   for (int ranks : {3, 8, 70}) {
     std::vector<Proxy> proxies = randomProxies(300, ranks, uint32_t(ranks) * 77);
