@@ -8,37 +8,32 @@ namespace ferry {
 std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, int meshBoxes,
                                     int instanceBoxes) {
   const std::vector<uint32_t> placements = scene.instanceCountPerObject();
-  std::vector<Box3f> objectBounds(scene.objects.size());
-  for (size_t o = 0; o < scene.objects.size(); ++o)
-    if (placements[o] > 1) objectBounds[o] = scene.objectBounds(int32_t(o));
-  // Braided instances: each instanced object's meshes cut into clusters once,
-  // in object space; an instance's proxies are those boxes, transformed.
-  std::vector<std::vector<Box3f>> objectPieces(scene.objects.size());
-  if (instanceBoxes > 1)
-    for (size_t o = 0; o < scene.objects.size(); ++o) {
-      if (placements[o] <= 1) continue;
-      for (int32_t m : scene.objects[o].meshes) {
-        if (scene.meshes[m].triangleCount() == 0) continue;
-        Mesh scratch;
-        const Mesh& mesh = scene.geometry(m, scratch);
-        for (const auto& cluster : clusterTriangles(mesh, Affine3f::identity(), instanceBoxes))
-          objectPieces[o].push_back(trianglesBounds(mesh, Affine3f::identity(), cluster));
-      }
+  // An instanced object's boxes, in object space, made once: its own box, or
+  // braided, its meshes' clusters; an instance's proxies are those, transformed.
+  std::vector<std::vector<Box3f>> objectBoxes(scene.objects.size());
+  for (size_t o = 0; o < scene.objects.size(); ++o) {
+    if (placements[o] <= 1) continue;
+    if (instanceBoxes <= 1) {
+      objectBoxes[o].push_back(scene.objectBounds(int32_t(o)));
+      continue;
     }
+    for (int32_t m : scene.objects[o].meshes) {
+      if (scene.meshes[m].triangleCount() == 0) continue;
+      Mesh scratch;
+      const Mesh& mesh = scene.geometry(m, scratch);
+      for (const auto& cluster : clusterTriangles(mesh, Affine3f::identity(), instanceBoxes))
+        objectBoxes[o].push_back(trianglesBounds(mesh, Affine3f::identity(), cluster));
+    }
+  }
   std::vector<UnitBox> boxes;
   for (uint32_t u = 0; u < units.units.size(); ++u) {
     for (int32_t i : units.units[u].instances) {
       const Instance& inst = scene.instances[i];
       if (placements[inst.object] > 1) {
-        if (instanceBoxes > 1) {
-          for (const Box3f& piece : objectPieces[inst.object]) {
-            Box3f b = inst.transform.transformBox(piece);
-            if (!b.empty()) boxes.push_back({u, b});
-          }
-          continue;
+        for (const Box3f& objectBox : objectBoxes[inst.object]) {
+          Box3f b = inst.transform.transformBox(objectBox);
+          if (!b.empty()) boxes.push_back({u, b});
         }
-        Box3f b = inst.transform.transformBox(objectBounds[inst.object]);
-        if (!b.empty()) boxes.push_back({u, b});
         continue;
       }
       for (int32_t m : scene.objects[inst.object].meshes) {

@@ -87,8 +87,6 @@ TEST(ProxyBvh, WideOwnerSetsMatchBruteForce) {
   }
 }
 
-// What the replay layout relies on: the answer with a finite tmax is the
-// answer with no limit if that enters before tmax, and nothing otherwise.
 TEST(ProxyBvh, AnEmptyBoxIsNeverEntered) {
   // An empty box's slab distances swap (lower above upper), so a plain slab
   // test lets every ray in; the tree leaves such proxies out.
@@ -96,9 +94,6 @@ TEST(ProxyBvh, AnEmptyBoxIsNeverEntered) {
   for (size_t k = 0; k < proxies.size(); k += 3) proxies[k].bounds = Box3f{};
   proxies[1].bounds = {{0, 0, 0}, {-1, 1, 1}};  // empty on one axis
   const ProxyBvh bvh(proxies);
-  std::vector<Proxy> kept = proxies;
-  for (Proxy& p : kept)
-    if (p.bounds.empty()) p.owners = RankSet{};  // never eligible in the brute force
   int found = 0;
   for (uint32_t i = 0; i < 2000; ++i) {
     auto u = [&](uint32_t k) { return uniform(90000 + i, k); };
@@ -107,9 +102,9 @@ TEST(ProxyBvh, AnEmptyBoxIsNeverEntered) {
     const ProxyBvh::Hit a = bvh.closest(o, d, kInfinity, RankMask(0));
     ProxyBvh::Hit b;
     const Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
-    for (size_t k = 0; k < kept.size(); ++k) {
+    for (size_t k = 0; k < proxies.size(); ++k) {  // brute force over the non-empty boxes
       float t;
-      if (!kept[k].bounds.empty() && intersectBox(kept[k].bounds, o, inv, kInfinity, t) &&
+      if (!proxies[k].bounds.empty() && intersectBox(proxies[k].bounds, o, inv, kInfinity, t) &&
           t < b.tEnter)
         b = {int32_t(k), t};
     }
@@ -122,6 +117,8 @@ TEST(ProxyBvh, AnEmptyBoxIsNeverEntered) {
   EXPECT_GT(found, 100);
 }
 
+// What the replay layout relies on: the answer with a finite tmax is the
+// answer with no limit if that enters before tmax, and nothing otherwise.
 TEST(ProxyBvh, SmallerTmaxOnlyCutsTheFarEnd) {
   for (int ranks : {3, 8, 70}) {
     std::vector<Proxy> proxies = randomProxies(300, ranks, uint32_t(ranks) * 77);
@@ -237,8 +234,12 @@ TEST(ProxyBvh, OwnTreeLeavesTheAnswersUnchanged) {
   for (const Case& c : cases) {
     const ProxyBvh one(c.proxies);
     const ProxyBvh split(c.proxies, c.own);
-    if (c.own < c.ranks) EXPECT_GT(split.ownOnlyCount(), 0u) << c.ranks;
-    if (c.ranks == 1) EXPECT_EQ(split.ownOnlyCount(), c.proxies.size());
+    if (c.own < c.ranks) {
+      EXPECT_GT(split.ownOnlyCount(), 0u) << c.ranks;
+    }
+    if (c.ranks == 1) {
+      EXPECT_EQ(split.ownOnlyCount(), c.proxies.size());
+    }
     for (uint32_t k = 0; k < 3000; ++k) {
       const Vec3f o =
           c.ranks == 4 && c.own == 2
@@ -257,7 +258,9 @@ TEST(ProxyBvh, OwnTreeLeavesTheAnswersUnchanged) {
       const ProxyBvh::Hit brute = bruteForce(c.proxies, o, d, tmax, excluded);
       ASSERT_EQ(a.proxy, b.proxy) << "ray " << k << " ranks " << c.ranks;
       ASSERT_EQ(a.proxy, brute.proxy) << "ray " << k << " ranks " << c.ranks;
-      if (a.found()) EXPECT_EQ(a.tEnter, b.tEnter);
+      if (a.found()) {
+        EXPECT_EQ(a.tEnter, b.tEnter);
+      }
       if (c.ranks <= 64) {
         const ProxyBvh::Hit m = split.closest(o, d, tmax, excluded.mask());
         ASSERT_EQ(m.proxy, a.proxy) << "ray " << k;
