@@ -330,7 +330,8 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
   cmd->add_option("--instance-proxies", o.instanceProxies,
                   "object-proxies, best, ray-guided: boxes per mesh of an instanced object for\n"
                   "each instance (braiding in object space); 1: one box per instance. 4 cut the\n"
-                  "island's forwards by a third and cost every rank ~380 B per added proxy")
+                  "island's forwards by a third and cost every rank ~90 B per added proxy\n"
+                  "(~260 B while its proxy tree is built)")
       ->capture_default_str();
   cmd->add_option("--max-part", o.maxPart,
                   "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"

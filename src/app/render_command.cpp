@@ -154,10 +154,10 @@ void printSummary(const RenderSession& session, const SessionReport& report, int
     return uint64_t(*std::max_element(v.begin(), v.end()));
   };
   const RankMemory& memory = report.memory;
-  fmt::print("  {:<22}{} of {} estimated, {} Embree, {} peak resident (largest rank)\n",
+  fmt::print("  {:<22}{} of {} estimated, {} Embree, {} proxies, {} peak resident (largest rank)\n",
              "memory per rank", formatBytes(maxOf(memory.estimated)),
              formatBytes(session.summary().memory.total()), formatBytes(maxOf(memory.embree)),
-             formatBytes(maxOf(memory.residentPeak)));
+             formatBytes(maxOf(memory.proxies)), formatBytes(maxOf(memory.residentPeak)));
   const size_t slowest = slowestSetup(report.setup);
   if (slowest < report.setup.size())
     fmt::print("  {:<22}{:.2f} s; {}: {} s\n", "time to first pixel",

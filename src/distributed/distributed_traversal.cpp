@@ -60,14 +60,15 @@ ExchangeMode resolveExchangeMode(ExchangeMode mode, ForwardingMode forwarding) {
 template <typename Path>
 DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,
                                                  const TraceBackend& geometry,
-                                                 const Partition& partition, ForwardingMode mode,
+                                                 const Partition& partition,
+                                                 const ProxyBvh& proxies, ForwardingMode mode,
                                                  ExchangeMode exchange, uint32_t chunkPixels)
     : comm_(comm),
       geometry_(geometry),
       mode_(mode),
       exchange_(resolveExchangeMode(exchange, mode)),
       chunkPixels_(std::max(1u, chunkPixels)),
-      proxies_(partition.proxies, comm.rank()) {
+      proxies_(proxies) {
   FERRY_CHECK_LE(comm.size(), kMaxRanks);
   if constexpr (!Path::kReplay) {
     FERRY_CHECK_LE(comm.size(), sizeof(typename Path::Mask) * 8);
@@ -86,7 +87,8 @@ int DistributedTraversal<Path>::primaryOwner(uint32_t pixel, const TraceRay& ray
   // ties among replicas); rays that hit no proxy are dealt by pixel id.
   ProxyBvh::Hit hit = proxies_.closest(ray.origin, ray.direction, ray.tmax, 0);
   if (!hit.found()) return int(pixel % ranks);
-  const RankSet& owners = proxies_.proxies()[size_t(hit.proxy)].owners;
+  if (hit.ownerSet) return hit.ownerSet->nth(int(pixel % uint32_t(hit.ownerSet->count())));
+  const RankSet owners = RankSet::fromMask(hit.ownerMask);
   return owners.nth(int(pixel % uint32_t(owners.count())));
 }
 

@@ -45,8 +45,11 @@ class DistributedTraversal final : public RayTraversal<Path> {
  public:
   // `chunkPixels`: overlapped, camera paths a rank starts at once, and the
   // largest batch it traces at once (any value gives the same image).
+  // `proxies`: the partition's proxies, built with this rank as the own rank
+  // (the caller keeps them, built once for every run); `partition`: for the
+  // instances' owners.
   DistributedTraversal(const Communicator& comm, const TraceBackend& geometry,
-                       const Partition& partition, ForwardingMode mode,
+                       const Partition& partition, const ProxyBvh& proxies, ForwardingMode mode,
                        ExchangeMode exchange = ExchangeMode::Auto, uint32_t chunkPixels = 8192);
   bool runsSamples() const override { return exchange_ == ExchangeMode::Overlapped; }
   void runSample(uint32_t sampleIndex, uint32_t first, uint32_t last, SampleShading<Path>& shading,
@@ -95,7 +98,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   ForwardingMode mode_;
   ExchangeMode exchange_;
   uint32_t chunkPixels_;
-  ProxyBvh proxies_;
+  const ProxyBvh& proxies_;
   std::vector<uint64_t>
       instanceOwners_;  // mask layouts: owner mask per instance (empty for replay)
   // Overlapped: rays of a later sample that arrived before this rank saw the

@@ -91,13 +91,15 @@ RenderResult renderFrame(const Communicator& comm, const Scene& scene, const Tra
                          const LightSampler& lights, const Partition& partition,
                          ForwardingMode mode, const RenderSettings& settings,
                          ExchangeMode exchange = ExchangeMode::Bulk) {
+  std::unique_ptr<ProxyBvh> proxies;  // outlives the traversal
   std::unique_ptr<RayTraversal<Path>> traversal;
   DistributedTraversal<Path>* distributed = nullptr;
   if (comm.size() == 1) {
     traversal = std::make_unique<LocalTraversal<Path>>(geometry);
   } else {
-    auto d = std::make_unique<DistributedTraversal<Path>>(comm, geometry, partition, mode, exchange,
-                                                          settings.chunkPixels);
+    proxies = std::make_unique<ProxyBvh>(partition.proxies, comm.rank());
+    auto d = std::make_unique<DistributedTraversal<Path>>(comm, geometry, partition, *proxies, mode,
+                                                          exchange, settings.chunkPixels);
     distributed = d.get();
     traversal = std::move(d);
   }

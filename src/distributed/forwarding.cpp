@@ -54,6 +54,13 @@ int pickOwner(const RankSet& owners, const PathCore& ray) {
   return owners.nth(int(ownerHash(ray) % uint32_t(count)));
 }
 
+namespace {
+// The owner of the proxy a query found: its owners come with the answer.
+int pickOwner(const ProxyBvh::Hit& hit, const PathCore& ray) {
+  return hit.ownerSet ? pickOwner(*hit.ownerSet, ray) : pickOwner(hit.ownerMask, ray);
+}
+}  // namespace
+
 template <typename Path>
 ForwardDecision finishTraversal(const Path& ray, int rank) {
   if (ray.isShadow())
@@ -73,8 +80,7 @@ ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int r
   if (ray.isShadow() && ray.has(kPathOccluded))
     return {ForwardDecision::Drop};  // ends at any occluder
   ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, RankMask(ray.visited));
-  if (next.found())
-    return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
+  if (next.found()) return {ForwardDecision::Send, pickOwner(next, ray)};
   return finishTraversal(ray, rank);
 }
 
@@ -83,8 +89,7 @@ ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int r
                                  const RankSet& visited) {
   if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};
   ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, visited);
-  if (next.found())
-    return {ForwardDecision::Send, pickOwner(proxies.proxies()[next.proxy].owners, ray)};
+  if (next.found()) return {ForwardDecision::Send, pickOwner(next, ray)};
   return finishTraversal(ray, rank);
 }
 
@@ -113,7 +118,7 @@ ReplayResult replayWalk(const ProxyBvh& proxies, const Path& ray, int generating
     ++result.queries;
     ProxyBvh::Hit next = proxies.closest(ray.origin, dir, ray.tmax, result.visited);
     if (!next.found()) return result;
-    at = pickOwner(proxies.proxies()[next.proxy].owners, ray);
+    at = pickOwner(next, ray);
     result.visited.insert(at);
   }
   result.reached = true;

@@ -746,6 +746,7 @@ SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
       std::vector<Box3f> boxes = r.array<Box3f>();
       std::vector<uint64_t> owners = r.array<uint64_t>();
       if (owners.size() != boxes.size() * words) r.fail("proxy arrays differ in size");
+      shared.proxies.reserve(boxes.size());
       for (size_t k = 0; k < boxes.size(); ++k)
         shared.proxies.push_back({boxes[k], RankSet::fromWords(owners.data() + k * words, words)});
     }

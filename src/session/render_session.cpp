@@ -26,6 +26,7 @@
 #include "render/wavefront_renderer.h"
 #include "trace/embree_backend.h"
 #include "trace/path.h"
+#include "trace/proxy_bvh.h"
 #include "trace/ray_sampler.h"
 
 namespace ferry {
@@ -35,7 +36,8 @@ namespace ferry {
 struct RenderSession::Rank {
   std::unique_ptr<tbb::global_control> threadLimit;
   Scene scene;
-  Partition partition;
+  Partition partition;  // its proxies move into `proxies` when the first run needs them
+  std::unique_ptr<const ProxyBvh> proxies;
   std::string partitionerName;
   std::vector<int32_t> owned;
   std::unique_ptr<TraceBackend> geometry;
@@ -48,6 +50,7 @@ struct RenderSession::Rank {
   bool firstPixel = false;                      // setup complete (run() reached its first frame)
 
   Rank(const SessionSettings& settings, const Communicator& comm);
+  double proxyBytes() const { return proxies ? double(proxies->bytes()) : 0.0; }
   // The one place the session names the trace backend: this rank's trace
   // structures over its instances, and what Embree holds for them.
   void buildTraceStructures(Instancing instancing);
@@ -304,9 +307,16 @@ std::unique_ptr<RayTraversal<Path>> RenderSession::makeTraversal(
   Rank& rank = *rank_;
   // One rank needs no forwarding machinery (no proxy queries, no collectives per round).
   if (comm_.size() == 1) return std::make_unique<LocalTraversal<Path>>(*rank.geometry);
-  auto d = std::make_unique<DistributedTraversal<Path>>(comm_, *rank.geometry, rank.partition,
-                                                        settings_.forwarding, settings_.exchange,
-                                                        settings_.render.chunkPixels);
+  if (!rank.proxies) {
+    // The tree consumes the proxies: a rank holds each proxy once.
+    rank.proxies =
+        std::make_unique<const ProxyBvh>(std::move(rank.partition.proxies), comm_.rank());
+    rank.partition.proxies = {};
+    malloc_trim(0);  // the builder's temporaries go back to the system
+  }
+  auto d = std::make_unique<DistributedTraversal<Path>>(
+      comm_, *rank.geometry, rank.partition, *rank.proxies, settings_.forwarding,
+      settings_.exchange, settings_.render.chunkPixels);
   if (distributed) *distributed = d.get();
   return d;
 }
@@ -333,20 +343,24 @@ std::vector<SetupTimes> rankSetupTimes(const Communicator& comm, const SetupTime
 }
 
 // Every rank's memory now, on every rank (one collective).
-RankMemory rankMemory(const Communicator& comm, double estimated, double embree,
-                      double embreePeak) {
+RankMemory rankMemory(const Communicator& comm, double estimated, double embree, double embreePeak,
+                      double proxies) {
   const ProcessMemory memory = readProcessMemory();
   const size_t n = size_t(comm.size()), me = size_t(comm.rank());
-  std::vector<double> mine(5 * n, 0.0);
-  const double values[5] = {estimated, embree, embreePeak, double(memory.residentBytes),
+  std::vector<double> mine(6 * n, 0.0);
+  const double values[6] = {estimated,
+                            embree,
+                            embreePeak,
+                            proxies,
+                            double(memory.residentBytes),
                             double(memory.peakResidentBytes)};
-  for (size_t k = 0; k < 5; ++k) mine[k * n + me] = values[k];
+  for (size_t k = 0; k < 6; ++k) mine[k * n + me] = values[k];
   const std::vector<double> all = comm.sum(std::span<const double>(mine));
   auto column = [&](size_t k) {
     return std::vector<double>(all.begin() + ptrdiff_t(k * n),
                                all.begin() + ptrdiff_t((k + 1) * n));
   };
-  return {column(0), column(1), column(2), column(3), column(4)};
+  return {column(0), column(1), column(2), column(3), column(4), column(5)};
 }
 
 }  // namespace
@@ -451,7 +465,7 @@ void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t 
                   FrameSink::Pixels::ToneMapped, render.toneMapping, compositeBytes);
     frame.stats.times.composite = comm_.max(secondsSince(start));
     frame.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
-                              double(rank.embreePeakBytes));
+                              double(rank.embreePeakBytes), rank.proxyBytes());
     if (!comm_.isRoot()) continue;
     frame.accumulated = accumulated;
     frame.camera = *render.camera;
@@ -557,7 +571,7 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
   FrameImage image = compositeAfter(lastFrame, report.compositeSeconds);
   report.compositeBytes = comm_.sum(compositeBytes);
   report.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
-                             double(rank.embreePeakBytes));
+                             double(rank.embreePeakBytes), rank.proxyBytes());
   report.setup = rankSetupTimes(comm_, rank.setup);
   report.raysReceived = comm_.sum(distributed ? distributed->received() : 0);
   report.revisits = comm_.sum(distributed ? distributed->revisits() : 0);

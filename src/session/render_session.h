@@ -39,6 +39,7 @@ struct RankMemory {
   std::vector<double> estimated;     // the memory model's estimate of what the rank holds
   std::vector<double> embree;        // bytes Embree holds for the rank's structures
   std::vector<double> embreePeak;    // and its peak while building them
+  std::vector<double> proxies;       // the proxy tree (every rank holds every proxy)
   std::vector<double> resident;      // resident set after rendering
   std::vector<double> residentPeak;  // peak resident set
 };

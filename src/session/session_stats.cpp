@@ -65,11 +65,13 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                        {"estimated_bytes", memory.estimated[rank]},
                        {"embree_bytes", memory.embree[rank]},
                        {"embree_peak_bytes", memory.embreePeak[rank]},
+                       {"proxy_bytes", memory.proxies[rank]},
                        {"resident_bytes", memory.resident[rank]},
                        {"peak_resident_bytes", memory.residentPeak[rank]}});
   j["memory"] = {{"scene_estimated_bytes", session.summary().memory.total()},
                  {"max_estimated_bytes", maxOf(memory.estimated)},
                  {"max_embree_bytes", maxOf(memory.embree)},
+                 {"max_proxy_bytes", maxOf(memory.proxies)},
                  {"max_peak_resident_bytes", maxOf(memory.residentPeak)},
                  {"per_rank", perRank}};
   // Set-up: rank 0's at the top (its "load" and "build" as ever), the

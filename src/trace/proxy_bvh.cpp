@@ -40,9 +40,9 @@ struct SplitChoice {
 // Builds the binary tree (binned SAH), then collapses it into kWidth-wide nodes.
 struct ProxyBvh::Builder {
   ProxyBvh& bvh;
+  const std::vector<Proxy>& proxies;
   std::vector<int32_t> order;
   std::vector<Vec3f> centers;
-  std::vector<RankMask> masks;
   std::vector<BinaryNode> binary;
   std::vector<RankSet> binaryOwners;  // per binary node, only when not narrow
 
@@ -51,16 +51,13 @@ struct ProxyBvh::Builder {
 };
 
 ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank)
-    : proxies_(std::move(proxies)), ownRank_(ownRank) {
-  Builder b{*this, {}, {}, {}, {}, {}};
-  for (const Proxy& p : proxies_) {
-    b.masks.push_back(p.owners.mask());
-    narrow_ = narrow_ && p.owners.fitsInMask();
-  }
+    : proxyCount_(proxies.size()), ownRank_(ownRank) {
+  for (const Proxy& p : proxies) narrow_ = narrow_ && p.owners.fitsInMask();
+  Builder b{*this, proxies, {}, {}, {}, {}};
   // A proxy whose box is empty stands for nothing and is left out: its slab
   // distances would swap and let every ray in.
-  for (size_t i = 0; i < proxies_.size(); ++i)
-    if (!proxies_[i].bounds.empty()) b.order.push_back(int32_t(i));
+  for (size_t i = 0; i < proxies.size(); ++i)
+    if (!proxies[i].bounds.empty()) b.order.push_back(int32_t(i));
   if (b.order.empty()) return;
   // The shared tree's proxies first, then those owned by ownRank alone.
   auto ownOnly = [&](const Proxy& p) {
@@ -68,17 +65,29 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank)
   };
   const int32_t shared =
       int32_t(std::stable_partition(b.order.begin(), b.order.end(),
-                                    [&](int32_t id) { return !ownOnly(proxies_[size_t(id)]); }) -
+                                    [&](int32_t id) { return !ownOnly(proxies[size_t(id)]); }) -
               b.order.begin());
   ownOnlyCount_ = b.order.size() - size_t(shared);
-  b.centers.resize(proxies_.size());
-  for (size_t i = 0; i < proxies_.size(); ++i) b.centers[i] = proxies_[i].bounds.center();
-  if (shared > 0) sharedRoot_ = b.collapse(b.build(0, shared, 0));
-  if (ownOnlyCount_ > 0) ownRoot_ = b.collapse(b.build(shared, int32_t(ownOnlyCount_), 0));
+  b.centers.resize(proxies.size());
+  for (size_t i = 0; i < proxies.size(); ++i) b.centers[i] = proxies[i].bounds.center();
+  const int32_t sharedBinary = shared > 0 ? b.build(0, shared, 0) : -1;
+  const int32_t ownBinary = ownOnlyCount_ > 0 ? b.build(shared, int32_t(ownOnlyCount_), 0) : -1;
+  // A wide node per binary inner node at most (plus a root that is a leaf,
+  // per tree): reserved, so the nodes are never copied as they grow (only
+  // the pages written become resident).
+  nodes_.reserve(b.binary.size() / 2 + 2);
+  if (!narrow_) slotOwners_.reserve(nodes_.capacity() * kWidth);
+  if (sharedBinary >= 0) sharedRoot_ = b.collapse(sharedBinary);
+  if (ownBinary >= 0) ownRoot_ = b.collapse(ownBinary);
+}
+
+size_t ProxyBvh::bytes() const {
+  size_t owners = 0;
+  for (const RankSet& s : slotOwners_) owners += sizeof(RankSet) + (s.wordCount() - 1) * 8;
+  return nodes_.size() * sizeof(Node) + owners;
 }
 
 int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
-  const std::vector<Proxy>& proxies = bvh.proxies_;
   int32_t index = int32_t(binary.size());
   binary.push_back({});
   Box3f bounds, centerBounds;
@@ -89,7 +98,7 @@ int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
     const int32_t id = order[size_t(i)];
     bounds.extend(proxies[size_t(id)].bounds);
     centerBounds.extend(centers[size_t(id)]);
-    owners |= masks[size_t(id)];
+    owners |= proxies[size_t(id)].owners.mask();
     minIndex = std::min(minIndex, id);
     if (!bvh.narrow_) wideOwners |= proxies[size_t(id)].owners;
   }
@@ -223,13 +232,12 @@ int32_t ProxyBvh::Builder::collapse(int32_t binaryNode) {
     int32_t minIndex, child;
     if (b < 0) {
       const int32_t id = ~b;
-      box = bvh.proxies_[size_t(id)].bounds;
-      owners = masks[size_t(id)];
+      box = proxies[size_t(id)].bounds;
+      owners = proxies[size_t(id)].owners.mask();
       minIndex = id;
       child = b;
       bvh.nodes_[size_t(index)].proxySlots |= 1u << k;
-      if (!bvh.narrow_)
-        bvh.slotOwners_[size_t(index) * kWidth + k] = bvh.proxies_[size_t(id)].owners;
+      if (!bvh.narrow_) bvh.slotOwners_[size_t(index) * kWidth + k] = proxies[size_t(id)].owners;
     } else {
       box = binary[size_t(b)].bounds;
       owners = binary[size_t(b)].ownersUnion;
@@ -383,7 +391,12 @@ void ProxyBvh::search(int32_t rootA, int32_t rootB, Vec3f origin, Vec3f directio
       const int k = std::countr_zero(p);
       const float t = t0[k];
       const int32_t id = node.minIndex[k];
-      if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) best = {id, t};
+      if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) {
+        if constexpr (kMask)
+          best = {id, t, node.owners[k], nullptr};
+        else
+          best = {id, t, 0, &slotOwners_[size_t(n) * kWidth + size_t(k)]};
+      }
     }
     for (uint32_t s = candidates & ~node.proxySlots; s != 0; s &= s - 1) {
       const int k = std::countr_zero(s);

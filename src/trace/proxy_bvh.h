@@ -15,6 +15,10 @@ namespace ferry {
 class ProxyBvh {
  public:
   ProxyBvh() = default;
+  // The tree keeps what a query needs (each proxy's box and owners in its
+  // node's slot) and nothing else: `proxies` is consumed, so a rank holds
+  // every proxy once (issue 13: every rank holds every proxy, and two copies
+  // plus the builder's temporaries were most of a small rank's memory).
   // With `ownRank` >= 0, the proxies owned by that rank alone go in a tree
   // of their own, which a query excluding `ownRank` never enters: a rank's
   // forwarding decisions always exclude itself (it has just traced the ray),
@@ -30,7 +34,12 @@ class ProxyBvh {
   struct Hit {
     int32_t proxy = -1;
     float tEnter = kInfinity;
+    // The proxy's owners: the mask when every owner is below rank 64 (the
+    // tree is narrow), else the set, which the tree holds.
+    RankMask ownerMask = 0;
+    const RankSet* ownerSet = nullptr;
     bool found() const { return proxy >= 0; }
+    RankSet owners() const { return ownerSet ? *ownerSet : RankSet::fromMask(ownerMask); }
   };
   // Closest proxy entered in [0, tmax) whose owners do not intersect `excluded`.
   // The answer is a pure function of the set of such proxies (least entry
@@ -44,8 +53,11 @@ class ProxyBvh {
   // True when every owner is below rank 64 (the RankMask query is exact).
   bool narrow() const { return narrow_; }
 
-  const std::vector<Proxy>& proxies() const { return proxies_; }
+  // Proxies given, with those of empty boxes (never entered).
+  size_t proxyCount() const { return proxyCount_; }
   size_t nodeCount() const { return nodes_.size(); }
+  // What the tree holds, in bytes (nodes, and owner sets above 64 ranks).
+  size_t bytes() const;
   // Proxies in the tree a query excluding the own rank never enters.
   size_t ownOnlyCount() const { return ownOnlyCount_; }
 
@@ -83,7 +95,7 @@ class ProxyBvh {
   };
   struct Builder;
 
-  std::vector<Proxy> proxies_;
+  size_t proxyCount_ = 0;
   bool narrow_ = true;
   std::vector<Node> nodes_;
   int32_t sharedRoot_ = -1;  // every proxy but those owned by ownRank_ alone

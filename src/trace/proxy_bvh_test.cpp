@@ -44,6 +44,10 @@ TEST(ProxyBvh, MatchesBruteForceOnRandomProxiesAndRays) {
   for (int ranks : {2, 5, 8, 64}) {
     std::vector<Proxy> proxies = randomProxies(300, ranks, uint32_t(ranks) * 1000);
     ProxyBvh bvh(proxies);
+    EXPECT_EQ(bvh.proxyCount(), proxies.size());
+    // Every rank holds every proxy: the tree is all it keeps of them (8-wide
+    // nodes, about 90 B a proxy on the island; docs/memory.md).
+    EXPECT_LT(bvh.bytes(), 160 * proxies.size());
     for (uint32_t k = 0; k < 2000; ++k) {
       Vec3f o = Vec3f(uniform(k, 10), uniform(k, 11), uniform(k, 12)) * 14.0f - Vec3f(2);
       Vec3f d = normalize(Vec3f(uniform(k, 13), uniform(k, 14), uniform(k, 15)) - Vec3f(0.5f));
@@ -56,10 +60,13 @@ TEST(ProxyBvh, MatchesBruteForceOnRandomProxiesAndRays) {
       ASSERT_EQ(a.proxy, b.proxy) << "ray " << k << " ranks " << ranks;
       if (a.found()) {
         EXPECT_EQ(a.tEnter, b.tEnter);
+        // The tree keeps no list of proxies: the owners come with the answer.
+        ASSERT_EQ(a.owners(), proxies[size_t(a.proxy)].owners) << "ray " << k;
       }
       // The set query answers the same.
       ProxyBvh::Hit c = bvh.closest(o, d, tmax, RankSet::fromMask(excluded));
       ASSERT_EQ(c.proxy, a.proxy);
+      ASSERT_EQ(c.owners(), a.owners());
     }
   }
 }
@@ -82,6 +89,8 @@ TEST(ProxyBvh, WideOwnerSetsMatchBruteForce) {
       ASSERT_EQ(a.proxy, b.proxy) << "ray " << k << " ranks " << ranks;
       if (a.found()) {
         EXPECT_EQ(a.tEnter, b.tEnter);
+        ASSERT_NE(a.ownerSet, nullptr);  // wide: the set the tree holds
+        ASSERT_EQ(a.owners(), proxies[size_t(a.proxy)].owners) << "ray " << k;
       }
     }
   }

@@ -256,6 +256,7 @@ void ViewerServer::publish(const InteractiveFrame& frame) {
     perRank.push_back({{"rank", r},
                        {"estimated_bytes", m.estimated[r]},
                        {"embree_bytes", m.embree[r]},
+                       {"proxy_bytes", m.proxies[r]},
                        {"resident_bytes", m.resident[r]},
                        {"peak_resident_bytes", m.residentPeak[r]}});
   j["memory_per_rank"] = perRank;
