@@ -281,18 +281,30 @@ TEST(Partitioners, ProxyStylesDifferAsDescribed) {
 TEST(Partitioners, BraidedInstancesKeepThePartsAndCoverTheContent) {
   // --instance-proxies: the same parts and more proxies, still covering
   // every instance's geometry (checkCovers; tighter: proxies_test.cpp).
-  for (const std::string name : {"object-proxies", "best"}) {
+  // ray-guided too: it weighs its splits with one box per instance whatever
+  // the proxies.
+  for (const std::string name : {"object-proxies", "best", "ray-guided"}) {
     SCOPED_TRACE(name);
     PartitionerOptions one = named(name), four = named(name);
     one.maxProxies = four.maxProxies = 0;
+    one.instanceProxies = 1;
     four.instanceProxies = 4;
     Scene a = builtinScene(kIsland), b = builtinScene(kIsland);
-    const Partition pa = partitionScene(a, 5, one);
-    const Partition pb = partitionScene(b, 5, four);
+    const Partition pa = partitionScene(a, 5, withRaySample(a, one));
+    const Partition pb = partitionScene(b, 5, withRaySample(b, four));
     EXPECT_EQ(pa.instanceOwners, pb.instanceOwners);
     EXPECT_GT(pb.proxies.size(), pa.proxies.size());
     EXPECT_NO_THROW(pb.checkCovers(b));
   }
+}
+
+TEST(Partitioners, BestAndRayGuidedBraidTheirInstancesByDefault) {
+  EXPECT_EQ(instanceProxiesFor(named("best")), kDefaultInstanceProxies);
+  EXPECT_EQ(instanceProxiesFor(named("ray-guided")), kDefaultInstanceProxies);
+  EXPECT_EQ(instanceProxiesFor(named("object-proxies")), 1);  // the paper's: one box per instance
+  PartitionerOptions two = named("object-proxies");
+  two.instanceProxies = 2;
+  EXPECT_EQ(instanceProxiesFor(two), 2);
 }
 
 TEST(Partitioners, CheckCoversCatchesAGap) {
