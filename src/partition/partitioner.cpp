@@ -121,11 +121,6 @@ std::string toString(PartitionerKind kind) {
   return partitionerNames()[index];
 }
 
-int instanceProxiesFor(const PartitionerOptions& o) {
-  if (o.instanceProxies > 0) return o.instanceProxies;
-  return o.name == "best" || o.name == "ray-guided" ? kDefaultInstanceProxies : 1;
-}
-
 Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
                          PartitionStats* stats) {
   const auto start = Clock::now();
@@ -196,8 +191,7 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       partition.proxies = unitBoxProxies(p.units, owners);
     else if (o.name == "object-proxies" || o.name == "ray-guided" || o.name == "best")
       // best: its mesh pieces braided too (docs/partitioning.md, "best's proxies").
-      partition.proxies =
-          instanceProxies(scene, p.units, owners, o.meshProxies, instanceProxiesFor(o));
+      partition.proxies = instanceProxies(scene, p.units, owners, o.meshProxies, o.instanceProxies);
     else
       partition.proxies = instanceProxies(scene, p.units, owners, 1);
   }
