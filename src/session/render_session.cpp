@@ -311,7 +311,6 @@ std::unique_ptr<RayTraversal<Path>> RenderSession::makeTraversal(
     // The tree consumes the proxies: a rank holds each proxy once.
     rank.proxies =
         std::make_unique<const ProxyBvh>(std::move(rank.partition.proxies), comm_.rank());
-    rank.partition.proxies = {};
     malloc_trim(0);  // the builder's temporaries go back to the system
   }
   auto d = std::make_unique<DistributedTraversal<Path>>(
