@@ -50,8 +50,9 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
         fmt::format("--ray-paths {}: expected 1 to {}", p.rayPaths, uint64_t(1) << 26));
   if (p.meshProxies < 1 || p.meshProxies > 4096)
     throw InputError(fmt::format("--mesh-proxies {}: expected 1 to 4096", p.meshProxies));
-  if (p.instanceProxies < 1 || p.instanceProxies > 64)
-    throw InputError(fmt::format("--instance-proxies {}: expected 1 to 64", p.instanceProxies));
+  if (p.instanceProxies < 0 || p.instanceProxies > 64)
+    throw InputError(
+        fmt::format("--instance-proxies {}: expected 1 to 64 (0: the default)", p.instanceProxies));
   return p;
 }
 
@@ -59,7 +60,7 @@ nlohmann::json optionsJson(const PartitionerOptions& p) {
   return {{"break_objects", p.breakObjects},
           {"replication_budget", p.replicationBudget},
           {"mesh_proxies", p.meshProxies},
-          {"instance_proxies", p.instanceProxies},
+          {"instance_proxies", instanceProxiesFor(p)},
           {"max_proxies", p.maxProxies},
           {"max_piece_bytes", p.maxPieceBytes},
           {"seed", p.seed},
@@ -329,10 +330,10 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       ->capture_default_str();
   cmd->add_option("--instance-proxies", o.instanceProxies,
                   "object-proxies, best, ray-guided: boxes per mesh of an instanced object for\n"
-                  "each instance (braiding in object space); 1: one box per instance. 4 cut the\n"
-                  "island's forwards by a third for ~90 B per added proxy on every rank, but\n"
-                  "partitioning checks coverage triangle by triangle (docs/partitioning.md)")
-      ->capture_default_str();
+                  "each instance (braiding in object space); 1: one box per instance. Default\n"
+                  "(or 0): 4 for best and ray-guided (the same parts, a third fewer forwards on\n"
+                  "the island, ~90 B more per added proxy on every rank), 1 for object-proxies\n"
+                  "(the paper's one box per instance)");
   cmd->add_option("--max-part", o.maxPart,
                   "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"
                   "a larger factor trades memory per rank for fewer forwarded rays")

@@ -30,7 +30,7 @@ struct PartitionCommandOptions {
   bool keepObjectsWhole = false;
   double replicationBudget = 0.05;
   int meshProxies = 64;
-  int instanceProxies = 1;
+  int instanceProxies = 0;  // 0: the partitioner's default
   uint64_t maxProxies = kDefaultMaxProxies;
   uint32_t seed = 1;          // random, ray-guided: their samples
   uint64_t rayPaths = 65536;  // ray-guided

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <bit>
 #include <numeric>
+#include <unordered_map>
 
 #include "core/error.h"
 #include "core/random.h"
+#include "partition/triangle_clusters.h"
 #include "partition/units.h"
 #include "scene/scene.h"
 
@@ -87,6 +89,11 @@ class ProxyOverlapTree {
 // Is `box` inside the union of the candidate boxes? Subtracts one overlapping
 // candidate at a time and recurses on the (up to 6) pieces left. `budget`
 // bounds the work; when it runs out the answer is "not shown" (false).
+// Cluster size at the leaves of the cover check's trees: small enough that
+// a leaf lies in few proxies, large enough that the trees stay small (about
+// 7 bytes per triangle of the meshes that need one).
+constexpr size_t kCoverLeafTriangles = 16;
+
 bool coveredByUnion(const Box3f& box, const std::vector<const Box3f*>& candidates, size_t from,
                     int64_t& budget) {
   if (--budget < 0) return false;
@@ -135,6 +142,8 @@ void Partition::checkCovers(const Scene& scene) const {
           fmt::format("a proxy has owners {} outside {} ranks", p.owners.toString(), ranks));
   ProxyOverlapTree tree(proxies);
   const std::vector<Box3f> bounds = instanceWorldBounds(scene);
+  const std::vector<uint32_t> placements = scene.instanceCountPerObject();
+  std::unordered_map<int32_t, ClusterTree> objectSpaceTrees;  // by mesh, made when first needed
 
   // Proxies a ray may be sent to for content of `owners` near `box`: those
   // overlapping it whose every owner holds the content.
@@ -156,37 +165,62 @@ void Partition::checkCovers(const Scene& scene) const {
     if (bounds[i].empty()) continue;
     const std::vector<const Box3f*> near = eligible(bounds[i], owners);
     if (covered(bounds[i], near, 2000)) continue;
-    // Proxies that follow the content (braiding, domains) need not cover the
-    // instance's box, only its geometry: check each mesh, then each triangle.
+    // Proxies that follow the content (braided meshes and instances, domains)
+    // need not cover the instance's box, only its geometry: go down each
+    // mesh's cluster tree (the build steps braiding uses, so a braided box is
+    // one of its nodes) until a node's box is covered, then, at the leaves,
+    // triangle by triangle. An instanced object's trees are made once, in
+    // object space, and shared by its instances.
     const Instance& inst = scene.instances[i];
+    const bool shared = placements[inst.object] > 1;
     for (int32_t m : scene.objects[inst.object].meshes) {
       if (scene.meshes[m].triangleCount() == 0) continue;
-      const Box3f meshBox = inst.transform.transformBox(scene.meshes[m].bounds());
-      const std::vector<const Box3f*> meshNear = eligible(meshBox, owners);
-      if (covered(meshBox, meshNear, 2000)) continue;
+      if (!shared) {  // (a shared mesh's box is its tree's root, made once)
+        const Box3f meshBox = inst.transform.transformBox(scene.meshes[m].bounds());
+        if (covered(meshBox, eligible(meshBox, owners), 2000)) continue;
+      }
       Mesh scratch;  // a stored mesh is read back only here, when its box is not covered
       const Mesh& mesh = scene.geometry(m, scratch);
-      std::vector<const Box3f*> triNear;
-      for (size_t t = 0; t < mesh.indices.size(); ++t) {
-        Box3f tri;
-        for (int k = 0; k < 3; ++k)
-          tri.extend(inst.transform.transformPoint(mesh.positions[mesh.indices[t][k]]));
-        // Usually one proxy holds the whole triangle (braided boxes are made of whole triangles).
-        bool inOne = false;
-        for (const Box3f* b : meshNear)
-          if (b->contains(tri)) {
-            inOne = true;
-            break;
-          }
-        if (inOne) continue;
-        triNear.clear();
-        for (const Box3f* b : meshNear)
-          if (b->overlaps(tri)) triNear.push_back(b);
-        if (!covered(tri, triNear, 1000000))
-          throw InternalError(
-              fmt::format("instance {} (object '{}', mesh '{}', triangle {}) is not covered by "
-                          "proxies of its owners {}",
-                          i, scene.objects[inst.object].name, mesh.name, t, owners.toString()));
+      ClusterTree own;
+      if (!shared) own = clusterTree(mesh, inst.transform, kCoverLeafTriangles);
+      auto it = objectSpaceTrees.find(m);
+      if (shared && it == objectSpaceTrees.end())
+        it = objectSpaceTrees
+                 .emplace(m, clusterTree(mesh, Affine3f::identity(), kCoverLeafTriangles))
+                 .first;
+      const ClusterTree& tree = shared ? it->second : own;
+      // A node's box in world space: object-space boxes are transformed as
+      // unitProxyBoxes transforms a braided instance's (the same floats).
+      auto worldBox = [&](const Box3f& b) { return shared ? inst.transform.transformBox(b) : b; };
+      std::vector<int32_t> stack{0};
+      while (!stack.empty()) {
+        const ClusterTree::Node& node = tree.nodes[size_t(stack.back())];
+        stack.pop_back();
+        const Box3f box = worldBox(node.bounds);
+        const std::vector<const Box3f*> nodeNear = eligible(box, owners);
+        // A node whose box is not in one proxy is usually split by the
+        // proxies into its children: a small budget, then down.
+        if (covered(box, nodeNear, node.left < 0 ? 2000 : 64)) continue;
+        if (node.left >= 0) {
+          stack.push_back(node.right);
+          stack.push_back(node.left);
+          continue;
+        }
+        std::vector<const Box3f*> triNear;
+        for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+          const uint32_t t = tree.triangles[k];
+          Box3f tri;
+          for (int v = 0; v < 3; ++v)
+            tri.extend(inst.transform.transformPoint(mesh.positions[mesh.indices[t][v]]));
+          triNear.clear();
+          for (const Box3f* b : nodeNear)
+            if (b->overlaps(tri)) triNear.push_back(b);
+          if (!covered(tri, triNear, 1000000))
+            throw InternalError(
+                fmt::format("instance {} (object '{}', mesh '{}', triangle {}) is not covered by "
+                            "proxies of its owners {}",
+                            i, scene.objects[inst.object].name, mesh.name, t, owners.toString()));
+        }
       }
     }
   }

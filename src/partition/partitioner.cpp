@@ -121,6 +121,11 @@ std::string toString(PartitionerKind kind) {
   return partitionerNames()[index];
 }
 
+int instanceProxiesFor(const PartitionerOptions& o) {
+  if (o.instanceProxies > 0) return o.instanceProxies;
+  return o.name == "best" || o.name == "ray-guided" ? kDefaultInstanceProxies : 1;
+}
+
 Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
                          PartitionStats* stats) {
   const auto start = Clock::now();
@@ -189,14 +194,21 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       partition.proxies = domainProxies(parts, partRanks);
     else if (o.name == "object-naive")
       partition.proxies = unitBoxProxies(p.units, owners);
-    else if (o.name == "object-proxies" || o.name == "ray-guided" || o.name == "best")
-      // best: its mesh pieces braided too (docs/partitioning.md, "best's proxies").
-      partition.proxies = instanceProxies(scene, p.units, owners, o.meshProxies, o.instanceProxies);
-    else
+    else if (o.name == "object-proxies" || o.name == "ray-guided" || o.name == "best") {
+      // best: its mesh pieces braided too (docs/partitioning.md, "best's
+      // proxies"). Merged straight from the boxes: braided instances are
+      // several times the budget before merging.
+      std::vector<UnitBox> boxes =
+          unitProxyBoxes(scene, p.units, o.meshProxies, instanceProxiesFor(o));
+      s.unmergedProxies = boxes.size();
+      partition.proxies = mergeProxies(std::move(boxes), owners, o.maxProxies);
+    } else
       partition.proxies = instanceProxies(scene, p.units, owners, 1);
   }
-  s.unmergedProxies = partition.proxies.size();
-  partition.proxies = mergeProxies(std::move(partition.proxies), o.maxProxies);
+  if (s.unmergedProxies == 0) {
+    s.unmergedProxies = partition.proxies.size();
+    partition.proxies = mergeProxies(std::move(partition.proxies), o.maxProxies);
+  }
   s.proxies = partition.proxies.size();
   if (stats)  // a pass over the scene per rank: only when asked for
     for (int r = 0; r < ranks; ++r)

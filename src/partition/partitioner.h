@@ -56,9 +56,9 @@ struct PartitionerOptions {
   int meshProxies = 64;  // object-proxies, best, ray-guided: boxes per non-instanced mesh
   // object-proxies, best, ray-guided: boxes per instance of an instanced
   // object, per mesh of the object (1: the object's box). More cut forwards
-  // and cost every rank proxy memory, and partitioning time and memory
-  // (docs/partitioning.md, "Braided instances").
-  int instanceProxies = 1;
+  // and cost every rank proxy memory (docs/partitioning.md). 0: the
+  // partitioner's default (instanceProxiesFor).
+  int instanceProxies = 0;
   // Proxies are merged down to this many (proxy_merge.h); 0: no limit.
   uint64_t maxProxies = kDefaultMaxProxies;
   uint64_t maxPieceBytes = 0;  // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
@@ -70,6 +70,14 @@ struct PartitionerOptions {
   // ray-guided: the largest part it aims at, times total / N (--max-part).
   double maxPart = 1.25;  // kRayGuidedDefaultMaxPart
 };
+
+// The boxes per instanced mesh a partitioner gives each instance: the
+// option, or by default kDefaultInstanceProxies for best and ray-guided (the
+// same parts, a third fewer forwards for about 90 B per added proxy on every
+// rank; docs/partitioning.md, "Braided instances") and 1 for the others
+// (object-proxies: the paper's one box per instance).
+constexpr int kDefaultInstanceProxies = 4;
+int instanceProxiesFor(const PartitionerOptions& options);
 
 struct PartitionStats {
   std::string partitioner;

@@ -298,6 +298,15 @@ TEST(Partitioners, BraidedInstancesKeepThePartsAndCoverTheContent) {
   }
 }
 
+TEST(Partitioners, BestAndRayGuidedBraidTheirInstancesByDefault) {
+  EXPECT_EQ(instanceProxiesFor(named("best")), kDefaultInstanceProxies);
+  EXPECT_EQ(instanceProxiesFor(named("ray-guided")), kDefaultInstanceProxies);
+  EXPECT_EQ(instanceProxiesFor(named("object-proxies")), 1);  // the paper's: one box per instance
+  PartitionerOptions two = named("object-proxies");
+  two.instanceProxies = 2;
+  EXPECT_EQ(instanceProxiesFor(two), 2);
+}
+
 TEST(Partitioners, CheckCoversCatchesAGap) {
   // Each partitioner's proxies are needed: take one away (or shrink one) and
   // some content is no longer covered.

@@ -1,5 +1,7 @@
 #include "partition/proxies.h"
 
+#include <algorithm>
+
 #include "partition/triangle_clusters.h"
 #include "scene/scene.h"
 
@@ -25,7 +27,21 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
         objectBoxes[o].push_back(trianglesBounds(mesh, Affine3f::identity(), cluster));
     }
   }
+  // Reserved exactly (clusterTriangles makes min(triangles, clusters)):
+  // braided, these are several times the proxies kept after merging.
+  size_t count = 0;
+  for (const Unit& unit : units.units)
+    for (int32_t i : unit.instances) {
+      const int32_t o = scene.instances[i].object;
+      if (placements[o] > 1) {
+        count += objectBoxes[o].size();
+        continue;
+      }
+      for (int32_t m : scene.objects[o].meshes)
+        count += std::min<size_t>(scene.meshes[m].triangleCount(), size_t(std::max(meshBoxes, 1)));
+    }
   std::vector<UnitBox> boxes;
+  boxes.reserve(count);
   for (uint32_t u = 0; u < units.units.size(); ++u) {
     for (int32_t i : units.units[u].instances) {
       const Instance& inst = scene.instances[i];

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/error.h"
 #include "render/render_test_util.h"
 #include "scene/scene.h"
 
@@ -59,6 +60,32 @@ TEST(InstanceProxies, BraidedInstancesLeaveTheGapsOfTheirObject) {
       EXPECT_GE(in, 1);
     }
   }
+}
+
+TEST(InstanceProxies, TheCoverCheckFindsEveryBraidedPieceAndEveryGap) {
+  // Partition::checkCovers goes down object-space cluster trees: it accepts
+  // braided instances without testing each triangle, and still finds a
+  // piece that no longer holds its triangles.
+  const Scene scene = twoPalms();
+  const UnitSet units = extractUnits(scene, {});
+  const std::vector<RankSet> owners(units.units.size(), RankSet::single(0));
+  Partition p;
+  p.ranks = 1;
+  p.instanceOwners.assign(scene.instances.size(), RankSet::single(0));
+  p.proxies = instanceProxies(scene, units, owners, 1, 2);
+  ASSERT_NO_THROW(p.checkCovers(scene));
+  for (size_t k = 0; k < p.proxies.size(); ++k)
+    for (int axis = 0; axis < 3; ++axis) {
+      Partition shrunk = p;
+      Box3f& b = shrunk.proxies[k].bounds;
+      if (b.upper[axis] == b.lower[axis]) continue;  // a flat piece: nothing to take off
+      b.upper[axis] -= 0.01f * (b.upper[axis] - b.lower[axis]);
+      EXPECT_THROW(shrunk.checkCovers(scene), InternalError) << "proxy " << k << ", axis " << axis;
+    }
+  Partition wrongOwner = p;
+  wrongOwner.ranks = 2;
+  wrongOwner.proxies[3].owners = RankSet::single(1);
+  EXPECT_THROW(wrongOwner.checkCovers(scene), InternalError);
 }
 
 }  // namespace

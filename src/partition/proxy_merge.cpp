@@ -26,15 +26,16 @@ constexpr int kBins = 16;
 // of the second. Binned over the centres on each axis, the planes leaving
 // the least summed surface area; the middle of the range if every centre is
 // the same point.
-uint32_t splitCluster(const std::vector<Proxy>& proxies, std::vector<uint32_t>& order,
-                      uint32_t first, uint32_t last) {
+template <class Input>
+uint32_t splitCluster(const Input& proxies, std::vector<uint32_t>& order, uint32_t first,
+                      uint32_t last) {
   Box3f centres;
-  for (uint32_t i = first; i < last; ++i) centres.extend(proxies[order[i]].bounds.center());
+  for (uint32_t i = first; i < last; ++i) centres.extend(proxies.bounds(order[i]).center());
   const Vec3f extent = centres.size();
   int bestAxis = -1, bestBin = 0;
   float bestCost = kInfinity;
   auto binOf = [&](int axis, uint32_t id) {
-    const float f = (proxies[id].bounds.center()[axis] - centres.lower[axis]) / extent[axis];
+    const float f = (proxies.bounds(id).center()[axis] - centres.lower[axis]) / extent[axis];
     return std::clamp(int(f * kBins), 0, kBins - 1);
   };
   for (int axis = 0; axis < 3; ++axis) {
@@ -43,7 +44,7 @@ uint32_t splitCluster(const std::vector<Proxy>& proxies, std::vector<uint32_t>& 
     uint32_t counts[kBins] = {};
     for (uint32_t i = first; i < last; ++i) {
       const int b = binOf(axis, order[i]);
-      bins[b].extend(proxies[order[i]].bounds);
+      bins[b].extend(proxies.bounds(order[i]));
       ++counts[b];
     }
     float rightArea[kBins];
@@ -76,28 +77,31 @@ uint32_t splitCluster(const std::vector<Proxy>& proxies, std::vector<uint32_t>& 
   return uint32_t(mid - order.begin());
 }
 
-Box3f unionOf(const std::vector<Proxy>& proxies, const std::vector<uint32_t>& order, uint32_t first,
+template <class Input>
+Box3f unionOf(const Input& proxies, const std::vector<uint32_t>& order, uint32_t first,
               uint32_t last) {
   Box3f b;
-  for (uint32_t i = first; i < last; ++i) b.extend(proxies[order[i]].bounds);
+  for (uint32_t i = first; i < last; ++i) b.extend(proxies.bounds(order[i]));
   return b;
 }
 
-}  // namespace
-
-std::vector<Proxy> mergeProxies(std::vector<Proxy> proxies, uint64_t maxProxies) {
-  if (maxProxies == 0 || proxies.size() <= maxProxies) return proxies;
+// The merge, over proxies given as `proxies.size()`, `.bounds(i)` and
+// `.owners(i)`; `.releaseBoxes()` lets the boxes go once they are merged
+// (the owner sets stay).
+template <class Input>
+std::vector<Proxy> merge(Input& proxies, uint64_t maxProxies) {
   std::vector<uint32_t> order(proxies.size());
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    return ownersBefore(proxies[a].owners, proxies[b].owners);
+    return ownersBefore(proxies.owners(a), proxies.owners(b));
   });
 
   // One cluster per owner set to start with.
   std::vector<Cluster> clusters;
+  clusters.reserve(size_t(std::min<uint64_t>(maxProxies, proxies.size())) + 1);
   for (uint32_t first = 0; first < order.size();) {
     uint32_t last = first + 1;
-    while (last < order.size() && proxies[order[last]].owners == proxies[order[first]].owners)
+    while (last < order.size() && proxies.owners(order[last]) == proxies.owners(order[first]))
       ++last;
     clusters.push_back({first, last, unionOf(proxies, order, first, last)});
     first = last;
@@ -126,10 +130,53 @@ std::vector<Proxy> mergeProxies(std::vector<Proxy> proxies, uint64_t maxProxies)
 
   std::sort(clusters.begin(), clusters.end(),
             [](const Cluster& a, const Cluster& b) { return a.first < b.first; });
+  // The owner sets, then the input is let go before the output is made.
+  std::vector<const RankSet*> owners(clusters.size());
+  for (size_t k = 0; k < clusters.size(); ++k)
+    owners[k] = &proxies.owners(order[clusters[k].first]);
+  order = {};
+  proxies.releaseBoxes();
   std::vector<Proxy> merged;
   merged.reserve(clusters.size());
-  for (const Cluster& c : clusters) merged.push_back({c.box, proxies[order[c.first]].owners});
+  for (size_t k = 0; k < clusters.size(); ++k) merged.push_back({clusters[k].box, *owners[k]});
   return merged;
+}
+
+struct ProxyInput {
+  const std::vector<Proxy>& proxies;
+  size_t size() const { return proxies.size(); }
+  const Box3f& bounds(uint32_t i) const { return proxies[i].bounds; }
+  const RankSet& owners(uint32_t i) const { return proxies[i].owners; }
+  void releaseBoxes() {}  // they hold the owner sets
+};
+
+struct UnitBoxInput {
+  std::vector<UnitBox> boxes;
+  const std::vector<RankSet>& unitOwners;
+  size_t size() const { return boxes.size(); }
+  const Box3f& bounds(uint32_t i) const { return boxes[i].box; }
+  const RankSet& owners(uint32_t i) const { return unitOwners[boxes[i].unit]; }
+  void releaseBoxes() { boxes = {}; }
+};
+
+}  // namespace
+
+std::vector<Proxy> mergeProxies(std::vector<Proxy> proxies, uint64_t maxProxies) {
+  if (maxProxies == 0 || proxies.size() <= maxProxies) return proxies;
+  ProxyInput input{proxies};
+  return merge(input, maxProxies);
+}
+
+std::vector<Proxy> mergeProxies(std::vector<UnitBox> boxes, const std::vector<RankSet>& unitOwners,
+                                uint64_t maxProxies) {
+  if (maxProxies == 0 || boxes.size() <= maxProxies) {
+    std::vector<Proxy> proxies;
+    proxies.reserve(boxes.size());
+    for (const UnitBox& b : boxes) proxies.push_back({b.box, unitOwners[b.unit]});
+    return proxies;
+  }
+  UnitBoxInput input{std::move(boxes), unitOwners};
+  return merge(input, maxProxies);
 }
 
 }  // namespace ferry

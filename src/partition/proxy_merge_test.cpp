@@ -60,6 +60,30 @@ TEST(ProxyMerge, UnderTheBudgetNothingChanges) {
   }
 }
 
+TEST(ProxyMerge, UnitBoxesMergeAsTheProxiesTheyStandFor) {
+  // The partitioners merge braided boxes straight from their units: the same
+  // boxes, in the same order, as merging the Proxy list.
+  const std::vector<Proxy> proxies = scattered(3000, 11);
+  std::vector<RankSet> unitOwners;
+  std::vector<UnitBox> boxes;
+  for (size_t i = 0; i < proxies.size(); ++i) {
+    if (i % 3 == 0) unitOwners.push_back(proxies[i].owners);  // a unit per 3 boxes...
+    if (!(unitOwners.back() == proxies[i].owners)) unitOwners.push_back(proxies[i].owners);
+    boxes.push_back({uint32_t(unitOwners.size() - 1), proxies[i].bounds});
+  }
+  for (uint64_t max : {uint64_t(0), uint64_t(6), uint64_t(300), uint64_t(5000)}) {
+    SCOPED_TRACE(fmt::format("max {}", max));
+    const std::vector<Proxy> want = mergeProxies(proxies, max);
+    const std::vector<Proxy> got = mergeProxies(boxes, unitOwners, max);
+    ASSERT_EQ(got.size(), want.size());
+    for (size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].owners, want[i].owners);
+      EXPECT_EQ(got[i].bounds.lower, want[i].bounds.lower);
+      EXPECT_EQ(got[i].bounds.upper, want[i].bounds.upper);
+    }
+  }
+}
+
 TEST(ProxyMerge, MergedBoxesCoverEveryProxyWithItsOwnersWithinTheBudget) {
   const std::vector<Proxy> proxies = scattered(2000, 7);
   for (uint64_t max : {4, 5, 17, 256, 1999}) {

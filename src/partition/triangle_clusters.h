@@ -20,6 +20,23 @@ struct Mesh;
 std::vector<std::vector<uint32_t>> clusterTriangles(const Mesh& mesh, const Affine3f& transform,
                                                     int maxClusters);
 
+// The whole binary tree of those build steps, split down to clusters of at
+// most `leafSize` triangles. Every cluster clusterTriangles makes (with the
+// same transform, any maxClusters) is one of its nodes, with the same
+// bounds, so a check that proxies cover a mesh can go down it until a node's
+// box lies in proxies (Partition::checkCovers) instead of testing triangle by
+// triangle. Bounds are of the nodes' triangles' vertices after `transform`.
+struct ClusterTree {
+  struct Node {
+    Box3f bounds;
+    uint32_t first = 0, count = 0;  // triangles[first, first + count)
+    int32_t left = -1, right = -1;  // children, or -1 for a leaf
+  };
+  std::vector<Node> nodes;          // nodes[0] is the root (none for an empty mesh)
+  std::vector<uint32_t> triangles;  // triangle indices, each node's contiguous
+};
+ClusterTree clusterTree(const Mesh& mesh, const Affine3f& transform, size_t leafSize);
+
 // World bounds (through `transform`) of the listed triangles' vertices.
 Box3f trianglesBounds(const Mesh& mesh, const Affine3f& transform,
                       const std::vector<uint32_t>& triangles);
