@@ -64,11 +64,14 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
            "rays low over the ground pass the boxes of pieces they never hit; braiding each non-instanced "
            "mesh or piece into 64 tight boxes (`object-proxies`' proxies, which `ray-guided` and, since "
            "2026-11-26, `best` use) cut `best`'s predicted forwards by 29–48 % on the island's views and "
-           "4–8 % on the landscape's (docs/partitioning.md, \"best's proxies\"). The spatial proxies are "
+           "4–8 % on the landscape's (docs/partitioning.md, \"best's proxies\"), and braiding each "
+           "instance's meshes into 4 boxes in object space (the default for `best` and `ray-guided`, also "
+           "since 2026-11-26) another 9–35 % on the island and 17–22 % on the landscape "
+           "(docs/partitioning.md, \"Braided instances\"). The spatial proxies are "
            + " and ".join(f"{sp_proxies[s]}" for s in scenes) + " disjoint domain boxes: a ray is forwarded "
            "only when it leaves its rank's domain without a hit. `best` has "
-           + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (one per instance, 64 per terrain "
-           "piece) that overlap wherever plants of different ranks stand together, and a ray passing such "
+           + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (4 per instanced mesh of each instance, "
+           "64 per terrain piece, merged down to at most 262,144) that overlap wherever plants of different ranks stand together, and a ray passing such "
            "proxies in front of its hit must visit each of their owners. ")
     if more:
         txt += ("Second, on the landscape every plant species is spread over the whole terrain "
