@@ -348,7 +348,7 @@ if "ray-guided" in PARTS:
       "goal (issue 16): fewer than every one of the six on every view, the unseen cameras included, with "
       "the largest part at most 1.3× an even share (and `best`'s at most 1.25×). The fewest's own largest "
       "part, × an even share, beside it: the six are not held to that cap. Forwards against memory, "
-      "ray-guided at larger caps: docs/partitioning.md, \"Forwards against memory\" "
+      "ray-guided at larger caps: docs/partitioning.md, \"At equal memory\" "
       "(`bench/memory_bandwidth.sh`).")
     w("")
     w("| scene | view | ray-guided | fewest of the six | its largest part | ray-guided fewer? |")
