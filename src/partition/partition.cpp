@@ -179,14 +179,20 @@ void Partition::checkCovers(const Scene& scene) const {
         const Box3f meshBox = inst.transform.transformBox(scene.meshes[m].bounds());
         if (covered(meshBox, eligible(meshBox, owners), 2000)) continue;
       }
-      Mesh scratch;  // a stored mesh is read back only here, when its box is not covered
-      const Mesh& mesh = scene.geometry(m, scratch);
+      // A stored mesh (out of core) is read back only when needed: to make
+      // its tree, or at a leaf no proxy holds whole; not for every instance.
+      Mesh scratch;
+      const Mesh* stored = nullptr;
+      auto geometry = [&]() -> const Mesh& {
+        if (!stored) stored = &scene.geometry(m, scratch);
+        return *stored;
+      };
       ClusterTree own;
-      if (!shared) own = clusterTree(mesh, inst.transform, kCoverLeafTriangles);
+      if (!shared) own = clusterTree(geometry(), inst.transform, kCoverLeafTriangles);
       auto it = objectSpaceTrees.find(m);
       if (shared && it == objectSpaceTrees.end())
         it = objectSpaceTrees
-                 .emplace(m, clusterTree(mesh, Affine3f::identity(), kCoverLeafTriangles))
+                 .emplace(m, clusterTree(geometry(), Affine3f::identity(), kCoverLeafTriangles))
                  .first;
       const ClusterTree& tree = shared ? it->second : own;
       // A node's box in world space: object-space boxes are transformed as
@@ -206,6 +212,7 @@ void Partition::checkCovers(const Scene& scene) const {
           stack.push_back(node.left);
           continue;
         }
+        const Mesh& mesh = geometry();
         std::vector<const Box3f*> triNear;
         for (uint32_t k = node.first; k < node.first + node.count; ++k) {
           const uint32_t t = tree.triangles[k];
