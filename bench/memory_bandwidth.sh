@@ -88,7 +88,7 @@ for scene in sorted({r["scene"] for r in rows}):
         cr = {r["view"]: r for r in rs if (r["partitioner"], r["max_part"]) == c}
         print(f"  {label(c):<18} {cr[views[0]]['largest_part']:>7.2f}x " +
               " ".join(f"{cr[v]['forwards_per_path']:>9.3f}" for v in views))
-    fig, axes = plt.subplots(1, len(views), figsize=(3.2 * len(views), 3.2), sharey=False)
+    fig, axes = plt.subplots(1, len(views), figsize=(3.2 * len(views), 3.5), sharey=False)
     for ax, view in zip(axes, views):
         vr = [r for r in rs if r["view"] == view]
         rg = sorted((r for r in vr if r["partitioner"] == "ray-guided"), key=lambda r: r["max_part"])
@@ -103,8 +103,10 @@ for scene in sorted({r["scene"] for r in rows}):
         ax.set_yscale("log")
         ax.tick_params(labelsize=7)
     axes[0].set_ylabel("forwards per camera path", fontsize=8)
-    axes[-1].legend(fontsize=6)
-    fig.tight_layout()
+    # One legend below the panels, where it covers no point.
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(os.path.join(out, f"memory-bandwidth-{scene}.png"), dpi=110)
 print(f"\nwrote {out}/memory_bandwidth.csv and memory-bandwidth-*.png")
 PY
