@@ -86,14 +86,14 @@ class ProxyOverlapTree {
   std::vector<Node> nodes_;
 };
 
-// Is `box` inside the union of the candidate boxes? Subtracts one overlapping
-// candidate at a time and recurses on the (up to 6) pieces left. `budget`
-// bounds the work; when it runs out the answer is "not shown" (false).
 // Cluster size at the leaves of the cover check's trees: small enough that
 // a leaf lies in few proxies, large enough that the trees stay small (about
 // 7 bytes per triangle of the meshes that need one).
 constexpr size_t kCoverLeafTriangles = 16;
 
+// Is `box` inside the union of the candidate boxes? Subtracts one overlapping
+// candidate at a time and recurses on the (up to 6) pieces left. `budget`
+// bounds the work; when it runs out the answer is "not shown" (false).
 bool coveredByUnion(const Box3f& box, const std::vector<const Box3f*>& candidates, size_t from,
                     int64_t& budget) {
   if (--budget < 0) return false;

@@ -139,6 +139,7 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
   s.ranks = ranks;
 
   Partition partition;
+  bool merged = false;  // the braided partitioners merge their boxes themselves
   if (o.name == "round-robin" || o.name == "random") {
     s.inputBytes = summarize(scene).memory.total();
     partition = o.name == "round-robin" ? roundRobinPartition(scene, ranks)
@@ -198,14 +199,15 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       // best: its mesh pieces braided too (docs/partitioning.md, "best's
       // proxies"). Merged straight from the boxes: braided instances are
       // several times the budget before merging.
-      std::vector<UnitBox> boxes =
+      const std::vector<UnitBox> boxes =
           unitProxyBoxes(scene, p.units, o.meshProxies, instanceProxiesFor(o));
       s.unmergedProxies = boxes.size();
-      partition.proxies = mergeProxies(std::move(boxes), owners, o.maxProxies);
+      partition.proxies = mergeProxies(boxes, owners, o.maxProxies);
+      merged = true;
     } else
       partition.proxies = instanceProxies(scene, p.units, owners, 1);
   }
-  if (s.unmergedProxies == 0) {
+  if (!merged) {
     s.unmergedProxies = partition.proxies.size();
     partition.proxies = mergeProxies(std::move(partition.proxies), o.maxProxies);
   }

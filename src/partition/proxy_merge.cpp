@@ -86,10 +86,9 @@ Box3f unionOf(const Input& proxies, const std::vector<uint32_t>& order, uint32_t
 }
 
 // The merge, over proxies given as `proxies.size()`, `.bounds(i)` and
-// `.owners(i)`; `.releaseBoxes()` lets the boxes go once they are merged
-// (the owner sets stay).
+// `.owners(i)`.
 template <class Input>
-std::vector<Proxy> merge(Input& proxies, uint64_t maxProxies) {
+std::vector<Proxy> merge(const Input& proxies, uint64_t maxProxies) {
   std::vector<uint32_t> order(proxies.size());
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
@@ -130,15 +129,9 @@ std::vector<Proxy> merge(Input& proxies, uint64_t maxProxies) {
 
   std::sort(clusters.begin(), clusters.end(),
             [](const Cluster& a, const Cluster& b) { return a.first < b.first; });
-  // The owner sets, then the input is let go before the output is made.
-  std::vector<const RankSet*> owners(clusters.size());
-  for (size_t k = 0; k < clusters.size(); ++k)
-    owners[k] = &proxies.owners(order[clusters[k].first]);
-  order = {};
-  proxies.releaseBoxes();
   std::vector<Proxy> merged;
   merged.reserve(clusters.size());
-  for (size_t k = 0; k < clusters.size(); ++k) merged.push_back({clusters[k].box, *owners[k]});
+  for (const Cluster& c : clusters) merged.push_back({c.box, proxies.owners(order[c.first])});
   return merged;
 }
 
@@ -147,36 +140,32 @@ struct ProxyInput {
   size_t size() const { return proxies.size(); }
   const Box3f& bounds(uint32_t i) const { return proxies[i].bounds; }
   const RankSet& owners(uint32_t i) const { return proxies[i].owners; }
-  void releaseBoxes() {}  // they hold the owner sets
 };
 
 struct UnitBoxInput {
-  std::vector<UnitBox> boxes;
+  const std::vector<UnitBox>& boxes;
   const std::vector<RankSet>& unitOwners;
   size_t size() const { return boxes.size(); }
   const Box3f& bounds(uint32_t i) const { return boxes[i].box; }
   const RankSet& owners(uint32_t i) const { return unitOwners[boxes[i].unit]; }
-  void releaseBoxes() { boxes = {}; }
 };
 
 }  // namespace
 
 std::vector<Proxy> mergeProxies(std::vector<Proxy> proxies, uint64_t maxProxies) {
   if (maxProxies == 0 || proxies.size() <= maxProxies) return proxies;
-  ProxyInput input{proxies};
-  return merge(input, maxProxies);
+  return merge(ProxyInput{proxies}, maxProxies);
 }
 
-std::vector<Proxy> mergeProxies(std::vector<UnitBox> boxes, const std::vector<RankSet>& unitOwners,
-                                uint64_t maxProxies) {
+std::vector<Proxy> mergeProxies(const std::vector<UnitBox>& boxes,
+                                const std::vector<RankSet>& unitOwners, uint64_t maxProxies) {
   if (maxProxies == 0 || boxes.size() <= maxProxies) {
     std::vector<Proxy> proxies;
     proxies.reserve(boxes.size());
     for (const UnitBox& b : boxes) proxies.push_back({b.box, unitOwners[b.unit]});
     return proxies;
   }
-  UnitBoxInput input{std::move(boxes), unitOwners};
-  return merge(input, maxProxies);
+  return merge(UnitBoxInput{boxes, unitOwners}, maxProxies);
 }
 
 }  // namespace ferry

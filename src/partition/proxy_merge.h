@@ -38,7 +38,7 @@ std::vector<Proxy> mergeProxies(std::vector<Proxy> proxies, uint64_t maxProxies)
 // unit's owners: the same result as making the Proxy list first, without it
 // (braided instances are several times the budget before merging: 28 bytes
 // each here, 56 as a Proxy).
-std::vector<Proxy> mergeProxies(std::vector<UnitBox> boxes, const std::vector<RankSet>& unitOwners,
-                                uint64_t maxProxies);
+std::vector<Proxy> mergeProxies(const std::vector<UnitBox>& boxes,
+                                const std::vector<RankSet>& unitOwners, uint64_t maxProxies);
 
 }  // namespace ferry

@@ -9,17 +9,20 @@ namespace ferry {
 
 namespace {
 
-// Triangle centroids after `transform`, and their indices in order.
+// Vertices and triangle centroids after `transform`, and the triangles'
+// indices in order.
 struct Centroids {
+  std::vector<Vec3f> world;
   std::vector<Vec3f> centroid;
   std::vector<uint32_t> order;
 };
 
 Centroids centroidsOf(const Mesh& mesh, const Affine3f& transform) {
   const size_t n = mesh.indices.size();
-  std::vector<Vec3f> world(mesh.positions.size());
-  for (size_t v = 0; v < world.size(); ++v) world[v] = transform.transformPoint(mesh.positions[v]);
   Centroids c;
+  std::vector<Vec3f>& world = c.world;
+  world.resize(mesh.positions.size());
+  for (size_t v = 0; v < world.size(); ++v) world[v] = transform.transformPoint(mesh.positions[v]);
   c.centroid.resize(n);
   for (size_t t = 0; t < n; ++t) {
     const Vec3i& tri = mesh.indices[t];
@@ -125,8 +128,7 @@ ClusterTree clusterTree(const Mesh& mesh, const Affine3f& transform, size_t leaf
     if (node.left < 0) {
       for (uint32_t i = node.first; i < node.first + node.count; ++i) {
         const Vec3i& tri = mesh.indices[c.order[i]];
-        for (int v = 0; v < 3; ++v)
-          node.bounds.extend(transform.transformPoint(mesh.positions[tri[v]]));
+        for (int v = 0; v < 3; ++v) node.bounds.extend(c.world[tri[v]]);
       }
     } else {
       node.bounds = tree.nodes[size_t(node.left)].bounds;
