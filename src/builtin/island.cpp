@@ -369,8 +369,8 @@ void IslandPlanner::addGiantIronwood() {
   giant.rootRadius = 0.1f;
   PlantDesign design = designTree(giant, streamKey(seed_, 0xba2));
   int32_t object =
-      addPlantObject(plan_, "isIronwoodA1/ironwood", design, [mat = mat_](PartRole role) {
-        return role == PartRole::Leaves ? mat.giantLeaves : mat.giantBark;
+      addPlantObject(plan_, "isIronwoodA1/ironwood", design, [mat = mat_](const PlantPart& part) {
+        return part.role == PartRole::Leaves ? mat.giantLeaves : mat.giantBark;
       });
   const uint64_t count = scaledCount(4, scale_);
   ScatterRule rule;
@@ -405,7 +405,9 @@ void IslandPlanner::addElementSpecies() {
     s.count = scaledCount(e.count, scale_);
     s.variants = std::max(1, int(std::lround(e.variants * variantFactor_)));
     s.design = [kind = e.kind, designSeed](int v) { return designPlant(kind, v, designSeed); };
-    s.material = [mat = mat_, kind = e.kind](PartRole r, int v) { return mat.forKind(kind, r, v); };
+    s.material = [mat = mat_, kind = e.kind](const PlantPart& part, int v) {
+      return mat.forKind(kind, part.role, v);
+    };
     s.rule = e.rule;
     s.ground = regionGround(shape_, e.region);
     addSpecies(plan_, s, streamKey(seed_, 0x5bec, uint32_t(k)));

@@ -12,13 +12,6 @@
 namespace ferry::builtin {
 namespace {
 
-// Normals from the function itself, so neighbouring pieces agree at their seams.
-void heightNormals(Mesh& m, const HeightFunction& height, float eps) {
-  tbb::parallel_for(size_t(0), m.positions.size(), [&](size_t v) {
-    m.normals[v] = heightNormal(height, m.positions[v].x, m.positions[v].z, eps);
-  });
-}
-
 // Cells [i0, i1] x [j0, j1] of a polar grid of rings x segments about an apex
 // (ring 0); when i0 == 0 the cells touching the apex are a fan. Vertex (i, j)
 // is at(i / rings, 2 pi (j mod segments) / segments) in every patch, so
@@ -81,17 +74,9 @@ std::string groundElement(const IslandShape& shape, Vec2f p) {
 
 void addGroundTiles(ScenePlan& plan, const Shape& shape, const TerrainGrid& grid, int tiles,
                     int32_t material, ElementMeshes& out) {
-  FERRY_CHECK_EQ(grid.segments % tiles, 0);
-  const int cells = grid.segments / tiles;
-  const float eps = 0.5f * (grid.x1 - grid.x0) / float(grid.segments);
   for (int tj = 0; tj < tiles; ++tj)
     for (int ti = 0; ti < tiles; ++ti) {
-      TerrainGrid tile;
-      tile.x0 = grid.x(ti * cells);
-      tile.x1 = grid.x((ti + 1) * cells);
-      tile.z0 = grid.z(tj * cells);
-      tile.z1 = grid.z((tj + 1) * cells);
-      tile.segments = cells;
+      TerrainGrid tile = terrainTile(grid, tiles, ti, tj);
       // Left out when every corner and the centre lie far out at sea, where
       // the ground is flat just above the seabed plane.
       float nearest = 1e9f;
@@ -101,19 +86,9 @@ void addGroundTiles(ScenePlan& plan, const Shape& shape, const TerrainGrid& grid
       if (nearest > 1.5f) continue;
       Vec2f centre{0.5f * (tile.x0 + tile.x1), 0.5f * (tile.z0 + tile.z1)};
       std::string element = groundElement(*shape, centre);
-      MeshRecipe r;
-      r.name = fmt::format("{}/ground-{}-{}", element, ti, tj);
-      r.material = material;
-      r.counts = terrainCounts(tile);
-      r.build = [shape, tile, grid, eps] {
-        HeightFunction height = [&](float x, float z) { return shape->ground(x, z); };
-        Mesh m = buildTerrain(tile, height);
-        heightNormals(m, height, eps);
-        for (Vec2f& uv : m.uvs)
-          uv =
-              grid.uvAt(tile.x0 + uv.x * (tile.x1 - tile.x0), tile.z0 + uv.y * (tile.z1 - tile.z0));
-        return m;
-      };
+      MeshRecipe r =
+          terrainTileRecipe(fmt::format("{}/ground-{}-{}", element, ti, tj), material, grid, tile,
+                            [shape](float x, float z) { return shape->ground(x, z); });
       out[element].push_back(plan.addMesh(std::move(r)));
     }
 }

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <memory>
 
+#include <fmt/format.h>
+
 #include "builtin/noise.h"
 #include "builtin/plants.h"
 #include "builtin/procedural_texture.h"
@@ -142,23 +144,32 @@ struct VariantKeys {
 // indices of textures, materials, meshes and objects, and the species'
 // random streams, depend on it. Every recipe captures what it needs by
 // value: the planner is gone when the plan is materialized.
+//
+// The structure follows what is published of pbrt's landscape (L1 in
+// docs/scenes.md): 29 objects of about 13 meshes each, 370 meshes, and per
+// instance about 145 K triangles, because what is instanced is large: whole
+// trees of about 100 K triangles cut into a mesh per branch level and
+// several leaf meshes, and ground cover baked into patches of a hundred and
+// more clumps. The ground is one object of 15 x 15 tiles.
 class LandscapePlanner {
  public:
   LandscapePlanner(double scale, uint32_t seed) : scale_(scale), seed_(seed), variants_{seed} {
     plan_.name = "landscape";
     grid_.x0 = grid_.z0 = -kHalfSize;
     grid_.x1 = grid_.z1 = kHalfSize;
-    grid_.segments = int(std::clamp(std::round(512 * std::sqrt(scale)), 64.0, 16384.0));
-    grid_.skirtY = 0;
+    // A multiple of the tiles, 1,080 at scale 1 (the edges are at height 0
+    // by the function's own fade, so no skirt is needed).
+    const int cells = int(std::clamp(std::round(72 * std::sqrt(scale)), 4.0, 1024.0));
+    grid_.segments = kGroundTiles * cells;
     shape_ = std::make_shared<const LandscapeShape>(seed, grid_);
   }
 
   ScenePlan plan() && {
     addMaterials(addTextures());
-    addTerrainMesh(plan_, "landscape-terrain", mat_.terrain, grid_,
-                   [shape = shape_](float x, float z) { return shape->height(x, z); });
+    addGround();
     addSpecies(plan_,
-               {oaks(), pines(), birches(), shrubs(), ferns(), grass(), flowers(), rocks(), logs()},
+               {oaks(), autumnOaks(), pines(), birches(), grassPatches(), flowerPatches(),
+                fernPatches(), shrubs(), saplings(), rocks(), logs()},
                streamKey(seed_, 0x1a4d));
     addLightsAndViews();
     plan_.bounds.extend(Vec3f(-kHalfSize, 0, -kHalfSize));
@@ -167,15 +178,20 @@ class LandscapePlanner {
   }
 
  private:
+  static constexpr int kGroundTiles = 15;
+
   LandscapeTextures addTextures();
   void addMaterials(const LandscapeTextures& tex);
+  void addGround();
   Species oaks() const;
+  Species autumnOaks() const;
   Species pines() const;
   Species birches() const;
+  Species grassPatches() const;
+  Species flowerPatches() const;
+  Species fernPatches() const;
   Species shrubs() const;
-  Species ferns() const;
-  Species grass() const;
-  Species flowers() const;
+  Species saplings() const;
   Species rocks() const;
   Species logs() const;
   void addLightsAndViews();
@@ -276,39 +292,74 @@ void LandscapePlanner::addMaterials(const LandscapeTextures& tex) {
   mat.logWood = material("log", {0.8f, 0.75f, 0.7f}, tex.oakBark);
 }
 
+void LandscapePlanner::addGround() {
+  std::vector<int32_t> tiles;
+  for (int tj = 0; tj < kGroundTiles; ++tj)
+    for (int ti = 0; ti < kGroundTiles; ++ti)
+      tiles.push_back(plan_.addMesh(
+          terrainTileRecipe(fmt::format("ground/tile-{}-{}", ti, tj), mat_.terrain, grid_,
+                            terrainTile(grid_, kGroundTiles, ti, tj),
+                            [shape = shape_](float x, float z) { return shape->height(x, z); })));
+  int32_t ground = plan_.addObject("ground", std::move(tiles));
+  plan_.addInstances(ground, 1, [](uint64_t) { return Affine3f::identity(); });
+}
+
+// A broadleaf tree of about 100 K triangles: four branch levels, 420 tips.
+TreeParams oakParams(HashRng& rng, int v) {
+  TreeParams p;
+  p.trunkLength = rng.uniform(4.5f, 6);
+  p.trunkRadius = rng.uniform(0.35f, 0.45f);
+  p.trunkRings = 16;
+  p.trunkSides = 12;
+  p.levels = {{7, 10, 8, 0.9f, 0.5f, 55, 0.45f, 0.1f, 0.4f},
+              {5, 6, 6, 0.5f, 0.55f, 45, 0.3f, 0.15f, 0.4f},
+              {4, 4, 4, 0.55f, 0.55f, 40, 0.3f, 0.1f, 0.4f},
+              {3, 3, 3, 0.6f, 0.55f, 40, 0.3f, 0.1f, 0.4f}};
+  p.leavesPerTip = 78 + 2 * (v % 3);
+  p.leafSegments = 2;
+  p.leafSize = 0.42f;
+  p.woodByLevel = true;
+  p.leafMeshes = 8;
+  return p;
+}
+
 Species LandscapePlanner::oaks() const {
   Species s;
   s.name = "oak";
-  s.count = scaledCount(300, scale_);
-  s.variants = 16;
+  s.count = scaledCount(420, scale_);
+  s.variants = 1;
   s.design = [keys = variants_](int v) {
     HashRng rng = keys.rng(1, v);
-    TreeParams p;
-    p.trunkLength = rng.uniform(4.5f, 6);
-    p.trunkRadius = rng.uniform(0.35f, 0.45f);
-    p.trunkRings = 16;
-    p.trunkSides = 12;
-    p.levels = {{6 + v % 3, 10, 8, 0.9f, 0.5f, 55, 0.45f, 0.1f, 0.4f},
-                {4, 6, 6, 0.5f, 0.55f, 45, 0.3f, 0.15f, 0.4f},
-                {4, 4, 4, 0.5f, 0.55f, 40, 0.3f, 0.1f, 0.4f}};
-    p.leavesPerTip = 24 + 2 * (v % 4);
-    p.leafSegments = 2;
-    p.leafSize = 1.0f;
-    return designTree(p, keys.design(1, v));
+    return designTree(oakParams(rng, v), keys.design(1, v));
   };
-  s.material = [leaves = mat_.oakLeaves, bark = mat_.oakBark](PartRole r, int v) {
-    return r == PartRole::Leaves ? leaves[size_t(v) % 3] : bark;
+  s.material = [leaves = mat_.oakLeaves, bark = mat_.oakBark](const PlantPart& part, int) {
+    return part.role == PartRole::Leaves ? leaves[size_t(part.group) % 2] : bark;
   };
   s.rule = {6, 25, 0.8f, 1.2f, 3, 0, 0.1f, 24};
   s.ground = landscapeGround(shape_, false, 4, 0.0f, 10);
   return s;
 }
 
+Species LandscapePlanner::autumnOaks() const {
+  Species s = oaks();
+  s.name = "oak-autumn";
+  s.count = scaledCount(50, scale_);
+  s.design = [keys = variants_](int v) {
+    HashRng rng = keys.rng(10, v);
+    return designTree(oakParams(rng, v + 1), keys.design(10, v));
+  };
+  s.material = [leaves = mat_.oakLeaves[2], bark = mat_.oakBark](const PlantPart& part, int) {
+    return part.role == PartRole::Leaves ? leaves : bark;
+  };
+  s.rule = {0, 0, 0.8f, 1.2f, 3, 0, 0.1f, 24};
+  return s;
+}
+
 Species LandscapePlanner::pines() const {
   Species s;
   s.name = "pine";
-  s.count = scaledCount(350, scale_);
-  s.variants = 16;
+  s.count = scaledCount(600, scale_);
+  s.variants = 1;
   s.design = [keys = variants_](int v) {
     HashRng rng = keys.rng(2, v);
     TreeParams p;
@@ -320,16 +371,19 @@ Species LandscapePlanner::pines() const {
     p.trunkLean = 0.03f;
     p.trunkFlare = 0.3f;
     p.coneFactor = 0.9f;
-    p.levels = {{34 + 2 * (v % 4), 6, 5, 0.35f, 0.3f, 95, 0.15f, -0.1f, 0.3f},
-                {3, 3, 3, 0.35f, 0.5f, 50, 0.3f, 0.0f, 0.4f}};
-    p.leavesPerTip = 16;
-    p.leafSegments = 1;
-    p.leafSize = 0.9f;
+    p.levels = {{36, 6, 5, 0.35f, 0.3f, 95, 0.15f, -0.1f, 0.3f},
+                {3, 3, 3, 0.35f, 0.5f, 50, 0.3f, 0.0f, 0.4f},
+                {3, 2, 3, 0.5f, 0.5f, 45, 0.3f, 0.0f, 0.4f}};
+    p.leavesPerTip = 90;
+    p.leafSegments = 2;
+    p.leafSize = 0.5f;
     p.leafDroop = 0.1f;
+    p.woodByLevel = true;
+    p.leafMeshes = 9;
     return designTree(p, keys.design(2, v));
   };
-  s.material = [needles = mat_.needles, bark = mat_.pineBark](PartRole r, int) {
-    return r == PartRole::Leaves ? needles : bark;
+  s.material = [needles = mat_.needles, bark = mat_.pineBark](const PlantPart& part, int) {
+    return part.role == PartRole::Leaves ? needles : bark;
   };
   s.rule = {8, 30, 0.8f, 1.2f, 2, 0, 0.1f, 24};
   s.ground = landscapeGround(shape_, false, 4, 0.1f, 10);
@@ -339,8 +393,8 @@ Species LandscapePlanner::pines() const {
 Species LandscapePlanner::birches() const {
   Species s;
   s.name = "birch";
-  s.count = scaledCount(220, scale_);
-  s.variants = 14;
+  s.count = scaledCount(390, scale_);
+  s.variants = 1;
   s.design = [keys = variants_](int v) {
     HashRng rng = keys.rng(3, v);
     TreeParams p;
@@ -351,26 +405,137 @@ Species LandscapePlanner::birches() const {
     p.trunkTaper = 0.3f;
     p.trunkLean = rng.uniform(0.05f, 0.15f);
     p.levels = {{8, 8, 6, 0.4f, 0.5f, 35, 0.4f, 0.3f, 0.4f},
-                {4, 5, 4, 0.5f, 0.55f, 40, 0.3f, -0.2f, 0.4f},
-                {3, 4, 3, 0.5f, 0.55f, 40, 0.3f, -0.2f, 0.4f}};
-    p.leavesPerTip = 20 + v % 5;
-    p.leafSegments = 1;
-    p.leafSize = 0.6f;
+                {5, 5, 4, 0.5f, 0.55f, 40, 0.3f, -0.2f, 0.4f},
+                {4, 4, 3, 0.5f, 0.55f, 40, 0.3f, -0.2f, 0.4f},
+                {3, 3, 3, 0.55f, 0.55f, 40, 0.3f, -0.2f, 0.4f}};
+    p.leavesPerTip = 60;
+    p.leafSegments = 2;
+    p.leafSize = 0.3f;
+    p.woodByLevel = true;
+    p.leafMeshes = 8;
     return designTree(p, keys.design(3, v));
   };
-  s.material = [leaves = mat_.birchLeaves, bark = mat_.birchBark](PartRole r, int) {
-    return r == PartRole::Leaves ? leaves : bark;
+  s.material = [leaves = mat_.birchLeaves, bark = mat_.birchBark](const PlantPart& part, int) {
+    return part.role == PartRole::Leaves ? leaves : bark;
   };
   s.rule = {5, 15, 0.8f, 1.2f, 4, 0, 0.1f, 24};
   s.ground = landscapeGround(shape_, false, 4, -0.1f, 10);
   return s;
 }
 
+// Patches follow the ground's slope at their centre and sink a little, so
+// their rims stay on the ground where it curves.
+constexpr float kPatchSlopeAlign = 1;
+constexpr float kPatchSink = 0.08f;
+constexpr float kPatchScaleMin = 0.8f, kPatchScaleMax = 1.2f;
+
+// How far a patch's centre keeps from the path's centre line so that none of
+// it reaches the path: its disc at the largest scale, and its clumps' reach.
+float patchClearance(float radius, float clumpReach) {
+  return (radius + clumpReach) * kPatchScaleMax + kPathHalfWidth;
+}
+
+Species LandscapePlanner::grassPatches() const {
+  Species s;
+  s.name = "grass-patch";
+  s.count = scaledCount(1350, scale_);
+  s.variants = 1;
+  s.design = [keys = variants_](int v) {
+    PatchParams patch;
+    patch.radius = 4;
+    patch.clumps = 220;
+    patch.groups = 13;
+    return designPatch(
+        patch,
+        [keys, v](int k) {
+          HashRng rng = keys.rng(6, v * 1000 + k);
+          GrassParams p;
+          p.blades = 56 + 2 * (k % 10);
+          p.segments = 5;
+          p.height = rng.uniform(0.35f, 0.8f);
+          p.radius = rng.uniform(0.15f, 0.3f);
+          return designGrass(p, keys.design(6, v * 1000 + k));
+        },
+        keys.design(6, 999));
+  };
+  s.material = [grass = mat_.grass](const PlantPart&, int) { return grass; };
+  s.rule = {0, 0, kPatchScaleMin, kPatchScaleMax, 0, kPatchSlopeAlign, kPatchSink, 16};
+  s.ground = landscapeGround(shape_, true, patchClearance(4, 0.4f), -10, 0.3f);
+  return s;
+}
+
+Species LandscapePlanner::flowerPatches() const {
+  Species s;
+  s.name = "flower-patch";
+  s.count = scaledCount(290, scale_);
+  s.variants = 1;
+  s.design = [keys = variants_](int v) {
+    PatchParams patch;
+    patch.radius = 2.5f;
+    patch.clumps = 120;
+    patch.groups = 3;
+    return designPatch(
+        patch,
+        [keys, v](int k) {
+          HashRng rng = keys.rng(7, v * 1000 + k);
+          FlowerParams p;
+          p.stems = 8 + k % 7;
+          p.petals = 5 + k % 4;
+          p.height = rng.uniform(0.25f, 0.6f);
+          p.petalLength = rng.uniform(0.03f, 0.06f);
+          return designFlowers(p, keys.design(7, v * 1000 + k));
+        },
+        keys.design(7, 999));
+  };
+  s.material = [mat = mat_](const PlantPart& part, int) {
+    switch (part.role) {
+      case PartRole::Petals:
+        return mat.petals[size_t(part.group) % 4];
+      case PartRole::Leaves:
+        return mat.shrubLeaves;
+      case PartRole::FlowerCentre:
+        return mat.flowerCentre;
+      default:
+        return mat.stem;
+    }
+  };
+  s.rule = {5, 8, kPatchScaleMin, kPatchScaleMax, 0, kPatchSlopeAlign, kPatchSink, 16};
+  s.ground = landscapeGround(shape_, true, patchClearance(2.5f, 0.3f), -10, 0.15f);
+  return s;
+}
+
+Species LandscapePlanner::fernPatches() const {
+  Species s;
+  s.name = "fern-patch";
+  s.count = scaledCount(290, scale_);
+  s.variants = 1;
+  s.design = [keys = variants_](int v) {
+    PatchParams patch;
+    patch.radius = 3;
+    patch.clumps = 120;
+    patch.groups = 7;
+    return designPatch(
+        patch,
+        [keys, v](int k) {
+          HashRng rng = keys.rng(5, v * 1000 + k);
+          FernParams p;
+          p.fronds = 16 + k % 6;
+          p.length = rng.uniform(0.7f, 1.2f);
+          return designFern(p, keys.design(5, v * 1000 + k));
+        },
+        keys.design(5, 999));
+  };
+  s.material = [fern = mat_.fern](const PlantPart&, int) { return fern; };
+  s.rule = {4, 10, kPatchScaleMin, kPatchScaleMax, 0, kPatchSlopeAlign, kPatchSink, 16};
+  s.ground = landscapeGround(shape_, true, patchClearance(3, 1.0f), -0.05f, 10);
+  return s;
+}
+
 Species LandscapePlanner::shrubs() const {
   Species s;
   s.name = "shrub";
-  s.count = scaledCount(2000, scale_);
-  s.variants = 24;
+  s.count = scaledCount(100, scale_);
+  s.variants = 8;
   s.design = [keys = variants_](int v) {
     HashRng rng = keys.rng(4, v);
     TreeParams p;
@@ -384,99 +549,63 @@ Species LandscapePlanner::shrubs() const {
     p.leavesPerTip = 24 + v % 8;
     p.leafSegments = 2;
     p.leafSize = 0.4f;
+    p.woodByLevel = true;
     return designTree(p, keys.design(4, v));
   };
-  s.material = [leaves = mat_.shrubLeaves, bark = mat_.oakBark](PartRole r, int) {
-    return r == PartRole::Leaves ? leaves : bark;
+  s.material = [leaves = mat_.shrubLeaves, bark = mat_.oakBark](const PlantPart& part, int) {
+    return part.role == PartRole::Leaves ? leaves : bark;
   };
-  s.rule = {10, 12, 0.6f, 1.3f, 6, 0.3f, 0.05f, 12};
+  s.rule = {5, 12, 0.6f, 1.3f, 6, 0.3f, 0.05f, 12};
   s.ground = landscapeGround(shape_, false, 2, -10, 10);
   return s;
 }
 
-Species LandscapePlanner::ferns() const {
+// Young birches and pines at the forest's edge.
+Species LandscapePlanner::saplings() const {
   Species s;
-  s.name = "fern";
-  s.count = scaledCount(3000, scale_);
-  s.variants = 20;
+  s.name = "sapling";
+  s.count = scaledCount(60, scale_);
+  s.variants = 4;
   s.design = [keys = variants_](int v) {
-    HashRng rng = keys.rng(5, v);
-    FernParams p;
-    p.fronds = 16 + v % 6;
-    p.length = rng.uniform(0.7f, 1.2f);
-    return designFern(p, keys.design(5, v));
+    HashRng rng = keys.rng(11, v);
+    TreeParams p;
+    p.trunkLength = rng.uniform(2.5f, 4);
+    p.trunkRadius = rng.uniform(0.05f, 0.08f);
+    p.trunkRings = 10;
+    p.trunkSides = 6;
+    p.trunkTaper = 0.3f;
+    p.levels = {{6, 6, 4, 0.45f, 0.5f, 40, 0.4f, 0.2f, 0.4f},
+                {3, 4, 3, 0.5f, 0.55f, 40, 0.3f, -0.1f, 0.4f}};
+    p.leavesPerTip = 30;
+    p.leafSegments = 2;
+    p.leafSize = 0.3f;
+    p.woodByLevel = true;
+    p.leafMeshes = 2;
+    return designTree(p, keys.design(11, v));
   };
-  s.material = [fern = mat_.fern](PartRole, int) { return fern; };
-  s.rule = {25, 8, 0.6f, 1.4f, 8, 0.5f, 0.03f, 16};
-  s.ground = landscapeGround(shape_, true, 1.6f, -0.05f, 10);
-  return s;
-}
-
-Species LandscapePlanner::grass() const {
-  Species s;
-  s.name = "grass";
-  s.count = scaledCount(26000, scale_);
-  s.variants = 40;
-  s.design = [keys = variants_](int v) {
-    HashRng rng = keys.rng(6, v);
-    GrassParams p;
-    p.blades = 96 + 4 * (v % 10);
-    p.segments = 5;
-    p.height = rng.uniform(0.35f, 0.8f);
-    p.radius = rng.uniform(0.15f, 0.3f);
-    return designGrass(p, keys.design(6, v));
+  s.material = [mat = mat_](const PlantPart& part, int v) {
+    if (part.role != PartRole::Leaves) return v % 2 ? mat.pineBark : mat.birchBark;
+    return v % 2 ? mat.needles : mat.birchLeaves;
   };
-  s.material = [grass = mat_.grass](PartRole, int) { return grass; };
-  s.rule = {200, 15, 0.6f, 1.5f, 6, 0.7f, 0.02f, 16};
-  s.ground = landscapeGround(shape_, true, 1.5f, -10, 0.3f);
-  return s;
-}
-
-Species LandscapePlanner::flowers() const {
-  Species s;
-  s.name = "flower";
-  s.count = scaledCount(7000, scale_);
-  s.variants = 30;
-  s.design = [keys = variants_](int v) {
-    HashRng rng = keys.rng(7, v);
-    FlowerParams p;
-    p.stems = 8 + v % 7;
-    p.petals = 5 + v % 4;
-    p.height = rng.uniform(0.25f, 0.6f);
-    p.petalLength = rng.uniform(0.03f, 0.06f);
-    return designFlowers(p, keys.design(7, v));
-  };
-  s.material = [mat = mat_](PartRole r, int v) {
-    switch (r) {
-      case PartRole::Petals:
-        return mat.petals[size_t(v) % 4];
-      case PartRole::Leaves:
-        return mat.shrubLeaves;
-      case PartRole::FlowerCentre:
-        return mat.flowerCentre;
-      default:
-        return mat.stem;
-    }
-  };
-  s.rule = {50, 5, 0.7f, 1.3f, 5, 0.6f, 0.02f, 16};
-  s.ground = landscapeGround(shape_, true, 1.5f, -10, 0.15f);
+  s.rule = {0, 0, 0.8f, 1.2f, 4, 0, 0.05f, 24};
+  s.ground = landscapeGround(shape_, false, 3, -0.2f, 0.1f);
   return s;
 }
 
 Species LandscapePlanner::rocks() const {
   Species s;
   s.name = "rock";
-  s.count = scaledCount(700, scale_);
-  s.variants = 20;
+  s.count = scaledCount(90, scale_);
+  s.variants = 6;
   s.design = [keys = variants_](int v) {
     HashRng rng = keys.rng(8, v);
     RockParams p;
-    p.detail = 12 + v % 8;
+    p.detail = 14 + v;
     p.radii = {rng.uniform(0.5f, 0.9f), rng.uniform(0.3f, 0.6f), rng.uniform(0.4f, 0.8f)};
     p.roughness = rng.uniform(0.2f, 0.35f);
     return designRock(p, keys.design(8, v));
   };
-  s.material = [rock = mat_.rock](PartRole, int) { return rock; };
+  s.material = [rock = mat_.rock](const PlantPart&, int) { return rock; };
   s.rule = {0, 0, 0.3f, 1.6f, 30, 0.8f, 0.1f, 12};
   s.ground = landscapeGround(shape_, true, 2, -10, 10, 0.9f * kKnollHeight);
   return s;
@@ -485,8 +614,8 @@ Species LandscapePlanner::rocks() const {
 Species LandscapePlanner::logs() const {
   Species s;
   s.name = "log";
-  s.count = scaledCount(30, scale_);
-  s.variants = 6;
+  s.count = scaledCount(20, scale_);
+  s.variants = 3;
   s.design = [keys = variants_](int v) {
     HashRng rng = keys.rng(9, v);
     LogParams p;
@@ -494,7 +623,7 @@ Species LandscapePlanner::logs() const {
     p.radius = rng.uniform(0.15f, 0.3f);
     return designLog(p, keys.design(9, v));
   };
-  s.material = [wood = mat_.logWood](PartRole, int) { return wood; };
+  s.material = [wood = mat_.logWood](const PlantPart&, int) { return wood; };
   s.rule = {0, 0, 0.8f, 1.2f, 3, 1.0f, 0.05f, 24};
   s.ground = landscapeGround(shape_, false, 3, 0.0f, 10);
   return s;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
+
 #include "builtin/noise.h"
 #include "core/error.h"
 
@@ -127,13 +129,32 @@ void addBranchTube(MeshBuilder& b, const Branch& branch, int sides) {
   addTube(b, branch.points, branch.radii, sides, 1.0f / (2 * kPi * r) * 0.5f);
 }
 
-Mesh buildTreeWood(const TreeParams& p, uint32_t seed) {
+// The wood of one level (0: the trunk and the aerial roots), or of all with kAllLevels.
+constexpr int kAllLevels = -1;
+
+MeshCounts woodLevelCounts(const TreeParams& p, int level) {
+  if (level == 0)
+    return tubeCounts(p.trunkRings, p.trunkSides) +
+           tubeCounts(p.rootRings, p.rootSides) * uint64_t(p.aerialRoots);
+  const BranchLevel& l = p.levels[size_t(level - 1)];
+  return tubeCounts(l.rings, l.sides) * branchCount(p, size_t(level));
+}
+
+// Leaves of the tip branches [tipBegin, tipEnd).
+MeshCounts leafRunCounts(const TreeParams& p, uint64_t tipBegin, uint64_t tipEnd) {
+  return ribbonCounts(p.leafSegments) * ((tipEnd - tipBegin) * uint64_t(p.leavesPerTip));
+}
+
+Mesh buildTreeWood(const TreeParams& p, uint32_t seed, int only) {
   auto levels = growTree(p, seed);
-  MeshBuilder b(true, true, treeWoodCounts(p));
-  addBranchTube(b, levels[0][0], p.trunkSides);
+  MeshCounts counts = only == kAllLevels ? treeWoodCounts(p) : woodLevelCounts(p, only);
+  MeshBuilder b(true, true, counts);
+  auto wanted = [only](size_t level) { return only == kAllLevels || size_t(only) == level; };
+  if (wanted(0)) addBranchTube(b, levels[0][0], p.trunkSides);
   for (size_t k = 0; k < p.levels.size(); ++k)
-    for (const Branch& br : levels[k + 1]) addBranchTube(b, br, p.levels[k].sides);
-  if (p.aerialRoots > 0) {
+    if (wanted(k + 1))
+      for (const Branch& br : levels[k + 1]) addBranchTube(b, br, p.levels[k].sides);
+  if (p.aerialRoots > 0 && wanted(0)) {
     // Roots hang from the first branch level (or the trunk) down into the ground.
     const std::vector<Branch>& hosts = levels.size() > 1 ? levels[1] : levels[0];
     HashRng rng(seed, 0x2007);
@@ -159,14 +180,18 @@ Mesh buildTreeWood(const TreeParams& p, uint32_t seed) {
   return b.finish();
 }
 
-Mesh buildTreeLeaves(const TreeParams& p, uint32_t seed) {
+// Draws every leaf's random numbers in the same order whatever the run, so a
+// tree cut into leaf meshes has the same leaves as one in one mesh.
+Mesh buildTreeLeaves(const TreeParams& p, uint32_t seed, uint64_t tipBegin, uint64_t tipEnd) {
   auto levels = growTree(p, seed);
-  MeshBuilder b(true, true, treeLeafCounts(p));
+  MeshBuilder b(true, true, leafRunCounts(p, tipBegin, tipEnd));
   HashRng rng(seed, 0x1eaf);
   const int segs = p.leafSegments;
   std::vector<Vec3f> centres(segs + 1), sides(segs + 1);
   std::vector<float> widths(segs + 1);
-  for (const Branch& tip : levels.back()) {
+  for (uint64_t t = 0; t < levels.back().size(); ++t) {
+    const Branch& tip = levels.back()[t];
+    const bool emit = t >= tipBegin && t < tipEnd;
     for (int k = 0; k < p.leavesPerTip; ++k) {
       Vec3f at, tangent;
       float radius;
@@ -181,7 +206,7 @@ Mesh buildTreeLeaves(const TreeParams& p, uint32_t seed) {
         sides[i] = side;
         widths[i] = size;
       }
-      addRibbon(b, centres, sides, widths);
+      if (emit) addRibbon(b, centres, sides, widths);
     }
   }
   return b.finish();
@@ -228,10 +253,8 @@ MeshCounts frondCounts(int segments) {
 // ------------------------------------------------------------------ trees
 
 MeshCounts treeWoodCounts(const TreeParams& p) {
-  MeshCounts c = tubeCounts(p.trunkRings, p.trunkSides);
-  for (size_t k = 0; k < p.levels.size(); ++k)
-    c += tubeCounts(p.levels[k].rings, p.levels[k].sides) * branchCount(p, k + 1);
-  c += tubeCounts(p.rootRings, p.rootSides) * uint64_t(p.aerialRoots);
+  MeshCounts c;
+  for (size_t level = 0; level <= p.levels.size(); ++level) c += woodLevelCounts(p, int(level));
   return c;
 }
 
@@ -249,12 +272,27 @@ PlantDesign designTree(const TreeParams& p, uint32_t seed) {
     FERRY_CHECK_GE(l.rings, 2);
     FERRY_CHECK_GE(l.sides, 3);
   }
+  FERRY_CHECK_GE(p.leafMeshes, 1);
   PlantDesign d;
-  d.push_back({"wood", PartRole::Wood, treeWoodCounts(p), true, true,
-               [p, seed] { return buildTreeWood(p, seed); }});
-  if (p.leavesPerTip > 0)
-    d.push_back({"leaves", PartRole::Leaves, treeLeafCounts(p), true, true,
-                 [p, seed] { return buildTreeLeaves(p, seed); }});
+  if (p.woodByLevel) {
+    for (int level = 0; level <= int(p.levels.size()); ++level)
+      d.push_back({level == 0 ? std::string("trunk") : fmt::format("branches-{}", level),
+                   PartRole::Wood, woodLevelCounts(p, level), true, true,
+                   [p, seed, level] { return buildTreeWood(p, seed, level); }, level});
+  } else {
+    d.push_back({"wood", PartRole::Wood, treeWoodCounts(p), true, true,
+                 [p, seed] { return buildTreeWood(p, seed, kAllLevels); }});
+  }
+  if (p.leavesPerTip > 0) {
+    const uint64_t tips = branchCount(p, p.levels.size());
+    const uint64_t runs = std::min<uint64_t>(uint64_t(p.leafMeshes), tips);
+    for (uint64_t r = 0; r < runs; ++r) {
+      uint64_t begin = tips * r / runs, end = tips * (r + 1) / runs;
+      d.push_back({runs == 1 ? std::string("leaves") : fmt::format("leaves-{}", r),
+                   PartRole::Leaves, leafRunCounts(p, begin, end), true, true,
+                   [p, seed, begin, end] { return buildTreeLeaves(p, seed, begin, end); }, int(r)});
+    }
+  }
   return d;
 }
 
@@ -482,6 +520,63 @@ PlantDesign designFlowers(const FlowerParams& p, uint32_t seed) {
                  }
                  return b.finish();
                }});
+  return d;
+}
+
+// ---------------------------------------------------------------- patches
+
+namespace {
+
+// Where clump k of a patch stands, and how it is turned and scaled.
+Affine3f clumpPlacement(const PatchParams& p, uint32_t seed, int k) {
+  HashRng rng(seed, 0x9a7c, uint32_t(k));
+  Vec2f at = rng.inDisc() * p.radius;
+  float yaw = rng.uniform(0, 2 * kPi);
+  float scale = rng.uniform(p.scaleMin, p.scaleMax);
+  return Affine3f::translate({at.x, 0, at.y}) * Affine3f::rotate({0, 1, 0}, yaw) *
+         Affine3f::scale(Vec3f(scale));
+}
+
+void appendTransformed(MeshBuilder& b, const Mesh& m, const Affine3f& to) {
+  const int32_t first = b.vertexCount();
+  for (size_t v = 0; v < m.positions.size(); ++v)
+    b.vertex(to.transformPoint(m.positions[v]),
+             m.normals.empty() ? Vec3f(0, 1, 0) : normalize(to.transformNormal(m.normals[v])),
+             m.uvs.empty() ? Vec2f(0, 0) : m.uvs[v]);
+  for (const Vec3i& t : m.indices) b.triangle(first + t.x, first + t.y, first + t.z);
+}
+
+}  // namespace
+
+PlantDesign designPatch(const PatchParams& p, const std::function<PlantDesign(int)>& clump,
+                        uint32_t seed) {
+  FERRY_CHECK_GE(p.clumps, 1);
+  FERRY_CHECK_GE(p.groups, 1);
+  FERRY_CHECK_LE(p.groups, p.clumps);
+  const PlantDesign first = clump(0);
+  PlantDesign d;
+  for (int g = 0; g < p.groups; ++g) {
+    const int begin = p.clumps * g / p.groups, end = p.clumps * (g + 1) / p.groups;
+    for (size_t j = 0; j < first.size(); ++j) {
+      MeshCounts counts;
+      for (int k = begin; k < end; ++k) {
+        PlantDesign c = clump(k);
+        FERRY_CHECK_EQ(c.size(), first.size());
+        FERRY_CHECK(c[j].role == first[j].role);
+        counts += c[j].counts;
+      }
+      const PlantPart& part = first[j];
+      d.push_back(
+          {fmt::format("{}/{}", g, part.name), part.role, counts, part.hasNormals, part.hasUvs,
+           [p, clump, seed, begin, end, j, counts, normals = part.hasNormals, uvs = part.hasUvs] {
+             MeshBuilder b(normals, uvs, counts);
+             for (int k = begin; k < end; ++k)
+               appendTransformed(b, clump(k)[j].build(), clumpPlacement(p, seed, k));
+             return b.finish();
+           },
+           g});
+    }
+  }
   return d;
 }
 

@@ -38,6 +38,9 @@ struct PlantPart {
   bool hasNormals = true;
   bool hasUvs = true;
   std::function<Mesh()> build;
+  // Which of several meshes of one role this is (a tree's leaf meshes, a
+  // patch's groups of clumps): scenes may vary the material by it.
+  int group = 0;
 };
 using PlantDesign = std::vector<PlantPart>;
 
@@ -76,6 +79,13 @@ struct TreeParams {
   int rootRings = 16;
   int rootSides = 6;
   float rootRadius = 0.06f;
+  // How the tree is cut into meshes, as production plant models are (one
+  // mesh per branch level and several leaf meshes): the wood in one mesh per
+  // level ("trunk", "branches-1", ...) or one "wood" mesh; the leaves in
+  // `leafMeshes` meshes ("leaves-0", ...; "leaves" when 1), each the leaves
+  // of a run of tip branches. The geometry is the same either way.
+  bool woodByLevel = false;
+  int leafMeshes = 1;
 };
 MeshCounts treeWoodCounts(const TreeParams& p);
 MeshCounts treeLeafCounts(const TreeParams& p);
@@ -126,6 +136,21 @@ struct FlowerParams {
   float centreRadius = 0.012f;
 };
 PlantDesign designFlowers(const FlowerParams& p, uint32_t seed);
+
+// A patch of ground cover as one object: `clumps` small plants spread over a
+// disc, as scattering tools bake a meadow tile. Clump k is `clump(k)` (every
+// clump with the same parts in the same order), turned and scaled at a spot
+// that is a pure function of (seed, k). The clumps are cut into `groups`
+// runs; each part of each run is one mesh, named "<group>/<part>", with
+// PlantPart::group set.
+struct PatchParams {
+  float radius = 4;  // clump centres lie in this disc around the origin
+  int clumps = 100;
+  int groups = 4;
+  float scaleMin = 0.75f, scaleMax = 1.25f;
+};
+PlantDesign designPatch(const PatchParams& p, const std::function<PlantDesign(int clump)>& clump,
+                        uint32_t seed);
 
 struct RockParams {
   int detail = 16;  // cube-sphere cells per face edge

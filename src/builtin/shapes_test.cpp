@@ -2,6 +2,12 @@
 // the built-ins' descriptions rest on it.
 #include "builtin/shapes.h"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "builtin/noise.h"
@@ -129,6 +135,118 @@ TEST(BuiltinPlants, EveryGeneratorMakesItsCounts) {
     expectDesignMakesItsCounts(designRock({}, seed));
     expectDesignMakesItsCounts(designLog({}, seed));
   }
+}
+
+// The triangles of a design, as sorted vertex triples (to compare designs
+// cut into meshes differently).
+std::vector<std::array<float, 9>> trianglesOf(const PlantDesign& design, PartRole role) {
+  std::vector<std::array<float, 9>> out;
+  for (const PlantPart& part : design) {
+    if (part.role != role) continue;
+    Mesh m = part.build();
+    for (const Vec3i& t : m.indices) {
+      std::array<float, 9> tri;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3f& p = m.positions[size_t(t[k])];
+        tri[size_t(3 * k)] = p.x, tri[size_t(3 * k + 1)] = p.y, tri[size_t(3 * k + 2)] = p.z;
+      }
+      out.push_back(tri);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Production plant models come as a mesh per branch level and several leaf
+// meshes (the landscape's trees): the cut changes the meshes, not the tree.
+TEST(BuiltinPlants, TreesCutIntoMeshesAreTheSameTree) {
+  TreeParams whole;
+  whole.levels = {{5, 6, 5, 0.6f, 0.5f, 50, 0.4f, 0.2f, 0.4f},
+                  {3, 4, 4, 0.5f, 0.5f, 40, 0.3f, 0.1f, 0.4f}};
+  whole.aerialRoots = 3;
+  TreeParams cut = whole;
+  cut.woodByLevel = true;
+  cut.leafMeshes = 4;
+  PlantDesign one = designTree(whole, 7), many = designTree(cut, 7);
+  ASSERT_EQ(one.size(), 2u);
+  ASSERT_EQ(many.size(), 3u + 4u);  // trunk, two branch levels, four leaf runs
+  expectDesignMakesItsCounts(many);
+  EXPECT_EQ(designCounts(one), designCounts(many));
+  EXPECT_EQ(trianglesOf(one, PartRole::Wood), trianglesOf(many, PartRole::Wood));
+  EXPECT_EQ(trianglesOf(one, PartRole::Leaves), trianglesOf(many, PartRole::Leaves));
+  for (int g = 0; g < 4; ++g) EXPECT_EQ(many[size_t(3 + g)].group, g);
+  // More leaf meshes than tips: one per tip.
+  cut.leafMeshes = 1000;
+  EXPECT_EQ(designTree(cut, 7).size(), 3u + 15u);
+}
+
+TEST(BuiltinPlants, PatchesAreTheirClumpsInGroups) {
+  PatchParams p;
+  p.radius = 2;
+  p.clumps = 10;
+  p.groups = 3;
+  auto clump = [](int k) {
+    FlowerParams f;
+    f.stems = 2 + k % 3;
+    return designFlowers(f, uint32_t(k));
+  };
+  PlantDesign patch = designPatch(p, clump, 5);
+  const size_t parts = clump(0).size();
+  ASSERT_EQ(patch.size(), 3 * parts);
+  expectDesignMakesItsCounts(patch);
+  MeshCounts total;
+  for (int k = 0; k < p.clumps; ++k) total += designCounts(clump(k));
+  EXPECT_EQ(designCounts(patch), total);
+  for (size_t i = 0; i < patch.size(); ++i) {
+    EXPECT_EQ(patch[i].group, int(i / parts));
+    EXPECT_EQ(patch[i].role, clump(0)[i % parts].role);
+  }
+  // Every clump stands in the disc (its own spread and petals aside).
+  for (const PlantPart& part : patch) {
+    Box3f b = part.build().bounds();
+    EXPECT_LT(std::max({std::abs(b.lower.x), std::abs(b.upper.x), std::abs(b.lower.z),
+                        std::abs(b.upper.z)}),
+              p.radius + 1);
+  }
+}
+
+TEST(BuiltinShapes, TerrainTilesMeetTheWholeGrid) {
+  TerrainGrid grid;
+  grid.x0 = -10, grid.x1 = 30, grid.z0 = 0, grid.z1 = 20;
+  grid.segments = 12;
+  HeightFunction height = [](float x, float z) { return std::sin(0.3f * x) + 0.1f * z; };
+  Mesh whole = buildTerrain(grid, height);
+  size_t triangles = 0;
+  std::map<std::array<float, 3>, int> tilesAt;  // exact position -> tiles with a vertex there
+  std::vector<Vec3f> edgeVertices;
+  for (int tj = 0; tj < 3; ++tj)
+    for (int ti = 0; ti < 3; ++ti) {
+      const TerrainGrid tile = terrainTile(grid, 3, ti, tj);
+      MeshRecipe r = terrainTileRecipe("t", 0, grid, tile, height);
+      Mesh m = r.build();
+      EXPECT_EQ(countsOf(m), r.counts);
+      expectWellFormed(m);
+      triangles += m.triangleCount();
+      for (size_t v = 0; v < m.positions.size(); ++v) {
+        const Vec3f& p = m.positions[v];
+        ++tilesAt[{p.x, p.y, p.z}];
+        // A vertex of the whole grid (up to rounding), with its uv.
+        size_t nearest = 0;
+        for (size_t w = 1; w < whole.positions.size(); ++w)
+          if (length(whole.positions[w] - p) < length(whole.positions[nearest] - p)) nearest = w;
+        EXPECT_LT(length(whole.positions[nearest] - p), 1e-4f) << v;
+        EXPECT_NEAR(whole.uvs[nearest].x, m.uvs[v].x, 1e-6f);
+        EXPECT_NEAR(whole.uvs[nearest].y, m.uvs[v].y, 1e-6f);
+        const bool onTileEdge =
+            p.x == tile.x0 || p.x == tile.x1 || p.z == tile.z0 || p.z == tile.z1;
+        const bool onGridEdge =
+            p.x == grid.x0 || p.x == grid.x1 || p.z == grid.z0 || p.z == grid.z1;
+        if (onTileEdge && !onGridEdge) edgeVertices.push_back(p);
+      }
+    }
+  EXPECT_EQ(triangles, whole.triangleCount());
+  // Where tiles meet, each edge vertex is exactly a neighbour's: no cracks.
+  for (const Vec3f& p : edgeVertices) EXPECT_GE((tilesAt[{p.x, p.y, p.z}]), 2) << p.x << " " << p.z;
 }
 
 TEST(BuiltinPlants, RocksStayWithinTheirStatedBound) {

@@ -69,6 +69,42 @@ int32_t addTerrainMesh(ScenePlan& plan, const std::string& name, int32_t materia
   return plan.addSingleInstanceMesh(std::move(r));
 }
 
+TerrainGrid terrainTile(const TerrainGrid& grid, int tiles, int ti, int tj) {
+  FERRY_CHECK_GE(tiles, 1);
+  FERRY_CHECK_EQ(grid.segments % tiles, 0);
+  const int cells = grid.segments / tiles;
+  TerrainGrid tile;
+  tile.x0 = grid.x(ti * cells);
+  tile.x1 = grid.x((ti + 1) * cells);
+  tile.z0 = grid.z(tj * cells);
+  tile.z1 = grid.z((tj + 1) * cells);
+  tile.segments = cells;
+  return tile;
+}
+
+MeshRecipe terrainTileRecipe(std::string name, int32_t material, const TerrainGrid& grid,
+                             const TerrainGrid& tile, HeightFunction height) {
+  MeshRecipe r;
+  r.name = std::move(name);
+  r.material = material;
+  r.counts = terrainCounts(tile);
+  const float eps = 0.5f * (grid.x1 - grid.x0) / float(grid.segments);
+  r.build = [tile, grid, eps, height = std::move(height)] {
+    Mesh m = buildTerrain(tile, height);
+    heightNormals(m, height, eps);
+    for (Vec2f& uv : m.uvs)
+      uv = grid.uvAt(tile.x0 + uv.x * (tile.x1 - tile.x0), tile.z0 + uv.y * (tile.z1 - tile.z0));
+    return m;
+  };
+  return r;
+}
+
+void heightNormals(Mesh& m, const HeightFunction& height, float eps) {
+  tbb::parallel_for(size_t(0), m.positions.size(), [&](size_t v) {
+    m.normals[v] = heightNormal(height, m.positions[v].x, m.positions[v].z, eps);
+  });
+}
+
 int terrainTextureSize(double texelsAcross) {
   int size = 256;
   while (size < 8192 && size < texelsAcross) size *= 2;

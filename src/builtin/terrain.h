@@ -43,6 +43,21 @@ Mesh buildTerrain(const TerrainGrid& grid, const HeightFunction& height);
 int32_t addTerrainMesh(ScenePlan& plan, const std::string& name, int32_t material,
                        const TerrainGrid& grid, HeightFunction height);
 
+// Tile (ti, tj) of `grid` cut into tiles x tiles pieces (its segments a
+// multiple of `tiles`): the whole grid's vertices (exactly on the tile's
+// edges, so neighbours meet without cracks; up to rounding inside). No
+// skirt: the tile's edges are the function's.
+TerrainGrid terrainTile(const TerrainGrid& grid, int tiles, int ti, int tj);
+
+// A tile as a mesh of the plan (not yet an object): normals from the
+// function, so neighbouring tiles agree at their seams, and uvs spanning the
+// whole `grid`, so one texture painted over the grid covers every tile.
+MeshRecipe terrainTileRecipe(std::string name, int32_t material, const TerrainGrid& grid,
+                             const TerrainGrid& tile, HeightFunction height);
+
+// Sets every normal of `m` from the function (heightNormal, step eps).
+void heightNormals(Mesh& m, const HeightFunction& height, float eps);
+
 // The side of a terrain's colour texture: the smallest power of two from 256
 // to 8192 that is at least `texelsAcross`.
 int terrainTextureSize(double texelsAcross);

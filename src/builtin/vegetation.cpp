@@ -93,12 +93,12 @@ uint64_t variantShare(uint64_t count, uint64_t variants, uint64_t variant) {
 }
 
 int32_t addPlantObject(ScenePlan& plan, const std::string& name, const PlantDesign& design,
-                       const std::function<int32_t(PartRole)>& material) {
+                       const std::function<int32_t(const PlantPart&)>& material) {
   std::vector<int32_t> meshes;
   for (const PlantPart& part : design) {
     MeshRecipe r;
     r.name = name + "/" + part.name;
-    r.material = material(part.role);
+    r.material = material(part);
     r.counts = part.counts;
     r.hasNormals = part.hasNormals;
     r.hasUvs = part.hasUvs;
@@ -124,7 +124,7 @@ std::vector<int32_t> addSpecies(ScenePlan& plan, const Species& species, uint32_
     int variant = int(v);
     int32_t object =
         addPlantObject(plan, fmt::format("{}/{}", species.name, v), species.design(variant),
-                       [&](PartRole role) { return species.material(role, variant); });
+                       [&](const PlantPart& part) { return species.material(part, variant); });
     uint64_t n = variantShare(species.count, variants, v);
     plan.addInstances(object, n,
                       [scatter, first](uint64_t i) { return scatter->transform(first + i); });

@@ -64,7 +64,7 @@ struct Species {
   uint64_t count = 0;  // instances over all variants (at least one per variant)
   int variants = 1;
   std::function<PlantDesign(int variant)> design;
-  std::function<int32_t(PartRole, int variant)> material;
+  std::function<int32_t(const PlantPart&, int variant)> material;
   ScatterRule rule;
   Ground ground;
 };
@@ -75,7 +75,7 @@ std::vector<int32_t> addSpecies(ScenePlan& plan, const Species& species, uint32_
 
 // Adds one object made of the design's parts.
 int32_t addPlantObject(ScenePlan& plan, const std::string& name, const PlantDesign& design,
-                       const std::function<int32_t(PartRole)>& material);
+                       const std::function<int32_t(const PlantPart&)>& material);
 
 // Adds the species in order, species k with key streamKey(key, k).
 void addSpecies(ScenePlan& plan, const std::vector<Species>& species, uint32_t key);

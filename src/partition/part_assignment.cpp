@@ -29,6 +29,7 @@ PartAssignment::PartAssignment(const UnitSet& set, std::vector<uint32_t> members
   }
   refs_.assign(k * set_.resourceBytes.size(), 0);
   bytes_.assign(k, 0);
+  units_.assign(k, 0);
   for (size_t i = 0; i < n; ++i) add(i, part_[i]);
 }
 
@@ -61,6 +62,7 @@ uint64_t PartAssignment::bytesWhereUsers(size_t i, int part, uint32_t users) con
 
 void PartAssignment::add(size_t i, int part) {
   bytes_[size_t(part)] += added(i, part);
+  ++units_[size_t(part)];
   const Unit& u = set_.units[members_[i]];
   const size_t base = size_t(part) * set_.resourceBytes.size();
   for (uint32_t j = 0; j < u.resourceCount; ++j)
@@ -69,6 +71,7 @@ void PartAssignment::add(size_t i, int part) {
 
 void PartAssignment::remove(size_t i, int part) {
   bytes_[size_t(part)] -= released(i, part);
+  --units_[size_t(part)];
   const Unit& u = set_.units[members_[i]];
   const size_t base = size_t(part) * set_.resourceBytes.size();
   for (uint32_t j = 0; j < u.resourceCount; ++j)
@@ -106,6 +109,7 @@ void PartAssignment::refine(double limit) {
     for (size_t i = 0; i < part_.size(); ++i) {
       if (raysOf_[i] == raysOf_[i + 1]) continue;
       const int from = part_[i];
+      if (units_[size_t(from)] == 1) continue;  // its part's last unit
       // The parts its rays touch: the only ones a move to can lower the score.
       std::fill(touched.begin(), touched.end(), 0);
       for (uint64_t e = raysOf_[i]; e < raysOf_[i + 1]; ++e)
@@ -163,7 +167,7 @@ void PartAssignment::rebalance(double limit) {
       for (size_t g = 0; g < group.size(); ++g) move(group[g], from[g]);
     };
     auto consider = [&](const std::vector<uint32_t>& group, int to) {
-      if (to == part_[group[0]]) return;
+      if (to == part_[group[0]] || group.size() >= units_[part_[group[0]]]) return;
       double removed = 0, damage = 0;
       undo(group, tryGroup(group, to, removed, damage));
       if (removed > 0) candidates.push_back({(damage + 1) / removed, group, to});
@@ -212,6 +216,7 @@ void PartAssignment::rebalance(double limit) {
       bool whole = true;  // still all in one part (an earlier move may have taken some)
       for (uint32_t i : c.members) whole &= part_[i] == part_[c.members[0]];
       if (!whole || part_[c.members[0]] == c.to) continue;
+      if (c.members.size() >= units_[part_[c.members[0]]]) continue;  // would empty it
       double removed = 0, damage = 0;
       const std::vector<uint16_t> from = tryGroup(c.members, c.to, removed, damage);
       if (removed <= 0) {

@@ -166,8 +166,10 @@ TEST_P(EmbreeMemory, AccelAndInstanceEstimateIsWithinAFactorOfEmbree) {
                                  << bytes.retained << " B retained by Embree";
   EXPECT_LE(ratio, kHighestRatio) << "the estimate is too high: " << estimate << " B for "
                                   << bytes.retained << " B retained by Embree";
+  // Within 2 %: the landscape's ground (225 tiles placed once, 19 % of the
+  // triangles at scale 0.1) costs 1.05 % more flattened into the top level.
   const EmbreeBytes shared = buildAndMeasure(scene, Instancing::Shared);
-  EXPECT_LE(shared.retained, bytes.retained * 1.01)
+  EXPECT_LE(shared.retained, bytes.retained * 1.02)
       << "unique objects at the top level retained more";
 }
 
