@@ -187,6 +187,13 @@ class LandscapePlanner {
   Species autumnOaks() const;
   Species pines() const;
   Species birches() const;
+  // A ground-cover species: one patch model (designPatch) whose clump k is
+  // clump(rng, k, seed), each clump with its own random stream; patches kept
+  // clear of the path by their reach (clumpReach: a clump's own radius).
+  using ClumpDesign = std::function<PlantDesign(HashRng& rng, int clump, uint32_t seed)>;
+  Species patches(std::string name, uint32_t species, double count, PatchParams patch,
+                  ClumpDesign clump, float clumpReach, int clusterSize, float clusterRadius,
+                  float forestMin, float forestMax) const;
   Species grassPatches() const;
   Species flowerPatches() const;
   Species fernPatches() const;
@@ -435,58 +442,58 @@ float patchClearance(float radius, float clumpReach) {
   return (radius + clumpReach) * kPatchScaleMax + kPathHalfWidth;
 }
 
-Species LandscapePlanner::grassPatches() const {
+Species LandscapePlanner::patches(std::string name, uint32_t species, double count,
+                                  PatchParams patch, ClumpDesign clump, float clumpReach,
+                                  int clusterSize, float clusterRadius, float forestMin,
+                                  float forestMax) const {
   Species s;
-  s.name = "grass-patch";
-  s.count = scaledCount(1350, scale_);
+  s.name = std::move(name);
+  s.count = scaledCount(count, scale_);
   s.variants = 1;
-  s.design = [keys = variants_](int v) {
-    PatchParams patch;
-    patch.radius = 4;
-    patch.clumps = 220;
-    patch.groups = 13;
+  s.design = [keys = variants_, species, patch, clump](int v) {
     return designPatch(
         patch,
-        [keys, v](int k) {
-          HashRng rng = keys.rng(6, v * 1000 + k);
-          GrassParams p;
-          p.blades = 56 + 2 * (k % 10);
-          p.segments = 5;
-          p.height = rng.uniform(0.35f, 0.8f);
-          p.radius = rng.uniform(0.15f, 0.3f);
-          return designGrass(p, keys.design(6, v * 1000 + k));
+        [keys, species, v, clump](int k) {
+          HashRng rng = keys.rng(species, v * 1000 + k);
+          return clump(rng, k, keys.design(species, v * 1000 + k));
         },
-        keys.design(6, 999));
+        keys.design(species, 999));
   };
+  s.rule = {clusterSize, clusterRadius,    kPatchScaleMin, kPatchScaleMax,
+            0,           kPatchSlopeAlign, kPatchSink,     16};
+  s.ground =
+      landscapeGround(shape_, true, patchClearance(patch.radius, clumpReach), forestMin, forestMax);
+  return s;
+}
+
+Species LandscapePlanner::grassPatches() const {
+  Species s = patches(
+      "grass-patch", 6, 1350, {.radius = 4, .clumps = 220, .groups = 13},
+      [](HashRng& rng, int k, uint32_t seed) {
+        GrassParams p;
+        p.blades = 56 + 2 * (k % 10);
+        p.segments = 5;
+        p.height = rng.uniform(0.35f, 0.8f);
+        p.radius = rng.uniform(0.15f, 0.3f);
+        return designGrass(p, seed);
+      },
+      0.4f, 0, 0, -10, 0.3f);
   s.material = [grass = mat_.grass](const PlantPart&, int) { return grass; };
-  s.rule = {0, 0, kPatchScaleMin, kPatchScaleMax, 0, kPatchSlopeAlign, kPatchSink, 16};
-  s.ground = landscapeGround(shape_, true, patchClearance(4, 0.4f), -10, 0.3f);
   return s;
 }
 
 Species LandscapePlanner::flowerPatches() const {
-  Species s;
-  s.name = "flower-patch";
-  s.count = scaledCount(290, scale_);
-  s.variants = 1;
-  s.design = [keys = variants_](int v) {
-    PatchParams patch;
-    patch.radius = 2.5f;
-    patch.clumps = 120;
-    patch.groups = 3;
-    return designPatch(
-        patch,
-        [keys, v](int k) {
-          HashRng rng = keys.rng(7, v * 1000 + k);
-          FlowerParams p;
-          p.stems = 8 + k % 7;
-          p.petals = 5 + k % 4;
-          p.height = rng.uniform(0.25f, 0.6f);
-          p.petalLength = rng.uniform(0.03f, 0.06f);
-          return designFlowers(p, keys.design(7, v * 1000 + k));
-        },
-        keys.design(7, 999));
-  };
+  Species s = patches(
+      "flower-patch", 7, 290, {.radius = 2.5f, .clumps = 120, .groups = 3},
+      [](HashRng& rng, int k, uint32_t seed) {
+        FlowerParams p;
+        p.stems = 8 + k % 7;
+        p.petals = 5 + k % 4;
+        p.height = rng.uniform(0.25f, 0.6f);
+        p.petalLength = rng.uniform(0.03f, 0.06f);
+        return designFlowers(p, seed);
+      },
+      0.3f, 5, 8, -10, 0.15f);
   s.material = [mat = mat_](const PlantPart& part, int) {
     switch (part.role) {
       case PartRole::Petals:
@@ -499,35 +506,20 @@ Species LandscapePlanner::flowerPatches() const {
         return mat.stem;
     }
   };
-  s.rule = {5, 8, kPatchScaleMin, kPatchScaleMax, 0, kPatchSlopeAlign, kPatchSink, 16};
-  s.ground = landscapeGround(shape_, true, patchClearance(2.5f, 0.3f), -10, 0.15f);
   return s;
 }
 
 Species LandscapePlanner::fernPatches() const {
-  Species s;
-  s.name = "fern-patch";
-  s.count = scaledCount(290, scale_);
-  s.variants = 1;
-  s.design = [keys = variants_](int v) {
-    PatchParams patch;
-    patch.radius = 3;
-    patch.clumps = 120;
-    patch.groups = 7;
-    return designPatch(
-        patch,
-        [keys, v](int k) {
-          HashRng rng = keys.rng(5, v * 1000 + k);
-          FernParams p;
-          p.fronds = 16 + k % 6;
-          p.length = rng.uniform(0.7f, 1.2f);
-          return designFern(p, keys.design(5, v * 1000 + k));
-        },
-        keys.design(5, 999));
-  };
+  Species s = patches(
+      "fern-patch", 5, 290, {.radius = 3, .clumps = 120, .groups = 7},
+      [](HashRng& rng, int k, uint32_t seed) {
+        FernParams p;
+        p.fronds = 16 + k % 6;
+        p.length = rng.uniform(0.7f, 1.2f);
+        return designFern(p, seed);
+      },
+      1.0f, 4, 10, -0.05f, 10);
   s.material = [fern = mat_.fern](const PlantPart&, int) { return fern; };
-  s.rule = {4, 10, kPatchScaleMin, kPatchScaleMax, 0, kPatchSlopeAlign, kPatchSink, 16};
-  s.ground = landscapeGround(shape_, true, patchClearance(3, 1.0f), -0.05f, 10);
   return s;
 }
 

@@ -50,7 +50,6 @@ class PartAssignment {
   uint64_t score() const { return score_; }
   uint64_t moves() const { return moves_; }
 
-  // Neither empties a part that holds something: every rank keeps content.
   void refine(double limit);
   void rebalance(double limit);
 
@@ -62,6 +61,7 @@ class PartAssignment {
   uint64_t bytesWhereUsers(size_t k, int part, uint32_t users) const;
   uint64_t released(size_t k, int part) const { return bytesWhereUsers(k, part, 1); }
   uint64_t added(size_t k, int part) const { return bytesWhereUsers(k, part, 0); }
+  void rebalanceRounds(double limit);
   void add(size_t k, int part);
   void remove(size_t k, int part);
   void move(size_t k, int to);
@@ -77,7 +77,6 @@ class PartAssignment {
   std::vector<uint32_t> count_;  // per ray and part: its units there
   std::vector<uint32_t> refs_;   // per part and resource: units there using it
   std::vector<uint64_t> bytes_;  // per part
-  std::vector<uint64_t> units_;  // per part: how many indices it holds (never made 0 by a move)
   uint64_t score_ = 0;
   uint64_t moves_ = 0;
 };

@@ -233,11 +233,12 @@ std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& 
     if (o.name == "best" && parts.size() > 1) {
       // One rank per part here (masks only count copies: one bit each).
       std::vector<Part> copy = parts;
-      balanceBest(p, int(copy.size()), copy);
+      const size_t n = parts.size();  // balancing may empty (drop) parts
+      balanceBest(p, int(n), copy);
       std::vector<RankSet> oneRank(copy.size(), RankSet::single(0));
       std::vector<RankSet> owners(p.units.units.size());
       replicateLargeUnits(p.units, copy, oneRank, owners, budget,
-                          uint64_t(kBestMaxPart * double(p.inputBytes) / double(copy.size())));
+                          uint64_t(kBestMaxPart * double(p.inputBytes) / double(n)));
       for (const Part& part : copy) largest = std::max(largest, part.bytes);
     } else {
       for (const Part& part : parts) largest = std::max(largest, part.bytes);

@@ -221,6 +221,10 @@ void refinePartsByRays(const UnitSet& units, const RayIncidence& incidence,
     part.domain = Box3f{};
     for (uint32_t u : part.units) part.domain.extend(units.units[u].bounds);
   }
+  // A part the moves emptied (its units went where they cost less) leaves
+  // its rank to a copy of the costliest part (assignRanks), as the split
+  // loop does when units run out: no rank holds nothing.
+  std::erase_if(parts, [](const Part& part) { return part.units.empty(); });
 }
 
 uint64_t estimatedForwards(const RayIncidence& incidence, const std::vector<Part>& parts,

@@ -78,8 +78,9 @@ class RayGuidedSplitter final : public PartSplitter {
 // After the splits: the parts refined together (part_assignment.h), every
 // part brought within `limit` bytes where moves can, and units moved to
 // parts their rays already touch where that lowers the estimate (with no
-// rays, as `best` calls it: balanced by bytes alone). Skipped above
-// kMaxRefinedParts parts (it keeps a counter per ray and part).
+// rays, as `best` calls it: balanced by bytes alone). A part left empty is
+// dropped: its rank gets a copy of the costliest part (assignRanks). Skipped
+// above kMaxRefinedParts parts (it keeps a counter per ray and part).
 constexpr size_t kMaxRefinedParts = 256;
 // The parts are refined to (the largest part asked for - this) x total / N:
 // 1.2 by default (the goal is 1.3; replication adds up to its
