@@ -3,6 +3,7 @@
 // unique triangle, triangles per instance), docs/scenes.md, L1.
 #include "builtin/landscape.h"
 
+#include <chrono>
 #include <cstdio>
 #include <map>
 #include <set>
@@ -123,6 +124,21 @@ TEST(Landscape, PathViewStandsOnTheGround) {
   }
   ASSERT_LT(nearest, 4.0f);
   EXPECT_NEAR(path.from.y - groundY, 1.7f, 0.5f);
+}
+
+// `ferry info` answers from the plan's counts: at scale 100 (46.8 G
+// instanced triangles) and far beyond, nothing is made.
+TEST(Landscape, LargeScalesAreDescribedFromCounts) {
+  const auto start = std::chrono::steady_clock::now();
+  SceneSummary large = describeBuiltin(parseBuiltinSpec("builtin:landscape?scale=100"));
+  SceneSummary huge = describeBuiltin(parseBuiltinSpec("builtin:landscape?scale=1000000"));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_GT(large.instancedTriangles, 40'000'000'000ull);
+  EXPECT_GT(large.triangles, 200'000'000ull);
+  EXPECT_EQ(double(large.objects), kPublishedObjects);
+  EXPECT_GT(huge.instancedTriangles, large.instancedTriangles);
+  EXPECT_LT(seconds, 2.0);
 }
 
 TEST(Landscape, ScaleGrowsInstancesNotObjects) {
