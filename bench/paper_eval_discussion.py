@@ -75,8 +75,9 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
            "64 per terrain piece, merged down to at most 262,144) that overlap wherever plants of different ranks stand together, and a ray passing such "
            "proxies in front of its hit must visit each of their owners. ")
     if more:
-        txt += ("Second, on the landscape every model is instanced over the whole ground, as published "
-                "figures imply for pbrt's (145 K triangles per instance: whole trees and ground-cover patches, "
+        txt += ("Second, on the landscape every model is instanced over the whole ground (the published "
+                "figures say what is instanced is large, 145 K triangles per instance, but not where it "
+                "stands: ours are whole trees and ground-cover patches scattered over the woods and meadows, "
                 "docs/scenes.md; the island's species grow in their elements' regions), so a part that holds "
                 "a model's instances holds them everywhere, and plants of several ranks stand together "
                 "wherever a ray goes; on the previous landscape, keeping each species' instances together "
