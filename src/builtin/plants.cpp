@@ -258,11 +258,6 @@ MeshCounts treeWoodCounts(const TreeParams& p) {
   return c;
 }
 
-MeshCounts treeLeafCounts(const TreeParams& p) {
-  return ribbonCounts(p.leafSegments) *
-         (branchCount(p, p.levels.size()) * uint64_t(p.leavesPerTip));
-}
-
 PlantDesign designTree(const TreeParams& p, uint32_t seed) {
   FERRY_CHECK_GE(p.trunkRings, 2);
   FERRY_CHECK_GE(p.trunkSides, 3);
@@ -553,19 +548,20 @@ PlantDesign designPatch(const PatchParams& p, const std::function<PlantDesign(in
   FERRY_CHECK_GE(p.clumps, 1);
   FERRY_CHECK_GE(p.groups, 1);
   FERRY_CHECK_LE(p.groups, p.clumps);
-  const PlantDesign first = clump(0);
+  std::vector<PlantDesign> clumps(size_t(p.clumps));
+  for (int k = 0; k < p.clumps; ++k) {
+    clumps[size_t(k)] = clump(k);
+    FERRY_CHECK_EQ(clumps[size_t(k)].size(), clumps[0].size());
+    for (size_t j = 0; j < clumps[0].size(); ++j)
+      FERRY_CHECK(clumps[size_t(k)][j].role == clumps[0][j].role);
+  }
   PlantDesign d;
   for (int g = 0; g < p.groups; ++g) {
     const int begin = p.clumps * g / p.groups, end = p.clumps * (g + 1) / p.groups;
-    for (size_t j = 0; j < first.size(); ++j) {
+    for (size_t j = 0; j < clumps[0].size(); ++j) {
       MeshCounts counts;
-      for (int k = begin; k < end; ++k) {
-        PlantDesign c = clump(k);
-        FERRY_CHECK_EQ(c.size(), first.size());
-        FERRY_CHECK(c[j].role == first[j].role);
-        counts += c[j].counts;
-      }
-      const PlantPart& part = first[j];
+      for (int k = begin; k < end; ++k) counts += clumps[size_t(k)][j].counts;
+      const PlantPart& part = clumps[0][j];
       d.push_back(
           {fmt::format("{}/{}", g, part.name), part.role, counts, part.hasNormals, part.hasUvs,
            [p, clump, seed, begin, end, j, counts, normals = part.hasNormals, uvs = part.hasUvs] {

@@ -88,7 +88,6 @@ struct TreeParams {
   int leafMeshes = 1;
 };
 MeshCounts treeWoodCounts(const TreeParams& p);
-MeshCounts treeLeafCounts(const TreeParams& p);
 PlantDesign designTree(const TreeParams& p, uint32_t seed);
 
 struct PalmParams {

@@ -59,16 +59,6 @@ Mesh buildTerrain(const TerrainGrid& grid, const HeightFunction& height) {
   return mesh;
 }
 
-int32_t addTerrainMesh(ScenePlan& plan, const std::string& name, int32_t material,
-                       const TerrainGrid& grid, HeightFunction height) {
-  MeshRecipe r;
-  r.name = name;
-  r.material = material;
-  r.counts = terrainCounts(grid);
-  r.build = [grid, height] { return buildTerrain(grid, height); };
-  return plan.addSingleInstanceMesh(std::move(r));
-}
-
 TerrainGrid terrainTile(const TerrainGrid& grid, int tiles, int ti, int tj) {
   FERRY_CHECK_GE(tiles, 1);
   FERRY_CHECK_EQ(grid.segments % tiles, 0);

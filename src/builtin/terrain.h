@@ -39,10 +39,6 @@ MeshCounts terrainCounts(const TerrainGrid& grid);
 // Positions, normals (from the height grid) and uvs; rows in parallel.
 Mesh buildTerrain(const TerrainGrid& grid, const HeightFunction& height);
 
-// The terrain as a mesh of the plan, placed once.
-int32_t addTerrainMesh(ScenePlan& plan, const std::string& name, int32_t material,
-                       const TerrainGrid& grid, HeightFunction height);
-
 // Tile (ti, tj) of `grid` cut into tiles x tiles pieces (its segments a
 // multiple of `tiles`): the whole grid's vertices (exactly on the tile's
 // edges, so neighbours meet without cracks; up to rounding inside). No
