@@ -148,7 +148,7 @@ struct VariantKeys {
 // The structure follows what is published of pbrt's landscape (L1 in
 // docs/scenes.md): 29 objects of about 13 meshes each, 370 meshes, and per
 // instance about 145 K triangles, because what is instanced is large: whole
-// trees of about 100 K triangles cut into a mesh per branch level and
+// trees of 120-150 K triangles cut into a mesh per branch level and
 // several leaf meshes, and ground cover baked into patches of a hundred and
 // more clumps. The ground is one object of 15 x 15 tiles.
 class LandscapePlanner {
@@ -311,7 +311,7 @@ void LandscapePlanner::addGround() {
   plan_.addInstances(ground, 1, [](uint64_t) { return Affine3f::identity(); });
 }
 
-// A broadleaf tree of about 100 K triangles: four branch levels, 420 tips.
+// A broadleaf tree of about 143 K triangles: four branch levels, 420 tips.
 TreeParams oakParams(HashRng& rng, int v) {
   TreeParams p;
   p.trunkLength = rng.uniform(4.5f, 6);
