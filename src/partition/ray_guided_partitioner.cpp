@@ -54,6 +54,9 @@ RayGuidedSplitter::RayGuidedSplitter(const UnitSet& units, const RayIncidence& i
       localOf_(units.units.size(), -1) {
   const int levels = std::max(1, int(std::ceil(std::log2(std::max(2, ranks)))));
   beta_ = 0.5 * std::pow(maxPart, 1.0 / levels);
+  CostCounter all(units);
+  for (uint32_t u = 0; u < units.units.size(); ++u) all.add(u);
+  finalLimit_ = (maxPart - kRayGuidedRefineMargin) * double(all.bytes()) / double(ranks);
 }
 
 bool RayGuidedSplitter::split(const Part& part, Part& left, Part& right) {
@@ -142,7 +145,12 @@ bool RayGuidedSplitter::split(const Part& part, Part& left, Part& right) {
   }
 
   // The fewest separated rays among balanced candidates; else the most balanced.
-  const double limit = beta_ * double(part.bytes);
+  // A side within the final limit is small enough at any level: beta
+  // assumes a side keeps beta of its parent's bytes at every level, but with
+  // shared content (an object instanced all over) both sides keep the
+  // shared part, so halving by beta would force splits apart (moving an
+  // object's instances to one side) that the final limit does not need.
+  const double limit = std::max(beta_ * double(part.bytes), finalLimit_);
   struct Best {
     bool balanced = false;
     uint64_t separated = 0;

@@ -17,8 +17,10 @@
 // asked for (--max-part, default kRayGuidedDefaultMaxPart = 1.25): after the
 // levels of splits N ranks need, the largest part holds at most M x total /
 // N (the goal is 1.3; replication and shared meshes need the rest).
-// When no candidate is that balanced, the most balanced one is taken. A
-// larger M trades memory for fewer forwarded rays.
+// A side within the final limit, (M - kRayGuidedRefineMargin) x total / N,
+// is always balanced enough: shared content does not halve. When no
+// candidate is balanced, the most balanced one is taken. A larger M trades
+// memory for fewer forwarded rays.
 //
 // Each split is then refined (part_assignment.h): moves of units, of an
 // object's instances and of the users of a shared mesh bring the sides
@@ -71,6 +73,7 @@ class RayGuidedSplitter final : public PartSplitter {
  private:
   const RayIncidence& incidence_;
   double beta_;
+  double finalLimit_;             // bytes: (maxPart - kRayGuidedRefineMargin) x total / N
   CentroidSplitter fallback_;     // a part no candidate plane splits: halved by count
   std::vector<int32_t> localOf_;  // unit -> index in the part being split, or -1
 };
