@@ -113,7 +113,7 @@ for scene in sorted({r["scene"] for r in rows}):
 # At equal memory: each of the six against ray-guided at the largest cap
 # whose largest part is no larger than that partitioner's (3 % tolerance, so
 # that `best`'s 1.23-1.25x meets ray-guided's 1.26x at --max-part 1.25).
-six = ["spatial-simple", "spatial-sah", "object-naive", "object-proxies", "bvh-style", "best"]
+six = list(dict.fromkeys(r["partitioner"] for r in rows if r["partitioner"] != "ray-guided"))
 wins = pairs = 0
 print("\nat equal memory: ray-guided (largest cap within the partitioner's largest part) against each")
 for scene in sorted({r["scene"] for r in rows}):
