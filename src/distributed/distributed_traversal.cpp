@@ -81,14 +81,20 @@ DistributedTraversal<Path>::DistributedTraversal(const Communicator& comm,
 }
 
 template <typename Path>
-int DistributedTraversal<Path>::primaryOwner(uint32_t pixel, const TraceRay& ray) const {
+int DistributedTraversal<Path>::primaryOwner(uint32_t pixel, const TraceRay& ray,
+                                             uint32_t& queries) const {
   const uint32_t ranks = uint32_t(comm_.size());
-  // Proxy-guided: the owner of the closest proxy keeps it (pixel id breaks
-  // ties among replicas); rays that hit no proxy are dealt by pixel id.
-  ProxyBvh::Hit hit = proxies_.closest(ray.origin, ray.direction, ray.tmax, 0);
+  // Proxy-guided: the owner of the closest proxy keeps it; rays that hit no
+  // proxy are dealt by pixel id.
+  const ProxyBvh::Hit hit = proxies_.closest(ray.origin, ray.direction, ray.tmax, 0);
+  queries = 1;
   if (!hit.found()) return int(pixel % ranks);
-  if (hit.ownerSet) return hit.ownerSet->nth(int(pixel % uint32_t(hit.ownerSet->count())));
-  const RankSet owners = RankSet::fromMask(hit.ownerMask);
+  // A replicated proxy: the owner that reaches farthest (forwarding.h), pixel
+  // id among equals. Taking any owner by pixel id sent most camera rays of a
+  // view standing on a replicated ground piece to a rank holding little else
+  // of what they pass.
+  const RankSet owners =
+      reachingOwners(proxies_, hit, ray.origin, ray.direction, RankSet{}, queries);
   return owners.nth(int(pixel % uint32_t(owners.count())));
 }
 
@@ -112,12 +118,19 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
     return;
   }
   std::vector<int32_t> owner(dealt);
+  std::atomic<uint64_t> queries{0};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, dealt, 1024), [&](const auto& range) {
-    for (size_t k = range.begin(); k != range.end(); ++k)
-      owner[k] = primaryOwner(pixelOf(k), cameraRay(pixelOf(k)));
+    uint64_t local = 0;
+    for (size_t k = range.begin(); k != range.end(); ++k) {
+      uint32_t q = 0;
+      owner[k] = primaryOwner(pixelOf(k), cameraRay(pixelOf(k)), q);
+      local += q;
+    }
+    queries += local;
   });
-  stats.proxyQueries += dealt;
+  stats.proxyQueries += queries;
   stats.primaryQueries += dealt;
+  stats.replicaQueries += queries - dealt;
   // Pixel ids by owner, each owner's in increasing order.
   std::vector<int> counts(ranks, 0), offsets(ranks, 0);
   for (int32_t o : owner) ++counts[size_t(o)];
@@ -299,13 +312,10 @@ void DistributedTraversal<Path>::decide(PathQueue<Path>& rays, const std::vector
   const int rank = comm_.rank();
   const int ranks = comm_.size();
   destination.resize(rays.size());
-  std::atomic<uint64_t> proxyQueries{0};
+  std::atomic<uint64_t> proxyQueries{0}, replicaQueries{0};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const auto& range) {
-    // One query per proxies decision, except for shadow rays already occluded (dropped).
-    uint64_t queries = 0;
+    uint64_t queries = 0, replica = 0;
     for (size_t i = range.begin(); i != range.end(); ++i) {
-      if (mode_ == ForwardingMode::Proxies)
-        queries += !(rays[i].isShadow() && rays[i].has(kPathOccluded));
       ForwardDecision d;
       if (mode_ == ForwardingMode::Ring)
         d = forwardByRing(rays[i], rank, ranks);
@@ -314,10 +324,14 @@ void DistributedTraversal<Path>::decide(PathQueue<Path>& rays, const std::vector
       else
         d = forwardByProxies(proxies_, rays[i], rank);
       destination[i] = decisionToDestination(d, rays[i], rank);
+      queries += d.queries;
+      replica += d.queries > 1 ? d.queries - 1 : 0;  // the first: the closest proxy
     }
     proxyQueries += queries;
+    replicaQueries += replica;
   });
   stats.proxyQueries += proxyQueries;
+  stats.replicaQueries += replicaQueries;
 }
 
 template <typename Path>

@@ -68,8 +68,10 @@ class DistributedTraversal final : public RayTraversal<Path> {
   uint64_t received() const { return received_; }
 
  private:
-  // The rank whose camera path `pixel` is: the owner of the closest proxy.
-  int primaryOwner(uint32_t pixel, const TraceRay& ray) const;
+  // The rank whose camera path `pixel` is: the owner of the closest proxy
+  // (of a replicated one, the owner that reaches farthest); `queries`: the
+  // proxy queries it took.
+  int primaryOwner(uint32_t pixel, const TraceRay& ray, uint32_t& queries) const;
   // Both take the wavefront as it travels (both kinds in one queue) and add
   // the rays left here to shade to `ready`, by kind (readyHits: per path).
   void traverseForwarding(PathQueue<Path> moving, RayQueues<Path>& ready,

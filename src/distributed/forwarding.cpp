@@ -54,10 +54,48 @@ int pickOwner(const RankSet& owners, const PathCore& ray) {
   return owners.nth(int(ownerHash(ray) % uint32_t(count)));
 }
 
+RankSet reachingOwners(const ProxyBvh& proxies, const ProxyBvh::Hit& hit, Vec3f origin,
+                       Vec3f direction, const RankSet& visited, uint32_t& queries) {
+  RankSet owners = hit.owners();
+  if (owners.count() <= 1) return owners;
+  const bool narrow = proxies.narrow() && visited.fitsInMask();
+  float farthest = -1;
+  RankSet reachers;
+  for (int k = 0; k < owners.count(); ++k) {
+    const int owner = owners.nth(k);
+    ProxyBvh::Hit other;
+    if (narrow) {
+      other =
+          proxies.closest(origin, direction, kInfinity, visited.mask() | (RankMask(1) << owner));
+    } else {
+      RankSet excluded = visited;
+      excluded.insert(owner);
+      other = proxies.closest(origin, direction, kInfinity, excluded);
+    }
+    ++queries;
+    const float reach = other.found() ? other.tEnter : kInfinity;
+    if (reach > farthest) {
+      farthest = reach;
+      reachers = RankSet::single(owner);
+    } else if (reach == farthest) {
+      reachers.insert(owner);
+    }
+  }
+  return reachers;
+}
+
 namespace {
-// The owner of the proxy a query found: its owners come with the answer.
-int pickOwner(const ProxyBvh::Hit& hit, const PathCore& ray) {
-  return hit.ownerSet ? pickOwner(*hit.ownerSet, ray) : pickOwner(hit.ownerMask, ray);
+// The next rank for a ray whose closest unvisited proxy is `hit`.
+ForwardDecision sendTo(const ProxyBvh& proxies, const ProxyBvh::Hit& hit, const PathCore& ray,
+                       Vec3f direction, const RankSet& visited) {
+  ForwardDecision d{ForwardDecision::Send};
+  d.queries = 1;
+  if (!hit.ownerSet && std::has_single_bit(hit.ownerMask)) {
+    d.rank = std::countr_zero(hit.ownerMask);
+    return d;
+  }
+  d.rank = pickOwner(reachingOwners(proxies, hit, ray.origin, direction, visited, d.queries), ray);
+  return d;
 }
 }  // namespace
 
@@ -79,18 +117,25 @@ template <typename Path>
 ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank) {
   if (ray.isShadow() && ray.has(kPathOccluded))
     return {ForwardDecision::Drop};  // ends at any occluder
-  ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, RankMask(ray.visited));
-  if (next.found()) return {ForwardDecision::Send, pickOwner(next, ray)};
-  return finishTraversal(ray, rank);
+  const Vec3f direction = ray.dir();
+  ProxyBvh::Hit next = proxies.closest(ray.origin, direction, ray.tmax, RankMask(ray.visited));
+  if (next.found())
+    return sendTo(proxies, next, ray, direction, RankSet::fromMask(RankMask(ray.visited)));
+  ForwardDecision d = finishTraversal(ray, rank);
+  d.queries = 1;
+  return d;
 }
 
 template <typename Path>
 ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int rank,
                                  const RankSet& visited) {
   if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};
-  ProxyBvh::Hit next = proxies.closest(ray.origin, ray.dir(), ray.tmax, visited);
-  if (next.found()) return {ForwardDecision::Send, pickOwner(next, ray)};
-  return finishTraversal(ray, rank);
+  const Vec3f direction = ray.dir();
+  ProxyBvh::Hit next = proxies.closest(ray.origin, direction, ray.tmax, visited);
+  if (next.found()) return sendTo(proxies, next, ray, direction, visited);
+  ForwardDecision d = finishTraversal(ray, rank);
+  d.queries = 1;
+  return d;
 }
 
 template <typename Path>
@@ -115,10 +160,14 @@ ReplayResult replayWalk(const ProxyBvh& proxies, const Path& ray, int generating
   const Vec3f dir = ray.dir();
   int at = generatingRank;
   while (at != current) {
-    ++result.queries;
     ProxyBvh::Hit next = proxies.closest(ray.origin, dir, ray.tmax, result.visited);
-    if (!next.found()) return result;
-    at = pickOwner(next, ray);
+    if (!next.found()) {
+      ++result.queries;
+      return result;
+    }
+    const ForwardDecision d = sendTo(proxies, next, ray, dir, result.visited);
+    result.queries += d.queries;
+    at = d.rank;
     result.visited.insert(at);
   }
   result.reached = true;

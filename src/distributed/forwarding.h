@@ -24,6 +24,7 @@ struct ForwardDecision {
   enum Kind : uint8_t { ShadeHere, Drop, Send } kind = ShadeHere;
   int rank = -1;         // for Send
   bool toShade = false;  // Send: traversal is complete, the receiver only shades
+  uint32_t queries = 0;  // proxy-BVH queries the decision took
 };
 
 // One owner among `owners`, picked pseudo-randomly but deterministically from
@@ -31,6 +32,20 @@ struct ForwardDecision {
 // layout). The two forms pick the same rank for the same set.
 int pickOwner(RankMask owners, const PathCore& ray);
 int pickOwner(const RankSet& owners, const PathCore& ray);
+
+// Which owners of a proxy the ray is to visit next (`hit`: the closest proxy
+// none of whose owners is in `visited`) may take it: the owners whose own
+// proxies carry it farthest, i.e. whose first proxy it enters that neither
+// they nor a visited rank hold comes last (tmax ignored, so the answer does
+// not change as hits shorten the ray: the replay layout recomputes it). An
+// unreplicated proxy's one owner; for a replica (a copy of large, cheap
+// content on several ranks) the one that holds the most of what the ray
+// passes next. Taking any replica's owner by a hash of the ray sent most
+// camera rays of a view standing on a replicated ground piece to a rank
+// holding little else of what they pass (docs/partitioning.md, "Replicas and
+// the owner a ray goes to"). Adds the queries it makes to `queries`.
+RankSet reachingOwners(const ProxyBvh& proxies, const ProxyBvh::Hit& hit, Vec3f origin,
+                       Vec3f direction, const RankSet& visited, uint32_t& queries);
 
 // Traversal done on `rank`: shade here if it holds the hit (or there is none),
 // else send to one of the hit's owners (replay layout: to the rank that found

@@ -94,6 +94,62 @@ TEST(Forwarding, RingVisitsEveryRankOnceThenFinishes) {
   EXPECT_EQ(visits, 5);
 }
 
+// A replica goes to the owner whose own proxies carry the ray farthest. Along
+// +x: a replicated box [0,1] on ranks 1 and 2, then rank 2's box [1,3],
+// rank 1's [2.5,3] and rank 3's [4,5]. From rank 0 every ray is sent to 2,
+// whatever its hash: the first box not held by 2 starts at 2.5, the first
+// not held by 1 at 1.
+TEST(Forwarding, AReplicaGoesToTheOwnerThatReachesFarthest) {
+  auto box = [](float x0, float x1) {
+    Box3f b;
+    b.extend({x0, -1, -1});
+    b.extend({x1, 1, 1});
+    return b;
+  };
+  RankSet replicated = RankSet::single(1);
+  replicated.insert(2);
+  const std::vector<Proxy> proxies = {{box(0, 1), replicated},
+                                      {box(1, 3), RankSet::single(2)},
+                                      {box(2.5f, 3), RankSet::single(1)},
+                                      {box(4, 5), RankSet::single(3)}};
+  for (int ownRank : {-1, 0}) {
+    const ProxyBvh bvh(proxies, ownRank);
+    int toRankOne = 0;
+    for (uint32_t pixel = 0; pixel < 64; ++pixel) {
+      Path8 ray{};
+      ray.origin = {-1, 0, 0};
+      ray.setDir({1, 0, 0});
+      ray.tmax = kInfinity;
+      ray.setPixelAndFlags(pixel, 0);
+      ray.visited = 1;  // traced on rank 0
+      const ForwardDecision d = forwardByProxies(bvh, ray, 0);
+      ASSERT_EQ(d.kind, ForwardDecision::Send);
+      EXPECT_EQ(d.rank, 2) << "pixel " << pixel;
+      EXPECT_EQ(d.queries, 3u);  // the closest proxy, then the reach of each owner
+      toRankOne += pickOwner(RankMask(0b110), ray) == 1;  // what a hash would have picked
+      // The same from the set form (the replay layout).
+      EXPECT_EQ(forwardByProxies(bvh, ray, 0, RankSet::single(0)).rank, 2);
+    }
+    EXPECT_GT(toRankOne, 0);  // the hash alone would have sent some rays to rank 1
+    // An unreplicated proxy costs one query, as before.
+    Path8 ray{};
+    ray.origin = {1.5f, 0, 0};
+    ray.setDir({1, 0, 0});
+    ray.tmax = kInfinity;
+    ray.visited = 0b0101;  // ranks 0 and 2
+    const ForwardDecision d = forwardByProxies(bvh, ray, 2);
+    EXPECT_EQ(d.rank, 1);
+    EXPECT_EQ(d.queries, 1u);
+    // Reach is measured past tmax: a short ray chooses as a long one does.
+    uint32_t queries = 0;
+    const ProxyBvh::Hit first = bvh.closest({-1, 0, 0}, {1, 0, 0}, 1.5f, RankMask(1));
+    ASSERT_TRUE(first.found());
+    EXPECT_EQ(reachingOwners(bvh, first, {-1, 0, 0}, {1, 0, 0}, RankSet::single(0), queries),
+              RankSet::single(2));
+    EXPECT_EQ(queries, 2u);
+  }
+}
+
 // The proxy walk never revisits a rank, and ends: a forwarded ray's next rank
 // is always unvisited, so at most `ranks` visits.
 TEST(Forwarding, ProxyWalkNeverRevisitsARank) {
@@ -138,6 +194,7 @@ void checkReplayAgainstCarriedSet(int ranks, uint32_t seed, int rays) {
     RankSet carried = RankSet::single(generating);
     if (ranks <= 64) mask.visited = RankMask(1) << generating;
     int rank = generating;
+    uint32_t decisionQueries = 0;  // of the decisions that brought the ray here
     for (int step = 0;; ++step) {
       ASSERT_LE(step, ranks);
       if (rank != generating) {
@@ -145,7 +202,9 @@ void checkReplayAgainstCarriedSet(int ranks, uint32_t seed, int rays) {
         ReplayResult r = replayWalk(bvh, replay, generating, rank);
         ASSERT_TRUE(r.reached) << "ranks " << ranks << " ray " << k << " step " << step;
         ASSERT_EQ(r.visited, carried) << "ranks " << ranks << " ray " << k << " step " << step;
-        EXPECT_EQ(r.queries, uint32_t(step));
+        // The replay makes the decisions again: their queries (replicas: one
+        // more per owner weighed).
+        EXPECT_EQ(r.queries, decisionQueries);
       }
       // The local trace: sometimes a hit, which shrinks tmax.
       if (uniform(k * 64 + uint32_t(step), 31, seed) < 0.4f) {
@@ -167,6 +226,8 @@ void checkReplayAgainstCarriedSet(int ranks, uint32_t seed, int rays) {
       if (!forwarded) break;
       ASSERT_EQ(byReplay.rank, bySet.rank) << "ranks " << ranks << " ray " << k << " step " << step;
       ASSERT_FALSE(carried.contains(byReplay.rank)) << "a revisit";
+      ASSERT_EQ(byReplay.queries, bySet.queries);
+      decisionQueries += byReplay.queries;
       rank = byReplay.rank;
       carried.insert(rank);
       if (ranks <= 64) mask.visited |= RankMask(1) << rank;

@@ -52,6 +52,9 @@ struct FrameStats {
   uint64_t proxyQueries = 0;     // proxy-BVH queries: camera-ray ownership and forwarding decisions
   uint64_t replayQueries = 0;    // replay layout: proxy queries spent recomputing visited sets
   uint64_t primaryQueries = 0;   // of proxyQueries: deciding which rank generates a camera path
+                                 // (one per camera path: its closest proxy)
+  uint64_t replicaQueries = 0;   // of proxyQueries: weighing a replicated proxy's owners (one per
+                                 // owner; distributed/forwarding.h, reachingOwners)
   uint64_t primaryBytesSent = 0;  // pixel ids sent to the ranks that generate their camera paths
   uint64_t terminationWaves = 0;  // overlapped exchange: non-blocking sums until a sample ended
   std::vector<ExchangeCounters> perBounce;
@@ -93,6 +96,7 @@ inline constexpr StatsField<FrameStats, uint64_t> kFrameCounters[] = {
     {"traces", "proxy_queries", &FrameStats::proxyQueries},
     {"traces", "replay_queries", &FrameStats::replayQueries},
     {"traces", "primary_queries", &FrameStats::primaryQueries},
+    {"traces", "replica_queries", &FrameStats::replicaQueries},
     {nullptr, "primary_bytes_sent", &FrameStats::primaryBytesSent},
     {nullptr, "termination_waves", &FrameStats::terminationWaves},
 };

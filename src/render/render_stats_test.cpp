@@ -68,9 +68,10 @@ TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
                                    "continuation_rays", "shadow_rays", "traces", "rays_per_second",
                                    "exchange", "exchange_per_bounce", "stage_seconds",
                                    "primary_bytes_sent", "termination_waves"}));
-  EXPECT_EQ(keysOf(j.at("traces")),
-            (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses",
-                                   "proxy_queries", "replay_queries", "primary_queries", "total"}));
+  EXPECT_EQ(
+      keysOf(j.at("traces")),
+      (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses", "proxy_queries",
+                             "replay_queries", "primary_queries", "replica_queries", "total"}));
   const std::set<std::string> exchange = {"rays_forwarded", "bytes_sent", "rounds", "messages"};
   EXPECT_EQ(keysOf(j.at("exchange")), exchange);
   EXPECT_EQ(keysOf(j.at("exchange_per_bounce")[0]), exchange);

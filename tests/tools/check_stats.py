@@ -3,7 +3,8 @@
 twice on a rank, rays forwarded (counted by senders) equal rays received
 (counted by receivers), every shading re-trace found its hit, and, with proxy
 forwarding, the proxies were asked about every camera ray (once: the rank a
-pixel is dealt to decides its owner for all)."""
+pixel is dealt to decides its owner for all; the queries weighing a
+replicated proxy's owners are counted apart)."""
 import json
 import sys
 
@@ -16,7 +17,8 @@ assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
 if s["settings"]["forwarding"] == "proxies" and s["settings"]["ranks"] > 1:
     camera = r["total"]["camera_paths"]
     queries = r["total"]["traces"]["proxy_queries"]
-    assert queries >= camera, f"{queries} proxy queries for {camera} camera paths"
+    replica = r["total"]["traces"]["replica_queries"]
+    assert queries >= camera + replica, f"{queries} proxy queries for {camera} camera paths"
     primary = r["total"]["traces"]["primary_queries"]
     assert primary == camera, f"{primary} primary-ownership queries for {camera} camera paths"
 ex = r["total"]["exchange"]
