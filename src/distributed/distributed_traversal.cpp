@@ -235,8 +235,7 @@ PathQueue<Path> DistributedTraversal<Path>::exchange(const PathQueue<Path>& rays
   };
   comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), received.data(),
                       toBytes(receiveCounts), toBytes(receiveOffsets));
-  counters.raysForwarded += send.size();
-  counters.bytesSent += send.size() * sizeof(Path);
+  counters.countSent(send.data(), send.size(), sizeof(Path));
   if (comm_.isRoot()) ++counters.rounds;  // a round is one collective step; counted once
   received_ += total;
   stats.times.exchange += secondsSince(start);

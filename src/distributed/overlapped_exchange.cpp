@@ -192,8 +192,7 @@ void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t first,
       PathQueue<Path>& rays = outbox[size_t(to)];
       if (rays.empty()) continue;
       comm_.send(to, RayMessageHeader{sampleIndex, bounce}, std::span<const Path>(rays));
-      counters.raysForwarded += rays.size();
-      counters.bytesSent += rays.size() * sizeof(Path);
+      counters.countSent(rays.data(), rays.size(), sizeof(Path));
       ++counters.messages;
       rays.clear();
     }

@@ -141,8 +141,10 @@ std::string RenderStats::summaryText(int ranks) const {
                                  formatCount(t.occlusionTraces), formatCount(t.retraces)));
   row("rays per second", formatCount(uint64_t(t.seconds > 0 ? t.raysTraced() / t.seconds : 0)));
   row("rays forwarded",
-      fmt::format("{} ({} per frame)", formatCount(ex.raysForwarded),
-                  formatCount(frames.empty() ? 0 : ex.raysForwarded / frames.size())));
+      fmt::format("{} ({} per frame; {} shadow rays, {} only to be shaded)",
+                  formatCount(ex.raysForwarded),
+                  formatCount(frames.empty() ? 0 : ex.raysForwarded / frames.size()),
+                  formatCount(ex.shadowRaysForwarded), formatCount(ex.forwardedToShade)));
   row("bytes sent", formatBytes(ex.bytesSent));
   if (ex.messages || t.terminationWaves)
     row("exchange", fmt::format("overlapped: {} messages, {} termination sums", ex.messages,

@@ -18,10 +18,24 @@ namespace ferry {
 // One wavefront's distributed traversal (the dist layer fills these).
 struct ExchangeCounters {
   uint64_t raysForwarded = 0;  // rays sent to another rank
-  uint64_t bytesSent = 0;      // ray payload bytes sent to other ranks
-  uint64_t rounds = 0;         // bulk exchange: rounds until no ray moved
-  uint64_t messages = 0;       // overlapped exchange: ray messages sent
+  // Of raysForwarded, by kind (the rest are camera rays and continuations
+  // still being traversed, which exchange_per_bounce tells apart):
+  uint64_t shadowRaysForwarded = 0;  // shadow rays
+  uint64_t forwardedToShade = 0;     // traversal done: sent to a hit owner only to be shaded
+  uint64_t bytesSent = 0;            // ray payload bytes sent to other ranks
+  uint64_t rounds = 0;               // bulk exchange: rounds until no ray moved
+  uint64_t messages = 0;             // overlapped exchange: ray messages sent
   ExchangeCounters& operator+=(const ExchangeCounters& o);
+  // Counts `rays` as sent (rays, bytes of `rayBytes` each, and their kinds).
+  template <typename Ray>
+  void countSent(const Ray* rays, size_t count, size_t rayBytes) {
+    raysForwarded += count;
+    bytesSent += count * rayBytes;
+    for (size_t i = 0; i < count; ++i) {
+      shadowRaysForwarded += rays[i].isShadow();
+      forwardedToShade += !rays[i].isShadow() && rays[i].isTraversed();
+    }
+  }
 };
 
 // Seconds per stage: summed over ranks when merged; on one rank the chunks
@@ -103,6 +117,8 @@ inline constexpr StatsField<FrameStats, uint64_t> kFrameCounters[] = {
 // Per bounce under "exchange_per_bounce", and summed over bounces under "exchange".
 inline constexpr StatsField<ExchangeCounters, uint64_t> kExchangeCounters[] = {
     {nullptr, "rays_forwarded", &ExchangeCounters::raysForwarded},
+    {nullptr, "shadow_rays_forwarded", &ExchangeCounters::shadowRaysForwarded},
+    {nullptr, "forwarded_to_shade", &ExchangeCounters::forwardedToShade},
     {nullptr, "bytes_sent", &ExchangeCounters::bytesSent},
     {nullptr, "rounds", &ExchangeCounters::rounds},
     {nullptr, "messages", &ExchangeCounters::messages},

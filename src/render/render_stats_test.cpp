@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "trace/path.h"
 
 namespace ferry {
 namespace {
@@ -72,7 +73,9 @@ TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
       keysOf(j.at("traces")),
       (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses", "proxy_queries",
                              "replay_queries", "primary_queries", "replica_queries", "total"}));
-  const std::set<std::string> exchange = {"rays_forwarded", "bytes_sent", "rounds", "messages"};
+  const std::set<std::string> exchange = {
+      "rays_forwarded", "shadow_rays_forwarded", "forwarded_to_shade", "bytes_sent", "rounds",
+      "messages"};
   EXPECT_EQ(keysOf(j.at("exchange")), exchange);
   EXPECT_EQ(keysOf(j.at("exchange_per_bounce")[0]), exchange);
   EXPECT_EQ(keysOf(j.at("stage_seconds")),
@@ -114,4 +117,28 @@ TEST(RenderStats, CounterArraysRoundTrip) {
 }
 
 }  // namespace
+}  // namespace ferry
+
+namespace ferry {
+
+// The kinds of the rays sent are counted from their flags: shadow rays, and
+// rays sent only to be shaded (traversed); a traversed shadow ray is a shadow ray.
+TEST(RenderStats, SentRaysAreCountedByKind) {
+  std::vector<Path8> rays(7);
+  rays[0].setPixelAndFlags(0, kPathShadow);
+  rays[1].setPixelAndFlags(1, kPathShadow | kPathOccluded);
+  rays[2].setPixelAndFlags(2, kPathTraversed);
+  rays[3].setPixelAndFlags(3, kPathTraversed | kPathAfterSpecular);
+  rays[4].setPixelAndFlags(4, kPathShadow | kPathTraversed);
+  rays[5].setPixelAndFlags(5, 0);
+  rays[6].setPixelAndFlags(6, kPathAfterSpecular);
+  ExchangeCounters c;
+  c.countSent(rays.data(), rays.size(), sizeof(Path8));
+  c.countSent(rays.data() + 2, 1, sizeof(Path8));
+  EXPECT_EQ(c.raysForwarded, 8u);
+  EXPECT_EQ(c.bytesSent, 8 * sizeof(Path8));
+  EXPECT_EQ(c.shadowRaysForwarded, 3u);
+  EXPECT_EQ(c.forwardedToShade, 3u);
+}
+
 }  // namespace ferry

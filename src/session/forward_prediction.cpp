@@ -43,6 +43,8 @@ nlohmann::json ForwardPrediction::toJson() const {
           {"sample_size", {sampleWidth, sampleHeight}},
           {"camera_paths", cameraPaths},
           {"rays_forwarded", raysForwarded},
+          {"shadow_rays_forwarded", shadowRaysForwarded},
+          {"forwarded_to_shade", forwardedToShade},
           {"bytes_sent", bytesSent},
           {"forwards_per_path", forwardsPerPath()},
           {"seconds", seconds}};
@@ -89,6 +91,8 @@ std::vector<ForwardPrediction> predictForwards(const std::string& directory,
       const ExchangeCounters exchange = total.exchangeTotal();
       p.cameraPaths = total.cameraPaths;
       p.raysForwarded = exchange.raysForwarded;
+      p.shadowRaysForwarded = exchange.shadowRaysForwarded;
+      p.forwardedToShade = exchange.forwardedToShade;
       p.bytesSent = exchange.bytesSent;
       p.seconds = secondsSince(start);
     }

@@ -45,6 +45,8 @@ struct ForwardPrediction {
   int sampleWidth = 0, sampleHeight = 0;
   uint64_t cameraPaths = 0;
   uint64_t raysForwarded = 0;
+  uint64_t shadowRaysForwarded = 0;  // of raysForwarded
+  uint64_t forwardedToShade = 0;     // of raysForwarded: sent to a hit owner only to be shaded
   uint64_t bytesSent = 0;
   double seconds = 0;  // rendering the sample (the parts are loaded once for all views)
 

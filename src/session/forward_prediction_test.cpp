@@ -27,10 +27,14 @@ using testing::makeQuad;
 // lies ahead), which finds the wall: one forward per camera path, exactly.
 // At depth 0 no other ray is made. A camera between the two (at z = 1) meets
 // rank 0's box first and finds the wall at once: no forward.
+// With `wallBoxTop` 4.5 rank 0's box reaches past rank 1's: every camera ray
+// starts on rank 0, finds the wall, is forwarded to rank 1 (whose box it
+// enters before the wall), misses there, and is sent back to rank 0 only to
+// be shaded: two forwards per camera path, one of them to be shaded.
 struct KnownForwarding {
   fs::path dir = fs::temp_directory_path() / ("ferry-prediction-test-" + std::to_string(getpid()));
 
-  KnownForwarding() {
+  explicit KnownForwarding(float wallBoxTop = 0.01f) {
     fs::remove_all(dir);
     Scene scene;
     const int32_t material = scene.addMaterial(diffuseMaterial({0.5f, 0.5f, 0.5f}));
@@ -54,7 +58,7 @@ struct KnownForwarding {
     partition.instanceOwners = {RankSet::single(0), RankSet::single(1)};
     Box3f wall = scene.objectBounds(0);
     wall.lower.z -= 0.01f;
-    wall.upper.z += 0.01f;
+    wall.upper.z += wallBoxTop;
     partition.proxies = {{wall, RankSet::single(0)}, {scene.objectBounds(1), RankSet::single(1)}};
     partition.checkCovers(scene);
     PartDirectoryInfo info;
@@ -86,6 +90,8 @@ TEST(ForwardPrediction, ExactWhereTheForwardingIsKnownByConstruction) {
   EXPECT_EQ(p[0].cameraPaths, 512u);
   EXPECT_EQ(p[0].raysForwarded, 512u);
   EXPECT_EQ(p[0].forwardsPerPath(), 1.0);
+  EXPECT_EQ(p[0].shadowRaysForwarded, 0u);
+  EXPECT_EQ(p[0].forwardedToShade, 0u);
   EXPECT_GT(p[0].bytesSent, 0u);
   EXPECT_EQ(p[1].view, "between");
   EXPECT_EQ(p[1].camera.from.z, 1.0f);
@@ -93,6 +99,23 @@ TEST(ForwardPrediction, ExactWhereTheForwardingIsKnownByConstruction) {
   EXPECT_EQ(p[1].raysForwarded, 0u);
   EXPECT_THROW(predictForwards(scene.dir.string(), {{"nowhere", std::nullopt}}, options),
                InputError);
+}
+
+TEST(ForwardPrediction, ARaySentBackToItsHitIsCountedAsSentToShade) {
+  KnownForwarding scene(4.5f);
+  ForwardPredictionOptions options;
+  options.width = 64;
+  options.height = 32;
+  options.samplePaths = 512;
+  options.maxDepth = 0;
+  const std::vector<ForwardPrediction> p =
+      predictForwards(scene.dir.string(), {{"front", std::nullopt}}, options);
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_EQ(p[0].cameraPaths, 512u);
+  EXPECT_EQ(p[0].raysForwarded, 1024u);
+  EXPECT_EQ(p[0].forwardedToShade, 512u);
+  EXPECT_EQ(p[0].shadowRaysForwarded, 0u);
+  EXPECT_EQ(p[0].toJson().at("forwarded_to_shade"), 512u);
 }
 
 TEST(ForwardPrediction, SampleKeepsTheImagesAspectAndNeverExceedsIt) {

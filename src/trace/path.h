@@ -62,6 +62,7 @@ struct PathCore {
   uint32_t flags() const { return pixelAndFlags & kPathFlagMask; }
   bool has(PathFlags f) const { return (pixelAndFlags & f) != 0; }
   bool isShadow() const { return has(kPathShadow); }
+  bool isTraversed() const { return has(kPathTraversed); }
   void set(PathFlags f) { pixelAndFlags |= f; }
   void setPixelAndFlags(uint32_t pixel, uint32_t flags) {
     pixelAndFlags = (pixel << (32 - kPixelBits)) | (flags & kPathFlagMask);

@@ -14,6 +14,12 @@ fwd = r["total"]["exchange"]["rays_forwarded"]
 assert r["revisits"] == 0, f"{r['revisits']} rays revisited a rank"
 assert r["rays_received"] == fwd, f"forwarded {fwd} but received {r['rays_received']}"
 assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
+ex = r["total"]["exchange"]
+kinds = ex["shadow_rays_forwarded"] + ex["forwarded_to_shade"]
+assert kinds <= fwd, f"{kinds} shadow and to-shade forwards of {fwd}"
+if s["settings"]["forwarding"] == "broadcast" and fwd > 0:
+    # Every copy's reply comes back traversed; a hit found elsewhere is sent to be shaded.
+    assert ex["forwarded_to_shade"] > 0, "broadcast forwarded nothing to be shaded"
 if s["settings"]["forwarding"] == "proxies" and s["settings"]["ranks"] > 1:
     camera = r["total"]["camera_paths"]
     queries = r["total"]["traces"]["proxy_queries"]
