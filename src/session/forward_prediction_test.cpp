@@ -70,17 +70,23 @@ struct KnownForwarding {
   ~KnownForwarding() { fs::remove_all(dir); }
 };
 
+// 512 camera paths of 32x16, no bounce: every count is known.
+ForwardPredictionOptions knownOptions() {
+  ForwardPredictionOptions options;
+  options.width = 64;
+  options.height = 32;
+  options.samplePaths = 512;
+  options.maxDepth = 0;
+  return options;
+}
+
 TEST(ForwardPrediction, ExactWhereTheForwardingIsKnownByConstruction) {
   KnownForwarding scene;
   CameraView between;
   between.from = {0, 0, 1};
   between.at = {0, 0, 0};
   between.fovY = 30;
-  ForwardPredictionOptions options;
-  options.width = 64;
-  options.height = 32;
-  options.samplePaths = 512;
-  options.maxDepth = 0;
+  const ForwardPredictionOptions options = knownOptions();
   const std::vector<ForwardPrediction> p =
       predictForwards(scene.dir.string(), {{"front", std::nullopt}, {"between", between}}, options);
   ASSERT_EQ(p.size(), 2u);
@@ -103,13 +109,8 @@ TEST(ForwardPrediction, ExactWhereTheForwardingIsKnownByConstruction) {
 
 TEST(ForwardPrediction, ARaySentBackToItsHitIsCountedAsSentToShade) {
   KnownForwarding scene(4.5f);
-  ForwardPredictionOptions options;
-  options.width = 64;
-  options.height = 32;
-  options.samplePaths = 512;
-  options.maxDepth = 0;
   const std::vector<ForwardPrediction> p =
-      predictForwards(scene.dir.string(), {{"front", std::nullopt}}, options);
+      predictForwards(scene.dir.string(), {{"front", std::nullopt}}, knownOptions());
   ASSERT_EQ(p.size(), 1u);
   EXPECT_EQ(p[0].cameraPaths, 512u);
   EXPECT_EQ(p[0].raysForwarded, 1024u);
