@@ -89,10 +89,8 @@ int DistributedTraversal<Path>::primaryOwner(uint32_t pixel, const TraceRay& ray
   const ProxyBvh::Hit hit = proxies_.closest(ray.origin, ray.direction, ray.tmax, 0);
   queries = 1;
   if (!hit.found()) return int(pixel % ranks);
-  // A replicated proxy: the owner that reaches farthest (forwarding.h), pixel
-  // id among equals. Taking any owner by pixel id sent most camera rays of a
-  // view standing on a replicated ground piece to a rank holding little else
-  // of what they pass.
+  // A replicated proxy: the owner that reaches farthest (forwarding.h,
+  // reachingOwners), pixel id among equals.
   const RankSet owners =
       reachingOwners(proxies_, hit, ray.origin, ray.direction, RankSet{}, queries);
   return owners.nth(int(pixel % uint32_t(owners.count())));

@@ -97,6 +97,17 @@ ForwardDecision sendTo(const ProxyBvh& proxies, const ProxyBvh::Hit& hit, const 
   d.rank = pickOwner(reachingOwners(proxies, hit, ray.origin, direction, visited, d.queries), ray);
   return d;
 }
+
+// The decision after the query for the closest unvisited proxy (`next`).
+template <typename Path>
+ForwardDecision decideAfterQuery(const ProxyBvh& proxies, const ProxyBvh::Hit& next,
+                                 const Path& ray, Vec3f direction, const RankSet& visited,
+                                 int rank) {
+  if (next.found()) return sendTo(proxies, next, ray, direction, visited);
+  ForwardDecision d = finishTraversal(ray, rank);
+  d.queries = 1;
+  return d;
+}
 }  // namespace
 
 template <typename Path>
@@ -118,12 +129,10 @@ ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int r
   if (ray.isShadow() && ray.has(kPathOccluded))
     return {ForwardDecision::Drop};  // ends at any occluder
   const Vec3f direction = ray.dir();
-  ProxyBvh::Hit next = proxies.closest(ray.origin, direction, ray.tmax, RankMask(ray.visited));
-  if (next.found())
-    return sendTo(proxies, next, ray, direction, RankSet::fromMask(RankMask(ray.visited)));
-  ForwardDecision d = finishTraversal(ray, rank);
-  d.queries = 1;
-  return d;
+  const ProxyBvh::Hit next =
+      proxies.closest(ray.origin, direction, ray.tmax, RankMask(ray.visited));
+  return decideAfterQuery(proxies, next, ray, direction, RankSet::fromMask(RankMask(ray.visited)),
+                          rank);
 }
 
 template <typename Path>
@@ -131,11 +140,8 @@ ForwardDecision forwardByProxies(const ProxyBvh& proxies, const Path& ray, int r
                                  const RankSet& visited) {
   if (ray.isShadow() && ray.has(kPathOccluded)) return {ForwardDecision::Drop};
   const Vec3f direction = ray.dir();
-  ProxyBvh::Hit next = proxies.closest(ray.origin, direction, ray.tmax, visited);
-  if (next.found()) return sendTo(proxies, next, ray, direction, visited);
-  ForwardDecision d = finishTraversal(ray, rank);
-  d.queries = 1;
-  return d;
+  const ProxyBvh::Hit next = proxies.closest(ray.origin, direction, ray.tmax, visited);
+  return decideAfterQuery(proxies, next, ray, direction, visited, rank);
 }
 
 template <typename Path>

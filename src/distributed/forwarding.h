@@ -42,8 +42,8 @@ int pickOwner(const RankSet& owners, const PathCore& ray);
 // content on several ranks) the one that holds the most of what the ray
 // passes next. Taking any replica's owner by a hash of the ray sent most
 // camera rays of a view standing on a replicated ground piece to a rank
-// holding little else of what they pass (docs/partitioning.md, "Replicas and
-// the owner a ray goes to"). Adds the queries it makes to `queries`.
+// holding little else of what they pass (docs/data-parallel.md, "Replicas").
+// Adds the queries it makes to `queries`.
 RankSet reachingOwners(const ProxyBvh& proxies, const ProxyBvh::Hit& hit, Vec3f origin,
                        Vec3f direction, const RankSet& visited, uint32_t& queries);
 
