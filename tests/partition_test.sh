@@ -97,7 +97,7 @@ assert set(p) == {"default", "beach", "overview", "command line"}, list(p)
 want = s["render"]["total"]["exchange"]["rays_forwarded"]
 got = p[sys.argv[3]]["rays_forwarded"]
 assert got == want and want > 0, f"{sys.argv[3]}: predicted {got}, the render forwarded {want}"
-for kind in ("shadow_rays_forwarded", "forwarded_to_shade"):
+for kind in ("shadow_rays_forwarded", "forwarded_to_shade", "visits_without_hit"):
     want, got = s["render"]["total"]["exchange"][kind], p[sys.argv[3]][kind]
     assert got == want, f"{sys.argv[3]}: predicted {got} {kind}, the render {want}"
 print(f"  predicted = forwarded for {sys.argv[3]}: {got}")

@@ -67,7 +67,7 @@ for key in ("camera_paths", "continuation_rays", "shadow_rays"):
     assert r[key] == m[key], (key, r[key], m[key])
 for key in ("closest", "occlusion", "retrace"):
     assert r["traces"][key] == m["traces"][key], (key, r["traces"][key], m["traces"][key])
-for key in ("rays_forwarded", "rounds"):
+for key in ("rays_forwarded", "rounds", "visits_without_hit"):
     assert r["exchange"][key] == m["exchange"][key], (key, r["exchange"][key], m["exchange"][key])
 print(f"  replay = mask: forwarded {r['exchange']['rays_forwarded']}, "
       f"closest traces {r['traces']['closest']}, replay queries {r['traces']['replay_queries']}")

@@ -110,15 +110,16 @@ void predictAndRecord(const PartitionCommandOptions& o, const std::vector<Predic
   predictionSampleSize(options, width, height);
   fmt::print("predicted rays forwarded ({}x{} paths sampled for {}x{}, depth {}):\n", width, height,
              options.width, options.height, options.maxDepth);
-  // Per path, and of that the shadow rays and the rays sent back to their hit
-  // only to be shaded (the rest: camera rays and continuations on their way).
-  fmt::print("  {:<16} {:>10} {:>8} {:>9} {:>14} {:>9}\n", "view", "per path", "shadow", "to shade",
-             "in the image", "seconds");
+  // Per path, and of that the shadow rays, the rays sent back to their hit
+  // only to be shaded (the rest: camera rays and continuations on their way),
+  // and the rays that found nothing where they were sent (the proxies' looseness).
+  fmt::print("  {:<16} {:>10} {:>8} {:>9} {:>9} {:>14} {:>9}\n", "view", "per path", "shadow",
+             "to shade", "no hit", "in the image", "seconds");
   for (const ForwardPrediction& p : predictions) {
     const double paths = double(std::max<uint64_t>(1, p.cameraPaths));
-    fmt::print("  {:<16} {:>10.3f} {:>8.3f} {:>9.3f} {:>14.0f} {:>9.2f}\n", p.view,
+    fmt::print("  {:<16} {:>10.3f} {:>8.3f} {:>9.3f} {:>9.3f} {:>14.0f} {:>9.2f}\n", p.view,
                p.forwardsPerPath(), double(p.shadowRaysForwarded) / paths,
-               double(p.forwardedToShade) / paths,
+               double(p.forwardedToShade) / paths, double(p.visitsWithoutHit) / paths,
                p.forwardsPerPath() * double(options.width) * double(options.height), p.seconds);
   }
 }

@@ -169,6 +169,19 @@ void DistributedTraversal<Path>::trace(PathQueue<Path>& rays, FrameStats& stats,
 }
 
 template <typename Path>
+void DistributedTraversal<Path>::traceArrivals(PathQueue<Path>& rays, std::vector<TraceHit>& hits,
+                                               ExchangeCounters& counters, FrameStats& stats) {
+  trace(rays, stats, &hits);
+  // A shadow ray arrives unoccluded (an occluded one is dropped where it is
+  // found), a path with the closest hit found so far: found nothing here
+  // means still unoccluded, or no closer hit here.
+  uint64_t without = 0;
+  for (size_t i = 0; i < rays.size(); ++i)
+    without += rays[i].isShadow() ? !rays[i].has(kPathOccluded) : !hits[i].valid();
+  counters.visitsWithoutHit += without;
+}
+
+template <typename Path>
 std::vector<RankSet> DistributedTraversal<Path>::replayArrivals(const PathQueue<Path>& rays,
                                                                 FrameStats& stats) {
   auto start = Clock::now();
@@ -299,7 +312,7 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path> moving, RayQ
     }
     // Replay before tracing: the walk is replayed with the tmax the ray arrived with.
     if (replay) visited = replayArrivals(moving, stats);
-    trace(moving, stats, &movingHits);
+    traceArrivals(moving, movingHits, counters, stats);
   }
 }
 
@@ -352,7 +365,8 @@ void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path> rays, RayQueu
       }
   }
   PathQueue<Path> received = exchange(copies, copiesTo, counters, stats);
-  trace(received, stats);
+  std::vector<TraceHit> copyHits;
+  traceArrivals(received, copyHits, counters, stats);
 
   // 2. Every copy goes back to its origin (the one visited rank besides this one).
   std::vector<int> replyTo(received.size());

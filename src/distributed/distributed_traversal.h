@@ -91,6 +91,10 @@ class DistributedTraversal final : public RayTraversal<Path> {
               std::vector<int>& destination, FrameStats& stats) const;
   // With `hits`: resized to rays.size(), the hits that set a ray's tmax here.
   void trace(PathQueue<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits = nullptr);
+  // trace() for rays that arrived to be traversed here, counting in
+  // `counters` those that find nothing here (visitsWithoutHit).
+  void traceArrivals(PathQueue<Path>& rays, std::vector<TraceHit>& hits, ExchangeCounters& counters,
+                     FrameStats& stats);
   // Replay layout, proxies mode: the visited set of each ray that arrived
   // here, recomputed from its generating rank (this rank included).
   std::vector<RankSet> replayArrivals(const PathQueue<Path>& rays, FrameStats& stats);

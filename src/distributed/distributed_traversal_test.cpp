@@ -81,7 +81,7 @@ PartitionedScene partitioned(const Scene& loaded, int ranks, const std::string& 
 struct RenderResult {
   std::vector<Vec3f> image;
   uint64_t cameraPaths = 0, forwarded = 0, received = 0, revisits = 0, retraceMisses = 0,
-           proxyQueries = 0;
+           proxyQueries = 0, forwardedToShade = 0, visitsWithoutHit = 0;
 };
 
 // One frame on this rank (set up as the `ferry` command sets up a rank:
@@ -115,7 +115,9 @@ RenderResult renderFrame(const Communicator& comm, const Scene& scene, const Tra
                                       distributed ? distributed->received() : 0,
                                       distributed ? distributed->revisits() : 0,
                                       stats.retraceMisses,
-                                      stats.proxyQueries};
+                                      stats.proxyQueries,
+                                      stats.exchangeTotal().forwardedToShade,
+                                      stats.exchangeTotal().visitsWithoutHit};
   const std::vector<uint64_t> all = comm.sum(std::span<const uint64_t>(mine));
   result.cameraPaths = all[0];
   result.forwarded = all[1];
@@ -123,6 +125,8 @@ RenderResult renderFrame(const Communicator& comm, const Scene& scene, const Tra
   result.revisits = all[3];
   result.retraceMisses = all[4];
   result.proxyQueries = all[5];
+  result.forwardedToShade = all[6];
+  result.visitsWithoutHit = all[7];
   return result;
 }
 
@@ -255,6 +259,10 @@ TEST_P(DistributedInProcess, EqualsTheOneRankImage) {
       EXPECT_EQ(r.revisits, 0u);
       EXPECT_EQ(r.received, r.forwarded);
       EXPECT_EQ(r.retraceMisses, 0u);
+      // Counted where rays arrive to be traversed, so no more than were sent so.
+      EXPECT_LE(r.visitsWithoutHit, r.forwarded - r.forwardedToShade);
+      // Every rank gets a copy of every ray: most find nothing there.
+      if (variant.mode == ForwardingMode::Broadcast) EXPECT_GT(r.visitsWithoutHit, 0u);
       if (variant.mode == ForwardingMode::Proxies) {
         // Every camera path's owner is decided by one proxy query (on the
         // rank its pixel is dealt to); forwarding decisions add more.

@@ -171,7 +171,10 @@ void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t first,
       else
         visited = replayArrivals(batch, stats);  // with the tmax each ray arrived with
     }
-    trace(batch, stats, &batchHits);
+    if (madeHere)
+      trace(batch, stats, &batchHits);
+    else
+      traceArrivals(batch, batchHits, stats.perBounce[bounce], stats);
     auto start = Clock::now();
     decide(batch, visited, destination, stats);
     for (size_t i = 0; i < batch.size(); ++i) {

@@ -141,10 +141,12 @@ std::string RenderStats::summaryText(int ranks) const {
                                  formatCount(t.occlusionTraces), formatCount(t.retraces)));
   row("rays per second", formatCount(uint64_t(t.seconds > 0 ? t.raysTraced() / t.seconds : 0)));
   row("rays forwarded",
-      fmt::format("{} ({} per frame; {} shadow rays, {} only to be shaded)",
+      fmt::format("{} ({} per frame; {} shadow rays, {} only to be shaded; {} found nothing "
+                  "where they were sent)",
                   formatCount(ex.raysForwarded),
                   formatCount(frames.empty() ? 0 : ex.raysForwarded / frames.size()),
-                  formatCount(ex.shadowRaysForwarded), formatCount(ex.forwardedToShade)));
+                  formatCount(ex.shadowRaysForwarded), formatCount(ex.forwardedToShade),
+                  formatCount(ex.visitsWithoutHit)));
   row("bytes sent", formatBytes(ex.bytesSent));
   if (ex.messages || t.terminationWaves)
     row("exchange", fmt::format("overlapped: {} messages, {} termination sums", ex.messages,

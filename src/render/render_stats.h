@@ -22,9 +22,15 @@ struct ExchangeCounters {
   // still being traversed, which exchange_per_bounce tells apart):
   uint64_t shadowRaysForwarded = 0;  // shadow rays
   uint64_t forwardedToShade = 0;     // traversal done: sent to a hit owner only to be shaded
-  uint64_t bytesSent = 0;            // ray payload bytes sent to other ranks
-  uint64_t rounds = 0;               // bulk exchange: rounds until no ray moved
-  uint64_t messages = 0;             // overlapped exchange: ray messages sent
+  // Counted where rays arrive: rays sent to be traversed that found nothing
+  // on the rank they were sent to (no hit closer than the one they carried;
+  // a shadow ray, no occluder). What the proxies' looseness costs: with
+  // proxies as tight as the geometry, only the forwards of rays that find
+  // something (and no ray sent back to be shaded) would be left.
+  uint64_t visitsWithoutHit = 0;
+  uint64_t bytesSent = 0;  // ray payload bytes sent to other ranks
+  uint64_t rounds = 0;     // bulk exchange: rounds until no ray moved
+  uint64_t messages = 0;   // overlapped exchange: ray messages sent
   ExchangeCounters& operator+=(const ExchangeCounters& o);
   // Counts `rays` as sent (rays, bytes of `rayBytes` each, and their kinds).
   template <typename Ray>
@@ -119,6 +125,7 @@ inline constexpr StatsField<ExchangeCounters, uint64_t> kExchangeCounters[] = {
     {nullptr, "rays_forwarded", &ExchangeCounters::raysForwarded},
     {nullptr, "shadow_rays_forwarded", &ExchangeCounters::shadowRaysForwarded},
     {nullptr, "forwarded_to_shade", &ExchangeCounters::forwardedToShade},
+    {nullptr, "visits_without_hit", &ExchangeCounters::visitsWithoutHit},
     {nullptr, "bytes_sent", &ExchangeCounters::bytesSent},
     {nullptr, "rounds", &ExchangeCounters::rounds},
     {nullptr, "messages", &ExchangeCounters::messages},

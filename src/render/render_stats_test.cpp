@@ -73,9 +73,13 @@ TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
       keysOf(j.at("traces")),
       (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses", "proxy_queries",
                              "replay_queries", "primary_queries", "replica_queries", "total"}));
-  const std::set<std::string> exchange = {
-      "rays_forwarded", "shadow_rays_forwarded", "forwarded_to_shade", "bytes_sent", "rounds",
-      "messages"};
+  const std::set<std::string> exchange = {"rays_forwarded",
+                                          "shadow_rays_forwarded",
+                                          "forwarded_to_shade",
+                                          "visits_without_hit",
+                                          "bytes_sent",
+                                          "rounds",
+                                          "messages"};
   EXPECT_EQ(keysOf(j.at("exchange")), exchange);
   EXPECT_EQ(keysOf(j.at("exchange_per_bounce")[0]), exchange);
   EXPECT_EQ(keysOf(j.at("stage_seconds")),

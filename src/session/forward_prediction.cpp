@@ -45,6 +45,7 @@ nlohmann::json ForwardPrediction::toJson() const {
           {"rays_forwarded", raysForwarded},
           {"shadow_rays_forwarded", shadowRaysForwarded},
           {"forwarded_to_shade", forwardedToShade},
+          {"visits_without_hit", visitsWithoutHit},
           {"bytes_sent", bytesSent},
           {"forwards_per_path", forwardsPerPath()},
           {"seconds", seconds}};
@@ -93,6 +94,7 @@ std::vector<ForwardPrediction> predictForwards(const std::string& directory,
       p.raysForwarded = exchange.raysForwarded;
       p.shadowRaysForwarded = exchange.shadowRaysForwarded;
       p.forwardedToShade = exchange.forwardedToShade;
+      p.visitsWithoutHit = exchange.visitsWithoutHit;
       p.bytesSent = exchange.bytesSent;
       p.seconds = secondsSince(start);
     }

@@ -47,6 +47,7 @@ struct ForwardPrediction {
   uint64_t raysForwarded = 0;
   uint64_t shadowRaysForwarded = 0;  // of raysForwarded
   uint64_t forwardedToShade = 0;     // of raysForwarded: sent to a hit owner only to be shaded
+  uint64_t visitsWithoutHit = 0;     // of raysForwarded: found nothing where they were sent
   uint64_t bytesSent = 0;
   double seconds = 0;  // rendering the sample (the parts are loaded once for all views)
 

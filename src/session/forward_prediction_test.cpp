@@ -98,6 +98,7 @@ TEST(ForwardPrediction, ExactWhereTheForwardingIsKnownByConstruction) {
   EXPECT_EQ(p[0].forwardsPerPath(), 1.0);
   EXPECT_EQ(p[0].shadowRaysForwarded, 0u);
   EXPECT_EQ(p[0].forwardedToShade, 0u);
+  EXPECT_EQ(p[0].visitsWithoutHit, 0u);  // rank 0 finds the wall every ray is sent for
   EXPECT_GT(p[0].bytesSent, 0u);
   EXPECT_EQ(p[1].view, "between");
   EXPECT_EQ(p[1].camera.from.z, 1.0f);
@@ -107,6 +108,8 @@ TEST(ForwardPrediction, ExactWhereTheForwardingIsKnownByConstruction) {
                InputError);
 }
 
+// The forward to rank 1 finds nothing there (a visit without a hit, the
+// proxy's looseness), and the ray goes back to be shaded.
 TEST(ForwardPrediction, ARaySentBackToItsHitIsCountedAsSentToShade) {
   KnownForwarding scene(4.5f);
   const std::vector<ForwardPrediction> p =
@@ -116,7 +119,9 @@ TEST(ForwardPrediction, ARaySentBackToItsHitIsCountedAsSentToShade) {
   EXPECT_EQ(p[0].raysForwarded, 1024u);
   EXPECT_EQ(p[0].forwardedToShade, 512u);
   EXPECT_EQ(p[0].shadowRaysForwarded, 0u);
+  EXPECT_EQ(p[0].visitsWithoutHit, 512u);
   EXPECT_EQ(p[0].toJson().at("forwarded_to_shade"), 512u);
+  EXPECT_EQ(p[0].toJson().at("visits_without_hit"), 512u);
 }
 
 TEST(ForwardPrediction, SampleKeepsTheImagesAspectAndNeverExceedsIt) {

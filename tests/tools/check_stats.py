@@ -17,6 +17,10 @@ assert r["total"]["traces"]["retrace_misses"] == 0, "re-trace missed the hit"
 ex = r["total"]["exchange"]
 kinds = ex["shadow_rays_forwarded"] + ex["forwarded_to_shade"]
 assert kinds <= fwd, f"{kinds} shadow and to-shade forwards of {fwd}"
+# Counted where rays arrive to be traversed: never more than were sent so.
+fruitless = ex["visits_without_hit"]
+assert fruitless <= fwd - ex["forwarded_to_shade"], \
+    f"{fruitless} visits without a hit of {fwd - ex['forwarded_to_shade']} sent to be traversed"
 if s["settings"]["forwarding"] == "broadcast" and fwd > 0:
     # Every copy's reply comes back traversed; a hit found elsewhere is sent to be shaded.
     assert ex["forwarded_to_shade"] > 0, "broadcast forwarded nothing to be shaded"
