@@ -25,12 +25,27 @@ constexpr int kMaxRanks = 65535;
 struct Proxy {
   Box3f bounds;
   RankSet owners;
+  // An instanced proxy (shape >= 0) stands for an instance of an instanced
+  // object: it is entered where the ray enters one of its shape's boxes,
+  // which are in the object's space and placed by `toWorld` (the instance's
+  // transform), as Embree places an instance's geometry. Its `bounds` are
+  // those boxes' world box. The shape is held once however many instances
+  // use it, so a tight shape costs a transform per instance, not a box per
+  // shape box (docs/data-parallel.md, "Instanced proxies").
+  int32_t shape = -1;  // Partition::proxyShapes index; -1: the box `bounds` itself
+  Affine3f toWorld;
+};
+
+// The boxes, in an object's space, that an instanced proxy is made of.
+struct ProxyShape {
+  std::vector<Box3f> boxes;
 };
 
 struct Partition {
   int ranks = 1;
   std::vector<RankSet> instanceOwners;  // per Scene::instances entry
   std::vector<Proxy> proxies;
+  std::vector<ProxyShape> proxyShapes;  // what instanced proxies refer to
 
   std::vector<int32_t> instancesOf(int rank) const;
   // Throws InternalError if an instance has no owner, or its geometry is not

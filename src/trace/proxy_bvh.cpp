@@ -1,5 +1,7 @@
 #include "trace/proxy_bvh.h"
 
+#include "core/error.h"
+
 #include <algorithm>
 #include <bit>
 #include <cstring>
@@ -45,15 +47,31 @@ struct ProxyBvh::Builder {
   std::vector<Vec3f> centers;
   std::vector<BinaryNode> binary;
   std::vector<RankSet> binaryOwners;  // per binary node, only when not narrow
+  std::vector<int32_t> instancedOf;   // per proxy: its instanced_ index, or -1
 
   int32_t build(int32_t first, int32_t count, int depth);
   int32_t collapse(int32_t binaryNode);
 };
 
-ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank)
+ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank, std::vector<ProxyShape> shapes)
     : proxyCount_(proxies.size()), ownRank_(ownRank) {
   for (const Proxy& p : proxies) narrow_ = narrow_ && p.owners.fitsInMask();
-  Builder b{*this, proxies, {}, {}, {}, {}};
+  Builder b{*this, proxies, {}, {}, {}, {}, std::vector<int32_t>(proxies.size(), -1)};
+  // Shapes' boxes once each; an instanced proxy keeps the inverse of its transform.
+  std::vector<uint32_t> shapeFirst(shapes.size());
+  for (size_t s = 0; s < shapes.size(); ++s) {
+    shapeFirst[s] = uint32_t(shapeBoxes_.size());
+    shapeBoxes_.insert(shapeBoxes_.end(), shapes[s].boxes.begin(), shapes[s].boxes.end());
+  }
+  for (size_t i = 0; i < proxies.size(); ++i) {
+    const int32_t s = proxies[i].shape;
+    if (s < 0) continue;
+    FERRY_CHECK(size_t(s) < shapes.size());
+    b.instancedOf[i] = int32_t(instanced_.size());
+    instanced_.push_back(
+        {proxies[i].toWorld.inverse(), shapeFirst[size_t(s)], uint32_t(shapes[size_t(s)].boxes.size())});
+  }
+  shapes.clear();
   // A proxy whose box is empty stands for nothing and is left out: its slab
   // distances would swap and let every ray in.
   for (size_t i = 0; i < proxies.size(); ++i)
@@ -84,7 +102,22 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank)
 size_t ProxyBvh::bytes() const {
   size_t owners = 0;
   for (const RankSet& s : slotOwners_) owners += sizeof(RankSet) + (s.wordCount() - 1) * 8;
-  return nodes_.size() * sizeof(Node) + owners;
+  return nodes_.size() * sizeof(Node) + owners + instanced_.size() * sizeof(Instanced) +
+         shapeBoxes_.size() * sizeof(Box3f);
+}
+
+float ProxyBvh::enterInstanced(const Instanced& p, Vec3f origin, Vec3f direction,
+                               float limit) const {
+  const Vec3f o = p.toObject.transformPoint(origin);
+  const Vec3f d = p.toObject.transformVector(direction);
+  const Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
+  float first = kInfinity;
+  for (uint32_t i = p.first; i < p.first + p.count; ++i) {
+    float t;
+    // Affine: the ray's parameter is the same in both spaces.
+    if (intersectBox(shapeBoxes_[i], o, inv, std::min(limit, first), t)) first = t;
+  }
+  return first;
 }
 
 int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
@@ -235,7 +268,7 @@ int32_t ProxyBvh::Builder::collapse(int32_t binaryNode) {
       box = proxies[size_t(id)].bounds;
       owners = proxies[size_t(id)].owners.mask();
       minIndex = id;
-      child = b;
+      child = instancedOf[size_t(id)];
       bvh.nodes_[size_t(index)].proxySlots |= 1u << k;
       if (!bvh.narrow_) bvh.slotOwners_[size_t(index) * kWidth + k] = proxies[size_t(id)].owners;
     } else {
@@ -389,8 +422,13 @@ void ProxyBvh::search(int32_t rootA, int32_t rootB, Vec3f origin, Vec3f directio
     // Proxies first: they may lower the bar for this node's subtrees.
     for (uint32_t p = candidates & node.proxySlots; p != 0; p &= p - 1) {
       const int k = std::countr_zero(p);
-      const float t = t0[k];
+      float t = t0[k];
       const int32_t id = node.minIndex[k];
+      if (!(t < best.tEnter || (t == best.tEnter && id < best.proxy))) continue;
+      // An instanced proxy's slot holds its boxes' world box: entered there
+      // or later (a lower bound, as a node's box is for its subtree).
+      if (node.child[k] >= 0)
+        t = enterInstanced(instanced_[size_t(node.child[k])], origin, direction, limit);
       if (t < best.tEnter || (t == best.tEnter && id < best.proxy)) {
         if constexpr (kMask)
           best = {id, t, node.owners[k], nullptr};

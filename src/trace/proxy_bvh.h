@@ -29,7 +29,9 @@ class ProxyBvh {
   // searches both trees together. The answers are those of one tree: the
   // split only sets apart proxies that cannot answer the queries that skip
   // them.
-  explicit ProxyBvh(std::vector<Proxy> proxies, int ownRank = -1);
+  // `shapes`: the boxes instanced proxies refer to (Proxy::shape), consumed too.
+  explicit ProxyBvh(std::vector<Proxy> proxies, int ownRank = -1,
+                    std::vector<ProxyShape> shapes = {});
 
   struct Hit {
     int32_t proxy = -1;
@@ -55,8 +57,11 @@ class ProxyBvh {
 
   // Proxies given, with those of empty boxes (never entered).
   size_t proxyCount() const { return proxyCount_; }
+  // Of those, instanced ones (a transform each, their shapes' boxes held once).
+  size_t instancedCount() const { return instanced_.size(); }
   size_t nodeCount() const { return nodes_.size(); }
-  // What the tree holds, in bytes (nodes, and owner sets above 64 ranks).
+  // What the tree holds, in bytes (nodes, owner sets above 64 ranks,
+  // instanced proxies' transforms and their shapes' boxes).
   size_t bytes() const;
   // Proxies in the tree a query excluding the own rank never enters.
   size_t ownOnlyCount() const { return ownOnlyCount_; }
@@ -82,7 +87,7 @@ class ProxyBvh {
     float upper[3][kWidth];
     RankMask owners[kWidth];   // a node: the union below it; a proxy: its owners (narrow)
     int32_t minIndex[kWidth];  // least proxy index below (a proxy: its index): prunes ties
-    int32_t child[kWidth];     // a node's index, or ~index of a proxy
+    int32_t child[kWidth];     // a node's index; a proxy: its instanced_ index, or -1
     uint32_t proxySlots = 0;   // bit k: slot k holds a proxy
   };
   // The binary SAH tree the wide one is collapsed from (construction only).
@@ -95,6 +100,15 @@ class ProxyBvh {
   };
   struct Builder;
 
+  // An instanced proxy: the ray taken into its object's space, the boxes
+  // of its shape (shapeBoxes_[first, first + count)).
+  struct Instanced {
+    Affine3f toObject;
+    uint32_t first = 0, count = 0;
+  };
+  // Where the ray enters the instanced proxy's boxes before `limit`, or infinity.
+  float enterInstanced(const Instanced& p, Vec3f origin, Vec3f direction, float limit) const;
+
   size_t proxyCount_ = 0;
   bool narrow_ = true;
   std::vector<Node> nodes_;
@@ -103,6 +117,8 @@ class ProxyBvh {
   int ownRank_ = -1;
   size_t ownOnlyCount_ = 0;
   std::vector<RankSet> slotOwners_;  // per node and slot, only when not narrow
+  std::vector<Instanced> instanced_;
+  std::vector<Box3f> shapeBoxes_;
 };
 
 // Whether the ray enters `box` before tmax; entry distance clamped at 0

@@ -297,3 +297,111 @@ TEST(ProxyBvh, AxisParallelRaysAndOriginInside) {
 }
 
 }  // namespace ferry
+
+namespace ferry {
+namespace {
+
+// Instanced proxies among plain ones: random shapes of a few boxes, placed by
+// random rotations, scales and translations. The brute force takes each
+// instanced proxy's entry as the least entry into its boxes in object space
+// (what an instance of a mesh is to Embree), so the tree must agree with
+// that, not with the boxes' world box.
+struct InstancedCase {
+  std::vector<Proxy> proxies;
+  std::vector<ProxyShape> shapes;
+};
+
+InstancedCase instancedCase(int ranks, uint32_t seed) {
+  InstancedCase c;
+  c.proxies = randomProxies(100, ranks, seed);
+  for (int s = 0; s < 5; ++s) {
+    ProxyShape shape;
+    for (int b = 0; b < 1 + s; ++b) {
+      Box3f box;
+      box.extend(Vec3f(uniform(seed + 50 * s + b, 20), uniform(seed + 50 * s + b, 21),
+                       uniform(seed + 50 * s + b, 22)) *
+                 2.0f);
+      box.extend(Vec3f(uniform(seed + 50 * s + b, 23), uniform(seed + 50 * s + b, 24),
+                       uniform(seed + 50 * s + b, 25)) *
+                 2.0f);
+      shape.boxes.push_back(box);
+    }
+    c.shapes.push_back(shape);
+  }
+  for (int i = 0; i < 200; ++i) {
+    const uint32_t k = seed + 7000 + uint32_t(i);
+    Proxy p;
+    p.shape = int32_t(uniform(k, 30) * 5);
+    p.toWorld = Affine3f::translate(Vec3f(uniform(k, 31), uniform(k, 32), uniform(k, 33)) * 10.0f) *
+                Affine3f::rotate(Vec3f(uniform(k, 34), uniform(k, 35), uniform(k, 36)) + Vec3f(0.1f),
+                                 uniform(k, 37) * 6.0f) *
+                Affine3f::scale(Vec3f(0.5f + uniform(k, 38)));
+    for (const Box3f& b : c.shapes[size_t(p.shape)].boxes) p.bounds.extend(p.toWorld.transformBox(b));
+    p.owners = RankSet::single(int(uniform(k, 39) * ranks));
+    c.proxies.push_back(p);
+  }
+  return c;
+}
+
+ProxyBvh::Hit bruteForceInstanced(const InstancedCase& c, Vec3f o, Vec3f d, float tmax,
+                                  const RankSet& excluded) {
+  ProxyBvh::Hit best;
+  for (size_t i = 0; i < c.proxies.size(); ++i) {
+    const Proxy& p = c.proxies[i];
+    if (p.owners.intersects(excluded)) continue;
+    float t = kInfinity;
+    if (p.shape < 0) {
+      const Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
+      if (!intersectBox(p.bounds, o, inv, tmax, t)) continue;
+    } else {
+      const Affine3f toObject = p.toWorld.inverse();
+      const Vec3f oo = toObject.transformPoint(o), dd = toObject.transformVector(d);
+      const Vec3f inv{1 / dd.x, 1 / dd.y, 1 / dd.z};
+      for (const Box3f& b : c.shapes[size_t(p.shape)].boxes) {
+        float tb;
+        if (intersectBox(b, oo, inv, tmax, tb)) t = std::min(t, tb);
+      }
+      if (t == kInfinity) continue;
+    }
+    if (t < best.tEnter) best = {int32_t(i), t};
+  }
+  return best;
+}
+
+}  // namespace
+
+TEST(ProxyBvh, InstancedProxiesAreEnteredWhereTheirObjectSpaceBoxesAre) {
+  for (int ranks : {3, 8}) {
+    for (int ownRank : {-1, 1}) {
+      const InstancedCase c = instancedCase(ranks, uint32_t(ranks) * 100);
+      ProxyBvh bvh(c.proxies, ownRank, c.shapes);
+      EXPECT_EQ(bvh.instancedCount(), 200u);
+      int missedByShape = 0;  // rays in an instanced proxy's world box that miss its boxes
+      for (uint32_t k = 0; k < 3000; ++k) {
+        const Vec3f o = Vec3f(uniform(k, 10), uniform(k, 11), uniform(k, 12)) * 14.0f - Vec3f(2);
+        const Vec3f d =
+            normalize(Vec3f(uniform(k, 13), uniform(k, 14), uniform(k, 15)) - Vec3f(0.5f));
+        const float tmax = uniform(k, 16) < 0.3f ? kInfinity : uniform(k, 17) * 20;
+        const RankSet excluded = RankSet::single(int(uniform(k, 18) * ranks));
+        const ProxyBvh::Hit a = bvh.closest(o, d, tmax, excluded);
+        const ProxyBvh::Hit b = bruteForceInstanced(c, o, d, tmax, excluded);
+        ASSERT_EQ(a.proxy, b.proxy) << "ray " << k;
+        if (a.found()) {
+          EXPECT_EQ(a.tEnter, b.tEnter);
+          EXPECT_EQ(a.owners(), c.proxies[size_t(a.proxy)].owners);
+        }
+        const Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
+        for (const Proxy& p : c.proxies) {
+          float t;
+          if (p.shape >= 0 && intersectBox(p.bounds, o, inv, tmax, t)) {
+            InstancedCase one{{p}, c.shapes};
+            missedByShape += !bruteForceInstanced(one, o, d, tmax, RankSet()).found();
+          }
+        }
+      }
+      EXPECT_GT(missedByShape, 100) << "the shapes were never tighter than their world boxes";
+    }
+  }
+}
+
+}  // namespace ferry
