@@ -257,6 +257,7 @@ const Case& islandCase(int tiles) {
     for (int j = 0; j < tiles; ++j) {
       const Vec3f shift{float(i - tiles / 2) * pitch.x, 0, float(j - tiles / 2) * pitch.z};
       for (Proxy p : partition.proxies) {
+        p.shape = -1;  // the tree of boxes is measured: an instanced proxy as its world box
         p.bounds.lower = p.bounds.lower + shift;
         p.bounds.upper = p.bounds.upper + shift;
         c.proxies.push_back(p);

@@ -97,7 +97,8 @@ RenderResult renderFrame(const Communicator& comm, const Scene& scene, const Tra
   if (comm.size() == 1) {
     traversal = std::make_unique<LocalTraversal<Path>>(geometry);
   } else {
-    proxies = std::make_unique<ProxyBvh>(partition.proxies, comm.rank());
+    proxies = std::make_unique<ProxyBvh>(partition.proxies, comm.rank(), partition.proxyShapes,
+                                         partition.proxyPlacements);
     auto d = std::make_unique<DistributedTraversal<Path>>(comm, geometry, partition, *proxies, mode,
                                                           exchange, settings.chunkPixels);
     distributed = d.get();

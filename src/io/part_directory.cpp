@@ -146,6 +146,8 @@ Manifest writeParts(const std::string& directory, const Scene& scene, const Part
   shared.filmFilename = scene.filmFilename;
   shared.lights = lights;
   shared.proxies = partition.proxies;
+  shared.proxyShapes = partition.proxyShapes;
+  shared.proxyPlacements = partition.proxyPlacements;
   m.shared.file = "shared.fpart";
   WrittenFile w = writeSharedFile(join(directory, m.shared.file), shared);
   m.shared.bytes = w.bytes;
@@ -181,6 +183,8 @@ RankPart loadRankPart(const std::string& directory, int rank, int ranks) {
   out.partition.ranks = ranks;
   out.partition.instanceOwners = std::move(part.owners);
   out.partition.proxies = std::move(shared.proxies);
+  out.partition.proxyShapes = std::move(shared.proxyShapes);
+  out.partition.proxyPlacements = std::move(shared.proxyPlacements);
   out.lights = std::move(shared.lights);
   return out;
 }
@@ -194,6 +198,8 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
   partition = Partition{};
   partition.ranks = m.ranks;
   partition.proxies = shared.proxies;
+  partition.proxyShapes = shared.proxyShapes;
+  partition.proxyPlacements = shared.proxyPlacements;
   for (const ManifestPart& p : m.parts) {
     LoadedPart part = readPartFile(join(directory, p.file), p.hash);
     const int32_t tables = int32_t(all.bsdfTables.size()), textures = int32_t(all.textures.size()),

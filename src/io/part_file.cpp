@@ -43,6 +43,8 @@ static_assert(sizeof(CameraView) == 80,
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Texture) == 192,
               "Texture changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(Affine3f) == 48,
+              "Affine3f changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(SunLight) == 28,
               "SunLight changed: update part_file.cpp and kPartFormatVersion");
 
@@ -707,10 +709,57 @@ WrittenFile writeSharedFile(const std::string& path, const SharedData& shared) {
     }
     w.array(boxes);
     w.array(owners);
+    // Instanced proxies (format 8): per proxy its shape (-1: a box), the
+    // instanced ones' transforms in order, and the shapes' boxes.
+    std::vector<int32_t> shapeOf;
+    std::vector<Affine3f> toWorld;
+    for (const Proxy& p : shared.proxies) {
+      shapeOf.push_back(p.shape);
+      if (p.shape >= 0) toWorld.push_back(shared.proxyPlacements[size_t(p.placement)]);
+    }
+    std::vector<uint64_t> shapeEnds;
+    std::vector<Box3f> shapeBoxes;
+    for (const ProxyShape& s : shared.proxyShapes) {
+      shapeBoxes.insert(shapeBoxes.end(), s.boxes.begin(), s.boxes.end());
+      shapeEnds.push_back(shapeBoxes.size());
+    }
+    w.array(shapeOf);
+    w.array(toWorld);
+    w.array(shapeEnds);
+    w.array(shapeBoxes);
     written = w.finish(kKindShared, 0xffffffffu, uint32_t(shared.ranks));
   });
   return written;
 }
+
+namespace {
+// Format 8's instanced proxies, checked: every shape index names a shape,
+// one transform per instanced proxy, shape ends increasing up to the boxes.
+void readInstancedProxies(FileReader& r, SharedData& shared) {
+  const std::vector<int32_t> shapeOf = r.array<int32_t>();
+  std::vector<Affine3f> toWorld = r.array<Affine3f>();
+  const std::vector<uint64_t> shapeEnds = r.array<uint64_t>();
+  const std::vector<Box3f> shapeBoxes = r.array<Box3f>();
+  if (shapeOf.size() != shared.proxies.size()) r.fail("proxy shape array differs in size");
+  uint64_t begin = 0;
+  for (uint64_t end : shapeEnds) {
+    if (end < begin || end > shapeBoxes.size()) r.fail("proxy shape ends out of order");
+    shared.proxyShapes.push_back(
+        {{shapeBoxes.begin() + ptrdiff_t(begin), shapeBoxes.begin() + ptrdiff_t(end)}});
+    begin = end;
+  }
+  size_t next = 0;
+  for (size_t k = 0; k < shapeOf.size(); ++k) {
+    if (shapeOf[k] < 0) continue;
+    if (size_t(shapeOf[k]) >= shared.proxyShapes.size()) r.fail("proxy shape out of range");
+    if (next >= toWorld.size()) r.fail("fewer proxy transforms than instanced proxies");
+    shared.proxies[k].shape = shapeOf[k];
+    shared.proxies[k].placement = int32_t(next++);
+  }
+  if (next != toWorld.size()) r.fail("more proxy transforms than instanced proxies");
+  shared.proxyPlacements = std::move(toWorld);
+}
+}  // namespace
 
 SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
   auto file = std::make_shared<const MappedFile>(path);
@@ -750,6 +799,7 @@ SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
       for (size_t k = 0; k < boxes.size(); ++k)
         shared.proxies.push_back({boxes[k], RankSet::fromWords(owners.data() + k * words, words)});
     }
+    if (h.version >= 8) readInstancedProxies(r, shared);
     r.end();
   });
   return shared;

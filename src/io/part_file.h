@@ -36,10 +36,10 @@ namespace ferry {
 // words (ranks 64k .. 64k+63 in word k) and the proxies as boxes then owner
 // words, so parts can be made for more than 64 ranks. Format 1 (up to 64
 // ranks, one word per set, proxies as 32-byte box+mask records) is still read.
-constexpr uint32_t kPartFormatVersion = 7;  // 3: Material::emitsBackSide; 4: coat, sigma;
+constexpr uint32_t kPartFormatVersion = 8;  // 3: Material::emitsBackSide; 4: coat, sigma;
                                             // 5: solid textures, bump and normal maps, mixes;
                                             // 6: tabulated (Fourier) BSDFs;
-                                            // 7: diffuse transmission
+                                            // 7: diffuse transmission; 8: instanced proxies
 constexpr uint32_t kOldestPartFormatVersion = 1;
 
 struct WrittenFile {
@@ -69,6 +69,8 @@ struct SharedData {
   std::string filmFilename;
   Scene lights;  // see scene/light_scene.h
   std::vector<Proxy> proxies;
+  std::vector<ProxyShape> proxyShapes;    // what instanced proxies refer to
+  std::vector<Affine3f> proxyPlacements;  // in the order of the instanced proxies
 };
 WrittenFile writeSharedFile(const std::string& path, const SharedData& shared);
 SharedData readSharedFile(const std::string& path, uint64_t expectedHash = 0);

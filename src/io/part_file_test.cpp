@@ -165,6 +165,8 @@ void expectSameProxies(const std::vector<Proxy>& got, const std::vector<Proxy>& 
   for (size_t k = 0; k < want.size(); ++k) {
     ASSERT_EQ(std::memcmp(&got[k].bounds, &want[k].bounds, sizeof(Box3f)), 0) << "proxy " << k;
     ASSERT_EQ(got[k].owners, want[k].owners) << "proxy " << k;
+    ASSERT_EQ(got[k].shape, want[k].shape) << "proxy " << k;
+    ASSERT_EQ(got[k].placement >= 0, want[k].placement >= 0) << "proxy " << k;
   }
 }
 
@@ -232,6 +234,19 @@ TEST(PartFiles, EveryRankRoundTripsExactly) {
     for (size_t k = 0; k < owned.size(); ++k)
       EXPECT_EQ(part.partition.instanceOwners[k], w.partition.instanceOwners[owned[k]]);
     expectSameProxies(part.partition.proxies, w.partition.proxies);
+    // best's instanced proxies: their placements and shapes, bit for bit.
+    ASSERT_FALSE(w.partition.proxyPlacements.empty());
+    ASSERT_EQ(part.partition.proxyPlacements.size(), w.partition.proxyPlacements.size());
+    EXPECT_EQ(std::memcmp(part.partition.proxyPlacements.data(), w.partition.proxyPlacements.data(),
+                          w.partition.proxyPlacements.size() * sizeof(Affine3f)),
+              0);
+    ASSERT_EQ(part.partition.proxyShapes.size(), w.partition.proxyShapes.size());
+    for (size_t s = 0; s < w.partition.proxyShapes.size(); ++s) {
+      const std::vector<Box3f>& a = part.partition.proxyShapes[s].boxes;
+      const std::vector<Box3f>& b = w.partition.proxyShapes[s].boxes;
+      ASSERT_EQ(a.size(), b.size());
+      EXPECT_EQ(std::memcmp(a.data(), b.data(), b.size() * sizeof(Box3f)), 0) << "shape " << s;
+    }
     ASSERT_EQ(part.scene.views.size(), island().views.size());
     EXPECT_EQ(part.scene.views[0].name, island().views[0].name);
     EXPECT_TRUE(part.scene.views[0].from == island().views[0].from);

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
+#include <map>
 #include <numeric>
 #include <unordered_map>
 
@@ -136,22 +138,64 @@ void Partition::checkCovers(const Scene& scene) const {
   FERRY_CHECK_EQ(instanceOwners.size(), scene.instances.size());
   FERRY_CHECK_GE(ranks, 1);
   const RankSet valid = RankSet::firstN(ranks);
-  for (const Proxy& p : proxies)
+  for (const Proxy& p : proxies) {
     if (p.owners.empty() || !p.owners.isSubsetOf(valid))
       throw InternalError(
           fmt::format("a proxy has owners {} outside {} ranks", p.owners.toString(), ranks));
+    if (p.shape >= 0 && (size_t(p.shape) >= proxyShapes.size() || p.placement < 0 ||
+                         size_t(p.placement) >= proxyPlacements.size()))
+      throw InternalError(fmt::format("a proxy has shape {} of {}, placement {} of {}", p.shape,
+                                      proxyShapes.size(), p.placement, proxyPlacements.size()));
+  }
   ProxyOverlapTree tree(proxies);
   const std::vector<Box3f> bounds = instanceWorldBounds(scene);
   const std::vector<uint32_t> placements = scene.instanceCountPerObject();
   std::unordered_map<int32_t, ClusterTree> objectSpaceTrees;  // by mesh, made when first needed
 
-  // Proxies a ray may be sent to for content of `owners` near `box`: those
-  // overlapping it whose every owner holds the content.
+  // Box proxies a ray may be sent to for content of `owners` near `box`:
+  // those overlapping it whose every owner holds the content.
   auto eligible = [&](const Box3f& box, const RankSet& owners) {
     std::vector<const Box3f*> out;
     for (uint32_t k : tree.overlapping(box))
-      if (proxies[k].owners.isSubsetOf(owners)) out.push_back(&proxies[k].bounds);
+      if (proxies[k].shape < 0 && proxies[k].owners.isSubsetOf(owners))
+        out.push_back(&proxies[k].bounds);
     return out;
+  };
+  // An instanced proxy covers an instance when it is placed as the instance
+  // is (the same transform, bit for bit), its owners hold the instance, and
+  // every triangle of the instance's object lies, in object space, in one of
+  // its shape's boxes (checked once per shape and object).
+  std::map<std::pair<int32_t, int32_t>, bool> shapeCovers;
+  auto coversObject = [&](int32_t shape, int32_t object) {
+    const std::vector<Box3f>& boxes = proxyShapes[size_t(shape)].boxes;
+    for (int32_t m : scene.objects[size_t(object)].meshes) {
+      Mesh scratch;
+      const Mesh& mesh = scene.geometry(m, scratch);
+      for (const auto& t : mesh.indices) {
+        Box3f tri;
+        for (int v = 0; v < 3; ++v) tri.extend(mesh.positions[t[v]]);
+        if (std::none_of(boxes.begin(), boxes.end(),
+                         [&](const Box3f& b) { return b.contains(tri); }))
+          return false;
+      }
+    }
+    return true;
+  };
+  auto coveredByInstanced = [&](size_t i, const RankSet& owners) {
+    const Instance& inst = scene.instances[i];
+    for (uint32_t k : tree.overlapping(bounds[i])) {
+      const Proxy& p = proxies[k];
+      if (p.shape < 0 || !p.owners.isSubsetOf(owners) ||
+          std::memcmp(&proxyPlacements[size_t(p.placement)], &inst.transform, sizeof(Affine3f)) !=
+              0)
+        continue;
+      const auto key = std::make_pair(p.shape, inst.object);
+      auto it = shapeCovers.find(key);
+      if (it == shapeCovers.end())
+        it = shapeCovers.emplace(key, coversObject(p.shape, inst.object)).first;
+      if (it->second) return true;
+    }
+    return false;
   };
   auto covered = [&](const Box3f& box, const std::vector<const Box3f*>& candidates,
                      int64_t budget) { return coveredByUnion(box, candidates, 0, budget); };
@@ -163,6 +207,7 @@ void Partition::checkCovers(const Scene& scene) const {
       throw InternalError(
           fmt::format("instance {} has owners {} outside {} ranks", i, owners.toString(), ranks));
     if (bounds[i].empty()) continue;
+    if (coveredByInstanced(i, owners)) continue;
     const std::vector<const Box3f*> near = eligible(bounds[i], owners);
     if (covered(bounds[i], near, 2000)) continue;
     // Proxies that follow the content (braided meshes and instances, domains)

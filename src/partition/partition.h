@@ -27,13 +27,14 @@ struct Proxy {
   RankSet owners;
   // An instanced proxy (shape >= 0) stands for an instance of an instanced
   // object: it is entered where the ray enters one of its shape's boxes,
-  // which are in the object's space and placed by `toWorld` (the instance's
-  // transform), as Embree places an instance's geometry. Its `bounds` are
-  // those boxes' world box. The shape is held once however many instances
-  // use it, so a tight shape costs a transform per instance, not a box per
-  // shape box (docs/data-parallel.md, "Instanced proxies").
-  int32_t shape = -1;  // Partition::proxyShapes index; -1: the box `bounds` itself
-  Affine3f toWorld;
+  // which are in the object's space and placed by the instance's transform
+  // (Partition::proxyPlacements[placement]), as Embree places an instance's
+  // geometry. Its `bounds` are those boxes' world box. The shape is held
+  // once however many instances use it, so a tight shape costs a transform
+  // per instance, not a box per shape box (docs/partitioning.md,
+  // "Instanced proxies").
+  int32_t shape = -1;      // Partition::proxyShapes index; -1: the box `bounds` itself
+  int32_t placement = -1;  // Partition::proxyPlacements index, with a shape
 };
 
 // The boxes, in an object's space, that an instanced proxy is made of.
@@ -45,7 +46,8 @@ struct Partition {
   int ranks = 1;
   std::vector<RankSet> instanceOwners;  // per Scene::instances entry
   std::vector<Proxy> proxies;
-  std::vector<ProxyShape> proxyShapes;  // what instanced proxies refer to
+  std::vector<ProxyShape> proxyShapes;    // what instanced proxies refer to
+  std::vector<Affine3f> proxyPlacements;  // where they stand (object to world)
 
   std::vector<int32_t> instancesOf(int rank) const;
   // Throws InternalError if an instance has no owner, or its geometry is not

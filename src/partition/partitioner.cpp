@@ -197,12 +197,30 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       partition.proxies = unitBoxProxies(p.units, owners);
     else if (o.name == "object-proxies" || o.name == "ray-guided" || o.name == "best") {
       // best: its mesh pieces braided too (docs/partitioning.md, "best's
-      // proxies"). Merged straight from the boxes: braided instances are
-      // several times the budget before merging.
+      // proxies"), merged straight from the boxes. Braided instances are
+      // instanced proxies (a transform each, their object's boxes held
+      // once: docs/data-parallel.md, "Instanced proxies"), one per instance
+      // and never merged (each costs about what a box does in the proxy
+      // tree); when they alone would reach --max-proxies, they are world
+      // boxes instead, merged with the rest as before.
+      const int instanceBoxes = instanceProxiesFor(o);
+      bool instanced = instanceBoxes > 1;
+      uint64_t boxBudget = o.maxProxies;
+      if (instanced && o.maxProxies > 0) {
+        const std::vector<uint32_t> placements = scene.instanceCountPerObject();
+        uint64_t count = 0;
+        for (const Unit& unit : p.units.units)
+          for (int32_t i : unit.instances)
+            count += placements[size_t(scene.instances[i].object)] > 1;
+        instanced = count < o.maxProxies;
+        if (instanced) boxBudget = o.maxProxies - count;
+      }
       const std::vector<UnitBox> boxes =
-          unitProxyBoxes(scene, p.units, o.meshProxies, instanceProxiesFor(o));
-      s.unmergedProxies = boxes.size();
-      partition.proxies = mergeProxies(boxes, owners, o.maxProxies);
+          unitProxyBoxes(scene, p.units, o.meshProxies, instanceBoxes, !instanced);
+      partition.proxies = mergeProxies(boxes, owners, boxBudget);
+      const size_t boxProxies = partition.proxies.size();
+      if (instanced) addInstancedProxies(scene, p.units, owners, instanceBoxes, partition);
+      s.unmergedProxies = boxes.size() + (partition.proxies.size() - boxProxies);
       merged = true;
     } else
       partition.proxies = instanceProxies(scene, p.units, owners, 1);

@@ -279,8 +279,9 @@ TEST(Partitioners, ProxyStylesDifferAsDescribed) {
 }
 
 TEST(Partitioners, BraidedInstancesKeepThePartsAndCoverTheContent) {
-  // --instance-proxies: the same parts and more proxies, still covering
-  // every instance's geometry (checkCovers; tighter: proxies_test.cpp).
+  // --instance-proxies: the same parts, instanced proxies instead of boxes,
+  // still covering every instance's geometry (checkCovers; tighter:
+  // proxies_test.cpp).
   // ray-guided too: it weighs its splits with one box per instance whatever
   // the proxies.
   for (const std::string name : {"object-proxies", "best", "ray-guided"}) {
@@ -293,7 +294,15 @@ TEST(Partitioners, BraidedInstancesKeepThePartsAndCoverTheContent) {
     const Partition pa = partitionScene(a, 5, withRaySample(a, one));
     const Partition pb = partitionScene(b, 5, withRaySample(b, four));
     EXPECT_EQ(pa.instanceOwners, pb.instanceOwners);
-    EXPECT_GT(pb.proxies.size(), pa.proxies.size());
+    // One instanced proxy per instance, whose shape has 4 boxes per mesh
+    // (held once per object), where one box per instance was.
+    EXPECT_EQ(pb.proxies.size(), pa.proxies.size());
+    EXPECT_TRUE(pa.proxyShapes.empty());
+    size_t instanced = 0, shapeBoxes = 0;
+    for (const Proxy& p : pb.proxies) instanced += p.shape >= 0;
+    for (const ProxyShape& s : pb.proxyShapes) shapeBoxes += s.boxes.size();
+    EXPECT_GT(instanced, 1000u);
+    EXPECT_GT(shapeBoxes, 2 * pb.proxyShapes.size());
     EXPECT_NO_THROW(pb.checkCovers(b));
   }
 }
@@ -331,6 +340,30 @@ TEST(Partitioners, CheckCoversCatchesAGap) {
     dropped.proxies.erase(dropped.proxies.begin() + long(largest));
     EXPECT_THROW(dropped.checkCovers(scene), InternalError);
   }
+}
+
+// An instanced proxy covers its instance only through its shape, placed as
+// the instance is and owned by its owners: spoil any of the three and the
+// check finds the gap.
+TEST(Partitioners, CheckCoversCatchesAGapInAnInstancedProxy) {
+  Scene scene = builtinScene(kIsland);
+  const Partition p = partitionScene(scene, 4, withRaySample(scene, named("best")));
+  ASSERT_NO_THROW(p.checkCovers(scene));
+  size_t k = 0;
+  while (k < p.proxies.size() && (p.proxies[k].shape < 0 || p.proxies[k].owners.count() != 1)) ++k;
+  ASSERT_LT(k, p.proxies.size());
+  const Proxy& proxy = p.proxies[k];
+  Partition shrunk = p;
+  for (Box3f& b : shrunk.proxyShapes[size_t(proxy.shape)].boxes)
+    b.upper = b.lower + b.size() * 0.5f;
+  EXPECT_THROW(shrunk.checkCovers(scene), InternalError);
+  Partition moved = p;
+  Affine3f& placed = moved.proxyPlacements[size_t(proxy.placement)];
+  placed.t = placed.t + Vec3f(0.01f, 0, 0);
+  EXPECT_THROW(moved.checkCovers(scene), InternalError);
+  Partition elsewhere = p;
+  elsewhere.proxies[k].owners = RankSet::single((proxy.owners.lowest() + 1) % 4);
+  EXPECT_THROW(elsewhere.checkCovers(scene), InternalError);
 }
 
 TEST(Partitioners, MaxPartCurvesStartAtTheWholeAndNeverGrowWithoutReplication) {

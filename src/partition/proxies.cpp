@@ -7,11 +7,8 @@
 
 namespace ferry {
 
-std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, int meshBoxes,
-                                    int instanceBoxes) {
+std::vector<std::vector<Box3f>> instancedObjectBoxes(const Scene& scene, int instanceBoxes) {
   const std::vector<uint32_t> placements = scene.instanceCountPerObject();
-  // An instanced object's boxes, in object space, made once: its own box, or
-  // braided, its meshes' clusters; an instance's proxies are those, transformed.
   std::vector<std::vector<Box3f>> objectBoxes(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o) {
     if (placements[o] <= 1) continue;
@@ -27,6 +24,46 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
         objectBoxes[o].push_back(trianglesBounds(mesh, Affine3f::identity(), cluster));
     }
   }
+  return objectBoxes;
+}
+
+void addInstancedProxies(const Scene& scene, const UnitSet& units,
+                         const std::vector<RankSet>& owners, int instanceBoxes,
+                         Partition& partition) {
+  std::vector<std::vector<Box3f>> objectBoxes = instancedObjectBoxes(scene, instanceBoxes);
+  std::vector<int32_t> shapeOf(scene.objects.size(), -1);
+  for (uint32_t u = 0; u < units.units.size(); ++u)
+    for (int32_t i : units.units[u].instances) {
+      const Instance& inst = scene.instances[i];
+      std::vector<Box3f>& boxes = objectBoxes[size_t(inst.object)];
+      if (boxes.empty()) continue;  // placed once (a box proxy), or no triangles
+      int32_t& shape = shapeOf[size_t(inst.object)];
+      if (shape < 0) {
+        Box3f all;
+        for (const Box3f& b : boxes) all.extend(b);
+        const float margin = kInstancedShapeMargin * length(all.size());
+        for (Box3f& b : boxes) b = Box3f{b.lower - Vec3f(margin), b.upper + Vec3f(margin)};
+        shape = int32_t(partition.proxyShapes.size());
+        partition.proxyShapes.push_back({boxes});
+      }
+      Proxy p;
+      p.owners = owners[u];
+      p.shape = shape;
+      p.placement = int32_t(partition.proxyPlacements.size());
+      partition.proxyPlacements.push_back(inst.transform);
+      for (const Box3f& b : boxes) p.bounds.extend(inst.transform.transformBox(b));
+      partition.proxies.push_back(std::move(p));
+    }
+}
+
+std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, int meshBoxes,
+                                    int instanceBoxes, bool instancedToo) {
+  const std::vector<uint32_t> placements = scene.instanceCountPerObject();
+  // An instanced object's boxes, in object space, made once: its own box, or
+  // braided, its meshes' clusters; an instance's proxies are those, transformed.
+  const std::vector<std::vector<Box3f>> objectBoxes =
+      instancedToo ? instancedObjectBoxes(scene, instanceBoxes)
+                   : std::vector<std::vector<Box3f>>(scene.objects.size());
   // Reserved exactly (clusterTriangles makes min(triangles, clusters)):
   // braided, these are several times the proxies kept after merging.
   size_t count = 0;
@@ -34,7 +71,7 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
     for (int32_t i : unit.instances) {
       const int32_t o = scene.instances[i].object;
       if (placements[o] > 1) {
-        count += objectBoxes[o].size();
+        count += objectBoxes[o].size();  // none when !instancedToo
         continue;
       }
       for (int32_t m : scene.objects[o].meshes)

@@ -23,8 +23,26 @@ struct UnitBox {
   uint32_t unit;
   Box3f box;
 };
+// With `instancedToo` false, instances of instanced objects are left out
+// (they become instanced proxies: addInstancedProxies).
 std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, int meshBoxes,
-                                    int instanceBoxes = 1);
+                                    int instanceBoxes = 1, bool instancedToo = true);
+
+// An instanced object's boxes in its own space: its box (`instanceBoxes`
+// 1), or braided, `instanceBoxes` cluster boxes per mesh; empty for objects
+// placed once. Instanced proxies' shapes are these, grown by
+// kInstancedShapeMargin of the object's box diagonal, so that a ray that
+// Embree finds hitting a triangle on a box's face enters the box too, though
+// the proxy query takes the ray into object space with other floats.
+std::vector<std::vector<Box3f>> instancedObjectBoxes(const Scene& scene, int instanceBoxes);
+constexpr float kInstancedShapeMargin = 1e-3f;
+
+// One instanced proxy (Proxy::shape) per instance of an instanced object in
+// `units`, owned by its unit's owners; its shape, the object's
+// instancedObjectBoxes, is added to partition.proxyShapes once per object.
+void addInstancedProxies(const Scene& scene, const UnitSet& units,
+                         const std::vector<RankSet>& owners, int instanceBoxes,
+                         Partition& partition);
 
 // `meshBoxes`: boxes per non-instanced mesh (1: the mesh's own box);
 // `instanceBoxes`: boxes per mesh of an instanced object, for each of its

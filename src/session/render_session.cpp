@@ -309,8 +309,9 @@ std::unique_ptr<RayTraversal<Path>> RenderSession::makeTraversal(
   if (comm_.size() == 1) return std::make_unique<LocalTraversal<Path>>(*rank.geometry);
   if (!rank.proxies) {
     // The tree consumes the proxies: a rank holds each proxy once.
-    rank.proxies =
-        std::make_unique<const ProxyBvh>(std::move(rank.partition.proxies), comm_.rank());
+    rank.proxies = std::make_unique<const ProxyBvh>(std::move(rank.partition.proxies), comm_.rank(),
+                                                    std::move(rank.partition.proxyShapes),
+                                                    std::move(rank.partition.proxyPlacements));
     malloc_trim(0);  // the builder's temporaries go back to the system
   }
   auto d = std::make_unique<DistributedTraversal<Path>>(

@@ -53,7 +53,8 @@ struct ProxyBvh::Builder {
   int32_t collapse(int32_t binaryNode);
 };
 
-ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank, std::vector<ProxyShape> shapes)
+ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank, std::vector<ProxyShape> shapes,
+                   std::vector<Affine3f> placements)
     : proxyCount_(proxies.size()), ownRank_(ownRank) {
   for (const Proxy& p : proxies) narrow_ = narrow_ && p.owners.fitsInMask();
   Builder b{*this, proxies, {}, {}, {}, {}, std::vector<int32_t>(proxies.size(), -1)};
@@ -67,11 +68,13 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank, std::vector<ProxySha
     const int32_t s = proxies[i].shape;
     if (s < 0) continue;
     FERRY_CHECK(size_t(s) < shapes.size());
+    FERRY_CHECK(proxies[i].placement >= 0 && size_t(proxies[i].placement) < placements.size());
     b.instancedOf[i] = int32_t(instanced_.size());
-    instanced_.push_back(
-        {proxies[i].toWorld.inverse(), shapeFirst[size_t(s)], uint32_t(shapes[size_t(s)].boxes.size())});
+    instanced_.push_back({placements[size_t(proxies[i].placement)].inverse(), shapeFirst[size_t(s)],
+                          uint32_t(shapes[size_t(s)].boxes.size())});
   }
   shapes.clear();
+  placements.clear();
   // A proxy whose box is empty stands for nothing and is left out: its slab
   // distances would swap and let every ray in.
   for (size_t i = 0; i < proxies.size(); ++i)

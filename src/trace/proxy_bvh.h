@@ -29,9 +29,10 @@ class ProxyBvh {
   // searches both trees together. The answers are those of one tree: the
   // split only sets apart proxies that cannot answer the queries that skip
   // them.
-  // `shapes`: the boxes instanced proxies refer to (Proxy::shape), consumed too.
+  // `shapes` and `placements`: what instanced proxies refer to
+  // (Proxy::shape, Proxy::placement), consumed too.
   explicit ProxyBvh(std::vector<Proxy> proxies, int ownRank = -1,
-                    std::vector<ProxyShape> shapes = {});
+                    std::vector<ProxyShape> shapes = {}, std::vector<Affine3f> placements = {});
 
   struct Hit {
     int32_t proxy = -1;

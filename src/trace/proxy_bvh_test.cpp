@@ -309,6 +309,7 @@ namespace {
 struct InstancedCase {
   std::vector<Proxy> proxies;
   std::vector<ProxyShape> shapes;
+  std::vector<Affine3f> placements;
 };
 
 InstancedCase instancedCase(int ranks, uint32_t seed) {
@@ -332,11 +333,14 @@ InstancedCase instancedCase(int ranks, uint32_t seed) {
     const uint32_t k = seed + 7000 + uint32_t(i);
     Proxy p;
     p.shape = int32_t(uniform(k, 30) * 5);
-    p.toWorld = Affine3f::translate(Vec3f(uniform(k, 31), uniform(k, 32), uniform(k, 33)) * 10.0f) *
-                Affine3f::rotate(Vec3f(uniform(k, 34), uniform(k, 35), uniform(k, 36)) + Vec3f(0.1f),
-                                 uniform(k, 37) * 6.0f) *
-                Affine3f::scale(Vec3f(0.5f + uniform(k, 38)));
-    for (const Box3f& b : c.shapes[size_t(p.shape)].boxes) p.bounds.extend(p.toWorld.transformBox(b));
+    p.placement = int32_t(c.placements.size());
+    c.placements.push_back(
+        Affine3f::translate(Vec3f(uniform(k, 31), uniform(k, 32), uniform(k, 33)) * 10.0f) *
+        Affine3f::rotate(Vec3f(uniform(k, 34), uniform(k, 35), uniform(k, 36)) + Vec3f(0.1f),
+                         uniform(k, 37) * 6.0f) *
+        Affine3f::scale(Vec3f(0.5f + uniform(k, 38))));
+    for (const Box3f& b : c.shapes[size_t(p.shape)].boxes)
+      p.bounds.extend(c.placements.back().transformBox(b));
     p.owners = RankSet::single(int(uniform(k, 39) * ranks));
     c.proxies.push_back(p);
   }
@@ -354,7 +358,7 @@ ProxyBvh::Hit bruteForceInstanced(const InstancedCase& c, Vec3f o, Vec3f d, floa
       const Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
       if (!intersectBox(p.bounds, o, inv, tmax, t)) continue;
     } else {
-      const Affine3f toObject = p.toWorld.inverse();
+      const Affine3f toObject = c.placements[size_t(p.placement)].inverse();
       const Vec3f oo = toObject.transformPoint(o), dd = toObject.transformVector(d);
       const Vec3f inv{1 / dd.x, 1 / dd.y, 1 / dd.z};
       for (const Box3f& b : c.shapes[size_t(p.shape)].boxes) {
@@ -374,7 +378,7 @@ TEST(ProxyBvh, InstancedProxiesAreEnteredWhereTheirObjectSpaceBoxesAre) {
   for (int ranks : {3, 8}) {
     for (int ownRank : {-1, 1}) {
       const InstancedCase c = instancedCase(ranks, uint32_t(ranks) * 100);
-      ProxyBvh bvh(c.proxies, ownRank, c.shapes);
+      ProxyBvh bvh(c.proxies, ownRank, c.shapes, c.placements);
       EXPECT_EQ(bvh.instancedCount(), 200u);
       int missedByShape = 0;  // rays in an instanced proxy's world box that miss its boxes
       for (uint32_t k = 0; k < 3000; ++k) {
@@ -394,7 +398,7 @@ TEST(ProxyBvh, InstancedProxiesAreEnteredWhereTheirObjectSpaceBoxesAre) {
         for (const Proxy& p : c.proxies) {
           float t;
           if (p.shape >= 0 && intersectBox(p.bounds, o, inv, tmax, t)) {
-            InstancedCase one{{p}, c.shapes};
+            InstancedCase one{{p}, c.shapes, c.placements};
             missedByShape += !bruteForceInstanced(one, o, d, tmax, RankSet()).found();
           }
         }
