@@ -68,11 +68,14 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
            "4–8 % on the previous landscape's (docs/partitioning.md, \"best's proxies\"), and braiding "
            "each instance's meshes into 4 boxes in object space (the default for `best` and `ray-guided`, "
            "also since 2026-11-26) another 9–35 % on the island and 17–22 % on the previous landscape "
-           "(docs/partitioning.md, \"Braided instances\"). The spatial proxies are "
+           "(docs/partitioning.md, \"Braided instances\"), and since 2026-11-27 each instance is one "
+           "instanced proxy whose object's boxes are tested in object space and no longer merged, another "
+           "13–20 % (docs/partitioning.md, \"Instanced proxies\"). The spatial proxies are "
            + " and ".join(f"{sp_proxies[s]}" for s in scenes) + " disjoint domain boxes: a ray is forwarded "
            "only when it leaves its rank's domain without a hit. `best` has "
-           + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (4 per instanced mesh of each instance, "
-           "64 per terrain piece, merged down to at most 262,144) that overlap wherever plants of different ranks stand together, and a ray passing such "
+           + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (one per instance, "
+           "its object's 4 boxes per mesh held once, and 64 per terrain piece, merged down to at most "
+           "262,144 in all) that overlap wherever plants of different ranks stand together, and a ray passing such "
            "proxies in front of its hit must visit each of their owners. ")
     if more:
         txt += ("Second, on the landscape every model is instanced over the whole ground (the published "

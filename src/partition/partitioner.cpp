@@ -199,7 +199,7 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       // best: its mesh pieces braided too (docs/partitioning.md, "best's
       // proxies"), merged straight from the boxes. Braided instances are
       // instanced proxies (a transform each, their object's boxes held
-      // once: docs/data-parallel.md, "Instanced proxies"), one per instance
+      // once: docs/partitioning.md, "Instanced proxies"), one per instance
       // and never merged (each costs about what a box does in the proxy
       // tree); when they alone would reach --max-proxies, they are world
       // boxes instead, merged with the rest as before.
