@@ -69,9 +69,15 @@ for manifest in sorted(glob.glob(os.path.join(work, "*", "manifest.json"))):
     share = m["input_bytes"] / ranks
     for pred in m["predictions"]:
         view = "unseen" if pred["view"] == "command line" else pred["view"]
+        paths = max(1, pred["camera_paths"])
         rows.append({"scene": scene, "partitioner": m["partitioner"], "max_part": cap,
                      "largest_part": largest / share, "view": view,
-                     "forwards_per_path": pred["forwards_per_path"]})
+                     "forwards_per_path": pred["forwards_per_path"],
+                     # Of those, per path: shadow rays, rays sent back only to be
+                     # shaded, and rays that found nothing where they were sent.
+                     "shadow_per_path": pred["shadow_rays_forwarded"] / paths,
+                     "to_shade_per_path": pred["forwarded_to_shade"] / paths,
+                     "no_hit_per_path": pred["visits_without_hit"] / paths})
 with open(os.path.join(out, "memory_bandwidth.csv"), "w", newline="") as f:
     w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
     w.writeheader()
