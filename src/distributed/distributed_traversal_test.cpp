@@ -263,7 +263,9 @@ TEST_P(DistributedInProcess, EqualsTheOneRankImage) {
       // Counted where rays arrive to be traversed, so no more than were sent so.
       EXPECT_LE(r.visitsWithoutHit, r.forwarded - r.forwardedToShade);
       // Every rank gets a copy of every ray: most find nothing there.
-      if (variant.mode == ForwardingMode::Broadcast) EXPECT_GT(r.visitsWithoutHit, 0u);
+      if (variant.mode == ForwardingMode::Broadcast) {
+        EXPECT_GT(r.visitsWithoutHit, 0u);
+      }
       if (variant.mode == ForwardingMode::Proxies) {
         // Every camera path's owner is decided by one proxy query (on the
         // rank its pixel is dealt to); forwarding decisions add more.

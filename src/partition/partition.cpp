@@ -207,7 +207,8 @@ void Partition::checkCovers(const Scene& scene) const {
       throw InternalError(
           fmt::format("instance {} has owners {} outside {} ranks", i, owners.toString(), ranks));
     if (bounds[i].empty()) continue;
-    if (coveredByInstanced(i, owners)) continue;
+    // (No instanced proxies, no second overlap query per instance.)
+    if (!proxyShapes.empty() && coveredByInstanced(i, owners)) continue;
     const std::vector<const Box3f*> near = eligible(bounds[i], owners);
     if (covered(bounds[i], near, 2000)) continue;
     // Proxies that follow the content (braided meshes and instances, domains)

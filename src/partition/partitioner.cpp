@@ -207,11 +207,7 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       bool instanced = instanceBoxes > 1;
       uint64_t boxBudget = o.maxProxies;
       if (instanced && o.maxProxies > 0) {
-        const std::vector<uint32_t> placements = scene.instanceCountPerObject();
-        uint64_t count = 0;
-        for (const Unit& unit : p.units.units)
-          for (int32_t i : unit.instances)
-            count += placements[size_t(scene.instances[i].object)] > 1;
+        const uint64_t count = instancedInstanceCount(scene, p.units);
         instanced = count < o.maxProxies;
         if (instanced) boxBudget = o.maxProxies - count;
       }

@@ -27,6 +27,14 @@ std::vector<std::vector<Box3f>> instancedObjectBoxes(const Scene& scene, int ins
   return objectBoxes;
 }
 
+uint64_t instancedInstanceCount(const Scene& scene, const UnitSet& units) {
+  const std::vector<uint32_t> placements = scene.instanceCountPerObject();
+  uint64_t count = 0;
+  for (const Unit& unit : units.units)
+    for (int32_t i : unit.instances) count += placements[size_t(scene.instances[i].object)] > 1;
+  return count;
+}
+
 void addInstancedProxies(const Scene& scene, const UnitSet& units,
                          const std::vector<RankSet>& owners, int instanceBoxes,
                          Partition& partition) {

@@ -37,6 +37,10 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
 std::vector<std::vector<Box3f>> instancedObjectBoxes(const Scene& scene, int instanceBoxes);
 constexpr float kInstancedShapeMargin = 1e-3f;
 
+// The instances of instanced objects (placed more than once) in `units`: at
+// most the instanced proxies addInstancedProxies makes.
+uint64_t instancedInstanceCount(const Scene& scene, const UnitSet& units);
+
 // One instanced proxy (Proxy::shape) per instance of an instanced object in
 // `units`, owned by its unit's owners; its shape, the object's
 // instancedObjectBoxes, is added to partition.proxyShapes once per object.
