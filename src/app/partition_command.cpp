@@ -51,9 +51,9 @@ PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, Partitio
         fmt::format("--ray-paths {}: expected 1 to {}", p.rayPaths, uint64_t(1) << 26));
   if (p.meshProxies < 1 || p.meshProxies > 4096)
     throw InputError(fmt::format("--mesh-proxies {}: expected 1 to 4096", p.meshProxies));
-  if (p.instanceProxies < 0 || p.instanceProxies > 64)
-    throw InputError(
-        fmt::format("--instance-proxies {}: expected 1 to 64 (0: the default)", p.instanceProxies));
+  if (p.instanceProxies < 0 || p.instanceProxies > kMaxInstanceProxies)
+    throw InputError(fmt::format("--instance-proxies {}: expected 1 to {} (0: the default)",
+                                 p.instanceProxies, kMaxInstanceProxies));
   return p;
 }
 
@@ -341,9 +341,9 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
                   "object-proxies, best, ray-guided: boxes per mesh of an instanced object\n"
                   "(braiding in object space); above 1 each instance is one instanced proxy, its\n"
                   "transform and its object's boxes, held once per object; 1: one box per\n"
-                  "instance. Default (or 0): 4 for best and ray-guided (the same parts, 14-20 %\n"
-                  "fewer forwards and fewer proxy bytes than 4 world boxes per instance), 1 for\n"
-                  "object-proxies (the paper's one box per instance)");
+                  "instance. Default (or 0): 64 for best and ray-guided (the same parts, 21-25 %\n"
+                  "fewer forwards than 4, in the same frame time), 1 for object-proxies (the\n"
+                  "paper's one box per instance); at most 1024");
   cmd->add_option("--max-part", o.maxPart,
                   "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"
                   "a larger factor trades memory per rank for fewer forwarded rays")

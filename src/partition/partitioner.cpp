@@ -210,6 +210,12 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
         const uint64_t count = instancedInstanceCount(scene, p.units);
         instanced = count < o.maxProxies;
         if (instanced) boxBudget = o.maxProxies - count;
+        if (!instanced && instanceBoxes > kMaxWorldInstanceBoxes)
+          throw InputError(fmt::format(
+              "--instance-proxies {}: the scene's {} instances reach --max-proxies {}, so they "
+              "would be world boxes, {} per mesh of every instance; raise --max-proxies above {} "
+              "(or 0: no limit) or give at most {} boxes per mesh",
+              instanceBoxes, count, o.maxProxies, instanceBoxes, count, kMaxWorldInstanceBoxes));
       }
       const std::vector<UnitBox> boxes =
           unitProxyBoxes(scene, p.units, o.meshProxies, instanceBoxes, !instanced);

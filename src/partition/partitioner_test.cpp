@@ -316,6 +316,30 @@ TEST(Partitioners, BestAndRayGuidedBraidTheirInstancesByDefault) {
   EXPECT_EQ(instanceProxiesFor(two), 2);
 }
 
+TEST(Partitioners, FineShapesThatWouldBecomeWorldBoxesAreAnErrorNamingTheFlags) {
+  // Instanced proxies hold their boxes once per object; when the instances
+  // alone reach --max-proxies they become world boxes, k per mesh of every
+  // instance, which above kMaxWorldInstanceBoxes is refused, not made.
+  Scene scene = builtinScene(kIsland);
+  PartitionerOptions o = named("best");
+  o.instanceProxies = kMaxWorldInstanceBoxes + 1;
+  o.maxProxies = 100;
+  try {
+    partitionScene(scene, 3, o);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("--instance-proxies 65"), std::string::npos) << message;
+    EXPECT_NE(message.find("--max-proxies 100"), std::string::npos) << message;
+  }
+  // Up to kMaxWorldInstanceBoxes the fallback is made, as before.
+  Scene again = builtinScene(kIsland);
+  o.instanceProxies = 2;
+  const Partition p = partitionScene(again, 3, o);
+  EXPECT_TRUE(p.proxyShapes.empty());
+  EXPECT_LE(p.proxies.size(), 100u);
+}
+
 TEST(Partitioners, CheckCoversCatchesAGap) {
   // Each partitioner's proxies are needed: take one away (or shrink one) and
   // some content is no longer covered.

@@ -15,6 +15,9 @@ constexpr int kLeafSize = 4;
 // is at most kMaxSahDepth + 32 deep.
 constexpr int kMaxSahDepth = 60;
 constexpr int kWidth = ProxyBvh::kWidth;
+// A shape tree's depth bound: median cuts into kWidth groups give at most
+// log8(boxes) + 1 levels, 12 for 2^32 boxes.
+constexpr int kMaxShapeDepth = 16;
 
 // The next float above t >= 0 (nextafter(t, inf) without the libm call,
 // which showed in profiles): one step of the bit pattern; infinity stays.
@@ -58,11 +61,13 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank, std::vector<ProxySha
     : proxyCount_(proxies.size()), ownRank_(ownRank) {
   for (const Proxy& p : proxies) narrow_ = narrow_ && p.owners.fitsInMask();
   Builder b{*this, proxies, {}, {}, {}, {}, std::vector<int32_t>(proxies.size(), -1)};
-  // Shapes' boxes once each; an instanced proxy keeps the inverse of its transform.
-  std::vector<uint32_t> shapeFirst(shapes.size());
+  // Shapes' trees once each; an instanced proxy keeps the inverse of its
+  // transform. A shape with no box (never entered) has no tree.
+  std::vector<int32_t> shapeRoot(shapes.size(), -1);
   for (size_t s = 0; s < shapes.size(); ++s) {
-    shapeFirst[s] = uint32_t(shapeBoxes_.size());
-    shapeBoxes_.insert(shapeBoxes_.end(), shapes[s].boxes.begin(), shapes[s].boxes.end());
+    std::vector<Box3f>& boxes = shapes[s].boxes;
+    std::erase_if(boxes, [](const Box3f& box) { return box.empty(); });
+    if (!boxes.empty()) shapeRoot[s] = buildShape(boxes, 0, boxes.size(), 0);
   }
   for (size_t i = 0; i < proxies.size(); ++i) {
     const int32_t s = proxies[i].shape;
@@ -70,8 +75,8 @@ ProxyBvh::ProxyBvh(std::vector<Proxy> proxies, int ownRank, std::vector<ProxySha
     FERRY_CHECK(size_t(s) < shapes.size());
     FERRY_CHECK(proxies[i].placement >= 0 && size_t(proxies[i].placement) < placements.size());
     b.instancedOf[i] = int32_t(instanced_.size());
-    instanced_.push_back({placements[size_t(proxies[i].placement)].inverse(), shapeFirst[size_t(s)],
-                          uint32_t(shapes[size_t(s)].boxes.size())});
+    instanced_.push_back(
+        {placements[size_t(proxies[i].placement)].inverse(), shapeRoot[size_t(s)]});
   }
   shapes.clear();
   placements.clear();
@@ -106,21 +111,64 @@ size_t ProxyBvh::bytes() const {
   size_t owners = 0;
   for (const RankSet& s : slotOwners_) owners += sizeof(RankSet) + (s.wordCount() - 1) * 8;
   return nodes_.size() * sizeof(Node) + owners + instanced_.size() * sizeof(Instanced) +
-         shapeBoxes_.size() * sizeof(Box3f);
+         shapeNodes_.size() * sizeof(ShapeNode);
 }
 
-float ProxyBvh::enterInstanced(const Instanced& p, Vec3f origin, Vec3f direction,
-                               float limit) const {
-  const Vec3f o = p.toObject.transformPoint(origin);
-  const Vec3f d = p.toObject.transformVector(direction);
-  const Vec3f inv{1 / d.x, 1 / d.y, 1 / d.z};
-  float first = kInfinity;
-  for (uint32_t i = p.first; i < p.first + p.count; ++i) {
-    float t;
-    // Affine: the ray's parameter is the same in both spaces.
-    if (intersectBox(shapeBoxes_[i], o, inv, std::min(limit, first), t)) first = t;
+// A node over at most kWidth boxes holds them; more are cut at the median
+// of their centres along the widest axis, three times over, into kWidth
+// groups, each a box (a group of one) or a node of its own. Median cuts keep
+// the tree at most log8(count) + 1 deep, which bounds the query's stack.
+int32_t ProxyBvh::buildShape(std::vector<Box3f>& boxes, size_t first, size_t count, int depth) {
+  FERRY_CHECK_LT(depth, kMaxShapeDepth);
+  struct Range {
+    size_t first, count;
+  };
+  std::vector<Range> groups{{first, count}};
+  while (count > size_t(kWidth) && groups.size() < size_t(kWidth)) {
+    std::vector<Range> next;
+    for (const Range& g : groups) {
+      if (g.count < 2) {
+        next.push_back(g);
+        continue;
+      }
+      Box3f centres;
+      for (size_t i = g.first; i < g.first + g.count; ++i) centres.extend(boxes[i].center());
+      const Vec3f size = centres.size();
+      const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
+      const size_t half = g.count / 2;
+      auto begin = boxes.begin() + std::ptrdiff_t(g.first);
+      std::nth_element(
+          begin, begin + std::ptrdiff_t(half), begin + std::ptrdiff_t(g.count),
+          [axis](const Box3f& a, const Box3f& b) { return a.center()[axis] < b.center()[axis]; });
+      next.push_back({g.first, half});
+      next.push_back({g.first + half, g.count - half});
+    }
+    groups = std::move(next);
   }
-  return first;
+  if (count <= size_t(kWidth)) {
+    groups.clear();
+    for (size_t i = first; i < first + count; ++i) groups.push_back({i, 1});
+  }
+  const int32_t index = int32_t(shapeNodes_.size());
+  shapeNodes_.emplace_back();
+  for (size_t k = 0; k < groups.size(); ++k) {
+    Box3f box;
+    for (size_t i = groups[k].first; i < groups[k].first + groups[k].count; ++i)
+      box.extend(boxes[i]);
+    int32_t child = -1;
+    if (groups[k].count > 1) child = buildShape(boxes, groups[k].first, groups[k].count, depth + 1);
+    ShapeNode& node = shapeNodes_[size_t(index)];  // looked up again: the child appended
+    for (int a = 0; a < 3; ++a) node.lower[a][k] = box.lower[a], node.upper[a][k] = box.upper[a];
+    node.child[k] = child;
+    node.usedSlots |= 1u << k;
+    if (child < 0) node.boxSlots |= 1u << k;
+  }
+  ShapeNode& node = shapeNodes_[size_t(index)];
+  for (size_t k = groups.size(); k < size_t(kWidth); ++k) {
+    for (int a = 0; a < 3; ++a) node.lower[a][k] = kInfinity, node.upper[a][k] = -kInfinity;
+    node.child[k] = -1;
+  }
+  return index;
 }
 
 int32_t ProxyBvh::Builder::build(int32_t first, int32_t count, int depth) {
@@ -318,7 +366,64 @@ inline uint32_t bits(Ints m) {
   for (int k = 0; k < kWidth; ++k) out |= uint32_t(m[k] != 0) << k;
   return out;
 }
+
+// The slots of a node (its boxes lower[axis][slot], upper[axis][slot]) the
+// ray (origin o, 1 / direction inv, both splat) enters before `limit`, and
+// each slot's entry distance in t0. Every slot at once, exactly as
+// intersectBox (Box3f::clipRay) computes it lane by lane, so that answers do
+// not depend on the width: per axis the slab distances, swapped when
+// reversed, an axis skipped where one is NaN (the origin on a slab plane of
+// a flat direction), entry = max (from 0), exit = min (from limit), a hit
+// when entry <= exit and entry < limit.
+[[gnu::always_inline]] inline uint32_t enteredSlots(const float (&lower)[3][kWidth],
+                                                    const float (&upper)[3][kWidth],
+                                                    const Floats (&o)[3], const Floats (&inv)[3],
+                                                    float limit, Floats& t0) {
+  t0 = splat(0.0f);
+  Floats t1 = splat(limit);
+  for (int a = 0; a < 3; ++a) {
+    const Floats lo = (load(lower[a]) - o[a]) * inv[a];
+    const Floats hi = (load(upper[a]) - o[a]) * inv[a];
+    const Ints swap = lo > hi;
+    const Floats near = swap ? hi : lo, far = swap ? lo : hi;
+    const Ints ordered = near <= far;
+    t0 = (ordered & (t0 < near)) ? near : t0;
+    t1 = (ordered & (far < t1)) ? far : t1;
+  }
+  return bits((t0 <= t1) & (t0 < splat(limit)));
+}
 }  // namespace
+
+float ProxyBvh::enterInstanced(const Instanced& p, Vec3f origin, Vec3f direction,
+                               float limit) const {
+  if (p.root < 0) return kInfinity;
+  // Affine: the ray's parameter is the same in both spaces.
+  const Vec3f o = p.toObject.transformPoint(origin);
+  const Vec3f d = p.toObject.transformVector(direction);
+  const Floats ov[3] = {splat(o.x), splat(o.y), splat(o.z)};
+  const Floats invV[3] = {splat(1 / d.x), splat(1 / d.y), splat(1 / d.z)};
+  // A box's entry distance is never less than its node's (the node's box
+  // holds it, and the slab distances are monotone in the bounds), so a node
+  // entered no closer than the best box so far is skipped. The least entry
+  // does not depend on the order the boxes are tested in.
+  float first = kInfinity;
+  int32_t stack[kMaxShapeDepth * kWidth];
+  int top = 0;
+  stack[top++] = p.root;
+  while (top > 0) {
+    const ShapeNode& node = shapeNodes_[size_t(stack[--top])];
+    Floats t0;
+    const uint32_t entered =
+        enteredSlots(node.lower, node.upper, ov, invV, std::min(limit, first), t0) & node.usedSlots;
+    for (uint32_t b = entered & node.boxSlots; b != 0; b &= b - 1)
+      first = std::min(first, t0[std::countr_zero(b)]);
+    for (uint32_t s = entered & ~node.boxSlots; s != 0; s &= s - 1) {
+      const int k = std::countr_zero(s);
+      if (t0[k] < first) stack[top++] = node.child[k];
+    }
+  }
+  return first;
+}
 
 ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax,
                                 RankMask excluded) const {
@@ -400,25 +505,10 @@ void ProxyBvh::search(int32_t rootA, int32_t rootB, Vec3f origin, Vec3f directio
   // a better one go into sub[0, count), nearest (then lowest index) last.
   auto expand = [&](int32_t n, Entry* sub, int& count) {
     const Node& node = nodes_[size_t(n)];
-    // Every slot's box at once, exactly as intersectBox (Box3f::clipRay)
-    // computes it lane by lane, so that answers do not depend on the width:
-    // per axis the slab distances, swapped when reversed, an axis skipped
-    // where one is NaN (the origin on a slab plane of a flat direction),
-    // entry = max, exit = min, a hit when entry <= exit and entry < limit.
     // Strictly closer, or equally close (a lower index may still win the tie).
     const float limit = std::min(tmax, nextAbove(best.tEnter));
-    Floats t0 = splat(0.0f), t1 = splat(limit);
-    for (int a = 0; a < 3; ++a) {
-      const Floats lo = (load(node.lower[a]) - o[a]) * invV[a];
-      const Floats hi = (load(node.upper[a]) - o[a]) * invV[a];
-      const Ints swap = lo > hi;
-      const Floats near = swap ? hi : lo, far = swap ? lo : hi;
-      const Ints ordered = near <= far;
-      t0 = (ordered & (t0 < near)) ? near : t0;
-      t1 = (ordered & (far < t1)) ? far : t1;
-    }
-    const Ints hit = (t0 <= t1) & (t0 < splat(limit));
-    uint32_t candidates = bits(hit);
+    Floats t0;
+    uint32_t candidates = enteredSlots(node.lower, node.upper, o, invV, limit, t0);
     if (candidates == 0) return;  // owners are read only for slots the ray enters
     candidates &= eligible(n);
     if (candidates == 0) return;

@@ -62,7 +62,7 @@ class ProxyBvh {
   size_t instancedCount() const { return instanced_.size(); }
   size_t nodeCount() const { return nodes_.size(); }
   // What the tree holds, in bytes (nodes, owner sets above 64 ranks,
-  // instanced proxies' transforms and their shapes' boxes).
+  // instanced proxies' transforms and their shapes' trees).
   size_t bytes() const;
   // Proxies in the tree a query excluding the own rank never enters.
   size_t ownOnlyCount() const { return ownOnlyCount_; }
@@ -101,13 +101,29 @@ class ProxyBvh {
   };
   struct Builder;
 
-  // An instanced proxy: the ray taken into its object's space, the boxes
-  // of its shape (shapeBoxes_[first, first + count)).
+  // An instanced proxy: the ray taken into its object's space, and the
+  // tree of its shape's boxes (shapeNodes_[root]).
   struct Instanced {
     Affine3f toObject;
-    uint32_t first = 0, count = 0;
+    int32_t root = -1;
   };
-  // Where the ray enters the instanced proxy's boxes before `limit`, or infinity.
+  // A shape's boxes, in its object's space, under a kWidth-wide tree of
+  // their own, built once per shape: a shape of many boxes (64 per mesh of
+  // a 13-mesh tree model is 832) costs a few node tests per query, not one
+  // test per box, so instanced proxies can be as fine as the braiding makes
+  // them (docs/partitioning.md, "Instanced proxies").
+  struct ShapeNode {
+    float lower[3][kWidth];
+    float upper[3][kWidth];
+    int32_t child[kWidth];  // a node slot: the node's index
+    uint32_t usedSlots = 0;
+    uint32_t boxSlots = 0;  // bit k: slot k is one of the shape's boxes
+  };
+  // Appends the tree over boxes[first, first + count) (reordered); returns its root.
+  int32_t buildShape(std::vector<Box3f>& boxes, size_t first, size_t count, int depth);
+  // Where the ray enters the instanced proxy's boxes before `limit`, or
+  // infinity: the least entry distance over the boxes, as testing each box
+  // in turn gives it.
   float enterInstanced(const Instanced& p, Vec3f origin, Vec3f direction, float limit) const;
 
   size_t proxyCount_ = 0;
@@ -119,7 +135,7 @@ class ProxyBvh {
   size_t ownOnlyCount_ = 0;
   std::vector<RankSet> slotOwners_;  // per node and slot, only when not narrow
   std::vector<Instanced> instanced_;
-  std::vector<Box3f> shapeBoxes_;
+  std::vector<ShapeNode> shapeNodes_;
 };
 
 // Whether the ray enters `box` before tmax; entry distance clamped at 0

@@ -312,11 +312,29 @@ struct InstancedCase {
   std::vector<Affine3f> placements;
 };
 
+constexpr int kInstancedShapes = 7;
+
 InstancedCase instancedCase(int ranks, uint32_t seed) {
   InstancedCase c;
   c.proxies = randomProxies(100, ranks, seed);
-  for (int s = 0; s < 5; ++s) {
+  // Shapes of 1 to 5 boxes, and two whose boxes need a tree of their own
+  // (ProxyBvh::ShapeNode): 100 boxes (two levels), 900 small ones (four).
+  for (int s = 0; s < kInstancedShapes; ++s) {
     ProxyShape shape;
+    if (s >= 5) {
+      const int count = s == 5 ? 100 : 900;
+      const float size = s == 5 ? 0.5f : 0.08f;
+      for (int b = 0; b < count; ++b) {
+        const uint32_t k = seed + 3000 * uint32_t(s) + uint32_t(b);
+        const Vec3f corner = Vec3f(uniform(k, 26), uniform(k, 27), uniform(k, 28)) * 2.0f;
+        Box3f box;
+        box.extend(corner);
+        box.extend(corner + Vec3f(uniform(k, 29), uniform(k, 30), uniform(k, 31)) * size);
+        shape.boxes.push_back(box);
+      }
+      c.shapes.push_back(shape);
+      continue;
+    }
     for (int b = 0; b < 1 + s; ++b) {
       Box3f box;
       box.extend(Vec3f(uniform(seed + 50 * s + b, 20), uniform(seed + 50 * s + b, 21),
@@ -332,7 +350,7 @@ InstancedCase instancedCase(int ranks, uint32_t seed) {
   for (int i = 0; i < 200; ++i) {
     const uint32_t k = seed + 7000 + uint32_t(i);
     Proxy p;
-    p.shape = int32_t(uniform(k, 30) * 5);
+    p.shape = int32_t(uniform(k, 30) * kInstancedShapes);
     p.placement = int32_t(c.placements.size());
     c.placements.push_back(
         Affine3f::translate(Vec3f(uniform(k, 31), uniform(k, 32), uniform(k, 33)) * 10.0f) *
