@@ -74,7 +74,7 @@ assert want == got, f"ranks hold {got}, the manifest says {want}"
 assert max(want) < m["input_bytes"], "some rank holds the whole scene"
 PY
 done
-# Braided instances (--instance-proxies; best braids 4 by default, the loop
+# Braided instances (--instance-proxies; best braids 64 by default, the loop
 # above): one box per instance instead, other proxies, the same image, at an
 # odd rank count.
 "$ferry" partition "$island" --ranks 3 --partitioner best --instance-proxies 1 -o "$work/island-3-braided" -q
