@@ -148,6 +148,7 @@ restore
 expect_failure "unknown partitioner" "unknown partitioner" mpirun --oversubscribe -np 2 "$ferry" render "$cornell" $cornell_args --partitioner kd-tree -o "$work/x.pfm"
 expect_failure "partition without output" "give -o DIR" "$ferry" partition "$cornell" --ranks 2
 expect_failure "bad max part" "--max-part 0.5" "$ferry" partition "$cornell" --ranks 2 --partitioner ray-guided --max-part 0.5 -o "$work/mp"
+expect_failure "bad instance proxies" "--instance-proxies 2000: expected 1 to 1024" "$ferry" partition "$cornell" --ranks 2 --instance-proxies 2000 -o "$work/ip"
 expect_failure "prediction without output" "goes with -o DIR" "$ferry" partition "$cornell" --ranks 2 --report "$work/r.csv" --predict-forwards
 expect_failure "camera without prediction" "go with --predict-forwards" "$ferry" partition "$cornell" --ranks 2 -o "$work/c" --look-from 0,0,1 --look-at 0,0,0
 expect_failure "half a camera" "go together" "$ferry" partition "$cornell" --ranks 2 -o "$work/c" --predict-forwards --look-from 0,0,1
