@@ -343,7 +343,8 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
                   "transform and its object's boxes, held once per object; 1: one box per\n"
                   "instance. Default (or 0): 64 for best and ray-guided (the same parts, 21-25 %\n"
                   "fewer forwards than 4, in the same frame time), 1 for object-proxies (the\n"
-                  "paper's one box per instance); at most 1024");
+                  "paper's one box per instance); at most 1024, and at most 64 when the\n"
+                  "instances would reach --max-proxies (they are then world boxes, not shapes)");
   cmd->add_option("--max-part", o.maxPart,
                   "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"
                   "a larger factor trades memory per rank for fewer forwarded rays")
