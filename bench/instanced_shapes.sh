@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # What finer instanced proxies cost and save (docs/partitioning.md,
 # "Instanced proxies"): for each scene and each --instance-proxies value
-# (boxes per mesh of an instanced object's shape), one partition is made and
+# (boxes per mesh of an instanced object's shape; 0: the default, one per 4
+# triangles of each mesh, at most 1024), one partition is made and
 # rendered on RANKS ranks by this build and, with BASELINE=old/ferry, by
 # another build, interleaved in the same rounds so that a busy machine slows
 # both alike. The part files do not depend on the build that renders them

@@ -168,15 +168,21 @@ void Partition::checkCovers(const Scene& scene) const {
   std::map<std::pair<int32_t, int32_t>, bool> shapeCovers;
   auto coversObject = [&](int32_t shape, int32_t object) {
     const std::vector<Box3f>& boxes = proxyShapes[size_t(shape)].boxes;
+    // Neighbouring triangles mostly share a box (the boxes are clusters of
+    // them), so the box that held the last triangle is tried first: shapes
+    // by size have up to 1024 boxes per mesh.
+    size_t last = 0;
     for (int32_t m : scene.objects[size_t(object)].meshes) {
       Mesh scratch;
       const Mesh& mesh = scene.geometry(m, scratch);
       for (const auto& t : mesh.indices) {
         Box3f tri;
         for (int v = 0; v < 3; ++v) tri.extend(mesh.positions[t[v]]);
-        if (std::none_of(boxes.begin(), boxes.end(),
-                         [&](const Box3f& b) { return b.contains(tri); }))
-          return false;
+        if (last < boxes.size() && boxes[last].contains(tri)) continue;
+        const auto it = std::find_if(boxes.begin(), boxes.end(),
+                                     [&](const Box3f& b) { return b.contains(tri); });
+        if (it == boxes.end()) return false;
+        last = size_t(it - boxes.begin());
       }
     }
     return true;

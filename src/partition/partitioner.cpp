@@ -122,8 +122,9 @@ std::string toString(PartitionerKind kind) {
 }
 
 int instanceProxiesFor(const PartitionerOptions& o) {
+  static_assert(kMaxInstanceProxies == kMaxShapeBoxesPerMesh);
   if (o.instanceProxies > 0) return o.instanceProxies;
-  return o.name == "best" || o.name == "ray-guided" ? kDefaultInstanceProxies : 1;
+  return o.name == "best" || o.name == "ray-guided" ? kShapeBoxesBySize : 1;
 }
 
 Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
@@ -203,13 +204,15 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
       // and never merged (each costs about what a box does in the proxy
       // tree); when they alone would reach --max-proxies, they are world
       // boxes instead, merged with the rest as before.
-      const int instanceBoxes = instanceProxiesFor(o);
-      bool instanced = instanceBoxes > 1;
+      int instanceBoxes = instanceProxiesFor(o);
+      bool instanced = instanceBoxes != 1;
       uint64_t boxBudget = o.maxProxies;
       if (instanced && o.maxProxies > 0) {
         const uint64_t count = instancedInstanceCount(scene, p.units);
         instanced = count < o.maxProxies;
         if (instanced) boxBudget = o.maxProxies - count;
+        if (!instanced && instanceBoxes == kShapeBoxesBySize)
+          instanceBoxes = kMaxWorldInstanceBoxes;  // shapes by size would be thousands per instance
         if (!instanced && instanceBoxes > kMaxWorldInstanceBoxes)
           throw InputError(fmt::format(
               "--instance-proxies {}: the scene's {} instances reach --max-proxies {}, so they "

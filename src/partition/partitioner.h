@@ -57,7 +57,8 @@ struct PartitionerOptions {
   // object-proxies, best, ray-guided: boxes per instance of an instanced
   // object, per mesh of the object (1: the object's box). More cut forwards
   // and cost every rank proxy memory (docs/partitioning.md). 0: the
-  // partitioner's default (instanceProxiesFor).
+  // partitioner's default (instanceProxiesFor), by size for best and
+  // ray-guided.
   int instanceProxies = 0;
   // Proxies are merged down to this many (proxy_merge.h); 0: no limit.
   uint64_t maxProxies = kDefaultMaxProxies;
@@ -72,16 +73,17 @@ struct PartitionerOptions {
 };
 
 // The boxes per instanced mesh a partitioner gives each instance: the
-// option, or by default kDefaultInstanceProxies for best and ray-guided and
-// 1 for the others (object-proxies: the paper's one box per instance).
+// option, or by default kShapeBoxesBySize for best and ray-guided (one box
+// per 4 triangles of each mesh, at most 1024: partition/proxies.h) and 1
+// for the others (object-proxies: the paper's one box per instance).
 // Above 1 they are instanced proxies: the boxes are held once per object,
 // in object space, under a small tree of their own (trace/proxy_bvh.h), so
-// finer shapes cost a few bytes per box and hardly any query time. 64 per
-// mesh forward 21-25 % fewer rays than 4 did, in the same frame time or
-// less (docs/partitioning.md, "Instanced proxies"). When the instances
-// alone would reach --max-proxies they become world boxes, k per mesh per
-// instance before merging, which is allowed up to kMaxWorldInstanceBoxes.
-constexpr int kDefaultInstanceProxies = 64;
+// fine shapes cost about 30 bytes per box and little query time. By size
+// they forward 10-22 % fewer rays than 64 per mesh did
+// (docs/partitioning.md, "Shapes by size"). When the instances alone would
+// reach --max-proxies they become world boxes, k per mesh per instance
+// before merging, which is allowed up to kMaxWorldInstanceBoxes (and is
+// what the default gives then).
 constexpr int kMaxInstanceProxies = 1024;
 constexpr int kMaxWorldInstanceBoxes = 64;
 int instanceProxiesFor(const PartitionerOptions& options);

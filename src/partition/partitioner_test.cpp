@@ -308,8 +308,8 @@ TEST(Partitioners, BraidedInstancesKeepThePartsAndCoverTheContent) {
 }
 
 TEST(Partitioners, BestAndRayGuidedBraidTheirInstancesByDefault) {
-  EXPECT_EQ(instanceProxiesFor(named("best")), kDefaultInstanceProxies);
-  EXPECT_EQ(instanceProxiesFor(named("ray-guided")), kDefaultInstanceProxies);
+  EXPECT_EQ(instanceProxiesFor(named("best")), kShapeBoxesBySize);
+  EXPECT_EQ(instanceProxiesFor(named("ray-guided")), kShapeBoxesBySize);
   EXPECT_EQ(instanceProxiesFor(named("object-proxies")), 1);  // the paper's: one box per instance
   PartitionerOptions two = named("object-proxies");
   two.instanceProxies = 2;
@@ -332,12 +332,18 @@ TEST(Partitioners, FineShapesThatWouldBecomeWorldBoxesAreAnErrorNamingTheFlags) 
     EXPECT_NE(message.find("--instance-proxies 65"), std::string::npos) << message;
     EXPECT_NE(message.find("--max-proxies 100"), std::string::npos) << message;
   }
-  // Up to kMaxWorldInstanceBoxes the fallback is made, as before.
-  Scene again = builtinScene(kIsland);
-  o.instanceProxies = 2;
-  const Partition p = partitionScene(again, 3, o);
-  EXPECT_TRUE(p.proxyShapes.empty());
-  EXPECT_LE(p.proxies.size(), 100u);
+  // Up to kMaxWorldInstanceBoxes the fallback is made, as before; so is
+  // the default's (shapes by size: kMaxWorldInstanceBoxes world boxes per
+  // mesh of every instance, then merged).
+  for (int instanceProxies : {2, 0}) {
+    SCOPED_TRACE(instanceProxies);
+    Scene again = builtinScene(kIsland);
+    o.instanceProxies = instanceProxies;
+    const Partition p = partitionScene(again, 3, o);
+    EXPECT_TRUE(p.proxyShapes.empty());
+    EXPECT_LE(p.proxies.size(), 100u);
+    EXPECT_NO_THROW(p.checkCovers(again));
+  }
 }
 
 TEST(Partitioners, CheckCoversCatchesAGap) {

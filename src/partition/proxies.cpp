@@ -7,12 +7,18 @@
 
 namespace ferry {
 
+int shapeBoxesForMesh(int instanceBoxes, uint32_t triangles) {
+  if (instanceBoxes != kShapeBoxesBySize) return instanceBoxes;
+  const uint32_t boxes = (triangles + kTrianglesPerShapeBox - 1) / kTrianglesPerShapeBox;
+  return int(std::clamp<uint32_t>(boxes, 1, kMaxShapeBoxesPerMesh));
+}
+
 std::vector<std::vector<Box3f>> instancedObjectBoxes(const Scene& scene, int instanceBoxes) {
   const std::vector<uint32_t> placements = scene.instanceCountPerObject();
   std::vector<std::vector<Box3f>> objectBoxes(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o) {
     if (placements[o] <= 1) continue;
-    if (instanceBoxes <= 1) {
+    if (instanceBoxes == 1) {
       objectBoxes[o].push_back(scene.objectBounds(int32_t(o)));
       continue;
     }
@@ -20,7 +26,8 @@ std::vector<std::vector<Box3f>> instancedObjectBoxes(const Scene& scene, int ins
       if (scene.meshes[m].triangleCount() == 0) continue;
       Mesh scratch;
       const Mesh& mesh = scene.geometry(m, scratch);
-      for (const auto& cluster : clusterTriangles(mesh, Affine3f::identity(), instanceBoxes))
+      const int clusters = shapeBoxesForMesh(instanceBoxes, mesh.triangleCount());
+      for (const auto& cluster : clusterTriangles(mesh, Affine3f::identity(), clusters))
         objectBoxes[o].push_back(trianglesBounds(mesh, Affine3f::identity(), cluster));
     }
   }
@@ -40,6 +47,14 @@ void addInstancedProxies(const Scene& scene, const UnitSet& units,
                          Partition& partition) {
   std::vector<std::vector<Box3f>> objectBoxes = instancedObjectBoxes(scene, instanceBoxes);
   std::vector<int32_t> shapeOf(scene.objects.size(), -1);
+  // An instance's world box is that of its shape's boxes, transformed. A
+  // shape may have thousands, so each run of kBoundsRun consecutive boxes
+  // (clusters of one mesh, in the braiding's order, so close together) is
+  // transformed as its union: a box a little wider than the exact one, at a
+  // kBoundsRun-th of the cost per instance. Only the proxy tree's culling
+  // sees the difference; where a ray enters a proxy comes from its boxes.
+  constexpr size_t kBoundsRun = 8;
+  std::vector<std::vector<Box3f>> runsOf(scene.objects.size());
   for (uint32_t u = 0; u < units.units.size(); ++u)
     for (int32_t i : units.units[u].instances) {
       const Instance& inst = scene.instances[i];
@@ -53,13 +68,20 @@ void addInstancedProxies(const Scene& scene, const UnitSet& units,
         for (Box3f& b : boxes) b = Box3f{b.lower - Vec3f(margin), b.upper + Vec3f(margin)};
         shape = int32_t(partition.proxyShapes.size());
         partition.proxyShapes.push_back({boxes});
+        std::vector<Box3f>& runs = runsOf[size_t(inst.object)];
+        for (size_t k = 0; k < boxes.size(); k += kBoundsRun) {
+          Box3f run;
+          for (size_t j = k; j < std::min(boxes.size(), k + kBoundsRun); ++j) run.extend(boxes[j]);
+          runs.push_back(run);
+        }
       }
       Proxy p;
       p.owners = owners[u];
       p.shape = shape;
       p.placement = int32_t(partition.proxyPlacements.size());
       partition.proxyPlacements.push_back(inst.transform);
-      for (const Box3f& b : boxes) p.bounds.extend(inst.transform.transformBox(b));
+      for (const Box3f& run : runsOf[size_t(inst.object)])
+        p.bounds.extend(inst.transform.transformBox(run));
       partition.proxies.push_back(std::move(p));
     }
 }

@@ -28,9 +28,20 @@ struct UnitBox {
 std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, int meshBoxes,
                                     int instanceBoxes = 1, bool instancedToo = true);
 
+// `instanceBoxes`, the boxes per mesh of an instanced object's shape: 1
+// (the object's box), N > 1 (N cluster boxes per mesh), or
+// kShapeBoxesBySize: one box per kTrianglesPerShapeBox triangles of each
+// mesh, at most kMaxShapeBoxesPerMesh, so a large mesh gets a tight shape
+// and a small one is not cut finer than it is. The boxes `instanceBoxes`
+// gives a mesh of `triangles` triangles:
+constexpr int kShapeBoxesBySize = 0;
+constexpr uint32_t kTrianglesPerShapeBox = 4;
+constexpr int kMaxShapeBoxesPerMesh = 1024;
+int shapeBoxesForMesh(int instanceBoxes, uint32_t triangles);
+
 // An instanced object's boxes in its own space: its box (`instanceBoxes`
-// 1), or braided, `instanceBoxes` cluster boxes per mesh; empty for objects
-// placed once. Instanced proxies' shapes are these, grown by
+// 1), or braided, shapeBoxesForMesh cluster boxes per mesh; empty for
+// objects placed once. Instanced proxies' shapes are these, grown by
 // kInstancedShapeMargin of the object's box diagonal, so that a ray that
 // Embree finds hitting a triangle on a box's face enters the box too, though
 // the proxy query takes the ray into object space with other floats.

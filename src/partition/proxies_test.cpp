@@ -62,6 +62,39 @@ TEST(InstanceProxies, BraidedInstancesLeaveTheGapsOfTheirObject) {
   }
 }
 
+TEST(InstanceProxies, ShapesBySizeHaveABoxPerFourTrianglesOfEachMeshUpTo1024) {
+  EXPECT_EQ(shapeBoxesForMesh(kShapeBoxesBySize, 1), 1);
+  EXPECT_EQ(shapeBoxesForMesh(kShapeBoxesBySize, 4), 1);
+  EXPECT_EQ(shapeBoxesForMesh(kShapeBoxesBySize, 5), 2);
+  EXPECT_EQ(shapeBoxesForMesh(kShapeBoxesBySize, 4096), 1024);
+  EXPECT_EQ(shapeBoxesForMesh(kShapeBoxesBySize, 100000), kMaxShapeBoxesPerMesh);
+  EXPECT_EQ(shapeBoxesForMesh(16, 100000), 16);  // a number is that number
+  EXPECT_EQ(shapeBoxesForMesh(1, 100000), 1);
+  // On a model of two meshes, 40 and 6,000 triangles: 10 and 1,024 boxes
+  // (clusterTriangles makes exactly as many as asked, up to one per triangle).
+  Scene scene;
+  scene.materials.push_back(diffuseMaterial({0.5f, 0.5f, 0.5f}));
+  auto grid = [](int cells, float x) {
+    Mesh m;
+    for (int i = 0; i < cells; ++i) {
+      const Mesh q = makeQuad({x + float(i), 0, 0}, {0.5f, 0, 0}, {0, 0.5f, 0}, 0);
+      const int base = int(m.positions.size());
+      for (const auto& t : q.indices) m.indices.push_back({t[0] + base, t[1] + base, t[2] + base});
+      m.positions.insert(m.positions.end(), q.positions.begin(), q.positions.end());
+      m.uvs.insert(m.uvs.end(), q.uvs.begin(), q.uvs.end());
+    }
+    return m;
+  };
+  scene.meshes.push_back(grid(20, 0));     // 40 triangles
+  scene.meshes.push_back(grid(3000, 50));  // 6,000
+  scene.objects.push_back({"model", {0, 1}});
+  scene.instances.resize(2);
+  scene.instances[1].transform.t = {0, 10, 0};
+  const std::vector<std::vector<Box3f>> boxes = instancedObjectBoxes(scene, kShapeBoxesBySize);
+  ASSERT_EQ(boxes.size(), 1u);
+  EXPECT_EQ(boxes[0].size(), 10u + 1024u);
+}
+
 TEST(InstanceProxies, TheCoverCheckFindsEveryBraidedPieceAndEveryGap) {
   // Partition::checkCovers goes down object-space cluster trees: it accepts
   // braided instances without testing each triangle, and still finds a

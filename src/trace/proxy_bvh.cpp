@@ -15,8 +15,8 @@ constexpr int kLeafSize = 4;
 // is at most kMaxSahDepth + 32 deep.
 constexpr int kMaxSahDepth = 60;
 constexpr int kWidth = ProxyBvh::kWidth;
-// A shape tree's depth bound: median cuts into kWidth groups give at most
-// log8(boxes) + 1 levels, 12 for 2^32 boxes.
+// A shape tree's depth bound: full subtrees (buildShape) give at most
+// ceil(log8(boxes)) levels, 11 for 2^32 boxes.
 constexpr int kMaxShapeDepth = 16;
 
 // The next float above t >= 0 (nextafter(t, inf) without the libm call,
@@ -114,41 +114,44 @@ size_t ProxyBvh::bytes() const {
          shapeNodes_.size() * sizeof(ShapeNode);
 }
 
-// A node over at most kWidth boxes holds them; more are cut at the median
-// of their centres along the widest axis, three times over, into kWidth
-// groups, each a box (a group of one) or a node of its own. Median cuts keep
-// the tree at most log8(count) + 1 deep, which bounds the query's stack.
+// A node over at most kWidth boxes holds them; more are cut into at most
+// kWidth groups of s boxes each (one group may have fewer), s the least
+// power of kWidth with kWidth * s >= count, by cuts at multiples of s in the
+// order of the box centres along the widest axis. Every subtree is then as
+// full as it can be: nodes hold kWidth boxes but for one per level, about
+// 30 bytes per box, where cutting at the median left leaf nodes of two or
+// three boxes (over 100 bytes per box). The tree is at most
+// ceil(log8(count)) deep, which bounds the query's stack.
 int32_t ProxyBvh::buildShape(std::vector<Box3f>& boxes, size_t first, size_t count, int depth) {
   FERRY_CHECK_LT(depth, kMaxShapeDepth);
   struct Range {
     size_t first, count;
   };
-  std::vector<Range> groups{{first, count}};
-  while (count > size_t(kWidth) && groups.size() < size_t(kWidth)) {
-    std::vector<Range> next;
-    for (const Range& g : groups) {
-      if (g.count < 2) {
-        next.push_back(g);
-        continue;
-      }
-      Box3f centres;
-      for (size_t i = g.first; i < g.first + g.count; ++i) centres.extend(boxes[i].center());
-      const Vec3f size = centres.size();
-      const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
-      const size_t half = g.count / 2;
-      auto begin = boxes.begin() + std::ptrdiff_t(g.first);
-      std::nth_element(
-          begin, begin + std::ptrdiff_t(half), begin + std::ptrdiff_t(g.count),
-          [axis](const Box3f& a, const Box3f& b) { return a.center()[axis] < b.center()[axis]; });
-      next.push_back({g.first, half});
-      next.push_back({g.first + half, g.count - half});
+  size_t groupSize = 1;
+  while (groupSize * size_t(kWidth) < count) groupSize *= size_t(kWidth);
+  std::vector<Range> groups;
+  std::vector<Range> pending{{first, count}};
+  while (!pending.empty()) {
+    const Range g = pending.back();
+    pending.pop_back();
+    if (g.count <= groupSize) {
+      groups.push_back(g);
+      continue;
     }
-    groups = std::move(next);
+    Box3f centres;
+    for (size_t i = g.first; i < g.first + g.count; ++i) centres.extend(boxes[i].center());
+    const Vec3f size = centres.size();
+    const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
+    const size_t chunks = (g.count + groupSize - 1) / groupSize;
+    const size_t left = chunks / 2 * groupSize;
+    auto begin = boxes.begin() + std::ptrdiff_t(g.first);
+    std::nth_element(
+        begin, begin + std::ptrdiff_t(left), begin + std::ptrdiff_t(g.count),
+        [axis](const Box3f& a, const Box3f& b) { return a.center()[axis] < b.center()[axis]; });
+    pending.push_back({g.first + left, g.count - left});
+    pending.push_back({g.first, left});
   }
-  if (count <= size_t(kWidth)) {
-    groups.clear();
-    for (size_t i = first; i < first + count; ++i) groups.push_back({i, 1});
-  }
+  FERRY_CHECK_LE(groups.size(), size_t(kWidth));
   const int32_t index = int32_t(shapeNodes_.size());
   shapeNodes_.emplace_back();
   for (size_t k = 0; k < groups.size(); ++k) {
