@@ -72,11 +72,12 @@ def discussion(runs, manifests, scenes, views, parts, rates, meta, paper_fwd, pa
            "instanced proxy whose object's boxes are tested in object space and no longer merged, another "
            "13–20 % (docs/partitioning.md, \"Instanced proxies\"), and 64 boxes per mesh instead of 4 "
            "under a small tree per object (also 2026-11-27) another 21–25 % (docs/partitioning.md, "
-           "\"A tree per shape\"). The spatial proxies are "
+           "\"A tree per shape\"), and a box per 4 triangles of each mesh (at most 1024) instead of 64 "
+           "another 10–22 % (docs/partitioning.md, \"Shapes by size\"). The spatial proxies are "
            + " and ".join(f"{sp_proxies[s]}" for s in scenes) + " disjoint domain boxes: a ray is forwarded "
            "only when it leaves its rank's domain without a hit. `best` has "
            + " and ".join(f"{best_proxies[s]:,}" for s in scenes) + " proxies (one per instance, "
-           "its object's 64 boxes per mesh held once, and 64 per terrain piece, merged down to at most "
+           "its object's boxes held once, a box per 4 triangles of each mesh, and 64 per terrain piece, merged down to at most "
            "262,144 in all) that overlap wherever plants of different ranks stand together, and a ray passing such "
            "proxies in front of its hit must visit each of their owners. ")
     if more:
