@@ -122,7 +122,6 @@ std::string toString(PartitionerKind kind) {
 }
 
 int instanceProxiesFor(const PartitionerOptions& o) {
-  static_assert(kMaxInstanceProxies == kMaxShapeBoxesPerMesh);
   if (o.instanceProxies > 0) return o.instanceProxies;
   return o.name == "best" || o.name == "ray-guided" ? kShapeBoxesBySize : 1;
 }

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "partition/partition.h"
+#include "partition/proxies.h"
 #include "partition/proxy_merge.h"
 #include "partition/ray_sample.h"
 #include "partition/scene_split.h"
@@ -84,7 +85,7 @@ struct PartitionerOptions {
 // reach --max-proxies they become world boxes, k per mesh per instance
 // before merging, which is allowed up to kMaxWorldInstanceBoxes (and is
 // what the default gives then).
-constexpr int kMaxInstanceProxies = 1024;
+constexpr int kMaxInstanceProxies = kMaxShapeBoxesPerMesh;  // --instance-proxies N: at most
 constexpr int kMaxWorldInstanceBoxes = 64;
 int instanceProxiesFor(const PartitionerOptions& options);
 
