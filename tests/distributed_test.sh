@@ -59,10 +59,17 @@ for ranks in 3 5; do
     check_stats "$out.json"
   done
 done
-# One rank under mpirun equals the plain run.
-mpirun_n 1 "$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q -o "$work/one.pfm"
-"$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q -o "$work/plain.pfm"
+# One rank under mpirun equals the plain run, which does not start MPI
+# (mpi/launcher.h).
+mpirun_n 1 "$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q -o "$work/one.pfm" \
+  --stats "$work/one.json"
+"$ferry" render "builtin:cornell" --size 40x40 --spp 2 --max-depth 4 --seed 3 -q -o "$work/plain.pfm" \
+  --stats "$work/plain.json"
 $compare "$work/plain.pfm" "$work/one.pfm" --rel 0 --abs 0
+python3 -c "
+import json, sys
+one, plain = (json.load(open(f))['settings']['transport'] for f in sys.argv[1:])
+assert (one, plain) == ('mpi', 'in-process'), (one, plain)" "$work/one.json" "$work/plain.json"
 # Keeping the hits a rank found (default, --retrace remote) or re-tracing every
 # shaded path (--retrace all) gives the same image on many ranks, bit for bit.
 for forwarding in proxies broadcast; do

@@ -2,7 +2,6 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
-#include <cstdlib>
 #include <exception>
 
 #include "app/info_command.h"
@@ -11,7 +10,35 @@
 #include "app/view_command.h"
 #include "core/error.h"
 #include "core/floating_point_mode.h"
+#include "mpi/in_process_communicator.h"
+#include "mpi/launcher.h"
 #include "mpi/mpi_communicator.h"
+
+namespace {
+
+// Runs `command` on the ranks of the MPI job when a launcher started this
+// process, else as the one rank of a job of one without starting MPI
+// (mpi/launcher.h: MPI's singleton start is most of a small render's time).
+// Alone, abortAll throws (in-process) instead of ending the job: it is an
+// error on the only rank.
+template <typename Command>
+int runOnRanks(int* argc, char*** argv, Command command) {
+  using namespace ferry;
+  if (startedByMpiLauncher()) {
+    MpiCommunicator comm(argc, argv);
+    comm.reportFatalSignals();
+    return command(comm);
+  }
+  InProcessGroup alone(1);
+  try {
+    return command(alone.communicator(0));
+  } catch (const GroupAborted& e) {
+    fmt::print(stderr, "ferry: error: {}\n", e.reason());
+    return 1;
+  }
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace ferry;
@@ -34,24 +61,18 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // Under mpirun every rank parses the same flags: only rank 0 speaks.
-    const char* rank = std::getenv("OMPI_COMM_WORLD_RANK");
-    if (!rank) rank = std::getenv("PMI_RANK");
-    if (rank && std::atoi(rank) != 0) return e.get_exit_code();
+    if (launcherRank() != 0) return e.get_exit_code();
     if (e.get_exit_code() == 0) return app.exit(e);  // --help
     fmt::print(stderr, "ferry: error: {} (see ferry --help)\n", e.what());
     return e.get_exit_code();
   }
   try {
-    if (app.got_subcommand("render")) {
-      MpiCommunicator comm(&argc, &argv);
-      comm.reportFatalSignals();
-      return runRender(renderOptions, comm);
-    }
-    if (app.got_subcommand("view")) {
-      MpiCommunicator comm(&argc, &argv);
-      comm.reportFatalSignals();
-      return runView(viewOptions, comm);
-    }
+    if (app.got_subcommand("render"))
+      return runOnRanks(&argc, &argv,
+                        [&](const Communicator& comm) { return runRender(renderOptions, comm); });
+    if (app.got_subcommand("view"))
+      return runOnRanks(&argc, &argv,
+                        [&](const Communicator& comm) { return runView(viewOptions, comm); });
     if (app.got_subcommand("info")) return runInfo(infoOptions);
     if (app.got_subcommand("partition")) return runPartition(partitionOptions);
   } catch (const InputError& e) {

@@ -305,6 +305,7 @@ class FailingExchange final : public Communicator {
 
   int rank() const override { return inner_.rank(); }
   int size() const override { return inner_.size(); }
+  const char* transport() const override { return inner_.transport(); }
   void barrier() const override { inner_.barrier(); }
   uint64_t sum(uint64_t value) const override { return inner_.sum(value); }
   double max(double value) const override { return inner_.max(value); }

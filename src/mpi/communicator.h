@@ -72,6 +72,9 @@ class Communicator {
   // Not collective.
   virtual int rank() const = 0;
   virtual int size() const = 0;
+  // How the ranks talk: "mpi", or "in-process" (ranks as threads of one
+  // process; one rank started without a launcher, mpi/launcher.h).
+  virtual const char* transport() const = 0;
   bool isRoot() const { return rank() == 0; }
 
   virtual void barrier() const = 0;

@@ -53,6 +53,7 @@ class InProcessCommunicator final : public Communicator {
  public:
   int rank() const override { return rank_; }
   int size() const override;
+  const char* transport() const override { return "in-process"; }
 
   void barrier() const override;
   uint64_t sum(uint64_t value) const override;

@@ -23,6 +23,7 @@ class MpiCommunicator final : public Communicator {
 
   int rank() const override { return rank_; }
   int size() const override { return size_; }
+  const char* transport() const override { return "mpi"; }
 
   void barrier() const override;
   uint64_t sum(uint64_t value) const override;
