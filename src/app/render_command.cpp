@@ -280,11 +280,11 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                    "a larger factor trades memory per rank for fewer forwarded rays")
       ->capture_default_str();
   command
-      ->add_option(
-          "--max-proxies", o.maxProxies,
-          "Merge proxies with the same owners into union boxes until there are at most\n"
-          "this many (0: never). Every rank holds every proxy (~280 B each); merged boxes\n"
-          "only cost rays sent through their gaps")
+      ->add_option("--max-proxies", o.maxProxies,
+                   "Merge proxies with the same owners into union boxes until there are at most\n"
+                   "this many (0: never). Every rank holds every world-box proxy (~90 B each); "
+                   "merged boxes\n"
+                   "only cost rays sent through their gaps")
       ->capture_default_str();
   command->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
   command->add_flag("--env-fallback", o.envFallback,
