@@ -355,11 +355,10 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       "Memory to partition in, e.g. 2GiB (default: half the machine's). A scene whose\n"
       "geometry would not fit is partitioned with its meshes in a temporary spill file\n"
       "next to -o, read back one at a time to cut and write them: the parts are the same");
-  cmd->add_option(
-         "--max-proxies", o.maxProxies,
-         "Merge proxies with the same owners into union boxes until there are at most\n"
-         "this many (0: never). Every rank holds every world-box proxy (~90 B each); merged boxes\n"
-         "only cost rays sent through their gaps")
+  cmd->add_option("--max-proxies", o.maxProxies,
+                  "Merge proxies with the same owners into union boxes until there are at most\n"
+                  "this many (0: never). Every rank holds every world-box proxy (~90 B each);\n"
+                  "merged boxes only cost rays sent through their gaps")
       ->capture_default_str();
   cmd->add_option("--seed", o.seed, "random, ray-guided: the seed of their samples")
       ->capture_default_str();

@@ -282,9 +282,8 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
   command
       ->add_option("--max-proxies", o.maxProxies,
                    "Merge proxies with the same owners into union boxes until there are at most\n"
-                   "this many (0: never). Every rank holds every world-box proxy (~90 B each); "
-                   "merged boxes\n"
-                   "only cost rays sent through their gaps")
+                   "this many (0: never). Every rank holds every world-box proxy (~90 B each);\n"
+                   "merged boxes only cost rays sent through their gaps")
       ->capture_default_str();
   command->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
   command->add_flag("--env-fallback", o.envFallback,
