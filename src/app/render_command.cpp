@@ -393,8 +393,7 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
     if (!o.quiet) printSummary(*session, report, comm.size(), sink->path());
     if (!o.statsPath.empty())
       writeStatsFile(o.statsPath,
-                     sessionStatsJson(*session, report,
-                                      {sink->path(), secondsSince(start), comm.transport()}));
+                     sessionStatsJson(*session, report, {sink->path(), secondsSince(start)}));
     return 0;
   } catch (const InputError& e) {
     // Only rank 0 writes files, after every collective: the others have finished.

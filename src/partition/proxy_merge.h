@@ -27,8 +27,8 @@ namespace ferry {
 // The default of `--max-proxies`: about 24 MB on every rank (the proxy tree
 // holds each world box and its owners in its node's slot, ~90 B each with
 // the nodes; ~280 B before issue 13's "each proxy held once"). Above the
-// built-ins at scale 1
-// with every partitioner, so their partitions are as without a budget.
+// built-ins at scale 1 with every partitioner, so their partitions are as
+// without a budget.
 constexpr uint64_t kDefaultMaxProxies = uint64_t(1) << 18;
 
 // `proxies` unchanged if there are at most `maxProxies` (or maxProxies is 0),

@@ -190,6 +190,7 @@ class RenderSession {
   // shape the image, and those settings in words (the same on every rank).
   std::pair<uint64_t, std::string> imageIdentity() const;
   const SessionSettings& settings() const { return settings_; }
+  const Communicator& communicator() const { return comm_; }
   // This rank's scene (its part, after partitioning): for its film settings.
   const Scene& scene() const;
   // The whole scene, summarized before this rank released what it does not own.

@@ -46,7 +46,7 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                    {"view", r.view},
                    {"threads", s.threads},
                    {"ranks", ranks},
-                   {"transport", context.transport},
+                   {"transport", session.communicator().transport()},
                    {"forwarding", toString(s.forwarding)},
                    {"exchange", ranks > 1 ? toString(s.exchange) : "none"},
                    {"chunk", r.chunkPixels},

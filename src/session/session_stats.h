@@ -21,7 +21,6 @@ namespace ferry {
 struct StatsContext {
   std::string output;
   double totalSeconds = 0;
-  std::string transport;  // Communicator::transport()
 };
 
 // The rank whose own set-up took longest (first pixel less the wait in
