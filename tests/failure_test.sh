@@ -62,6 +62,7 @@ one_message "overlapped broadcast" "broadcast" mpirun --oversubscribe -np 3 "$fe
 one_message "bad light paths" "--light-paths" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --light-paths sometimes -o "$work/out.png"
 one_message "light paths without MIS" "--mis on" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --light-paths on --mis off -o "$work/out.png"
 one_message "bad max part" "--max-part" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --partitioner ray-guided --max-part 0.5 -o "$work/out.png"
+one_message "bad mesh proxies" "--mesh-proxies 0" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --mesh-proxies 0 -o "$work/out.png"
 one_message "bad crop" "--crop" mpirun --oversubscribe -np 3 "$ferry" render "$scene" "${args[@]}" --crop 0.5,0.2,0,1 -o "$work/out.png"
 one_message "empty crop" "holds no pixel" mpirun --oversubscribe -np 3 "$ferry" render "$scene" --size 8x8 -q --crop 0.51,0.52,0,1 -o "$work/out.png"
 one_message "bad output format" "unknown image format" mpirun --oversubscribe -np 2 "$ferry" render "$scene" "${args[@]}" -o "$work/out.gif"

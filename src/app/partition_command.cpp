@@ -35,25 +35,8 @@ namespace {
 
 // The flags as the partitioner's options, checked; `kind` names it.
 PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, PartitionerKind kind) {
-  PartitionerOptions p;
+  PartitionerOptions p = checkedPartitionerOptions(o.partition);
   p.name = toString(kind);
-  p.breakObjects = !o.keepObjectsWhole;
-  p.replicationBudget = o.replicationBudget;
-  p.meshProxies = o.meshProxies;
-  p.instanceProxies = o.instanceProxies;
-  p.maxProxies = o.maxProxies;
-  p.seed = o.seed;
-  p.rayPaths = o.rayPaths;
-  p.maxPart = o.maxPart;
-  checkPartitionerFlags(p.replicationBudget, p.maxPart);
-  if (p.rayPaths < 1 || p.rayPaths > (uint64_t(1) << 26))
-    throw InputError(
-        fmt::format("--ray-paths {}: expected 1 to {}", p.rayPaths, uint64_t(1) << 26));
-  if (p.meshProxies < 1 || p.meshProxies > 4096)
-    throw InputError(fmt::format("--mesh-proxies {}: expected 1 to 4096", p.meshProxies));
-  if (p.instanceProxies < 0 || p.instanceProxies > kMaxInstanceProxies)
-    throw InputError(fmt::format("--instance-proxies {}: expected 1 to {} (0: the default)",
-                                 p.instanceProxies, kMaxInstanceProxies));
   return p;
 }
 
@@ -316,55 +299,20 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       ->capture_default_str();
   cmd->add_option("--ranks", o.ranks, "Rank count (8), or for --report a range (1..128)")
       ->capture_default_str();
-  std::string names;
-  for (const std::string& n : partitionerNames()) names += (names.empty() ? "" : ", ") + n;
-  cmd->add_option("--partitioner", o.partitioner, "Partitioner: " + names)->capture_default_str();
+  addPartitionFlags(cmd, o.partition, "--partitioner", "Default: best.");
   cmd->add_option("-o,--output", o.output, "Directory to write the parts and manifest.json into");
   cmd->add_option(
       "--report", o.report,
       "Write the largest part's estimated bytes per rank count and partitioner as CSV, and\n"
       "a plot of it as PNG (see --plot)");
   cmd->add_option("--plot", o.plot, "PNG for --report (default: the report's name with .png)");
-  cmd->add_flag(
-      "--keep-objects-whole", o.keepObjectsWhole,
-      "Keep non-instanced content whole, as one unit (default: each mesh of a non-instanced\n"
-      "object is its own unit, after Zellmann et al.)");
-  cmd->add_option("--replication-budget", o.replicationBudget,
-                  "best: copies of spatially large, cheap content may add this fraction of the "
-                  "scene's bytes")
-      ->capture_default_str();
-  cmd->add_option("--mesh-proxies", o.meshProxies,
-                  "object-proxies, best, ray-guided: boxes per non-instanced mesh or mesh\n"
-                  "piece, made by BVH build steps on its triangles (braiding); 1: its box")
-      ->capture_default_str();
-  cmd->add_option("--instance-proxies", o.instanceProxies,
-                  "object-proxies, best, ray-guided: boxes per mesh of an instanced object\n"
-                  "(braiding in object space); above 1 each instance is one instanced proxy, its\n"
-                  "transform and its object's boxes, held once per object; 1: one box per\n"
-                  "instance. Default (or 0): for best and ray-guided one box per 4 triangles of\n"
-                  "each mesh, at most 1024 (10-22 % fewer forwards than 64 per mesh, about 30 B\n"
-                  "per box on every rank), 1 for object-proxies (the paper's one box per\n"
-                  "instance); at most 1024, and at most 64 when the instances would reach\n"
-                  "--max-proxies (they are then world boxes, not shapes; the default gives 64)");
-  cmd->add_option("--max-part", o.maxPart,
-                  "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"
-                  "a larger factor trades memory per rank for fewer forwarded rays")
-      ->capture_default_str();
   cmd->add_option(
       "--memory-budget", o.memoryBudget,
       "Memory to partition in, e.g. 2GiB (default: half the machine's). A scene whose\n"
       "geometry would not fit is partitioned with its meshes in a temporary spill file\n"
       "next to -o, read back one at a time to cut and write them: the parts are the same");
-  cmd->add_option("--max-proxies", o.maxProxies,
-                  "Merge proxies with the same owners into union boxes until there are at most\n"
-                  "this many (0: never). Every rank holds every world-box proxy (~90 B each);\n"
-                  "merged boxes only cost rays sent through their gaps")
-      ->capture_default_str();
-  cmd->add_option("--seed", o.seed, "random, ray-guided: the seed of their samples")
-      ->capture_default_str();
-  cmd->add_option("--ray-paths", o.rayPaths,
-                  "ray-guided: paths in its ray sample (each a few rays), traced from cameras\n"
-                  "spread around and inside the scene, never from its named views")
+  cmd->add_option("--seed", o.partition.options.seed,
+                  "random, ray-guided: the seed of their samples")
       ->capture_default_str();
   cmd->add_flag(
       "--predict-forwards", o.predictForwards,
@@ -383,7 +331,8 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
 }
 
 int runPartition(const PartitionCommandOptions& o) {
-  const PartitionerKind kind = parsePartitioner(o.partitioner);
+  const PartitionerKind kind =
+      parsePartitioner(o.partition.partitioner.empty() ? "best" : o.partition.partitioner);
   const PartitionerOptions p = partitionerOptions(o, kind);
   if (o.output.empty() && o.report.empty())
     throw InputError(

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "app/camera_flags.h"
+#include "app/partition_flags.h"
 
 #include "partition/partitioner.h"
 
@@ -23,18 +24,11 @@ struct RenderOptions;
 struct PartitionCommandOptions {
   std::string scene = "builtin:island";
   std::string ranks = "8";
-  std::string partitioner = "best";
   std::string output;  // part directory
   std::string report;  // CSV of the largest part per rank count
   std::string plot;    // PNG of the same (default: the report's name with .png)
-  bool keepObjectsWhole = false;
-  double replicationBudget = 0.05;
-  int meshProxies = 64;
-  int instanceProxies = 0;  // 0: the partitioner's default
-  uint64_t maxProxies = kDefaultMaxProxies;
-  uint32_t seed = 1;          // random, ray-guided: their samples
-  uint64_t rayPaths = 65536;  // ray-guided
-  double maxPart = 1.25;      // ray-guided: --max-part
+  // --partitioner (default best) and the partitioners' flags, --seed among them.
+  PartitionFlags partition;
   bool quiet = false;
   // --memory-budget: partition without holding the geometry when it would
   // not fit (empty: half the machine's memory; see partition_command.cpp).

@@ -173,13 +173,9 @@ void printSummary(const RenderSession& session, const SessionReport& report, int
 }  // namespace
 
 void applyPartitionerFlags(const RenderOptions& o, SessionSettings& settings) {
-  if (!o.partition.empty()) settings.partitioner = parsePartitioner(o.partition);
-  settings.keepObjectsWhole = o.keepObjectsWhole;
-  settings.replicationBudget = o.replicationBudget;
-  settings.maxPart = o.maxPart;
-  settings.maxProxies = o.maxProxies;
-  settings.render.seed = o.seed;
-  checkPartitionerFlags(o.replicationBudget, o.maxPart);
+  if (!o.partition.partitioner.empty())
+    settings.partitioner = parsePartitioner(o.partition.partitioner);
+  settings.partitioning = checkedPartitionerOptions(o.partition);
 }
 
 void addRenderingOptions(CLI::App* command, RenderOptions& o) {
@@ -261,30 +257,9 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
           "which saves every ray an instance transform) or always (every object). Instanced\n"
           "objects are never flattened either way. The image is the same.")
       ->capture_default_str();
-  command->add_option(
-      "--partitioner,--partition", o.partition,
-      "How the scene is split over ranks, made on the fly on every rank: spatial-simple,\n"
-      "spatial-sah, object-naive, object-proxies, bvh-style, best (the paper's six), or\n"
-      "round-robin, random (for testing). Default: best on more than one rank. Not used\n"
-      "for a part directory (its manifest names the partitioner that made it).");
-  command->add_flag("--keep-objects-whole", o.keepObjectsWhole,
-                    "Partitioners keep non-instanced content whole (default: broken into meshes)");
-  command
-      ->add_option(
-          "--replication-budget", o.replicationBudget,
-          "best: copies of large, cheap content may add this fraction of the scene's bytes")
-      ->capture_default_str();
-  command
-      ->add_option("--max-part", o.maxPart,
-                   "ray-guided: the largest part it aims at, times an even share (total / ranks);\n"
-                   "a larger factor trades memory per rank for fewer forwarded rays")
-      ->capture_default_str();
-  command
-      ->add_option("--max-proxies", o.maxProxies,
-                   "Merge proxies with the same owners into union boxes until there are at most\n"
-                   "this many (0: never). Every rank holds every world-box proxy (~90 B each);\n"
-                   "merged boxes only cost rays sent through their gaps")
-      ->capture_default_str();
+  addPartitionFlags(command, o.partition, "--partitioner,--partition",
+                    "Made on the fly on every rank; default: best on more than one rank. Not used\n"
+                    "for a part directory (its manifest names the partitioner that made it).");
   command->add_flag("-q,--quiet", o.quiet, "No progress and no summary on the terminal");
   command->add_flag("--env-fallback", o.envFallback,
                     "Render a scene whose environment map is missing with a constant white\n"

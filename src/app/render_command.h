@@ -6,7 +6,7 @@
 #include <string_view>
 
 #include "app/camera_flags.h"
-#include "partition/proxy_merge.h"
+#include "app/partition_flags.h"
 
 namespace CLI {
 class App;
@@ -57,14 +57,11 @@ struct RenderOptions {
   // --instancing: "shared" gives an Embree instance level only to objects a
   // rank places more than once or transformed; "always" to every object.
   std::string instancing = "shared";
-  // --partitioner (alias --partition): a name from partition/partitioner.h,
-  // made on the fly (every rank runs the same deterministic partitioner).
-  // Ignored when the scene is a part directory (ferry partition -o DIR).
-  std::string partition;  // empty: best on more than one rank
-  bool keepObjectsWhole = false;
-  double replicationBudget = 0.05;
-  double maxPart = 1.25;  // ray-guided: --max-part
-  uint64_t maxProxies = kDefaultMaxProxies;
+  // --partitioner (alias --partition) and the partitioners' flags: made on
+  // the fly (every rank runs the same deterministic partitioner); ignored
+  // when the scene is a part directory (ferry partition -o DIR). No
+  // partitioner given: best on more than one rank.
+  PartitionFlags partition;
   // --show-partition[=N]: draw the partition instead of rendering (0: off;
   // -1: for as many ranks as MPI runs; N: for N ranks).
   int showPartition = 0;

@@ -107,14 +107,6 @@ PartitionerKind parsePartitioner(const std::string& name) {
   throw InputError(fmt::format("unknown partitioner '{}' (partitioners: {})", name, known));
 }
 
-void checkPartitionerFlags(double replicationBudget, double maxPart) {
-  if (!(replicationBudget >= 0 && replicationBudget <= 1))
-    throw InputError(
-        fmt::format("--replication-budget {}: expected a fraction from 0 to 1", replicationBudget));
-  if (!(maxPart >= 1 && maxPart <= 1e6))
-    throw InputError(fmt::format("--max-part {}: expected a factor of at least 1", maxPart));
-}
-
 std::string toString(PartitionerKind kind) {
   const size_t index = size_t(kind);
   FERRY_CHECK_LT(index, partitionerNames().size());

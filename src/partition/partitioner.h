@@ -132,9 +132,6 @@ enum class PartitionerKind {
 };
 // By name; throws InputError naming the accepted ones (as checkPartitionerName).
 PartitionerKind parsePartitioner(const std::string& name);
-// The flags' values checked (InputError naming the flag): --replication-budget
-// a fraction from 0 to 1, --max-part at least 1.
-void checkPartitionerFlags(double replicationBudget, double maxPart);
 // The name (PartitionerOptions::name, the stats).
 std::string toString(PartitionerKind kind);
 

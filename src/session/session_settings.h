@@ -45,10 +45,9 @@ struct SessionSettings {
   std::string checkpoint;
   int checkpointEvery = 10;
   double timeLimitSeconds = 0;
-  bool keepObjectsWhole = false;
-  double replicationBudget = 0.05;
-  double maxPart = 1.25;  // ray-guided: the largest part it aims at (PartitionerOptions::maxPart)
-  uint64_t maxProxies = kDefaultMaxProxies;  // partition/proxy_merge.h
+  // The partitioner's options but its name and seed (which partitionerOptions
+  // sets from `partitioner`, the rank count and render.seed).
+  PartitionerOptions partitioning;
 };
 
 // The partitioner options a session with `settings` partitions with on `ranks` ranks.
