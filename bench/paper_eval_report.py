@@ -61,17 +61,14 @@ for path in glob.glob(f"{work}/runs/*.json"):
     r = s["render"]
     frames = len(r["frames"])
     ex = r["total"]["exchange"]
+    # The first frame also opens the TCP connections between ranks.
     timed = [f["seconds"] for f in (r["frames"][1:] or r["frames"])]
     runs[scene, view, part, mode, rate] = {
         "forwarded": ex["rays_forwarded"] / frames,
         "bytes": ex["bytes_sent"] / frames,
         "rounds": ex["rounds"] / frames,
         "paths": r["total"]["camera_paths"] / frames,
-        # The first frame also opens the TCP connections between ranks.
         "seconds": statistics.median(timed),
-        # The timed frames' range: how far one frame strays on this machine.
-        "seconds_lo": min(timed),
-        "seconds_hi": max(timed),
         "exchange_s": r["total"]["stage_seconds"]["exchange"] / frames,
         "mem_est": s["memory"]["max_estimated_bytes"],
         "mem_embree": s["memory"]["max_embree_bytes"],
@@ -419,10 +416,10 @@ if meta["pictures"]:
 # Frame times
 w("## Frame time (the paper's Figure 5)")
 w("")
-timed = max(meta["frames"] - 1, 1)
+timed_frames = max(meta["frames"] - 1, 1)
 w("Seconds per frame (slowest rank), `proxies` forwarding, per view, partitioner and link rate: "
-  + (f"the median of {timed} frames per configuration and rate (all but the first, which also opens the TCP "
-     "connections)" if timed > 1 else "one frame per configuration and rate")
+  + (f"the median of {timed_frames} frames per configuration and rate (all but the first, which also opens "
+     "the TCP connections)" if timed_frames > 1 else "one frame per configuration and rate")
   + ", 8 ranks time-sliced onto this machine's cores: read the differences between runs of the same "
   "configuration at the two rates as this run's noise. In the "
   "last column, the transfer time the frame's bytes would take at the link rate if sent one after another "

@@ -176,6 +176,8 @@ void applyPartitionerFlags(const RenderOptions& o, SessionSettings& settings) {
   if (!o.partition.partitioner.empty())
     settings.partitioner = parsePartitioner(o.partition.partitioner);
   settings.partitioning = checkedPartitionerOptions(o.partition);
+  settings.render.seed =
+      o.seed;  // the partitioner's seed too (--show-partition reads it from here)
 }
 
 void addRenderingOptions(CLI::App* command, RenderOptions& o) {
