@@ -8,6 +8,7 @@
 # set-up seconds and the frame time.
 #
 #   SCENE='builtin:island?scale=30' RANKS=8 BUDGET=2GiB RENDER=1 bash bench/partition_memory.sh [FERRY]
+#   SCALES='1 5 10 30:2GiB' RANKS=8 bash bench/partition_memory.sh [FERRY]
 #
 # Memory figures are counts and do not depend on the machine's load; the
 # seconds do (every rank shares the machine's cores).
@@ -25,6 +26,39 @@ mpirun_args=(--oversubscribe)
 
 peak() { awk '/Maximum resident set size/ {printf "%.0f", $NF * 1024}' "$1"; }
 wall() { awk -F': ' '/Elapsed \(wall clock\)/ {n=split($2,a,":"); s=0; for(i=1;i<=n;i++) s=s*60+a[i]; print s}' "$1"; }
+
+# SCALES="1 5 10 30:2GiB": the island at each scale (after a colon, under
+# that budget), one row each: instances, wall and CPU seconds, peak
+# resident, and both per million instances, with each scale's time and peak
+# per instance against the first scale's (issue 48: linear means near 1).
+if [ -n "${SCALES:-}" ]; then
+  echo "island, $ranks ranks, $partitioner ($(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GiB)"
+  printf '%-14s %10s %8s %8s %10s %12s %12s %8s %8s\n' scale instances wall cpu "peak GiB" \
+    "cpu s/M" "peak MiB/M" "time x" "peak x"
+  first=""
+  for entry in $SCALES; do
+    s=${entry%%:*}
+    args=()
+    [ "$entry" != "$s" ] && args=(--memory-budget "${entry#*:}")
+    sc="builtin:island?scale=$s"
+    instances=$("$ferry" info --json "$sc" | python3 -c "import json, sys; print(json.load(sys.stdin)['instances'])")
+    /usr/bin/time -f "%e %U %S %M" -o "$work/scale.time" "$ferry" partition "$sc" --ranks "$ranks" \
+      --partitioner "$partitioner" -o "$work/scale" -q "${args[@]}"
+    rm -rf "$work/scale"
+    read -r w u sy kb < "$work/scale.time"
+    row=$(python3 -c "
+import sys
+w, u, sy, kb, n = map(float, sys.argv[1:6])
+cpu = u + sy; peak = kb * 1024
+print(f'{n:.0f} {w:.1f} {cpu:.1f} {peak / 2**30:.2f} {cpu / n * 1e6:.2f} {peak / 2**20 / n * 1e6:.0f}')" \
+      "$w" "$u" "$sy" "$kb" "$instances")
+    read -r n wall cpu gib cpum peakm <<< "$row"
+    [ -z "$first" ] && first="$cpum $peakm"
+    ratios=$(python3 -c "import sys; a, b, c, d = map(float, sys.argv[1:]); print(f'{c / a:.2f} {d / b:.2f}')" $first "$cpum" "$peakm")
+    printf '%-14s %10s %8s %8s %10s %12s %12s %8s %8s\n' "$entry" "$n" "$wall" "$cpu" "$gib" "$cpum" "$peakm" $ratios
+  done
+  exit 0
+fi
 
 echo "scene $scene, $ranks ranks, $partitioner, budget $budget ($(nproc) cores, $(free -g | awk '/Mem:/ {print $2}') GiB)"
 "$ferry" info "$scene" | sed -n '2,9p'

@@ -37,7 +37,7 @@ void addPartitionFlags(CLI::App* command, PartitionFlags& f, const std::string& 
                    "each mesh, at most 1024 (10-22 % fewer forwards than 64 per mesh, about 30 B\n"
                    "per box on every rank), 1 for object-proxies (the paper's one box per\n"
                    "instance); at most 1024, and at most 64 when the instances would reach\n"
-                   "--max-proxies (they are then world boxes, not shapes; the default gives 64)")
+                   "--max-proxies (they are then world boxes, merged; the default gives 1 there)")
       ->capture_default_str();
   command
       ->add_option("--max-part", o.maxPart,

@@ -202,8 +202,11 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& o,
         const uint64_t count = instancedInstanceCount(scene, p.units);
         instanced = count < o.maxProxies;
         if (instanced) boxBudget = o.maxProxies - count;
-        if (!instanced && instanceBoxes == kShapeBoxesBySize)
-          instanceBoxes = kMaxWorldInstanceBoxes;  // shapes by size would be thousands per instance
+        // The instances alone exceed the budget, so their world boxes are
+        // merged: finer boxes per instance would only be merged away, at a
+        // cost in time and memory per instance (docs/partitioning.md, "At
+        // scale"). The default gives the object's box.
+        if (!instanced && instanceBoxes == kShapeBoxesBySize) instanceBoxes = 1;
         if (!instanced && instanceBoxes > kMaxWorldInstanceBoxes)
           throw InputError(fmt::format(
               "--instance-proxies {}: the scene's {} instances reach --max-proxies {}, so they "

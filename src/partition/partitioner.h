@@ -83,8 +83,9 @@ struct PartitionerOptions {
 // they forward 10-22 % fewer rays than 64 per mesh did
 // (docs/partitioning.md, "Shapes by size"). When the instances alone would
 // reach --max-proxies they become world boxes, k per mesh per instance
-// before merging, which is allowed up to kMaxWorldInstanceBoxes (and is
-// what the default gives then).
+// before merging, which is allowed up to kMaxWorldInstanceBoxes; the
+// default gives the object's box then, which keeps partitioning linear in
+// the instances (docs/partitioning.md, "At scale").
 constexpr int kMaxInstanceProxies = kMaxShapeBoxesPerMesh;  // --instance-proxies N: at most
 constexpr int kMaxWorldInstanceBoxes = 64;
 int instanceProxiesFor(const PartitionerOptions& options);

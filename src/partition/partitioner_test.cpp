@@ -333,8 +333,7 @@ TEST(Partitioners, FineShapesThatWouldBecomeWorldBoxesAreAnErrorNamingTheFlags) 
     EXPECT_NE(message.find("--max-proxies 100"), std::string::npos) << message;
   }
   // Up to kMaxWorldInstanceBoxes the fallback is made, as before; so is
-  // the default's (shapes by size: kMaxWorldInstanceBoxes world boxes per
-  // mesh of every instance, then merged).
+  // the default's (the object's box per instance, then merged).
   for (int instanceProxies : {2, 0}) {
     SCOPED_TRACE(instanceProxies);
     Scene again = builtinScene(kIsland);
