@@ -13,6 +13,7 @@ packages=(
   libopenexr-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format                    # tests/format_test.sh keeps the tree clean under .clang-format
+  clang libclang-rt-14-dev        # scripts/fuzz.sh: libFuzzer with ASan and UBSan (docs/fuzzing.md)
   libcpp-httplib-dev              # ferry view: the HTTP server on rank 0
   chromium chromium-driver        # tests/viewer_test.sh: the viewer page in a headless browser
   python3 python3-matplotlib   # python3-matplotlib: the plots of bench/paper-eval

@@ -233,7 +233,8 @@ std::string differingFields(const std::string& theirs, const std::string& ours) 
   const auto a = fields(theirs), b = fields(ours);
   std::string out;
   for (const auto& [key, value] : b) {
-    auto it = std::find_if(a.begin(), a.end(), [&](const auto& f) { return f.first == key; });
+    auto it =
+        std::find_if(a.begin(), a.end(), [&key = key](const auto& f) { return f.first == key; });
     const std::string there = it == a.end() ? "(none)" : it->second;
     if (there == value) continue;
     if (!out.empty()) out += "; ";

@@ -1,0 +1,183 @@
+#include "fuzz/fuzz_inputs.h"
+
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "core/error.h"
+#include "core/hash64.h"
+#include "io/byte_stream.h"
+#include "io/checkpoint_file.h"
+#include "io/fourier_bsdf_file.h"
+#include "io/gltf_loader.h"
+#include "io/load_options.h"
+#include "io/manifest.h"
+#include "io/obj_loader.h"
+#include "io/part_file.h"
+#include "io/pbrt_parser.h"
+#include "io/pbrt_tokenizer.h"
+#include "io/ply_reader.h"
+#include "viewer/view_requests.h"
+
+namespace ferry::fuzz {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A loader's options that keep one input within a fuzzer's memory limit and
+// say nothing.
+LoadOptions quietOptions() {
+  LoadOptions options;
+  options.warn = [](const std::string&) {};
+  options.maxGeneratedTriangles = 1 << 20;
+  return options;
+}
+
+// The loaders that take a path get the bytes in a file of this process's
+// own directory (removed at exit).
+const fs::path& scratchDirectory() {
+  static const fs::path dir = [] {
+    fs::path d = fs::temp_directory_path() / ("ferry-fuzz-" + std::to_string(getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  static const struct Remover {
+    ~Remover() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } remover;
+  return dir;
+}
+
+std::string writeScratch(const std::string& name, std::string_view bytes) {
+  const fs::path path = scratchDirectory() / name;
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+  if (!out) throw std::runtime_error("fuzz: cannot write " + path.string());
+  return path.string();
+}
+
+void pbrt(std::string_view bytes) {
+  try {
+    PbrtTokenizer tokens(ByteStream::fromMemory(bytes, "fuzz.pbrt"));
+    while (tokens.next().kind != PbrtToken::Kind::End) {
+    }
+  } catch (const InputError&) {
+  }
+  // No directory with files: every Include, plymesh or texture is missing.
+  loadPbrtFromString(bytes, "fuzz.pbrt", "/nonexistent-ferry-fuzz-dir", quietOptions());
+}
+
+void ply(std::string_view bytes) {
+  ByteStream s = ByteStream::fromMemory(bytes, "fuzz.ply");
+  readPly(s, quietOptions());
+}
+
+void obj(std::string_view bytes) {
+  loadObj(writeScratch("fuzz.obj", bytes));
+}
+void gltf(std::string_view bytes) {
+  loadGltf(writeScratch("fuzz.gltf", bytes), quietOptions());
+}
+void glb(std::string_view bytes) {
+  loadGltf(writeScratch("fuzz.glb", bytes), quietOptions());
+}
+
+void bsdf(std::string_view bytes) {
+  ByteStream s = ByteStream::fromMemory(bytes, "fuzz.bsdf");
+  readFourierBsdf(s);
+}
+
+// Part files and checkpoints carry hashes of their bytes; a mutated input is
+// sealed again (its hashes made to match) so that the fuzzer reaches the
+// records behind them, not only the hash check.
+void part(std::string_view bytes) {
+  std::string sealed(bytes);
+  constexpr size_t kHeaderBytes = 64, kHashedHeaderBytes = 40;
+  constexpr size_t kFileBytesAt = 16, kPayloadHashAt = 24;
+  if (sealed.size() >= kHeaderBytes) {
+    const uint64_t fileBytes = sealed.size();
+    std::memcpy(&sealed[kFileBytesAt], &fileBytes, 8);
+    const uint64_t payload = hash64(sealed.data() + kHeaderBytes, sealed.size() - kHeaderBytes);
+    std::memcpy(&sealed[kPayloadHashAt], &payload, 8);
+    const uint64_t header = hash64(sealed.data(), kHashedHeaderBytes);
+    std::memcpy(&sealed[kHashedHeaderBytes], &header, 8);
+  }
+  readPartFile(writeScratch("part.fpart", sealed));
+}
+
+void manifest(std::string_view bytes) {
+  writeScratch("manifest.json", bytes);
+  readManifest(scratchDirectory().string());
+}
+
+void checkpoint(std::string_view bytes) {
+  std::string sealed(bytes);
+  if (sealed.size() >= 8) {
+    const uint64_t h = hash64(sealed.data(), sealed.size() - 8);
+    std::memcpy(&sealed[sealed.size() - 8], &h, 8);
+  }
+  readCheckpoint(writeScratch("fuzz.ckpt", sealed));
+}
+
+CameraView someCamera(const char* name, Vec3f from) {
+  CameraView c;
+  c.name = name;
+  c.from = from;
+  c.at = Vec3f(0, 1, 0);
+  c.up = Vec3f(0, 1, 0);
+  c.fovY = 40;
+  return c;
+}
+
+void camera(std::string_view bytes) {
+  ViewChange change;
+  applyCameraRequest(std::string(bytes), someCamera("default", Vec3f(0, 1, 5)), change);
+}
+
+void settings(std::string_view bytes) {
+  RenderSettings current;
+  current.width = 64;
+  current.height = 48;
+  current.samplesPerPixel = 1;
+  current.maxDepth = 5;
+  const std::vector<CameraView> views = {someCamera("default", Vec3f(0, 1, 5)),
+                                         someCamera("top", Vec3f(0, 10, 0.1f))};
+  ViewChange change;
+  applySettingsRequest(std::string(bytes), current, views, ViewLimits{}, change);
+}
+
+}  // namespace
+
+const std::vector<Kind>& kinds() {
+  static const std::vector<Kind> all = {
+      {"pbrt", pbrt},     {"ply", ply},           {"obj", obj},
+      {"gltf", gltf},     {"glb", glb},           {"bsdf", bsdf},
+      {"part", part},     {"manifest", manifest}, {"checkpoint", checkpoint},
+      {"camera", camera}, {"settings", settings},
+  };
+  return all;
+}
+
+const Kind& kind(std::string_view name) {
+  for (const Kind& k : kinds())
+    if (name == k.name) return k;
+  throw std::invalid_argument("fuzz: no kind '" + std::string(name) + "'");
+}
+
+bool runOne(const Kind& k, std::string_view bytes) {
+  try {
+    k.run(bytes);
+    return true;
+  } catch (const InputError&) {
+    return false;
+  } catch (const RequestError&) {
+    return false;
+  }
+}
+
+}  // namespace ferry::fuzz

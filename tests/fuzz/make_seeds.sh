@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Regenerates the seed corpora of the fuzz targets that have no corpus of
+# their own (tests/fuzz/corpus/<kind>) from the malformed-input corpora in
+# tests/corpus and from files Ferry writes itself (part files, a manifest, a
+# checkpoint of a tiny render). pbrt and ply keep their minimised corpora.
+#   bash tests/fuzz/make_seeds.sh build/ferry
+set -euo pipefail
+ferry=$(realpath "${1:-build/ferry}")
+cd "$(dirname "$0")/../.."
+corpus=tests/fuzz/corpus
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+fresh() { rm -rf "${corpus:?}/$1"; mkdir -p "$corpus/$1"; }
+fresh obj && cp tests/corpus/obj/*.obj "$corpus/obj/"
+# Valid ones too (the corpus's good files name material libraries, which a
+# fuzzed input has not got beside it).
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > "$corpus/obj/valid-triangle.obj"
+printf 'o quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\ng top\ns 1\nf 1/1/1 2/2/1 3/3/1 4/4/1\n' \
+  > "$corpus/obj/valid-quad.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 0 0 1\nf 1 2 4\nf 2 3 4\n' > "$corpus/obj/valid-relative.obj"
+fresh gltf && cp tests/corpus/gltf/*.gltf "$corpus/gltf/"
+fresh glb && cp tests/corpus/gltf/*.glb "$corpus/glb/"
+fresh bsdf && cp tests/corpus/bsdf/*.bsdf "$corpus/bsdf/"
+
+"$ferry" partition builtin:cornell --ranks 2 --partitioner best -o "$work/parts" -q
+fresh part
+cp "$work"/parts/part-0000.fpart "$corpus/part/cornell-0.fpart"
+cp "$work"/parts/part-0001.fpart "$corpus/part/cornell-1.fpart"
+cp "$work"/parts/shared.fpart "$corpus/part/cornell-shared.fpart"
+for f in tests/corpus/parts-v1/*.fpart; do cp "$f" "$corpus/part/v1-$(basename "$f")"; done
+fresh manifest
+cp "$work/parts/manifest.json" "$corpus/manifest/cornell.json"
+cp tests/corpus/parts-v1/manifest.json "$corpus/manifest/v1.json"
+printf '{}' > "$corpus/manifest/empty-object.json"
+
+fresh checkpoint
+"$ferry" render builtin:cornell --size 4x3 --spp 1 --frames 2 -q -o "$work/c.pfm" \
+  --checkpoint "$corpus/checkpoint/cornell-4x3.ckpt"
+"$ferry" render builtin:cornell --size 1x1 --spp 1 -q -o "$work/d.pfm" \
+  --checkpoint "$corpus/checkpoint/cornell-1x1.ckpt"
+printf 'FERRYCKP' > "$corpus/checkpoint/magic-only.ckpt"
+
+fresh camera
+printf '{"from":[0,1,5],"at":[0,1,0]}' > "$corpus/camera/minimal.json"
+printf '{"from":[1,2,3],"at":[0,0,0],"up":[0,0,1],"fov":60}' > "$corpus/camera/full.json"
+printf '{"from":[0,1,5],"at":[0,1,5]}' > "$corpus/camera/degenerate.json"
+printf '[1,2,3]' > "$corpus/camera/array.json"
+fresh settings
+printf '{"width":32,"height":24}' > "$corpus/settings/size.json"
+printf '{"spp":4,"max_depth":8,"exposure":-1.5}' > "$corpus/settings/samples.json"
+printf '{"view":"top"}' > "$corpus/settings/view.json"
+printf '{"view":"nowhere","width":-1}' > "$corpus/settings/bad.json"
+echo "seeds in $corpus: $(ls "$corpus" | tr '\n' ' ')"
