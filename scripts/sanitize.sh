@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# The suite under sanitizers (issue 47; docs/fuzzing.md):
+#   asan: every unit and script test (ctest) with AddressSanitizer,
+#         LeakSanitizer and UndefinedBehaviorSanitizer, in build-asan;
+#   tsan: the threaded tests (the in-process communicator, the distributed
+#         traversal with both exchanges on in-process ranks, the compositor)
+#         with ThreadSanitizer, in build-tsan.
+# clang, -O1 with line tables. Suppressions (scripts/sanitizers/*.supp) name third-party
+# libraries only, each with its reason. Fails on any report.
+#   bash scripts/sanitize.sh [asan|tsan|all]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+what=${1:-all}
+supp=$PWD/scripts/sanitizers
+
+configure() {
+  CC=clang CXX=clang++ cmake -S . -B "$1" -G Ninja -DFERRY_SANITIZE="$2" \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
+    -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" > /dev/null
+}
+
+status=0
+if [ "$what" = asan ] || [ "$what" = all ]; then
+  configure build-asan address,undefined
+  cmake --build build-asan
+  # Every process the tests start (ferry under mpirun too) inherits these.
+  export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:exitcode=86
+  export LSAN_OPTIONS=suppressions=$supp/lsan.supp:print_suppressions=0
+  export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  ctest --test-dir build-asan -j"$(nproc)" --output-on-failure --timeout 2700 || status=1
+  echo "sanitize.sh: ASan + UBSan suite: $([ $status = 0 ] && echo clean || echo FAILED)"
+fi
+if [ "$what" = tsan ] || [ "$what" = all ]; then
+  configure build-tsan thread
+  cmake --build build-tsan --target ferry_tests
+  tsan=0
+  TSAN_OPTIONS="suppressions=$supp/tsan.supp:halt_on_error=1:second_deadlock_stack=1" \
+    build-tsan/tests/ferry_tests \
+    --gtest_filter='InProcess*:*/InProcess*:DistributedInProcess*:*/DistributedInProcess*:Compositor*:*/Compositor*' \
+    || tsan=1
+  echo "sanitize.sh: TSan threaded tests: $([ $tsan = 0 ] && echo clean || echo FAILED)"
+  ((tsan == 0)) || status=1
+fi
+exit $status
