@@ -91,6 +91,8 @@ for kind in "${kinds[@]}"; do
 done
 if ((failed > 0)); then
   echo "fuzz.sh: $failed of ${#kinds[@]} targets failed"
+  echo "fuzz: $((${#kinds[@]} - failed)) passed, $failed failed"
   exit 1
 fi
 echo "fuzz.sh: ${#kinds[@]} targets, ${seconds} s each, no finding"
+echo "fuzz: ${#kinds[@]} passed, 0 failed"
