@@ -406,7 +406,9 @@ class RatioReporter : public benchmark::ConsoleReporter {
         "\nCPU time per query (args: tiles/ray set); Baseline, ProxyBvh,  OwnApart (rank r's own "
         "proxies apart):\n");
     for (const auto& [args, trees] : perQuery_) {
-      auto at = [&](const char* tree) { return trees.count(tree) ? trees.at(tree) : 0.0; };
+      auto at = [&trees = trees](const char* tree) {
+        return trees.count(tree) ? trees.at(tree) : 0.0;
+      };
       const double base = at("Baseline"), wide = at("ProxyBvh"), split = at("OwnApart");
       std::printf(
           "  %-8s %.3f us  %.3f us  %.3f us   ProxyBvh %.2fx faster than Baseline, "
