@@ -119,7 +119,10 @@ ForwardDecision finishTraversal(const Path& ray, int rank) {
     return {ForwardDecision::Send, int(ray.hitRank), true};
   } else {
     RankMask owners = RankMask(ray.hitOwners);
-    if (owners == 0 || (owners & (RankMask(1) << rank))) return {ForwardDecision::ShadeHere};
+    // A rank beyond the mask's bits (a mask path checked against a rank set
+    // above 64 ranks) owns nothing the mask can name.
+    const bool ownsHit = rank < int(8 * sizeof(RankMask)) && (owners & (RankMask(1) << rank));
+    if (owners == 0 || ownsHit) return {ForwardDecision::ShadeHere};
     return {ForwardDecision::Send, pickOwner(owners, ray), true};
   }
 }
