@@ -24,10 +24,20 @@ if [ "$what" = asan ] || [ "$what" = all ]; then
   configure build-asan address,undefined
   cmake --build build-asan
   # Every process the tests start (ferry under mpirun too) inherits these.
-  export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:exitcode=86
   export LSAN_OPTIONS=suppressions=$supp/lsan.supp:print_suppressions=0
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-  ctest --test-dir build-asan -j"$(nproc)" --output-on-failure --timeout 2700 || status=1
+  # The unit tests (gtest names have a dot) with leak checking, but for the
+  # one that starts MPI in the test binary.
+  ASAN_OPTIONS=detect_leaks=1 ctest --test-dir build-asan -j"$(nproc)" -R '[.]' \
+    -E '^MpiCommunicator[.]' --output-on-failure --timeout 2700 || status=1
+  # The script tests start ferry under mpirun: Open MPI unloads its
+  # components (dlopen'ed libraries) at MPI_Finalize, so what they keep for
+  # the process's life is reported from an unknown module that no
+  # suppression can name. Memory errors and undefined behaviour still fail;
+  # the tests' own memory bounds are not checked (ASan's shadow and
+  # quarantine are not the program's memory).
+  ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan -j"$(nproc)" \
+    -R '^([^.]*|MpiCommunicator[.].*)$' --output-on-failure --timeout 2700 || status=1
   echo "sanitize.sh: ASan + UBSan suite: $([ $status = 0 ] && echo clean || echo FAILED)"
 fi
 if [ "$what" = tsan ] || [ "$what" = all ]; then

@@ -84,8 +84,9 @@ std::vector<uint8_t> partitionPicture(const Scene& scene, const Partition& parti
             const Vec3f d = q - camera.origin();
             float px, py;
             if (!camera.project(d, px, py)) continue;
+            // Off the picture (or far off: no int holds it) before converting.
+            if (!(px >= 0 && py >= 0 && px < float(w) && py < float(h))) continue;
             const int ix = int(std::floor(px)), iy = int(std::floor(py));
-            if (ix < 0 || iy < 0 || ix >= w || iy >= h) continue;
             const bool hidden = length(d) > depth[size_t(iy) * w + ix] * 1.0001f;
             const Rgba c = rankColor(p.owners.nth(count > 1 ? (s / 8) % count : 0));
             canvas.blend(ix, iy, c, hidden ? 0.12f : 0.55f);
