@@ -38,7 +38,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "io/image_io.h"
+#include "io/images/image_io.h"
 #include "render/camera.h"
 
 namespace {

@@ -92,7 +92,7 @@ def filtered_mean(values):
 
 for scene in cornell bunny; do
   obj="$work/$scene.obj"
-  # Ferry's default OBJ view (src/io/obj_loader.cpp): at the bounds centre, from +z, fovY 45.
+  # Ferry's default OBJ view (src/io/obj/obj_loader.cpp): at the bounds centre, from +z, fovY 45.
   read -r vp vi <<< "$("$ferry" info "$obj" --json | python3 -c '
 import json, math, sys
 lo, hi = json.load(sys.stdin)["bounds"]

@@ -34,13 +34,13 @@
 
 #include "core/floating_point_mode.h"
 #include "core/random.h"
+#include "distributed/proxy_bvh.h"
 #include "io/scene_loader.h"
 #include "partition/partitioner.h"
 #include "render/bsdf.h"
 #include "render/camera.h"
 #include "scene/scene.h"
 #include "trace/embree_backend.h"
-#include "trace/proxy_bvh.h"
 
 namespace ferry {
 namespace {

@@ -10,6 +10,7 @@ per offence, file:line) when
     (tests included);
   - the declared dependencies form a cycle, or name an unknown folder;
   - a folder with sources is not declared.
+A folder's subfolders (io/pbrt/, io/gltf/, ...) belong to it.
 """
 import os
 import re
@@ -60,7 +61,11 @@ def main():
         path = os.path.join(src, folder)
         if not os.path.isdir(path) or folder == "third_party":
             continue
-        files = sorted(f for f in os.listdir(path) if f.endswith((".h", ".cpp")))
+        files = sorted(
+            os.path.relpath(os.path.join(d, f), path)
+            for d, _, names in os.walk(path)
+            for f in names
+            if f.endswith((".h", ".cpp")))
         if files and folder not in layers:
             errors.append(f"src/{folder}: not declared with ferry_module in src/CMakeLists.txt")
             continue

@@ -8,9 +8,9 @@
 #include "app/partition_command.h"
 #include "app/render_command.h"
 #include "app/view_command.h"
+#include "comm/in_process_communicator.h"
 #include "core/error.h"
 #include "core/floating_point_mode.h"
-#include "mpi/in_process_communicator.h"
 #include "mpi/launcher.h"
 #include "mpi/mpi_communicator.h"
 

@@ -12,13 +12,15 @@
 
 #include "app/render_command.h"
 #include "builtin/builtin.h"
+#include "comm/communicator.h"
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/process_memory.h"
-#include "io/image_io.h"
-#include "io/part_directory.h"
+#include "io/images/image_io.h"
+#include "io/parts/part_directory.h"
 #include "io/scene_loader.h"
-#include "mpi/communicator.h"
+#include "partition/ray_sampler.h"
+#include "path/path.h"
 #include "report/partition_picture.h"
 #include "report/partition_report.h"
 #include "scene/light_scene.h"
@@ -27,8 +29,6 @@
 #include "scene/scene_summary.h"
 #include "session/forward_prediction.h"
 #include "session/session_settings.h"
-#include "trace/path.h"
-#include "trace/ray_sampler.h"
 
 namespace ferry {
 namespace {

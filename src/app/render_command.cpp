@@ -13,17 +13,17 @@
 #include "app/camera_flags.h"
 #include "app/partition_command.h"
 #include "app/progress.h"
+#include "comm/communicator.h"
 #include "core/clock.h"
 #include "core/error.h"
 #include "distributed/distributed_traversal.h"
 #include "distributed/forwarding.h"
-#include "io/image_io.h"
-#include "mpi/communicator.h"
+#include "io/images/image_io.h"
+#include "path/path.h"
 #include "scene/scene_summary.h"
 #include "session/image_file_sink.h"
 #include "session/render_session.h"
 #include "session/session_stats.h"
-#include "trace/path.h"
 
 namespace ferry {
 namespace {

@@ -7,8 +7,8 @@
 #include <optional>
 
 #include "app/progress.h"
+#include "comm/communicator.h"
 #include "core/error.h"
-#include "mpi/communicator.h"
 #include "session/render_session.h"
 #include "viewer/viewer_server.h"
 

@@ -1,6 +1,6 @@
 // An array that owns its elements, or shares memory that something else keeps
 // alive: the scene's mesh and texel arrays, which a rank loading its part file
-// takes straight from the file's mapping instead of copying (io/part_file), and
+// takes straight from the file's mapping instead of copying (io/parts/part_file), and
 // which the Embree backend in turn shares (no second copy anywhere).
 //
 // It behaves as a value, like the std::vector it wraps: copies are independent.

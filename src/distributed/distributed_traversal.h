@@ -21,11 +21,11 @@
 #include <string>
 #include <vector>
 
+#include "comm/communicator.h"
 #include "distributed/forwarding.h"
-#include "mpi/communicator.h"
+#include "distributed/proxy_bvh.h"
 #include "partition/partition.h"
 #include "render/ray_traversal.h"
-#include "trace/proxy_bvh.h"
 
 namespace ferry {
 

@@ -23,15 +23,15 @@
 
 #include <fmt/format.h>
 
+#include "comm/in_process_communicator.h"
+#include "compositing/compositor.h"
 #include "io/scene_loader.h"
-#include "mpi/compositor.h"
-#include "mpi/in_process_communicator.h"
 #include "partition/partitioner.h"
+#include "path/path.h"
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene.h"
 #include "trace/embree_backend.h"
-#include "trace/path.h"
 
 namespace ferry {
 namespace {

@@ -6,9 +6,9 @@
 #include <cstdint>
 #include <string>
 
+#include "distributed/proxy_bvh.h"
 #include "partition/partition.h"
-#include "trace/path.h"
-#include "trace/proxy_bvh.h"
+#include "path/path.h"
 
 namespace ferry {
 

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "distributed/forwarding.h"
-#include "trace/path.h"
+#include "path/path.h"
 #include "trace/trace_backend.h"
 
 namespace ferry {

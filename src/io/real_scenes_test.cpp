@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
-#include "io/image_io.h"
+#include "io/images/image_io.h"
 #include "io/scene_loader.h"
 #include "scene/scene_summary.h"
 

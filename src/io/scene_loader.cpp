@@ -7,10 +7,10 @@
 
 #include "builtin/builtin.h"
 #include "core/error.h"
-#include "io/gltf_loader.h"
-#include "io/obj_loader.h"
-#include "io/pbrt_parser.h"
-#include "io/ply_reader.h"
+#include "io/gltf/gltf_loader.h"
+#include "io/obj/obj_loader.h"
+#include "io/pbrt/pbrt_parser.h"
+#include "io/ply/ply_reader.h"
 #include "scene/mesh_store.h"
 
 namespace ferry {

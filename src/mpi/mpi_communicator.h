@@ -8,7 +8,7 @@
 
 #include <memory>
 
-#include "mpi/communicator.h"
+#include "comm/communicator.h"
 
 namespace ferry {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "mpi/communicator_test_util.h"
+#include "comm/communicator_test_util.h"
 
 namespace ferry {
 namespace {

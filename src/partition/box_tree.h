@@ -1,6 +1,6 @@
 // A BVH over boxes answering the ray-guided partitioner's question: which
 // boxes does this segment pass? (All of them, in no particular order; the
-// forwarding operator's closest-proxy query is trace/proxy_bvh.h.)
+// forwarding operator's closest-proxy query is distributed/proxy_bvh.h.)
 #pragma once
 
 #include <cstdint>

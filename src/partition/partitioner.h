@@ -65,7 +65,7 @@ struct PartitionerOptions {
   uint64_t maxProxies = kDefaultMaxProxies;
   uint64_t maxPieceBytes = 0;  // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
   uint32_t seed = 1;           // random; ray-guided: its sample
-  // ray-guided: the rays it weighs splits with (trace/ray_sampler.h makes
+  // ray-guided: the rays it weighs splits with (partition/ray_sampler.h makes
   // them: withRaySample), and how many paths that sample has.
   std::shared_ptr<const RaySample> raySample;
   uint64_t rayPaths = 65536;
@@ -78,7 +78,7 @@ struct PartitionerOptions {
 // per 4 triangles of each mesh, at most 1024: partition/proxies.h) and 1
 // for the others (object-proxies: the paper's one box per instance).
 // Above 1 they are instanced proxies: the boxes are held once per object,
-// in object space, under a small tree of their own (trace/proxy_bvh.h), so
+// in object space, under a small tree of their own (distributed/proxy_bvh.h), so
 // fine shapes cost about 30 bytes per box and little query time. By size
 // they forward 10-22 % fewer rays than 64 per mesh did
 // (docs/partitioning.md, "Shapes by size"). When the instances alone would

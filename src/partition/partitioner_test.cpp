@@ -14,13 +14,13 @@
 #include "core/hash64.h"
 #include "partition/object_partitioner.h"
 #include "partition/ray_guided_partitioner.h"
+#include "partition/ray_sampler.h"
 #include "partition/scene_split.h"
 #include "partition/spatial_partitioner.h"
 #include "partition/split_loop.h"
 #include "partition/units.h"
 #include "scene/scene.h"
 #include "scene/scene_summary.h"
-#include "trace/ray_sampler.h"
 
 namespace ferry {
 namespace {

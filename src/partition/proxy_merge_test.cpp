@@ -8,8 +8,8 @@
 
 #include "builtin/builtin.h"
 #include "partition/partitioner.h"
+#include "partition/ray_sampler.h"
 #include "scene/scene.h"
-#include "trace/ray_sampler.h"
 
 namespace ferry {
 namespace {

@@ -36,7 +36,7 @@
 // `--mesh-proxies`), so that rays pass through the gaps of terrain pieces.
 //
 // The sample is made from the scene alone, never from the views evaluated:
-// trace/ray_sampler.h.
+// partition/ray_sampler.h.
 #pragma once
 
 #include <cstdint>

@@ -3,7 +3,7 @@
 // its origin to its first hit in the whole scene (or to where it leaves the
 // scene's box). The partitioner needs only the segments: which units' boxes
 // a segment passes is a question of boxes, answered here in partition/; the
-// hits come from a tracer (trace/ray_sampler.h makes the sample with Embree).
+// hits come from a tracer (partition/ray_sampler.h makes the sample with Embree).
 #pragma once
 
 #include <cstdint>

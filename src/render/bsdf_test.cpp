@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "io/fourier_bsdf_file.h"
+#include "io/pbrt/fourier_bsdf_file.h"
 #include "render/fourier_bsdf.h"
 #include "render/render_test_util.h"
 

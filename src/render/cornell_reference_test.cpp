@@ -41,7 +41,7 @@
 #include <sstream>
 
 #include "builtin/builtin.h"
-#include "io/image_io.h"
+#include "io/images/image_io.h"
 #include "render/render_test_util.h"
 
 namespace ferry {

@@ -8,7 +8,7 @@
 
 #include <filesystem>
 
-#include "io/fourier_bsdf_file.h"
+#include "io/pbrt/fourier_bsdf_file.h"
 #include "render/bsdf.h"
 #include "render/render_test_util.h"
 

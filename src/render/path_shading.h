@@ -61,12 +61,12 @@
 
 #include "core/math.h"
 #include "core/random.h"
+#include "path/path.h"
 #include "render/bsdf.h"
 #include "render/camera.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
 #include "render/surface.h"
-#include "trace/path.h"
 #include "trace/trace_backend.h"
 
 namespace ferry {

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "core/clock.h"
+#include "path/path.h"
 #include "render/render_stats.h"
-#include "trace/path.h"
 #include "trace/trace_backend.h"
 
 namespace ferry {

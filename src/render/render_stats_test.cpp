@@ -8,7 +8,7 @@
 #include <string>
 
 #include "core/error.h"
-#include "trace/path.h"
+#include "path/path.h"
 
 namespace ferry {
 namespace {

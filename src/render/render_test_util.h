@@ -17,13 +17,13 @@
 #include <tbb/global_control.h>
 
 #include "core/math.h"
+#include "path/path.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
 #include "render/ray_traversal.h"
 #include "render/wavefront_renderer.h"
 #include "scene/scene.h"
 #include "trace/embree_backend.h"
-#include "trace/path.h"
 
 namespace ferry::testing {
 

@@ -13,12 +13,12 @@
 
 #include "builtin/builtin.h"
 #include "core/random.h"
+#include "path/path.h"
 #include "render/bsdf.h"
 #include "render/camera.h"
 #include "render/surface.h"
 #include "scene/scene.h"
 #include "trace/embree_backend.h"
-#include "trace/path.h"
 #include "trace/reference_backend.h"
 
 namespace ferry {

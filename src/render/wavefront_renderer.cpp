@@ -12,8 +12,8 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/random.h"
+#include "path/path.h"
 #include "scene/scene.h"
-#include "trace/path.h"
 
 namespace ferry {
 

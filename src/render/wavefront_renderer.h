@@ -1,5 +1,5 @@
 // The path tracer every rank runs, as a wavefront: typed queues of compact
-// paths (trace/path.h: RayQueues, paths and shadow rays), one method per
+// paths (path/path.h: RayQueues, paths and shadow rays), one method per
 // stage, the render loop reading like the algorithm.
 //
 // One wavefront is one sample of every pixel this rank generates (on one

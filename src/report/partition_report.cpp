@@ -9,7 +9,7 @@
 
 #include "core/clock.h"
 #include "core/error.h"
-#include "io/image_io.h"
+#include "io/images/image_io.h"
 #include "report/canvas.h"
 #include "scene/scene.h"
 #include "scene/scene_summary.h"

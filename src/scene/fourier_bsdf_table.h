@@ -11,7 +11,7 @@
 // mu_i of the zeroth coefficient (luminance), which sampling inverts.
 //
 // The table is the scene's (Scene::bsdfTables, shared: materials name it by
-// index); reading it is io/fourier_bsdf_file, evaluating it
+// index); reading it is io/pbrt/fourier_bsdf_file, evaluating it
 // render/fourier_bsdf.
 #pragma once
 

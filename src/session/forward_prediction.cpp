@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "comm/in_process_communicator.h"
 #include "core/clock.h"
 #include "core/error.h"
-#include "io/manifest.h"
-#include "mpi/in_process_communicator.h"
+#include "io/parts/manifest.h"
 #include "session/render_session.h"
 
 namespace ferry {

@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "core/error.h"
-#include "io/part_directory.h"
+#include "io/parts/part_directory.h"
 #include "render/render_test_util.h"
 #include "scene/light_scene.h"
 #include "scene/scene_summary.h"

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "io/image_io.h"
+#include "io/images/image_io.h"
 #include "session/frame_sink.h"
 
 namespace ferry {

@@ -12,7 +12,7 @@
 
 namespace ferry {
 
-// The path on the wire (trace/path.h).
+// The path on the wire (path/path.h).
 enum class PathLayout : uint8_t {
   Auto,   // Path8 up to 8 ranks, Path64 up to 64, replay above
   Mask,   // Path8 or Path64 (at most 64 ranks)

@@ -11,23 +11,23 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
+#include "compositing/compositor.h"
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/fault_injection.h"
 #include "core/hash64.h"
 #include "core/process_memory.h"
 #include "distributed/distributed_traversal.h"
-#include "io/checkpoint_file.h"
-#include "io/part_directory.h"
+#include "distributed/proxy_bvh.h"
+#include "io/checkpoints/checkpoint_file.h"
+#include "io/parts/part_directory.h"
 #include "io/scene_loader.h"
-#include "mpi/compositor.h"
 #include "partition/partition.h"
+#include "partition/ray_sampler.h"
+#include "path/path.h"
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
 #include "trace/embree_backend.h"
-#include "trace/path.h"
-#include "trace/proxy_bvh.h"
-#include "trace/ray_sampler.h"
 
 namespace ferry {
 

@@ -21,8 +21,8 @@
 #include <utility>
 #include <vector>
 
+#include "comm/communicator.h"
 #include "distributed/distributed_traversal.h"
-#include "mpi/communicator.h"
 #include "render/camera.h"
 #include "render/render_stats.h"
 #include "scene/scene.h"
@@ -181,7 +181,7 @@ class RenderSession {
   // after it (the bandwidth predictor renders several views from one load).
   void setView(const std::string& view, const std::optional<CameraView>& camera);
   // Rank 0, before run() (not collective): continues the render held in a
-  // checkpoint (io/checkpoint_file.h): run() starts after its frames, with
+  // checkpoint (io/checkpoints/checkpoint_file.h): run() starts after its frames, with
   // its image. Throws InputError naming the file if it cannot be read, or
   // was made with another scene or other settings that shape the image
   // (size, samples per frame, depth, seed, view), or holds every frame asked for.

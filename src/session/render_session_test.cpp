@@ -12,10 +12,10 @@
 #include <filesystem>
 #include <string>
 
+#include "comm/in_process_communicator.h"
 #include "core/error.h"
-#include "io/part_directory.h"
+#include "io/parts/part_directory.h"
 #include "io/scene_loader.h"
-#include "mpi/in_process_communicator.h"
 #include "partition/partitioner.h"
 #include "scene/light_scene.h"
 #include "session/session_stats.h"

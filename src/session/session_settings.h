@@ -39,7 +39,7 @@ struct SessionSettings {
   // paper's best on more than one rank (round-robin, which does nothing, on one).
   std::optional<PartitionerKind> partitioner;
 
-  // Long renders (io/checkpoint_file.h): the accumulated image is written to
+  // Long renders (io/checkpoints/checkpoint_file.h): the accumulated image is written to
   // `checkpoint` every `checkpointEvery` frames and after the last one;
   // `timeLimitSeconds` (> 0) makes the frame that crosses it the last.
   std::string checkpoint;

@@ -6,7 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
-#include "io/image_io.h"
+#include "io/images/image_io.h"
 
 namespace ferry {
 namespace {

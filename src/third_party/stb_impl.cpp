@@ -10,7 +10,7 @@
 
 // tinygltf reuses the stb compiled above and the system's nlohmann/json, and
 // decodes no image itself: Ferry's glTF loader decodes only the images its
-// materials use (see io/gltf_config.h, which every includer goes through).
+// materials use (see io/gltf/gltf_config.h, which every includer goes through).
 #include <nlohmann/json.hpp>
 #define TINYGLTF_IMPLEMENTATION
-#include "io/gltf_config.h"
+#include "io/gltf/gltf_config.h"

@@ -14,8 +14,8 @@
 #include "builtin/builtin.h"
 #include "core/floating_point_mode.h"
 #include "core/random.h"
+#include "path/path.h"
 #include "scene/scene.h"
-#include "trace/path.h"
 
 namespace ferry {
 namespace {

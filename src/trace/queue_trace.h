@@ -20,7 +20,7 @@
 #include <span>
 
 #include "core/error.h"
-#include "trace/path.h"
+#include "path/path.h"
 #include "trace/trace_backend.h"
 
 namespace ferry {

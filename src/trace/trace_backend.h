@@ -15,7 +15,7 @@
 #include <string>
 
 #include "core/math.h"
-#include "trace/path.h"
+#include "path/path.h"
 
 namespace ferry {
 

@@ -38,6 +38,7 @@
 #include "builtin/builtin.h"
 #include "core/random.h"
 #include "io/scene_loader.h"
+#include "path/path.h"
 #include "render/camera.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
@@ -45,7 +46,6 @@
 #include "render/wavefront_renderer.h"
 #include "scene/scene.h"
 #include "trace/embree_backend.h"
-#include "trace/path.h"
 #include "trace/reference_backend.h"
 
 namespace ferry {

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "core/error.h"
-#include "io/image_io.h"
+#include "io/images/image_io.h"
 #include "viewer/viewer_page.h"
 
 namespace ferry {

@@ -1,0 +1,197 @@
+#include "io/parts/manifest.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "core/hash64.h"
+#include "io/images/image_io.h"
+#include "io/parts/part_file.h"
+#include "scene/scene.h"
+
+namespace ferry {
+namespace {
+
+std::string manifestPath(const std::string& directory) {
+  return (std::filesystem::path(directory) / kManifestName).string();
+}
+
+nlohmann::json fileJson(const ManifestFile& f) {
+  return {{"file", f.file}, {"bytes", f.bytes}, {"hash", hashToHex(f.hash)}};
+}
+
+uint64_t parseHash(const std::string& hex, const std::string& where) {
+  if (hex.size() != 16 || hex.find_first_not_of("0123456789abcdef") != std::string::npos)
+    throw InputError(fmt::format("{}: bad hash '{}'", where, hex));
+  return std::stoull(hex, nullptr, 16);
+}
+
+void readFile(const nlohmann::json& j, ManifestFile& f, const std::string& where) {
+  f.file = j.at("file").get<std::string>();
+  f.bytes = j.at("bytes").get<uint64_t>();
+  f.hash = parseHash(j.at("hash").get<std::string>(), where);
+  // Files live in the directory: no absolute paths, no way out of it.
+  std::filesystem::path p(f.file);
+  if (f.file.empty() || p.is_absolute() || p.has_parent_path())
+    throw InputError(fmt::format("{}: bad file name '{}'", where, f.file));
+}
+
+}  // namespace
+
+nlohmann::json Manifest::toJson() const {
+  nlohmann::json j;
+  j["format"] = kManifestFormat;
+  j["version"] = version;
+  j["scene"] = scene;
+  j["partitioner"] = partitioner;
+  j["options"] = options;
+  j["ranks"] = ranks;
+  j["summary"] = summary;
+  j["film_scale"] = filmScale;
+  if (filmCrop) j["film_crop"] = *filmCrop;
+  if (!integrator.empty()) j["integrator"] = integrator;
+  if (integratorMaxDepth) j["integrator_max_depth"] = *integratorMaxDepth;
+  j["input_bytes"] = inputBytes;
+  j["replicated_bytes"] = replicatedBytes;
+  j["proxies"] = proxies;
+  j["partition_seconds"] = partitionSeconds;
+  j["shared"] = fileJson(shared);
+  nlohmann::json parts = nlohmann::json::array();
+  for (const ManifestPart& p : this->parts) {
+    nlohmann::json e = fileJson(p);
+    e["rank"] = p.rank;
+    e["instances"] = p.instances;
+    e["estimated_bytes"] = p.estimatedBytes;
+    parts.push_back(e);
+  }
+  j["parts"] = parts;
+  if (!predictions.empty()) j["predictions"] = predictions;
+  return j;
+}
+
+bool isPartDirectory(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::is_directory(path, ec) && std::filesystem::exists(manifestPath(path), ec);
+}
+
+void writeManifest(const std::string& directory, const Manifest& manifest) {
+  const std::string path = manifestPath(directory);
+  writeFileAtomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp);
+    out << manifest.toJson().dump(2) << "\n";
+    out.close();
+    if (!out) throw InputError(fmt::format("{}: could not write", path));
+  });
+}
+
+Manifest readManifest(const std::string& directory) {
+  const std::string path = manifestPath(directory);
+  std::ifstream in(path);
+  if (!in) throw InputError(fmt::format("{}: no such file (not a part directory?)", path));
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: not valid JSON ({})", path, e.what()));
+  }
+  Manifest m;
+  try {
+    if (!j.is_object() || j.value("format", std::string()) != kManifestFormat)
+      throw InputError(fmt::format("{}: not a Ferry part manifest", path));
+    m.version = j.at("version").get<uint32_t>();
+    if (m.version < kOldestPartFormatVersion || m.version > kPartFormatVersion)
+      throw InputError(fmt::format(
+          "{}: made by another version of Ferry (part format {}, this Ferry reads formats "
+          "{} to {}): partition the scene again",
+          path, m.version, kOldestPartFormatVersion, kPartFormatVersion));
+    m.scene = j.at("scene").get<std::string>();
+    m.partitioner = j.at("partitioner").get<std::string>();
+    m.options = j.value("options", nlohmann::json::object());
+    m.ranks = j.at("ranks").get<int>();
+    m.summary = j.at("summary");
+    m.filmScale = j.value("film_scale", 1.0f);  // absent in directories made before it existed
+    if (!(m.filmScale > 0) || !std::isfinite(m.filmScale))
+      throw InputError(fmt::format("{}: bad film_scale {}", path, m.filmScale));
+    if (j.contains("film_crop")) {
+      const auto crop = j.at("film_crop").get<std::vector<float>>();
+      if (crop.size() != 4 || !isCropWindow(crop[0], crop[1], crop[2], crop[3]))
+        throw InputError(fmt::format("{}: bad film_crop", path));
+      m.filmCrop = std::array<float, 4>{crop[0], crop[1], crop[2], crop[3]};
+    }
+    m.integrator = j.value("integrator", std::string());
+    if (j.contains("integrator_max_depth")) {
+      m.integratorMaxDepth = j.at("integrator_max_depth").get<int>();
+      if (*m.integratorMaxDepth < 0)
+        throw InputError(
+            fmt::format("{}: bad integrator_max_depth {}", path, *m.integratorMaxDepth));
+    }
+    m.inputBytes = j.value("input_bytes", uint64_t(0));
+    m.replicatedBytes = j.value("replicated_bytes", uint64_t(0));
+    m.proxies = j.value("proxies", uint64_t(0));
+    m.partitionSeconds = j.value("partition_seconds", 0.0);
+    m.predictions = j.value("predictions", nlohmann::json::array());
+    if (!m.predictions.is_array())
+      throw InputError(fmt::format("{}: predictions must be an array", path));
+    readFile(j.at("shared"), m.shared, path);
+    const nlohmann::json& parts = j.at("parts");
+    if (m.ranks < 1 || m.ranks > (m.version == 1 ? 64 : kMaxRanks) || !parts.is_array() ||
+        parts.size() != size_t(m.ranks))
+      throw InputError(
+          fmt::format("{}: {} parts listed for {} ranks", path, parts.size(), m.ranks));
+    for (size_t r = 0; r < parts.size(); ++r) {
+      ManifestPart p;
+      readFile(parts[r], p, path);
+      p.rank = parts[r].at("rank").get<int>();
+      if (p.rank != int(r))
+        throw InputError(fmt::format("{}: part {} is listed as rank {}", path, r, p.rank));
+      p.instances = parts[r].value("instances", uint64_t(0));
+      p.estimatedBytes = parts[r].value("estimated_bytes", uint64_t(0));
+      m.parts.push_back(std::move(p));
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: missing or bad field ({})", path, e.what()));
+  }
+  return m;
+}
+
+SceneSummary summaryFromJson(const nlohmann::json& j) {
+  SceneSummary s;
+  s.name = j.value("name", std::string());
+  s.uniqueMeshes = j.value("unique_meshes", uint64_t(0));
+  s.triangles = j.value("triangles", uint64_t(0));
+  s.vertices = j.value("vertices", uint64_t(0));
+  s.objects = j.value("objects", uint64_t(0));
+  s.instances = j.value("instances", uint64_t(0));
+  s.instancedTriangles = j.value("instanced_triangles", uint64_t(0));
+  s.textures = j.value("textures", uint64_t(0));
+  s.texels = j.value("texels", uint64_t(0));
+  s.views = j.value("views", uint64_t(0));
+  if (j.contains("lights")) {
+    const auto& l = j["lights"];
+    s.suns = l.value("suns", uint64_t(0));
+    s.environments = l.value("environments", uint64_t(0));
+    s.emissiveMeshes = l.value("emissive_meshes", uint64_t(0));
+    s.emissiveTriangles = l.value("emissive_triangles", uint64_t(0));
+  }
+  if (j.contains("bounds") && j["bounds"].is_array() && j["bounds"].size() == 2) {
+    const auto& b = j["bounds"];
+    s.bounds.lower = {b[0][0].get<float>(), b[0][1].get<float>(), b[0][2].get<float>()};
+    s.bounds.upper = {b[1][0].get<float>(), b[1][1].get<float>(), b[1][2].get<float>()};
+  }
+  if (j.contains("memory_bytes")) {
+    const auto& m = j["memory_bytes"];
+    s.memory.vertices = m.value("vertices", uint64_t(0));
+    s.memory.normals = m.value("normals", uint64_t(0));
+    s.memory.uvs = m.value("uvs", uint64_t(0));
+    s.memory.indices = m.value("indices", uint64_t(0));
+    s.memory.texels = m.value("texels", uint64_t(0));
+    s.memory.instances = m.value("instances", uint64_t(0));
+    s.memory.accel = m.value("accel", uint64_t(0));
+  }
+  return s;
+}
+
+}  // namespace ferry

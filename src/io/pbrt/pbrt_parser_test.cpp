@@ -1,0 +1,910 @@
+#include "io/pbrt/pbrt_parser.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "io/images/image_io.h"
+
+namespace ferry {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kCorpus = fs::path(FERRY_SOURCE_DIR) / "tests" / "corpus" / "pbrt";
+
+std::string corpus(const std::string& name) {
+  return (kCorpus / name).string();
+}
+
+struct Loaded {
+  Scene scene;
+  std::vector<std::string> warnings;
+};
+
+Loaded load(const std::string& path, bool envFallback = false) {
+  Loaded out;
+  LoadOptions options;
+  options.envFallback = envFallback;
+  options.warn = [&](const std::string& w) { out.warnings.push_back(w); };
+  out.scene = loadPbrt(path, options);
+  out.scene.validate();
+  return out;
+}
+
+Scene fromText(const std::string& text, std::vector<std::string>* warnings = nullptr) {
+  LoadOptions options;
+  options.warn = [&](const std::string& w) {
+    if (warnings) warnings->push_back(w);
+  };
+  Scene s = loadPbrtFromString(text, "text.pbrt", kCorpus.string(), options);
+  s.validate();
+  return s;
+}
+
+bool anyContains(const std::vector<std::string>& lines, const std::string& piece) {
+  for (const std::string& l : lines)
+    if (l.find(piece) != std::string::npos) return true;
+  return false;
+}
+
+const Material& material(const Scene& s, const std::string& name) {
+  for (const Material& m : s.materials)
+    if (m.name == name) return m;
+  throw std::runtime_error("no material " + name);
+}
+
+// Meshes using the material called `name`.
+std::vector<const Mesh*> meshesOf(const Scene& s, const std::string& name) {
+  std::vector<const Mesh*> out;
+  for (const Mesh& m : s.meshes)
+    if (s.materials[size_t(m.material)].name == name) out.push_back(&m);
+  return out;
+}
+
+int32_t objectOfMesh(const Scene& s, const Mesh* mesh) {
+  for (size_t o = 0; o < s.objects.size(); ++o)
+    for (int32_t m : s.objects[o].meshes)
+      if (&s.meshes[size_t(m)] == mesh) return int32_t(o);
+  return -1;
+}
+
+std::vector<const Instance*> instancesOf(const Scene& s, int32_t object) {
+  std::vector<const Instance*> out;
+  for (const Instance& i : s.instances)
+    if (i.object == object) out.push_back(&i);
+  return out;
+}
+
+// ------------------------------------------------------------------- pbrt-v3
+
+class PbrtV3Features : public testing::Test {
+ protected:
+  static void SetUpTestSuite() { loaded_ = new Loaded(load(corpus("features_v3.pbrt"))); }
+  static void TearDownTestSuite() { delete loaded_; }
+  const Scene& scene() const { return loaded_->scene; }
+  const std::vector<std::string>& warnings() const { return loaded_->warnings; }
+  static Loaded* loaded_;
+};
+Loaded* PbrtV3Features::loaded_ = nullptr;
+
+TEST_F(PbrtV3Features, CameraAndFilm) {
+  ASSERT_EQ(scene().views.size(), 1u);
+  const CameraView& v = scene().views[0];
+  EXPECT_EQ(v.name, "camera");
+  EXPECT_NEAR(v.from.x, 0, 1e-5);
+  EXPECT_NEAR(v.from.y, -10, 1e-5);
+  EXPECT_NEAR(v.from.z, 2, 1e-5);
+  Vec3f dir = normalize(v.at - v.from);
+  Vec3f expected = normalize(Vec3f(0, 10, -1));
+  EXPECT_NEAR(dot(dir, expected), 1, 1e-5);
+  EXPECT_GT(v.up.z, 0.9f);
+  // `Scale -1 1 1` before LookAt makes the camera right-handed.
+  EXPECT_FALSE(v.leftHanded);
+  EXPECT_FLOAT_EQ(v.fovY, 40);  // a wide film: fov is vertical
+  EXPECT_EQ(scene().filmWidth, 200);
+  EXPECT_EQ(scene().filmHeight, 100);
+  EXPECT_EQ(scene().filmFilename, "features.exr");
+  EXPECT_EQ(scene().filmScale, 2);  // "float scale" [ 2 ]: the radiance written is doubled
+  ASSERT_TRUE(scene().filmCrop.has_value());  // "float cropwindow" [ 0.25 0.75 0 0.5 ]
+  EXPECT_EQ(*scene().filmCrop, (std::array<float, 4>{0.25f, 0.75f, 0, 0.5f}));
+}
+
+// The Integrator is named (light paths follow a bidirectional one) and
+// otherwise skipped with a warning.
+TEST_F(PbrtV3Features, IntegratorIsRecorded) {
+  EXPECT_EQ(scene().integrator, "path");
+  EXPECT_FALSE(integratorWantsLightPaths(scene().integrator));
+  EXPECT_FALSE(scene().integratorMaxDepth.has_value());  // no "maxdepth": Ferry's default
+}
+
+TEST_F(PbrtV3Features, Lights) {
+  EXPECT_EQ(scene().environment.color, Vec3f(1, 1, 1));  // 0.5 times "rgb scale" 2
+  EXPECT_FALSE(scene().environment.image);
+  ASSERT_EQ(scene().suns.size(), 1u);
+  const SunLight& sun = scene().suns[0];
+  EXPECT_NEAR(sun.direction.z, 1, 1e-6);
+  // A 5500 K blackbody at 3 times its peak: warm, bright.
+  EXPECT_GT(sun.irradiance.x, sun.irradiance.z);
+  EXPECT_GT(luminance(sun.irradiance), 1.0f);
+  EXPECT_LT(luminance(sun.irradiance), 3.0f);
+  // The point light is a small emitting sphere at (1, 2, 3).
+  auto lamp = meshesOf(scene(), "point light");
+  ASSERT_EQ(lamp.size(), 1u);
+  auto inst = instancesOf(scene(), objectOfMesh(scene(), lamp[0]));
+  ASSERT_EQ(inst.size(), 1u);
+  EXPECT_EQ(inst[0]->transform.t, Vec3f(1, 2, 3));
+  EXPECT_LT(length(lamp[0]->bounds().size()), 0.2f);
+  // The area light's quad emits L.
+  bool area = false;
+  for (const Material& m : scene().materials)
+    if (m.emission == Vec3f(4, 4, 4)) area = true;
+  EXPECT_TRUE(area);
+}
+
+TEST_F(PbrtV3Features, Materials) {
+  EXPECT_EQ(material(scene(), "red matte").baseColor, Vec3f(0.8f, 0.1f, 0.1f));
+  const Material& al = material(scene(), "aluminium");
+  EXPECT_EQ(al.metallic, 1);
+  // Aluminium from the .spd files: a bright, nearly neutral grey.
+  EXPECT_GT(al.baseColor.x, 0.85f);
+  EXPECT_LT(maxComponent(al.baseColor) -
+                std::min(al.baseColor.x, std::min(al.baseColor.y, al.baseColor.z)),
+            0.05f);
+  // pbrt-v3's roughness remapping: 0.001 -> alpha 0.047, Ferry's roughness sqrt(alpha).
+  EXPECT_NEAR(al.roughness, 0.217f, 0.01f);
+  const Material& glass = material(scene(), "glass");
+  EXPECT_EQ(glass.transmission, 1);
+  EXPECT_FLOAT_EQ(glass.ior, 1.33f);
+  EXPECT_EQ(material(scene(), "leather").baseColor, Vec3f(0.5f));
+  // mix: v3's amount weighs the first material: "red matte" shades with
+  // probability 0.25, "black" with 0.75 (its mean colour is the v3 blend).
+  const Material& mixed = material(scene(), "mixed");
+  EXPECT_EQ(mixed.baseColor, Vec3f(0.8f, 0.1f, 0.1f));
+  ASSERT_GE(mixed.mixedWith, 0);
+  EXPECT_FLOAT_EQ(mixed.mixAmount, 0.75f);
+  const Vec3f black = scene().materials.at(size_t(mixed.mixedWith)).baseColor;
+  EXPECT_NEAR(mixed.baseColor.x * 0.25f + black.x * 0.75f, 0.2f, 1e-6);
+  EXPECT_NEAR(mixed.baseColor.y * 0.25f + black.y * 0.75f, 0.025f, 1e-6);
+  const Material& uber = material(scene(), "mirror-ish uber");
+  EXPECT_EQ(uber.metallic, 1);
+  EXPECT_FLOAT_EQ(uber.baseColor.x, 0.9f);
+}
+
+TEST_F(PbrtV3Features, Textures) {
+  // The procedural checkerboard, baked: red where floor(4u) + floor(4v) is even.
+  const Material& plastic = material(scene(), "plastic");
+  ASSERT_NE(plastic.baseColorTexture, kNoTexture);
+  const Texture& checks = scene().textures[size_t(plastic.baseColorTexture)];
+  EXPECT_GE(checks.width, 128);
+  Vec4f a = checks.sample({0.1f, 0.1f}), b = checks.sample({0.35f, 0.1f}),
+        c = checks.sample({0.35f, 0.35f});
+  EXPECT_GT(a.x, 0.9f);
+  EXPECT_LT(a.z, 0.1f);
+  EXPECT_GT(b.z, 0.9f);
+  EXPECT_LT(b.x, 0.1f);
+  EXPECT_GT(c.x, 0.9f);
+  // "scale": the checker image at half brightness, texel for texel.
+  const Mesh* tri = nullptr;
+  for (const Mesh& m : scene().meshes)
+    if (scene().materials[size_t(m.material)].alphaTexture != kNoTexture &&
+        scene().materials[size_t(m.material)].baseColorTexture != kNoTexture)
+      tri = &m;
+  ASSERT_TRUE(tri);
+  const Material& dim = scene().materials[size_t(tri->material)];
+  const Texture& grid = scene().textures[size_t(dim.baseColorTexture)];
+  ASSERT_EQ(grid.width, 4);
+  ASSERT_EQ(grid.height, 4);
+  EXPECT_NEAR(grid.rgba[0], 188, 1);  // sRGB of linear 0.5
+  EXPECT_EQ(grid.rgba[2], 0);
+  EXPECT_NEAR(grid.rgba[6], 188, 1);  // its right neighbour blue
+  // The alpha texture from the grey mask: its top half opaque.
+  const Texture& mask = scene().textures[size_t(dim.alphaTexture)];
+  EXPECT_EQ(mask.sampleAlpha({0.5f, 0.7f}), 1.0f);
+  EXPECT_EQ(mask.sampleAlpha({0.5f, 0.3f}), 0.0f);
+}
+
+TEST_F(PbrtV3Features, InstancingStaysInstancing) {
+  // "pair": the tetrahedron and the subdivided one, placed three times.
+  const Object* pair = nullptr;
+  int32_t pairIndex = -1;
+  for (size_t o = 0; o < scene().objects.size(); ++o)
+    if (scene().objects[o].name == "pair") pair = &scene().objects[o], pairIndex = int32_t(o);
+  ASSERT_TRUE(pair);
+  ASSERT_EQ(pair->meshes.size(), 2u);
+  const Mesh& tet = scene().meshes[size_t(pair->meshes[0])];
+  const Mesh& subdivided = scene().meshes[size_t(pair->meshes[1])];
+  EXPECT_EQ(tet.triangleCount(), 4u);
+  EXPECT_EQ(subdivided.triangleCount(), 4u * 16u);  // two levels
+  // Baked with the definition's transform (Translate 0 0 3).
+  EXPECT_GE(subdivided.bounds().lower.z, 3.0f);
+  EXPECT_LE(subdivided.bounds().upper.z, 4.0f);
+  auto placed = instancesOf(scene(), pairIndex);
+  ASSERT_EQ(placed.size(), 3u);
+  std::set<std::tuple<float, float, float>> at;
+  for (const Instance* i : placed)
+    at.insert({i->transform.t.x, i->transform.t.y, i->transform.t.z});
+  EXPECT_TRUE(at.count({5.f, 0.f, 0.f}));
+  EXPECT_TRUE(at.count({0.f, 5.f, 0.f}));
+  EXPECT_TRUE(at.count({0.f, 0.f, 0.f}));
+  // The same PLY twice at the top level: one object, two instances.
+  auto quads = meshesOf(scene(), "leather");
+  ASSERT_EQ(quads.size(), 1u);
+  EXPECT_EQ(instancesOf(scene(), objectOfMesh(scene(), quads[0])).size(), 2u);
+}
+
+TEST_F(PbrtV3Features, ShapesAndCounts) {
+  EXPECT_EQ(scene().objects.size(), 10u);
+  EXPECT_EQ(scene().instances.size(), 13u);
+  // Both curves share one mesh: 6 + 3 linear pieces of 3-sided tubes.
+  auto curves = meshesOf(scene(), "mirror-ish uber");
+  ASSERT_EQ(curves.size(), 1u);
+  EXPECT_EQ(curves[0]->triangleCount(), (6u + 3u) * 6u);
+  EXPECT_EQ(curves[0]->vertexCount(), (7u + 4u) * 3u);
+  // CoordSysTransform "here" went back to the world transform.
+  auto inst = instancesOf(scene(), objectOfMesh(scene(), curves[0]));
+  ASSERT_EQ(inst.size(), 1u);
+  EXPECT_EQ(inst[0]->transform.t, Vec3f(0, 0, 0));
+  // The sphere, tessellated: area near 4 pi r^2.
+  auto spheres = meshesOf(scene(), "aluminium");
+  ASSERT_EQ(spheres.size(), 1u);
+  double area = 0;
+  for (const Vec3i& t : spheres[0]->indices)
+    area += 0.5 * length(cross(spheres[0]->positions[t.y] - spheres[0]->positions[t.x],
+                               spheres[0]->positions[t.z] - spheres[0]->positions[t.x]));
+  EXPECT_NEAR(area, 4 * kPi * 0.25, 0.02 * 4 * kPi * 0.25);
+  // The included file's cylinder, from a directory with a space in its name.
+  auto cylinder = meshesOf(scene(), "matte");
+  bool found = false;
+  for (const Mesh* m : cylinder)
+    if (m->name == "cylinder") found = true;
+  EXPECT_TRUE(found);
+}
+
+// pbrt-v3's fourier material reads its table (tests/corpus/bsdf), once per
+// file; a file that is not there is a warning naming it and grey diffuse; a
+// malformed one an error naming it and the line that names it.
+TEST(PbrtFourier, LoadsTheTable) {
+  std::vector<std::string> warnings;
+  const Scene s = fromText(
+      "WorldBegin\n"
+      "MakeNamedMaterial \"a\" \"string type\" \"fourier\" \"string bsdffile\" "
+      "\"../bsdf/valid.bsdf\"\n"
+      "MakeNamedMaterial \"b\" \"string type\" \"fourier\" \"string bsdffile\" "
+      "\"../bsdf/valid.bsdf\"\n"
+      "NamedMaterial \"a\"\nShape \"sphere\"\n"
+      "NamedMaterial \"b\"\nTranslate 3 0 0\nShape \"sphere\"\n",
+      &warnings);
+  ASSERT_EQ(s.bsdfTables.size(), 1u);
+  EXPECT_EQ(s.bsdfTables[0]->nMu, 5);
+  int named = 0;
+  for (const Material& m : s.materials)
+    if (m.bsdfTable == 0) ++named;
+  EXPECT_EQ(named, 2);
+  EXPECT_FALSE(anyContains(warnings, "fourier")) << warnings.front();
+}
+
+TEST(PbrtFourier, AMissingTableIsAWarningAndGreyDiffuse) {
+  std::vector<std::string> warnings;
+  const Scene s = fromText(
+      "WorldBegin\nMaterial \"fourier\" \"string bsdffile\" \"bsdfs/ceramic.bsdf\"\n"
+      "Shape \"sphere\"\n",
+      &warnings);
+  EXPECT_TRUE(s.bsdfTables.empty());
+  ASSERT_FALSE(s.materials.empty());
+  EXPECT_EQ(s.materials.back().bsdfTable, kNoBsdfTable);
+  EXPECT_EQ(s.materials.back().baseColor, Vec3f(0.5f));
+  std::string warning;
+  for (const std::string& w : warnings)
+    if (w.find("fourier material:") != std::string::npos) warning = w;
+  ASSERT_FALSE(warning.empty());
+  EXPECT_NE(warning.find("ceramic.bsdf"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("text.pbrt:2"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("rendered as diffuse (0.5, 0.5, 0.5)"), std::string::npos) << warning;
+  std::printf("%s\n", warning.c_str());
+}
+
+TEST(PbrtFourier, AMalformedTableIsAnErrorNamingItAndTheLine) {
+  try {
+    fromText(
+        "WorldBegin\n\nMaterial \"fourier\" \"string bsdffile\" "
+        "\"../bsdf/offset_out_of_range.bsdf\"\nShape \"sphere\"\n");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("text.pbrt:3"), std::string::npos) << what;
+    EXPECT_NE(what.find("offset_out_of_range.bsdf: entry (2, 1)"), std::string::npos) << what;
+  }
+}
+
+TEST_F(PbrtV3Features, WarnsOnceAboutWhatItSkips) {
+  EXPECT_TRUE(anyContains(warnings(), "Sampler ignored"));
+  EXPECT_TRUE(anyContains(warnings(), "Integrator ignored"));
+  // leather.bsdf is not there: a warning naming it, and grey diffuse.
+  EXPECT_TRUE(anyContains(warnings(), "fourier material:"));
+  EXPECT_TRUE(anyContains(warnings(), "leather.bsdf"));
+  std::set<std::string> unique(warnings().begin(), warnings().end());
+  EXPECT_EQ(unique.size(), warnings().size());
+}
+
+// ------------------------------------------------------------------- pbrt-v4
+
+class PbrtV4Features : public testing::Test {
+ protected:
+  static void SetUpTestSuite() { loaded_ = new Loaded(load(corpus("features_v4.pbrt"))); }
+  static void TearDownTestSuite() { delete loaded_; }
+  const Scene& scene() const { return loaded_->scene; }
+  const std::vector<std::string>& warnings() const { return loaded_->warnings; }
+  static Loaded* loaded_;
+};
+Loaded* PbrtV4Features::loaded_ = nullptr;
+
+TEST_F(PbrtV4Features, LeftHandedCameraAndPortraitFov) {
+  const CameraView& v = scene().views.at(0);
+  EXPECT_TRUE(v.leftHanded);
+  // fov 60 spans the shorter (horizontal) side of a 100 x 200 film.
+  float expected = 2 * std::atan(std::tan(30 * kPi / 180) * 2) * 180 / kPi;
+  EXPECT_NEAR(v.fovY, expected, 1e-3);
+  EXPECT_EQ(scene().filmFilename, "v4.png");
+  EXPECT_EQ(scene().filmScale, 4);  // "float iso" 400: pbrt-v4's imaging ratio at 1 s
+  EXPECT_TRUE(anyContains(warnings(), "lensradius ignored"));
+}
+
+TEST_F(PbrtV4Features, BidirectionalIntegratorAsksForLightPaths) {
+  EXPECT_EQ(scene().integrator, "bdpt");
+  EXPECT_TRUE(integratorWantsLightPaths(scene().integrator));
+  EXPECT_EQ(scene().integratorMaxDepth, 7);  // "integer maxdepth" 7
+}
+
+TEST_F(PbrtV4Features, Materials) {
+  const Material& gold = material(scene(), "gold");
+  EXPECT_EQ(gold.metallic, 1);
+  EXPECT_GT(gold.baseColor.x, 0.8f);
+  EXPECT_LT(gold.baseColor.z, 0.5f);                          // yellow
+  EXPECT_NEAR(gold.roughness, std::pow(0.01f, 0.25f), 1e-4);  // v4: alpha = sqrt(r)
+  EXPECT_NEAR(material(scene(), "bk7").ior, 1.5185f, 1e-3);
+  EXPECT_NEAR(material(scene(), "sheet").ior, 1.01f, 1e-6);
+  EXPECT_EQ(material(scene(), "coated").baseColor, Vec3f(0.1f, 0.5f, 0.1f));
+  const Material& copper = material(scene(), "car");
+  EXPECT_EQ(copper.metallic, 1);
+  EXPECT_GT(copper.baseColor.x, copper.baseColor.y);
+  EXPECT_GT(copper.baseColor.y, copper.baseColor.z);
+  // diffusetransmission: reflectance and transmittance kept apart.
+  const Material& leaf = material(scene(), "leaf");
+  EXPECT_EQ(leaf.baseColor, Vec3f(0.2f, 0.4f, 0.1f));
+  EXPECT_EQ(leaf.transmittance, Vec3f(0.1f, 0.3f, 0.05f));
+  const Material& portal = material(scene(), "portal");
+  ASSERT_NE(portal.alphaTexture, kNoTexture);
+  EXPECT_EQ(scene().textures[size_t(portal.alphaTexture)].sampleAlpha({0.5f, 0.5f}), 0.0f);
+  // A mix shades with the second material with probability "amount" (v4).
+  const Material& mostly = material(scene(), "mostly gold");
+  EXPECT_EQ(mostly.coat, Material::Coat::Layered);  // the first: coateddiffuse
+  ASSERT_GE(mostly.mixedWith, 0);
+  EXPECT_FLOAT_EQ(mostly.mixAmount, 0.75f);
+  EXPECT_EQ(scene().materials.at(size_t(mostly.mixedWith)).metallic, 1);  // gold
+  // v4's displacement texture bumps the shading normal.
+  const Material& leafMaterial = leaf;
+  EXPECT_NE(leafMaterial.bumpTexture, kNoTexture);
+  EXPECT_NEAR(leafMaterial.bumpScale, 1.0f, 1e-6f);
+  EXPECT_FALSE(anyContains(warnings(), "displacement"));
+  EXPECT_TRUE(anyContains(warnings(), "Shape \"nurbs\" is not supported"));
+}
+
+TEST_F(PbrtV4Features, ShapesLightsAttributesAndImport) {
+  // Attribute "shape" "float radius" 0.25 reached the sphere without a radius.
+  auto gold = meshesOf(scene(), "gold");
+  ASSERT_EQ(gold.size(), 1u);
+  EXPECT_NEAR(gold[0]->bounds().upper.x, 0.25f, 1e-4);
+  // A curved bilinear patch is sampled 8 x 8; a flat one is two triangles.
+  EXPECT_EQ(meshesOf(scene(), "bk7").at(0)->triangleCount(), 128u);
+  EXPECT_EQ(meshesOf(scene(), "sheet").at(0)->triangleCount(), 2u);
+  EXPECT_EQ(meshesOf(scene(), "mostly gold").at(0)->triangleCount(), 6u);  // a ribbon
+  // Import: its triangle is there, its Translate did not leak out.
+  auto diffuse = meshesOf(scene(), "diffuse");
+  ASSERT_EQ(diffuse.size(), 2u);
+  Box3f sphere;
+  for (const Mesh* m : diffuse)
+    if (m->name == "sphere")
+      for (const Instance* i : instancesOf(scene(), objectOfMesh(scene(), m)))
+        sphere.extend(i->transform.transformBox(m->bounds()));
+  EXPECT_NEAR(sphere.center().y, 0, 1e-4);
+  // Blackbody 6500 K at luminance 1, times scale 1.5.
+  EXPECT_NEAR(luminance(scene().environment.color), 1.5f, 0.05f);
+  // The spot: an emitting disk in a black tube.
+  auto spot = meshesOf(scene(), "spot light");
+  ASSERT_EQ(spot.size(), 1u);
+  EXPECT_EQ(scene().objects[size_t(objectOfMesh(scene(), spot[0]))].meshes.size(), 3u);
+}
+
+// ------------------------------------------------------------------ details
+
+// pbrt-v4's "float power" (watts) scales a light as pbrt-v4's Create
+// functions do: by power / k_e, k_e what a unit light emits.
+Vec3f brightestEmission(const Scene& s) {
+  Vec3f out(0);
+  for (const Material& m : s.materials)
+    if (luminance(m.emission) > luminance(out)) out = m.emission;
+  return out;
+}
+
+TEST(PbrtParser, V4PointAndSpotPowerScaleTheIntensity) {
+  auto emission = [](const std::string& light) {
+    return brightestEmission(fromText("WorldBegin\nShape \"sphere\"\n" + light + "\n"));
+  };
+  const Vec3f point = emission(R"(LightSource "point" "rgb I" [ 1 1 1 ])");
+  const Vec3f pointPower = emission(R"(LightSource "point" "rgb I" [ 1 1 1 ] "float power" 100)");
+  EXPECT_NEAR(pointPower.y / point.y, 100 / (4 * kPi), 1e-3);
+  const std::string spot = R"(LightSource "spot" "rgb I" [ 1 1 1 ] "float coneangle" 20 )";
+  const Vec3f spotPlain = emission(spot);
+  const Vec3f spotPower = emission(spot + R"("float conedeltaangle" 5 "float power" 100)");
+  const float cosEnd = std::cos(20 * kPi / 180), cosStart = std::cos(15 * kPi / 180);
+  EXPECT_NEAR(spotPower.y / spotPlain.y,
+              100 / (2 * kPi * ((1 - cosStart) + (cosStart - cosEnd) / 2)), 1e-2);
+}
+
+TEST(PbrtParser, V4AreaPowerIsPerPbrtShape) {
+  auto emission = [](const std::string& shape, std::vector<std::string>* warnings = nullptr) {
+    return brightestEmission(fromText(
+        "WorldBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ] \"float power\" 10\n" + shape +
+            "\n",
+        warnings));
+  };
+  // A sphere of radius 2: pbrt's area phi_max r (z_max - z_min) = 16 pi.
+  EXPECT_NEAR(emission(R"(Shape "sphere" "float radius" 2)").y, 10 / (16 * kPi * kPi), 1e-5);
+  // A disk of radius 1 under Scale 3: pbrt takes the disk's own area, pi.
+  EXPECT_NEAR(emission("Scale 3 3 3 Shape \"disk\"").y, 10 / (kPi * kPi), 1e-4);
+  // A 2 x 2 quad of two triangles: each triangle (area 2) emits the power.
+  std::vector<std::string> warnings;
+  EXPECT_NEAR(emission(R"(Shape "trianglemesh" "point3 P" [ 0 0 0 2 0 0 2 2 0 0 2 0 ]
+                          "integer indices" [ 0 1 2 0 2 3 ])",
+                       &warnings)
+                  .y,
+              10 / (2 * kPi), 1e-4);
+  EXPECT_FALSE(anyContains(warnings, "power"));
+  // Triangles of unequal area: the same total power, with a warning.
+  EXPECT_NEAR(emission(R"(Shape "trianglemesh" "point3 P" [ 0 0 0 2 0 0 2 2 0 0 4 0 ]
+                          "integer indices" [ 0 1 2 0 2 3 ])",
+                       &warnings)
+                  .y,
+              10 / (3 * kPi), 1e-4);  // mean area (2 + 4) / 2
+  EXPECT_TRUE(anyContains(warnings, "each piece that power"));
+}
+
+TEST(PbrtParser, TransformsComposeAsInPbrt) {
+  Scene s = fromText(R"(WorldBegin
+Translate 1 0 0
+Rotate 90 0 0 1
+Scale 2 2 2
+Shape "trianglemesh" "point3 P" [ 1 0 0 0 1 0 0 0 1 ]
+ConcatTransform [ 1 0 0 0  0 1 0 0  0 0 1 0  0 0 7 1 ]
+Shape "trianglemesh" "point3 P" [ 1 0 0 0 1 0 0 0 1 ]
+Transform [ 2 0 0 0  0 2 0 0  0 0 2 0  0 0 0 2 ]
+Shape "trianglemesh" "point3 P" [ 1 0 0 0 1 0 0 0 1 ]
+)");
+  ASSERT_EQ(s.instances.size(), 3u);
+  // Translate * Rotate * Scale applied to (1, 0, 0): scaled to 2, turned to +y, moved +x.
+  Vec3f p = s.instances[0].transform.transformPoint({1, 0, 0});
+  EXPECT_NEAR(p.x, 1, 1e-5);
+  EXPECT_NEAR(p.y, 2, 1e-5);
+  // The column-major matrix's translation (0, 0, 7) is in the object's space.
+  Vec3f q = s.instances[1].transform.transformPoint({0, 0, 0});
+  EXPECT_NEAR(q.x, 1, 1e-5);
+  EXPECT_NEAR(q.z, 14, 1e-5);
+  // Transform replaces; w = 2 divides.
+  EXPECT_EQ(s.instances[2].transform.transformPoint({1, 2, 3}), Vec3f(1, 2, 3));
+}
+
+TEST(PbrtParser, AttributeAndTransformBlocksRestore) {
+  Scene s = fromText(R"(WorldBegin
+AttributeBegin
+  Translate 5 0 0
+  Material "matte" "rgb Kd" [ 0 1 0 ]
+  TransformBegin
+    Translate 0 5 0
+  TransformEnd
+  Shape "sphere"
+AttributeEnd
+Shape "sphere"
+)");
+  ASSERT_EQ(s.instances.size(), 2u);
+  EXPECT_EQ(s.instances[0].transform.t, Vec3f(5, 0, 0));
+  EXPECT_EQ(s.instances[1].transform.t, Vec3f(0, 0, 0));
+  EXPECT_EQ(s.materials[size_t(s.meshes[0].material)].baseColor, Vec3f(0, 1, 0));
+  EXPECT_EQ(s.materials[size_t(s.meshes[1].material)].baseColor, Vec3f(0.5f));  // the default
+}
+
+TEST(PbrtParser, ImageEnvironmentIsResampledToYUp) {
+  // A 2:1 lat-long map (v3 "mapname", z up): the top half red (+z), the bottom blue.
+  fs::path dir = fs::temp_directory_path() / ("ferry_env_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  LinearImage img;
+  img.width = 16;
+  img.height = 8;
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 16; ++x) img.rgb.push_back(y < 4 ? Vec3f(1, 0, 0) : Vec3f(0, 0, 1));
+  writeExr((dir / "sky.exr").string(), img);
+  Scene s = loadPbrtFromString(
+      "WorldBegin\nLightSource \"infinite\" \"string mapname\" \"sky.exr\" \"rgb L\" [ 2 2 2 ]\n"
+      "Shape \"sphere\"\n",
+      "env.pbrt", dir.string());
+  fs::remove_all(dir);
+  ASSERT_TRUE(s.environment.image);
+  const HdrImage& env = *s.environment.image;
+  // Ferry's map is y up: pbrt's +z is now at v = 0.5 (the horizon); +y is
+  // pbrt's horizon too, so red and blue meet along a great circle through the
+  // poles. Pixels facing +z are red, facing -z blue, times L = 2.
+  auto at = [&](Vec3f d) {
+    float theta = std::acos(d.y), phi = std::atan2(d.z, d.x);
+    if (phi < 0) phi += 2 * kPi;
+    int x = std::min(env.width - 1, int(phi / (2 * kPi) * env.width));
+    int y = std::min(env.height - 1, int(theta / kPi * env.height));
+    return env.at(x, y);
+  };
+  EXPECT_NEAR(at(normalize(Vec3f(0.1f, 0.1f, 1))).x, 2, 0.05);
+  EXPECT_NEAR(at(normalize(Vec3f(0.1f, 0.1f, -1))).z, 2, 0.05);
+}
+
+TEST(PbrtParser, MissingEnvironmentMapFailsOrFallsBack) {
+  std::string path = corpus("missing_envmap.pbrt");
+  try {
+    load(path);
+    FAIL() << "loaded without its environment map";
+  } catch (const InputError& e) {
+    std::string m = e.what();
+    EXPECT_NE(m.find("missing_envmap.pbrt:2:1: environment map \"textures/sky.exr\" not found"),
+              std::string::npos)
+        << m;
+    EXPECT_NE(m.find("--env-fallback"), std::string::npos) << m;
+  }
+  Loaded fallback = load(path, true);
+  EXPECT_EQ(fallback.scene.environment.color, Vec3f(1));
+  EXPECT_TRUE(anyContains(fallback.warnings, "textures/sky.exr\" not found: using a constant"));
+}
+
+TEST(PbrtParser, PerpendicularNormalsAreDropped) {
+  std::vector<std::string> w;
+  Scene s = fromText(R"(WorldBegin
+Shape "trianglemesh" "integer indices" [ 0 1 2 ] "point3 P" [ 0 0 0 1 0 0 0 1 0 ]
+    "normal N" [ 0 1 0 0 1 0 0 1 0 ]
+Shape "trianglemesh" "integer indices" [ 0 1 2 ] "point3 P" [ 0 0 0 1 0 0 0 1 0 ]
+    "normal N" [ 0 0 1 0 0 1 0 0.1 1 ]
+)",
+                     &w);
+  EXPECT_TRUE(s.meshes[0].normals.empty());
+  EXPECT_EQ(s.meshes[1].normals.size(), 3u);
+  EXPECT_TRUE(anyContains(w, "normals all lie in its faces' planes"));
+}
+
+TEST(PbrtParser, MismatchedBlockEndsAreAcceptedWithAWarning) {
+  Loaded l = load(corpus("mismatched_end.pbrt"));
+  EXPECT_TRUE(anyContains(l.warnings, "closes the AttributeBegin"));
+}
+
+TEST(PbrtParser, UnknownNamedSpectraGetAStandIn) {
+  std::vector<std::string> w;
+  Scene s = fromText(R"(WorldBegin
+Material "conductor" "spectrum eta" "metal-CuZn-eta" "spectrum k" "metal-CuZn-k"
+Shape "sphere"
+)",
+                     &w);
+  EXPECT_EQ(s.materials.at(0).metallic, 1);
+  EXPECT_GT(s.materials.at(0).baseColor.z, 0.85f);  // aluminium's neutral grey
+  EXPECT_TRUE(anyContains(w, "\"metal-CuZn-eta\" is not known to Ferry: using \"metal-Al-eta\""));
+}
+
+TEST(PbrtParser, WarningsAreDeduplicated) {
+  std::vector<std::string> w;
+  std::string text = "WorldBegin\n";
+  for (int i = 0; i < 100; ++i) text += "Shape \"sphere\" \"float shininess\" 3\n";
+  fromText(text, &w);
+  int count = 0;
+  for (const std::string& line : w) count += line.find("shininess") != std::string::npos;
+  EXPECT_EQ(count, 1);
+}
+
+TEST(PbrtParser, ObjectsOfManyCurvesShareOneMesh) {
+  std::string text = "WorldBegin\nObjectBegin \"hair\"\n";
+  for (int i = 0; i < 50; ++i)
+    text += "Shape \"curves\" \"point3 P\" [ 0 0 " + std::to_string(i) +
+            " 1 0 0 2 1 0 3 1 1 ] \"float width\" 0.01\n";
+  text += "ObjectEnd\nObjectInstance \"hair\"\nTranslate 1 0 0\nObjectInstance \"hair\"\n";
+  Scene s = fromText(text);
+  ASSERT_EQ(s.objects.size(), 1u);
+  ASSERT_EQ(s.objects[0].meshes.size(), 1u);
+  EXPECT_EQ(s.meshes[0].triangleCount(), 50u * 3u * 6u);
+  EXPECT_EQ(s.instances.size(), 2u);
+}
+
+TEST(PbrtParser, ExponentialTextureTreesFailInsteadOfHanging) {
+  // Each level mixes the level below with itself: 2^30 evaluations per texel.
+  std::string text = "WorldBegin\nTexture \"t0\" \"spectrum\" \"checkerboard\"\n";
+  for (int i = 1; i <= 30; ++i)
+    text += "Texture \"t" + std::to_string(i) + "\" \"spectrum\" \"mix\" \"texture tex1\" \"t" +
+            std::to_string(i - 1) + "\" \"texture tex2\" \"t" + std::to_string(i - 1) + "\"\n";
+  text += "Material \"diffuse\" \"texture reflectance\" \"t30\"\nShape \"sphere\"\n";
+  try {
+    fromText(text);
+    FAIL() << "baked a texture of 2^30 evaluations per texel";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("too expensive to bake"), std::string::npos) << e.what();
+  }
+}
+
+// ------------------------------------------------------------ malformed files
+
+struct BadPbrt {
+  std::string file;     // loaded
+  std::string errorIn;  // the file the error names
+  int line;
+  int column;  // 0: not checked
+  std::string contains;
+};
+
+std::ostream& operator<<(std::ostream& os, const BadPbrt& b) {
+  return os << b.file;
+}
+
+class PbrtCorpusError : public testing::TestWithParam<BadPbrt> {};
+
+TEST_P(PbrtCorpusError, NamesFileLineAndColumn) {
+  const BadPbrt& bad = GetParam();
+  try {
+    load(corpus(bad.file));
+    FAIL() << bad.file << " loaded without error";
+  } catch (const InputError& e) {
+    std::string message = e.what();
+    SCOPED_TRACE(message);
+    EXPECT_EQ(fs::path(e.where().file).filename().string(), bad.errorIn);
+    EXPECT_EQ(e.where().line, bad.line);
+    if (bad.column > 0) {
+      EXPECT_EQ(e.where().column, bad.column);
+    }
+    EXPECT_NE(message.find(bad.errorIn + ":" + std::to_string(bad.line) + ":"), std::string::npos);
+    EXPECT_NE(message.find(bad.contains), std::string::npos) << "expected: " << bad.contains;
+  }
+}
+
+// pbrt's area lights emit only in front unless "twosided"; the front is the
+// winding normal, reversed by ReverseOrientation, or the side of the vertex
+// normals: the loader orients a one-sided emitter's winding to match.
+// The coated materials and matte's sigma (issue 14): what each pbrt
+// parameter becomes.
+TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
+  auto only = [](const std::string& material) {
+    const Scene scene = fromText("WorldBegin\n" + material +
+                                 "\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] "
+                                 "\"integer indices\" [0 1 2]\nWorldEnd\n");
+    return scene.materials.at(size_t(scene.meshes.at(0).material));
+  };
+  // v3 plastic: Kd + Ks with FresnelDielectric(1.5, 1); roughness remapped.
+  const Material plastic = only(
+      "Material \"plastic\" \"rgb Kd\" [0.1 0.2 0.3] \"rgb Ks\" [0.4 0.5 0.6] "
+      "\"float roughness\" 0.2 \"bool remaproughness\" false");
+  EXPECT_EQ(plastic.baseColor, Vec3f(0.1f, 0.2f, 0.3f));
+  EXPECT_EQ(plastic.specular, Vec3f(0.4f, 0.5f, 0.6f));
+  EXPECT_FLOAT_EQ(plastic.specularRoughness, std::sqrt(0.2f));  // alpha 0.2
+  EXPECT_FLOAT_EQ(plastic.specularEta, 1 / 1.5f);
+  EXPECT_EQ(plastic.coat, Material::Coat::Additive);
+  const Material defaults = only("Material \"plastic\"");
+  EXPECT_EQ(defaults.baseColor, Vec3f(0.25f));
+  EXPECT_EQ(defaults.specular, Vec3f(0.25f));
+  // Remapped as pbrt-v3's RoughnessToAlpha(0.1) = 0.4615.
+  EXPECT_NEAR(defaults.specularRoughness * defaults.specularRoughness, 0.4615f, 1e-3f);
+  // v3 translucent: Kd split by reflect and transmit (its glossy Ks dropped).
+  const Material translucent = only(
+      "Material \"translucent\" \"rgb Kd\" [0.5 0.5 0.5] \"rgb reflect\" [0.2 0.2 0.2] "
+      "\"rgb transmit\" [0.6 0.6 0.6]");
+  EXPECT_NEAR(translucent.baseColor.x, 0.1f, 1e-6f);
+  EXPECT_NEAR(translucent.transmittance.x, 0.3f, 1e-6f);
+  // matte: sigma in degrees.
+  EXPECT_EQ(only("Material \"matte\" \"float sigma\" 20").sigma, 20.0f);
+  EXPECT_EQ(only("Material \"matte\"").sigma, 0.0f);
+  // uber: Ks with FresnelDielectric(1, eta).
+  const Material uber = only("Material \"uber\" \"rgb Ks\" [0.3 0.3 0.3] \"float eta\" 1.7");
+  EXPECT_EQ(uber.specular, Vec3f(0.3f));
+  EXPECT_FLOAT_EQ(uber.specularEta, 1.7f);
+  EXPECT_EQ(uber.coat, Material::Coat::Additive);
+  // v4 coateddiffuse: a layered coat of the interface's eta.
+  const Material coated = only(
+      "Material \"coateddiffuse\" \"rgb reflectance\" [0.7 0.6 0.5] \"float roughness\" 0.04 "
+      "\"float eta\" 1.4");
+  EXPECT_EQ(coated.baseColor, Vec3f(0.7f, 0.6f, 0.5f));
+  EXPECT_EQ(coated.specular, Vec3f(1));
+  EXPECT_FLOAT_EQ(coated.specularEta, 1.4f);
+  EXPECT_FLOAT_EQ(coated.specularRoughness, std::sqrt(std::sqrt(0.04f)));  // v4: alpha = sqrt(r)
+  EXPECT_EQ(coated.coat, Material::Coat::Layered);
+  // v4 coatedconductor: the conductor under a layered coat of the interface's eta.
+  const Material coatedMetal = only(
+      "Material \"coatedconductor\" \"float interface.eta\" 1.6 \"float "
+      "interface.roughness\" 0.09 \"float conductor.roughness\" 0.25");
+  EXPECT_EQ(coatedMetal.metallic, 1);
+  EXPECT_EQ(coatedMetal.specular, Vec3f(1));
+  EXPECT_FLOAT_EQ(coatedMetal.specularEta, 1.6f);
+  EXPECT_NEAR(coatedMetal.specularRoughness * coatedMetal.specularRoughness, 0.3f, 1e-5f);
+  EXPECT_NEAR(coatedMetal.roughness * coatedMetal.roughness, 0.5f, 1e-5f);
+  EXPECT_EQ(coatedMetal.coat, Material::Coat::Layered);
+  // substrate: Ashikhmin-Shirley, Ks the coat's reflectance at normal incidence.
+  const Material substrate = only("Material \"substrate\" \"rgb Ks\" [0.04 0.05 0.06]");
+  EXPECT_EQ(substrate.specular, Vec3f(0.04f, 0.05f, 0.06f));
+  EXPECT_EQ(substrate.baseColor, Vec3f(0.5f));
+  EXPECT_EQ(substrate.coat, Material::Coat::FresnelBlend);
+}
+
+TEST(PbrtParser, SolidTexturesAreEvaluatedInTheirSpace) {
+  const Scene scene = fromText(
+      "WorldBegin\nTransformBegin\nTranslate 0 2 0\nTexture \"m\" \"color\" \"marble\" \"float "
+      "scale\" 4 \"float variation\" 0.3 \"integer octaves\" 5 \"float roughness\" 0.6\n"
+      "TransformEnd\nTexture \"w\" \"spectrum\" \"wrinkled\"\n"
+      "Material \"matte\" \"texture Kd\" \"m\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 "
+      "0 1 0] \"integer indices\" [0 1 2]\nMaterial \"matte\" \"texture Kd\" \"w\"\nShape "
+      "\"trianglemesh\" \"point3 P\" [0 0 1 1 0 1 0 1 1] \"integer indices\" [0 1 2]\nWorldEnd\n");
+  ASSERT_EQ(scene.meshes.size(), 2u);
+  const Texture& marble = scene.textures.at(
+      size_t(scene.materials.at(size_t(scene.meshes[0].material)).baseColorTexture));
+  EXPECT_EQ(marble.solid.kind, SolidTextureKind::Marble);
+  EXPECT_EQ(marble.solid.scale, 4.0f);
+  EXPECT_EQ(marble.solid.variation, 0.3f);
+  EXPECT_EQ(marble.solid.octaves, 5);
+  EXPECT_EQ(marble.solid.omega, 0.6f);
+  EXPECT_EQ(marble.solid.worldToTexture.transformPoint({0, 2, 0}), Vec3f(0, 0, 0));
+  EXPECT_EQ(marble.texelCount(), 0u);
+  const Texture& wrinkled = scene.textures.at(
+      size_t(scene.materials.at(size_t(scene.meshes[1].material)).baseColorTexture));
+  EXPECT_EQ(wrinkled.solid.kind, SolidTextureKind::Wrinkled);
+  EXPECT_EQ(wrinkled.solid.octaves, 8);
+}
+
+TEST(PbrtParser, DotsAreBakedAsPbrtV3Draws) {
+  const Scene scene = fromText(
+      "WorldBegin\nTexture \"d\" \"color\" \"dots\" \"rgb inside\" [1 0 0] \"rgb outside\" [0 0 1] "
+      "\"float uscale\" 8 \"float vscale\" 8\nMaterial \"matte\" \"texture Kd\" \"d\"\nShape "
+      "\"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nWorldEnd\n");
+  const Material& m = scene.materials.at(size_t(scene.meshes.at(0).material));
+  ASSERT_NE(m.baseColorTexture, kNoTexture);
+  const Texture& t = scene.textures.at(size_t(m.baseColorTexture));
+  // Both colours appear, and dots (at most pi 0.35^2 = 38% of the area) are the minority.
+  int red = 0, blue = 0;
+  for (float v = 0.01f; v < 1; v += 0.02f)
+    for (float u = 0.01f; u < 1; u += 0.02f) {
+      const Vec4f c = t.sample({u, v});
+      red += c.x > 0.5f;
+      blue += c.z > 0.5f;
+    }
+  EXPECT_GT(red, 0);
+  EXPECT_GT(blue, red);
+  EXPECT_LT(red, 0.4 * (red + blue));
+}
+
+TEST(PbrtParser, BumpMapsAreBakedWithTheirRange) {
+  const Scene scene = fromText(
+      "WorldBegin\nTexture \"b\" \"float\" \"checkerboard\" \"float tex1\" 0.2 \"float tex2\" "
+      "0.7 \"float uscale\" 4 \"float vscale\" 4\nTexture \"flat\" \"float\" \"constant\" \"float "
+      "value\" 0.3\nMaterial \"matte\" \"texture bumpmap\" \"b\"\nShape \"trianglemesh\" \"point3 "
+      "P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nMaterial \"coateddiffuse\" \"texture "
+      "displacement\" \"flat\"\nShape \"trianglemesh\" \"point3 P\" [0 0 1 1 0 1 0 1 1] "
+      "\"integer indices\" [0 1 2]\nWorldEnd\n");
+  const Material& bumped = scene.materials.at(size_t(scene.meshes.at(0).material));
+  ASSERT_NE(bumped.bumpTexture, kNoTexture);
+  EXPECT_NEAR(bumped.bumpScale, 0.5f, 1e-6f);
+  const Texture& t = scene.textures.at(size_t(bumped.bumpTexture));
+  EXPECT_FALSE(t.srgb);
+  // Linear texels spanning the range: 0 where 0.2, 255 where 0.7.
+  EXPECT_EQ(*std::min_element(t.rgba.begin(), t.rgba.end()), 0);
+  // A flat displacement (pbrt-v4's "displacement") bends nothing.
+  EXPECT_EQ(scene.materials.at(size_t(scene.meshes.at(1).material)).bumpTexture, kNoTexture);
+}
+
+TEST(PbrtParser, AreaLightsAreOneSidedAndOriented) {
+  auto emitterOf = [](const std::string& before, const std::string& light,
+                      const std::string& extra) {
+    const Scene scene = fromText(
+        "WorldBegin\nAttributeBegin\n" + before + "AreaLightSource \"diffuse\" " + light +
+        "\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] " +
+        extra + "\nAttributeEnd\nWorldEnd\n");
+    for (const Mesh& m : scene.meshes)
+      if (scene.materials[size_t(m.material)].isEmissive()) return m;
+    ADD_FAILURE() << "no emitter";
+    return Mesh{};
+  };
+  auto normalZ = [](const Mesh& m) {
+    const Vec3i t = m.indices[0];
+    return cross(m.positions[size_t(t.y)] - m.positions[size_t(t.x)],
+                 m.positions[size_t(t.z)] - m.positions[size_t(t.x)])
+        .z;
+  };
+  const Scene oneSided = fromText(
+      "WorldBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\nShape \"trianglemesh\" "
+      "\"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nWorldEnd\n");
+  bool found = false;
+  for (const Material& m : oneSided.materials)
+    if (m.isEmissive()) {
+      EXPECT_FALSE(m.emitsBackSide);
+      found = true;
+    }
+  EXPECT_TRUE(found);
+  EXPECT_GT(normalZ(emitterOf("", "\"rgb L\" [1 1 1]", "")), 0);  // as written: +z
+  EXPECT_LT(normalZ(emitterOf("ReverseOrientation\n", "\"rgb L\" [1 1 1]", "")), 0);
+  // Vertex normals decide, whatever the winding.
+  EXPECT_LT(normalZ(emitterOf("", "\"rgb L\" [1 1 1]", "\"normal N\" [0 0 -1 0 0 -1 0 0 -1]")), 0);
+  // Two-sided: as written, and emitting on both sides.
+  const Mesh twoSided =
+      emitterOf("ReverseOrientation\n", "\"rgb L\" [1 1 1] \"bool twosided\" true", "");
+  EXPECT_GT(normalZ(twoSided), 0);
+}
+
+const std::vector<BadPbrt> kBadPbrt = {
+    {"unknown_directive.pbrt", "unknown_directive.pbrt", 3, 1, "unknown directive 'Shpae'"},
+    {"unterminated_string.pbrt", "unterminated_string.pbrt", 3, 35,
+     "string not closed before the end of its line"},
+    {"bad_escape.pbrt", "bad_escape.pbrt", 2, 39, "unknown escape '\\q'"},
+    {"unbalanced_attribute.pbrt", "unbalanced_attribute.pbrt", 2, 1,
+     "AttributeBegin is never closed"},
+    {"extra_attribute_end.pbrt", "extra_attribute_end.pbrt", 4, 1,
+     "AttributeEnd without a matching AttributeBegin"},
+    {"object_end_without_begin.pbrt", "object_end_without_begin.pbrt", 2, 1,
+     "ObjectEnd without ObjectBegin"},
+    {"object_crossing_attribute.pbrt", "object_crossing_attribute.pbrt", 4, 1,
+     "this closes the AttributeBegin"},
+    {"include_loop_a.pbrt", "include_loop_b.pbrt", 2, 1, "include loop"},
+    {"missing_include.pbrt", "missing_include.pbrt", 2, 1,
+     "Include \"no such file.pbrt\" not found"},
+    {"missing_ply.pbrt", "missing_ply.pbrt", 2, 1, "PLY file \"geometry/missing.ply\" not found"},
+    {"missing_texture.pbrt", "missing_texture.pbrt", 2, 1, "file \"textures/wood.png\" not found"},
+    {"index_out_of_range.pbrt", "index_out_of_range.pbrt", 2, 22,
+     "index 3 (entry 5) is out of range: 3 points"},
+    {"nan_value.pbrt", "nan_value.pbrt", 3, 24, "value 'nan' is not finite"},
+    {"wrong_count.pbrt", "wrong_count.pbrt", 3, 3, "8 numbers is not a multiple of 3"},
+    {"bad_param_type.pbrt", "bad_param_type.pbrt", 2, 16, "unknown parameter type 'float128'"},
+    {"translate_args.pbrt", "translate_args.pbrt", 3, 1,
+     "Translate: expected a number, found 'Shape'"},
+    {"unknown_named_material.pbrt", "unknown_named_material.pbrt", 2, 1,
+     "no material named \"nothing\""},
+    {"unknown_object.pbrt", "unknown_object.pbrt", 2, 1, "no object named \"nobody\""},
+    {"singular.pbrt", "singular.pbrt", 3, 1, "singular"},
+    {"projective.pbrt", "projective.pbrt", 2, 1, "projective transforms are not supported"},
+    {"huge_film.pbrt", "huge_film.pbrt", 1, 1, "Film: resolution 1000000 x 10"},
+    {"bad_film_scale.pbrt", "bad_film_scale.pbrt", 1, 1, "\"float scale\" -2 must be positive"},
+    {"bad_cropwindow.pbrt", "bad_cropwindow.pbrt", 1, 1, "\"float cropwindow\" expects four"},
+    {"bad_maxdepth.pbrt", "bad_maxdepth.pbrt", 1, 1, "\"integer maxdepth\" -1 must be 0 or more"},
+    {"binary.pbrt", "binary.pbrt", 3, 1, "unexpected byte 0x00"},
+    {"absurd_subdivision.pbrt", "absurd_subdivision.pbrt", 2, 1, "30 levels of subdivision"},
+    {"missing_envmap.pbrt", "missing_envmap.pbrt", 2, 1,
+     "environment map \"textures/sky.exr\" not found"},
+    {"bad_ply.pbrt", "bad_ply.pbrt", 2, 1,
+     "lying_header.ply:3: element 'vertex' with 2000000000 entries"},
+    {"mix_cycle.pbrt", "mix_cycle.pbrt", 2, 1, "material \"a\" mixes itself"},
+    {"string_for_number.pbrt", "string_for_number.pbrt", 2, 34,
+     "expected a number, found the string \"abc\""},
+    {"unclosed_bracket.pbrt", "unclosed_bracket.pbrt", 2, 33, "'[' never closed"},
+    {"repeated_param.pbrt", "repeated_param.pbrt", 2, 0, "parameter 'P' given twice"},
+    {"degenerate_lookat.pbrt", "degenerate_lookat.pbrt", 1, 1,
+     "the eye and the look-at point are the same"},
+    {"huge_number.pbrt", "huge_number.pbrt", 2, 31, "value '1e39' is too large for a float"},
+    {"huge_integer.pbrt", "huge_integer.pbrt", 2, 0,
+     "integer '3000000000' does not fit in 32 bits"},
+    {"curve_count.pbrt", "curve_count.pbrt", 2, 1,
+     "a degree-3 Bezier curve needs 4 + 3k control points, found 3"},
+};
+
+INSTANTIATE_TEST_SUITE_P(Corpus, PbrtCorpusError, testing::ValuesIn(kBadPbrt));
+
+TEST(PbrtParser, EveryCorpusFileIsCovered) {
+  std::set<std::string> tested = {"features_v3.pbrt", "features_v4.pbrt", "imported.pbrt",
+                                  "include_loop_b.pbrt", "mismatched_end.pbrt"};
+  for (const BadPbrt& b : kBadPbrt) tested.insert(b.file);
+  for (const auto& entry : fs::directory_iterator(kCorpus))
+    if (entry.path().extension() == ".pbrt") {
+      EXPECT_TRUE(tested.count(entry.path().filename().string())) << entry.path();
+    }
+}
+
+}  // namespace
+}  // namespace ferry
