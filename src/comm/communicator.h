@@ -1,8 +1,7 @@
 // How ranks talk: the collectives Ferry's distributed layer is written
-// against. Two implementations: MpiCommunicator (mpi_communicator.h, the only
-// code that names MPI) for real runs under mpirun, and InProcessCommunicator
-// (in_process_communicator.h), N ranks as N threads of one process, so the
-// distributed traversal and the compositor can be tested without mpirun.
+// against. Implemented by MpiCommunicator (mpi_communicator.h, the only code
+// that names MPI) and InProcessCommunicator (in_process_communicator.h, N
+// ranks as N threads of one process; tests run without mpirun).
 //
 // Every operation is collective unless it says otherwise: every rank calls it,
 // in the same order, with matching arguments. Callers take a `const

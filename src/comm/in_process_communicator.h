@@ -1,28 +1,17 @@
-// N ranks as N threads of one process, for tests: the distributed traversal,
-// the compositor and anything else written against Communicator run
-// unchanged, without mpirun.
+// N ranks as N threads of one process (tests, the bandwidth predictor, one
+// rank started without a launcher): the distributed traversal, the
+// compositor and anything else written against Communicator run unchanged,
+// without mpirun.
 //
 //   runRanks(3, [&](const Communicator& comm) { ... one rank's work ... });
 //
-// A group (InProcessGroup) holds one rendezvous that every collective goes
-// through: each rank deposits a pointer to its contribution, waits until all
-// ranks have, computes its own result by reading every rank's contribution in
-// rank order, and waits again until all have read (so no buffer goes away
-// while another rank still reads it). Results are deterministic and the same
-// on every rank. Floating-point sums add the ranks' values in rank order,
-// starting from rank 0's (v0 + v1 + v2 + ...); MPI promises the same result on
-// every rank but no order, so an MPI run may differ from this in the last bits
-// of a double sum and nowhere else (Ferry sums only timings that way; the
-// image is composited by exchangeBytes, exact in both). Maxima of doubles
-// compare in rank order too.
-//
-// Nothing hangs: abortAll() marks the group failed and throws GroupAborted in
-// the calling rank, and every other rank blocked in a collective, or entering
-// one later, wakes and throws GroupAborted too. A rank whose work returns
-// while others wait in a collective it will never join (mismatched
-// collectives, a bug) makes them throw CommunicationError, as do arguments
-// that do not match across ranks (different operations at the same point,
-// byte counts that disagree).
+// Results are deterministic and the same on every rank: every collective
+// reads the ranks' contributions in rank order (a floating-point sum is
+// v0 + v1 + v2 + ...). Nothing hangs: abortAll() throws GroupAborted in the
+// caller and in every rank in a collective or entering one; a rank that
+// returns while others wait in a collective it will never join, or arguments
+// that do not match across ranks, make them throw CommunicationError.
+// docs/architecture.md, "Two communicators".
 #pragma once
 
 #include <functional>
