@@ -40,10 +40,8 @@ int pickOwner(const RankSet& owners, const PathCore& ray);
 // not change as hits shorten the ray: the replay layout recomputes it). An
 // unreplicated proxy's one owner; for a replica (a copy of large, cheap
 // content on several ranks) the one that holds the most of what the ray
-// passes next. Taking any replica's owner by a hash of the ray sent most
-// camera rays of a view standing on a replicated ground piece to a rank
-// holding little else of what they pass (docs/data-parallel.md, "Replicas").
-// Adds the queries it makes to `queries`.
+// passes next (docs/data-parallel.md, "Replicas"). Adds the queries it makes
+// to `queries`.
 RankSet reachingOwners(const ProxyBvh& proxies, const ProxyBvh::Hit& hit, Vec3f origin,
                        Vec3f direction, const RankSet& visited, uint32_t& queries);
 
@@ -69,24 +67,13 @@ ForwardDecision forwardByRing(const Path& ray, int rank, int ranks);
 
 // The paper's "replay" (Section 3.3): the set of ranks a ray has visited,
 // recomputed from only the rank that generated it, by re-running the proxy
-// decisions from there until the walk reaches `current`.
-//
-// Why this reproduces the mask exactly (with `ray.tmax` as it arrived at
-// `current`, i.e. before `current` traces it): at each step the forwarding
-// operator takes the closest proxy, by (entry distance, index), with no
-// visited owner and entry before the ray's tmax at the time. Entry distances
-// do not depend on tmax (ProxyBvh::closest), tmax only shrinks and the
-// visited set only grows, so the chosen entries never decrease, and every
-// proxy chosen on the way lies before the entry of the proxy that sent the ray
-// to `current`, which was before the arrival tmax. So with the arrival tmax
-// each replayed step has the same candidate at the front and picks the same
-// proxy and (pickOwner) the same owner. Hits found on the way (tmax updates),
-// the local-first trace on the generating rank (the walk starts with it
-// visited) and primary rays kept by the owner of their closest proxy (they
-// start the same way) need no more state.
+// decisions from there until the walk reaches `current`. With `ray.tmax` as
+// it arrived at `current` (before `current` traces it) the walk visits
+// exactly the ranks a carried mask would hold, with no more state on the ray
+// (docs/data-parallel.md, "Above 64 ranks: replay", says why).
 //
 // `reached` is false if the walk ends without reaching `current`: the ray's
-// history is not what the replay says (counted as a revisit; never seen).
+// history is not what the replay says (counted as a revisit).
 struct ReplayResult {
   RankSet visited;  // ranks the ray has been traced on before `current`, plus `current` if reached
   bool reached = false;

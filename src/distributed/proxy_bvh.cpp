@@ -453,8 +453,7 @@ ProxyBvh::Hit ProxyBvh::closestImpl(Vec3f origin, Vec3f direction, float tmax,
       ownSearched = !ex.excluded.contains(ownRank_);
   }
   // Both trees at once (below): searched one after the other, the first
-  // tree's answer is often far and bounds the second badly (1.2-1.9x the
-  // time of one tree for camera rays in bench/proxy_query_bench).
+  // tree's answer is often far and bounds the second badly.
   Hit best;
   search(sharedRoot_, ownSearched ? ownRoot_ : -1, origin, direction, tmax, ex, best);
   return best;

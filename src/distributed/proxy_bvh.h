@@ -17,20 +17,14 @@ class ProxyBvh {
   ProxyBvh() = default;
   // The tree keeps what a query needs (each proxy's box and owners in its
   // node's slot) and nothing else: `proxies` is consumed, so a rank holds
-  // every proxy once (issue 13: every rank holds every proxy, and two copies
-  // plus the builder's temporaries were most of a small rank's memory).
-  // With `ownRank` >= 0, the proxies owned by that rank alone go in a tree
-  // of their own, which a query excluding `ownRank` never enters: a rank's
-  // forwarding decisions always exclude itself (it has just traced the ray),
-  // and near where its rays start most proxies are its own, which one shared
-  // tree made every decision descend to and reject (issue 13; measured in
-  // bench/proxy_query_bench and docs/data-parallel.md). A query that does
-  // not exclude `ownRank` (which rank owns a camera path, replay walks)
-  // searches both trees together. The answers are those of one tree: the
-  // split only sets apart proxies that cannot answer the queries that skip
-  // them.
-  // `shapes` and `placements`: what instanced proxies refer to
-  // (Proxy::shape, Proxy::placement), consumed too.
+  // every proxy once. With `ownRank` >= 0, the proxies owned by that rank
+  // alone go in a tree of their own, which a query excluding `ownRank` (every
+  // forwarding decision of that rank) never enters; a query that does not
+  // (which rank owns a camera path, replay walks) searches both. The answers
+  // are those of one tree. `shapes` and `placements`: what instanced proxies
+  // refer to (Proxy::shape, Proxy::placement), consumed too. Why:
+  // docs/memory.md, "Each proxy held once"; docs/data-parallel.md, "Each
+  // rank's own proxies apart".
   explicit ProxyBvh(std::vector<Proxy> proxies, int ownRank = -1,
                     std::vector<ProxyShape> shapes = {}, std::vector<Affine3f> placements = {});
 
@@ -68,9 +62,9 @@ class ProxyBvh {
   size_t ownOnlyCount() const { return ownOnlyCount_; }
 
   // Children per node. The query tests a node's children together, 8 lanes
-  // of one vector operation per slab (AVX with x86-64-v3): a binary tree
-  // spent most of its time descending one box test at a time (issue 13: the
-  // forwarding decision after every trace was the largest cost at 8 ranks).
+  // of one vector operation per slab (AVX with x86-64-v3), each lane exactly
+  // the scalar box test (docs/architecture.md, "A wide proxy tree with
+  // scalar answers").
   static constexpr int kWidth = 8;
 
  private:
