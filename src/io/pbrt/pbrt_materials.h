@@ -1,48 +1,11 @@
-// pbrt materials and textures mapped onto Ferry's Material (base colour with
-// an optional texture, roughness, metallic, transmission, ior, emission,
-// alpha cut-out, a dielectric coat, Oren-Nayar sigma, bump map, mix link).
-//
-// Materials (v3 and v4 names):
-//   diffuse, matte, translucent, diffusetransmission -> diffuse: reflectance
-//       / Kd (plus transmittance for diffusetransmission, clamped to 1: a thin
-//       translucent sheet lit from both sides looks about that bright);
-//       matte's sigma is Oren-Nayar
-//   plastic -> Kd plus a GGX coat of Ks with pbrt-v3's FresnelDielectric(1.5,
-//       1) (Coat::Additive); substrate -> pbrt-v3's FresnelBlend;
-//       coateddiffuse -> the base under a layered dielectric coat
-//   conductor, metal, coatedconductor -> metallic 1; the colour is the
-//       normal-incidence Fresnel reflectance computed per wavelength from
-//       eta and k (named spectra, .spd files, inline spectra, or rgb per
-//       channel), or `reflectance` when given
-//   dielectric, glass, thindielectric -> transmission 1 with eta (index);
-//       thindielectric uses ior 1.01 (light passes straight through a thin
-//       sheet; a solid-glass ior would bend it)
-//   uber -> glass when Kt dominates, a mirror-like conductor when Kr
-//       dominates Kd, else Kd plus a coat of Ks; opacity becomes a cut-out
-//   disney -> color, metallic, roughness, spectrans
-//   mix -> the first material, switching to the second with probability
-//       amount at each shading point (v3's amount weighs the first, v4's the
-//       second; Material::mixedWith)
-//   interface, none, "" -> invisible (cut out everywhere)
-//   fourier (pbrt-v3) -> its "bsdffile" read (io/pbrt/fourier_bsdf_file.h) into
-//       Scene::bsdfTables, once per file; a file that is not there is a
-//       warning naming it and grey diffuse 0.5, a malformed one an error
-//   anything else (measured, hair, subsurface, ...) -> diffuse with
-//       its Kd / reflectance if constant, else grey 0.5, one warning naming it
-// Roughness: Ferry's roughness r has GGX alpha = r^2. pbrt-v4 remaps
-// roughness to alpha = sqrt(roughness), pbrt-v3 with its polynomial; u and v
-// roughnesses are combined as sqrt(alpha_u alpha_v).
-//
-// Textures: imagemap (PNG, TGA, JPEG, BMP, EXR, HDR, PFM; scale, invert,
-// encoding/gamma, uscale/vscale/udelta/vdelta), checkerboard (2D), scale,
-// mix, bilerp, constant, nested to any depth. A colour texture becomes an
-// 8-bit sRGB RGBA texture: an image alone at its own resolution, anything
-// else (procedural, nested, or with a uv transform) baked over uv in [0,1]^2
-// on a grid (the largest image's resolution, or 16 texels per checker, up to
-// 2048), repeating beyond; values above 1 are clamped. A float texture used
-// as `alpha` becomes the alpha channel of such a texture (an image's alpha
-// channel, or its luminance when it has none). Float textures on scalar
-// parameters (roughness, amount) are averaged over uv (one warning).
+// pbrt materials and textures (v3 and v4 names) mapped onto Ferry's Material
+// (base colour with an optional texture, roughness, metallic, transmission,
+// ior, emission, alpha cut-out, a dielectric coat, Oren-Nayar sigma, bump
+// map, mix link). Colour textures become 8-bit sRGB textures (an image alone
+// at its own resolution, anything else baked over uv in [0,1]^2); float
+// textures on scalar parameters are averaged. Unsupported materials become
+// diffuse with one warning naming them. The mapping, material by material:
+// docs/formats.md, "pbrt".
 #pragma once
 
 #include <functional>
