@@ -6,18 +6,12 @@
 // instances on one rank).
 //
 // The hybrid partitioners (bvh-style, best) use the same splitter with one
-// unit per instance. bvh-style sorts each instance by its own centre, as the
-// paper describes. `best` adds `groupCandidates`: another 3 x 7 planes that
-// sort the instances of each object together, by the box around that
-// object's instances in the part. The cost function then chooses between
-// splitting an object's instances over both sides (each side pays for the
-// object's meshes) and keeping them together ("partition based on instances,
-// so some instances can get replicated, if the cost function so chooses").
-// Without that family every plane cuts through the spread-out instances of
-// every plant species, and each side pays for nearly all the unique
-// geometry: on the landscape at 8 ranks the largest part is 53% of the scene
-// instead of 21% (and rays are forwarded less: 1.5 instead of 3.6 per path;
-// docs/partitioning.md has the measurements).
+// unit per instance, sorted by its own centre. `best` adds `groupCandidates`:
+// another 3 x 7 planes that sort the instances of each object together, by
+// the box around that object's instances in the part, so the cost function
+// chooses between splitting an object's instances (each side pays for its
+// meshes) and keeping them together (docs/partitioning.md, "`best`'s extra
+// candidates").
 #pragma once
 
 #include "partition/split_loop.h"

@@ -133,8 +133,7 @@ void PartAssignment::rebalance(double limit) {
   // The rounds lower the total excess; gathering a shared mesh's users frees
   // copies (less over all parts) but may pile them on one part. Where the
   // largest part ends larger than it was, the moves are undone: balancing
-  // is for the largest part (the island's at 32 ranks went from 7 % to 12 %
-  // of it before this check).
+  // is for the largest part.
   const std::vector<uint16_t> before = part_;
   const uint64_t largestBefore = largest();
   rebalanceRounds(limit);

@@ -3,23 +3,14 @@
 // partitioner's optimizer; ray_guided_partitioner.h).
 //
 // The score is the forwarding estimate: a ray whose units lie in m parts
-// costs m - 1 (the "connectivity - 1" metric of hypergraph partitioning,
-// which for K = 2 counts the rays a split separates). Bytes are counted as a
-// part pays them: its units' records, and each mesh or texture once per part
-// that uses it (reference counts per part), so moving the last instance of a
-// plant out of a part also frees the plant's meshes there.
-//
-// Moves after Fiduccia and Mattheyses, greedily (no negative moves with
-// rollback): refine() moves single units to a part their rays already
-// touch when that lowers the score and keeps every part within the byte
-// limit; rebalance() empties the excess above the limit by the moves that
-// cost the fewest rays per byte of excess removed, among single units, all
-// of an object's instances in one part (frees the object's meshes there)
-// and all units in one part using a mesh or texture another part holds too
-// (frees that copy: when shared content makes the parts together larger
-// than K times the limit, no move of single units can balance them).
-// Everything is a pure function of the input (units in index order, ties
-// to the lower index).
+// costs m - 1 (the "connectivity - 1" metric). Bytes are counted as a part
+// pays them: its units' records, and each mesh or texture once per part that
+// uses it. refine() moves single units, greedily, where that lowers the score
+// within the byte limit; rebalance() removes the excess above the limit by
+// the moves that cost the fewest rays per byte: single units, an object's
+// instances, or the users of a shared mesh or texture. A pure function of
+// the input (ties to the lower index). docs/partitioning.md, "The
+// ray-guided partitioner".
 #pragma once
 
 #include <cstdint>

@@ -1,19 +1,12 @@
-// Proxies merged down to a budget.
-//
-// Every rank holds every proxy (and a BVH over them), so their number is
-// memory and set-up time on every rank: one proxy per instance is 3.8 M
-// proxies for the island at scale 30, about 1 GB on each of its 8 ranks
-// (docs/memory.md). A proxy says only "these ranks have content here", so the
-// union box of proxies with the same owners is still a proxy satisfying the
-// partition invariant (every point of an instance lies in a proxy whose
-// owners all hold it); what merging costs is rays sent to the owners through
-// the gaps of the union. So the boxes are merged where that costs least:
+// Proxies merged down to a budget. Every rank holds every proxy, so their
+// number is memory and set-up time on every rank. The union box of proxies
+// with the same owners still satisfies the partition invariant; what merging
+// costs is rays sent to the owners through the gaps of the union. So
 // proxies are grouped by owner set, each group starts as one union box, and
-// the box with the largest surface area (rays entering a box are in
-// proportion to it) is split in two, by a binned sweep over its members'
-// centres choosing the planes that leave the least summed area, until the
-// budget is reached or every box holds one proxy. Deterministic, like the
-// partitioners: every rank merging the same proxies gets the same boxes.
+// the box of largest surface area is split in two (a binned sweep over its
+// members' centres, least summed area) until the budget is reached or every
+// box holds one proxy. Deterministic: every rank merging the same proxies
+// gets the same boxes. docs/partitioning.md, "Proxies under a budget".
 #pragma once
 
 #include <cstdint>
@@ -26,9 +19,8 @@ namespace ferry {
 
 // The default of `--max-proxies`: about 24 MB on every rank (the proxy tree
 // holds each world box and its owners in its node's slot, ~90 B each with
-// the nodes; ~280 B before issue 13's "each proxy held once"). Above the
-// built-ins at scale 1 with every partitioner, so their partitions are as
-// without a budget.
+// the nodes). Above the built-ins at scale 1 with every partitioner, so
+// their partitions are as without a budget.
 constexpr uint64_t kDefaultMaxProxies = uint64_t(1) << 18;
 
 // `proxies` unchanged if there are at most `maxProxies` (or maxProxies is 0),
