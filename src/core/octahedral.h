@@ -2,12 +2,10 @@
 // al. 2014, "A Survey of Efficient Representations for Independent Unit
 // Vectors") and positive densities in 16 bits: what the compact path stores.
 //
-// The octahedral direction replaced three halves (48 bits) so that the path
-// has room for the BSDF density that multiple importance sampling needs
-// (issue 14) while staying 36 bytes; it is also more precise: at most ~7e-5
-// rad off (tested), against ~3e-4 rad for three halves. Encoding and decoding
-// are plain float arithmetic (built with -ffp-contract=off), so every rank
-// decodes exactly the same ray.
+// A decoded direction is at most ~7e-5 rad off (tested). Encoding and
+// decoding are plain float arithmetic (built with -ffp-contract=off), so
+// every rank decodes exactly the same ray. Why 32 bits: docs/data-parallel.md,
+// "The path on the wire".
 #pragma once
 
 #include <cmath>

@@ -3,19 +3,12 @@
 // direct send; on one rank it is the image.
 //
 // Sums are kept in fixed point (64-bit integers, kFractionBits below the
-// binary point), not in floats: integer addition is associative, so the sum
-// of a pixel's contributions does not depend on the order they arrive in.
-// That is what lets the distributed engine shade rays in whatever order
-// other ranks send them (issue 13), any number of contributions land on a
-// pixel per wavefront (MIS), and the ranks' partial sums add up to exactly
-// the one-rank image, bit for bit, at any rank count.
-//
-// Adds are plain while the renderer adds to a pixel from one thread at a
-// time (one rank's chunks are disjoint pixel ranges; a whole-image wavefront
-// adds a pixel sample's shadow ray and shades its path in separate passes).
-// Light paths (render/path_shading.h) add to whatever pixel their vertex
-// projects to, from any thread: the renderer then makes adds atomic
-// (relaxed; setAtomicAdds), which costs a locked add per channel.
+// binary point): integer addition is associative, so a pixel's sum does not
+// depend on the order its contributions arrive in, and the ranks' partial
+// sums add up to exactly the one-rank image at any rank count
+// (docs/architecture.md, "Fixed-point frame buffer"). Adds are plain, for
+// one thread per pixel at a time, unless setAtomicAdds(true) (light paths
+// add to any pixel from any thread; docs/path-tracer.md, "Light paths").
 #pragma once
 
 #include <algorithm>

@@ -2,21 +2,14 @@
 // environment's sampling tables, the emissive triangles in world space) and
 // lives on every rank, whatever part of the geometry the rank owns.
 //
-// One light sample per path vertex: the light is chosen by weighted sampling
-// over all candidates (each sun, the environment, each emissive triangle or,
-// past a threshold, groups of them), candidate i with probability w_i / sum(w)
-// (what a one-sample weighted reservoir gives), with a single uniform number,
-// so the choice is a pure function of the path's random key. The weights
-// depend only on the shading point, not on its normal, so that a path which
-// finds an emitter by BSDF sampling can compute, from its ray's origin, the
-// density with which the light sample would have found the same point: the
-// other half of the MIS weight (lightPdf, environmentPdf).
-//
-// Which lights take part in MIS: emissive triangles and an environment map.
-// Suns (cones a BSDF sample almost never finds) and a constant environment
-// (sampled about the shading normal, which a path does not carry) are left
-// to the light sample alone; a BSDF sample counts them only after a delta
-// vertex (or the camera), where no light sample was taken.
+// One light sample per path vertex, chosen with a single uniform number over
+// every candidate with probability w_i / sum(w), so the choice is a pure
+// function of the path's random key. The weights depend only on the shading
+// point, not on its normal, so a path that finds an emitter by BSDF sampling
+// can recompute the light sample's density there (emitterPdf,
+// environmentPdf): the other half of the MIS weight. Emissive triangles and
+// an environment map take part in MIS; suns and a constant environment are
+// left to the light sample alone. docs/path-tracer.md, "Light sampling".
 #pragma once
 
 #include <array>

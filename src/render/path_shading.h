@@ -9,51 +9,10 @@
 //   BSDF sample    the continuation, after Russian roulette
 //   light sample   next-event estimation: one light, one shadow ray, its tmax
 //
-// Multiple importance sampling (Veach 1997, the power heuristic): light an
-// emitter or the environment map sends to a vertex is found twice, by the
-// light sample and by the BSDF sample, and each counts with weight
-// p_own^2 / (p_light^2 + p_bsdf^2). The light sample knows both densities
-// at once; the BSDF sample's density travels with the continuation
-// (PathCore::bsdfDensity, 16 bits) and the light's is recomputed where the
-// path lands, on whichever rank that is (light data is on every rank). Both
-// weights use the stored (packed) BSDF density, so they sum to one. After a
-// delta vertex or the camera (kPathAfterSpecular) no light sample was taken
-// and emission counts in full; suns and a constant sky are left to the
-// light sample alone (lights.h). Without MIS (LightStrategy::LightSamples),
-// emission and escaped light count only there.
-//
-// A pixel sample's path and its shadow ray may now both add light in one
-// wavefront: the renderer adds the shadow rays' light in one pass and shades
-// the paths in another, and a pixel sample has one ray of each kind, so no
-// two threads add to one pixel at once (and the fixed-point frame buffer
-// makes the order irrelevant).
-//
-// Light paths (light tracing; on when the scene asks for bidirectional
-// transport, pbrt's Integrator "bdpt", or with --light-paths on): besides
-// one camera path, each pixel sample starts one light path at an emitter
-// (chosen by power, cosine-weighted direction). At every non-delta vertex
-// it scatters from, it connects to the camera: a shadow ray to the camera
-// carrying its contribution to the pixel the vertex projects to (pbrt-v3's
-// bdpt strategy t = 1; pixel() of that ray is the light path's index, the
-// pixel is recomputed from its origin, Camera::pixelOf). So a path of length
-// k is found three ways: the camera path hits the emitter, the camera path's
-// light sample, the light path's connection, and each counts with the power
-// heuristic over all three (Veach 1997; for the breakfast scene's lamps
-// behind frosted glass only the light path finds the walls' light well).
-// The three densities of a whole path are known only at its end, so each
-// path carries one running ratio (lightRatio, 16 bits): a camera path the
-// light path's density of its vertices over its own (factors
-// rev_i cos_{i-1} / (fwd_{i-1} cos_i), the squared distances cancel), a
-// light path the sum of squares of the other two strategies' over its own.
-// Delta lobes count density 1 on both sides (as pbrt's remap0). The light
-// path's throughput is stored divided by the emitters' total power, so that
-// halves hold it. Contributions then land on any pixel from any thread: the
-// frame buffer then adds atomically (FrameBuffer::setAtomicAdds).
-//
-// The vertex travels through the steps as two structs: PathVertex (where the
-// path is, what it brings) and VertexScattering (how the vertex scatters), so
-// a step that needs more (a layered BSDF, a bumped shading normal) changes
-// one of them and the steps that read it.
+// Emitters are weighed by MIS over the BSDF and light samples, and with light
+// paths (connections to the camera) over all three; the densities travel on
+// the path (PathCore::bsdfDensity, lightRatio). docs/path-tracer.md,
+// "Multiple importance sampling" and "Light paths".
 #pragma once
 
 #include <algorithm>
@@ -113,12 +72,8 @@ template <typename Path>
 
 // Where a shadow ray from `origin` along `storedDir` (its direction as
 // stored) to the sampled point of a finite light stops: short of the sampled
-// point and of the emitter's plane along the ray as stored. Its quantized
-// direction is off by up to ~7e-5 rad, so it meets the emitter's plane up to
-// 7e-5 / cos(theta_light) (relative) before or after the sampled point, which
-// at grazing angles is more than the 1e-4 margin; the emitter then shadowed
-// itself (with half-precision directions, 6% too dark under a square light,
-// 11% inside a closed emitter).
+// point and of the emitter's plane along the ray as stored, so the emitter
+// does not shadow itself (docs/path-tracer.md, "Light sampling").
 [[gnu::always_inline]] inline float shadowRayTmax(Vec3f position, Vec3f origin, Vec3f storedDir,
                                                   const LightSample& light) {
   const Vec3f toLight = position + light.direction * light.distance - origin;
@@ -133,7 +88,7 @@ template <typename Path>
 
 // Which samples find emitters and the sky. Mis: both (the default).
 // LightSamples: light samples alone (emission counts only after delta
-// vertices; the paper's, and Ferry's before MIS). BsdfSamples: BSDF samples
+// vertices; the paper's). BsdfSamples: BSDF samples
 // alone, no shadow rays (for tests: all three must agree on the mean).
 enum class LightStrategy { Mis, LightSamples, BsdfSamples };
 // "mis", "light", "bsdf" (the stats JSON and checkpoint identities).

@@ -1,21 +1,18 @@
 // `ferry view`'s HTTP server on rank 0 (cpp-httplib, only here): serves the
 // page, the accumulated image and the stats, and turns the API's requests
-// into the ViewChanges the session applies at the next frame boundary.
+// into the ViewChanges the session applies at the next frame boundary
+// (docs/viewer.md, "API"):
 //
 //   GET  /            the page (viewer_page.h)
-//   GET  /frame.png   the accumulated image, tone mapped; ?after=ID waits (up
-//                     to 2 s) for a frame newer than ID; the response's
-//                     X-Ferry-Frame header is this frame's ID
-//   GET  /stats       JSON: frames accumulated, frame id, camera, settings,
-//                     views, and the last frame's counters, stage times and
-//                     memory per rank
+//   GET  /frame.png   the image, tone mapped (?after=ID: waits up to 2 s for a newer frame)
+//   GET  /stats       JSON: frames, camera, settings, views, last frame's stats
 //   POST /camera      {"from":[x,y,z],"at":[x,y,z],"up":[x,y,z],"fov":deg}
 //   POST /settings    {"width","height","spp","max_depth","exposure","view"}
 //   POST /quit        ends every rank at the next frame boundary
 //
 // Requests are checked (view_requests.h): a bad one gets a 4xx with the
-// reason and changes nothing. The server runs on its own threads; the
-// render loop only takes changes and publishes frames, under one mutex.
+// reason and changes nothing. The server runs on its own threads; the render
+// loop only takes changes and publishes frames, under one mutex.
 #pragma once
 
 #include <memory>
