@@ -1,11 +1,9 @@
 // One floating-point mode for every thread that traces or shades: denormals
 // flushed to zero (FTZ) and read as zero (DAZ), as Embree recommends for
-// speed. Set explicitly, because otherwise a thread's mode is an accident of
-// history: TBB runs its tasks with the mode of the thread that first started
-// it, and Embree switches the mode on inside its builds, so a rank whose
-// first TBB call happened inside a BVH build shaded with FTZ on and one that
-// partitioned first shaded with it off, and their images differed wherever a
-// denormal appeared (docs/memory.md, "Concurrent builds"). Call
+// speed. Set explicitly: otherwise TBB runs its tasks with the mode of the
+// thread that first started it, which Embree's builds change, and images
+// differ wherever a denormal appears (docs/architecture.md, "One
+// floating-point mode for every thread"). Call
 // useFixedFloatingPointMode() first thing in main(), before any thread or
 // TBB call: threads made afterwards inherit the mode, and TBB, started
 // afterwards, runs its tasks with it.

@@ -132,7 +132,7 @@ constexpr bool kHardwareHalf = true;
 // `packed` holds three halves in its low 48 bits (the top 16 are ignored):
 // callers load them with the two bytes after them in one 8-byte load, which
 // the processor forwards from earlier stores (a 6-byte copy into a zeroed
-// word is three stores and one load, and stalled shading by ~15 cycles).
+// word is three stores and one wider load, which it cannot forward).
 [[gnu::always_inline]] inline void halves3ToFloats(uint64_t packed, float out[3]) {
   firstThreeLanes(_mm_cvtph_ps(_mm_cvtsi64_si128(int64_t(packed))), out);
 }

@@ -98,9 +98,8 @@ inline Vec3f normalize(Vec3f a) {
 // direction sampler). The quarter turn is taken from u exactly (u * 4 and its
 // rounding lose nothing), the rest is at most an eighth of a turn, where
 // minimax polynomials of degree 7 (sin) and 6 (cos) are within 2e-7 of the
-// true values (math_test.cpp). No branches: libm's sincosf and a version that
-// chose the quadrant by branching each cost ~5 % of a frame (the quadrant is
-// random, so every other branch was mispredicted).
+// true values (math_test.cpp). No branches: the quadrant is random, so a
+// branch on it would be mispredicted every other time (docs/performance.md).
 inline void sinCosTwoPi(float u, float& sinOut, float& cosOut) {
   const float quarters = u * 4.0f;
   const uint32_t k = uint32_t(quarters + 0.5f);       // nearest quarter turn, 0..4
@@ -185,8 +184,7 @@ struct Box3f {
   // the box (touching counts), `inverse` being 1 / direction per axis;
   // false, leaving t0 > t1, when nothing is left. A NaN (0 * inf: the origin
   // on a slab plane of a zero direction) counts as inside that slab. Inline:
-  // the proxy query runs it for every node and leaf box it meets (13 % of a
-  // forwarding rank's time as a call).
+  // the proxy query runs it for every node and leaf box it meets.
   [[gnu::always_inline]] bool clipRay(Vec3f origin, Vec3f inverse, float& t0, float& t1) const {
     for (int a = 0; a < 3; ++a) {
       float lo = (lower[a] - origin[a]) * inverse[a];
@@ -301,8 +299,8 @@ inline Affine3f operator*(const Affine3f& a, const Affine3f& b) {
 // Orthonormal basis around a unit normal (Duff et al. 2017), for local shading frames.
 struct Frame {
   Vec3f s, t, n;
-  // (Always inlined: a handful of multiplies each, called at every vertex,
-  // and GCC left toLocal out of line once shading grew: 3 % of a frame.)
+  // (Always inlined: a handful of multiplies each, called at every vertex;
+  // GCC may otherwise leave toLocal out of line.)
   [[gnu::always_inline]] explicit Frame(Vec3f normal) : n(normal) {
     float sign = std::copysign(1.0f, n.z);
     float a = -1.0f / (sign + n.z);

@@ -119,9 +119,8 @@ size_t ProxyBvh::bytes() const {
 // power of kWidth with kWidth * s >= count, by cuts at multiples of s in the
 // order of the box centres along the widest axis. Every subtree is then as
 // full as it can be: nodes hold kWidth boxes but for one per level, about
-// 30 bytes per box, where cutting at the median left leaf nodes of two or
-// three boxes (over 100 bytes per box). The tree is at most
-// ceil(log8(count)) deep, which bounds the query's stack.
+// 30 bytes per box (docs/partitioning.md, "Shapes by size"). The tree is at
+// most ceil(log8(count)) deep, which bounds the query's stack.
 int32_t ProxyBvh::buildShape(std::vector<Box3f>& boxes, size_t first, size_t count, int depth) {
   FERRY_CHECK_LT(depth, kMaxShapeDepth);
   struct Range {

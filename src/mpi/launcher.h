@@ -3,8 +3,8 @@
 //
 // `ferry render` or `ferry view` started by hand is one rank and does not
 // start MPI at all: Open MPI's singleton start (MPI_Init without mpirun)
-// discovers the machine's topology and starts a helper daemon, 0.35-0.45 s
-// on the 2-core guest of docs/performance.md, more than a small frame takes.
+// discovers the machine's topology and starts a helper daemon, which takes
+// longer than a small frame (docs/architecture.md, "Two communicators").
 #pragma once
 
 namespace ferry {

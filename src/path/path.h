@@ -173,8 +173,8 @@ static_assert(std::is_trivially_copyable_v<Path8> && std::is_trivially_copyable_
 
 // A wavefront's queue of paths. Every path in a queue is written before it is
 // read, so growing a queue need not zero it (value-initializing the new paths
-// was a memset of the whole image's queue per sample): the allocator leaves
-// default-constructed paths uninitialized. Paths are aggregates of trivially
+// would be a memset of the whole image's queue per sample): the allocator
+// leaves default-constructed paths uninitialized. Paths are aggregates of trivially
 // copyable parts (implicit-lifetime types), so the storage is their object.
 template <typename T>
 struct UninitializedAllocator : std::allocator<T> {

@@ -21,7 +21,7 @@ Vec3f sunRadiance(const SunLight& sun) {
 }
 
 // 1 - cos(r) without cancellation: in float, 1 - cos(0.00465) is off by 0.2%
-// (and by 1.3% at r = 0.002), which biased every sunlit pixel by as much.
+// (and by 1.3% at r = 0.002), which would bias every sunlit pixel by as much.
 float oneMinusCos(float r) {
   float s = std::sin(0.5f * r);
   return 2 * s * s;

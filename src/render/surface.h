@@ -42,8 +42,7 @@ std::vector<Affine3f> instanceInverses(const Scene& scene);
 // meshes start in `meshes`; per (object, mesh slot) the mesh's arrays and
 // material. A hit then reaches its triangle's vertices in three dependent
 // loads instead of six (instance, object, mesh list, mesh, indices,
-// positions), which were the critical path of every vertex. Same result, bit
-// for bit.
+// positions). Same result, bit for bit.
 struct SurfaceTable {
   struct MeshArrays {
     const Vec3i* indices;

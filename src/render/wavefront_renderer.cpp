@@ -67,9 +67,8 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
       // One rank: chunks of pixels, each taken from camera ray to last bounce
       // by one thread, so that its queues (paths, kept hits, spawned rays:
       // ~130 bytes a pixel) stay in that core's cache from stage to stage and
-      // no thread waits for another at the end of every stage (the whole
-      // image per wavefront streamed ~17 MB through memory at each stage of a
-      // 512x512 frame; docs/performance.md). Chunks are disjoint pixel ranges
+      // no thread waits for another at the end of every stage
+      // (docs/performance.md, "Why chunks"). Chunks are disjoint pixel ranges
       // and each pixel sample is the same computation, adding to the frame
       // buffer in the same order: the image does not depend on the chunks.
       // (Stage times are then summed over the threads.)

@@ -31,21 +31,20 @@ struct MemoryCost {
 // The model assumes every object has its own BVH under an instance
 // (the Embree backend with Instancing::Always); the default build puts an object a
 // rank places once, untransformed, into the top-level BVH, which retains no
-// more (tested), so for it the model is an upper bound (by a few KB per such
-// object; Cornell's 8 meshes: 14.8 KB estimated, 3.5 KB retained).
+// more (tested), so for it the model is an upper bound.
 // Calibrated constants: measured with Embree 3.13.5 (Debian, default build
 // quality, on an AVX-512 CPU) by src/scene/memory_cost_test.cpp, which
 // keeps them honest; docs/memory.md has the measurements. `accel` is what
 // Embree's memory monitor counts (its retained bytes after the build; the
 // peak during a build is higher, see docs/memory.md).
 struct MemoryModel {
-  // BVH nodes and triangle leaves per triangle (55..69 measured, by mesh size).
+  // BVH nodes and triangle leaves per triangle.
   static constexpr double kAccelBytesPerTriangle = 64.0;
   // Fixed BVH bytes per mesh: Embree allocates in blocks, so even a
   // two-triangle mesh retains about one block. Matters only for scenes of many
-  // small meshes (the Cornell box: 8 meshes, 32 triangles, 11.5 KB retained).
+  // small meshes.
   static constexpr double kAccelBytesPerMesh = 1150.0;
-  // Top-level BVH bytes per instance in the instancing scene (66..106 measured).
+  // Top-level BVH bytes per instance in the instancing scene.
   static constexpr double kAccelBytesPerInstance = 100.0;
   // Ferry's Instance record (52 bytes) plus Embree's instance geometry object
   // (298 bytes, on the heap but not reported by the memory monitor).

@@ -10,8 +10,8 @@
 // renderer's counters. A sample of pixels spread evenly over the image is a
 // sample of the full image's camera paths: forwards per camera path do not
 // depend on the resolution but through which paths are sampled, so the
-// prediction's error is the sampling error of a ratio (a few per cent at
-// 16 K paths; docs/evaluation.md has the measured error).
+// prediction's error is the sampling error of a ratio (docs/evaluation.md,
+// "The bandwidth predictor", has the measured error).
 #pragma once
 
 #include <cstdint>

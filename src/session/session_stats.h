@@ -3,8 +3,7 @@
 // Scripts read it (bench/, tests/tools/check_stats.py): keys only ever grow.
 // "seconds" holds the command's "total" and the set-up's intervals to the
 // first pixel (kSetupTimes, render_session.h): rank 0's, the slowest rank's
-// ("slowest", slowestSetup) and each rank's ("per_rank"). ("load" was,
-// before the set-up was broken down, load + partition + lights.)
+// ("slowest", slowestSetup) and each rank's ("per_rank").
 #pragma once
 
 #include <string>

@@ -181,10 +181,9 @@ RTCRayHit toEmbree(const TraceRay& r) {
 }
 
 // Re-trace margin (docs/architecture.md): Embree accepts a hit only somewhat
-// inside tfar, with an error that scales with the coordinates, not with t
-// (measured: tfar = t, t + 1e-6 relative, or t * 1.001 at t = 0.016 in a
-// 555-unit box can all miss it), so the re-trace searches past the recorded
-// distance by a margin of both kinds; nothing closer than the recorded hit
+// inside tfar, with an error that scales with the coordinates, not with t,
+// so the re-trace searches past the recorded distance by a margin of both
+// kinds; nothing closer than the recorded hit
 // exists, so the closest hit found is the same one.
 TraceRay retraceQuery(const RetraceRay& r) {
   const Vec3f o = r.origin;

@@ -69,10 +69,9 @@ struct BuiltCounts {
 // Which objects get an instance level. An object this rank places exactly
 // once, untransformed, instances nothing: with Shared its meshes join the top
 // level, as a production renderer keeps unique geometry (saves every ray an
-// instance transform and a second BVH root: 15 % of Embree's own tutorial
-// frame on the bunny, docs/performance.md). Instancing is never flattened: an
-// object's triangles exist once however often it is placed. Hits name the
-// same (instance, mesh slot) either way.
+// instance transform and a second BVH root; docs/performance.md). Instancing
+// is never flattened: an object's triangles exist once however often it is
+// placed. Hits name the same (instance, mesh slot) either way.
 enum class Instancing : uint8_t {
   Shared,  // objects placed more than once, or transformed; unique geometry at the top level
   Always   // every object, even one placed once

@@ -836,8 +836,8 @@ struct PbrtMaterials::Impl {
 
   // pbrt-v3's fourier material: its "bsdffile" read once per path into
   // Scene::bsdfTables. A file that is not there is a warning naming it (the
-  // material then renders grey diffuse, as before tables were read); a file
-  // that is there but malformed is an error naming it and where it is named.
+  // material then renders grey diffuse); a file that is there but malformed
+  // is an error naming it and where it is named.
   bool fourierTable(const PbrtParams& p, const PbrtMaterialDefinition& def, Material& m) {
     const PbrtParam* file = p.find("bsdffile");
     const std::string name = p.getString("bsdffile", "");
