@@ -248,7 +248,7 @@ const Case& islandCase(int tiles) {
   Scene scene = loadScene("builtin:island");
   const CameraView view = scene.view("");
   PartitionerOptions options;
-  options.name = "best";
+  options.partitioner = &bestPartitioner();
   Partition partition = partitionScene(scene, 8, options);
   Box3f extent;
   for (const Proxy& p : partition.proxies) extent.extend(p.bounds);

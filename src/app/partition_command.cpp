@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <filesystem>
 
@@ -19,7 +20,6 @@
 #include "io/images/image_io.h"
 #include "io/parts/part_directory.h"
 #include "io/scene_loader.h"
-#include "partition/ray_sampler.h"
 #include "path/path.h"
 #include "report/partition_picture.h"
 #include "report/partition_report.h"
@@ -33,15 +33,37 @@
 namespace ferry {
 namespace {
 
-// The flags as the partitioner's options, checked; `kind` names it.
-PartitionerOptions partitionerOptions(const PartitionCommandOptions& o, PartitionerKind kind) {
+// Parses "N" or "A..B" (1 <= A <= B <= 4096); throws InputError naming --ranks.
+void parseRankRange(const std::string& text, int& first, int& last) {
+  auto bad = [&]() {
+    return InputError(fmt::format("--ranks '{}': expected a count (8) or a range (1..128)", text));
+  };
+  auto parse = [&](std::string_view s, int& out) {
+    auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+    if (s.empty() || ec != std::errc() || ptr != s.data() + s.size()) throw bad();
+  };
+  size_t dots = text.find("..");
+  if (dots == std::string::npos) {
+    parse(text, first);
+    last = first;
+  } else {
+    parse(std::string_view(text).substr(0, dots), first);
+    parse(std::string_view(text).substr(dots + 2), last);
+  }
+  if (first < 1 || last < first || last > 4096)
+    throw InputError(
+        fmt::format("--ranks '{}': counts must satisfy 1 <= first <= last <= 4096", text));
+}
+
+// The flags as the partitioner's options, checked (best when none is named).
+PartitionerOptions partitionerOptions(const PartitionCommandOptions& o) {
   PartitionerOptions p = checkedPartitionerOptions(o.partition);
-  p.name = toString(kind);
+  p.partitioner = &chosenPartitioner(o.partition, bestPartitioner());
   return p;
 }
 
 nlohmann::json optionsJson(const PartitionerOptions& p) {
-  return {{"break_objects", p.breakObjects},
+  return {{"break_objects", !p.keepObjectsWhole},
           {"replication_budget", p.replicationBudget},
           {"mesh_proxies", p.meshProxies},
           {"instance_proxies", instanceProxiesFor(p)},
@@ -108,13 +130,13 @@ void predictAndRecord(const PartitionCommandOptions& o, const std::vector<Predic
 }
 
 // What `ferry partition -o DIR` made, for the terminal.
-void printPartsSummary(const PartitionCommandOptions& o, PartitionerKind kind,
-                       const PartitionerOptions& p, int ranks, const PartitionStats& stats,
-                       const Manifest& m, double loadSeconds, double writeSeconds) {
+void printPartsSummary(const PartitionCommandOptions& o, const PartitionerOptions& p, int ranks,
+                       const PartitionStats& stats, const Manifest& m, double loadSeconds,
+                       double writeSeconds) {
   fmt::print(
       "partitioned {} ({} estimated) for {} ranks with {}: {} units, {} distinct parts, {} "
       "proxies{}\n",
-      o.scene, formatBytes(stats.inputBytes), ranks, p.name, stats.units, stats.parts,
+      o.scene, formatBytes(stats.inputBytes), ranks, p.chosen().name(), stats.units, stats.parts,
       stats.proxies,
       stats.unmergedProxies > stats.proxies
           ? fmt::format(" (merged from {}: --max-proxies)", stats.unmergedProxies)
@@ -122,13 +144,13 @@ void printPartsSummary(const PartitionCommandOptions& o, PartitionerKind kind,
   if (stats.split.objectsBroken || stats.split.meshesCut)
     fmt::print("  rewritten first: {} objects broken into meshes, {} meshes cut into {} pieces\n",
                stats.split.objectsBroken, stats.split.meshesCut, stats.split.piecesMade);
-  if (kind == PartitionerKind::RayGuided)
+  if (p.chosen().tracesRays())
     fmt::print(
         "  sampled {} rays in {:.2f} s ({} pass two or more units); the splits separate {} "
         "({:.2f} per sampled ray)\n",
         stats.sampledRays, stats.sampleSeconds, stats.sampledRaysAcrossUnits, stats.separatedRays,
         double(stats.separatedRays) / double(std::max<uint64_t>(1, stats.sampledRays)));
-  if (kind == PartitionerKind::Best || kind == PartitionerKind::RayGuided)
+  if (p.chosen().reads("replication-budget"))
     fmt::print("  replicated {} units, {} over all ranks (budget {:.1f}% = {})\n",
                stats.replicatedUnits, formatBytes(stats.replicatedBytes), 100 * p.replicationBudget,
                formatBytes(uint64_t(p.replicationBudget * double(stats.inputBytes))));
@@ -215,11 +237,10 @@ void checkLargestMesh(const Scene& scene, const GeometryPlan& g, const std::stri
   }
 }
 
-int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const PartitionerOptions& p,
-               int ranks) {
+int writeParts(const PartitionCommandOptions& o, const PartitionerOptions& p, int ranks) {
   auto start = Clock::now();
   const GeometryPlan geometryPlan = planGeometry(o);
-  if (geometryPlan.outOfCore && kind == PartitionerKind::RayGuided)
+  if (geometryPlan.outOfCore && p.chosen().tracesRays())
     throw InputError(
         "--partitioner ray-guided traces its ray sample through the whole scene in memory: it "
         "cannot partition with the geometry out of memory (use best, or a larger "
@@ -239,11 +260,11 @@ int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const Par
   const SceneSummary summary = summarize(scene);
   const Scene lights = lightScene(scene);  // from the scene as given, before any rewrite
   PartitionStats stats;
-  Partition partition = partitionScene(scene, ranks, withRaySample(scene, p), &stats);
+  Partition partition = partitionScene(scene, ranks, p, &stats);
   partition.checkCovers(scene);
   PartDirectoryInfo info;
   info.scene = o.scene;
-  info.partitioner = p.name;
+  info.partitioner = p.chosen().name();
   info.options = optionsJson(p);
   info.summary = summary.toJson();
   info.inputBytes = stats.inputBytes;
@@ -253,7 +274,7 @@ int writeParts(const PartitionCommandOptions& o, PartitionerKind kind, const Par
   Manifest m = writePartDirectory(o.output, scene, partition, lights, info);
   const double writeSeconds = secondsSince(writeStart);
   if (!o.quiet) {
-    printPartsSummary(o, kind, p, ranks, stats, m, loadSeconds, writeSeconds);
+    printPartsSummary(o, p, ranks, stats, m, loadSeconds, writeSeconds);
     if (geometryPlan.outOfCore)
       fmt::print("  geometry out of memory ({}): {} spilled, budget {}\n", geometryPlan.why,
                  formatBytes(scene.meshStore->bytes()), formatBytes(geometryPlan.budget));
@@ -331,9 +352,7 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
 }
 
 int runPartition(const PartitionCommandOptions& o) {
-  const PartitionerKind kind =
-      parsePartitioner(o.partition.partitioner.empty() ? "best" : o.partition.partitioner);
-  const PartitionerOptions p = partitionerOptions(o, kind);
+  const PartitionerOptions p = partitionerOptions(o);
   if (o.output.empty() && o.report.empty())
     throw InputError(
         "ferry partition: give -o DIR (write parts) or --report FILE.csv (largest part per rank "
@@ -354,7 +373,7 @@ int runPartition(const PartitionCommandOptions& o) {
     if (last > kMaxRanks)
       throw InputError(
           fmt::format("--ranks {}: parts are made for 1 to {} ranks", last, kMaxRanks));
-    writeParts(o, kind, p, last);
+    writeParts(o, p, last);
   }
   return 0;
 }
@@ -382,9 +401,9 @@ int runShowPartition(const RenderOptions& o, const Communicator& comm) {
         applyPartitionerFlags(o, settings);
         const PartitionerOptions p = partitionerOptions(settings, ranks);
         scene = loadScene(o.scene);
-        partition = partitionScene(scene, ranks, withRaySample(scene, p));
-        title = fmt::format("{}: {}{}, {} ranks", scene.name, p.name,
-                            p.breakObjects ? "" : " (objects whole)", ranks);
+        partition = partitionScene(scene, ranks, p);
+        title = fmt::format("{}: {}{}, {} ranks", scene.name, p.chosen().name(),
+                            p.keepObjectsWhole ? " (objects whole)" : "", ranks);
       }
       PictureOptions picture;
       picture.width = width;

@@ -1,7 +1,7 @@
 // The flags that say how a scene is split over ranks, shared by `ferry
 // partition` (which writes the parts) and `ferry render` / `ferry view`
-// (which split the scene on the fly, every rank alike): one definition, one
-// help text and one check for both, so the two commands cannot drift apart.
+// (which split the scene on the fly): made from the partitioner registry
+// and its settings (partition/partitioner.h), one flag per setting.
 #pragma once
 
 #include <string>
@@ -15,24 +15,25 @@ class App;
 namespace ferry {
 
 struct PartitionFlags {
-  // --partitioner: a name from partitionerNames(); empty: the command's default.
+  // --partitioner: a name from partitioners(); empty: the command's default.
   std::string partitioner;
-  bool keepObjectsWhole = false;  // --keep-objects-whole (options.breakObjects is its opposite)
-  // Every other flag's value, its default the partitioner's own. name,
-  // seed and raySample are the command's to set.
+  // Every setting's flag; `partitioner`, `seed` and `raySample` are the command's to set.
   PartitionerOptions options;
 };
 
-// Adds --partitioner, --keep-objects-whole, --replication-budget,
-// --mesh-proxies, --instance-proxies, --max-part, --max-proxies and
-// --ray-paths. `partitionerNames` is the option's names (e.g.
-// "--partitioner,--partition"); `defaultText` ends --partitioner's help: what
-// the command does when it is not given.
-void addPartitionFlags(CLI::App* command, PartitionFlags& flags,
-                       const std::string& partitionerNames, const std::string& defaultText);
+// Adds --partitioner (its help lists the registry) and --NAME for every
+// partitioner setting, with the setting's help and the partitioners that read it.
+// `partitionerFlag` is the option's names (e.g. "--partitioner,--partition");
+// `defaultText` ends --partitioner's help: what the command does when it is not given.
+void addPartitionFlags(CLI::App* command, PartitionFlags& flags, const std::string& partitionerFlag,
+                       const std::string& defaultText);
 
 // The flags as partitioner options, checked: throws InputError naming the
-// flag and its range. The name and seed are left as `flags.options` has them.
+// flag and its range. The partitioner and seed are left unset.
 PartitionerOptions checkedPartitionerOptions(const PartitionFlags& flags);
+
+// The partitioner --partitioner names, or `fallback` when none is given;
+// throws InputError naming the accepted ones.
+const Partitioner& chosenPartitioner(const PartitionFlags& flags, const Partitioner& fallback);
 
 }  // namespace ferry

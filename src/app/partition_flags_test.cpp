@@ -52,7 +52,7 @@ TEST(PartitionFlags, BothCommandsReadTheSameFlagsIntoTheSameOptions) {
   const PartitionerOptions a = checkedPartitionerOptions(parsePartition(kAllFlags).partition);
   const PartitionerOptions b = checkedPartitionerOptions(parseRender(kAllFlags).partition);
   for (const PartitionerOptions& p : {a, b}) {
-    EXPECT_FALSE(p.breakObjects);
+    EXPECT_TRUE(p.keepObjectsWhole);
     EXPECT_DOUBLE_EQ(p.replicationBudget, 0.1);
     EXPECT_EQ(p.meshProxies, 8);
     EXPECT_EQ(p.instanceProxies, 16);
@@ -68,7 +68,7 @@ TEST(PartitionFlags, DefaultsAreThePartitionersOwn) {
   const PartitionerOptions defaults;
   for (const PartitionerOptions& p : {checkedPartitionerOptions(parsePartition({}).partition),
                                       checkedPartitionerOptions(parseRender({}).partition)}) {
-    EXPECT_EQ(p.breakObjects, defaults.breakObjects);
+    EXPECT_EQ(p.keepObjectsWhole, defaults.keepObjectsWhole);
     EXPECT_EQ(p.replicationBudget, defaults.replicationBudget);
     EXPECT_EQ(p.meshProxies, defaults.meshProxies);
     EXPECT_EQ(p.instanceProxies, defaults.instanceProxies);

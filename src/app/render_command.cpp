@@ -47,6 +47,17 @@ LoadOptions sceneLoadOptions(const RenderOptions& o, const Communicator& comm) {
 
 }  // namespace
 
+// `parse(value)`, its InputError prefixed with the flag (lower layers name
+// the setting, not the flag).
+template <typename Parse>
+auto parseFlag(const char* flag, const std::string& value, Parse parse) {
+  try {
+    return parse(value);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", flag, e.what()));
+  }
+}
+
 SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm) {
   if (o.samplesPerPixel < 1)
     throw InputError(fmt::format("--spp {}: must be at least 1", o.samplesPerPixel));
@@ -57,8 +68,9 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--threads {}: must be 0 (all) or more", o.threads));
   if (o.writesImage) checkOutputPath(o.output);
   SessionSettings s;
-  s.forwarding = parseForwardingMode(o.forwarding);
-  s.exchange = resolveExchangeMode(parseExchangeMode(o.exchange), s.forwarding);
+  s.forwarding = parseFlag("--forwarding", o.forwarding, parseForwardingMode);
+  s.exchange =
+      resolveExchangeMode(parseFlag("--exchange", o.exchange, parseExchangeMode), s.forwarding);
   if (o.chunkPixels < 1)
     throw InputError(fmt::format("--chunk {}: must be at least 1", o.chunkPixels));
   s.render.chunkPixels = o.chunkPixels;
@@ -75,9 +87,9 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   s.checkpoint = o.checkpoint;
   s.checkpointEvery = o.checkpointEvery;
   s.timeLimitSeconds = o.timeLimit;
-  s.pathLayout = parsePathLayout(o.pathLayout);
-  s.retrace = parseRetrace(o.retrace);
-  s.instancing = parseInstancing(o.instancing);
+  s.pathLayout = parseFlag("--path-layout", o.pathLayout, parsePathLayout);
+  s.retrace = parseFlag("--retrace", o.retrace, parseRetrace);
+  s.instancing = parseFlag("--instancing", o.instancing, parseInstancing);
   applyPartitionerFlags(o, s);
   checkRankCount(comm.size(), s.pathLayout);
   parseImageSize(o.size, s.render.width, s.render.height);
@@ -174,7 +186,7 @@ void printSummary(const RenderSession& session, const SessionReport& report, int
 
 void applyPartitionerFlags(const RenderOptions& o, SessionSettings& settings) {
   if (!o.partition.partitioner.empty())
-    settings.partitioner = parsePartitioner(o.partition.partitioner);
+    settings.partitioner = &partitionerNamed(o.partition.partitioner);
   settings.partitioning = checkedPartitionerOptions(o.partition);
   settings.render.seed =
       o.seed;  // the partitioner's seed too (--show-partition reads it from here)

@@ -32,7 +32,7 @@ ExchangeMode parseExchangeMode(const std::string& name) {
   if (name == "auto") return ExchangeMode::Auto;
   if (name == "overlapped") return ExchangeMode::Overlapped;
   if (name == "bulk") return ExchangeMode::Bulk;
-  throw InputError(fmt::format("--exchange '{}': expected auto, overlapped or bulk", name));
+  throw InputError(fmt::format("exchange '{}': expected auto, overlapped or bulk", name));
 }
 
 std::string toString(ExchangeMode mode) {
@@ -52,8 +52,8 @@ ExchangeMode resolveExchangeMode(ExchangeMode mode, ForwardingMode forwarding) {
     return forwarding == ForwardingMode::Broadcast ? ExchangeMode::Bulk : ExchangeMode::Overlapped;
   if (mode == ExchangeMode::Overlapped && forwarding == ForwardingMode::Broadcast)
     throw InputError(
-        "--exchange overlapped does not do --forwarding broadcast (its replies are built on "
-        "rounds): use --exchange bulk or auto");
+        "the overlapped exchange does not do broadcast forwarding (its replies are built on "
+        "rounds): use the bulk exchange, or auto");
   return mode;
 }
 

@@ -71,7 +71,7 @@ PartitionedScene partitioned(const Scene& loaded, int ranks, const std::string& 
                              uint32_t seed) {
   PartitionedScene p{loaded, {}};
   PartitionerOptions options;
-  options.name = partitioner;
+  options.partitioner = &partitionerNamed(partitioner);
   options.seed = seed;
   p.partition = partitionScene(p.scene, ranks, options);
   return p;

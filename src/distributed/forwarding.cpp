@@ -14,7 +14,7 @@ ForwardingMode parseForwardingMode(const std::string& name) {
   if (name == "proxies") return ForwardingMode::Proxies;
   if (name == "ring") return ForwardingMode::Ring;
   if (name == "broadcast") return ForwardingMode::Broadcast;
-  throw InputError(fmt::format("--forwarding '{}': expected proxies, ring or broadcast", name));
+  throw InputError(fmt::format("forwarding '{}': expected proxies, ring or broadcast", name));
 }
 
 std::string toString(ForwardingMode mode) {

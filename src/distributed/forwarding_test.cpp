@@ -322,7 +322,7 @@ TEST(Forwarding, ModesParseAndUnknownModeIsAnError) {
     parseForwardingMode("Ring");
     FAIL() << "a name differing in case was accepted";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), "--forwarding 'Ring': expected proxies, ring or broadcast");
+    EXPECT_EQ(std::string(e.what()), "forwarding 'Ring': expected proxies, ring or broadcast");
   }
 }
 

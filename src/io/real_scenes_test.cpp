@@ -154,7 +154,7 @@ TEST(RealScenes, BmwM6) {
       ferry("render " + shellQuote(scenePath) + " -q --size 8x8 -o /tmp/never.png");
   EXPECT_NE(failed.status, 0);
   EXPECT_NE(failed.err.find("textures/sky.exr"), std::string::npos) << failed.err;
-  EXPECT_NE(failed.err.find("--env-fallback"), std::string::npos) << failed.err;
+  EXPECT_NE(failed.err.find("env-fallback"), std::string::npos) << failed.err;
 
   LoadOptions fallback;
   fallback.envFallback = true;

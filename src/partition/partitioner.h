@@ -1,34 +1,15 @@
-// Partitioners by name: the paper's six (Section 4) and the two that test the
-// distributed layer. Every one of the six runs the same loop (split_loop.h)
-// on units (units.h) and differs in how it splits and what proxies it makes:
-//
-//   spatial-simple  domains split at the spatial median of the longest axis;
-//                   straddling content on both sides; proxies: the domains
-//   spatial-sah     the same with the best of 3 x 7 planes by splitCost()
-//   object-naive    whole objects (all instances on one rank) by their box
-//                   centres, 3 x 7 planes; proxies: the objects' boxes
-//   object-proxies  the same parts; proxies: one per instance, and 64 per
-//                   non-instanced mesh by BVH build steps (braiding)
-//   bvh-style       instances as units (objects replicated where instances
-//                   land); one proxy per instance or non-instanced mesh
-//   best            large meshes first cut into tight pieces, then as
-//                   bvh-style, then parts over 1.2x an even share give units
-//                   to lighter ones, then spatially large but cheap content
-//                   replicated on every rank up to a budget (default 5%);
-//                   proxies: one per instance, and 64 per mesh piece by
-//                   braiding, as object-proxies (Ferry's, beyond the paper)
-//   ray-guided      as best, but each split takes, among balanced ones, the
-//                   one a sample of rays crosses least (ray_guided_partitioner.h)
-//   round-robin     instances dealt in turn (tests)
-//   random          random replication and overlapping proxies (tests)
-//
-// All are deterministic: every rank computing the same partition of the
-// same scene gets the same answer.
+// Partitioners: who owns which instances, and the proxies every rank keeps
+// of what others own. Each partitioner is an object in the registry
+// (partitioners(), partitioners.cpp) that names itself and the settings it
+// reads; all are deterministic, so every rank computing the partition of the
+// same scene gets the same answer. docs/partitioning.md describes each.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
+#include <variant>
 #include <vector>
 
 #include "partition/partition.h"
@@ -44,49 +25,108 @@ struct Scene;
 // `best` cuts meshes costing more than the input's bytes / this.
 constexpr int kBestPiecesPerScene = 256;
 // `best` brings its parts within kBestFinalBalance x an even share after the
-// splits, and its replication fills none above kBestMaxPart x (issue 16).
+// splits, and its replication fills none above kBestMaxPart x.
 constexpr double kBestFinalBalance = 1.2;
 constexpr double kBestMaxPart = 1.25;
 
+class Partitioner;
+
+// Which partitioner, and every setting a partitioner may read
+// (partitionerSettings() says which reads what, with its help and range).
 struct PartitionerOptions {
-  std::string name = "best";
-  // Break non-instanced objects into their meshes (Zellmann et al.); false:
-  // keep all non-instanced content whole, as one unit.
-  bool breakObjects = true;
-  double replicationBudget = 0.05;  // best: copies may add this fraction of the input's bytes
-  int meshProxies = 64;  // object-proxies, best, ray-guided: boxes per non-instanced mesh
-  // object-proxies, best, ray-guided: boxes per instance of an instanced
-  // object, per mesh of the object (1: the object's box). More cut forwards
-  // and cost every rank proxy memory (docs/partitioning.md). 0: the
-  // partitioner's default (instanceProxiesFor), by size for best and
-  // ray-guided.
+  const Partitioner* partitioner = nullptr;  // nullptr: bestPartitioner()
+  // Keep non-instanced content whole, as one unit; false: each mesh of a
+  // non-instanced object is its own unit (Zellmann et al.).
+  bool keepObjectsWhole = false;
+  double replicationBudget = 0.05;  // copies may add this fraction of the input's bytes
+  int meshProxies = 64;             // boxes per non-instanced mesh (braiding)
+  // Boxes per instance of an instanced object, per mesh of the object (1:
+  // the object's box); 0: the partitioner's default (instanceProxiesFor).
   int instanceProxies = 0;
   // Proxies are merged down to this many (proxy_merge.h); 0: no limit.
   uint64_t maxProxies = kDefaultMaxProxies;
-  uint64_t maxPieceBytes = 0;  // best: cut meshes above this (0: input bytes / kBestPiecesPerScene)
-  uint32_t seed = 1;           // random; ray-guided: its sample
-  // ray-guided: the rays it weighs splits with (partition/ray_sampler.h makes
-  // them: withRaySample), and how many paths that sample has.
+  uint64_t maxPieceBytes = 0;  // meshes above this are cut (0: input bytes / kBestPiecesPerScene)
+  uint32_t seed = 1;           // random choices and ray samples
+  // A ray sample to weigh splits with; none: a partitioner that traces
+  // makes its own (rayPaths paths) from the scene as given.
   std::shared_ptr<const RaySample> raySample;
   uint64_t rayPaths = 65536;
-  // ray-guided: the largest part it aims at, times total / N (--max-part).
-  double maxPart = 1.25;  // kRayGuidedDefaultMaxPart
+  double maxPart = 1.25;  // the largest part aimed at, times total / N
+
+  const Partitioner& chosen() const;
 };
 
-// The boxes per instanced mesh a partitioner gives each instance: the
-// option, or by default kShapeBoxesBySize for best and ray-guided (one box
-// per 4 triangles of each mesh, at most 1024: partition/proxies.h) and 1
-// for the others (object-proxies: the paper's one box per instance).
-// Above 1 they are instanced proxies: the boxes are held once per object,
-// in object space, under a small tree of their own (distributed/proxy_bvh.h), so
-// fine shapes cost about 30 bytes per box and little query time. By size
-// they forward 10-22 % fewer rays than 64 per mesh did
-// (docs/partitioning.md, "Shapes by size"). When the instances alone would
-// reach --max-proxies they become world boxes, k per mesh per instance
-// before merging, which is allowed up to kMaxWorldInstanceBoxes; the
-// default gives the object's box then, which keeps partitioning linear in
-// the instances (docs/partitioning.md, "At scale").
-constexpr int kMaxInstanceProxies = kMaxShapeBoxesPerMesh;  // --instance-proxies N: at most
+// A setting of PartitionerOptions as the command line shows it (--NAME) and
+// checks it.
+struct PartitionerSetting {
+  using Field = std::variant<bool PartitionerOptions::*, int PartitionerOptions::*,
+                             double PartitionerOptions::*, uint64_t PartitionerOptions::*>;
+  std::string_view name;  // e.g. "mesh-proxies"
+  std::string_view help;
+  Field field;
+  double min = 0, max = 0;  // the accepted range (not for bool)
+  std::string range;        // the range in words; empty: "min to max"
+
+  std::string rangeText() const;
+  std::string valueText(const PartitionerOptions& options) const;
+};
+const std::vector<PartitionerSetting>& partitionerSettings();
+// The first setting outside its range, or nullptr.
+const PartitionerSetting* firstSettingOutOfRange(const PartitionerOptions& options);
+// Throws InputError naming the first setting outside its range.
+void checkPartitionerOptions(const PartitionerOptions& options);
+
+struct PartitionStats;
+
+// A partitioner (the paper's six, Ferry's two, and two that test the
+// distributed layer): its name, what it reads, and how it partitions.
+// Partitioners are stateless singletons, found in partitioners().
+class Partitioner {
+ public:
+  virtual ~Partitioner() = default;
+  virtual std::string_view name() const = 0;
+  virtual std::string_view summary() const = 0;  // a line for the help
+  // The settings (partitionerSettings() names) it reads beyond max-proxies.
+  virtual std::vector<std::string_view> settings() const = 0;
+  bool reads(std::string_view setting) const;
+  virtual bool fromThePaper() const { return false; }
+  // Cuts large meshes into pieces (rewrites the scene even when objects are kept whole).
+  virtual bool cutsMeshes() const { return false; }
+  // Traces a ray sample through the whole scene, which must be in memory.
+  virtual bool tracesRays() const { return false; }
+  // Boxes per instanced mesh when the instance-proxies setting is 0.
+  virtual int defaultInstanceBoxes() const { return 1; }
+
+  // Partitions `scene` over `ranks`, rewriting the scene where it splits
+  // content (same image); fills what `stats` says of the partitioner's own
+  // steps, and merges its proxies down to options.maxProxies.
+  virtual Partition partition(Scene& scene, int ranks, const PartitionerOptions& options,
+                              PartitionStats& stats) const = 0;
+  // The largest part's bytes for 1..maxRanks (the paper's Figure 4); only
+  // the paper's partitioners answer, others throw InputError.
+  virtual std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& options,
+                                                  int maxRanks) const;
+};
+
+// Every partitioner, in the order the help lists them; the paper's six first.
+const std::vector<const Partitioner*>& partitioners();
+// By name; throws InputError naming the accepted ones.
+const Partitioner& partitionerNamed(std::string_view name);
+const Partitioner& bestPartitioner();
+// The registry's names, and those of the paper's six, in its order.
+const std::vector<std::string>& partitionerNames();
+const std::vector<std::string>& paperPartitionerNames();
+// What a session uses when none is chosen: best on more than one rank,
+// round-robin (which splits nothing) on one.
+const Partitioner& defaultPartitioner(int ranks);
+
+// The boxes per instanced mesh each instance gets: the instance-proxies
+// setting, else the partitioner's default (kShapeBoxesBySize: by size, see
+// proxies.h). Above 1 they are instanced proxies, held once per object in
+// object space (distributed/proxy_bvh.h); when the instances alone reach
+// max-proxies they are world boxes instead, at most kMaxWorldInstanceBoxes
+// per mesh, and the default gives the object's box.
+constexpr int kMaxInstanceProxies = kMaxShapeBoxesPerMesh;
 constexpr int kMaxWorldInstanceBoxes = 64;
 int instanceProxiesFor(const PartitionerOptions& options);
 
@@ -113,32 +153,10 @@ struct PartitionStats {
   uint64_t maxRankBytes() const;
 };
 
-// Every name `--partitioner` accepts, and the paper's six among them.
-const std::vector<std::string>& partitionerNames();
-const std::vector<std::string>& paperPartitionerNames();
-// Throws InputError naming the accepted ones.
-void checkPartitionerName(const std::string& name);
-
-// The partitioners as a choice a command line makes once (in partitionerNames() order).
-enum class PartitionerKind {
-  SpatialSimple,
-  SpatialSah,
-  ObjectNaive,
-  ObjectProxies,
-  BvhStyle,
-  Best,
-  RayGuided,
-  RoundRobin,
-  Random
-};
-// By name; throws InputError naming the accepted ones (as checkPartitionerName).
-PartitionerKind parsePartitioner(const std::string& name);
-// The name (PartitionerOptions::name, the stats).
-std::string toString(PartitionerKind kind);
-
-// Partitions `scene` over `ranks` (1..kMaxRanks). The six paper partitioners first
-// rewrite the scene in place with splitForPartitioning (same image); the
-// partition refers to the rewritten scene.
+// Partitions `scene` over `ranks` (1..kMaxRanks) with options.chosen(). The
+// paper's partitioners and Ferry's first rewrite the scene in place with
+// splitForPartitioning (same image); the partition refers to the rewritten
+// scene.
 Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& options,
                          PartitionStats* stats = nullptr);
 
@@ -148,5 +166,11 @@ Partition partitionScene(Scene& scene, int ranks, const PartitionerOptions& opti
 // One of the six only.
 std::vector<uint64_t> maxPartBytesCurve(Scene& scene, const PartitionerOptions& options,
                                         int maxRanks);
+
+// Merges `partition`'s proxies down to options.maxProxies, recording the
+// count before and after in `stats` (for partitioners that do not merge as
+// they make them).
+void mergePartitionProxies(Partition& partition, const PartitionerOptions& options,
+                           PartitionStats& stats);
 
 }  // namespace ferry

@@ -133,10 +133,10 @@ TEST(ProxyMerge, EveryPartitionerStillCoversItsContentWithFewProxies) {
       SCOPED_TRACE(fmt::format("{} at {} ranks", name, ranks));
       Scene scene = source;
       PartitionerOptions o;
-      o.name = name;
+      o.partitioner = &partitionerNamed(name);
       o.maxProxies = 40;
       PartitionStats stats;
-      const Partition p = partitionScene(scene, ranks, withRaySample(scene, o), &stats);
+      const Partition p = partitionScene(scene, ranks, o, &stats);
       ASSERT_NO_THROW(p.checkCovers(scene));
       EXPECT_EQ(stats.proxies, p.proxies.size());
       std::set<std::string> sets;

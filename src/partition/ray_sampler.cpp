@@ -128,7 +128,8 @@ RaySample sampleSceneRays(const Scene& scene, const RaySamplerOptions& o) {
   if (scene.meshStore)
     throw InputError(
         "the ray-guided partitioner traces its ray sample through the whole scene in memory: it "
-        "does not partition under --memory-budget (use best, or a larger budget)");
+        "does not partition with the geometry out of memory (use best, or a larger memory "
+        "budget)");
   const std::unique_ptr<TraceBackend> tracer = makeEmbreeBackend(scene);
   const PathSampler sampler(scene, *tracer, o);
   // Per block of paths, then joined in path order: the same rays whatever
@@ -145,16 +146,6 @@ RaySample sampleSceneRays(const Scene& scene, const RaySamplerOptions& o) {
     sample.rays.insert(sample.rays.end(), block.begin(), block.end());
   sample.seconds = secondsSince(start);
   return sample;
-}
-
-PartitionerOptions withRaySample(const Scene& scene, PartitionerOptions options) {
-  if (options.name == "ray-guided" && !options.raySample) {
-    RaySamplerOptions o;
-    o.seed = options.seed;
-    o.paths = options.rayPaths;
-    options.raySample = std::make_shared<const RaySample>(sampleSceneRays(scene, o));
-  }
-  return options;
 }
 
 }  // namespace ferry

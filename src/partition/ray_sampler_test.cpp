@@ -1,4 +1,5 @@
 #include "partition/ray_sampler.h"
+#include "partition/partitioner.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -59,17 +60,16 @@ TEST(RaySampler, SegmentsLieInTheScenesBox) {
   EXPECT_GT(inside, sample.rays.size() / 2);
 }
 
-TEST(RaySampler, OnlyTheRayGuidedPartitionerGetsASample) {
-  const Scene scene = loadScene("builtin:cornell");
-  PartitionerOptions best;
-  best.name = "best";
-  EXPECT_EQ(withRaySample(scene, best).raySample, nullptr);
-  PartitionerOptions guided;
-  guided.name = "ray-guided";
-  guided.rayPaths = 100;
-  const PartitionerOptions o = withRaySample(scene, guided);
-  ASSERT_NE(o.raySample, nullptr);
-  EXPECT_EQ(o.raySample->paths, 100u);
+TEST(RaySampler, OnlyTheRayGuidedPartitionerTracesASample) {
+  for (const Partitioner* p : partitioners()) {
+    Scene scene = loadScene("builtin:cornell");
+    PartitionerOptions o;
+    o.partitioner = p;
+    o.rayPaths = 100;
+    PartitionStats stats;
+    partitionScene(scene, 2, o, &stats);
+    EXPECT_EQ(stats.sampledRays > 0, p->tracesRays()) << p->name();
+  }
 }
 
 }  // namespace

@@ -25,34 +25,32 @@ MaxPartReport maxPartReport(Scene scene, const std::string& sceneName, int minRa
   report.inputBytes = summarize(scene).memory.total();
   report.minRanks = minRanks;
   report.maxRanks = maxRanks;
-  auto run = [&](Scene& s, const std::string& name, bool whole) {
+  auto run = [&](Scene& s, const Partitioner& partitioner, bool whole) {
     PartitionerOptions o = base;
-    o.name = name;
-    o.breakObjects = !whole;
+    o.partitioner = &partitioner;
+    o.keepObjectsWhole = whole;
     auto start = Clock::now();
     std::vector<uint64_t> curve = maxPartBytesCurve(s, o, maxRanks);
     MaxPartSeries series;
-    series.partitioner = name;
+    series.partitioner = partitioner.name();
     series.whole = whole;
     series.bytes.assign(curve.begin() + (minRanks - 1), curve.end());
     series.seconds = secondsSince(start);
     report.series.push_back(std::move(series));
   };
-  // Kept whole, the five that do not cut meshes leave the scene as it is;
-  // `best` cuts, and breaking rewrites, so those run on copies or last.
-  std::vector<std::string> five;
-  for (const std::string& name : paperPartitionerNames())
-    if (name != "best") five.push_back(name);
-  for (const std::string& name : five) run(scene, name, true);
-  {
-    Scene copy = scene;
-    run(copy, "best", true);
-  }
-  {
-    Scene copy = scene;
-    run(copy, "best", false);
-  }
-  for (const std::string& name : five) run(scene, name, false);
+  // Kept whole, the partitioners that do not cut meshes leave the scene as
+  // it is; those that cut, and breaking objects, rewrite it, so those run on
+  // copies or last.
+  std::vector<const Partitioner*> keep, cut;
+  for (const Partitioner* p : partitioners())
+    if (p->fromThePaper()) (p->cutsMeshes() ? cut : keep).push_back(p);
+  for (const Partitioner* p : keep) run(scene, *p, true);
+  for (const Partitioner* p : cut)
+    for (bool whole : {true, false}) {
+      Scene copy = scene;
+      run(copy, *p, whole);
+    }
+  for (const Partitioner* p : keep) run(scene, *p, false);
   // In the paper's order, broken before whole.
   std::vector<MaxPartSeries> ordered;
   for (const std::string& name : paperPartitionerNames())
@@ -159,27 +157,6 @@ std::vector<uint8_t> plotMaxPart(const MaxPartReport& report, int width, int hei
 
 void writeMaxPartPlot(const std::string& path, const MaxPartReport& report, int width, int height) {
   writePng(path, width, height, plotMaxPart(report, width, height));
-}
-
-void parseRankRange(const std::string& text, int& first, int& last) {
-  auto bad = [&]() {
-    return InputError(fmt::format("--ranks '{}': expected a count (8) or a range (1..128)", text));
-  };
-  auto parse = [&](std::string_view s, int& out) {
-    auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-    if (s.empty() || ec != std::errc() || ptr != s.data() + s.size()) throw bad();
-  };
-  size_t dots = text.find("..");
-  if (dots == std::string::npos) {
-    parse(text, first);
-    last = first;
-  } else {
-    parse(std::string_view(text).substr(0, dots), first);
-    parse(std::string_view(text).substr(dots + 2), last);
-  }
-  if (first < 1 || last < first || last > 4096)
-    throw InputError(
-        fmt::format("--ranks '{}': counts must satisfy 1 <= first <= last <= 4096", text));
 }
 
 }  // namespace ferry

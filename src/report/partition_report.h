@@ -42,7 +42,4 @@ std::vector<uint8_t> plotMaxPart(const MaxPartReport& report, int width, int hei
 void writeMaxPartPlot(const std::string& path, const MaxPartReport& report, int width = 1000,
                       int height = 640);
 
-// Parses "N" or "A..B" (1 <= A <= B <= 4096); throws InputError naming --ranks.
-void parseRankRange(const std::string& text, int& first, int& last);
-
 }  // namespace ferry

@@ -1,4 +1,4 @@
-// The memory model against Embree's own memory monitor (issue 2). The
+// The memory model against Embree's own memory monitor. The
 // partitioners split scenes by the estimate and `ferry info` prints it, so it
 // must stay close to what Embree really retains after building a rank's
 // geometry. Two kinds of checks:

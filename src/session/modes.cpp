@@ -10,7 +10,7 @@ PathLayout parsePathLayout(const std::string& name) {
   if (name == "auto") return PathLayout::Auto;
   if (name == "mask") return PathLayout::Mask;
   if (name == "replay") return PathLayout::Replay;
-  throw InputError(fmt::format("--path-layout '{}': expected auto, mask or replay", name));
+  throw InputError(fmt::format("path-layout '{}': expected auto, mask or replay", name));
 }
 
 std::string toString(PathLayout layout) {
@@ -29,7 +29,7 @@ std::string toString(PathLayout layout) {
 Retrace parseRetrace(const std::string& name) {
   if (name == "remote") return Retrace::Remote;
   if (name == "all") return Retrace::All;
-  throw InputError(fmt::format("--retrace '{}': expected remote or all", name));
+  throw InputError(fmt::format("retrace '{}': expected remote or all", name));
 }
 
 std::string toString(Retrace retrace) {
@@ -46,7 +46,7 @@ std::string toString(Retrace retrace) {
 Instancing parseInstancing(const std::string& name) {
   if (name == "shared") return Instancing::Shared;
   if (name == "always") return Instancing::Always;
-  throw InputError(fmt::format("--instancing '{}': expected shared or always", name));
+  throw InputError(fmt::format("instancing '{}': expected shared or always", name));
 }
 
 std::string toString(Instancing instancing) {

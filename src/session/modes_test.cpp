@@ -24,9 +24,9 @@ TEST(Modes, PathLayoutsParseAndRoundTrip) {
   EXPECT_EQ(parsePathLayout("replay"), PathLayout::Replay);
   for (PathLayout layout : {PathLayout::Auto, PathLayout::Mask, PathLayout::Replay})
     EXPECT_EQ(parsePathLayout(toString(layout)), layout);
-  expectRefused(parsePathLayout, "mask8", "--path-layout 'mask8': expected auto, mask or replay");
-  expectRefused(parsePathLayout, "", "--path-layout '': expected auto, mask or replay");
-  expectRefused(parsePathLayout, "Auto", "--path-layout 'Auto': expected auto, mask or replay");
+  expectRefused(parsePathLayout, "mask8", "path-layout 'mask8': expected auto, mask or replay");
+  expectRefused(parsePathLayout, "", "path-layout '': expected auto, mask or replay");
+  expectRefused(parsePathLayout, "Auto", "path-layout 'Auto': expected auto, mask or replay");
 }
 
 TEST(Modes, RetraceModesParseAndRoundTrip) {
@@ -34,8 +34,8 @@ TEST(Modes, RetraceModesParseAndRoundTrip) {
   EXPECT_EQ(parseRetrace("all"), Retrace::All);
   for (Retrace retrace : {Retrace::Remote, Retrace::All})
     EXPECT_EQ(parseRetrace(toString(retrace)), retrace);
-  expectRefused(parseRetrace, "none", "--retrace 'none': expected remote or all");
-  expectRefused(parseRetrace, "ALL", "--retrace 'ALL': expected remote or all");
+  expectRefused(parseRetrace, "none", "retrace 'none': expected remote or all");
+  expectRefused(parseRetrace, "ALL", "retrace 'ALL': expected remote or all");
 }
 
 TEST(Modes, InstancingModesParseAndRoundTrip) {
@@ -43,8 +43,8 @@ TEST(Modes, InstancingModesParseAndRoundTrip) {
   EXPECT_EQ(parseInstancing("always"), Instancing::Always);
   for (Instancing instancing : {Instancing::Shared, Instancing::Always})
     EXPECT_EQ(parseInstancing(toString(instancing)), instancing);
-  expectRefused(parseInstancing, "never", "--instancing 'never': expected shared or always");
-  expectRefused(parseInstancing, " shared", "--instancing ' shared': expected shared or always");
+  expectRefused(parseInstancing, "never", "instancing 'never': expected shared or always");
+  expectRefused(parseInstancing, " shared", "instancing ' shared': expected shared or always");
 }
 
 }  // namespace

@@ -4,8 +4,7 @@ namespace ferry {
 
 PartitionerOptions partitionerOptions(const SessionSettings& settings, int ranks) {
   PartitionerOptions p = settings.partitioning;
-  p.name = toString(settings.partitioner.value_or(ranks > 1 ? PartitionerKind::Best
-                                                            : PartitionerKind::RoundRobin));
+  p.partitioner = settings.partitioner ? settings.partitioner : &defaultPartitioner(ranks);
   p.seed = settings.render.seed;
   return p;
 }

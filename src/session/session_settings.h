@@ -37,7 +37,7 @@ struct SessionSettings {
   // How a scene (not a part directory) is split over the ranks, on the fly:
   // every rank runs the same deterministic partitioner. None given: the
   // paper's best on more than one rank (round-robin, which does nothing, on one).
-  std::optional<PartitionerKind> partitioner;
+  const Partitioner* partitioner = nullptr;
 
   // Long renders (io/checkpoints/checkpoint_file.h): the accumulated image is written to
   // `checkpoint` every `checkpointEvery` frames and after the last one;
@@ -45,8 +45,8 @@ struct SessionSettings {
   std::string checkpoint;
   int checkpointEvery = 10;
   double timeLimitSeconds = 0;
-  // The partitioner's options but its name and seed (which partitionerOptions
-  // sets from `partitioner`, the rank count and render.seed).
+  // The partitioner's settings; partitionerOptions adds the partitioner
+  // (from `partitioner` and the rank count) and the seed (render.seed).
   PartitionerOptions partitioning;
 };
 

@@ -190,7 +190,7 @@ ViewerServer::ViewerServer(const std::string& bind, int port, std::vector<Camera
   s.requestedSettings = settings;
   s.routes();
   if (port < 0 || port > 65535)
-    throw InputError(fmt::format("--port {}: expected 0 (any free port) to 65535", port));
+    throw InputError(fmt::format("port {}: expected 0 (any free port) to 65535", port));
   s.port =
       port == 0 ? s.server.bind_to_any_port(bind) : (s.server.bind_to_port(bind, port) ? port : -1);
   if (s.port <= 0)

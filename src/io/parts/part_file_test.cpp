@@ -132,7 +132,7 @@ Written writeDirectory(const std::string& dir, const std::string& partitioner, i
   coated.mixAmount = 0.3f;
   Scene lights = lightScene(w.scene);
   PartitionerOptions o;
-  o.name = partitioner;
+  o.partitioner = &partitionerNamed(partitioner);
   w.partition = partitionScene(w.scene, ranks, o);
   PartDirectoryInfo info;
   info.scene = "builtin:island?scale=0.05";
@@ -181,7 +181,7 @@ TEST(PartFiles, MoreThan64RanksRoundTrip) {
     Written w;
     w.scene = island();
     PartitionerOptions o;
-    o.name = partitioner;
+    o.partitioner = &partitionerNamed(partitioner);
     w.partition = partitionScene(w.scene, 70, o);
     bool wide = false;
     for (const RankSet& s : w.partition.instanceOwners) wide = wide || !s.fitsInMask();
@@ -207,7 +207,7 @@ TEST(PartFiles, Format1DirectoriesStillLoad) {
   const std::string dir = std::string(FERRY_SOURCE_DIR) + "/tests/corpus/parts-v1";
   Scene scene = generateBuiltin(parseBuiltinSpec("builtin:cornell"));
   PartitionerOptions o;
-  o.name = "best";
+  o.partitioner = &bestPartitioner();
   Partition fresh = partitionScene(scene, 3, o);
   for (int r = 0; r < 3; ++r) {
     SCOPED_TRACE(r);

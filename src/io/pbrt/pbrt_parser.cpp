@@ -609,14 +609,13 @@ class Parser {
           fail(where, fmt::format("Integrator: \"integer maxdepth\" {} must be 0 or more", depth));
         scene_.integratorMaxDepth = depth;
       }
-      skipped(
-          name, p, where,
-          (integratorWantsLightPaths(type)
-               ? fmt::format("\"{}\": Ferry renders it as camera paths and light paths "
-                             "combined by MIS (--light-paths)",
-                             type)
-               : fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type)) +
-              (scene_.integratorMaxDepth ? "; its \"maxdepth\" is the default --max-depth" : ""));
+      skipped(name, p, where,
+              (integratorWantsLightPaths(type)
+                   ? fmt::format("\"{}\": Ferry renders it as camera paths and light paths "
+                                 "combined by MIS (the light-paths setting)",
+                                 type)
+                   : fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type)) +
+                  (scene_.integratorMaxDepth ? "; its \"maxdepth\" is the default max-depth" : ""));
     } else if (name == "Sampler" || name == "SurfaceIntegrator" || name == "VolumeIntegrator" ||
                name == "PixelFilter" || name == "Accelerator" || name == "Renderer") {
       std::string type = string(in, n);
@@ -1355,13 +1354,13 @@ class Parser {
       if (!found) {
         if (!options_.envFallback)
           throw InputError(light.where,
-                           fmt::format("environment map \"{}\" not found (looked for {}); render "
-                                       "with --env-fallback to use a constant white environment "
+                           fmt::format("environment map \"{}\" not found (looked for {}); set "
+                                       "env-fallback to use a constant white environment "
                                        "instead",
                                        map, lookedFor));
         warnings_.once("env fallback|" + map,
                        fmt::format("{}: environment map \"{}\" not found: using a constant "
-                                   "environment ({}) instead (--env-fallback)",
+                                   "environment ({}) instead (env-fallback)",
                                    light.where.toString(), map, average3(L)));
         constant += L;
         continue;

@@ -562,7 +562,7 @@ TEST(PbrtParser, MissingEnvironmentMapFailsOrFallsBack) {
     EXPECT_NE(m.find("missing_envmap.pbrt:2:1: environment map \"textures/sky.exr\" not found"),
               std::string::npos)
         << m;
-    EXPECT_NE(m.find("--env-fallback"), std::string::npos) << m;
+    EXPECT_NE(m.find("env-fallback"), std::string::npos) << m;
   }
   Loaded fallback = load(path, true);
   EXPECT_EQ(fallback.scene.environment.color, Vec3f(1));
@@ -675,7 +675,7 @@ TEST_P(PbrtCorpusError, NamesFileLineAndColumn) {
 // pbrt's area lights emit only in front unless "twosided"; the front is the
 // winding normal, reversed by ReverseOrientation, or the side of the vertex
 // normals: the loader orients a one-sided emitter's winding to match.
-// The coated materials and matte's sigma (issue 14): what each pbrt
+// The coated materials and matte's sigma: what each pbrt
 // parameter becomes.
 TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
   auto only = [](const std::string& material) {
