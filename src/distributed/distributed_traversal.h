@@ -6,14 +6,10 @@
 //   with the forwarding operator, compact by destination, exchange counts then
 //   rays (all-to-all, all-to-all-v), until no ray moves on any rank. What is
 //   left on each rank is what it shades (traverse()).
-// - overlapped (issue 13): the traversal runs the whole sample
-//   (runSample(), overlapped_exchange.cpp). A rank takes its camera paths in
-//   chunks; rays leave for other ranks as soon as a batch is traced, in
-//   non-blocking messages, while the rank traces and shades whatever is
-//   here: other chunks, other bounces, rays that arrived. Nobody waits in a
-//   collective per round; the sample ends when the counts of rays made and
-//   rays ended agree over all ranks twice in a row (non-blocking sums).
-//
+// - overlapped: the traversal runs the whole sample (runSample(),
+//   overlapped_exchange.cpp): camera paths in chunks, rays sent in
+//   non-blocking messages as soon as a batch is traced, no collective per
+//   round (docs/data-parallel.md).
 // The forwarding operator, and so every ray's path through the ranks, is the
 // same in both; so is the image (the frame buffer sums in fixed point).
 #pragma once
@@ -98,6 +94,8 @@ class DistributedTraversal final : public RayTraversal<Path> {
   // Replay layout, proxies mode: the visited set of each ray that arrived
   // here, recomputed from its generating rank (this rank included).
   std::vector<RankSet> replayArrivals(const PathQueue<Path>& rays, FrameStats& stats);
+  // runSample's state and steps (overlapped_exchange.cpp).
+  class OverlappedSample;
 
   const Communicator& comm_;
   const TraceBackend& geometry_;

@@ -1,6 +1,6 @@
-// The overlapped exchange (issue 13): DistributedTraversal::runSample. See
-// distributed_traversal.h for the idea and docs/data-parallel.md for the
-// measurements.
+// The overlapped exchange: DistributedTraversal::runSample, whose state and
+// steps are the class OverlappedSample. See distributed_traversal.h for the
+// idea and docs/data-parallel.md for the measurements.
 //
 // A rank keeps, per bounce, the rays it made and must trace first (local
 // first), the rays that arrived to be traced here, and the rays whose
@@ -75,40 +75,84 @@ class IdleBackoff {
 
 }  // namespace
 
+// One sample of the overlapped exchange on this rank: runSample's state (the
+// rays of each bounce, the counts of rays made and ended, the camera paths
+// not started yet, the termination sums) and its steps. run() takes one step
+// at a time, in the order described at the top of this file, until a sum
+// shows the sample over on every rank; it is collective, and returns once
+// every send of this rank has completed.
 template <typename Path>
-void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t first, uint32_t last,
-                                           SampleShading<Path>& shading, FrameStats& stats) {
-  const int rank = comm_.rank();
-  const int ranks = comm_.size();
-  const bool replay = Path::kReplay && mode_ == ForwardingMode::Proxies;
+class DistributedTraversal<Path>::OverlappedSample {
+ public:
+  OverlappedSample(DistributedTraversal& traversal, uint32_t sampleIndex, uint32_t first,
+                   uint32_t last, SampleShading<Path>& shading, FrameStats& stats)
+      : traversal_(traversal),
+        comm_(traversal.comm_),
+        sampleIndex_(sampleIndex),
+        first_(first),
+        last_(last),
+        shading_(shading),
+        stats_(stats),
+        rank_(comm_.rank()),
+        ranks_(comm_.size()),
+        replay_(Path::kReplay && traversal.mode_ == ForwardingMode::Proxies),
+        outbox_(static_cast<size_t>(ranks_)) {}
 
-  // Which camera paths are this rank's (proxy-guided, one collective).
-  std::vector<uint32_t> mine;
-  {
-    auto start = Clock::now();
-    primaryPixels(
-        first, last, [&](uint32_t pixel) { return shading.cameraRay(pixel); }, mine, stats);
-    stats.times.generate += secondsSince(start);
+  void run() {
+    findOwnCameraPaths();
+    takeEarlyRays();
+    for (;;) {
+      receiveMessages();
+      if (doNextWork())
+        backoff_.reset();
+      else if (checkSampleOver())
+        break;
+    }
+    waitForSends();
   }
 
-  std::vector<BounceRays<Path>> bounces;
-  auto at = [&](uint32_t bounce) -> BounceRays<Path>& {
-    if (bounces.size() <= bounce) bounces.resize(bounce + 1);
-    if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
-    return bounces[bounce];
-  };
-  uint64_t made = 0, ended = 0;  // this sample's rays on this rank
-  size_t nextPixel = 0;          // into `mine`
+ private:
+  // Which camera paths are this rank's (proxy-guided, one collective).
+  void findOwnCameraPaths() {
+    auto start = Clock::now();
+    traversal_.primaryPixels(
+        first_, last_, [&](uint32_t pixel) { return shading_.cameraRay(pixel); }, mine_, stats_);
+    stats_.times.generate += secondsSince(start);
+  }
 
-  // Scratch, reused from batch to batch.
-  PathQueue<Path> batch;
-  std::vector<TraceHit> batchHits;
-  std::vector<RankSet> visited;
-  std::vector<int> destination;
-  std::vector<PathQueue<Path>> outbox(static_cast<size_t>(ranks));
-  RayQueues<Path> spawned;
+  // What arrived for this sample while this rank was still in the previous one.
+  void takeEarlyRays() {
+    std::erase_if(traversal_.early_, [&](const EarlyRays& e) {
+      if (e.sample != sampleIndex_) return false;
+      addArrivals(e.bounce, e.rays);
+      return true;
+    });
+  }
 
-  auto addArrivals = [&](uint32_t bounce, const auto& rays) {
+  // Takes every message that has arrived: rays of this sample into their
+  // bounce's queues, rays of a later sample kept for that sample.
+  void receiveMessages() {
+    auto start = Clock::now();
+    while (auto message = comm_.receive<RayMessageHeader, Path>()) {
+      traversal_.received_ += message->items.size();
+      const RayMessageHeader header = message->header;
+      if (header.sample > sampleIndex_) {  // the sender is ahead: keep them for that sample
+        traversal_.early_.push_back(
+            {header.sample, header.bounce,
+             PathQueue<Path>(message->items.begin(), message->items.end())});
+        continue;
+      }
+      if (header.sample < sampleIndex_)
+        throw CommunicationError("receive", rank_,
+                                 fmt::format("rays of sample {} from rank {} during sample {}",
+                                             header.sample, message->from, sampleIndex_));
+      addArrivals(header.bounce, message->items);
+    }
+    stats_.times.exchange += secondsSince(start);
+  }
+
+  // Rays sent here: to trace ("arrived"), or, already traversed, to shade ("ready").
+  void addArrivals(uint32_t bounce, std::span<const Path> rays) {
     BounceRays<Path>& b = at(bounce);
     for (const Path& p : rays) {
       if (p.has(kPathTraversed))
@@ -116,146 +160,197 @@ void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t first,
       else
         b.arrived.push_back(p);
     }
-  };
-  auto receiveArrivals = [&] {
-    auto start = Clock::now();
-    while (auto message = comm_.receive<RayMessageHeader, Path>()) {
-      received_ += message->items.size();
-      const RayMessageHeader header = message->header;
-      if (header.sample > sampleIndex) {  // the sender is ahead: keep them for that sample
-        early_.push_back({header.sample, header.bounce,
-                          PathQueue<Path>(message->items.begin(), message->items.end())});
-        continue;
-      }
-      if (header.sample < sampleIndex)
-        throw CommunicationError("receive", rank,
-                                 fmt::format("rays of sample {} from rank {} during sample {}",
-                                             header.sample, message->from, sampleIndex));
-      addArrivals(header.bounce, message->items);
-    }
-    stats.times.exchange += secondsSince(start);
-  };
-  // What arrived for this sample while this rank was still in the previous one.
-  std::erase_if(early_, [&](const EarlyRays& e) {
-    if (e.sample != sampleIndex) return false;
-    addArrivals(e.bounce, e.rays);
+  }
+
+  // Bounce `bounce`'s rays; adds bounces (here and in the stats) up to it.
+  BounceRays<Path>& at(uint32_t bounce) {
+    if (bounces_.size() <= bounce) bounces_.resize(bounce + 1);
+    if (stats_.perBounce.size() <= bounce) stats_.perBounce.resize(bounce + 1);
+    return bounces_[bounce];
+  }
+
+  // The first work there is here, deepest bounce first: shade ready rays,
+  // else trace rays, else start camera paths. False when there is none.
+  bool doNextWork() {
+    if (auto b = deepest([](const BounceRays<Path>& r) { return r.ready.size() > 0; }))
+      shadeReady(*b);
+    else if (auto t = deepest([](const BounceRays<Path>& r) { return r.hasTraceWork(); }))
+      traceBatch(*t);
+    else if (nextPixel_ < mine_.size())
+      startCameraPaths();
+    else
+      return false;
     return true;
-  });
+  }
+
+  // The deepest bounce with work of the kind asked for, if any.
+  template <typename HasWork>
+  std::optional<uint32_t> deepest(HasWork&& hasWork) const {
+    for (size_t b = bounces_.size(); b-- > 0;)
+      if (hasWork(bounces_[b])) return uint32_t(b);
+    return std::nullopt;
+  }
 
   // Shades bounce `bounce`'s ready rays; their new rays are made here.
-  auto shadeBounce = [&](uint32_t bounce) {
-    BounceRays<Path>& b = bounces[bounce];
-    ended += b.ready.size();
-    shading.shade(bounce, b.ready, b.readyHits, spawned, stats);
+  void shadeReady(uint32_t bounce) {
+    BounceRays<Path>& b = bounces_[bounce];
+    ended_ += b.ready.size();
+    shading_.shade(bounce, b.ready, b.readyHits, spawned_, stats_);
     b.ready.clear();
     b.readyHits.clear();
-    made += spawned.size();
-    if (spawned.size() == 0) return;
-    BounceRays<Path>& next = at(bounce + 1);
-    next.made.insert(next.made.end(), spawned.paths.begin(), spawned.paths.end());
-    next.made.insert(next.made.end(), spawned.shadowRays.begin(), spawned.shadowRays.end());
-  };
+    made_ += spawned_.size();
+    if (spawned_.size() == 0) return;
+    BounceRays<Path>& next = at(bounce + 1);  // (may move `b`)
+    next.made.insert(next.made.end(), spawned_.paths.begin(), spawned_.paths.end());
+    next.made.insert(next.made.end(), spawned_.shadowRays.begin(), spawned_.shadowRays.end());
+  }
 
   // Traces up to a chunk of bounce `bounce`'s rays (made here first), keeps
   // what ends here, sends the rest.
-  auto traceBounce = [&](uint32_t bounce) {
-    BounceRays<Path>& b = bounces[bounce];
-    const bool madeHere = !b.made.empty();
-    PathQueue<Path>& source = madeHere ? b.made : b.arrived;
-    const size_t n = std::min<size_t>(source.size(), chunkPixels_);
-    batch.assign(source.end() - ptrdiff_t(n), source.end());
-    source.resize(source.size() - n);
-    if (replay) {
+  void traceBatch(uint32_t bounce) {
+    BounceRays<Path>& b = bounces_[bounce];
+    const bool madeHere = takeBatch(b);
+    if (replay_) {
       if (madeHere)
-        visited.assign(batch.size(), RankSet::single(rank));
-      else
-        visited = replayArrivals(batch, stats);  // with the tmax each ray arrived with
+        visited_.assign(batch_.size(), RankSet::single(rank_));
+      else  // with the tmax each ray arrived with
+        visited_ = traversal_.replayArrivals(batch_, stats_);
     }
     if (madeHere)
-      trace(batch, stats, &batchHits);
+      traversal_.trace(batch_, stats_, &batchHits_);
     else
-      traceArrivals(batch, batchHits, stats.perBounce[bounce], stats);
+      traversal_.traceArrivals(batch_, batchHits_, stats_.perBounce[bounce], stats_);
     auto start = Clock::now();
-    decide(batch, visited, destination, stats);
-    for (size_t i = 0; i < batch.size(); ++i) {
-      const int d = destination[i];
+    routeBatch(b);
+    sendOutbox(bounce);
+    stats_.times.exchange += secondsSince(start);
+  }
+
+  // Moves up to a chunk of `b`'s rays to trace, from the back of its made
+  // rays if any, else of its arrived ones, into batch_; true if made here.
+  bool takeBatch(BounceRays<Path>& b) {
+    const bool madeHere = !b.made.empty();
+    PathQueue<Path>& source = madeHere ? b.made : b.arrived;
+    const size_t n = std::min<size_t>(source.size(), traversal_.chunkPixels_);
+    batch_.assign(source.end() - ptrdiff_t(n), source.end());
+    source.resize(source.size() - n);
+    return madeHere;
+  }
+
+  // Each traced ray's next step: kept to shade in `b`, dropped (an occluded
+  // shadow ray: it ends here), or into the outbox of the rank it goes to.
+  void routeBatch(BounceRays<Path>& b) {
+    traversal_.decide(batch_, visited_, destination_, stats_);
+    for (size_t i = 0; i < batch_.size(); ++i) {
+      const int d = destination_[i];
       if (d == kShadeHere)
-        keepToShade(batch[i], batchHits[i], b.ready, b.readyHits);
+        keepToShade(batch_[i], batchHits_[i], b.ready, b.readyHits);
       else if (d == kDrop)
-        ++ended;
+        ++ended_;
       else
-        outbox[size_t(d)].push_back(batch[i]);
+        outbox_[size_t(d)].push_back(batch_[i]);
     }
-    if (firstExchange_) {
-      maybeInjectFailure("exchange", rank);
-      firstExchange_ = false;
+  }
+
+  // Sends each non-empty outbox as one message, in rank order, and empties it.
+  void sendOutbox(uint32_t bounce) {
+    if (traversal_.firstExchange_) {
+      maybeInjectFailure("exchange", rank_);
+      traversal_.firstExchange_ = false;
     }
-    ExchangeCounters& counters = stats.perBounce[bounce];
-    for (int to = 0; to < ranks; ++to) {
-      PathQueue<Path>& rays = outbox[size_t(to)];
+    ExchangeCounters& counters = stats_.perBounce[bounce];
+    for (int to = 0; to < ranks_; ++to) {
+      PathQueue<Path>& rays = outbox_[size_t(to)];
       if (rays.empty()) continue;
-      comm_.send(to, RayMessageHeader{sampleIndex, bounce}, std::span<const Path>(rays));
+      comm_.send(to, RayMessageHeader{sampleIndex_, bounce}, std::span<const Path>(rays));
       counters.countSent(rays.data(), rays.size(), sizeof(Path));
       ++counters.messages;
       rays.clear();
     }
-    stats.times.exchange += secondsSince(start);
-  };
-
-  // The deepest bounce with work of the kind asked for, if any.
-  auto deepest = [&](auto&& hasWork) -> std::optional<uint32_t> {
-    for (size_t b = bounces.size(); b-- > 0;)
-      if (hasWork(bounces[b])) return uint32_t(b);
-    return std::nullopt;
-  };
-
-  std::optional<SumHandle> wave;
-  uint64_t contributedMade = 0, contributedEnded = 0;
-  bool contributed = false;
-  std::vector<uint64_t> total;
-  IdleBackoff backoff;
-  for (;;) {
-    receiveArrivals();
-    if (auto b = deepest([](const BounceRays<Path>& r) { return r.ready.size() > 0; })) {
-      shadeBounce(*b);
-    } else if (auto t = deepest([](const BounceRays<Path>& r) { return r.hasTraceWork(); })) {
-      traceBounce(*t);
-    } else if (nextPixel < mine.size()) {
-      const size_t n = std::min<size_t>(mine.size() - nextPixel, chunkPixels_);
-      BounceRays<Path>& first = at(0);
-      const size_t before = first.made.size();
-      // (Camera paths, and with light paths those too.)
-      shading.cameraPaths(std::span<const uint32_t>(mine.data() + nextPixel, n), first.made, stats);
-      nextPixel += n;
-      made += first.made.size() - before;
-    } else {
-      // Nothing here to do: is the sample over everywhere?
-      auto start = Clock::now();
-      if (!wave) {
-        const bool changed = !contributed || made != contributedMade || ended != contributedEnded;
-        wave = comm_.startSum({made, ended, changed ? 1u : 0u});
-        contributedMade = made;
-        contributedEnded = ended;
-        contributed = true;
-        if (comm_.isRoot()) ++stats.terminationWaves;
-      } else if (comm_.sumDone(*wave, total)) {
-        wave.reset();
-        if (total[0] == total[1] && total[2] == 0) {
-          stats.times.wait += secondsSince(start);
-          break;
-        }
-      } else {
-        comm_.waitForMessage(backoff.next());
-      }
-      stats.times.wait += secondsSince(start);
-      continue;
-    }
-    backoff.reset();
   }
+
+  // Makes the next chunk of this rank's camera paths (and with light paths
+  // those too), to be traced here.
+  void startCameraPaths() {
+    const size_t n = std::min<size_t>(mine_.size() - nextPixel_, traversal_.chunkPixels_);
+    BounceRays<Path>& cameraBounce = at(0);
+    const size_t before = cameraBounce.made.size();
+    shading_.cameraPaths(std::span<const uint32_t>(mine_.data() + nextPixel_, n), cameraBounce.made,
+                         stats_);
+    nextPixel_ += n;
+    made_ += cameraBounce.made.size() - before;
+  }
+
+  // Nothing here to do: contributes to a sum if none is running, else reads
+  // the running one if it completed, else waits for a message. True when the
+  // completed sum shows the sample over on every rank.
+  bool checkSampleOver() {
+    auto start = Clock::now();
+    bool over = false;
+    if (!wave_) {
+      contributeCounts();
+    } else if (comm_.sumDone(*wave_, total_)) {
+      wave_.reset();
+      over = total_[0] == total_[1] && total_[2] == 0;
+    } else {
+      comm_.waitForMessage(backoff_.next());
+    }
+    stats_.times.wait += secondsSince(start);
+    return over;
+  }
+
+  // Starts a sum of (made, ended, whether they changed since this rank's
+  // previous contribution).
+  void contributeCounts() {
+    const bool changed = !contributed_ || made_ != contributedMade_ || ended_ != contributedEnded_;
+    wave_ = comm_.startSum({made_, ended_, changed ? 1u : 0u});
+    contributedMade_ = made_;
+    contributedEnded_ = ended_;
+    contributed_ = true;
+    if (comm_.isRoot()) ++stats_.terminationWaves;
+  }
+
   // Every ray was received (made == ended everywhere), so every send completes.
-  auto start = Clock::now();
-  while (!comm_.allSendsDone()) comm_.waitForMessage(std::chrono::microseconds(20));
-  stats.times.wait += secondsSince(start);
+  void waitForSends() {
+    auto start = Clock::now();
+    while (!comm_.allSendsDone()) comm_.waitForMessage(std::chrono::microseconds(20));
+    stats_.times.wait += secondsSince(start);
+  }
+
+  DistributedTraversal& traversal_;
+  const Communicator& comm_;
+  const uint32_t sampleIndex_;
+  const uint32_t first_, last_;  // the sample's pixels [first, last)
+  SampleShading<Path>& shading_;
+  FrameStats& stats_;
+  const int rank_, ranks_;
+  const bool replay_;  // replay layout, proxies mode
+
+  std::vector<uint32_t> mine_;  // this rank's camera paths
+  size_t nextPixel_ = 0;        // into mine_: the next one to start
+  std::vector<BounceRays<Path>> bounces_;
+  uint64_t made_ = 0, ended_ = 0;  // this sample's rays on this rank
+
+  // Scratch, reused from batch to batch.
+  PathQueue<Path> batch_;
+  std::vector<TraceHit> batchHits_;
+  std::vector<RankSet> visited_;
+  std::vector<int> destination_;
+  std::vector<PathQueue<Path>> outbox_;  // per rank
+  RayQueues<Path> spawned_;
+
+  // Termination: the running sum, if any, and this rank's last contribution.
+  std::optional<SumHandle> wave_;
+  uint64_t contributedMade_ = 0, contributedEnded_ = 0;
+  bool contributed_ = false;
+  std::vector<uint64_t> total_;
+  IdleBackoff backoff_;
+};
+
+template <typename Path>
+void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t first, uint32_t last,
+                                           SampleShading<Path>& shading, FrameStats& stats) {
+  OverlappedSample(*this, sampleIndex, first, last, shading, stats).run();
 }
 
 // The class is instantiated in distributed_traversal.cpp; this is its one member here.

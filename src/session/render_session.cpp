@@ -23,7 +23,6 @@
 #include "io/parts/part_directory.h"
 #include "io/scene_loader.h"
 #include "partition/partition.h"
-#include "partition/ray_sampler.h"
 #include "path/path.h"
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
@@ -49,7 +48,8 @@ struct RenderSession::Rank {
   Clock::time_point lapStart = processStart();  // where the next interval of `setup` begins
   bool firstPixel = false;                      // setup complete (run() reached its first frame)
 
-  Rank(const SessionSettings& settings, const Communicator& comm);
+  // From settings.scene, or from `given` (the whole scene, in memory) when set.
+  Rank(const SessionSettings& settings, const Communicator& comm, Scene* given);
   double proxyBytes() const { return proxies ? double(proxies->bytes()) : 0.0; }
   // The one place the session names the trace backend: this rank's trace
   // structures over its instances, and what Embree holds for them.
@@ -70,12 +70,12 @@ struct RenderSession::Rank {
   }
 };
 
-RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm) {
+RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm, Scene* given) {
   if (settings.threads > 0)
     threadLimit = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, settings.threads);
   lap(&SetupTimes::start);
-  if (isPartDirectory(settings.scene)) {
+  if (!given && isPartDirectory(settings.scene)) {
     // A part directory: this rank reads only its own part and the shared data.
     RankPart part = loadRankPart(settings.scene, comm.rank(), comm.size());
     scene = std::move(part.scene);
@@ -94,7 +94,7 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     lights = std::make_unique<LightSampler>(part.lights);
     lap(&SetupTimes::lights);
   } else {
-    scene = loadScene(settings.scene, settings.load);
+    scene = given ? std::move(*given) : loadScene(settings.scene, settings.load);
     scene.view(settings.render.view);  // fail on an unknown view before building anything
     summary = summarize(scene);
     lap(&SetupTimes::load);
@@ -103,8 +103,8 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     lights = std::make_unique<LightSampler>(scene);
     lap(&SetupTimes::lights);
     const PartitionerOptions options = partitionerOptions(settings, comm.size());
-    partition = partitionScene(scene, comm.size(), withRaySample(scene, options));
-    partitionerName = options.name;
+    partition = partitionScene(scene, comm.size(), options);
+    partitionerName = options.chosen().name();
     owned = partition.instancesOf(comm.rank());
     scene.releaseAllBut(owned);
     // Hand the freed geometry back to the system, so resident memory shows what the rank holds.
@@ -173,16 +173,24 @@ void checkRankCount(int ranks, PathLayout layout) {
     throw InputError(fmt::format("{} ranks: Ferry supports up to {} ranks", ranks, kMaxRanks));
   if (layout == PathLayout::Mask && ranks > 64)
     throw InputError(fmt::format(
-        "--path-layout mask: {} ranks do not fit a 64-bit mask (use replay or auto)", ranks));
+        "path-layout mask: {} ranks do not fit a 64-bit mask (use replay or auto)", ranks));
 }
 
 RenderSession::RenderSession(const SessionSettings& settings, const Communicator& comm)
+    : RenderSession(settings, comm, nullptr) {}
+
+RenderSession::RenderSession(Scene scene, const SessionSettings& settings, const Communicator& comm)
+    : RenderSession(settings, comm, &scene) {}
+
+RenderSession::RenderSession(const SessionSettings& settings, const Communicator& comm,
+                             Scene* given)
     : settings_(settings), comm_(comm) {
   FERRY_CHECK_GE(settings.render.frames, 1);
   FERRY_CHECK_GE(settings.render.samplesPerPixel, 1);
   checkRankCount(comm.size(), settings.pathLayout);
+  if (given) given->validate();
   settings_.render.retraceAll = settings.retrace == Retrace::All;
-  rank_ = std::make_unique<Rank>(settings_, comm_);
+  rank_ = std::make_unique<Rank>(settings_, comm_, given);
   settings_.render.lightPaths =
       settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
 }
@@ -253,7 +261,7 @@ void RenderSession::resumeFrom(const std::string& path) {
                                  differingFields(checkpoint->description, description)));
   if (checkpoint->frames >= settings_.render.frames)
     throw InputError(
-        fmt::format("{}: the checkpoint holds {} frames already; --frames {} asks "
+        fmt::format("{}: the checkpoint holds {} frames already; a render of {} frames asks "
                     "for no more (ask for more frames to continue)",
                     path, checkpoint->frames, settings_.render.frames));
   resume_ = std::move(checkpoint);
@@ -290,16 +298,6 @@ const std::string& RenderSession::partitionerName() const {
 }
 const SetupTimes& RenderSession::setupTimes() const {
   return rank_->setup;
-}
-
-SessionReport RenderSession::run(FrameSink& sink, const SessionProgress& progress) {
-  // The layout: masks while they fit (8 then 64 ranks), else replay (or as forced).
-  const int ranks = comm_.size();
-  if (settings_.pathLayout == PathLayout::Replay ||
-      (settings_.pathLayout == PathLayout::Auto && ranks > 64))
-    return runWithLayout<PathReplay>(sink, progress);
-  if (ranks <= 8) return runWithLayout<Path8>(sink, progress);
-  return runWithLayout<Path64>(sink, progress);
 }
 
 template <typename Path>
@@ -382,149 +380,239 @@ void ViewChange::applyTo(CameraView& camera, RenderSettings& settings) const {
   if (flags & kExposure) settings.toneMapping.exposure = exposure;
 }
 
-void RenderSession::runInteractive(InteractiveControl* control, uint64_t maxFrames,
-                                   double sliceSeconds) {
-  FERRY_CHECK(!comm_.isRoot() || control);
-  const int ranks = comm_.size();
-  if (settings_.pathLayout == PathLayout::Replay ||
-      (settings_.pathLayout == PathLayout::Auto && ranks > 64))
-    return interactiveWithLayout<PathReplay>(control, maxFrames, sliceSeconds);
-  if (ranks <= 8) return interactiveWithLayout<Path8>(control, maxFrames, sliceSeconds);
-  interactiveWithLayout<Path64>(control, maxFrames, sliceSeconds);
-}
+// The frames of one run, whatever the path layout: the render settings, the
+// frame buffer, and the renderer over this rank's traversal (FramesFor).
+class RenderSession::Frames {
+ public:
+  explicit Frames(const RenderSettings& render)
+      : render(render), buffer(render.imageWidth(), render.imageHeight()) {}
+  virtual ~Frames() = default;
+  uint32_t pixels() const { return uint32_t(render.imageWidth()) * uint32_t(render.imageHeight()); }
+  // Pixels [first, last) of `frame`, with `progress` (collective when distributed).
+  virtual FrameStats renderPixels(uint32_t first, uint32_t last) = 0;
+  // A renderer for `render` as it is now (after a change), over the same traversal.
+  virtual void restart() = 0;
+  virtual uint64_t raysReceived() const = 0;
+  virtual uint64_t revisits() const = 0;
+  virtual std::string layout() const = 0;
+  virtual size_t pathBytes() const = 0;
+
+  RenderSettings render;
+  FrameBuffer buffer;
+  int frame = 0;              // the frame index the next renderPixels renders
+  ProgressCallback progress;  // for the next renderPixels
+};
 
 template <typename Path>
-void RenderSession::interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames,
-                                          double sliceSeconds) {
-  Rank& rank = *rank_;
-  rank.lap(&SetupTimes::agree);
-  std::unique_ptr<RayTraversal<Path>> traversal = makeTraversal<Path>(nullptr);
-  rank.lap(&SetupTimes::proxies);
-  RenderSettings render = settings_.render;
-  render.frames = 1;
-  if (!render.camera) render.camera = rank.scene.view(render.view);
-  auto renderer = std::make_unique<WavefrontRenderer<Path>>(rank.scene, *rank.geometry,
-                                                            *rank.lights, *traversal, render);
-  // Reused from frame to frame; made anew only when the image size changes.
-  FrameBuffer frameBuffer(render.imageWidth(), render.imageHeight());
-  int accumulated = 0;
-  uint64_t compositeBytes = 0, abandoned = 0;
-  double lastFrameSeconds = 0;  // the slowest rank's, of the last whole frame
-  for (uint64_t frames = 0; maxFrames == 0 || frames < maxFrames; ++frames) {
-    ViewChange change;
-    if (comm_.isRoot()) change = control->takeChange();
-    comm_.broadcast(change);
-    if (change.flags & ViewChange::kQuit) break;
-    const int oldWidth = render.imageWidth(), oldHeight = render.imageHeight();
-    change.applyTo(*render.camera, render);
-    if (change.flags & (ViewChange::kCamera | ViewChange::kSettings)) {
-      if (render.imageWidth() != oldWidth || render.imageHeight() != oldHeight)
-        frameBuffer = FrameBuffer(render.imageWidth(), render.imageHeight());
-      else
-        frameBuffer.clear();
-      accumulated = 0;
-      renderer = std::make_unique<WavefrontRenderer<Path>>(rank.scene, *rank.geometry, *rank.lights,
-                                                           *traversal, render);
-    }
-    // A long frame goes through in slices of about `sliceSeconds` (judged by
-    // the last frame's time, the same on every rank), with rank 0's word in
-    // between on whether a change is waiting: a camera move abandons the
-    // rest of the frame instead of waiting for it (what was added is cleared
-    // with the accumulation the change restarts). Each slice costs a
-    // distributed render the overlap at its end, so short frames stay whole.
-    const uint32_t pixels = uint32_t(render.imageWidth()) * uint32_t(render.imageHeight());
-    const double bySeconds = sliceSeconds > 0 ? lastFrameSeconds / sliceSeconds : 64;
-    const uint32_t slices = std::clamp<uint32_t>(
-        std::min<uint32_t>(uint32_t(std::min(bySeconds, 64.0)), pixels / 4096), 1, 64);
-    FrameStats mine;
-    bool abandon = false;
-    rank.reachFirstPixel();
-    const auto frameStart = Clock::now();
-    for (uint32_t slice = 0; slice < slices && !abandon; ++slice) {
-      const uint32_t first = uint32_t(uint64_t(pixels) * slice / slices);
-      const uint32_t last = uint32_t(uint64_t(pixels) * (slice + 1) / slices);
-      mine.merge(renderer->renderPixels(accumulated, first, last, frameBuffer));
-      if (slice + 1 < slices) {
-        abandon = comm_.isRoot() && control->restartPending();
-        comm_.broadcast(abandon);
-      }
-    }
-    if (abandon) {
-      ++abandoned;
-      continue;
-    }
-    mine.frame = accumulated;
-    mine.seconds = secondsSince(frameStart);
-    InteractiveFrame frame;
-    frame.abandoned = std::exchange(abandoned, 0);
-    frame.stats = sumOverRanks(comm_, mine);
-    lastFrameSeconds = frame.stats.seconds;
-    ++accumulated;
-    const auto start = Clock::now();
-    frame.image =
-        composite(comm_, frameBuffer, imageScale(rank.scene, accumulated, render.samplesPerPixel),
-                  FrameSink::Pixels::ToneMapped, render.toneMapping, compositeBytes);
-    frame.stats.times.composite = comm_.max(secondsSince(start));
-    frame.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
-                              double(rank.embreePeakBytes), rank.proxyBytes());
-    if (!comm_.isRoot()) continue;
-    frame.accumulated = accumulated;
-    frame.camera = *render.camera;
-    frame.settings = render;
-    frame.image.frame = accumulated - 1;
-    try {
-      control->publish(frame);
-    } catch (const std::exception& e) {
-      comm_.abortAll(e.what());  // the other ranks are in the next frame's collectives
-    }
+class RenderSession::FramesFor final : public RenderSession::Frames {
+ public:
+  FramesFor(const Scene& scene, const TraceBackend& geometry, const LightSampler& lights,
+            std::unique_ptr<RayTraversal<Path>> traversal, DistributedTraversal<Path>* distributed,
+            const RenderSettings& render)
+      : Frames(render),
+        scene_(scene),
+        geometry_(geometry),
+        lights_(lights),
+        traversal_(std::move(traversal)),
+        distributed_(distributed) {
+    restart();
   }
-}
+  FrameStats renderPixels(uint32_t first, uint32_t last) override {
+    return renderer_->renderPixels(frame, first, last, buffer, progress);
+  }
+  void restart() override {
+    renderer_ =
+        std::make_unique<WavefrontRenderer<Path>>(scene_, geometry_, lights_, *traversal_, render);
+  }
+  uint64_t raysReceived() const override { return distributed_ ? distributed_->received() : 0; }
+  uint64_t revisits() const override { return distributed_ ? distributed_->revisits() : 0; }
+  std::string layout() const override { return layoutName<Path>(); }
+  size_t pathBytes() const override { return sizeof(Path); }
+
+ private:
+  const Scene& scene_;
+  const TraceBackend& geometry_;
+  const LightSampler& lights_;
+  std::unique_ptr<RayTraversal<Path>> traversal_;
+  DistributedTraversal<Path>* distributed_;
+  std::unique_ptr<WavefrontRenderer<Path>> renderer_;
+};
+
+// What a run does around the frame loop (RenderSession::renderFrames): which
+// frame comes next, how it is sliced, what follows it. Batch and interactive
+// renders are its two kinds.
+class RenderSession::FramePolicy {
+ public:
+  virtual ~FramePolicy() = default;
+  // Once, before the first frame.
+  virtual void start(Frames&) {}
+  // Before each frame (collective): false ends the run. Sets frames.frame and
+  // frames.progress, and may change frames.render (then restarts frames).
+  virtual bool next(Frames& frames) = 0;
+  // Slices of this frame, the same on every rank.
+  virtual uint32_t slices(const Frames&) { return 1; }
+  // After each slice but the last (collective): true abandons the frame.
+  virtual bool abandon() { return false; }
+  virtual void abandoned() {}
+  // After a whole frame: this rank's stats, and its time from the first slice.
+  virtual void finished(Frames& frames, FrameStats mine, double seconds) = 0;
+  // Once, after the last frame.
+  virtual void done(Frames&) {}
+};
 
 template <typename Path>
-SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgress& progress) {
+void RenderSession::renderFrames(FramePolicy& policy, const RenderSettings& render) {
   Rank& rank = *rank_;
-  // A resumed render starts after the checkpoint's frames, with its image on
-  // rank 0 (the other ranks add to zero: the composite is the same sum).
-  int firstFrame = resume_ ? resume_->frames : 0;
-  comm_.broadcast(firstFrame);
   rank.lap(&SetupTimes::agree);
-  const RenderSettings& render = settings_.render;
   DistributedTraversal<Path>* distributed = nullptr;
   std::unique_ptr<RayTraversal<Path>> traversal = makeTraversal<Path>(&distributed);
   rank.lap(&SetupTimes::proxies);
-  WavefrontRenderer<Path> renderer(rank.scene, *rank.geometry, *rank.lights, *traversal, render);
-  FrameBuffer frameBuffer(render.imageWidth(), render.imageHeight());
-  const FrameSink::Frames frames = sink.frames();
-  const FrameSink::Pixels pixels = sink.pixels();
-  SessionReport report;
-  RenderStats& stats = report.stats;
-  uint64_t compositeBytes = 0;        // this rank's, over every composite
-  int lastFrame = render.frames - 1;  // earlier if the time limit says so
-  auto compositeAfter = [&](int frame, double& seconds) {
-    auto start = Clock::now();
-    const float scale = imageScale(rank.scene, frame + 1, render.samplesPerPixel);
-    FrameImage image =
-        composite(comm_, frameBuffer, scale, pixels, render.toneMapping, compositeBytes);
-    image.frame = frame;
-    image.last = frame == lastFrame;
-    seconds = comm_.max(secondsSince(start));
-    stats.frames[size_t(frame - firstFrame)].times.composite += seconds;
-    return image;
-  };
-
-  if (resume_) {
-    FERRY_CHECK_EQ(resume_->sums.size(), frameBuffer.fixedSum().size());
-    frameBuffer.fixedSum() = std::move(resume_->sums);
-    resume_.reset();
+  FramesFor<Path> frames(rank.scene, *rank.geometry, *rank.lights, std::move(traversal),
+                         distributed, render);
+  policy.start(frames);
+  while (policy.next(frames)) {
+    const uint32_t pixels = frames.pixels(), slices = policy.slices(frames);
+    rank.reachFirstPixel();
+    const auto start = Clock::now();
+    FrameStats mine;
+    bool abandon = false;
+    for (uint32_t slice = 0; slice < slices && !abandon; ++slice) {
+      const uint32_t first = uint32_t(uint64_t(pixels) * slice / slices);
+      const uint32_t last = uint32_t(uint64_t(pixels) * (slice + 1) / slices);
+      if (slices == 1)
+        mine = frames.renderPixels(first, last);
+      else
+        mine.merge(frames.renderPixels(first, last));
+      if (slice + 1 < slices) abandon = policy.abandon();
+    }
+    if (abandon)
+      policy.abandoned();
+    else
+      policy.finished(frames, std::move(mine), secondsSince(start));
   }
-  const auto runStart = Clock::now();
-  auto writeCheckpointAfter = [&](int frame) {
+  policy.done(frames);
+}
+
+template <typename F>
+void RenderSession::withPathLayout(F&& f) {
+  // Masks while they fit (8 then 64 ranks), else replay (or as forced).
+  const int ranks = comm_.size();
+  if (settings_.pathLayout == PathLayout::Replay ||
+      (settings_.pathLayout == PathLayout::Auto && ranks > 64))
+    f.template operator()<PathReplay>();
+  else if (ranks <= 8)
+    f.template operator()<Path8>();
+  else
+    f.template operator()<Path64>();
+}
+
+// A batch render: frames 0 to render.frames - 1 (after a checkpoint's, and
+// up to the time limit), checkpoints, images to a sink, and the report.
+class RenderSession::BatchFrames final : public RenderSession::FramePolicy {
+ public:
+  BatchFrames(RenderSession& session, FrameSink& sink, const SessionProgress& progress)
+      : session_(session),
+        comm_(session.comm_),
+        rank_(*session.rank_),
+        settings_(session.settings_),
+        sink_(sink),
+        sinkFrames_(sink.frames()),
+        sinkPixels_(sink.pixels()),
+        progress_(progress) {
+    // A resumed render starts after the checkpoint's frames, with its image
+    // on rank 0 (the other ranks add to zero: the composite is the same sum).
+    firstFrame_ = session.resume_ ? session.resume_->frames : 0;
+    comm_.broadcast(firstFrame_);
+    lastFrame_ = settings_.render.frames - 1;
+    frame_ = firstFrame_ - 1;
+  }
+
+  void start(Frames& frames) override {
+    if (std::unique_ptr<Checkpoint>& resume = session_.resume_) {
+      FERRY_CHECK_EQ(resume->sums.size(), frames.buffer.fixedSum().size());
+      frames.buffer.fixedSum() = std::move(resume->sums);
+      resume.reset();
+    }
+    runStart_ = Clock::now();
+  }
+
+  bool next(Frames& frames) override {
+    if (++frame_ > lastFrame_) return false;
+    double secondsLeft = -1;
+    if (settings_.timeLimitSeconds > 0)
+      secondsLeft = std::max(0.0, settings_.timeLimitSeconds - secondsSince(runStart_));
+    frames.frame = frame_;
+    frames.progress = [this, frame = frame_, secondsLeft](int done, int total) {
+      if (progress_) progress_({frame, done, total, false, secondsLeft});
+    };
+    return true;
+  }
+
+  void finished(Frames& frames, FrameStats mine, double) override {
+    const int frame = frame_;
+    report_.stats.frames.push_back(sumOverRanks(comm_, mine));
+    // The frame that crosses the time limit is the last (every rank agrees:
+    // the slowest rank's clock decides).
+    if (settings_.timeLimitSeconds > 0 &&
+        comm_.max(secondsSince(runStart_)) >= settings_.timeLimitSeconds)
+      lastFrame_ = frame;
+    if (!settings_.checkpoint.empty() &&
+        (frame == lastFrame_ || (frame + 1 - firstFrame_) % settings_.checkpointEvery == 0))
+      writeCheckpointAfter(frames, frame);
+    if (sinkFrames_ == FrameSink::Frames::Every && frame < lastFrame_) {
+      double seconds = 0;
+      FrameImage image = compositeAfter(frames, frame, seconds);
+      // The other ranks go on into the next frame's collectives: a failure
+      // here must end them too.
+      if (comm_.isRoot()) try {
+          sink_.receive(image);
+        } catch (const std::exception& e) {
+          comm_.abortAll(e.what());
+        }
+    }
+  }
+
+  // After the last frame: the final image to the sink, and the report.
+  void done(Frames& frames) override {
+    const RenderSettings& render = settings_.render;
+    if (progress_) progress_({lastFrame_, render.samplesPerPixel, render.samplesPerPixel, true});
+    FrameImage image = compositeAfter(frames, lastFrame_, report_.compositeSeconds);
+    report_.compositeBytes = comm_.sum(compositeBytes_);
+    report_.memory =
+        rankMemory(comm_, double(rank_.ownedEstimate.total()), double(rank_.embreeBytes),
+                   double(rank_.embreePeakBytes), rank_.proxyBytes());
+    report_.setup = rankSetupTimes(comm_, rank_.setup);
+    report_.raysReceived = comm_.sum(frames.raysReceived());
+    report_.revisits = comm_.sum(frames.revisits());
+    report_.pathLayout = frames.layout();
+    report_.pathBytes = frames.pathBytes();
+    // After the last collective: what the sink throws ends only this rank.
+    if (comm_.isRoot()) sink_.receive(image);
+  }
+
+  SessionReport takeReport() { return std::move(report_); }
+
+ private:
+  FrameImage compositeAfter(Frames& frames, int frame, double& seconds) {
+    const auto start = Clock::now();
+    const float scale = imageScale(rank_.scene, frame + 1, settings_.render.samplesPerPixel);
+    FrameImage image = composite(comm_, frames.buffer, scale, sinkPixels_,
+                                 settings_.render.toneMapping, compositeBytes_);
+    image.frame = frame;
+    image.last = frame == lastFrame_;
+    seconds = comm_.max(secondsSince(start));
+    report_.stats.frames[size_t(frame - firstFrame_)].times.composite += seconds;
+    return image;
+  }
+
+  void writeCheckpointAfter(Frames& frames, int frame) {
     uint64_t sent = 0;
-    std::vector<int64_t> sums = compositeFixed(comm_, frameBuffer, sent);
-    compositeBytes += sent;
+    std::vector<int64_t> sums = compositeFixed(comm_, frames.buffer, sent);
+    compositeBytes_ += sent;
     if (!comm_.isRoot()) return;
+    const RenderSettings& render = settings_.render;
     Checkpoint c;
-    std::tie(c.identity, c.description) = imageIdentity();
+    std::tie(c.identity, c.description) = session_.imageIdentity();
     c.width = render.imageWidth();
     c.height = render.imageHeight();
     c.frames = frame + 1;
@@ -535,52 +623,129 @@ SessionReport RenderSession::runWithLayout(FrameSink& sink, const SessionProgres
     } catch (const std::exception& e) {
       comm_.abortAll(e.what());  // the other ranks are in the next collective
     }
-  };
+  }
 
-  for (int frame = firstFrame; frame <= lastFrame; ++frame) {
-    double secondsLeft = -1;
-    if (settings_.timeLimitSeconds > 0)
-      secondsLeft = std::max(0.0, settings_.timeLimitSeconds - secondsSince(runStart));
-    rank.reachFirstPixel();
-    FrameStats mine = renderer.renderFrame(frame, frameBuffer, [&](int done, int total) {
-      if (progress) progress({frame, done, total, false, secondsLeft});
-    });
-    stats.frames.push_back(sumOverRanks(comm_, mine));
-    // The frame that crosses the time limit is the last (every rank agrees:
-    // the slowest rank's clock decides).
-    if (settings_.timeLimitSeconds > 0 &&
-        comm_.max(secondsSince(runStart)) >= settings_.timeLimitSeconds)
-      lastFrame = frame;
-    if (!settings_.checkpoint.empty() &&
-        (frame == lastFrame || (frame + 1 - firstFrame) % settings_.checkpointEvery == 0))
-      writeCheckpointAfter(frame);
-    if (frames == FrameSink::Frames::Every && frame < lastFrame) {
-      double seconds = 0;
-      FrameImage image = compositeAfter(frame, seconds);
-      // The other ranks go on into the next frame's collectives: a failure
-      // here must end them too.
-      if (comm_.isRoot()) try {
-          sink.receive(image);
-        } catch (const std::exception& e) {
-          comm_.abortAll(e.what());
-        }
+  RenderSession& session_;
+  const Communicator& comm_;
+  Rank& rank_;
+  const SessionSettings& settings_;
+  FrameSink& sink_;
+  const FrameSink::Frames sinkFrames_;
+  const FrameSink::Pixels sinkPixels_;
+  const SessionProgress& progress_;
+  SessionReport report_;
+  int firstFrame_ = 0, lastFrame_ = 0, frame_ = 0;
+  uint64_t compositeBytes_ = 0;  // this rank's, over every composite
+  Clock::time_point runStart_;
+};
+
+SessionReport RenderSession::run(FrameSink& sink, const SessionProgress& progress) {
+  BatchFrames policy(*this, sink, progress);
+  withPathLayout([&]<typename Path>() { renderFrames<Path>(policy, settings_.render); });
+  return policy.takeReport();
+}
+
+// An interactive render: frame after frame, accumulating, with rank 0's
+// control asked for changes before each frame and told after it.
+class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy {
+ public:
+  InteractiveFrames(RenderSession& session, InteractiveControl* control, uint64_t maxFrames,
+                    double sliceSeconds)
+      : comm_(session.comm_),
+        rank_(*session.rank_),
+        control_(control),
+        maxFrames_(maxFrames),
+        sliceSeconds_(sliceSeconds) {}
+
+  bool next(Frames& frames) override {
+    if (maxFrames_ > 0 && frames_++ >= maxFrames_) return false;
+    ViewChange change;
+    if (comm_.isRoot()) change = control_->takeChange();
+    comm_.broadcast(change);
+    if (change.flags & ViewChange::kQuit) return false;
+    RenderSettings& render = frames.render;
+    const int oldWidth = render.imageWidth(), oldHeight = render.imageHeight();
+    change.applyTo(*render.camera, render);
+    if (change.flags & (ViewChange::kCamera | ViewChange::kSettings)) {
+      if (render.imageWidth() != oldWidth || render.imageHeight() != oldHeight)
+        frames.buffer = FrameBuffer(render.imageWidth(), render.imageHeight());
+      else
+        frames.buffer.clear();
+      accumulated_ = 0;
+      frames.restart();
+    }
+    frames.frame = accumulated_;
+    return true;
+  }
+
+  // A long frame goes through in slices of about `sliceSeconds` (judged by
+  // the last frame's time, the same on every rank), with rank 0's word in
+  // between on whether a change is waiting: a camera move abandons the rest
+  // of the frame instead of waiting for it (what was added is cleared with
+  // the accumulation the change restarts). Each slice costs a distributed
+  // render the overlap at its end, so short frames stay whole.
+  uint32_t slices(const Frames& frames) override {
+    const double bySeconds = sliceSeconds_ > 0 ? lastFrameSeconds_ / sliceSeconds_ : 64;
+    return std::clamp<uint32_t>(
+        std::min<uint32_t>(uint32_t(std::min(bySeconds, 64.0)), frames.pixels() / 4096), 1, 64);
+  }
+
+  bool abandon() override {
+    bool abandon = comm_.isRoot() && control_->restartPending();
+    comm_.broadcast(abandon);
+    return abandon;
+  }
+
+  void abandoned() override { ++abandoned_; }
+
+  void finished(Frames& frames, FrameStats mine, double seconds) override {
+    const RenderSettings& render = frames.render;
+    mine.frame = accumulated_;
+    mine.seconds = seconds;
+    InteractiveFrame frame;
+    frame.abandoned = std::exchange(abandoned_, 0);
+    frame.stats = sumOverRanks(comm_, mine);
+    lastFrameSeconds_ = frame.stats.seconds;
+    ++accumulated_;
+    const auto start = Clock::now();
+    frame.image = composite(comm_, frames.buffer,
+                            imageScale(rank_.scene, accumulated_, render.samplesPerPixel),
+                            FrameSink::Pixels::ToneMapped, render.toneMapping, compositeBytes_);
+    frame.stats.times.composite = comm_.max(secondsSince(start));
+    frame.memory = rankMemory(comm_, double(rank_.ownedEstimate.total()), double(rank_.embreeBytes),
+                              double(rank_.embreePeakBytes), rank_.proxyBytes());
+    if (!comm_.isRoot()) return;
+    frame.accumulated = accumulated_;
+    frame.camera = *render.camera;
+    frame.settings = render;
+    frame.image.frame = accumulated_ - 1;
+    try {
+      control_->publish(frame);
+    } catch (const std::exception& e) {
+      comm_.abortAll(e.what());  // the other ranks are in the next frame's collectives
     }
   }
 
-  if (progress) progress({lastFrame, render.samplesPerPixel, render.samplesPerPixel, true});
+ private:
+  const Communicator& comm_;
+  Rank& rank_;
+  InteractiveControl* control_;
+  const uint64_t maxFrames_;
+  const double sliceSeconds_;
+  uint64_t frames_ = 0;  // frames begun, abandoned ones too
+  int accumulated_ = 0;
+  uint64_t compositeBytes_ = 0, abandoned_ = 0;
+  double lastFrameSeconds_ = 0;  // the slowest rank's, of the last whole frame
+};
 
-  FrameImage image = compositeAfter(lastFrame, report.compositeSeconds);
-  report.compositeBytes = comm_.sum(compositeBytes);
-  report.memory = rankMemory(comm_, double(rank.ownedEstimate.total()), double(rank.embreeBytes),
-                             double(rank.embreePeakBytes), rank.proxyBytes());
-  report.setup = rankSetupTimes(comm_, rank.setup);
-  report.raysReceived = comm_.sum(distributed ? distributed->received() : 0);
-  report.revisits = comm_.sum(distributed ? distributed->revisits() : 0);
-  report.pathLayout = layoutName<Path>();
-  report.pathBytes = sizeof(Path);
-  // After the last collective: what the sink throws ends only this rank.
-  if (comm_.isRoot()) sink.receive(image);
-  return report;
+void RenderSession::runInteractive(InteractiveControl* control, uint64_t maxFrames,
+                                   double sliceSeconds) {
+  FERRY_CHECK(!comm_.isRoot() || control);
+  InteractiveFrames policy(*this, control, maxFrames, sliceSeconds);
+  RenderSettings render = settings_.render;
+  render.frames = 1;
+  if (!render.camera) render.camera = rank_->scene.view(render.view);
+  withPathLayout([&]<typename Path>() { renderFrames<Path>(policy, render); });
 }
 
 }  // namespace ferry

@@ -147,6 +147,10 @@ class RenderSession {
   // view, rank count, path layout). Every rank usually meets the same error:
   // the caller agrees on failure (Communicator::agreeOnFailure).
   RenderSession(const SessionSettings& settings, const Communicator& comm);
+  // The same for a scene in memory, the whole of it on every rank, instead
+  // of settings.scene (which then only names it): partitioned on the fly as
+  // a loaded one. Throws InputError if the scene is not valid (Scene::validate).
+  RenderSession(Scene scene, const SessionSettings& settings, const Communicator& comm);
   ~RenderSession();
   RenderSession(const RenderSession&) = delete;
   RenderSession& operator=(const RenderSession&) = delete;
@@ -205,10 +209,19 @@ class RenderSession {
  private:
   struct Rank;
 
+  RenderSession(const SessionSettings& settings, const Communicator& comm, Scene* given);
+  class Frames;  // the frame loop's frames, renderer and frame buffer
   template <typename Path>
-  SessionReport runWithLayout(FrameSink& sink, const SessionProgress& progress);
+  class FramesFor;
+  class FramePolicy;  // what a run does around the frame loop: batch or interactive
+  class BatchFrames;
+  class InteractiveFrames;
+  // The frame loop: batch and interactive renders alike.
   template <typename Path>
-  void interactiveWithLayout(InteractiveControl* control, uint64_t maxFrames, double sliceSeconds);
+  void renderFrames(FramePolicy& policy, const RenderSettings& render);
+  // Calls f.template operator()<Path>() with the path layout for this rank count.
+  template <typename F>
+  void withPathLayout(F&& f);
   // The traversal this session's ranks use (local on one rank); `distributed`
   // set when it is the distributed one.
   template <typename Path>

@@ -165,17 +165,17 @@ TEST(RenderSession, PartDirectoryStatsNameThePartitionerThatMadeTheParts) {
     Scene scene = loadScene("builtin:cornell");
     const Scene lights = lightScene(scene);
     PartitionerOptions options;
-    options.name = toString(PartitionerKind::SpatialSah);
+    options.partitioner = &partitionerNamed("spatial-sah");
     const Partition partition = partitionScene(scene, 1, options);
     PartDirectoryInfo info;
     info.scene = "builtin:cornell";
-    info.partitioner = options.name;
+    info.partitioner = options.chosen().name();
     info.summary = summarize(scene).toJson();
     writePartDirectory(dir.string(), scene, partition, lights, info);
   }
   SessionSettings settings = cornellSettings();
   settings.scene = dir.string();
-  settings.partitioner = PartitionerKind::Best;  // not used for a part directory
+  settings.partitioner = &bestPartitioner();  // not used for a part directory
   RenderSession session(settings, oneRank());
   RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
   const SessionReport report = session.run(sink);
@@ -208,7 +208,7 @@ TEST(RenderSession, PartGeometryStaysInTheMappedPartFile) {
     const Partition partition = partitionScene(scene, 1, options);
     PartDirectoryInfo info;
     info.scene = source;
-    info.partitioner = options.name;
+    info.partitioner = options.chosen().name();
     info.summary = summarize(scene).toJson();
     writePartDirectory(dir.string(), scene, partition, lights, info);
   }
@@ -243,9 +243,33 @@ TEST(RenderSession, PartGeometryStaysInTheMappedPartFile) {
 // Where the time to the first pixel went: every rank's intervals, from the
 // process's start, add up to its first pixel, and the stats name them all
 // (the slowest rank's too). 3 ranks in process, partitioning on the fly.
+// A scene handed over in memory renders the image its file renders, on one
+// rank and partitioned over three.
+TEST(RenderSession, AnInMemorySceneRendersAsItsFileDoes) {
+  for (int ranks : {1, 3}) {
+    std::vector<std::vector<Vec3f>> images(2);
+    for (int given = 0; given < 2; ++given)
+      runRanks(ranks, [&](const Communicator& comm) {
+        SessionSettings settings = cornellSettings();
+        settings.partitioner = &bestPartitioner();
+        std::unique_ptr<RenderSession> session =
+            given ? std::make_unique<RenderSession>(loadScene("builtin:cornell"), settings, comm)
+                  : std::make_unique<RenderSession>(settings, comm);
+        RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+        session->run(sink);
+        if (comm.isRoot()) images[size_t(given)] = sink.images.at(0).linear;
+      });
+    ASSERT_FALSE(images[0].empty());
+    EXPECT_TRUE(images[0] == images[1]) << ranks << " ranks";
+  }
+  Scene broken = loadScene("builtin:cornell");
+  broken.meshes[0].material = 1000;
+  EXPECT_THROW(RenderSession(std::move(broken), cornellSettings(), oneRank()), InputError);
+}
+
 TEST(RenderSession, SetUpIntervalsAddUpToTheFirstPixelOnEveryRank) {
   SessionSettings settings = cornellSettings();
-  settings.partitioner = PartitionerKind::Best;
+  settings.partitioner = &bestPartitioner();
   nlohmann::json stats;
   runRanks(3, [&](const Communicator& comm) {
     RenderSession session(settings, comm);
