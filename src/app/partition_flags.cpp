@@ -15,12 +15,16 @@ void addPartitionFlags(CLI::App* command, PartitionFlags& f, const std::string& 
   command->add_option(partitionerFlag, f.partitioner, help + defaultText);
   for (const PartitionerSetting& s : partitionerSettings()) {
     std::string readers;
+    size_t count = 0;
     for (const Partitioner* p : partitioners())
-      if (p->reads(s.name)) readers += (readers.empty() ? "" : ", ") + std::string(p->name());
+      if (p->reads(s.name)) {
+        readers += (readers.empty() ? "" : ", ") + std::string(p->name());
+        ++count;
+      }
     const std::string flag = "--" + std::string(s.name);
-    const std::string text =
-        fmt::format("{}\n({})", s.help,
-                    readers.size() > 60 ? std::string("every partitioner") : "read by " + readers);
+    const std::string text = fmt::format(
+        "{}\n({})", s.help,
+        count == partitioners().size() ? std::string("every partitioner") : "read by " + readers);
     std::visit(
         [&](auto field) {
           using T = std::remove_reference_t<decltype(f.options.*field)>;
