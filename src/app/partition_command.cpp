@@ -28,6 +28,7 @@
 #include "scene/mesh_store.h"
 #include "scene/scene_summary.h"
 #include "session/forward_prediction.h"
+#include "session/partitioned_scene.h"
 #include "session/session_settings.h"
 
 namespace ferry {
@@ -387,24 +388,21 @@ int runShowPartition(const RenderOptions& o, const Communicator& comm) {
       const std::string& out = o.output;
       if (imageFormatOf(out) != ImageFormat::Png)
         throw InputError(fmt::format("{}: --show-partition writes a PNG", out));
-      Scene scene;
-      Partition partition;
-      std::string title;
-      if (isPartDirectory(o.scene)) {
-        scene = loadAllParts(o.scene, partition);
-        const Manifest m = readManifest(o.scene);
-        title = fmt::format("{}: {}, {} ranks (from {})", m.summary.value("name", o.scene),
-                            m.partitioner, m.ranks, o.scene);
-      } else {
-        const int ranks = o.showPartition > 0 ? o.showPartition : comm.size();
-        SessionSettings settings;
-        applyPartitionerFlags(o, settings);
-        const PartitionerOptions p = partitionerOptions(settings, ranks);
-        scene = loadScene(o.scene);
-        partition = partitionScene(scene, ranks, p);
-        title = fmt::format("{}: {}{}, {} ranks", scene.name, p.chosen().name(),
-                            p.keepObjectsWhole ? " (objects whole)" : "", ranks);
-      }
+      SessionSettings settings;
+      settings.scene = o.scene;
+      applyPartitionerFlags(o, settings);
+      const int ranks = o.showPartition > 0 ? o.showPartition : comm.size();
+      PartitionedScene loaded = loadPartitionedScene(settings, ranks, -1);
+      const std::string title =
+          loaded.manifest
+              ? fmt::format("{}: {}, {} ranks (from {})",
+                            loaded.manifest->summary.value("name", o.scene), loaded.partitioner,
+                            loaded.manifest->ranks, o.scene)
+              : fmt::format("{}: {}{}, {} ranks", loaded.scene.name, loaded.partitioner,
+                            settings.partitioning.keepObjectsWhole ? " (objects whole)" : "",
+                            ranks);
+      const Scene& scene = loaded.scene;
+      const Partition& partition = loaded.partition;
       PictureOptions picture;
       picture.width = width;
       picture.height = height;

@@ -26,6 +26,7 @@
 #include "path/path.h"
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
+#include "session/partitioned_scene.h"
 #include "trace/embree_backend.h"
 
 namespace ferry {
@@ -75,36 +76,34 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     threadLimit = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, settings.threads);
   lap(&SetupTimes::start);
-  if (!given && isPartDirectory(settings.scene)) {
-    // A part directory: this rank reads only its own part and the shared data.
-    RankPart part = loadRankPart(settings.scene, comm.rank(), comm.size());
-    scene = std::move(part.scene);
+  PartitionedScene loaded =
+      loadPartitionedScene(settings, comm.size(), comm.rank(), given, [&](Scene& whole) {
+        whole.view(settings.render.view);  // fail on an unknown view before building anything
+        summary = summarize(whole);
+        lap(&SetupTimes::load);
+        // Light data is small and needed everywhere: take it from the scene
+        // as given, before the partitioner rewrites it and ranks release geometry.
+        lights = std::make_unique<LightSampler>(whole);
+        lap(&SetupTimes::lights);
+      });
+  scene = std::move(loaded.scene);
+  partition = std::move(loaded.partition);
+  partitionerName = std::move(loaded.partitioner);
+  if (const std::optional<Manifest>& manifest = loaded.manifest) {
+    // A part directory: this rank read only its own part and the shared data.
     scene.view(settings.render.view);
-    summary = summaryFromJson(part.manifest.summary);
-    partition = std::move(part.partition);
-    partitionerName = part.manifest.partitioner;
-    scene.filmScale = part.manifest.filmScale;
-    scene.filmCrop = part.manifest.filmCrop;
-    scene.integrator = part.manifest.integrator;
-    scene.integratorMaxDepth = part.manifest.integratorMaxDepth;
+    summary = summaryFromJson(manifest->summary);
+    scene.filmScale = manifest->filmScale;
+    scene.filmCrop = manifest->filmCrop;
+    scene.integrator = manifest->integrator;
+    scene.integratorMaxDepth = manifest->integratorMaxDepth;
     owned.resize(scene.instances.size());
     std::iota(owned.begin(), owned.end(), 0);
     ownedEstimate = ownedMemory(scene, owned);
     lap(&SetupTimes::load);
-    lights = std::make_unique<LightSampler>(part.lights);
+    lights = std::make_unique<LightSampler>(loaded.lights);
     lap(&SetupTimes::lights);
   } else {
-    scene = given ? std::move(*given) : loadScene(settings.scene, settings.load);
-    scene.view(settings.render.view);  // fail on an unknown view before building anything
-    summary = summarize(scene);
-    lap(&SetupTimes::load);
-    // Light data is small and needed everywhere: take it from the scene as
-    // given, before the partitioner rewrites it and ranks release geometry.
-    lights = std::make_unique<LightSampler>(scene);
-    lap(&SetupTimes::lights);
-    const PartitionerOptions options = partitionerOptions(settings, comm.size());
-    partition = partitionScene(scene, comm.size(), options);
-    partitionerName = options.chosen().name();
     owned = partition.instancesOf(comm.rank());
     scene.releaseAllBut(owned);
     // Hand the freed geometry back to the system, so resident memory shows what the rank holds.
