@@ -689,7 +689,8 @@ class GltfBuilder {
       std::vector<float> p = accessors_.floats(position, 3, "POSITION");
       mesh.positions.reserve(p.size() / 3 + 1);  // Mesh::hasVertexSlack
       mesh.positions.resize(p.size() / 3);
-      std::memcpy(static_cast<void*>(mesh.positions.data()), p.data(), p.size() * sizeof(float));
+      if (!p.empty())  // memcpy from an empty vector's null data() is undefined
+        std::memcpy(static_cast<void*>(mesh.positions.data()), p.data(), p.size() * sizeof(float));
     }
     const size_t n = mesh.positions.size();
     for (size_t i = 0; i < n; ++i)
