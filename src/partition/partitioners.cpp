@@ -200,6 +200,17 @@ class RayGuided final : public SplitLoopPartitioner {
   }
 };
 
+// The test partitioners' stats (every instance a unit, every rank a part)
+// and merged proxies, around the partition they dealt.
+Partition byInstance(const Scene& scene, int ranks, Partition partition,
+                     const PartitionerOptions& o, PartitionStats& s) {
+  s.inputBytes = summarize(scene).memory.total();
+  s.parts = ranks;
+  s.units = scene.instances.size();
+  mergePartitionProxies(partition, o, s);
+  return partition;
+}
+
 class RoundRobin final : public Partitioner {
  public:
   std::string_view name() const override { return "round-robin"; }
@@ -207,12 +218,7 @@ class RoundRobin final : public Partitioner {
   std::vector<std::string_view> settings() const override { return {}; }
   Partition partition(Scene& scene, int ranks, const PartitionerOptions& o,
                       PartitionStats& s) const override {
-    s.inputBytes = summarize(scene).memory.total();
-    Partition partition = roundRobinPartition(scene, ranks);
-    s.parts = ranks;
-    s.units = scene.instances.size();
-    mergePartitionProxies(partition, o, s);
-    return partition;
+    return byInstance(scene, ranks, roundRobinPartition(scene, ranks), o, s);
   }
 };
 
@@ -225,12 +231,7 @@ class Random final : public Partitioner {
   std::vector<std::string_view> settings() const override { return {}; }
   Partition partition(Scene& scene, int ranks, const PartitionerOptions& o,
                       PartitionStats& s) const override {
-    s.inputBytes = summarize(scene).memory.total();
-    Partition partition = randomPartition(scene, ranks, o.seed);
-    s.parts = ranks;
-    s.units = scene.instances.size();
-    mergePartitionProxies(partition, o, s);
-    return partition;
+    return byInstance(scene, ranks, randomPartition(scene, ranks, o.seed), o, s);
   }
 };
 
