@@ -9,6 +9,7 @@
 #   bash scripts/fuzz.sh [SECONDS] [KIND ...]     # default: 60 s, every kind
 #   MERGE=1 bash scripts/fuzz.sh 3600 pbrt        # keep what a long run found, minimised
 #   FUZZ_OPT=-O0 bash scripts/fuzz.sh 10          # as CI: builds in half the time, runs slower
+#   FUZZ_CORPUS=~/fuzz bash scripts/fuzz.sh 3600   # what a run finds stays there for the next
 #
 # Prints a table: kind, executions, corpus size, coverage (libFuzzer's
 # edges), features, and the outcome. docs/fuzzing.md has the long runs.
@@ -39,20 +40,21 @@ fi
 mkdir -p "$out"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+corpora=${FUZZ_CORPUS:-$work}
 
 # run KIND: one target for `seconds`; its log in $work/KIND.log, its exit
 # status in $work/KIND.status.
 run() {
   local kind=$1 fuzzer="$build/tests/fuzz/ferry_fuzz_$1"
-  local dirs=("$work/$kind.corpus" "tests/fuzz/corpus/$kind")
+  local dirs=("$corpora/$kind.corpus" "tests/fuzz/corpus/$kind")
   [ -d "tests/fuzz/regressions/$kind" ] && dirs+=("tests/fuzz/regressions/$kind")
-  mkdir -p "$work/$kind.corpus"
+  mkdir -p "$corpora/$kind.corpus"
   local status=0
   ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1} UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1} \
     "$fuzzer" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
     -artifact_prefix="$out/$kind-" "${dirs[@]}" > "$work/$kind.log" 2>&1 || status=$?
   if [ "$status" = 0 ] && [ "${MERGE:-0}" = 1 ]; then
-    "$fuzzer" -merge=1 "tests/fuzz/corpus/$kind" "$work/$kind.corpus" >> "$work/$kind.log" 2>&1 || status=$?
+    "$fuzzer" -merge=1 "tests/fuzz/corpus/$kind" "$corpora/$kind.corpus" >> "$work/$kind.log" 2>&1 || status=$?
   fi
   echo "$status" > "$work/$kind.status"
 }

@@ -16,7 +16,6 @@ ScenePlan planFurnace(double scale, uint32_t /*seed: nothing random*/) {
   Material white;
   white.name = "white-diffuse";
   white.baseColor = Vec3f(kFurnaceAlbedo);
-  white.roughness = 1;
   const int32_t material = plan.addMaterial(white);
 
   MeshRecipe sphere;

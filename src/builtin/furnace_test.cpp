@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "builtin/builtin.h"
+#include "material/models/diffuse.h"
 #include "scene/scene_summary.h"
 
 namespace ferry {
@@ -14,8 +15,10 @@ TEST(Furnace, WhiteSphereInAWhiteEnvironment) {
   const Mesh& sphere = scene.meshes[0];
   const Material& m = scene.materials[sphere.material];
   EXPECT_EQ(m.baseColor, Vec3f(builtin::kFurnaceAlbedo));
-  EXPECT_EQ(m.metallic, 0.0f);
-  EXPECT_EQ(m.transmission, 0.0f);
+  // Lambertian.
+  const auto* diffuse = dynamic_cast<const DiffuseModel*>(m.model.get());
+  ASSERT_NE(diffuse, nullptr);
+  EXPECT_EQ(diffuse->sigmaDegrees, 0.0f);
   EXPECT_FALSE(m.isEmissive());
   EXPECT_EQ(scene.environment.color, Vec3f(1, 1, 1));
   EXPECT_EQ(scene.environment.image, nullptr);

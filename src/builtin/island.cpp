@@ -15,6 +15,7 @@
 #include "builtin/procedural_texture.h"
 #include "builtin/terrain.h"
 #include "builtin/vegetation.h"
+#include "material/models/dielectric.h"
 
 namespace ferry::builtin {
 namespace {
@@ -220,46 +221,44 @@ IslandTextures IslandPlanner::addTextures() {
 
 void IslandPlanner::addMaterials(const IslandTextures& tex) {
   auto material = [&](const char* name, Vec3f colour, int32_t texture = kNoTexture,
-                      bool alphaCutout = false, float roughness = 0.9f) {
-    return addDiffuseMaterial(plan_, name, colour, texture, alphaCutout, roughness);
+                      bool alphaCutout = false) {
+    return addDiffuseMaterial(plan_, name, colour, texture, alphaCutout);
   };
   IslandMaterials& mat = mat_;
   mat.terrain = material("island-ground", Vec3f(1), tex.terrain);
   mat.sand = material("beach-sand", Vec3f(1), tex.sand);
-  mat.rock = material("rock", Vec3f(1), tex.rock, false, 0.8f);
+  mat.rock = material("rock", Vec3f(1), tex.rock);
   Material water;
   water.name = "ocean";
   water.baseColor = {0.9f, 0.97f, 1.0f};
-  water.transmission = 1;
-  water.ior = 1.33f;
   // Slightly rough: light reaches a diffuse seabed under a perfectly smooth
   // surface only by caustic paths, which a path tracer with light sampling
   // finds by chance (white speckles on black); a rough surface takes light
   // samples itself, so the sea reads as sky and sun reflected on dark water.
-  water.roughness = 0.12f;
+  water.model = std::make_shared<DielectricModel>(1.33f, 0.12f);
   mat.ocean = plan_.addMaterial(water);
   mat.seabed = material("seabed", kDeepSeabed);
   mat.bark = material("bark", Vec3f(1), tex.bark);
-  mat.leaves = material("leaves", Vec3f(1), tex.leaves, true, 0.6f);
+  mat.leaves = material("leaves", Vec3f(1), tex.leaves, true);
   mat.palmBark = material("palm-bark", Vec3f(1), tex.palmBark);
-  mat.palmFronds = material("palm-fronds", Vec3f(1), tex.palmFronds, true, 0.6f);
-  mat.deadFronds = material("dead-palm-fronds", {1.0f, 0.75f, 0.45f}, tex.palmFronds, true, 0.7f);
-  mat.coconut = material("coconut", {0.22f, 0.15f, 0.07f}, kNoTexture, false, 0.6f);
-  mat.fern = material("fern", Vec3f(1), tex.fern, true, 0.7f);
-  mat.grass = material("grass", Vec3f(1), tex.grass, false, 0.7f);
-  mat.seaweed = material("seaweed", {0.45f, 0.4f, 0.2f}, tex.grass, false, 0.7f);
+  mat.palmFronds = material("palm-fronds", Vec3f(1), tex.palmFronds, true);
+  mat.deadFronds = material("dead-palm-fronds", {1.0f, 0.75f, 0.45f}, tex.palmFronds, true);
+  mat.coconut = material("coconut", {0.22f, 0.15f, 0.07f});
+  mat.fern = material("fern", Vec3f(1), tex.fern, true);
+  mat.grass = material("grass", Vec3f(1), tex.grass);
+  mat.seaweed = material("seaweed", {0.45f, 0.4f, 0.2f}, tex.grass);
   mat.stem = material("flower-stem", {0.08f, 0.22f, 0.04f});
-  mat.petals = {material("petal-red", {1.0f, 0.12f, 0.15f}, tex.petal, true, 0.6f),
-                material("petal-yellow", {1.0f, 0.85f, 0.2f}, tex.petal, true, 0.6f),
-                material("petal-white", {0.95f, 0.95f, 0.92f}, tex.petal, true, 0.6f)};
+  mat.petals = {material("petal-red", {1.0f, 0.12f, 0.15f}, tex.petal, true),
+                material("petal-yellow", {1.0f, 0.85f, 0.2f}, tex.petal, true),
+                material("petal-white", {0.95f, 0.95f, 0.92f}, tex.petal, true)};
   mat.flowerCentre = material("flower-centre", {0.8f, 0.5f, 0.05f});
   mat.driftwood = material("driftwood", {0.9f, 0.88f, 0.85f}, tex.bark);
-  mat.shell = material("shell", {0.85f, 0.8f, 0.72f}, kNoTexture, false, 0.5f);
-  mat.corals = {material("coral-pink", {0.75f, 0.35f, 0.4f}, tex.rock, false, 0.8f),
-                material("coral-orange", {0.85f, 0.5f, 0.25f}, tex.rock, false, 0.8f),
-                material("coral-violet", {0.45f, 0.3f, 0.6f}, tex.rock, false, 0.8f)};
+  mat.shell = material("shell", {0.85f, 0.8f, 0.72f});
+  mat.corals = {material("coral-pink", {0.75f, 0.35f, 0.4f}, tex.rock),
+                material("coral-orange", {0.85f, 0.5f, 0.25f}, tex.rock),
+                material("coral-violet", {0.45f, 0.3f, 0.6f}, tex.rock)};
   mat.giantBark = material("giant-ironwood-bark", {0.85f, 0.82f, 0.78f}, tex.bark);
-  mat.giantLeaves = material("giant-ironwood-leaves", Vec3f(1), tex.giantLeaves, true, 0.6f);
+  mat.giantLeaves = material("giant-ironwood-leaves", Vec3f(1), tex.giantLeaves, true);
   Material glow;
   glow.name = "lantern-glow";
   glow.baseColor = {0.8f, 0.7f, 0.5f};

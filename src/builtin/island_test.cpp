@@ -15,6 +15,7 @@
 #include "builtin/island_elements.h"
 #include "builtin/island_shape.h"
 #include "builtin/vegetation.h"
+#include "material/models/dielectric.h"
 #include "scene/memory_cost.h"
 #include "scene/scene_summary.h"
 
@@ -228,9 +229,11 @@ TEST(Island, HasAGiantTreeTexturedGroundOceanAndLights) {
       if (scene.meshes[size_t(m)].name != "osOcean/water-0") continue;
       ocean = true;
       const Material& water = scene.materials[size_t(scene.meshes[size_t(m)].material)];
-      EXPECT_EQ(water.transmission, 1.0f);
-      EXPECT_FLOAT_EQ(water.ior, 1.33f);
-      EXPECT_GT(water.roughness, 0.0f);  // rough, so light samples reach the sea (see island.cpp)
+      const auto* surface = dynamic_cast<const DielectricModel*>(water.model.get());
+      ASSERT_NE(surface, nullptr);
+      EXPECT_FLOAT_EQ(surface->ior, 1.33f);
+      // Rough, so light samples reach the sea (see island.cpp).
+      EXPECT_GT(surface->roughness, 0.0f);
     }
   }
   EXPECT_TRUE(giant);

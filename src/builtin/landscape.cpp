@@ -273,29 +273,29 @@ LandscapeTextures LandscapePlanner::addTextures() {
 
 void LandscapePlanner::addMaterials(const LandscapeTextures& tex) {
   auto material = [&](const char* name, Vec3f colour, int32_t texture = kNoTexture,
-                      bool alphaCutout = false, float roughness = 0.9f) {
-    return addDiffuseMaterial(plan_, name, colour, texture, alphaCutout, roughness);
+                      bool alphaCutout = false) {
+    return addDiffuseMaterial(plan_, name, colour, texture, alphaCutout);
   };
   LandscapeMaterials& mat = mat_;
   mat.terrain = material("landscape-ground", Vec3f(1), tex.terrain);
   mat.oakBark = material("oak-bark", Vec3f(1), tex.oakBark);
   mat.birchBark = material("birch-bark", Vec3f(1), tex.birchBark);
   mat.pineBark = material("pine-bark", Vec3f(1), tex.pineBark);
-  mat.oakLeaves = {material("oak-leaves", Vec3f(1), tex.oakLeaves, true, 0.6f),
-                   material("oak-leaves-dark", Vec3f(0.7f), tex.oakLeaves, true, 0.6f),
-                   material("autumn-leaves", Vec3f(1), tex.autumnLeaves, true, 0.6f)};
-  mat.birchLeaves = material("birch-leaves", Vec3f(1), tex.birchLeaves, true, 0.6f);
-  mat.needles = material("pine-needles", Vec3f(1), tex.needles, true, 0.7f);
-  mat.shrubLeaves = material("shrub-leaves", Vec3f(1), tex.shrubLeaves, true, 0.6f);
-  mat.fern = material("fern", Vec3f(1), tex.fern, true, 0.7f);
-  mat.grass = material("grass", Vec3f(1), tex.blade, false, 0.7f);
+  mat.oakLeaves = {material("oak-leaves", Vec3f(1), tex.oakLeaves, true),
+                   material("oak-leaves-dark", Vec3f(0.7f), tex.oakLeaves, true),
+                   material("autumn-leaves", Vec3f(1), tex.autumnLeaves, true)};
+  mat.birchLeaves = material("birch-leaves", Vec3f(1), tex.birchLeaves, true);
+  mat.needles = material("pine-needles", Vec3f(1), tex.needles, true);
+  mat.shrubLeaves = material("shrub-leaves", Vec3f(1), tex.shrubLeaves, true);
+  mat.fern = material("fern", Vec3f(1), tex.fern, true);
+  mat.grass = material("grass", Vec3f(1), tex.blade);
   mat.stem = material("flower-stem", {0.07f, 0.2f, 0.04f});
-  mat.petals = {material("petal-white", {0.95f, 0.95f, 0.93f}, tex.petal, true, 0.6f),
-                material("petal-yellow", {1.0f, 0.82f, 0.15f}, tex.petal, true, 0.6f),
-                material("petal-purple", {0.5f, 0.2f, 0.75f}, tex.petal, true, 0.6f),
-                material("petal-red", {0.9f, 0.1f, 0.08f}, tex.petal, true, 0.6f)};
+  mat.petals = {material("petal-white", {0.95f, 0.95f, 0.93f}, tex.petal, true),
+                material("petal-yellow", {1.0f, 0.82f, 0.15f}, tex.petal, true),
+                material("petal-purple", {0.5f, 0.2f, 0.75f}, tex.petal, true),
+                material("petal-red", {0.9f, 0.1f, 0.08f}, tex.petal, true)};
   mat.flowerCentre = material("flower-centre", {0.85f, 0.6f, 0.05f});
-  mat.rock = material("rock", Vec3f(1), tex.rock, false, 0.8f);
+  mat.rock = material("rock", Vec3f(1), tex.rock);
   mat.logWood = material("log", {0.8f, 0.75f, 0.7f}, tex.oakBark);
 }
 

@@ -57,13 +57,12 @@ uint64_t ScenePlan::instanceCount() const {
 }
 
 int32_t addDiffuseMaterial(ScenePlan& plan, const std::string& name, Vec3f colour, int32_t texture,
-                           bool alphaCutout, float roughness) {
+                           bool alphaCutout) {
   Material m;
   m.name = name;
   m.baseColor = colour;
   m.baseColorTexture = texture;
   m.alphaTexture = alphaCutout ? texture : kNoTexture;
-  m.roughness = roughness;
   return plan.addMaterial(m);
 }
 

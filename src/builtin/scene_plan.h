@@ -82,8 +82,7 @@ struct ScenePlan {
 // A Lambertian material, its colour multiplied by `texture` when one is
 // given, and cut out where the texture's alpha is low if `alphaCutout`.
 int32_t addDiffuseMaterial(ScenePlan& plan, const std::string& name, Vec3f colour,
-                           int32_t texture = kNoTexture, bool alphaCutout = false,
-                           float roughness = 0.9f);
+                           int32_t texture = kNoTexture, bool alphaCutout = false);
 
 // Daylight: a sun of the real sun's size and clear-day irradiance towards
 // `towardsSun` (any length), and a sky of unit scale fading from `zenith` to

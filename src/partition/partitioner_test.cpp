@@ -7,7 +7,9 @@
 #include <array>
 #include <bit>
 #include <map>
+#include <string>
 #include <tuple>
+#include <vector>
 
 #include "builtin/builtin.h"
 #include "core/error.h"
@@ -37,6 +39,15 @@ const char* const kIsland = "builtin:island?scale=0.05";
 const char* const kLandscape = "builtin:landscape?scale=0.05";
 const char* const kCornell = "builtin:cornell";
 
+// A material model's name and parameters, as a hash.
+uint64_t modelHash(const MaterialModel& model) {
+  MaterialRecordWriter record;
+  model.write(record);
+  std::string bytes(model.name());
+  bytes.append(record.bytes().begin(), record.bytes().end());
+  return hash64(bytes.data(), bytes.size());
+}
+
 // Every triangle of the scene as placed in the world, with what shades it
 // (the transform, the material's values, the vertex data), as a hash, summed
 // into an order-independent fingerprint of the multiset (count and two sums
@@ -47,6 +58,7 @@ std::array<uint64_t, 3> placedTriangles(const Scene& scene) {
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
     const Mesh& mesh = scene.meshes[m];
     const Material& mat = scene.materials[mesh.material];
+    const uint64_t model = modelHash(*mat.model);
     for (const Vec3i& tri : mesh.indices) {
       std::vector<float> r;
       for (int v = 0; v < 3; ++v) {
@@ -56,10 +68,11 @@ std::array<uint64_t, 3> placedTriangles(const Scene& scene) {
         for (int i = 0; i < 2; ++i) r.push_back(mesh.uvs.empty() ? -9.0f : mesh.uvs[tri[v]][i]);
       }
       r.push_back(float(mesh.material));
-      r.push_back(mat.emission.x + mat.baseColor.y + mat.roughness);
+      r.push_back(mat.emission.x + mat.baseColor.y);
       r.push_back(float(mat.alphaTexture));
       r.push_back(float(mat.baseColorTexture));
-      perMesh[m].push_back(hash64(r.data(), r.size() * sizeof(float)));
+      const uint64_t h[2] = {hash64(r.data(), r.size() * sizeof(float)), model};
+      perMesh[m].push_back(hash64(h, sizeof(h)));
     }
   }
   std::array<uint64_t, 3> out{0, 0, 0};

@@ -9,6 +9,8 @@
 #include <cstring>
 #include <memory>
 
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
 #include "render/render_test_util.h"
 
 namespace ferry {
@@ -65,14 +67,13 @@ Scene busyScene() {
   Material glass;
   glass.name = "glass";
   glass.baseColor = Vec3f(1);
-  glass.transmission = 1;
-  glass.roughness = 0;
+  glass.model = std::make_shared<DielectricModel>(1.5f, 0.0f);
   scene.addSingleInstanceMesh(
       makeSphere({0.4f, 0.5f, 0.3f}, 0.5f, 16, 32, scene.addMaterial(glass), true));
 
   Material frosted = glass;
   frosted.name = "frosted";
-  frosted.roughness = 0.4f;
+  frosted.model = std::make_shared<DielectricModel>(1.5f, 0.4f);
   frosted.baseColor = {0.9f, 0.95f, 1};
   scene.addSingleInstanceMesh(
       makeSphere({-0.6f, 0.35f, 0.8f}, 0.35f, 12, 24, scene.addMaterial(frosted)));
@@ -80,8 +81,7 @@ Scene busyScene() {
   Material metal;
   metal.name = "metal";
   metal.baseColor = {0.95f, 0.7f, 0.4f};
-  metal.metallic = 1;
-  metal.roughness = 0.3f;
+  metal.model = std::make_shared<ConductorModel>(0.3f);
   scene.addSingleInstanceMesh(
       makeSphere({1.3f, 0.4f, -0.4f}, 0.4f, 12, 24, scene.addMaterial(metal), true));
 

@@ -2,14 +2,15 @@
 // a plane of paint.bsdf under a white sky, direct light only, seen from one
 // direction through a narrow camera, renders the table's directional albedo
 // for that direction (estimated independently from the BSDF's own samples).
-// Checks the wiring from Material::bsdfTable through shading, the frame's
+// Checks the wiring from a material's FourierModel through shading, the frame's
 // orientation and the light samples' use of eval().
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
 #include "io/pbrt/fourier_bsdf_file.h"
-#include "render/bsdf.h"
+#include "material/bsdf.h"
+#include "material/models/fourier.h"
 #include "render/render_test_util.h"
 
 namespace ferry {
@@ -24,7 +25,7 @@ TEST(FourierRender, APaintedPlaneUnderAWhiteSkyShowsTheTablesAlbedo) {
   Scene scene;
   scene.bsdfTables.push_back(readFourierBsdfFile(path.string()));
   Material paint = diffuseMaterial(Vec3f(0.5f));
-  paint.bsdfTable = 0;
+  paint.model = std::make_shared<FourierModel>(0);
   const int32_t m = scene.addMaterial(paint);
   scene.addSingleInstanceMesh(makeQuad({-50, 0, 50}, {100, 0, 0}, {0, 0, -100}, m));
   // Looking down at 50 degrees from the normal, 1-degree field of view.
@@ -37,7 +38,7 @@ TEST(FourierRender, APaintedPlaneUnderAWhiteSkyShowsTheTablesAlbedo) {
 
   // The albedo for wo = the direction to the camera, in the shading frame
   // (z the normal): the mean of the sampled weights over the upper hemisphere.
-  const Bsdf bsdf = Bsdf::fourier(*scene.bsdfTables[0]);
+  const Bsdf bsdf = fourierBsdf(*scene.bsdfTables[0]);
   const Vec3f wo{0, std::sin(theta), std::cos(theta)};
   TestRng rng(3);
   MeanVariance albedo[3];

@@ -20,6 +20,8 @@
 
 #include <cstdio>
 
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
 #include "render/render_test_util.h"
 
 namespace ferry {
@@ -107,14 +109,11 @@ TEST(Furnace, LosslessSpheresAreInvisible) {
   Material glass;
   glass.name = "glass";
   glass.baseColor = Vec3f(1);
-  glass.transmission = 1;
-  glass.roughness = 0;
-  glass.ior = 1.5f;
+  glass.model = std::make_shared<DielectricModel>(1.5f, 0.0f);
   Material mirror;
   mirror.name = "mirror";
   mirror.baseColor = Vec3f(1);
-  mirror.metallic = 1;
-  mirror.roughness = 0;
+  mirror.model = std::make_shared<ConductorModel>(0.0f);
   for (const Material& m : {glass, mirror}) {
     // Glass gets smooth normals: in a faceted glass sphere, rays entering
     // near the silhouette get trapped by total internal reflection between
@@ -122,7 +121,7 @@ TEST(Furnace, LosslessSpheresAreInvisible) {
     // the depth limit at work, not lost energy. The mirror stays flat: with
     // smooth normals, reflections about the shading normal that point below
     // the facet are (rightly) dropped, a known shading-normal loss.
-    Scene scene = sphereInEnvironment(m, 40, m.transmission > 0);
+    Scene scene = sphereInEnvironment(m, 40, m.model->name() == "dielectric");
     RenderSettings s;
     s.width = s.height = 32;
     s.samplesPerPixel = 4;

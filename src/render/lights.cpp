@@ -5,7 +5,7 @@
 #include <cstring>
 
 #include "core/hash64.h"
-#include "render/bsdf.h"
+#include "material/bsdf.h"
 
 namespace ferry {
 namespace {

@@ -13,6 +13,8 @@
 #include <cstdio>
 #include <memory>
 
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
 #include "render/render_test_util.h"
 #include "render/surface.h"
 #include "scene/light_scene.h"
@@ -37,8 +39,7 @@ Material roughMetal(float roughness) {
   Material m;
   m.name = "metal";
   m.baseColor = {0.9f, 0.7f, 0.5f};
-  m.metallic = 1;
-  m.roughness = roughness;
+  m.model = std::make_shared<ConductorModel>(roughness);
   return m;
 }
 
@@ -290,8 +291,7 @@ Scene lampInFrostedGlass() {
   Material frosted;
   frosted.name = "frosted";
   frosted.baseColor = Vec3f(1);
-  frosted.transmission = 1;
-  frosted.roughness = 0.4f;
+  frosted.model = std::make_shared<DielectricModel>(1.5f, 0.4f);
   scene.addSingleInstanceMesh(
       makeSphere({0, 1.2f, 0}, 0.5f, 16, 32, scene.addMaterial(frosted), true));
   scene.addSingleInstanceMesh(

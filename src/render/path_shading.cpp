@@ -322,7 +322,7 @@ Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u,
                           ? surface.baseColor
                           : materialBaseColor(scene_, *material, surface.uv, surface.position);
   chosen = material;
-  return Bsdf::fromMaterial(*material, color, scene_.bsdfTableOf(*material));
+  return material->model->bsdf(color, scene_.materialResources());
 }
 
 template <typename Path>
@@ -331,10 +331,9 @@ template <typename Path>
   const RandomStream random(RandomKey{randomPixel(vertex.pixel), sampleIndex, keyBounce, seed_});
   const SurfacePoint& surface = vertex.surface;
   const Material* chosen = surface.material;
-  const Bsdf bsdf =
-      chosen->mixedWith < 0
-          ? Bsdf::fromMaterial(*chosen, surface.baseColor, scene_.bsdfTableOf(*chosen))
-          : mixedBsdf(surface, random(RandomDim::MaterialSelect), chosen);
+  const Bsdf bsdf = chosen->mixedWith < 0
+                        ? chosen->model->bsdf(surface.baseColor, scene_.materialResources())
+                        : mixedBsdf(surface, random(RandomDim::MaterialSelect), chosen);
   Vec3f ng = surface.geometricNormal, ns = surface.shadingNormal;
   // The mix picked another material: the normal is bent by its map (or by
   // none), not by the first material's.

@@ -20,8 +20,8 @@
 
 #include "core/math.h"
 #include "core/random.h"
+#include "material/bsdf.h"
 #include "path/path.h"
-#include "render/bsdf.h"
 #include "render/camera.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"

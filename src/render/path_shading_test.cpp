@@ -4,6 +4,7 @@
 // limit and the two-sided rule; and the shadow ray's tmax against the
 // emitter's plane along the direction as stored.
 #include "render/path_shading.h"
+#include "material/models/conductor.h"
 #include "trace/embree_backend.h"
 
 #include <gtest/gtest.h>
@@ -37,8 +38,7 @@ struct ShadingScene {
     const int32_t diffuse = scene.addMaterial(diffuseMaterial({0.5f, 0.6f, 0.7f}));
     Material mirror;
     mirror.name = "mirror";
-    mirror.metallic = 1;
-    mirror.roughness = 0;
+    mirror.model = std::make_shared<ConductorModel>(0.0f);
     const int32_t mirrorId = scene.addMaterial(mirror);
     Material panel = diffuseMaterial({0.1f, 0.1f, 0.1f});
     panel.emission = emission;

@@ -13,8 +13,8 @@
 
 #include "builtin/builtin.h"
 #include "core/random.h"
+#include "material/bsdf.h"
 #include "path/path.h"
-#include "render/bsdf.h"
 #include "render/camera.h"
 #include "render/surface.h"
 #include "scene/scene.h"

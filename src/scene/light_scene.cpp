@@ -21,8 +21,9 @@ Scene lightScene(const Scene& scene) {
       if (material < 0) {
         Material mat = scene.materials[source.material];
         for (int32_t* t : mat.textureSlots()) *t = kNoTexture;
-        mat.bsdfTable = kNoBsdfTable;  // the light scene holds no tables
-        mat.mixedWith = -1;            // emission is the mesh's own material's
+        mat.model = withBsdfTablesRenumbered(  // the light scene holds no tables
+            mat.model, [](int32_t) { return kNoBsdfTable; });
+        mat.mixedWith = -1;  // emission is the mesh's own material's
         material = out.addMaterial(std::move(mat));
       }
       Mesh mesh;

@@ -1,6 +1,6 @@
 #include "scene/memory_cost.h"
 
-#include "scene/fourier_bsdf_table.h"
+#include "material/fourier_bsdf_table.h"
 
 #include "core/math.h"
 #include "scene/scene.h"

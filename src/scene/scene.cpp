@@ -121,10 +121,11 @@ void Scene::validate() const {
   };
   for (const Material& m : materials) {
     for (int32_t t : m.textures()) checkTexture(t, "material '" + m.name + "'");
-    if (m.bsdfTable != kNoBsdfTable &&
-        (m.bsdfTable < 0 || size_t(m.bsdfTable) >= bsdfTables.size()))
-      fail(fmt::format("material '{}' refers to BSDF table {} of {}", m.name, m.bsdfTable,
-                       bsdfTables.size()));
+    if (!m.model) fail(fmt::format("material '{}' has no model", m.name));
+    if (const int32_t t = m.bsdfTable();
+        t != kNoBsdfTable && (t < 0 || size_t(t) >= bsdfTables.size()))
+      fail(
+          fmt::format("material '{}' refers to BSDF table {} of {}", m.name, t, bsdfTables.size()));
     if (m.mixedWith != -1 && (m.mixedWith < 0 || size_t(m.mixedWith) >= materials.size()))
       fail(fmt::format("material '{}' mixes with material {} of {}", m.name, m.mixedWith,
                        materials.size()));
@@ -132,7 +133,7 @@ void Scene::validate() const {
       fail(fmt::format("material '{}' has a mix amount {} outside [0, 1]", m.name, m.mixAmount));
     if (m.alphaTexture != kNoTexture && textures[m.alphaTexture].isSolid())
       fail(fmt::format("material '{}': a solid texture cannot be a cut-out", m.name));
-    if (!isFinite(m.baseColor) || !isFinite(m.emission) || !std::isfinite(m.ior))
+    if (!isFinite(m.baseColor) || !isFinite(m.emission))
       fail(fmt::format("material '{}' has a non-finite parameter", m.name));
   }
   for (const Material& m : materials) {

@@ -16,22 +16,24 @@
 
 #include "core/math.h"
 #include "core/shared_array.h"
-#include "scene/fourier_bsdf_table.h"
+#include "material/fourier_bsdf_table.h"
+#include "material/material_model.h"
 #include "scene/texture.h"
 
 namespace ferry {
 
 constexpr int32_t kNoTexture = -1;
-constexpr int32_t kNoBsdfTable = -1;
 
+// A surface's material: what every surface has (colour and its texture,
+// emission, cut-out, bump or normal map, mix) and how it scatters light, its
+// model (material/material_model.h: diffuse, conductor, dielectric, ...).
 struct Material {
   std::string name;
+  // The model's colour (a diffuse albedo, a conductor's reflectance, a
+  // glass's tint) times its texture.
   Vec3f baseColor{0.8f, 0.8f, 0.8f};
-  int32_t baseColorTexture = kNoTexture;  // multiplies baseColor
-  float roughness = 1.0f;                 // 0: perfectly smooth (delta), 1: very rough
-  float metallic = 0.0f;                  // 1: conductor with baseColor as reflectance
-  float transmission = 0.0f;              // 1: dielectric (glass), refracting with ior
-  float ior = 1.5f;
+  int32_t baseColorTexture = kNoTexture;
+  std::shared_ptr<const MaterialModel> model = defaultMaterialModel();  // never null
   Vec3f emission{0, 0, 0};            // radiance leaving the surface
   int32_t alphaTexture = kNoTexture;  // cut-out: texel alpha < alphaCutoff is a hole
   float alphaCutoff = 0.5f;
@@ -39,49 +41,23 @@ struct Material {
   // glTF), or only the side its winding normal faces (pbrt's area lights
   // unless "twosided": the loader orients the winding as pbrt would).
   bool emitsBackSide = true;
-  // A glossy dielectric coat over a diffuse base (pbrt-v3 plastic, uber's Ks,
-  // substrate, pbrt-v4 coateddiffuse): its reflectance tint (0: no coat), its
-  // roughness (Ferry's: GGX alpha = roughness^2) and the relative index of
-  // refraction its Fresnel term uses (render/bsdf.h, Bsdf::plastic).
-  Vec3f specular{0, 0, 0};
-  float specularRoughness = 0.3f;
-  float specularEta = 1.5f;
-  // Additive: base + coat, as pbrt-v3's plastic (not energy conserving);
-  // Layered: the base seen through the coat, times (1 - F) on the way in and
-  // out; FresnelBlend: pbrt-v3's substrate (Ashikhmin-Shirley), whose coat
-  // reflects `specular` at normal incidence (Schlick) and whose base fades as
-  // the coat reflects more (specularEta unused).
-  enum class Coat : uint8_t { Additive, Layered, FresnelBlend };
-  Coat coat = Coat::Additive;
-  // Oren-Nayar roughness of a diffuse base, in degrees (pbrt's matte
-  // "sigma"); 0 is Lambertian.
-  float sigma = 0;
   // Shading-normal perturbation (render/surface.h), in uv space: a bump map
-  // (pbrt's "bumpmap": a displacement along the normal of bumpScale times
-  // the texture's grey value, in world units) or a tangent-space normal map
-  // (glTF's normalTexture: RGB in [0, 1] -> [-1, 1], x and y times
-  // normalScale; x along +u, y along +v).
+  // (a displacement along the normal of bumpScale times the texture's grey
+  // value, in world units) or a tangent-space normal map (RGB in [0, 1] ->
+  // [-1, 1], x and y times normalScale; x along +u, y along +v).
   int32_t bumpTexture = kNoTexture;
   float bumpScale = 1;
   int32_t normalTexture = kNoTexture;
   float normalScale = 1;
   // pbrt's mix: at each shading point, materials[mixedWith] is used instead
-  // of this one with probability mixAmount, chosen by the vertex's random
-  // numbers (a pure function of the pixel sample, as pbrt-v4 picks one by a
-  // hash); -1: not a mix. Chains are allowed, cycles are not (validate).
+  // of this one with probability mixAmount, a pure function of the pixel
+  // sample; -1: not a mix. Chains are allowed, cycles are not (validate).
   int32_t mixedWith = -1;
   float mixAmount = 0;
-  // pbrt-v3's fourier material: an index into Scene::bsdfTables (kNoBsdfTable:
-  // none). The table is the whole BSDF: the parameters above other than
-  // emission, the cut-out and the bump or normal map are then unused.
-  int32_t bsdfTable = kNoBsdfTable;
-  // Diffuse transmission (pbrt-v4's diffusetransmission, pbrt-v3's
-  // translucent): light passing through a thin sheet (a leaf, paper) leaves
-  // the other side cosine-distributed with this albedo; the base colour is
-  // then the sheet's diffuse reflectance. 0: opaque.
-  Vec3f transmittance{0, 0, 0};
 
   bool isEmissive() const { return maxComponent(emission) > 0; }
+  // The tabulated BSDF its model reads (Scene::bsdfTables), or kNoBsdfTable.
+  int32_t bsdfTable() const { return model->bsdfTable(); }
   // Every texture index the material holds (kNoTexture where unused), for
   // code that keeps, drops or renumbers textures with their materials.
   std::array<int32_t*, 4> textureSlots() {
@@ -195,7 +171,7 @@ struct Scene {
   std::vector<Instance> instances;
   std::vector<Material> materials;
   std::vector<Texture> textures;
-  // Tabulated BSDFs (Material::bsdfTable); shared, as several materials and
+  // Tabulated BSDFs (Material::bsdfTable()); shared, as several materials and
   // copies of the scene may name one. Released ones are null.
   std::vector<std::shared_ptr<const FourierBsdfTable>> bsdfTables;
   std::vector<SunLight> suns;
@@ -261,13 +237,11 @@ struct Scene {
   template <typename Visit>
   void forEachShadingBsdfTable(int32_t material, Visit&& visit) const {
     forEachShadingMaterial(material, [&](int32_t m) {
-      if (materials[size_t(m)].bsdfTable != kNoBsdfTable) visit(materials[size_t(m)].bsdfTable);
+      if (const int32_t t = materials[size_t(m)].bsdfTable(); t != kNoBsdfTable) visit(t);
     });
   }
-  // The table material `m` names, or null.
-  const FourierBsdfTable* bsdfTableOf(const Material& m) const {
-    return m.bsdfTable == kNoBsdfTable ? nullptr : bsdfTables[size_t(m.bsdfTable)].get();
-  }
+  // What material models read besides their parameters.
+  MaterialResources materialResources() const { return {bsdfTables}; }
   void validate() const;
   // Mesh::reserveVertexSlack for every mesh (a copy only where a loader left none).
   void reserveVertexSlack();

@@ -24,6 +24,7 @@
 #include "io/gltf/gltf_specular_layers.h"
 #include "io/images/image_io.h"
 #include "io/light_emitters.h"
+#include "material/metallic_roughness.h"
 
 namespace ferry {
 namespace {
@@ -1015,8 +1016,6 @@ class GltfBuilder {
       // rough metal is a poor grey; use a grey diffuse, as viewers do.
       m.name = "default";
       m.baseColor = Vec3f(0.8f);
-      m.roughness = 1;
-      m.metallic = 0;
       info.material = scene_.addMaterial(m);
       return materials_.emplace(index, info).first->second;
     }
@@ -1044,16 +1043,18 @@ class GltfBuilder {
     float alphaFactor = pbr.baseColorFactor.size() == 4 ? float(pbr.baseColorFactor[3]) : 1.0f;
     m.baseColor = min(max(base, Vec3f(0)), Vec3f(1));
     m.baseColorTexture = textureFor(baseColorRef.index, "baseColor", true);
-    m.metallic = std::clamp(float(pbr.metallicFactor), 0.0f, 1.0f);
-    m.roughness = std::clamp(float(pbr.roughnessFactor), 0.0f, 1.0f);
+    MetallicRoughness surface;
+    surface.metallic = std::clamp(float(pbr.metallicFactor), 0.0f, 1.0f);
+    surface.roughness = std::clamp(float(pbr.roughnessFactor), 0.0f, 1.0f);
     const Vec4f metallicRoughness =
         meanOf(metallicRoughnessRef, "metallicRoughness", false, m.name);
-    m.roughness *= metallicRoughness.y;
-    m.metallic *= metallicRoughness.z;
+    surface.roughness *= metallicRoughness.y;
+    surface.metallic *= metallicRoughness.z;
 
-    readTransmission(values, extensions, m);
-    const float ior = readIor(values, extensions, m);
-    readSpecularLayers(values, extensions, ior, m);
+    readTransmission(values, extensions, m.name, surface);
+    const float ior = readIor(values, extensions, surface);
+    readSpecularLayers(values, extensions, ior, m.name, surface);
+    m.model = modelOf(surface);
     readNormalMap(values, g.normalTexture, normalRef, m);
     if (g.occlusionTexture.index >= 0)
       warnings_.once("occlusion", fmt::format("{}: occlusion textures are ignored (a path tracer "
@@ -1109,74 +1110,76 @@ class GltfBuilder {
   }
 
   // KHR_materials_transmission: the factor times the mean of the texture's
-  // red channel. Ferry's dielectric takes over at 0.5 (render/bsdf.h).
+  // red channel. Ferry's dielectric takes over at 0.5
+  // (material/metallic_roughness.h).
   void readTransmission(const GltfMaterialValues& values, const nlohmann::json& extensions,
-                        Material& m) {
+                        const std::string& material, MetallicRoughness& surface) {
     const char* what = "KHR_materials_transmission";
     const nlohmann::json* e = values.extension(extensions, what);
     if (!e) return;
-    m.transmission = values.number(*e, what, "transmissionFactor", 0, 0, 1);
-    m.transmission *=
-        meanOf(values.texture(*e, what, "transmissionTexture"), "transmission", false, m.name).x;
+    surface.transmission = values.number(*e, what, "transmissionFactor", 0, 0, 1);
+    surface.transmission *=
+        meanOf(values.texture(*e, what, "transmissionTexture"), "transmission", false, material).x;
   }
 
   // KHR_materials_ior: 0 or at least 1. The ior refracts (transmission) and
   // sets the specular layer's Fresnel term. 0 is the spec's legacy value
   // (F0 = 1, the specular colour is the reflectance): it has no refraction,
   // so a transmitting material keeps 1.5.
-  float readIor(const GltfMaterialValues& values, const nlohmann::json& extensions, Material& m) {
+  float readIor(const GltfMaterialValues& values, const nlohmann::json& extensions,
+                MetallicRoughness& surface) {
     const char* what = "KHR_materials_ior";
     const nlohmann::json* e = values.extension(extensions, what);
     if (!e) return 1.5f;
     const float ior = values.number(*e, what, "ior", 1.5f);
     if (!(ior == 0 || ior >= 1))
       values.fail(fmt::format("{} ior is {}: must be 0 or at least 1", what, ior));
-    if (ior >= 1) m.ior = ior;
+    if (ior >= 1) surface.ior = ior;
     return ior;
   }
 
   // The dielectric specular layer glTF puts over every non-metallic base
   // (KHR_materials_ior, KHR_materials_specular) and KHR_materials_clearcoat,
   // as Ferry's layered coat (io/gltf/gltf_specular_layers.h says how). Metals
-  // stay conductors, which have no coat: a clear coat on one is dropped.
+  // stay bare conductors: a clear coat on one is dropped.
   void readSpecularLayers(const GltfMaterialValues& values, const nlohmann::json& extensions,
-                          float ior, Material& m) {
+                          float ior, const std::string& material, MetallicRoughness& surface) {
     GltfSpecularLayers layers;
     layers.ior = ior;
-    layers.roughness = m.roughness;
+    layers.roughness = surface.roughness;
     if (const nlohmann::json* e = values.extension(extensions, "KHR_materials_specular")) {
       const char* what = "KHR_materials_specular";
       layers.specularFactor = values.number(*e, what, "specularFactor", 1, 0, 1);
       layers.specularFactor *=
-          meanOf(values.texture(*e, what, "specularTexture"), "specular", false, m.name).w;
+          meanOf(values.texture(*e, what, "specularTexture"), "specular", false, material).w;
       // The colour may exceed 1: F0 = min(F0(ior) * colour, 1).
       const Vec3f color = values.color(*e, what, "specularColorFactor", Vec3f(1), 0,
                                        std::numeric_limits<float>::max());
       layers.specularColor = color * meanOf(values.texture(*e, what, "specularColorTexture"),
-                                            "specularColor", true, m.name)
+                                            "specularColor", true, material)
                                          .xyz();
     }
     if (const nlohmann::json* e = values.extension(extensions, "KHR_materials_clearcoat")) {
       const char* what = "KHR_materials_clearcoat";
       layers.clearcoat = values.number(*e, what, "clearcoatFactor", 0, 0, 1);
       layers.clearcoat *=
-          meanOf(values.texture(*e, what, "clearcoatTexture"), "clearcoat", false, m.name).x;
+          meanOf(values.texture(*e, what, "clearcoatTexture"), "clearcoat", false, material).x;
       layers.clearcoatRoughness = values.number(*e, what, "clearcoatRoughnessFactor", 0, 0, 1);
       layers.clearcoatRoughness *= meanOf(values.texture(*e, what, "clearcoatRoughnessTexture"),
-                                          "clearcoatRoughness", false, m.name)
+                                          "clearcoatRoughness", false, material)
                                        .y;
       if (values.texture(*e, what, "clearcoatNormalTexture").present())
         warnings_.once("clearcoat normal",
                        fmt::format("{}: clearcoatNormalTexture is ignored (Ferry's coat uses the "
                                    "material's normal; first: material \"{}\")",
-                                   path_, m.name));
+                                   path_, material));
     }
-    if (m.metallic >= 0.5f) {
+    if (surface.metallic >= 0.5f) {
       if (layers.clearcoat > 0)
         warnings_.once("clearcoat metal",
                        fmt::format("{}: a clear coat on a metallic material is dropped (Ferry's "
                                    "conductor has no coat; first: material \"{}\")",
-                                   path_, m.name));
+                                   path_, material));
       return;
     }
     if (layers.clearcoat > 0)
@@ -1184,12 +1187,12 @@ class GltfBuilder {
                      fmt::format("{}: KHR_materials_clearcoat: Ferry has one coat, the clear coat "
                                  "and the specular layer under it mixed by clearcoatFactor "
                                  "(first: material \"{}\")",
-                                 path_, m.name));
+                                 path_, material));
     const FerryCoat coat = ferryCoatOf(layers);
-    m.coat = Material::Coat::Layered;
-    m.specular = coat.tint;
-    m.specularRoughness = coat.roughness;
-    m.specularEta = coat.eta;
+    surface.coat = coat.tint;
+    surface.coatRoughness = coat.roughness;
+    surface.coatEta = coat.eta;
+    surface.coatLayered = true;
   }
 
   // normalTexture: a tangent-space normal map, its texels kept as they are

@@ -15,7 +15,10 @@
 
 #include "core/error.h"
 #include "io/images/image_io.h"
-#include "render/bsdf.h"
+#include "material/bsdf.h"
+#include "material/models/coated_diffuse.h"
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
 
 namespace ferry {
 namespace {
@@ -26,6 +29,12 @@ const fs::path kCorpus = fs::path(FERRY_SOURCE_DIR) / "tests" / "corpus" / "gltf
 
 std::string corpus(const std::string& name) {
   return (kCorpus / name).string();
+}
+
+// The material's model if it is a T, else null.
+template <class T>
+const T* modelAs(const Material& m) {
+  return dynamic_cast<const T*>(m.model.get());
 }
 
 Scene load(const std::string& name, std::vector<std::string>* warnings = nullptr) {
@@ -82,16 +91,19 @@ void expectCorpusScene(const Scene& s) {
   const Material& masked = material(s, "masked");
   ASSERT_NE(masked.baseColorTexture, kNoTexture);
   EXPECT_EQ(masked.alphaTexture, masked.baseColorTexture);
-  EXPECT_FLOAT_EQ(masked.roughness, 0.8f);
+  // A dielectric base: the specular layer takes the material's roughness.
+  const auto* maskedCoat = modelAs<CoatedDiffuseModel>(masked);
+  ASSERT_NE(maskedCoat, nullptr);
+  EXPECT_FLOAT_EQ(maskedCoat->roughness, 0.8f);
   const Texture& tex = s.textures[size_t(masked.baseColorTexture)];
   ASSERT_EQ(tex.width, 2);
   EXPECT_EQ(tex.wrap, WrapMode::Clamp);
   // glTF's v runs down the image: uv (0.25, 0.75) in Ferry is the top-left texel, red.
   EXPECT_GT(tex.sample({0.25f, 0.75f}).x, 0.99f);
   EXPECT_EQ(tex.sampleAlpha({0.75f, 0.75f}), 0.0f);  // top right: transparent green
-  const Material& glassMaterial = material(s, "glass");
-  EXPECT_EQ(glassMaterial.transmission, 1);
-  EXPECT_FLOAT_EQ(glassMaterial.ior, 1.33f);
+  const auto* glassModel = modelAs<DielectricModel>(material(s, "glass"));
+  ASSERT_NE(glassModel, nullptr);
+  EXPECT_FLOAT_EQ(glassModel->ior, 1.33f);
 
   // The emissive texture glows in its top-left texel only: of the glowing
   // quad's two triangles, the upper-left one emits most, orange.
@@ -337,12 +349,12 @@ TEST(GltfMaterials, DielectricBaseHasTheSpecsSpecularLayer) {
                          {{"baseColorFactor", {0.5, 0.2, 0.1, 1}},
                           {"metallicFactor", 0},
                           {"roughnessFactor", 0.4}}}}});
-  const Material& m = quadMaterial(s);
-  EXPECT_EQ(m.coat, Material::Coat::Layered);
-  EXPECT_EQ(m.specular, Vec3f(1));
-  EXPECT_FLOAT_EQ(m.specularRoughness, 0.4f);
-  EXPECT_EQ(m.specularEta, 1.5f);  // F0 0.04
-  EXPECT_EQ(Bsdf::fromMaterial(m, m.baseColor).kind(), Bsdf::Kind::Coated);
+  const auto* coat = modelAs<CoatedDiffuseModel>(quadMaterial(s));
+  ASSERT_NE(coat, nullptr);
+  EXPECT_TRUE(coat->layered);
+  EXPECT_EQ(coat->specular, Vec3f(1));
+  EXPECT_FLOAT_EQ(coat->roughness, 0.4f);
+  EXPECT_EQ(coat->eta, 1.5f);  // F0 0.04
 }
 
 TEST(GltfMaterials, MetalsStayConductorsWithoutACoat) {
@@ -352,9 +364,10 @@ TEST(GltfMaterials, MetalsStayConductorsWithoutACoat) {
                          {{"baseColorFactor", {1, 0.8, 0.3, 1}},
                           {"metallicFactor", 1},
                           {"roughnessFactor", 0.3}}}}});
-  const Material& m = quadMaterial(s);
-  EXPECT_EQ(m.specular, Vec3f(0));
-  EXPECT_EQ(Bsdf::fromMaterial(m, m.baseColor).kind(), Bsdf::Kind::RoughConductor);
+  // A bare (uncoated) conductor, rough.
+  const auto* metal = modelAs<ConductorModel>(quadMaterial(s));
+  ASSERT_NE(metal, nullptr);
+  EXPECT_FLOAT_EQ(metal->roughness, 0.3f);
 }
 
 TEST(GltfMaterials, IorRefractsAndSetsTheSpecularLayer) {
@@ -364,10 +377,18 @@ TEST(GltfMaterials, IorRefractsAndSetsTheSpecularLayer) {
                         {"extensions",
                          {{"KHR_materials_ior", {{"ior", 1.33}}},
                           {"KHR_materials_transmission", {{"transmissionFactor", 1}}}}}}});
-  const Material& m = quadMaterial(s);
-  EXPECT_FLOAT_EQ(m.ior, 1.33f);
-  EXPECT_FLOAT_EQ(m.specularEta, 1.33f);
-  EXPECT_EQ(Bsdf::fromMaterial(m, m.baseColor).kind(), Bsdf::Kind::SmoothDielectric);
+  // Transmitting: a smooth dielectric of that ior.
+  const auto* water = modelAs<DielectricModel>(quadMaterial(s));
+  ASSERT_NE(water, nullptr);
+  EXPECT_FLOAT_EQ(water->ior, 1.33f);
+  EXPECT_EQ(water->roughness, 0.0f);
+  // Opaque: the specular layer over the diffuse base has that ior.
+  s = file.load({{{"name", "wet"},
+                  {"pbrMetallicRoughness", {{"metallicFactor", 0}, {"roughnessFactor", 0}}},
+                  {"extensions", {{"KHR_materials_ior", {{"ior", 1.33}}}}}}});
+  const auto* coat = modelAs<CoatedDiffuseModel>(quadMaterial(s));
+  ASSERT_NE(coat, nullptr);
+  EXPECT_FLOAT_EQ(coat->eta, 1.33f);
 }
 
 TEST(GltfMaterials, LegacyIorZeroReflectsTheSpecularColour) {
@@ -378,9 +399,18 @@ TEST(GltfMaterials, LegacyIorZeroReflectsTheSpecularColour) {
                   {"extensions",
                    {{"KHR_materials_ior", {{"ior", 0}}},
                     {"KHR_materials_specular", {{"specularColorFactor", {0.5, 0.5, 0.5}}}}}}}});
-  const Material& m = quadMaterial(s);
-  EXPECT_EQ(m.ior, 1.5f);  // 0 has no refraction: the dielectric keeps the default
-  EXPECT_NEAR(m.specular.x * fresnelDielectric(1, m.specularEta), 0.5f, 1e-5f);
+  const auto* coat = modelAs<CoatedDiffuseModel>(quadMaterial(s));
+  ASSERT_NE(coat, nullptr);
+  EXPECT_NEAR(coat->specular.x * fresnelDielectric(1, coat->eta), 0.5f, 1e-5f);
+  // 0 has no refraction: a transmitting material keeps the default ior.
+  s = file.load({{{"name", "legacy glass"},
+                  {"pbrMetallicRoughness", {{"metallicFactor", 0}}},
+                  {"extensions",
+                   {{"KHR_materials_ior", {{"ior", 0}}},
+                    {"KHR_materials_transmission", {{"transmissionFactor", 1}}}}}}});
+  const auto* glass = modelAs<DielectricModel>(quadMaterial(s));
+  ASSERT_NE(glass, nullptr);
+  EXPECT_EQ(glass->ior, 1.5f);
 }
 
 TEST(GltfMaterials, TransmissionIsTheFactorTimesTheMeanOfItsTexture) {
@@ -394,8 +424,18 @@ TEST(GltfMaterials, TransmissionIsTheFactorTimesTheMeanOfItsTexture) {
                    {{"KHR_materials_transmission",
                      {{"transmissionFactor", 0.8}, {"transmissionTexture", {{"index", half}}}}}}}}},
                 &w);
-  EXPECT_FLOAT_EQ(quadMaterial(s).transmission, 0.4f);
+  // 0.8 * 0.5 = 0.4: below the dielectric's 0.5, an opaque (coated diffuse) surface.
+  EXPECT_NE(modelAs<CoatedDiffuseModel>(quadMaterial(s)), nullptr);
   EXPECT_TRUE(saidOnce(w, "transmission textures are averaged")) << ::testing::PrintToString(w);
+  // Red 1 and 128/255 (mean 0.75): 0.8 * 0.75 = 0.6, glass.
+  int most = file.texture(2, 1, {255, 9, 9, 255, 128, 9, 9, 255});
+  s = file.load(
+      {{{"name", "clearer"},
+        {"pbrMetallicRoughness", {{"metallicFactor", 0}}},
+        {"extensions",
+         {{"KHR_materials_transmission",
+           {{"transmissionFactor", 0.8}, {"transmissionTexture", {{"index", most}}}}}}}}});
+  EXPECT_NE(modelAs<DielectricModel>(quadMaterial(s)), nullptr);
 }
 
 TEST(GltfMaterials, SpecularFactorAndColourWithTheirTextures) {
@@ -414,15 +454,16 @@ TEST(GltfMaterials, SpecularFactorAndColourWithTheirTextures) {
                             {"specularTexture", {{"index", strength}}},
                             {"specularColorTexture", {{"index", color}}}}}}}}},
                       &w);
-  const Material& m = quadMaterial(s);
+  const auto* coat = modelAs<CoatedDiffuseModel>(quadMaterial(s));
+  ASSERT_NE(coat, nullptr);
   const float linear = srgbToLinear(188 / 255.0f);
   // F0 = 0.04 * colour * texture, times specularFactor * 0.5; the largest
   // channel (0.04 * linear) goes into eta, the rest into the tint.
-  EXPECT_NEAR(fresnelDielectric(1, m.specularEta), 0.04f * linear, 1e-5f);
-  EXPECT_NEAR(m.specular.x, 0.25f, 1e-6f);
-  EXPECT_NEAR(m.specular.y, 0.125f, 1e-6f);
-  EXPECT_NEAR(m.specular.z, 0.0625f, 1e-6f);
-  EXPECT_FLOAT_EQ(m.specularRoughness, 0.5f);
+  EXPECT_NEAR(fresnelDielectric(1, coat->eta), 0.04f * linear, 1e-5f);
+  EXPECT_NEAR(coat->specular.x, 0.25f, 1e-6f);
+  EXPECT_NEAR(coat->specular.y, 0.125f, 1e-6f);
+  EXPECT_NEAR(coat->specular.z, 0.0625f, 1e-6f);
+  EXPECT_FLOAT_EQ(coat->roughness, 0.5f);
   EXPECT_TRUE(saidOnce(w, "specular textures are averaged"));
   EXPECT_TRUE(saidOnce(w, "specularColor textures are averaged"));
 }
@@ -433,9 +474,10 @@ TEST(GltfMaterials, SpecularColourAboveOneRaisesF0) {
       {{{"name", "bright"},
         {"pbrMetallicRoughness", {{"metallicFactor", 0}}},
         {"extensions", {{"KHR_materials_specular", {{"specularColorFactor", {2, 2, 2}}}}}}}});
-  const Material& m = quadMaterial(s);
-  EXPECT_NEAR(fresnelDielectric(1, m.specularEta), 0.08f, 1e-5f);
-  EXPECT_NEAR(maxComponent(m.specular), 1, 1e-6f);  // never above 1: F reaches 1 at grazing
+  const auto* coat = modelAs<CoatedDiffuseModel>(quadMaterial(s));
+  ASSERT_NE(coat, nullptr);
+  EXPECT_NEAR(fresnelDielectric(1, coat->eta), 0.08f, 1e-5f);
+  EXPECT_NEAR(maxComponent(coat->specular), 1, 1e-6f);  // never above 1: F reaches 1 at grazing
 }
 
 TEST(GltfMaterials, ClearcoatBecomesTheCoat) {
@@ -447,11 +489,12 @@ TEST(GltfMaterials, ClearcoatBecomesTheCoat) {
                          {{"KHR_materials_clearcoat",
                            {{"clearcoatFactor", 1}, {"clearcoatRoughnessFactor", 0.1}}}}}}},
                       &w);
-  const Material& m = quadMaterial(s);
-  EXPECT_EQ(m.coat, Material::Coat::Layered);
-  EXPECT_EQ(m.specular, Vec3f(1));
-  EXPECT_EQ(m.specularEta, 1.5f);
-  EXPECT_FLOAT_EQ(m.specularRoughness, 0.1f);
+  const auto* coat = modelAs<CoatedDiffuseModel>(quadMaterial(s));
+  ASSERT_NE(coat, nullptr);
+  EXPECT_TRUE(coat->layered);
+  EXPECT_EQ(coat->specular, Vec3f(1));
+  EXPECT_EQ(coat->eta, 1.5f);
+  EXPECT_FLOAT_EQ(coat->roughness, 0.1f);
   EXPECT_TRUE(saidOnce(w, "Ferry has one coat")) << ::testing::PrintToString(w);
 }
 
@@ -470,12 +513,13 @@ TEST(GltfMaterials, ClearcoatTexturesAreAveragedAndMixed) {
                             {"clearcoatRoughnessTexture", {{"index", coat}}},
                             {"clearcoatNormalTexture", {{"index", coat}}}}}}}}},
                       &w);
-  const Material& m = quadMaterial(s);
+  const auto* mixed = modelAs<CoatedDiffuseModel>(quadMaterial(s));
+  ASSERT_NE(mixed, nullptr);
   // Clear coat 0.5 (tint 1, eta 1.5, roughness 0.1) mixed half and half
   // with the specular layer (tint 1, eta 1.5, roughness 0.9).
-  EXPECT_EQ(m.specular, Vec3f(1));
-  EXPECT_FLOAT_EQ(m.specularEta, 1.5f);
-  EXPECT_NEAR(m.specularRoughness, 0.5f, 1e-6f);
+  EXPECT_EQ(mixed->specular, Vec3f(1));
+  EXPECT_FLOAT_EQ(mixed->eta, 1.5f);
+  EXPECT_NEAR(mixed->roughness, 0.5f, 1e-6f);
   EXPECT_TRUE(saidOnce(w, "clearcoat textures are averaged")) << ::testing::PrintToString(w);
   EXPECT_TRUE(saidOnce(w, "clearcoatRoughness textures are averaged"));
   EXPECT_TRUE(saidOnce(w, "clearcoatNormalTexture is ignored"));
@@ -488,7 +532,7 @@ TEST(GltfMaterials, ClearcoatOnAMetalIsDropped) {
                         {"pbrMetallicRoughness", {{"metallicFactor", 1}}},
                         {"extensions", {{"KHR_materials_clearcoat", {{"clearcoatFactor", 1}}}}}}},
                       &w);
-  EXPECT_EQ(quadMaterial(s).specular, Vec3f(0));
+  EXPECT_NE(modelAs<ConductorModel>(quadMaterial(s)), nullptr);  // not a coated conductor
   EXPECT_TRUE(saidOnce(w, "a clear coat on a metallic material is dropped"));
 }
 

@@ -1,5 +1,5 @@
 // How glTF's specular layers become Ferry's one coat over a diffuse base
-// (Material::specular, specularRoughness, specularEta with Coat::Layered). At
+// (a layered CoatedDiffuseModel's specular, roughness and eta). At
 // normal incidence the coat reflects exactly glTF's specularFactor
 // min(F0 specularColor, 1), F0 from the ior; KHR_materials_clearcoat is mixed
 // into the same coat by clearcoatFactor (each layer exact at 0 and 1). The

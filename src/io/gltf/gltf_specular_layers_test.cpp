@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "render/bsdf.h"
+#include "material/bsdf.h"
 
 namespace ferry {
 namespace {

@@ -26,6 +26,7 @@
 #include "core/error.h"
 #include "io/default_lighting.h"
 #include "io/images/image_io.h"
+#include "material/metallic_roughness.h"
 
 namespace ferry {
 namespace {
@@ -873,24 +874,26 @@ class MaterialConverter {
     else if (r.mapKd)
       m.baseColor = Vec3f(1);
     if (has("Ke")) m.emission = max(color(v.emission, r.greyKe), Vec3f(0));
+    MetallicRoughness surface;
     if (has("Pr"))
-      m.roughness = std::clamp(float(v.roughness), 0.0f, 1.0f);
+      surface.roughness = std::clamp(float(v.roughness), 0.0f, 1.0f);
     else if (has("Ns"))
-      m.roughness = std::sqrt(2.0f / (std::max(float(v.shininess), 0.0f) + 2.0f));
+      surface.roughness = std::sqrt(2.0f / (std::max(float(v.shininess), 0.0f) + 2.0f));
     if (has("Pm")) {
-      m.metallic = std::clamp(float(v.metallic), 0.0f, 1.0f);
+      surface.metallic = std::clamp(float(v.metallic), 0.0f, 1.0f);
     } else if (illum == 3 || illum == 5) {
-      m.metallic = 1;
+      surface.metallic = 1;
       Vec3f ks = has("Ks") ? clamp01(color(v.specular, r.greyKs)) : Vec3f(0);
       if (maxComponent(ks) > 0) m.baseColor = ks;
     }
-    if (has("Ni") && v.ior >= 1) m.ior = float(v.ior);
+    if (has("Ni") && v.ior >= 1) surface.ior = float(v.ior);
     float transmission = 0;
     if (has("d") || has("Tr")) transmission = 1 - std::clamp(float(v.dissolve), 0.0f, 1.0f);
     if ((illum == 4 || illum == 6 || illum == 7) && has("Tf"))
       transmission =
           std::max(transmission, maxComponent(clamp01(color(v.transmittance, r.greyTf))));
-    m.transmission = transmission;
+    surface.transmission = transmission;
+    m.model = modelOf(surface);
     if (r.mapKd) m.baseColorTexture = textureFor(*r.mapKd, false);
     if (r.mapD) m.alphaTexture = textureFor(*r.mapD, true);
     return m;

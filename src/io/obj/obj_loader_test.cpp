@@ -14,6 +14,9 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
+#include "material/models/diffuse.h"
 
 namespace ferry {
 namespace {
@@ -51,6 +54,12 @@ const Material* findMaterial(const Scene& scene, const std::string& name) {
   for (const Material& m : scene.materials)
     if (m.name == name) return &m;
   return nullptr;
+}
+
+// The material's model if it is a T, else null.
+template <class T>
+const T* modelAs(const Material& m) {
+  return dynamic_cast<const T*>(m.model.get());
 }
 
 uint64_t totalTriangles(const Scene& scene) {
@@ -270,9 +279,10 @@ TEST(ObjLoader, CubeWithNormalsAndUvs) {
   const Material& red = scene.materials[0];
   EXPECT_EQ(red.name, "red");
   EXPECT_EQ(red.baseColor, Vec3f(0.8f, 0.1f, 0.1f));
-  EXPECT_NEAR(red.roughness, std::sqrt(2.0f / 100.0f), 1e-6f);
-  EXPECT_EQ(red.metallic, 0.0f);
-  EXPECT_EQ(red.transmission, 0.0f);
+  // Neither metallic nor transmitting: Lambertian (its Ns has no use).
+  const auto* diffuse = modelAs<DiffuseModel>(red);
+  ASSERT_NE(diffuse, nullptr);
+  EXPECT_EQ(diffuse->sigmaDegrees, 0.0f);
   EXPECT_FALSE(red.isEmissive());
 
   // No emitter: a sun and a grey environment, and a view that frames the cube.
@@ -347,21 +357,25 @@ TEST(ObjLoader, FeaturesMaterialsAndPolygons) {
   EXPECT_EQ(scene.meshes[0].material, 0);
 
   const Material* glass = findMaterial(scene, "glass");
-  EXPECT_EQ(glass->transmission, 1.0f);
-  EXPECT_EQ(glass->ior, 1.5f);
-  EXPECT_NEAR(glass->roughness, std::sqrt(2.0f / 1002.0f), 1e-6f);
-  EXPECT_EQ(glass->metallic, 0.0f);
+  ASSERT_TRUE(glass);
+  const auto* glassModel = modelAs<DielectricModel>(*glass);
+  ASSERT_NE(glassModel, nullptr);
+  EXPECT_EQ(glassModel->ior, 1.5f);
+  EXPECT_NEAR(glassModel->roughness, std::sqrt(2.0f / 1002.0f), 1e-6f);
   EXPECT_EQ(findMesh(scene, "other/glass")->material, glass - scene.materials.data());
 
   const Material* metal = findMaterial(scene, "metal");
-  EXPECT_EQ(metal->metallic, 1.0f);
+  ASSERT_TRUE(metal);
+  const auto* metalModel = modelAs<ConductorModel>(*metal);
+  ASSERT_NE(metalModel, nullptr);
   EXPECT_EQ(metal->baseColor, Vec3f(0.9f, 0.8f, 0.7f));  // Ks, as illum 3 says
-  EXPECT_NEAR(metal->roughness, std::sqrt(2.0f / 202.0f), 1e-6f);
-  EXPECT_EQ(metal->transmission, 0.0f);
+  EXPECT_NEAR(metalModel->roughness, std::sqrt(2.0f / 202.0f), 1e-6f);
 
   const Material* pbr = findMaterial(scene, "pbr");
-  EXPECT_NEAR(pbr->roughness, 0.3f, 1e-6f);  // Pr wins over Ns
-  EXPECT_EQ(pbr->metallic, 1.0f);
+  ASSERT_TRUE(pbr);
+  const auto* pbrModel = modelAs<ConductorModel>(*pbr);
+  ASSERT_NE(pbrModel, nullptr);
+  EXPECT_NEAR(pbrModel->roughness, 0.3f, 1e-6f);  // Pr wins over Ns
   EXPECT_EQ(pbr->baseColor, Vec3f(0.2f, 0.4f, 0.6f));
 
   const Material* clamped = findMaterial(scene, "clamped");
@@ -370,9 +384,12 @@ TEST(ObjLoader, FeaturesMaterialsAndPolygons) {
   EXPECT_EQ(scene.textures[size_t(clamped->baseColorTexture)].wrap, WrapMode::Clamp);
 
   const Material* dissolve = findMaterial(scene, "dissolve");
-  EXPECT_NEAR(dissolve->transmission, 0.75f, 1e-6f);  // 1 - d; Tf ignored for illum 2
-  EXPECT_EQ(dissolve->ior, 1.5f);                     // "Ni 0" means unset
-  EXPECT_EQ(dissolve->roughness, 1.0f);               // no Ns, no Pr
+  ASSERT_TRUE(dissolve);
+  // Transmission 1 - d = 0.75 (Tf ignored for illum 2): glass.
+  const auto* dissolveModel = modelAs<DielectricModel>(*dissolve);
+  ASSERT_NE(dissolveModel, nullptr);
+  EXPECT_EQ(dissolveModel->ior, 1.5f);        // "Ni 0" means unset
+  EXPECT_EQ(dissolveModel->roughness, 1.0f);  // no Ns, no Pr
 }
 
 TEST(ObjLoader, EmbreeCornellBox) {

@@ -210,7 +210,7 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
     for (Material mat : part.scene.materials) {
       for (int32_t* t : mat.textureSlots())
         if (*t != kNoTexture) *t += textures;
-      if (mat.bsdfTable != kNoBsdfTable) mat.bsdfTable += tables;
+      mat.model = withBsdfTablesRenumbered(mat.model, [&](int32_t t) { return t + tables; });
       if (mat.mixedWith >= 0) mat.mixedWith += materials;
       all.materials.push_back(std::move(mat));
     }

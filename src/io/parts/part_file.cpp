@@ -16,6 +16,14 @@
 #include "core/error.h"
 #include "core/hash64.h"
 #include "io/images/image_io.h"
+#include "material/models/coated_conductor.h"
+#include "material/models/coated_diffuse.h"
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
+#include "material/models/diffuse.h"
+#include "material/models/diffuse_transmission.h"
+#include "material/models/fourier.h"
+#include "material/models/fresnel_blend.h"
 
 namespace ferry {
 namespace {
@@ -34,7 +42,7 @@ static_assert(std::is_trivially_copyable_v<ProxyV1> && sizeof(ProxyV1) == 32);
 static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 // The writers below list every field of these structs: when one gains a
 // field, these fail so that the part format (and kPartFormatVersion) follows.
-static_assert(sizeof(Material) == 160,
+static_assert(sizeof(Material) == 112,
               "Material changed: update part_file.cpp and kPartFormatVersion");
 // (Mesh::stored is not written: a part holds its meshes' arrays; 136 before
 // it; the arrays became SharedArrays at 392, and 192 for Texture, same fields.)
@@ -137,31 +145,28 @@ class FileWriter {
   uint64_t offset_ = 0;
 };
 
-void writeMaterial(FileWriter& w, const Material& m) {
+// A material: what every surface has, then its model by name and the
+// model's own record (material/material_model.h); `tableIndex` renumbers the
+// tables the model names.
+void writeMaterial(FileWriter& w, const Material& m,
+                   const MaterialRecordWriter::TableIndex& tableIndex) {
   w.str(m.name);
   w.pod(m.baseColor);
   w.pod(m.baseColorTexture);
-  w.pod(m.roughness);
-  w.pod(m.metallic);
-  w.pod(m.transmission);
-  w.pod(m.ior);
   w.pod(m.emission);
   w.pod(m.alphaTexture);
   w.pod(m.alphaCutoff);
   w.pod(uint8_t(m.emitsBackSide ? 1 : 0));
-  w.pod(m.specular);
-  w.pod(m.specularRoughness);
-  w.pod(m.specularEta);
-  w.pod(uint8_t(m.coat));
-  w.pod(m.sigma);
   w.pod(m.bumpTexture);
   w.pod(m.bumpScale);
   w.pod(m.normalTexture);
   w.pod(m.normalScale);
   w.pod(m.mixedWith);
   w.pod(m.mixAmount);
-  w.pod(m.bsdfTable);
-  w.pod(m.transmittance);
+  w.str(std::string(m.model->name()));
+  MaterialRecordWriter record(tableIndex);
+  m.model->write(record);
+  w.array(record.bytes());
 }
 
 // The table as read (a0 and recip are derived again when read back).
@@ -221,8 +226,8 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
     if (materialIndex[k] == 0) {
       for (int32_t t : scene.materials[k].textures())
         if (t != kNoTexture) textureIndex[t] = 0;
-      if (scene.materials[k].bsdfTable != kNoBsdfTable)
-        tableIndex[size_t(scene.materials[k].bsdfTable)] = 0;
+      if (const int32_t t = scene.materials[k].bsdfTable(); t != kNoBsdfTable)
+        tableIndex[size_t(t)] = 0;
     }
   // Kept items get new indices in their original order.
   auto number = [](std::vector<int32_t>& index) {
@@ -248,8 +253,8 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
       for (int32_t* t : mat.textureSlots())
         if (*t != kNoTexture) *t = textureIndex[*t];
       if (mat.mixedWith >= 0) mat.mixedWith = materialIndex[size_t(mat.mixedWith)];
-      if (mat.bsdfTable != kNoBsdfTable) mat.bsdfTable = tableIndex[size_t(mat.bsdfTable)];
-      writeMaterial(w, mat);
+      writeMaterial(w, mat,
+                    [&](int32_t t) { return t == kNoBsdfTable ? t : tableIndex[size_t(t)]; });
     }
   w.pod(uint64_t(meshes));
   for (size_t m = 0; m < scene.meshes.size(); ++m)
@@ -485,29 +490,61 @@ class FileReader {
   uint32_t version_ = kPartFormatVersion;
 };
 
-Material readMaterial(FileReader& r) {
+// Formats 1 to 8 wrote the scattering parameters as Material's fields; they
+// are read as the model the renderer then picked by them.
+Material readMaterial(FileReader& r, size_t bsdfTables) {
   Material m;
   m.name = r.str();
   m.baseColor = r.pod<Vec3f>();
   m.baseColorTexture = r.pod<int32_t>();
-  m.roughness = r.pod<float>();
-  m.metallic = r.pod<float>();
-  m.transmission = r.pod<float>();
-  m.ior = r.pod<float>();
+  if (r.version() >= 9) {
+    m.emission = r.pod<Vec3f>();
+    m.alphaTexture = r.pod<int32_t>();
+    m.alphaCutoff = r.pod<float>();
+    m.emitsBackSide = r.pod<uint8_t>() != 0;
+    m.bumpTexture = r.pod<int32_t>();
+    m.bumpScale = r.pod<float>();
+    m.normalTexture = r.pod<int32_t>();
+    m.normalScale = r.pod<float>();
+    m.mixedWith = r.pod<int32_t>();
+    m.mixAmount = r.pod<float>();
+    const std::string model = r.str();
+    const std::vector<uint8_t> bytes = r.array<uint8_t>();
+    const MaterialModelKind* kind = materialModelKind(model);
+    if (!kind) {
+      std::string known;
+      for (const MaterialModelKind& k : materialModelKinds())
+        known += (known.empty() ? "" : ", ") + k.name;
+      throw InputError(
+          fmt::format("{}: material \"{}\" has model \"{}\", which this Ferry does "
+                      "not know (it knows {})",
+                      r.path(), m.name, model, known));
+    }
+    MaterialRecordReader record(
+        bytes, fmt::format("{}: material \"{}\" ({})", r.path(), m.name, model), bsdfTables);
+    m.model = kind->read(record);
+    record.finish();
+    return m;
+  }
+  // Formats 1 to 8.
+  const float roughness = r.pod<float>(), metallic = r.pod<float>(), transmission = r.pod<float>(),
+              ior = r.pod<float>();
   m.emission = r.pod<Vec3f>();
   m.alphaTexture = r.pod<int32_t>();
   m.alphaCutoff = r.pod<float>();
   if (r.version() >= 3) m.emitsBackSide = r.pod<uint8_t>() != 0;  // older: two-sided
+  Vec3f specular{0};
+  float specularRoughness = 0.3f, specularEta = 1.5f, sigma = 0;
+  uint8_t coat = 0;        // additive, layered, FresnelBlend
   if (r.version() >= 4) {  // older: one lobe, no coat, Lambertian
-    m.specular = r.pod<Vec3f>();
-    m.specularRoughness = r.pod<float>();
-    m.specularEta = r.pod<float>();
-    const uint8_t coat = r.pod<uint8_t>();
-    if (coat > uint8_t(Material::Coat::FresnelBlend))
+    specular = r.pod<Vec3f>();
+    specularRoughness = r.pod<float>();
+    specularEta = r.pod<float>();
+    coat = r.pod<uint8_t>();
+    if (coat > 2)
       throw InputError(
           fmt::format("{}: material \"{}\" has an unknown coat model {}", r.path(), m.name, coat));
-    m.coat = Material::Coat(coat);
-    m.sigma = r.pod<float>();
+    sigma = r.pod<float>();
   }
   if (r.version() >= 5) {  // older: no bump or normal map
     m.bumpTexture = r.pod<int32_t>();
@@ -517,8 +554,44 @@ Material readMaterial(FileReader& r) {
     m.mixedWith = r.pod<int32_t>();
     m.mixAmount = r.pod<float>();
   }
-  if (r.version() >= 6) m.bsdfTable = r.pod<int32_t>();    // older: no tables
-  if (r.version() >= 7) m.transmittance = r.pod<Vec3f>();  // older: opaque
+  int32_t table = kNoBsdfTable;
+  if (r.version() >= 6) table = r.pod<int32_t>();  // older: no tables
+  Vec3f transmittance{0};
+  if (r.version() >= 7) transmittance = r.pod<Vec3f>();  // older: opaque
+  if (table != kNoBsdfTable && (table < 0 || size_t(table) >= bsdfTables))
+    r.fail(fmt::format("material \"{}\" names BSDF table {} of {}", m.name, table, bsdfTables));
+  // The model the renderer picked from these fields.
+  m.model = [&]() -> std::shared_ptr<const MaterialModel> {
+    if (table != kNoBsdfTable) return std::make_shared<FourierModel>(table);
+    if (transmission >= 0.5f) return std::make_shared<DielectricModel>(ior, roughness);
+    if (metallic >= 0.5f && maxComponent(specular) > 0) {
+      auto c = std::make_shared<CoatedConductorModel>();
+      c->baseRoughness = roughness;
+      c->specular = specular;
+      c->roughness = specularRoughness;
+      c->eta = specularEta;
+      return c;
+    }
+    if (metallic >= 0.5f) return std::make_shared<ConductorModel>(roughness);
+    if (maxComponent(transmittance) > 0)
+      return std::make_shared<DiffuseTransmissionModel>(transmittance);
+    if (maxComponent(specular) > 0 && coat == 2) {
+      auto f = std::make_shared<FresnelBlendModel>();
+      f->specular = specular;
+      f->roughness = specularRoughness;
+      return f;
+    }
+    if (maxComponent(specular) > 0) {
+      auto c = std::make_shared<CoatedDiffuseModel>();
+      c->specular = specular;
+      c->roughness = specularRoughness;
+      c->eta = specularEta;
+      c->layered = coat == 1;
+      c->sigmaDegrees = sigma;
+      return c;
+    }
+    return std::make_shared<DiffuseModel>(sigma);
+  }();
   return m;
 }
 
@@ -582,7 +655,8 @@ void readContent(FileReader& r, Scene& scene, std::vector<RankSet>& owners, size
   for (uint64_t n = r.count(8); n > 0; --n) scene.textures.push_back(readTexture(r));
   if (r.version() >= 6)
     for (uint64_t n = r.count(8); n > 0; --n) scene.bsdfTables.push_back(readBsdfTable(r));
-  for (uint64_t n = r.count(8); n > 0; --n) scene.materials.push_back(readMaterial(r));
+  for (uint64_t n = r.count(8); n > 0; --n)
+    scene.materials.push_back(readMaterial(r, scene.bsdfTables.size()));
   for (uint64_t n = r.count(8); n > 0; --n) scene.meshes.push_back(readMesh(r));
   for (uint64_t n = r.count(8); n > 0; --n) {
     Object o;

@@ -1,4 +1,6 @@
 #include "io/parts/part_file.h"
+#include "material/models/coated_diffuse.h"
+#include "material/models/fourier.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -56,12 +58,15 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
            x.solid.octaves == y.solid.octaves && x.solid.omega == y.solid.omega &&
            x.solid.scale == y.solid.scale && x.solid.variation == y.solid.variation;
   };
-  return a.name == b.name && a.baseColor == b.baseColor && a.roughness == b.roughness &&
-         a.metallic == b.metallic && a.transmission == b.transmission && a.ior == b.ior &&
-         a.emission == b.emission && a.alphaCutoff == b.alphaCutoff &&
-         a.emitsBackSide == b.emitsBackSide && a.specular == b.specular &&
-         a.specularRoughness == b.specularRoughness && a.specularEta == b.specularEta &&
-         a.coat == b.coat && a.sigma == b.sigma && a.bumpScale == b.bumpScale &&
+  // The same model with the same parameters: the same record.
+  auto record = [](const Material& m) {
+    MaterialRecordWriter w;
+    m.model->write(w);
+    return w.bytes();
+  };
+  return a.name == b.name && a.baseColor == b.baseColor && a.model->name() == b.model->name() &&
+         record(a) == record(b) && a.emission == b.emission && a.alphaCutoff == b.alphaCutoff &&
+         a.emitsBackSide == b.emitsBackSide && a.bumpScale == b.bumpScale &&
          a.normalScale == b.normalScale && a.mixAmount == b.mixAmount &&
          (a.mixedWith < 0) == (b.mixedWith < 0) &&
          sameTexture(a.baseColorTexture, b.baseColorTexture) &&
@@ -109,13 +114,15 @@ Written writeDirectory(const std::string& dir, const std::string& partitioner, i
   w.scene = island();
   // One material as a pbrt area light has it (one-sided), so the round trips cover the flag.
   w.scene.materials.back().emitsBackSide = false;
-  // And one coated, Oren-Nayar material, for the coat's fields (format 4).
+  // And one coated, Oren-Nayar material, for a model's record.
   Material& coated = w.scene.materials.front();
-  coated.specular = {0.1f, 0.2f, 0.3f};
-  coated.specularRoughness = 0.4f;
-  coated.specularEta = 1 / 1.5f;
-  coated.coat = Material::Coat::Layered;
-  coated.sigma = 12;
+  auto coat = std::make_shared<CoatedDiffuseModel>();
+  coat->specular = {0.1f, 0.2f, 0.3f};
+  coat->roughness = 0.4f;
+  coat->eta = 1 / 1.5f;
+  coat->layered = true;
+  coat->sigmaDegrees = 12;
+  coated.model = coat;
   // Its colour a solid texture (format 5).
   Texture marble;
   marble.name = "marble";
@@ -293,7 +300,7 @@ TEST(PartFiles, BsdfTablesGoWithTheirMaterials) {
   scene.bsdfTables.push_back(readFourierBsdfFile((corpus / "valid.bsdf").string()));
   Material plain, tabulated;
   tabulated.name = "tabulated";
-  tabulated.bsdfTable = 1;
+  tabulated.model = std::make_shared<FourierModel>(1);
   scene.addMaterial(plain);
   scene.addMaterial(tabulated);
   for (int32_t k = 0; k < 2; ++k) {
@@ -316,8 +323,8 @@ TEST(PartFiles, BsdfTablesGoWithTheirMaterials) {
   EXPECT_EQ(t.nMu, 5);
   EXPECT_EQ(t.coefficients, scene.bsdfTables[1]->coefficients);
   EXPECT_EQ(t.a0, scene.bsdfTables[1]->a0);
-  EXPECT_EQ(a.scene.materials[1].bsdfTable, 0);
-  EXPECT_EQ(a.scene.materials[0].bsdfTable, kNoBsdfTable);
+  EXPECT_EQ(a.scene.materials[1].bsdfTable(), 0);
+  EXPECT_EQ(a.scene.materials[0].bsdfTable(), kNoBsdfTable);
   EXPECT_TRUE(b.scene.bsdfTables.empty());
   // A rank keeps only the tables of what it owns.
   Scene released = scene;

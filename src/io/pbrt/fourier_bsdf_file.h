@@ -17,7 +17,7 @@
 #include <string>
 
 #include "io/byte_stream.h"
-#include "scene/fourier_bsdf_table.h"
+#include "material/fourier_bsdf_table.h"
 
 namespace ferry {
 

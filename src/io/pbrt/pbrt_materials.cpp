@@ -11,6 +11,15 @@
 #include "core/error.h"
 #include "io/images/image_io.h"
 #include "io/pbrt/fourier_bsdf_file.h"
+#include "material/metallic_roughness.h"
+#include "material/models/coated_conductor.h"
+#include "material/models/coated_diffuse.h"
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
+#include "material/models/diffuse.h"
+#include "material/models/diffuse_transmission.h"
+#include "material/models/fourier.h"
+#include "material/models/fresnel_blend.h"
 
 namespace ferry {
 namespace {
@@ -864,7 +873,7 @@ struct PbrtMaterials::Impl {
       scene.bsdfTables.push_back(std::move(table));
       it = bsdfTables.emplace(path, int32_t(scene.bsdfTables.size() - 1)).first;
     }
-    m.bsdfTable = it->second;
+    m.model = std::make_shared<FourierModel>(it->second);
     m.baseColor = Vec3f(0.5f);  // (unused by the table; what a viewer of the material sees)
     return true;
   }
@@ -875,7 +884,6 @@ struct PbrtMaterials::Impl {
     const bool v3 = isV3Material(type);
     Look look;
     Material& m = look.m;
-    m.roughness = 1;
     auto setColor = [&](const Color& c) {
       m.baseColor = c.value;
       m.baseColorTexture = c.texture;
@@ -888,7 +896,8 @@ struct PbrtMaterials::Impl {
       }
     if (type == "diffuse" || type == "matte") {
       setColor(color(p, {"reflectance", "Kd"}, Vec3f(0.5f)));
-      if (type == "matte") m.sigma = std::clamp(scalar(p, "sigma", 0), 0.0f, 90.0f);
+      if (type == "matte")
+        m.model = std::make_shared<DiffuseModel>(std::clamp(scalar(p, "sigma", 0), 0.0f, 90.0f));
     } else if (type == "translucent") {
       // pbrt-v3: Kd reflected (times "reflect") and transmitted (times
       // "transmit") diffusely, plus Ks's glossy reflection and transmission,
@@ -897,7 +906,8 @@ struct PbrtMaterials::Impl {
       const Vec3f transmit = untexturedColor(p, "transmit", Vec3f(0.5f));
       Color kd = color(p, {"Kd"}, Vec3f(0.25f));
       setColor({kd.value * reflect, kd.texture});
-      m.transmittance = untexturedColor(p, "Kd", Vec3f(0.25f)) * transmit;
+      m.model = std::make_shared<DiffuseTransmissionModel>(untexturedColor(p, "Kd", Vec3f(0.25f)) *
+                                                           transmit);
       if (maxComponent(untexturedColor(p, "Ks", Vec3f(0.25f))) > 0)
         layerWarning(type, def.where, "the glossy part (Ks)");
       consume(p, {"roughness", "remaproughness"});
@@ -906,7 +916,8 @@ struct PbrtMaterials::Impl {
       const float s = p.getFloat("scale", 1);
       Color r = color(p, {"reflectance"}, Vec3f(0.25f));
       setColor({r.value * s, r.texture});
-      m.transmittance = untexturedColor(p, "transmittance", Vec3f(0.25f)) * s;
+      m.model = std::make_shared<DiffuseTransmissionModel>(
+          untexturedColor(p, "transmittance", Vec3f(0.25f)) * s);
     } else if (type == "plastic") {
       // pbrt-v3: Lambertian Kd plus a Trowbridge-Reitz reflection of Ks with
       // FresnelDielectric(1.5, 1), i.e. seen from inside the glass: Ferry's
@@ -914,16 +925,19 @@ struct PbrtMaterials::Impl {
       // beyond 41.8 degrees. That is pbrt-v3's plastic (its reference images
       // have it), so Ferry keeps it.
       setColor(color(p, {"Kd"}, Vec3f(0.25f)));
-      m.specular = untexturedColor(p, "Ks", Vec3f(0.25f));
-      m.specularRoughness = roughness(p, "", 0.1f, true);
-      m.specularEta = 1 / 1.5f;
-      m.coat = Material::Coat::Additive;
+      auto plastic = std::make_shared<CoatedDiffuseModel>();
+      plastic->specular = untexturedColor(p, "Ks", Vec3f(0.25f));
+      plastic->roughness = roughness(p, "", 0.1f, true);
+      plastic->eta = 1 / 1.5f;
+      plastic->layered = false;
+      m.model = plastic;
     } else if (type == "substrate") {
       // pbrt-v3's FresnelBlend (Ashikhmin-Shirley).
       setColor(color(p, {"Kd"}, Vec3f(0.5f)));
-      m.specular = untexturedColor(p, "Ks", Vec3f(0.5f));
-      m.specularRoughness = roughness(p, "", 0.1f, true);
-      m.coat = Material::Coat::FresnelBlend;
+      auto substrate = std::make_shared<FresnelBlendModel>();
+      substrate->specular = untexturedColor(p, "Ks", Vec3f(0.5f));
+      substrate->roughness = roughness(p, "", 0.1f, true);
+      m.model = substrate;
     } else if (type == "coateddiffuse") {
       // pbrt-v4: a diffuse base under a dielectric interface, simulated by
       // a random walk between the layers; Ferry's layered coat counts the
@@ -931,10 +945,12 @@ struct PbrtMaterials::Impl {
       // interface reflects back down (a little darker than pbrt-v4 for
       // bright bases).
       setColor(color(p, {"reflectance"}, Vec3f(0.5f)));
-      m.specular = Vec3f(1);
-      m.specularEta = std::max(iorOf(p, 1.5f), 1.01f);
-      m.specularRoughness = roughness(p, "", 0.0f, false);
-      m.coat = Material::Coat::Layered;
+      auto coated = std::make_shared<CoatedDiffuseModel>();
+      coated->specular = Vec3f(1);
+      coated->eta = std::max(iorOf(p, 1.5f), 1.01f);
+      coated->roughness = roughness(p, "", 0.0f, false);
+      coated->layered = true;
+      m.model = coated;
       consume(p, {"thickness", "albedo", "g", "maxdepth", "nsamples"});
     } else if (type == "conductor" || type == "metal" || type == "coatedconductor") {
       std::string prefix = type == "coatedconductor" ? "conductor." : "";
@@ -944,36 +960,38 @@ struct PbrtMaterials::Impl {
       } else {
         m.baseColor = conductorColor(p, prefix);
       }
-      m.metallic = 1;
-      m.roughness = roughness(p, prefix, type == "metal" ? 0.01f : 0.0f, v3);
+      const float baseRoughness = roughness(p, prefix, type == "metal" ? 0.01f : 0.0f, v3);
       if (type == "coatedconductor") {
         // pbrt-v4: the conductor under a dielectric interface (a random walk
         // between them); Ferry's layered coat, as for coateddiffuse.
-        m.specular = Vec3f(1);
-        m.specularRoughness = roughness(p, "interface.", 0.0f, false);
-        m.coat = Material::Coat::Layered;
-        m.specularEta = 1.5f;
+        auto coated = std::make_shared<CoatedConductorModel>();
+        coated->baseRoughness = baseRoughness;
+        coated->specular = Vec3f(1);
+        coated->roughness = roughness(p, "interface.", 0.0f, false);
+        coated->eta = 1.5f;
         if (const PbrtParam* eta = p.find("interface.eta")) {
           if (eta->type == "spectrum")
-            m.specularEta = spectrumOf(*eta).at(550);
+            coated->eta = spectrumOf(*eta).at(550);
           else
-            m.specularEta = p.getFloat("interface.eta", 1.5f);
+            coated->eta = p.getFloat("interface.eta", 1.5f);
         }
-        m.specularEta = std::max(m.specularEta, 1.01f);
+        coated->eta = std::max(coated->eta, 1.01f);
         consume(p, {"thickness", "albedo", "g", "maxdepth", "nsamples"});
+        m.model = coated;
+      } else {
+        m.model = std::make_shared<ConductorModel>(baseRoughness);
       }
     } else if (type == "mirror") {
       setColor(color(p, {"Kr"}, Vec3f(0.9f)));
-      m.metallic = 1;
-      m.roughness = 0;
+      m.model = std::make_shared<ConductorModel>(0.0f);
     } else if (type == "dielectric" || type == "glass" || type == "thindielectric") {
-      m.transmission = 1;
       m.baseColor = Vec3f(1);
       if (type == "glass") setColor(color(p, {"Kt"}, Vec3f(1)));
-      m.ior = iorOf(p, 1.5f);
-      m.roughness = roughness(p, "", 0.0f, v3);
-      if (type == "thindielectric") m.ior = 1.01f;
-      if (!(m.ior >= 1)) m.ior = std::max(1.0f / std::max(m.ior, 1e-3f), 1.01f);
+      float ior = iorOf(p, 1.5f);
+      const float rough = roughness(p, "", 0.0f, v3);
+      if (type == "thindielectric") ior = 1.01f;
+      if (!(ior >= 1)) ior = std::max(1.0f / std::max(ior, 1e-3f), 1.01f);
+      m.model = std::make_shared<DielectricModel>(ior, rough);
     } else if (type == "uber") {
       // pbrt-v3: Kd (Lambertian) + Ks (Trowbridge-Reitz, FresnelDielectric(1,
       // eta)) + Kr (mirror) + Kt (window), with opacity.
@@ -985,30 +1003,31 @@ struct PbrtMaterials::Impl {
       float ior = iorOf(p, 1.5f);
       Color opacity = color(p, {"opacity"}, Vec3f(1));
       if (maxComponent(kt.value) >= 0.5f) {
-        m.transmission = 1;
         setColor(kt);
-        m.ior = std::max(ior, 1.01f);
-        m.roughness = rough;
+        m.model = std::make_shared<DielectricModel>(std::max(ior, 1.01f), rough);
       } else if (maxComponent(kr.value) > maxComponent(kd.value)) {
         setColor(kr);
-        m.metallic = 1;
-        m.roughness = 0;
+        m.model = std::make_shared<ConductorModel>(0.0f);
       } else {
         setColor(kd);
-        m.specular = ks;
-        m.specularRoughness = rough;
-        m.specularEta = std::max(ior, 1.01f);
-        m.coat = Material::Coat::Additive;
+        auto coated = std::make_shared<CoatedDiffuseModel>();
+        coated->specular = ks;
+        coated->roughness = rough;
+        coated->eta = std::max(ior, 1.01f);
+        coated->layered = false;
+        m.model = coated;
         if (maxComponent(kr.value) > 0) layerWarning(type, def.where, "the mirror layer (Kr)");
       }
       if (opacity.texture == kNoTexture && average(opacity.value) < 1)
         look.alpha = alphaConstant(average(opacity.value));
     } else if (type == "disney") {
       setColor(color(p, {"color"}, Vec3f(0.5f)));
-      m.metallic = std::clamp(scalar(p, "metallic", 0), 0.0f, 1.0f);
-      m.roughness = std::clamp(scalar(p, "roughness", 0.5f), 0.0f, 1.0f);
-      m.transmission = std::clamp(scalar(p, "spectrans", 0), 0.0f, 1.0f);
-      m.ior = std::max(iorOf(p, 1.5f), 1.01f);
+      MetallicRoughness surface;
+      surface.metallic = std::clamp(scalar(p, "metallic", 0), 0.0f, 1.0f);
+      surface.roughness = std::clamp(scalar(p, "roughness", 0.5f), 0.0f, 1.0f);
+      surface.transmission = std::clamp(scalar(p, "spectrans", 0), 0.0f, 1.0f);
+      surface.ior = std::max(iorOf(p, 1.5f), 1.01f);
+      m.model = modelOf(surface);
     } else if (type == "mix") {
       std::string first, second;
       bool v4 = false;
@@ -1039,8 +1058,8 @@ struct PbrtMaterials::Impl {
       m.mixAmount = wb;
       look.alpha = wb > 0.5f ? b.alpha : a.alpha;
     } else if (type == "fourier" && fourierTable(p, def, m)) {
-      // (m.bsdfTable set; a file that is not there falls through to the
-      // grey diffuse below, with a warning naming it.)
+      // (m's model reads the table; a file that is not there falls through to
+      // the grey diffuse below, with a warning naming it.)
     } else if (type == "interface" || type == "none" || type.empty()) {
       look.alpha = alphaConstant(0);
     } else {

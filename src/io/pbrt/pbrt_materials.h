@@ -1,7 +1,7 @@
 // pbrt materials and textures (v3 and v4 names) mapped onto Ferry's Material
-// (base colour with an optional texture, roughness, metallic, transmission,
-// ior, emission, alpha cut-out, a dielectric coat, Oren-Nayar sigma, bump
-// map, mix link). Colour textures become 8-bit sRGB textures (an image alone
+// (base colour with an optional texture, emission, alpha cut-out, bump map,
+// mix link) and its model (material/models/: each pbrt material type onto
+// one). Colour textures become 8-bit sRGB textures (an image alone
 // at its own resolution, anything else baked over uv in [0,1]^2); float
 // textures on scalar parameters are averaged. Unsupported materials become
 // diffuse with one warning naming them. The mapping, material by material:

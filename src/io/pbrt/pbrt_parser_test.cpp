@@ -13,6 +13,13 @@
 
 #include "core/error.h"
 #include "io/images/image_io.h"
+#include "material/models/coated_conductor.h"
+#include "material/models/coated_diffuse.h"
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
+#include "material/models/diffuse.h"
+#include "material/models/diffuse_transmission.h"
+#include "material/models/fresnel_blend.h"
 
 namespace ferry {
 namespace {
@@ -60,6 +67,12 @@ const Material& material(const Scene& s, const std::string& name) {
   for (const Material& m : s.materials)
     if (m.name == name) return m;
   throw std::runtime_error("no material " + name);
+}
+
+// The material's model if it is a T, else null.
+template <class T>
+const T* modelAs(const Material& m) {
+  return dynamic_cast<const T*>(m.model.get());
 }
 
 // Meshes using the material called `name`.
@@ -153,17 +166,18 @@ TEST_F(PbrtV3Features, Lights) {
 TEST_F(PbrtV3Features, Materials) {
   EXPECT_EQ(material(scene(), "red matte").baseColor, Vec3f(0.8f, 0.1f, 0.1f));
   const Material& al = material(scene(), "aluminium");
-  EXPECT_EQ(al.metallic, 1);
+  const auto* alModel = modelAs<ConductorModel>(al);
+  ASSERT_NE(alModel, nullptr);
   // Aluminium from the .spd files: a bright, nearly neutral grey.
   EXPECT_GT(al.baseColor.x, 0.85f);
   EXPECT_LT(maxComponent(al.baseColor) -
                 std::min(al.baseColor.x, std::min(al.baseColor.y, al.baseColor.z)),
             0.05f);
   // pbrt-v3's roughness remapping: 0.001 -> alpha 0.047, Ferry's roughness sqrt(alpha).
-  EXPECT_NEAR(al.roughness, 0.217f, 0.01f);
-  const Material& glass = material(scene(), "glass");
-  EXPECT_EQ(glass.transmission, 1);
-  EXPECT_FLOAT_EQ(glass.ior, 1.33f);
+  EXPECT_NEAR(alModel->roughness, 0.217f, 0.01f);
+  const auto* glass = modelAs<DielectricModel>(material(scene(), "glass"));
+  ASSERT_NE(glass, nullptr);
+  EXPECT_FLOAT_EQ(glass->ior, 1.33f);
   EXPECT_EQ(material(scene(), "leather").baseColor, Vec3f(0.5f));
   // mix: v3's amount weighs the first material: "red matte" shades with
   // probability 0.25, "black" with 0.75 (its mean colour is the v3 blend).
@@ -175,7 +189,7 @@ TEST_F(PbrtV3Features, Materials) {
   EXPECT_NEAR(mixed.baseColor.x * 0.25f + black.x * 0.75f, 0.2f, 1e-6);
   EXPECT_NEAR(mixed.baseColor.y * 0.25f + black.y * 0.75f, 0.025f, 1e-6);
   const Material& uber = material(scene(), "mirror-ish uber");
-  EXPECT_EQ(uber.metallic, 1);
+  EXPECT_NE(modelAs<ConductorModel>(uber), nullptr);
   EXPECT_FLOAT_EQ(uber.baseColor.x, 0.9f);
 }
 
@@ -287,7 +301,7 @@ TEST(PbrtFourier, LoadsTheTable) {
   EXPECT_EQ(s.bsdfTables[0]->nMu, 5);
   int named = 0;
   for (const Material& m : s.materials)
-    if (m.bsdfTable == 0) ++named;
+    if (m.bsdfTable() == 0) ++named;
   EXPECT_EQ(named, 2);
   EXPECT_FALSE(anyContains(warnings, "fourier")) << warnings.front();
 }
@@ -300,7 +314,7 @@ TEST(PbrtFourier, AMissingTableIsAWarningAndGreyDiffuse) {
       &warnings);
   EXPECT_TRUE(s.bsdfTables.empty());
   ASSERT_FALSE(s.materials.empty());
-  EXPECT_EQ(s.materials.back().bsdfTable, kNoBsdfTable);
+  EXPECT_EQ(s.materials.back().bsdfTable(), kNoBsdfTable);
   EXPECT_EQ(s.materials.back().baseColor, Vec3f(0.5f));
   std::string warning;
   for (const std::string& w : warnings)
@@ -366,30 +380,40 @@ TEST_F(PbrtV4Features, BidirectionalIntegratorAsksForLightPaths) {
 
 TEST_F(PbrtV4Features, Materials) {
   const Material& gold = material(scene(), "gold");
-  EXPECT_EQ(gold.metallic, 1);
+  const auto* goldModel = modelAs<ConductorModel>(gold);
+  ASSERT_NE(goldModel, nullptr);
   EXPECT_GT(gold.baseColor.x, 0.8f);
-  EXPECT_LT(gold.baseColor.z, 0.5f);                          // yellow
-  EXPECT_NEAR(gold.roughness, std::pow(0.01f, 0.25f), 1e-4);  // v4: alpha = sqrt(r)
-  EXPECT_NEAR(material(scene(), "bk7").ior, 1.5185f, 1e-3);
-  EXPECT_NEAR(material(scene(), "sheet").ior, 1.01f, 1e-6);
+  EXPECT_LT(gold.baseColor.z, 0.5f);                                // yellow
+  EXPECT_NEAR(goldModel->roughness, std::pow(0.01f, 0.25f), 1e-4);  // v4: alpha = sqrt(r)
+  const auto* bk7 = modelAs<DielectricModel>(material(scene(), "bk7"));
+  ASSERT_NE(bk7, nullptr);
+  EXPECT_NEAR(bk7->ior, 1.5185f, 1e-3);
+  const auto* sheet = modelAs<DielectricModel>(material(scene(), "sheet"));
+  ASSERT_NE(sheet, nullptr);
+  EXPECT_NEAR(sheet->ior, 1.01f, 1e-6);
   EXPECT_EQ(material(scene(), "coated").baseColor, Vec3f(0.1f, 0.5f, 0.1f));
   const Material& copper = material(scene(), "car");
-  EXPECT_EQ(copper.metallic, 1);
+  EXPECT_NE(modelAs<CoatedConductorModel>(copper), nullptr);
   EXPECT_GT(copper.baseColor.x, copper.baseColor.y);
   EXPECT_GT(copper.baseColor.y, copper.baseColor.z);
   // diffusetransmission: reflectance and transmittance kept apart.
   const Material& leaf = material(scene(), "leaf");
   EXPECT_EQ(leaf.baseColor, Vec3f(0.2f, 0.4f, 0.1f));
-  EXPECT_EQ(leaf.transmittance, Vec3f(0.1f, 0.3f, 0.05f));
+  const auto* leafModel = modelAs<DiffuseTransmissionModel>(leaf);
+  ASSERT_NE(leafModel, nullptr);
+  EXPECT_EQ(leafModel->transmittance, Vec3f(0.1f, 0.3f, 0.05f));
   const Material& portal = material(scene(), "portal");
   ASSERT_NE(portal.alphaTexture, kNoTexture);
   EXPECT_EQ(scene().textures[size_t(portal.alphaTexture)].sampleAlpha({0.5f, 0.5f}), 0.0f);
   // A mix shades with the second material with probability "amount" (v4).
   const Material& mostly = material(scene(), "mostly gold");
-  EXPECT_EQ(mostly.coat, Material::Coat::Layered);  // the first: coateddiffuse
+  const auto* mostlyModel = modelAs<CoatedDiffuseModel>(mostly);  // the first: coateddiffuse
+  ASSERT_NE(mostlyModel, nullptr);
+  EXPECT_TRUE(mostlyModel->layered);
   ASSERT_GE(mostly.mixedWith, 0);
   EXPECT_FLOAT_EQ(mostly.mixAmount, 0.75f);
-  EXPECT_EQ(scene().materials.at(size_t(mostly.mixedWith)).metallic, 1);  // gold
+  EXPECT_NE(modelAs<ConductorModel>(scene().materials.at(size_t(mostly.mixedWith))),
+            nullptr);  // gold
   // v4's displacement texture bumps the shading normal.
   const Material& leafMaterial = leaf;
   EXPECT_NE(leafMaterial.bumpTexture, kNoTexture);
@@ -595,7 +619,7 @@ Material "conductor" "spectrum eta" "metal-CuZn-eta" "spectrum k" "metal-CuZn-k"
 Shape "sphere"
 )",
                      &w);
-  EXPECT_EQ(s.materials.at(0).metallic, 1);
+  EXPECT_NE(modelAs<ConductorModel>(s.materials.at(0)), nullptr);
   EXPECT_GT(s.materials.at(0).baseColor.z, 0.85f);  // aluminium's neutral grey
   EXPECT_TRUE(anyContains(w, "\"metal-CuZn-eta\" is not known to Ferry: using \"metal-Al-eta\""));
 }
@@ -689,53 +713,70 @@ TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
       "Material \"plastic\" \"rgb Kd\" [0.1 0.2 0.3] \"rgb Ks\" [0.4 0.5 0.6] "
       "\"float roughness\" 0.2 \"bool remaproughness\" false");
   EXPECT_EQ(plastic.baseColor, Vec3f(0.1f, 0.2f, 0.3f));
-  EXPECT_EQ(plastic.specular, Vec3f(0.4f, 0.5f, 0.6f));
-  EXPECT_FLOAT_EQ(plastic.specularRoughness, std::sqrt(0.2f));  // alpha 0.2
-  EXPECT_FLOAT_EQ(plastic.specularEta, 1 / 1.5f);
-  EXPECT_EQ(plastic.coat, Material::Coat::Additive);
+  const auto* plasticCoat = modelAs<CoatedDiffuseModel>(plastic);
+  ASSERT_NE(plasticCoat, nullptr);
+  EXPECT_EQ(plasticCoat->specular, Vec3f(0.4f, 0.5f, 0.6f));
+  EXPECT_FLOAT_EQ(plasticCoat->roughness, std::sqrt(0.2f));  // alpha 0.2
+  EXPECT_FLOAT_EQ(plasticCoat->eta, 1 / 1.5f);
+  EXPECT_FALSE(plasticCoat->layered);
   const Material defaults = only("Material \"plastic\"");
   EXPECT_EQ(defaults.baseColor, Vec3f(0.25f));
-  EXPECT_EQ(defaults.specular, Vec3f(0.25f));
+  const auto* defaultCoat = modelAs<CoatedDiffuseModel>(defaults);
+  ASSERT_NE(defaultCoat, nullptr);
+  EXPECT_EQ(defaultCoat->specular, Vec3f(0.25f));
   // Remapped as pbrt-v3's RoughnessToAlpha(0.1) = 0.4615.
-  EXPECT_NEAR(defaults.specularRoughness * defaults.specularRoughness, 0.4615f, 1e-3f);
+  EXPECT_NEAR(defaultCoat->roughness * defaultCoat->roughness, 0.4615f, 1e-3f);
   // v3 translucent: Kd split by reflect and transmit (its glossy Ks dropped).
   const Material translucent = only(
       "Material \"translucent\" \"rgb Kd\" [0.5 0.5 0.5] \"rgb reflect\" [0.2 0.2 0.2] "
       "\"rgb transmit\" [0.6 0.6 0.6]");
   EXPECT_NEAR(translucent.baseColor.x, 0.1f, 1e-6f);
-  EXPECT_NEAR(translucent.transmittance.x, 0.3f, 1e-6f);
+  const auto* translucentModel = modelAs<DiffuseTransmissionModel>(translucent);
+  ASSERT_NE(translucentModel, nullptr);
+  EXPECT_NEAR(translucentModel->transmittance.x, 0.3f, 1e-6f);
   // matte: sigma in degrees.
-  EXPECT_EQ(only("Material \"matte\" \"float sigma\" 20").sigma, 20.0f);
-  EXPECT_EQ(only("Material \"matte\"").sigma, 0.0f);
+  const Material rough = only("Material \"matte\" \"float sigma\" 20");
+  const auto* orenNayar = modelAs<DiffuseModel>(rough);
+  ASSERT_NE(orenNayar, nullptr);
+  EXPECT_EQ(orenNayar->sigmaDegrees, 20.0f);
+  const Material smooth = only("Material \"matte\"");
+  const auto* lambertian = modelAs<DiffuseModel>(smooth);
+  ASSERT_NE(lambertian, nullptr);
+  EXPECT_EQ(lambertian->sigmaDegrees, 0.0f);
   // uber: Ks with FresnelDielectric(1, eta).
   const Material uber = only("Material \"uber\" \"rgb Ks\" [0.3 0.3 0.3] \"float eta\" 1.7");
-  EXPECT_EQ(uber.specular, Vec3f(0.3f));
-  EXPECT_FLOAT_EQ(uber.specularEta, 1.7f);
-  EXPECT_EQ(uber.coat, Material::Coat::Additive);
+  const auto* uberCoat = modelAs<CoatedDiffuseModel>(uber);
+  ASSERT_NE(uberCoat, nullptr);
+  EXPECT_EQ(uberCoat->specular, Vec3f(0.3f));
+  EXPECT_FLOAT_EQ(uberCoat->eta, 1.7f);
+  EXPECT_FALSE(uberCoat->layered);
   // v4 coateddiffuse: a layered coat of the interface's eta.
   const Material coated = only(
       "Material \"coateddiffuse\" \"rgb reflectance\" [0.7 0.6 0.5] \"float roughness\" 0.04 "
       "\"float eta\" 1.4");
   EXPECT_EQ(coated.baseColor, Vec3f(0.7f, 0.6f, 0.5f));
-  EXPECT_EQ(coated.specular, Vec3f(1));
-  EXPECT_FLOAT_EQ(coated.specularEta, 1.4f);
-  EXPECT_FLOAT_EQ(coated.specularRoughness, std::sqrt(std::sqrt(0.04f)));  // v4: alpha = sqrt(r)
-  EXPECT_EQ(coated.coat, Material::Coat::Layered);
+  const auto* coat = modelAs<CoatedDiffuseModel>(coated);
+  ASSERT_NE(coat, nullptr);
+  EXPECT_EQ(coat->specular, Vec3f(1));
+  EXPECT_FLOAT_EQ(coat->eta, 1.4f);
+  EXPECT_FLOAT_EQ(coat->roughness, std::sqrt(std::sqrt(0.04f)));  // v4: alpha = sqrt(r)
+  EXPECT_TRUE(coat->layered);
   // v4 coatedconductor: the conductor under a layered coat of the interface's eta.
   const Material coatedMetal = only(
       "Material \"coatedconductor\" \"float interface.eta\" 1.6 \"float "
       "interface.roughness\" 0.09 \"float conductor.roughness\" 0.25");
-  EXPECT_EQ(coatedMetal.metallic, 1);
-  EXPECT_EQ(coatedMetal.specular, Vec3f(1));
-  EXPECT_FLOAT_EQ(coatedMetal.specularEta, 1.6f);
-  EXPECT_NEAR(coatedMetal.specularRoughness * coatedMetal.specularRoughness, 0.3f, 1e-5f);
-  EXPECT_NEAR(coatedMetal.roughness * coatedMetal.roughness, 0.5f, 1e-5f);
-  EXPECT_EQ(coatedMetal.coat, Material::Coat::Layered);
+  const auto* metal = modelAs<CoatedConductorModel>(coatedMetal);
+  ASSERT_NE(metal, nullptr);
+  EXPECT_EQ(metal->specular, Vec3f(1));
+  EXPECT_FLOAT_EQ(metal->eta, 1.6f);
+  EXPECT_NEAR(metal->roughness * metal->roughness, 0.3f, 1e-5f);
+  EXPECT_NEAR(metal->baseRoughness * metal->baseRoughness, 0.5f, 1e-5f);
   // substrate: Ashikhmin-Shirley, Ks the coat's reflectance at normal incidence.
   const Material substrate = only("Material \"substrate\" \"rgb Ks\" [0.04 0.05 0.06]");
-  EXPECT_EQ(substrate.specular, Vec3f(0.04f, 0.05f, 0.06f));
+  const auto* blend = modelAs<FresnelBlendModel>(substrate);
+  ASSERT_NE(blend, nullptr);
+  EXPECT_EQ(blend->specular, Vec3f(0.04f, 0.05f, 0.06f));
   EXPECT_EQ(substrate.baseColor, Vec3f(0.5f));
-  EXPECT_EQ(substrate.coat, Material::Coat::FresnelBlend);
 }
 
 TEST(PbrtParser, SolidTexturesAreEvaluatedInTheirSpace) {

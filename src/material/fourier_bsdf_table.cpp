@@ -1,4 +1,4 @@
-#include "scene/fourier_bsdf_table.h"
+#include "material/fourier_bsdf_table.h"
 
 #include <cmath>
 

@@ -1,7 +1,11 @@
-#include "render/fourier_bsdf.h"
+#include "material/models/fourier.h"
 
 #include <algorithm>
 #include <cmath>
+
+#include <fmt/format.h>
+
+#include "material/models/diffuse.h"
 
 namespace ferry {
 namespace {
@@ -280,6 +284,38 @@ bool fourierSample(const FourierBsdfTable& t, Vec3f wo, Vec2f u, BsdfSample& out
   if (!(out.pdf > 0)) return false;
   out.weight = fourierEval(t, wo, out.wi) * (1 / out.pdf);
   return true;
+}
+
+namespace {
+
+struct FourierLobe {
+  const FourierBsdfTable* table;
+  Vec3f eval(Vec3f wo, Vec3f wi) const { return fourierEval(*table, wo, wi); }
+  float pdf(Vec3f wo, Vec3f wi) const { return fourierPdf(*table, wo, wi); }
+  bool sample(Vec3f wo, float, Vec2f u, BsdfSample& out) const {
+    return fourierSample(*table, wo, u, out);
+  }
+};
+
+}  // namespace
+
+Bsdf fourierBsdf(const FourierBsdfTable& table) {
+  return Bsdf(FourierLobe{&table}, false, table.transmits());
+}
+
+Bsdf FourierModel::bsdf(Vec3f color, const MaterialResources& resources) const {
+  const FourierBsdfTable* t = table >= 0 && size_t(table) < resources.bsdfTables.size()
+                                  ? resources.bsdfTables[size_t(table)].get()
+                                  : nullptr;
+  return t ? fourierBsdf(*t) : diffuseBsdf(color);
+}
+
+std::shared_ptr<const MaterialModel> FourierModel::read(MaterialRecordReader& record) {
+  return std::make_shared<FourierModel>(record.table());
+}
+
+std::string FourierModel::describe() const {
+  return fmt::format("fourier (table {})", table);
 }
 
 }  // namespace ferry

@@ -11,7 +11,7 @@
 //    and the albedo from quadrature of eval() equals the Monte Carlo one (so no
 //    energy sits where sample() never goes);
 //  - reciprocity, and fresnelDielectric against closed forms.
-#include "render/bsdf.h"
+#include "material/bsdf.h"
 
 #include <gtest/gtest.h>
 
@@ -25,7 +25,14 @@
 #include <vector>
 
 #include "io/pbrt/fourier_bsdf_file.h"
-#include "render/fourier_bsdf.h"
+#include "material/models/coated_conductor.h"
+#include "material/models/coated_diffuse.h"
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
+#include "material/models/diffuse.h"
+#include "material/models/diffuse_transmission.h"
+#include "material/models/fourier.h"
+#include "material/models/fresnel_blend.h"
 #include "render/render_test_util.h"
 
 namespace ferry {
@@ -120,15 +127,15 @@ std::vector<LobeCase> roughCases() {
   std::vector<LobeCase> cases;
   const float outside[] = {0, 30, 60, 85};
   for (float t : outside)
-    cases.push_back({"diffuse_wo" + degrees(t), Bsdf::diffuse(Vec3f(1)), direction(t)});
+    cases.push_back({"diffuse_wo" + degrees(t), diffuseBsdf(Vec3f(1)), direction(t)});
   for (float t : outside)
-    cases.push_back({"orennayar_s30_wo" + degrees(t), Bsdf::diffuse(Vec3f(1), 30), direction(t)});
+    cases.push_back({"orennayar_s30_wo" + degrees(t), diffuseBsdf(Vec3f(1), 30), direction(t)});
   // Diffuse transmission, from either side (its normals are kept).
   for (float t : {0.0f, 45.0f, 85.0f, 120.0f, 175.0f}) {
     cases.push_back({"transmission_r5t5_wo" + degrees(t),
-                     Bsdf::diffuseTransmission(Vec3f(0.5f), Vec3f(0.5f)), direction(t)});
+                     diffuseTransmissionBsdf(Vec3f(0.5f), Vec3f(0.5f)), direction(t)});
     cases.push_back({"transmission_r2t7_wo" + degrees(t),
-                     Bsdf::diffuseTransmission(Vec3f(0.2f), Vec3f(0.7f)), direction(t)});
+                     diffuseTransmissionBsdf(Vec3f(0.2f), Vec3f(0.7f)), direction(t)});
   }
   // Coats: pbrt-v3's plastic (additive, seen from inside the glass: eta 1 /
   // 1.5) with half-white base and coat, so that the sum stays below one; and
@@ -138,18 +145,18 @@ std::vector<LobeCase> roughCases() {
     for (float t : outside) {
       const std::string rough = std::to_string(int(r * 10));
       cases.push_back({"plastic_r" + rough + "_wo" + degrees(t),
-                       Bsdf::coated(Vec3f(0.5f), Vec3f(0.5f), r, 1 / 1.5f, false), direction(t)});
+                       coatedBsdf(Vec3f(0.5f), Vec3f(0.5f), r, 1 / 1.5f, false), direction(t)});
       cases.push_back({"layered_r" + rough + "_wo" + degrees(t),
-                       Bsdf::coated(Vec3f(1), Vec3f(1), r, 1.5f, true, 20), direction(t)});
+                       coatedBsdf(Vec3f(1), Vec3f(1), r, 1.5f, true, 20), direction(t)});
       cases.push_back({"coatedmetal_r" + rough + "_wo" + degrees(t),
-                       Bsdf::coatedConductor(Vec3f(1), 0.5f, Vec3f(1), r, 1.5f), direction(t)});
+                       coatedConductorBsdf(Vec3f(1), 0.5f, Vec3f(1), r, 1.5f), direction(t)});
       cases.push_back({"fresnelblend_r" + rough + "_wo" + degrees(t),
-                       Bsdf::fresnelBlend(Vec3f(1), Vec3f(0.3f), r), direction(t)});
+                       fresnelBlendBsdf(Vec3f(1), Vec3f(0.3f), r), direction(t)});
     }
   for (float r : {0.2f, 0.5f, 1.0f})
     for (float t : outside)
       cases.push_back({"conductor_r" + std::to_string(int(r * 10)) + "_wo" + degrees(t),
-                       Bsdf::conductor(Vec3f(1), r), direction(t)});
+                       conductorBsdf(Vec3f(1), r), direction(t)});
   // Dielectrics: from the outside (wo.z > 0) and the inside (wo.z < 0), with
   // the ior as seen from +z both above and below 1.
   const float dielectricAngles[] = {5, 45, 85, 120, 175};
@@ -158,7 +165,7 @@ std::vector<LobeCase> roughCases() {
       for (float t : dielectricAngles)
         cases.push_back({std::string("dielectric_") + (ior > 1 ? "ior1.5" : "ior0.67") + "_r" +
                              std::to_string(int(r * 10)) + "_wo" + degrees(t),
-                         Bsdf::dielectric(ior, r), direction(t)});
+                         dielectricBsdf(ior, r), direction(t)});
   // Tabulated BSDFs: pbrt-v3's paint (three channels, reflection only; when
   // ../shared is there), a window (eta 1) from both sides, and an eta 1.5
   // interface from above (from below, pbrt-v3's eta^2 for radiance
@@ -166,11 +173,11 @@ std::vector<LobeCase> roughCases() {
   // (At 85 degrees paint's series dips below zero: BsdfFourier below.)
   if (const FourierBsdfTable* paint = paintTable())
     for (float t : {0.0f, 30.0f, 60.0f, 75.0f})
-      cases.push_back({"fourier_paint_wo" + degrees(t), Bsdf::fourier(*paint), direction(t)});
+      cases.push_back({"fourier_paint_wo" + degrees(t), fourierBsdf(*paint), direction(t)});
   for (float t : dielectricAngles)
-    cases.push_back({"fourier_window_wo" + degrees(t), Bsdf::fourier(windowTable()), direction(t)});
+    cases.push_back({"fourier_window_wo" + degrees(t), fourierBsdf(windowTable()), direction(t)});
   for (float t : outside)
-    cases.push_back({"fourier_eta1.5_wo" + degrees(t), Bsdf::fourier(glassTable()), direction(t)});
+    cases.push_back({"fourier_eta1.5_wo" + degrees(t), fourierBsdf(glassTable()), direction(t)});
   return cases;
 }
 
@@ -417,7 +424,7 @@ TEST_P(BsdfLobeTest, SamplingMatchesPdfEnergyAndEval) {
 TEST(BsdfFourier, PaintAtGrazingIncidenceLosesOnlyItsNegativeLobes) {
   const FourierBsdfTable* paint = paintTable();
   if (!paint) GTEST_SKIP() << "paint.bsdf is not available";
-  const Bsdf bsdf = Bsdf::fourier(*paint);
+  const Bsdf bsdf = fourierBsdf(*paint);
   const Vec3f wo = direction(85);
   std::vector<double> pdfCells, evalCells;
   double quadratureError = 0;
@@ -454,9 +461,9 @@ INSTANTIATE_TEST_SUITE_P(BsdfLobes, BsdfLobeTest, ::testing::ValuesIn(roughCases
 // when its lobe is, so a path that counts emission after a delta bounce never
 // has a shadow ray in the same wavefront.
 TEST(BsdfDelta, ASampleIsDeltaExactlyWhenItsLobeIs) {
-  const Bsdf lobes[] = {Bsdf::diffuse(Vec3f(0.5f)), Bsdf::conductor(Vec3f(0.9f), 0),
-                        Bsdf::conductor(Vec3f(0.9f), 0.3f), Bsdf::dielectric(1.5f, 0),
-                        Bsdf::dielectric(1.5f, 0.3f)};
+  const Bsdf lobes[] = {diffuseBsdf(Vec3f(0.5f)), conductorBsdf(Vec3f(0.9f), 0),
+                        conductorBsdf(Vec3f(0.9f), 0.3f), dielectricBsdf(1.5f, 0),
+                        dielectricBsdf(1.5f, 0.3f)};
   for (const Bsdf& b : lobes) {
     for (float t : {10.0f, 60.0f, 120.0f, 170.0f}) {
       for (float uLobe : {0.01f, 0.5f, 0.99f}) {
@@ -471,7 +478,7 @@ TEST(BsdfDelta, ASampleIsDeltaExactlyWhenItsLobeIs) {
 
 TEST(BsdfDelta, SmoothConductorIsAMirrorWithSchlickFresnel) {
   for (float f0 : {1.0f, 0.5f, 0.04f}) {
-    Bsdf b = Bsdf::conductor(Vec3f(f0), 0);
+    Bsdf b = conductorBsdf(Vec3f(f0), 0);
     ASSERT_TRUE(b.isDelta());
     for (float t : {0.0f, 30.0f, 60.0f, 89.0f}) {
       Vec3f wo = direction(t);
@@ -501,7 +508,7 @@ TEST(BsdfDelta, SmoothDielectricFollowsFresnelAndSnell) {
   const int cases = 2 * int(std::size(angles));
   const double z = testing::twoSidedNormalQuantile(testing::sidak(kAlpha, cases));
   for (float ior : {1.5f, 1 / 1.5f}) {
-    Bsdf b = Bsdf::dielectric(ior, 0, Vec3f(0.9f, 0.8f, 0.7f));
+    Bsdf b = dielectricBsdf(ior, 0, Vec3f(0.9f, 0.8f, 0.7f));
     ASSERT_TRUE(b.isDelta());
     for (float t : angles) {
       Vec3f wo = direction(t);
@@ -548,16 +555,16 @@ TEST(BsdfDelta, SmoothDielectricFollowsFresnelAndSnell) {
 // (n_i: index on wi's side).
 TEST(BsdfReciprocity, EvalIsSymmetricUpToTheRefractiveIndexFactor) {
   std::vector<std::pair<std::string, Bsdf>> lobes = {
-      {"diffuse", Bsdf::diffuse(Vec3f(0.7f))},
-      {"conductor 0.3", Bsdf::conductor(Vec3f(0.9f), 0.3f)},
-      {"conductor 0.8", Bsdf::conductor(Vec3f(0.5f), 0.8f)},
-      {"dielectric 1.5 0.3", Bsdf::dielectric(1.5f, 0.3f)},
-      {"dielectric 1.33 0.6", Bsdf::dielectric(1.33f, 0.6f)},
-      {"dielectric 0.67 0.5", Bsdf::dielectric(1 / 1.5f, 0.5f)},
-      {"oren-nayar 25", Bsdf::diffuse(Vec3f(0.7f), 25)},
-      {"plastic 0.3", Bsdf::coated(Vec3f(0.5f), Vec3f(0.4f), 0.3f, 1 / 1.5f, false)},
-      {"layered 0.2", Bsdf::coated(Vec3f(0.8f), Vec3f(1), 0.2f, 1.5f, true, 10)},
-      {"fresnel blend 0.3", Bsdf::fresnelBlend(Vec3f(0.6f), Vec3f(0.2f), 0.3f)}};
+      {"diffuse", diffuseBsdf(Vec3f(0.7f))},
+      {"conductor 0.3", conductorBsdf(Vec3f(0.9f), 0.3f)},
+      {"conductor 0.8", conductorBsdf(Vec3f(0.5f), 0.8f)},
+      {"dielectric 1.5 0.3", dielectricBsdf(1.5f, 0.3f)},
+      {"dielectric 1.33 0.6", dielectricBsdf(1.33f, 0.6f)},
+      {"dielectric 0.67 0.5", dielectricBsdf(1 / 1.5f, 0.5f)},
+      {"oren-nayar 25", diffuseBsdf(Vec3f(0.7f), 25)},
+      {"plastic 0.3", coatedBsdf(Vec3f(0.5f), Vec3f(0.4f), 0.3f, 1 / 1.5f, false)},
+      {"layered 0.2", coatedBsdf(Vec3f(0.8f), Vec3f(1), 0.2f, 1.5f, true, 10)},
+      {"fresnel blend 0.3", fresnelBlendBsdf(Vec3f(0.6f), Vec3f(0.2f), 0.3f)}};
   TestRng rng(7);
   for (const auto& [name, bsdf] : lobes) {
     const float ior = bsdf.transmits() ? (name.find("1.33") != std::string::npos   ? 1.33f
@@ -629,7 +636,7 @@ TEST(BsdfFresnel, MatchesClosedForms) {
 }
 
 TEST(BsdfDiffuse, IsCosineWeightedWithAlbedoWeight) {
-  Bsdf b = Bsdf::diffuse(Vec3f(0.2f, 0.5f, 0.8f));
+  Bsdf b = diffuseBsdf(Vec3f(0.2f, 0.5f, 0.8f));
   Vec3f wo = direction(40);
   BsdfSample bs;
   ASSERT_TRUE(b.sample(wo, 0.5f, {0.3f, 0.6f}, bs));
