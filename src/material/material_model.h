@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "core/record.h"
 #include "material/bsdf.h"
 #include "material/fourier_bsdf_table.h"
 
@@ -31,55 +32,27 @@ struct MaterialResources {
   std::span<const std::shared_ptr<const FourierBsdfTable>> bsdfTables;
 };
 
-// A model's parameters as bytes, in a part file. The part file renumbers the
-// tables a model names (it keeps only the ones its materials use): a model
-// writes a table index through table(), and reads it back through table().
-class MaterialRecordWriter {
+// A model's parameters as bytes, in a part file (core/record.h). The part
+// file renumbers the tables a model names (it keeps only the ones its
+// materials use): a model writes a table index through table(), and reads it
+// back through table(), which checks it against the tables there are.
+class MaterialRecordWriter : public RecordWriter {
  public:
   using TableIndex = std::function<int32_t(int32_t)>;
   explicit MaterialRecordWriter(TableIndex tableIndex = {}) : tableIndex_(std::move(tableIndex)) {}
-  template <class T>
-  void pod(const T& value) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    const auto* p = reinterpret_cast<const uint8_t*>(&value);
-    bytes_.insert(bytes_.end(), p, p + sizeof(T));
-  }
   void table(int32_t index) { pod(tableIndex_ ? tableIndex_(index) : index); }
-  const std::vector<uint8_t>& bytes() const { return bytes_; }
 
  private:
   TableIndex tableIndex_;
-  std::vector<uint8_t> bytes_;
 };
 
-// Reads a record back; every read is checked, and a short, long or
-// out-of-range record is an InputError naming `where` (the file and material).
-class MaterialRecordReader {
+class MaterialRecordReader : public RecordReader {
  public:
   MaterialRecordReader(std::span<const uint8_t> bytes, std::string where, size_t bsdfTables)
-      : bytes_(bytes), where_(std::move(where)), tables_(bsdfTables) {}
-  template <class T>
-  T pod() {
-    static_assert(std::is_trivially_copyable_v<T>);
-    if (bytes_.size() - at_ < sizeof(T)) fail("its record is too short");
-    T value;
-    std::memcpy(&value, bytes_.data() + at_, sizeof(T));
-    at_ += sizeof(T);
-    return value;
-  }
-  // A finite float (every parameter a model has is one).
-  float number();
-  Vec3f color();
+      : RecordReader(bytes, std::move(where)), tables_(bsdfTables) {}
   int32_t table();
-  // After the model has read its parameters: the record must be used up.
-  void finish() const;
-  [[noreturn]] void fail(const std::string& what) const;
-  const std::string& where() const { return where_; }
 
  private:
-  std::span<const uint8_t> bytes_;
-  size_t at_ = 0;
-  std::string where_;
   size_t tables_;
 };
 

@@ -185,6 +185,11 @@ void Partition::checkCovers(const Scene& scene) const {
         last = size_t(it - boxes.begin());
       }
     }
+    for (int32_t g : scene.objects[size_t(object)].geometries)
+      if (const Shape* shape = scene.geometries[g].shape.get(); shape && !shape->bounds().empty())
+        if (std::none_of(boxes.begin(), boxes.end(),
+                         [&](const Box3f& b) { return b.contains(shape->bounds()); }))
+          return false;
     return true;
   };
   auto coveredByInstanced = [&](size_t i, const RankSet& owners) {
@@ -281,6 +286,15 @@ void Partition::checkCovers(const Scene& scene) const {
                             i, scene.objects[inst.object].name, mesh.name, t, owners.toString()));
         }
       }
+    }
+    for (int32_t g : scene.objects[inst.object].geometries) {
+      const Shape* shape = scene.geometries[g].shape.get();
+      if (!shape || shape->bounds().empty()) continue;
+      const Box3f box = inst.transform.transformBox(shape->bounds());
+      if (!covered(box, eligible(box, owners), 1000000))
+        throw InternalError(fmt::format(
+            "instance {} (object '{}', geometry '{}') is not covered by proxies of its owners {}",
+            i, scene.objects[inst.object].name, scene.geometries[g].name, owners.toString()));
     }
   }
 }

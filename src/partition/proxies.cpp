@@ -30,6 +30,9 @@ std::vector<std::vector<Box3f>> instancedObjectBoxes(const Scene& scene, int ins
       for (const auto& cluster : clusterTriangles(mesh, Affine3f::identity(), clusters))
         objectBoxes[o].push_back(trianglesBounds(mesh, Affine3f::identity(), cluster));
     }
+    for (int32_t g : scene.objects[o].geometries)  // one box a geometry of another kind
+      if (const Shape* shape = scene.geometries[g].shape.get(); shape && !shape->bounds().empty())
+        objectBoxes[o].push_back(shape->bounds());
   }
   return objectBoxes;
 }
@@ -106,6 +109,7 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
       }
       for (int32_t m : scene.objects[o].meshes)
         count += std::min<size_t>(scene.meshes[m].triangleCount(), size_t(std::max(meshBoxes, 1)));
+      count += scene.objects[o].geometries.size();
     }
   std::vector<UnitBox> boxes;
   boxes.reserve(count);
@@ -130,6 +134,9 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
         for (const auto& cluster : clusterTriangles(mesh, inst.transform, meshBoxes))
           boxes.push_back({u, trianglesBounds(mesh, inst.transform, cluster)});
       }
+      for (int32_t g : scene.objects[inst.object].geometries)  // one box a geometry
+        if (const Shape* shape = scene.geometries[g].shape.get(); shape && !shape->bounds().empty())
+          boxes.push_back({u, inst.transform.transformBox(shape->bounds())});
     }
   }
   return boxes;

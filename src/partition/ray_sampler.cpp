@@ -38,7 +38,7 @@ Vec3f cosineAbout(Vec3f n, float u, float v) {
 Vec3f facingNormal(const Scene& scene, const TraceHit& hit, Vec3f direction) {
   const Instance& instance = scene.instances[size_t(hit.instance)];
   const Mesh& mesh =
-      scene.meshes[size_t(scene.objects[size_t(instance.object)].meshes[size_t(hit.meshSlot)])];
+      scene.meshes[size_t(scene.objects[size_t(instance.object)].meshes[size_t(hit.slot)])];
   const Vec3i& tri = mesh.indices[hit.primitive];
   const Vec3f p0 = instance.transform.transformPoint(mesh.positions[size_t(tri.x)]);
   const Vec3f p1 = instance.transform.transformPoint(mesh.positions[size_t(tri.y)]);

@@ -89,7 +89,8 @@ SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& opt
   }
 
   // 2. Objects: a broken object becomes one object per mesh; each piece of a
-  // cut mesh becomes its own object; the rest stays together in the original.
+  // cut mesh becomes its own object; the rest stays together in the original
+  // (with the geometries of other kinds, which are never cut).
   const size_t objectCount = scene.objects.size();
   std::vector<std::vector<int32_t>> replacement(objectCount);
   for (size_t o = 0; o < objectCount; ++o) {
@@ -118,6 +119,7 @@ SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& opt
                         ? fmt::format("{}/{}", original.name, scene.meshes[groups[g][0]].name)
                         : original.name;
       object.meshes = groups[g];
+      if (g == 0) object.geometries = original.geometries;  // other kinds stay whole, together
       if (g == 0) {
         scene.objects[o] = std::move(object);
         replacement[o].push_back(int32_t(o));

@@ -22,22 +22,31 @@ UnitSet extractUnits(const Scene& scene, const UnitOptions& options) {
   const uint32_t meshes = uint32_t(scene.meshes.size());
   set.meshResources = meshes;
   set.objectCount = uint32_t(scene.objects.size());
-  const uint32_t tables = meshes + uint32_t(scene.textures.size());  // first table's resource
-  set.resourceBytes.reserve(tables + scene.bsdfTables.size());
+  const uint32_t tables = meshes + uint32_t(scene.textures.size());        // first table's resource
+  const uint32_t geometries = tables + uint32_t(scene.bsdfTables.size());  // first geometry's
+  set.resourceBytes.reserve(geometries + scene.geometries.size());
   for (const Mesh& m : scene.meshes) set.resourceBytes.push_back(meshCost(m).total());
   for (const Texture& t : scene.textures) set.resourceBytes.push_back(textureCost(t).total());
   for (const auto& t : scene.bsdfTables) set.resourceBytes.push_back(bsdfTableCost(*t).total());
+  for (const Geometry& g : scene.geometries) set.resourceBytes.push_back(geometryCost(g).total());
 
-  // Resources of each object: its meshes and their materials' textures and tables.
+  // Resources of each object: its meshes and geometries and their materials'
+  // textures and tables.
   std::vector<std::vector<uint32_t>> objectResources(scene.objects.size());
   for (size_t o = 0; o < scene.objects.size(); ++o) {
     std::vector<uint32_t>& r = objectResources[o];
+    auto materialResources = [&](int32_t material) {
+      scene.forEachShadingTexture(material, [&](int32_t t) { r.push_back(meshes + uint32_t(t)); });
+      scene.forEachShadingBsdfTable(material,
+                                    [&](int32_t t) { r.push_back(tables + uint32_t(t)); });
+    };
     for (int32_t m : scene.objects[o].meshes) {
       r.push_back(uint32_t(m));
-      scene.forEachShadingTexture(scene.meshes[m].material,
-                                  [&](int32_t t) { r.push_back(meshes + uint32_t(t)); });
-      scene.forEachShadingBsdfTable(scene.meshes[m].material,
-                                    [&](int32_t t) { r.push_back(tables + uint32_t(t)); });
+      materialResources(scene.meshes[m].material);
+    }
+    for (int32_t g : scene.objects[o].geometries) {
+      r.push_back(geometries + uint32_t(g));
+      materialResources(scene.geometries[g].material);
     }
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());

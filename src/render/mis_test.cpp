@@ -166,7 +166,7 @@ TEST(Mis, EmittersAreFoundThroughTheLightSceneAndUnderMirroringTransforms) {
     for (int32_t primitive = 0; primitive < 2; ++primitive) {
       TraceHit hit;
       hit.instance = instance;
-      hit.meshSlot = 0;
+      hit.slot = 0;
       hit.primitive = primitive;
       const std::array<Vec3f, 3> corners = worldCorners(scene, table, hit);
       const uint32_t a = direct.emitterIndex(corners);

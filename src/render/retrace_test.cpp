@@ -29,7 +29,7 @@ bool same(const void* a, const void* b, size_t n) {
 }
 
 bool sameHit(const TraceHit& a, const TraceHit& b) {
-  return a.instance == b.instance && a.meshSlot == b.meshSlot && a.primitive == b.primitive &&
+  return a.instance == b.instance && a.slot == b.slot && a.primitive == b.primitive &&
          same(&a.u, &b.u, 4) && same(&a.v, &b.v, 4);
 }
 

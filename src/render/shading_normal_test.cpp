@@ -48,7 +48,7 @@ Scene texturedSquare(Material material) {
 SurfacePoint surfaceAtCentre(const Scene& scene) {
   TraceHit hit;
   hit.instance = 0;
-  hit.meshSlot = 0;
+  hit.slot = 0;
   hit.primitive = 0;  // corners 0, 1, 2: barycentrics put the point at uv (0.75, 0.25)
   hit.u = 0.5f;
   hit.v = 0.25f;

@@ -72,6 +72,23 @@ Vec3f bentNormal(const Scene& scene, const Material& material, const SurfacePoin
   return bent;
 }
 
+SurfacePoint shapeSurfaceAt(const Scene& scene, const Affine3f& transform, const Affine3f& inv,
+                            const Shape& shape, const Material& material, const TraceHit& hit) {
+  const ShapeSurface local = shape.surface(hit.primitive, {hit.u, hit.v});
+  SurfacePoint s;
+  s.position = transform.transformPoint(local.position);
+  const Vec3f ng = normalize(transformNormalByInverse(inv, local.geometricNormal));
+  const Vec3f n = transformNormalByInverse(inv, local.shadingNormal);
+  const float len = length(n);
+  const Vec3f ns = len > 0 && std::isfinite(len) ? n * (1 / len) : ng;
+  s.geometricNormal = ng;
+  s.shadingNormal = dot(ns, ng) < 0 ? -ns : ns;
+  s.uv = local.uv;
+  s.material = &material;
+  s.baseColor = materialBaseColor(scene, material, s.uv, s.position);
+  return s;
+}
+
 std::vector<Affine3f> instanceInverses(const Scene& scene) {
   std::vector<Affine3f> out;
   out.reserve(scene.instances.size());
@@ -84,6 +101,8 @@ SurfaceTable::SurfaceTable(const Scene& scene) : inverses(instanceInverses(scene
   for (size_t o = 0; o < scene.objects.size(); ++o) {
     objectMeshes[o] = uint32_t(meshes.size());
     for (int32_t m : scene.objects[o].meshes) meshes.push_back(meshArrays(scene, scene.meshes[m]));
+    for (int32_t g : scene.objects[o].geometries)
+      meshes.push_back(geometryArrays(scene, scene.geometries[g]));
   }
   instanceMeshes.reserve(scene.instances.size());
   for (const Instance& inst : scene.instances) instanceMeshes.push_back(objectMeshes[inst.object]);

@@ -50,6 +50,7 @@ struct SurfaceTable {
     const Vec3f* normals;  // null: none
     const Vec2f* uvs;      // null: none
     const Material* material;
+    const Shape* shape = nullptr;  // set: a geometry of another kind (the arrays are null)
   };
   std::vector<Affine3f> inverses;        // per instance
   std::vector<uint32_t> instanceMeshes;  // per instance: its object's slot 0 in `meshes`
@@ -85,6 +86,12 @@ void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
 Vec3f bentNormal(const Scene& scene, const Material& material, const SurfacePoint& s, Vec3f n,
                  Vec3f dpdu, Vec3f dpdv);
 
+// The surface where `hit` meets a geometry of another kind (scene/shape.h),
+// whose material has no bump or normal map (Scene::validate). Out of line:
+// triangles are the common case.
+SurfacePoint shapeSurfaceAt(const Scene& scene, const Affine3f& transform, const Affine3f& inv,
+                            const Shape& shape, const Material& material, const TraceHit& hit);
+
 // The hit triangle's corners in world space, each as Affine3f::transformPoint
 // places it (what the light sampler keys emitters by: LightSampler::emitterIndex).
 std::array<Vec3f, 3> worldCorners(const Scene& scene, const SurfaceTable& table,
@@ -106,6 +113,8 @@ inline Vec3f transformNormalByInverse(const Affine3f& inv, Vec3f n) {
 // The one computation behind both reconstructSurface overloads.
 inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, const Affine3f& inv,
                               const SurfaceTable::MeshArrays& mesh, const TraceHit& hit) {
+  if (mesh.shape) [[unlikely]]
+    return shapeSurfaceAt(scene, transform, inv, *mesh.shape, *mesh.material, hit);
   const Vec3i& tri = mesh.indices[hit.primitive];
   float w = 1 - hit.u - hit.v;
   SurfacePoint s;
@@ -142,25 +151,39 @@ inline SurfaceTable::MeshArrays meshArrays(const Scene& scene, const Mesh& mesh)
           mesh.uvs.empty() ? nullptr : mesh.uvs.data(), &scene.materials[mesh.material]};
 }
 
+inline SurfaceTable::MeshArrays geometryArrays(const Scene& scene, const Geometry& geometry) {
+  return {nullptr,
+          nullptr,
+          nullptr,
+          nullptr,
+          &scene.materials[geometry.material],
+          geometry.shape.get()};
+}
+
 inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
                                        const std::vector<Affine3f>* inverses) {
   const Instance& inst = scene.instances[hit.instance];
   const Affine3f inv = inverses ? (*inverses)[hit.instance] : inst.transform.inverse();
-  const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.meshSlot]];
-  return surfaceAt(scene, inst.transform, inv, meshArrays(scene, mesh), hit);
+  const Object& object = scene.objects[inst.object];
+  const size_t slot = size_t(hit.slot);
+  const SurfaceTable::MeshArrays arrays =
+      slot < object.meshes.size()
+          ? meshArrays(scene, scene.meshes[object.meshes[slot]])
+          : geometryArrays(scene, scene.geometries[object.geometries[slot - object.meshes.size()]]);
+  return surfaceAt(scene, inst.transform, inv, arrays, hit);
 }
 
 inline SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table,
                                        const TraceHit& hit) {
   return surfaceAt(scene, scene.instances[hit.instance].transform, table.inverses[hit.instance],
-                   table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.meshSlot)], hit);
+                   table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)], hit);
 }
 
 inline std::array<Vec3f, 3> worldCorners(const Scene& scene, const SurfaceTable& table,
                                          const TraceHit& hit) {
   const Affine3f& transform = scene.instances[hit.instance].transform;
   const SurfaceTable::MeshArrays& mesh =
-      table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.meshSlot)];
+      table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)];
   const Vec3i& tri = mesh.indices[hit.primitive];
   return {transform.transformPoint(mesh.positions[tri.x]),
           transform.transformPoint(mesh.positions[tri.y]),

@@ -44,7 +44,7 @@ std::vector<uint8_t> partitionPicture(const Scene& scene, const Partition& parti
             if (!hit.valid()) continue;
             depth[size_t(y) * w + x] = hit.t;
             const Instance& inst = scene.instances[hit.instance];
-            const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.meshSlot]];
+            const Mesh& mesh = scene.meshes[scene.objects[inst.object].meshes[hit.slot]];
             const Vec3i& tri = mesh.indices[hit.primitive];
             Vec3f p0 = inst.transform.transformPoint(mesh.positions[tri.x]);
             Vec3f p1 = inst.transform.transformPoint(mesh.positions[tri.y]);

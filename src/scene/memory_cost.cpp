@@ -15,6 +15,7 @@ MemoryCost& MemoryCost::operator+=(const MemoryCost& o) {
   texels += o.texels;
   instances += o.instances;
   accel += o.accel;
+  shapes += o.shapes;
   return *this;
 }
 
@@ -27,6 +28,7 @@ MemoryCost MemoryCost::scaled(uint64_t times) const {
   c.texels *= times;
   c.instances *= times;
   c.accel *= times;
+  c.shapes *= times;
   return c;
 }
 
@@ -67,6 +69,16 @@ MemoryCost instanceCost(uint64_t instanceCount) {
   MemoryCost c;
   c.instances = static_cast<uint64_t>(instanceCount * MemoryModel::kBytesPerInstanceRecord);
   c.accel = static_cast<uint64_t>(instanceCount * MemoryModel::kAccelBytesPerInstance);
+  return c;
+}
+
+MemoryCost geometryCost(const Geometry& geometry) {
+  MemoryCost c;
+  if (!geometry.shape) return c;
+  c.shapes = geometry.shape->bytes();
+  c.accel = static_cast<uint64_t>(double(geometry.shape->primitiveCount()) *
+                                      MemoryModel::kAccelBytesPerTriangle +
+                                  MemoryModel::kAccelBytesPerMesh);
   return c;
 }
 

@@ -11,6 +11,7 @@ namespace ferry {
 
 struct Mesh;
 struct Texture;
+struct Geometry;
 
 struct MemoryCost {
   uint64_t vertices = 0;  // positions
@@ -18,12 +19,13 @@ struct MemoryCost {
   uint64_t uvs = 0;
   uint64_t indices = 0;
   uint64_t texels = 0;     // textures' texels and tabulated BSDFs' coefficients
+  uint64_t shapes = 0;     // what geometries of other kinds hold (Shape::bytes)
   uint64_t instances = 0;  // instance records (transform, ids) and their Embree instance geometry
   uint64_t accel = 0;      // estimated BVH bytes (bottom level per object, top level per instance)
 
   // The mesh arrays alone (what a mesh store keeps out of memory).
   uint64_t meshArrays() const { return vertices + normals + uvs + indices; }
-  uint64_t total() const { return meshArrays() + texels + instances + accel; }
+  uint64_t total() const { return meshArrays() + texels + shapes + instances + accel; }
   MemoryCost& operator+=(const MemoryCost& o);
   MemoryCost scaled(uint64_t times) const;
 };
@@ -58,5 +60,9 @@ MemoryCost textureCost(const Texture& texture);
 struct FourierBsdfTable;
 MemoryCost bsdfTableCost(const FourierBsdfTable& table);
 MemoryCost instanceCost(uint64_t instanceCount);
+// A geometry of another kind: its shape's bytes, and a BVH estimated as for
+// triangles, per primitive (not calibrated: Embree builds it over the
+// primitives' boxes). A released one costs nothing.
+MemoryCost geometryCost(const Geometry& geometry);
 
 }  // namespace ferry

@@ -50,6 +50,17 @@ int32_t Scene::addSingleInstanceMesh(Mesh mesh) {
   return id;
 }
 
+int32_t Scene::addSingleInstanceGeometry(Geometry geometry) {
+  geometries.push_back(std::move(geometry));
+  Object object;
+  object.name = geometries.back().name;
+  object.geometries.push_back(static_cast<int32_t>(geometries.size() - 1));
+  objects.push_back(std::move(object));
+  int32_t id = static_cast<int32_t>(objects.size() - 1);
+  instances.push_back({id, Affine3f::identity()});
+  return id;
+}
+
 void Scene::reserveVertexSlack() {
   for (Mesh& mesh : meshes) mesh.reserveVertexSlack();
 }
@@ -62,6 +73,8 @@ int32_t Scene::addMaterial(Material material) {
 Box3f Scene::objectBounds(int32_t object) const {
   Box3f b;
   for (int32_t m : objects[object].meshes) b.extend(meshes[m].bounds());
+  for (int32_t g : objects[object].geometries)
+    if (geometries[g].shape) b.extend(geometries[g].shape->bounds());
   return b;
 }
 
@@ -103,6 +116,18 @@ void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
         forEachShadingTexture(meshes[m].material, [&](int32_t t) { keepTexture[size_t(t)] = 1; });
         forEachShadingBsdfTable(meshes[m].material, [&](int32_t t) { keepTable[size_t(t)] = 1; });
       }
+  std::vector<uint8_t> keepGeometry(geometries.size(), 0);
+  for (size_t o = 0; o < objects.size(); ++o)
+    if (keepObject[o])
+      for (int32_t g : objects[o].geometries) {
+        keepGeometry[g] = 1;
+        forEachShadingTexture(geometries[g].material,
+                              [&](int32_t t) { keepTexture[size_t(t)] = 1; });
+        forEachShadingBsdfTable(geometries[g].material,
+                                [&](int32_t t) { keepTable[size_t(t)] = 1; });
+      }
+  for (size_t g = 0; g < geometries.size(); ++g)
+    if (!keepGeometry[g]) geometries[g].shape.reset();
   for (size_t m = 0; m < meshes.size(); ++m)
     if (!keepMesh[m]) meshes[m].releaseArrays();
   for (size_t t = 0; t < textures.size(); ++t)
@@ -148,10 +173,34 @@ void Scene::validate() const {
                        materials.size()));
     if (std::string problem = mesh.arrayProblem(); !problem.empty()) fail(problem);
   }
-  for (const Object& o : objects)
+  for (const Geometry& g : geometries) {
+    if (g.material < 0 || size_t(g.material) >= materials.size())
+      fail(fmt::format("geometry '{}' refers to material {} of {}", g.name, g.material,
+                       materials.size()));
+    // Lights, cut-outs and bent normals are triangles' (render/lights.h,
+    // trace/alpha_cutout.h, render/surface.h).
+    forEachShadingMaterial(g.material, [&](int32_t k) {
+      const Material& m = materials[size_t(k)];
+      const char* what = m.isEmissive()                  ? "emits light"
+                         : m.alphaTexture != kNoTexture  ? "has a cut-out"
+                         : m.bumpTexture != kNoTexture   ? "has a bump map"
+                         : m.normalTexture != kNoTexture ? "has a normal map"
+                                                         : nullptr;
+      if (what)
+        fail(
+            fmt::format("geometry '{}' ({}): material '{}' {}, which only triangle meshes can "
+                        "have",
+                        g.name, g.shape ? std::string(g.shape->kind()) : "released", m.name, what));
+    });
+  }
+  for (const Object& o : objects) {
     for (int32_t m : o.meshes)
       if (m < 0 || size_t(m) >= meshes.size())
         fail(fmt::format("object '{}' refers to mesh {} of {}", o.name, m, meshes.size()));
+    for (int32_t g : o.geometries)
+      if (g < 0 || size_t(g) >= geometries.size())
+        fail(fmt::format("object '{}' refers to geometry {} of {}", o.name, g, geometries.size()));
+  }
   for (size_t i = 0; i < instances.size(); ++i) {
     if (instances[i].object < 0 || size_t(instances[i].object) >= objects.size())
       fail(fmt::format("instance {} refers to object {} of {}", i, instances[i].object,

@@ -18,6 +18,7 @@
 #include "core/shared_array.h"
 #include "material/fourier_bsdf_table.h"
 #include "material/material_model.h"
+#include "scene/shape.h"
 #include "scene/texture.h"
 
 namespace ferry {
@@ -117,10 +118,20 @@ struct Mesh {
   }
 };
 
-// A group of meshes placed together by instances (a tree: trunk + leaf cards).
+// A shape of another kind than a triangle mesh (scene/shape.h) with its material.
+struct Geometry {
+  std::string name;
+  int32_t material = 0;
+  std::shared_ptr<const Shape> shape;  // null: released (Scene::releaseAllBut)
+};
+
+// A group of meshes and geometries placed together by instances (a tree:
+// trunk + leaf cards). A hit names a slot: its meshes first, then its geometries.
 struct Object {
   std::string name;
-  std::vector<int32_t> meshes;  // indices into Scene::meshes
+  std::vector<int32_t> meshes;      // indices into Scene::meshes
+  std::vector<int32_t> geometries;  // indices into Scene::geometries
+  size_t slots() const { return meshes.size() + geometries.size(); }
 };
 
 struct Instance {
@@ -167,6 +178,7 @@ inline bool integratorWantsLightPaths(const std::string& type) {
 struct Scene {
   std::string name;
   std::vector<Mesh> meshes;
+  std::vector<Geometry> geometries;
   std::vector<Object> objects;
   std::vector<Instance> instances;
   std::vector<Material> materials;
@@ -206,6 +218,9 @@ struct Scene {
   // Adds a mesh (with vertex slack) as its own object with one identity
   // instance; returns the object.
   int32_t addSingleInstanceMesh(Mesh mesh);
+  // Adds a geometry of another kind as its own object with one identity
+  // instance; returns the object.
+  int32_t addSingleInstanceGeometry(Geometry geometry);
   int32_t addMaterial(Material material);
 
   Box3f objectBounds(int32_t object) const;

@@ -23,6 +23,11 @@ SceneSummary summarize(const Scene& scene) {
       s.emissiveTriangles += m.triangleCount();
     }
   }
+  s.geometries = scene.geometries.size();
+  for (const Geometry& g : scene.geometries) {
+    if (g.shape) s.shapePrimitives += g.shape->primitiveCount();
+    s.memory += geometryCost(g);
+  }
   s.objects = scene.objects.size();
   s.instances = scene.instances.size();
   std::vector<uint64_t> trianglesPerObject(scene.objects.size(), 0);
@@ -47,18 +52,29 @@ SceneSummary summarize(const Scene& scene) {
 
 MemoryCost ownedMemory(const Scene& scene, const std::vector<int32_t>& instances) {
   std::vector<uint8_t> object(scene.objects.size(), 0), mesh(scene.meshes.size(), 0),
-      texture(scene.textures.size(), 0), table(scene.bsdfTables.size(), 0);
+      geometry(scene.geometries.size(), 0), texture(scene.textures.size(), 0),
+      table(scene.bsdfTables.size(), 0);
   for (int32_t i : instances) object[scene.instances[i].object] = 1;
   MemoryCost cost = instanceCost(instances.size());
   for (size_t o = 0; o < object.size(); ++o)
-    if (object[o])
+    if (object[o]) {
       for (int32_t m : scene.objects[o].meshes) mesh[m] = 1;
+      for (int32_t g : scene.objects[o].geometries) geometry[g] = 1;
+    }
   for (size_t m = 0; m < mesh.size(); ++m) {
     if (!mesh[m]) continue;
     cost += meshCost(scene.meshes[m]);
     scene.forEachShadingTexture(scene.meshes[m].material,
                                 [&](int32_t t) { texture[size_t(t)] = 1; });
     scene.forEachShadingBsdfTable(scene.meshes[m].material,
+                                  [&](int32_t t) { table[size_t(t)] = 1; });
+  }
+  for (size_t g = 0; g < geometry.size(); ++g) {
+    if (!geometry[g]) continue;
+    cost += geometryCost(scene.geometries[g]);
+    scene.forEachShadingTexture(scene.geometries[g].material,
+                                [&](int32_t t) { texture[size_t(t)] = 1; });
+    scene.forEachShadingBsdfTable(scene.geometries[g].material,
                                   [&](int32_t t) { table[size_t(t)] = 1; });
   }
   for (size_t t = 0; t < texture.size(); ++t)
@@ -123,6 +139,8 @@ nlohmann::json SceneSummary::toJson() const {
   nlohmann::json j;
   j["name"] = name;
   j["unique_meshes"] = uniqueMeshes;
+  j["geometries"] = geometries;
+  j["shape_primitives"] = shapePrimitives;
   j["triangles"] = triangles;
   j["vertices"] = vertices;
   j["objects"] = objects;
@@ -142,7 +160,8 @@ nlohmann::json SceneSummary::toJson() const {
   j["memory_bytes"] = {{"total", memory.total()},       {"vertices", memory.vertices},
                        {"normals", memory.normals},     {"uvs", memory.uvs},
                        {"indices", memory.indices},     {"texels", memory.texels},
-                       {"instances", memory.instances}, {"accel", memory.accel}};
+                       {"instances", memory.instances}, {"accel", memory.accel},
+                       {"shapes", memory.shapes}};
   return j;
 }
 
@@ -153,6 +172,9 @@ std::string SceneSummary::toText() const {
   };
   out += fmt::format("scene {}\n", name);
   row("unique meshes", formatCount(uniqueMeshes));
+  if (geometries > 0)
+    row("other geometries",
+        fmt::format("{} ({} primitives)", formatCount(geometries), formatCount(shapePrimitives)));
   row("triangles", formatCount(triangles));
   row("vertices", formatCount(vertices));
   row("objects", formatCount(objects));
@@ -174,6 +196,7 @@ std::string SceneSummary::toText() const {
   row("  uvs", formatBytes(memory.uvs));
   row("  indices", formatBytes(memory.indices));
   row("  texels", formatBytes(memory.texels));
+  if (memory.shapes > 0) row("  shapes", formatBytes(memory.shapes));
   row("  instances", formatBytes(memory.instances));
   row("  acceleration", formatBytes(memory.accel));
   return out;

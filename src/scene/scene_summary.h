@@ -19,6 +19,8 @@ struct Scene;
 struct SceneSummary {
   std::string name;
   uint64_t uniqueMeshes = 0;
+  uint64_t geometries = 0;  // of other kinds than triangle meshes (scene/shape.h)
+  uint64_t shapePrimitives = 0;
   uint64_t triangles = 0;  // unique: each mesh counted once
   uint64_t vertices = 0;
   uint64_t objects = 0;

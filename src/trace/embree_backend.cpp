@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <mutex>
 #include <numeric>
 #include <string>
@@ -163,6 +164,63 @@ void errorCallback(void* user, RTCError code, const char* message) {
   if (code != RTC_ERROR_NONE) static_cast<ErrorLog*>(user)->record(code, message);
 }
 
+// A geometry of another kind (scene/shape.h) as an Embree user geometry:
+// Embree builds its BVH over the primitives' boxes and asks the shape for
+// each crossing.
+void shapeBounds(const RTCBoundsFunctionArguments* args) {
+  const Box3f b = static_cast<const Shape*>(args->geometryUserPtr)->primitiveBounds(args->primID);
+  RTCBounds* out = args->bounds_o;
+  out->lower_x = b.lower.x;
+  out->lower_y = b.lower.y;
+  out->lower_z = b.lower.z;
+  out->upper_x = b.upper.x;
+  out->upper_y = b.upper.y;
+  out->upper_z = b.upper.z;
+}
+
+// Ray i of a stream's packet: its origin, direction and t range.
+template <typename Args>
+bool shapeCrossing(const Args* args, RTCRayN* ray, unsigned i, float& t, Vec2f& uv) {
+  const unsigned n = args->N;
+  const Vec3f origin{RTCRayN_org_x(ray, n, i), RTCRayN_org_y(ray, n, i), RTCRayN_org_z(ray, n, i)};
+  const Vec3f direction{RTCRayN_dir_x(ray, n, i), RTCRayN_dir_y(ray, n, i),
+                        RTCRayN_dir_z(ray, n, i)};
+  return static_cast<const Shape*>(args->geometryUserPtr)
+      ->intersect(args->primID, origin, direction, RTCRayN_tnear(ray, n, i),
+                  RTCRayN_tfar(ray, n, i), t, uv);
+}
+
+void shapeIntersect(const RTCIntersectFunctionNArguments* args) {
+  RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
+  RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    float t;
+    Vec2f uv;
+    if (!shapeCrossing(args, ray, i, t, uv)) continue;
+    const unsigned n = args->N;
+    RTCRayN_tfar(ray, n, i) = t;
+    RTCHitN_Ng_x(hit, n, i) = 0;  // (shading rebuilds the normal from the shape)
+    RTCHitN_Ng_y(hit, n, i) = 0;
+    RTCHitN_Ng_z(hit, n, i) = 1;
+    RTCHitN_u(hit, n, i) = uv.x;
+    RTCHitN_v(hit, n, i) = uv.y;
+    RTCHitN_primID(hit, n, i) = args->primID;
+    RTCHitN_geomID(hit, n, i) = args->geomID;
+    RTCHitN_instID(hit, n, i, 0) = args->context->instID[0];
+  }
+}
+
+void shapeOccluded(const RTCOccludedFunctionNArguments* args) {
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    float t;
+    Vec2f uv;
+    if (shapeCrossing(args, args->ray, i, t, uv))
+      RTCRayN_tfar(args->ray, args->N, i) = -std::numeric_limits<float>::infinity();
+  }
+}
+
 RTCRayHit toEmbree(const TraceRay& r) {
   RTCRayHit rh{};
   rh.ray.org_x = r.origin.x;
@@ -250,13 +308,13 @@ class EmbreeBackend final : public TraceBackend {
     if (geomID == RTC_INVALID_GEOMETRY_ID || instID != RTC_INVALID_GEOMETRY_ID) return;
     const TopLevelMesh& m = topLevelMeshes_[geomID - topLevelBase_];
     instID = uint32_t(m.instance);
-    geomID = uint32_t(m.meshSlot);
+    geomID = uint32_t(m.slot);
   }
   TraceHit hitOf(const RTCRayHit& rh) const;
   // The vertex array Embree reads for `mesh`: the scene's own when it has a
   // spare element, else a padded copy kept here.
   const Vec3f* sharedPositions(const Mesh& mesh);
-  // Embree geometries for the meshes of `object`, each attached to `target`
+  // Embree geometries for the meshes and geometries of `object`, each attached to `target`
   // by the id idForSlot(slot) returns.
   template <typename IdForSlot>
   void attachMeshes(const Object& object, RTCScene target, const IdForSlot& idForSlot);
@@ -274,7 +332,7 @@ class EmbreeBackend final : public TraceBackend {
   // Meshes attached straight to the top-level scene, by top-level geometry id
   // minus topLevelBase_: the instance and mesh slot a hit on them names.
   struct TopLevelMesh {
-    int32_t instance, meshSlot;
+    int32_t instance, slot;
   };
   std::vector<TopLevelMesh> topLevelMeshes_;
   uint32_t topLevelBase_ = 0;
@@ -403,6 +461,20 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
     rtcAttachGeometryByID(target, g, idForSlot(int32_t(slot)));
     rtcReleaseGeometry(g);
   }
+  for (size_t k = 0; k < object.geometries.size(); ++k) {
+    const Shape* shape = scene_.geometries[object.geometries[k]].shape.get();
+    if (!shape || shape->primitiveCount() == 0) continue;
+    RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, shape->primitiveCount());
+    // Embree only passes the pointer back to the callbacks, which read it as const.
+    rtcSetGeometryUserData(g, const_cast<Shape*>(shape));
+    rtcSetGeometryBoundsFunction(g, shapeBounds, nullptr);
+    rtcSetGeometryIntersectFunction(g, shapeIntersect);
+    rtcSetGeometryOccludedFunction(g, shapeOccluded);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(target, g, idForSlot(int32_t(object.meshes.size() + k)));
+    rtcReleaseGeometry(g);
+  }
 }
 
 RTCScene EmbreeBackend::objectScene(int32_t objectId) const {
@@ -417,9 +489,13 @@ void EmbreeBackend::buildObjectScenes(const std::vector<int32_t>& objects) {
   // object's BVH is the same whichever thread builds it and whatever else
   // builds beside it (EmbreeTraceBackend.ConcurrentBuildsAnswerAsOneThreadDoes).
   std::vector<uint64_t> triangles(objects.size(), 0);
-  for (size_t k = 0; k < objects.size(); ++k)
+  for (size_t k = 0; k < objects.size(); ++k) {
     for (int32_t m : scene_.objects[objects[k]].meshes)
       triangles[k] += scene_.meshes[m].triangleCount();
+    for (int32_t g : scene_.objects[objects[k]].geometries)
+      if (const Shape* shape = scene_.geometries[g].shape.get())
+        triangles[k] += shape->primitiveCount();
+  }
   std::vector<size_t> order(objects.size());
   std::iota(order.begin(), order.end(), size_t(0));
   std::stable_sort(order.begin(), order.end(),

@@ -93,7 +93,7 @@ void expectSameAnswers(const std::string& spec, bool someStayInstanced) {
     EXPECT_TRUE(pathsA[i].hasHit());
     // The same distance on another triangle (a shared edge) may be found
     // first in the other BVH; anything else must name the same triangle.
-    if (a[i].instance != b[i].instance || a[i].meshSlot != b[i].meshSlot ||
+    if (a[i].instance != b[i].instance || a[i].slot != b[i].slot ||
         a[i].primitive != b[i].primitive) {
       ++tiedElsewhere;
       continue;
@@ -103,7 +103,7 @@ void expectSameAnswers(const std::string& spec, bool someStayInstanced) {
     // The single-ray query names hits the same way.
     TraceHit single = shared->intersect(asTraced);
     EXPECT_EQ(single.instance, a[i].instance);
-    EXPECT_EQ(single.meshSlot, a[i].meshSlot);
+    EXPECT_EQ(single.slot, a[i].slot);
   }
   EXPECT_GT(hits, rays.size() / 4) << spec;
   EXPECT_LE(tiedElsewhere, hits / 1000) << spec;

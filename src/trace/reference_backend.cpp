@@ -152,27 +152,6 @@ class Bvh {
   std::vector<uint32_t> items_;
 };
 
-// One object's triangles (every mesh slot with triangles) under one BVH, in
-// the object's own space.
-struct ObjectGeometry {
-  struct Triangle {
-    uint32_t slot, primitive;
-  };
-  std::vector<const Mesh*> meshes;   // by mesh slot
-  std::vector<AlphaCutout> cutouts;  // by mesh slot (inactive: none)
-  std::vector<Triangle> triangles;   // the BVH's items
-  Box3f bounds;
-  Bvh bvh;
-};
-
-// An instance as placed here.
-struct Placement {
-  int32_t instance = 0;
-  uint32_t object = 0;       // into ReferenceBackend::objects_
-  bool transformed = false;  // else entered as is (the top level, or an identity transform)
-  Affine3f toObject;         // world to object space
-};
-
 // One candidate hit: a triangle the ray crosses, in double precision.
 bool crossesTriangle(const Mesh& mesh, uint32_t primitive, Vec3d o, Vec3d d, double& t, double& u,
                      double& v) {
@@ -193,6 +172,49 @@ bool crossesTriangle(const Mesh& mesh, uint32_t primitive, Vec3d o, Vec3d d, dou
   t = dot(e2, qv) * inv;
   return true;
 }
+
+// One object's triangles (every mesh slot with triangles) under one BVH, in
+// the object's own space.
+struct ObjectGeometry {
+  struct Triangle {
+    uint32_t slot, primitive;
+  };
+  std::vector<const Mesh*> meshes;   // by mesh slot
+  std::vector<AlphaCutout> cutouts;  // by mesh slot (inactive: none)
+  std::vector<const Shape*> shapes;  // by slot after the meshes' (null: released)
+  std::vector<Triangle> triangles;   // the BVH's items: triangles, then shapes' primitives
+
+  // Whether the ray crosses item `tri` at t in (tnear, tfar); the float ray
+  // for shapes, the double one for triangles.
+  bool crosses(Triangle tri, Vec3d o, Vec3d d, Vec3f origin, Vec3f direction, float tnear,
+               double tfar, double& t, double& u, double& v) const {
+    if (tri.slot < meshes.size())
+      return crossesTriangle(*meshes[tri.slot], tri.primitive, o, d, t, u, v);
+    float ft;
+    Vec2f uv;
+    if (!shapes[tri.slot - meshes.size()]->intersect(tri.primitive, origin, direction, tnear,
+                                                     float(tfar), ft, uv))
+      return false;
+    t = ft;
+    u = uv.x;
+    v = uv.y;
+    return true;
+  }
+  bool isHole(Triangle tri, double u, double v) const {
+    return tri.slot < cutouts.size() && cutouts[tri.slot].active() &&
+           cutouts[tri.slot].isHole(tri.primitive, float(u), float(v));
+  }
+  Box3f bounds;
+  Bvh bvh;
+};
+
+// An instance as placed here.
+struct Placement {
+  int32_t instance = 0;
+  uint32_t object = 0;       // into ReferenceBackend::objects_
+  bool transformed = false;  // else entered as is (the top level, or an identity transform)
+  Affine3f toObject;         // world to object space
+};
 
 class ReferenceBackend final : public TraceBackend {
  public:
@@ -323,6 +345,17 @@ ReferenceBackend::ReferenceBackend(const Scene& scene, std::span<const int32_t> 
         g.bounds.extend(b);
       }
     }
+    for (size_t k = 0; k < object.geometries.size(); ++k) {
+      const Shape* shape = scene.geometries[size_t(object.geometries[k])].shape.get();
+      g.shapes.push_back(shape);
+      if (!shape) continue;
+      const uint32_t slot = uint32_t(object.meshes.size() + k);
+      for (uint32_t prim = 0; prim < shape->primitiveCount(); ++prim) {
+        g.triangles.push_back({slot, prim});
+        boxes.push_back(shape->primitiveBounds(prim));
+        g.bounds.extend(boxes.back());
+      }
+    }
     g.bvh.build(boxes);
     return it->second;
   };
@@ -355,11 +388,9 @@ TraceHit ReferenceBackend::intersect(const TraceRay& ray) const {
     g.bvh.traverse(boxRay(origin, direction, ray.tnear), prune, [&](uint32_t item) {
       const ObjectGeometry::Triangle tri = g.triangles[item];
       double t, u, v;
-      if (!crossesTriangle(*g.meshes[tri.slot], tri.primitive, o, d, t, u, v)) return true;
+      if (!g.crosses(tri, o, d, origin, direction, ray.tnear, bestT, t, u, v)) return true;
       if (!(t > ray.tnear && (best.valid() ? t < bestT : t <= bestT))) return true;
-      if (g.cutouts[tri.slot].active() &&
-          g.cutouts[tri.slot].isHole(tri.primitive, float(u), float(v)))
-        return true;
+      if (g.isHole(tri, u, v)) return true;
       bestT = t;
       prune = float(t);
       best = {float(t), placement.instance, int32_t(tri.slot), tri.primitive, float(u), float(v)};
@@ -379,11 +410,9 @@ bool ReferenceBackend::occluded(const TraceRay& ray) const {
     g.bvh.traverse(boxRay(origin, direction, ray.tnear), tfar, [&](uint32_t item) {
       const ObjectGeometry::Triangle tri = g.triangles[item];
       double t, u, v;
-      if (!crossesTriangle(*g.meshes[tri.slot], tri.primitive, o, d, t, u, v)) return true;
+      if (!g.crosses(tri, o, d, origin, direction, ray.tnear, ray.tmax, t, u, v)) return true;
       if (!(t > ray.tnear && t <= ray.tmax)) return true;
-      if (g.cutouts[tri.slot].active() &&
-          g.cutouts[tri.slot].isHole(tri.primitive, float(u), float(v)))
-        return true;
+      if (g.isHole(tri, u, v)) return true;
       blocked = true;
       return false;
     });

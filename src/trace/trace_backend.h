@@ -29,9 +29,9 @@ struct TraceRay {
 struct TraceHit {
   float t = kInfinity;
   int32_t instance = -1;   // index into Scene::instances
-  int32_t meshSlot = -1;   // index into the instance's Object::meshes
-  uint32_t primitive = 0;  // triangle within the mesh
-  float u = 0, v = 0;      // barycentrics of vertices 1 and 2
+  int32_t slot = -1;       // in the instance's object: its meshes, then its geometries
+  uint32_t primitive = 0;  // triangle within the mesh, or the shape's primitive
+  float u = 0, v = 0;      // barycentrics of vertices 1 and 2, or the shape's (u, v)
 
   bool valid() const { return instance >= 0; }
 };

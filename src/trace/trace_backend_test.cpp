@@ -97,9 +97,8 @@ PathQueue<Path8> asPaths(const std::vector<TraceRay>& rays, bool shadow) {
 }
 
 bool sameTriangle(const TraceHit& a, const TraceHit& b) {
-  return a.valid() == b.valid() &&
-         (!a.valid() ||
-          (a.instance == b.instance && a.meshSlot == b.meshSlot && a.primitive == b.primitive));
+  return a.valid() == b.valid() && (!a.valid() || (a.instance == b.instance && a.slot == b.slot &&
+                                                   a.primitive == b.primitive));
 }
 
 struct Agreement {
@@ -123,18 +122,16 @@ struct Agreement {
 
 std::string describe(const TraceHit& h) {
   if (!h.valid()) return "miss";
-  return fmt::format("instance {} slot {} triangle {} t {}", h.instance, h.meshSlot, h.primitive,
-                     h.t);
+  return fmt::format("instance {} slot {} triangle {} t {}", h.instance, h.slot, h.primitive, h.t);
 }
 
 // Whether the two hits name triangles with the same three corners (a face
 // listed twice, in either winding): either is the right answer.
 bool coincident(const Scene& scene, const TraceHit& a, const TraceHit& b) {
-  if (!a.valid() || !b.valid() || a.instance != b.instance || a.meshSlot != b.meshSlot)
-    return false;
+  if (!a.valid() || !b.valid() || a.instance != b.instance || a.slot != b.slot) return false;
   const Instance& inst = scene.instances[size_t(a.instance)];
   const Mesh& mesh =
-      scene.meshes[size_t(scene.objects[size_t(inst.object)].meshes[size_t(a.meshSlot)])];
+      scene.meshes[size_t(scene.objects[size_t(inst.object)].meshes[size_t(a.slot)])];
   const Vec3i& p = mesh.indices[a.primitive];
   const Vec3i& q = mesh.indices[b.primitive];
   auto corner = [&](int32_t i) { return mesh.positions[size_t(i)]; };
@@ -147,7 +144,7 @@ bool nearAnEdge(const Scene& scene, const TraceHit& hit, float epsilon) {
   if (!hit.valid()) return false;
   const Instance& inst = scene.instances[size_t(hit.instance)];
   const Mesh& mesh =
-      scene.meshes[size_t(scene.objects[size_t(inst.object)].meshes[size_t(hit.meshSlot)])];
+      scene.meshes[size_t(scene.objects[size_t(inst.object)].meshes[size_t(hit.slot)])];
   const Vec3i& tri = mesh.indices[hit.primitive];
   const Vec3f p[3] = {inst.transform.transformPoint(mesh.positions[size_t(tri.x)]),
                       inst.transform.transformPoint(mesh.positions[size_t(tri.y)]),
@@ -198,7 +195,7 @@ Agreement compare(const Scene& scene, const TraceBackend& embree, const TraceBac
         if (difference <= 1e-5 * (r.t + sceneScale)) {
           ++a.agreedHits;
           const Instance& inst = scene.instances[size_t(r.instance)];
-          const int32_t mesh = scene.objects[size_t(inst.object)].meshes[size_t(r.meshSlot)];
+          const int32_t mesh = scene.objects[size_t(inst.object)].meshes[size_t(r.slot)];
           a.onInstances += !inst.transform.isIdentity();
           a.onCutouts +=
               scene.materials[size_t(scene.meshes[size_t(mesh)].material)].alphaTexture !=
@@ -310,7 +307,7 @@ TEST(TraceBackendCrossCheck, AShiftedVertexIsCaught) {
   embree->trace(paths, 0, {}, hits);
   std::map<std::tuple<int32_t, int32_t, uint32_t>, int> counts;
   for (const TraceHit& h : hits)
-    if (h.valid()) ++counts[{h.instance, h.meshSlot, h.primitive}];
+    if (h.valid()) ++counts[{h.instance, h.slot, h.primitive}];
   ASSERT_FALSE(counts.empty());
   const auto [instance, slot, primitive] =
       std::max_element(counts.begin(), counts.end(), [](const auto& a, const auto& b) {

@@ -218,8 +218,14 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
       mesh.material += materials;
       all.meshes.push_back(std::move(mesh));
     }
+    const int32_t geometries = int32_t(all.geometries.size());
+    for (Geometry& g : part.scene.geometries) {
+      g.material += materials;
+      all.geometries.push_back(std::move(g));
+    }
     for (Object& o : part.scene.objects) {
       for (int32_t& mesh : o.meshes) mesh += meshes;
+      for (int32_t& g : o.geometries) g += geometries;
       all.objects.push_back(std::move(o));
     }
     for (const Instance& inst : part.scene.instances)

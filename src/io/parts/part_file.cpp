@@ -24,6 +24,7 @@
 #include "material/models/diffuse_transmission.h"
 #include "material/models/fourier.h"
 #include "material/models/fresnel_blend.h"
+#include "shapes/shape_kinds.h"
 
 namespace ferry {
 namespace {
@@ -213,14 +214,20 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
                   const std::vector<RankSet>* owners, size_t ownerWords) {
   std::vector<int32_t> objectIndex(scene.objects.size(), -1), meshIndex(scene.meshes.size(), -1),
       materialIndex(scene.materials.size(), -1), textureIndex(scene.textures.size(), -1),
-      tableIndex(scene.bsdfTables.size(), -1);
+      tableIndex(scene.bsdfTables.size(), -1), geometryIndex(scene.geometries.size(), -1);
   for (int32_t i : instances) objectIndex[scene.instances[i].object] = 0;
   for (size_t o = 0; o < scene.objects.size(); ++o)
-    if (objectIndex[o] == 0)
+    if (objectIndex[o] == 0) {
       for (int32_t m : scene.objects[o].meshes) meshIndex[m] = 0;
+      for (int32_t g : scene.objects[o].geometries) geometryIndex[g] = 0;
+    }
   for (size_t m = 0; m < scene.meshes.size(); ++m)
     if (meshIndex[m] == 0)
       scene.forEachShadingMaterial(scene.meshes[m].material,
+                                   [&](int32_t k) { materialIndex[size_t(k)] = 0; });
+  for (size_t g = 0; g < scene.geometries.size(); ++g)
+    if (geometryIndex[g] == 0)
+      scene.forEachShadingMaterial(scene.geometries[g].material,
                                    [&](int32_t k) { materialIndex[size_t(k)] = 0; });
   for (size_t k = 0; k < scene.materials.size(); ++k)
     if (materialIndex[k] == 0) {
@@ -238,7 +245,7 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
   };
   const int32_t objects = number(objectIndex), meshes = number(meshIndex),
                 materials = number(materialIndex), textures = number(textureIndex),
-                tables = number(tableIndex);
+                tables = number(tableIndex), geometries = number(geometryIndex);
 
   w.pod(uint64_t(textures));
   for (size_t t = 0; t < scene.textures.size(); ++t)
@@ -262,6 +269,18 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
       Mesh scratch;  // a stored mesh is read back for as long as it is written
       writeMesh(w, scene.geometry(int32_t(m), scratch), materialIndex[scene.meshes[m].material]);
     }
+  w.pod(uint64_t(geometries));
+  for (size_t g = 0; g < scene.geometries.size(); ++g)
+    if (geometryIndex[g] >= 0) {
+      const Geometry& geometry = scene.geometries[g];
+      FERRY_CHECK(geometry.shape != nullptr);  // a part holds what it names
+      w.str(geometry.name);
+      w.pod(materialIndex[size_t(geometry.material)]);
+      w.str(std::string(geometry.shape->kind()));
+      RecordWriter record;
+      geometry.shape->write(record);
+      w.array(record.bytes());
+    }
   w.pod(uint64_t(objects));
   std::vector<int32_t> list;
   for (size_t o = 0; o < scene.objects.size(); ++o)
@@ -269,6 +288,9 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
       w.str(scene.objects[o].name);
       list.clear();
       for (int32_t m : scene.objects[o].meshes) list.push_back(meshIndex[m]);
+      w.array(list);
+      list.clear();
+      for (int32_t g : scene.objects[o].geometries) list.push_back(geometryIndex[g]);
       w.array(list);
     }
   std::vector<int32_t> instanceObjects;
@@ -650,6 +672,29 @@ Mesh readMesh(FileReader& r) {
   return m;
 }
 
+// A geometry of another kind: its name, material, kind by name and the
+// kind's record (scene/shape.h, shapes/shape_kinds.h).
+Geometry readGeometry(FileReader& r) {
+  Geometry g;
+  g.name = r.str();
+  g.material = r.pod<int32_t>();
+  const std::string kind = r.str();
+  const std::vector<uint8_t> bytes = r.array<uint8_t>();
+  const ShapeKind* k = shapeKind(kind);
+  if (!k) {
+    std::string known;
+    for (const ShapeKind& s : shapeKinds()) known += (known.empty() ? "" : ", ") + s.name;
+    throw InputError(
+        fmt::format("{}: geometry \"{}\" is of kind \"{}\", which this Ferry does "
+                    "not know (it knows {})",
+                    r.path(), g.name, kind, known));
+  }
+  RecordReader record(bytes, fmt::format("{}: geometry \"{}\" ({})", r.path(), g.name, kind));
+  g.shape = k->read(record);
+  record.finish();
+  return g;
+}
+
 // Reads what writeContent wrote; checks every index (Scene::validate).
 void readContent(FileReader& r, Scene& scene, std::vector<RankSet>& owners, size_t ownerWords) {
   for (uint64_t n = r.count(8); n > 0; --n) scene.textures.push_back(readTexture(r));
@@ -658,10 +703,13 @@ void readContent(FileReader& r, Scene& scene, std::vector<RankSet>& owners, size
   for (uint64_t n = r.count(8); n > 0; --n)
     scene.materials.push_back(readMaterial(r, scene.bsdfTables.size()));
   for (uint64_t n = r.count(8); n > 0; --n) scene.meshes.push_back(readMesh(r));
+  if (r.version() >= 9)  // older: triangle meshes only
+    for (uint64_t n = r.count(8); n > 0; --n) scene.geometries.push_back(readGeometry(r));
   for (uint64_t n = r.count(8); n > 0; --n) {
     Object o;
     o.name = r.str();
     o.meshes = r.array<int32_t>();
+    if (r.version() >= 9) o.geometries = r.array<int32_t>();
     scene.objects.push_back(std::move(o));
   }
   std::vector<int32_t> objects = r.array<int32_t>();

@@ -1,0 +1,76 @@
+// A plug-in's parameters as bytes (a material model's, a shape's), as part
+// files store them: written field by field, read back with every read
+// checked; a short, long or non-finite record is an InputError naming where
+// it is (the file and the item).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <span>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include "core/math.h"
+
+namespace ferry {
+
+class RecordWriter {
+ public:
+  template <class T>
+  void pod(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const auto* p = reinterpret_cast<const uint8_t*>(&value);
+    bytes_.insert(bytes_.end(), p, p + sizeof(T));
+  }
+  template <class T>
+  void array(std::span<const T> values) {
+    pod(uint64_t(values.size()));
+    for (const T& v : values) pod(v);
+  }
+  const std::vector<uint8_t>& bytes() const { return bytes_; }
+
+ private:
+  std::vector<uint8_t> bytes_;
+};
+
+class RecordReader {
+ public:
+  RecordReader(std::span<const uint8_t> bytes, std::string where)
+      : bytes_(bytes), where_(std::move(where)) {}
+  template <class T>
+  T pod() {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if (bytes_.size() - at_ < sizeof(T)) fail("its record is too short");
+    T value;
+    std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return value;
+  }
+  // What array() wrote; the count is checked against the bytes left first.
+  template <class T>
+  std::vector<T> array() {
+    const uint64_t n = pod<uint64_t>();
+    if (n > (bytes_.size() - at_) / sizeof(T)) fail("its record is too short");
+    std::vector<T> out(n);
+    if (n) std::memcpy(out.data(), bytes_.data() + at_, n * sizeof(T));
+    at_ += n * sizeof(T);
+    return out;
+  }
+  // A finite float.
+  float number();
+  // A finite colour or point.
+  Vec3f color();
+  // After the reader has read its fields: the record must be used up.
+  void finish() const;
+  [[noreturn]] void fail(const std::string& what) const;
+  const std::string& where() const { return where_; }
+
+ private:
+  std::span<const uint8_t> bytes_;
+  size_t at_ = 0;
+  std::string where_;
+};
+
+}  // namespace ferry

@@ -1,0 +1,49 @@
+// A kind of geometry other than a triangle mesh (spheres; curves could
+// follow): what the scene holds (Scene::geometries), the partitioners weigh
+// and place, the proxies bound, a TraceBackend intersects, shading rebuilds
+// and part files store. Triangle meshes stay Scene::meshes, the kind every
+// stage is tuned for. Each kind registers a reader by its name
+// (shapes/shape_kinds.cpp), so a part file stores a shape as its kind's name
+// and its record. Adding a kind: docs/architecture.md.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "core/math.h"
+#include "core/record.h"
+
+namespace ferry {
+
+// A point on a shape, in the shape's own (object) space.
+struct ShapeSurface {
+  Vec3f position;
+  Vec3f geometricNormal;  // unit, outwards
+  Vec3f shadingNormal;    // unit, on the geometric normal's side
+  Vec2f uv;               // texture coordinates
+};
+
+class Shape {
+ public:
+  virtual ~Shape() = default;
+  // The name its kind is registered under (shapes/shape_kinds.cpp).
+  virtual std::string_view kind() const = 0;
+  virtual uint32_t primitiveCount() const = 0;
+  virtual Box3f primitiveBounds(uint32_t primitive) const = 0;
+  // The union of the primitives' bounds.
+  Box3f bounds() const;
+  // Bytes it holds in memory (its share of a rank's memory budget).
+  virtual uint64_t bytes() const = 0;
+  // The nearest crossing of `primitive` by origin + t direction with t in
+  // (tnear, tfar): its t and the (u, v) surface() reads back. Deterministic:
+  // the same ray gives the same answer on every rank and thread.
+  virtual bool intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
+                         float& t, Vec2f& uv) const = 0;
+  virtual ShapeSurface surface(uint32_t primitive, Vec2f uv) const = 0;
+  virtual void write(RecordWriter& record) const = 0;
+  // A line for people: the kind and its size.
+  virtual std::string describe() const = 0;
+};
+
+}  // namespace ferry
