@@ -84,6 +84,8 @@ const std::deque<MaterialModelKind>& materialModelKinds();
 const MaterialModelKind* materialModelKind(std::string_view name);
 // Adds a model (a test's, an application's); a name already taken is an InternalError.
 void registerMaterialModel(MaterialModelKind kind);
+// Every model's name, "a, b, c".
+std::string materialModelNames();
 
 // `model` with each BSDF table index t it names replaced by newIndex(t) (by
 // writing its record and reading it back); `model` itself if it names none.

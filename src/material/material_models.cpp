@@ -1,8 +1,6 @@
 // The registry: every material model by name. A new model adds its line here.
-#include <deque>
-#include <mutex>
-
 #include "core/error.h"
+#include "core/registry.h"
 #include "material/material_model.h"
 #include "material/models/coated_conductor.h"
 #include "material/models/coated_diffuse.h"
@@ -16,50 +14,46 @@
 namespace ferry {
 namespace {
 
-std::deque<MaterialModelKind>& kinds() {
-  static std::deque<MaterialModelKind> all = {
-      {"diffuse", "Lambertian, or Oren-Nayar (pbrt's matte, diffuse)", DiffuseModel::read},
-      {"conductor", "a metal: Schlick Fresnel, mirror or GGX (pbrt's metal, conductor, mirror)",
-       ConductorModel::read},
-      {"dielectric", "glass, water: smooth or GGX reflection and refraction (pbrt's glass)",
-       DielectricModel::read},
-      {"coated-diffuse", "a diffuse base under a GGX coat (pbrt's plastic, coateddiffuse, uber)",
-       CoatedDiffuseModel::read},
-      {"coated-conductor", "a GGX conductor under a layered coat (pbrt's coatedconductor)",
-       CoatedConductorModel::read},
-      {"fresnel-blend", "Ashikhmin-Shirley's FresnelBlend (pbrt-v3's substrate)",
-       FresnelBlendModel::read},
-      {"diffuse-transmission", "a thin diffuse sheet (pbrt's translucent, diffusetransmission)",
-       DiffuseTransmissionModel::read},
-      {"fourier", "a tabulated BSDF, pbrt-v3's fourier material (.bsdf files)", FourierModel::read},
-  };
+Registry<MaterialModelKind>& registry() {
+  static Registry<MaterialModelKind> all(
+      "material model",
+      {
+          {"diffuse", "Lambertian, or Oren-Nayar (pbrt's matte, diffuse)", DiffuseModel::read},
+          {"conductor", "a metal: Schlick Fresnel, mirror or GGX (pbrt's metal, conductor, mirror)",
+           ConductorModel::read},
+          {"dielectric", "glass, water: smooth or GGX reflection and refraction (pbrt's glass)",
+           DielectricModel::read},
+          {"coated-diffuse",
+           "a diffuse base under a GGX coat (pbrt's plastic, coateddiffuse, uber)",
+           CoatedDiffuseModel::read},
+          {"coated-conductor", "a GGX conductor under a layered coat (pbrt's coatedconductor)",
+           CoatedConductorModel::read},
+          {"fresnel-blend", "Ashikhmin-Shirley's FresnelBlend (pbrt-v3's substrate)",
+           FresnelBlendModel::read},
+          {"diffuse-transmission", "a thin diffuse sheet (pbrt's translucent, diffusetransmission)",
+           DiffuseTransmissionModel::read},
+          {"fourier", "a tabulated BSDF, pbrt-v3's fourier material (.bsdf files)",
+           FourierModel::read},
+      });
   return all;
-}
-
-std::mutex& registryMutex() {
-  static std::mutex m;
-  return m;
 }
 
 }  // namespace
 
 const std::deque<MaterialModelKind>& materialModelKinds() {
-  return kinds();
+  return registry().all();
 }
 
 const MaterialModelKind* materialModelKind(std::string_view name) {
-  std::lock_guard lock(registryMutex());
-  for (const MaterialModelKind& k : kinds())
-    if (k.name == name) return &k;
-  return nullptr;
+  return registry().find(name);
 }
 
 void registerMaterialModel(MaterialModelKind kind) {
-  std::lock_guard lock(registryMutex());
-  for (const MaterialModelKind& k : kinds())
-    if (k.name == kind.name)
-      throw InternalError(fmt::format("material model \"{}\" is registered twice", kind.name));
-  kinds().push_back(std::move(kind));
+  registry().add(std::move(kind));
+}
+
+std::string materialModelNames() {
+  return registry().names();
 }
 
 std::shared_ptr<const MaterialModel> withBsdfTablesRenumbered(

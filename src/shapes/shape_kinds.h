@@ -27,5 +27,7 @@ const std::deque<ShapeKind>& shapeKinds();
 const ShapeKind* shapeKind(std::string_view name);
 // Adds a kind; a name already taken is an InternalError.
 void registerShapeKind(ShapeKind kind);
+// Every kind's name, "a, b, c".
+std::string shapeKindNames();
 
 }  // namespace ferry

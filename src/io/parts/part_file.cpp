@@ -512,6 +512,16 @@ class FileReader {
   uint32_t version_ = kPartFormatVersion;
 };
 
+// A material's bump and normal maps and its mix (formats 5 on).
+void readMapsAndMix(FileReader& r, Material& m) {
+  m.bumpTexture = r.pod<int32_t>();
+  m.bumpScale = r.pod<float>();
+  m.normalTexture = r.pod<int32_t>();
+  m.normalScale = r.pod<float>();
+  m.mixedWith = r.pod<int32_t>();
+  m.mixAmount = r.pod<float>();
+}
+
 // Formats 1 to 8 wrote the scattering parameters as Material's fields; they
 // are read as the model the renderer then picked by them.
 Material readMaterial(FileReader& r, size_t bsdfTables) {
@@ -524,24 +534,15 @@ Material readMaterial(FileReader& r, size_t bsdfTables) {
     m.alphaTexture = r.pod<int32_t>();
     m.alphaCutoff = r.pod<float>();
     m.emitsBackSide = r.pod<uint8_t>() != 0;
-    m.bumpTexture = r.pod<int32_t>();
-    m.bumpScale = r.pod<float>();
-    m.normalTexture = r.pod<int32_t>();
-    m.normalScale = r.pod<float>();
-    m.mixedWith = r.pod<int32_t>();
-    m.mixAmount = r.pod<float>();
+    readMapsAndMix(r, m);
     const std::string model = r.str();
     const std::vector<uint8_t> bytes = r.array<uint8_t>();
     const MaterialModelKind* kind = materialModelKind(model);
-    if (!kind) {
-      std::string known;
-      for (const MaterialModelKind& k : materialModelKinds())
-        known += (known.empty() ? "" : ", ") + k.name;
+    if (!kind)
       throw InputError(
           fmt::format("{}: material \"{}\" has model \"{}\", which this Ferry does "
                       "not know (it knows {})",
-                      r.path(), m.name, model, known));
-    }
+                      r.path(), m.name, model, materialModelNames()));
     MaterialRecordReader record(
         bytes, fmt::format("{}: material \"{}\" ({})", r.path(), m.name, model), bsdfTables);
     m.model = kind->read(record);
@@ -568,14 +569,7 @@ Material readMaterial(FileReader& r, size_t bsdfTables) {
           fmt::format("{}: material \"{}\" has an unknown coat model {}", r.path(), m.name, coat));
     sigma = r.pod<float>();
   }
-  if (r.version() >= 5) {  // older: no bump or normal map
-    m.bumpTexture = r.pod<int32_t>();
-    m.bumpScale = r.pod<float>();
-    m.normalTexture = r.pod<int32_t>();
-    m.normalScale = r.pod<float>();
-    m.mixedWith = r.pod<int32_t>();
-    m.mixAmount = r.pod<float>();
-  }
+  if (r.version() >= 5) readMapsAndMix(r, m);  // older: no bump or normal map, no mix
   int32_t table = kNoBsdfTable;
   if (r.version() >= 6) table = r.pod<int32_t>();  // older: no tables
   Vec3f transmittance{0};
@@ -681,14 +675,11 @@ Geometry readGeometry(FileReader& r) {
   const std::string kind = r.str();
   const std::vector<uint8_t> bytes = r.array<uint8_t>();
   const ShapeKind* k = shapeKind(kind);
-  if (!k) {
-    std::string known;
-    for (const ShapeKind& s : shapeKinds()) known += (known.empty() ? "" : ", ") + s.name;
+  if (!k)
     throw InputError(
         fmt::format("{}: geometry \"{}\" is of kind \"{}\", which this Ferry does "
                     "not know (it knows {})",
-                    r.path(), g.name, kind, known));
-  }
+                    r.path(), g.name, kind, shapeKindNames()));
   RecordReader record(bytes, fmt::format("{}: geometry \"{}\" ({})", r.path(), g.name, kind));
   g.shape = k->read(record);
   record.finish();
