@@ -72,7 +72,7 @@ void PbrtParams::fail(const PbrtParam& p, const std::string& message) {
   throw InputError(p.where, fmt::format("\"{}\": {}", p.declaration(), message));
 }
 
-PbrtParams PbrtParams::parse(PbrtTokenizer& tokens) {
+PbrtParams PbrtParams::parse(PbrtTokenSource& tokens) {
   PbrtParams params;
   while (tokens.peek().kind == PbrtToken::Kind::String) {
     const PbrtToken& decl = tokens.next();

@@ -15,7 +15,7 @@
 
 namespace ferry {
 
-class PbrtTokenizer;
+class PbrtTokenSource;
 
 struct PbrtParam {
   // Canonical type: bool integer float point2 vector2 point3 vector3 normal rgb
@@ -42,7 +42,7 @@ class PbrtParams {
   // a value of the wrong kind ("float" given a string, a non-finite or
   // unparsable number, an integer outside 32 bits), an empty or unclosed
   // list, a parameter given twice.
-  static PbrtParams parse(PbrtTokenizer& tokens);
+  static PbrtParams parse(PbrtTokenSource& tokens);
 
   void add(PbrtParam param);
   bool empty() const { return params_.empty(); }

@@ -279,7 +279,38 @@ class Parser {
     return v;
   }
 
-  PbrtParams params(Input& in) { return PbrtParams::parse(in.tokens); }
+  // A directive's parameter list, from `in` (the innermost input) and, where
+  // `in` is an included file that ends inside the list, the files that
+  // included it (pbrt-v3's smoke scene continues a medium's list so). Never
+  // past an Import, which pbrt-v4 parses on its own. The exhausted files stay
+  // on the stack until the run loop pops them.
+  PbrtParams params(Input& in) {
+    class IncludeChain final : public PbrtTokenSource {
+     public:
+      IncludeChain(std::vector<std::unique_ptr<Input>>& inputs, Input& in)
+          : inputs_(inputs), last_(&in) {}
+      const PbrtToken& next() override { return current().tokens.next(); }
+      const PbrtToken& peek() override { return current().tokens.peek(); }
+      SourceLocation where(const PbrtToken& token) const override {
+        return last_->tokens.where(token);
+      }
+
+     private:
+      Input& current() {
+        size_t i = inputs_.size() - 1;
+        while (i > 0 && !inputs_[i]->import &&
+               inputs_[i]->tokens.peek().kind == PbrtToken::Kind::End)
+          --i;
+        last_ = inputs_[i].get();
+        return *last_;
+      }
+      std::vector<std::unique_ptr<Input>>& inputs_;
+      Input* last_;
+    };
+    if (&in != inputs_.back().get()) return PbrtParams::parse(in.tokens);
+    IncludeChain chain(inputs_, in);
+    return PbrtParams::parse(chain);
+  }
 
   void reportUnused(const PbrtParams& p, const std::string& what) {
     for (const PbrtParam* q : p.unused())

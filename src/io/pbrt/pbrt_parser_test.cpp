@@ -576,6 +576,32 @@ TEST(PbrtParser, ImageEnvironmentIsResampledToYUp) {
   EXPECT_NEAR(at(normalize(Vec3f(0.1f, 0.1f, -1))).z, 2, 0.05);
 }
 
+TEST(PbrtParser, ParameterListsGoOnAfterAnIncludedFileEnds) {
+  // pbrt-v3 reads an included file and its includer as one token stream (its
+  // smoke scene's medium takes "sigma_a" after the included grid); an Import
+  // is parsed on its own, so its list ends with it.
+  fs::path dir = fs::temp_directory_path() / ("ferry_include_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "points.pbrt") << "Shape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0]\n";
+  std::ofstream(dir / "nested.pbrt") << "Include \"points.pbrt\"\n";
+  const std::string rest = "  \"integer indices\" [0 1 2]\n";
+  Scene s = loadPbrtFromString("WorldBegin\nInclude \"points.pbrt\"\n" + rest, "main.pbrt",
+                               dir.string());
+  ASSERT_EQ(s.meshes.size(), 1u);
+  EXPECT_EQ(s.meshes[0].triangleCount(), 1u);
+  // Through two levels of includes.
+  s = loadPbrtFromString("WorldBegin\nInclude \"nested.pbrt\"\n" + rest, "main.pbrt",
+                         dir.string());
+  ASSERT_EQ(s.meshes.size(), 1u);
+  try {
+    loadPbrtFromString("WorldBegin\nImport \"points.pbrt\"\n" + rest, "main.pbrt", dir.string());
+    ADD_FAILURE() << "an Import's list went on in its importer";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("main.pbrt:3:3: expected a directive"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
 TEST(PbrtParser, MissingEnvironmentMapFailsOrFallsBack) {
   std::string path = corpus("missing_envmap.pbrt");
   try {
