@@ -1,0 +1,67 @@
+#include "media/density_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace ferry {
+
+DensityGrid::DensityGrid(int nx, int ny, int nz, std::vector<float> values)
+    : nx_(nx), ny_(ny), nz_(nz), values_(std::move(values)) {
+  if (nx <= 0 || ny <= 0 || nz <= 0)
+    throw std::invalid_argument(fmt::format("grid dimensions {} x {} x {} must be positive", nx, ny, nz));
+  const uint64_t count = uint64_t(nx) * uint64_t(ny) * uint64_t(nz);
+  if (values_.size() != count)
+    throw std::invalid_argument(fmt::format("{} x {} x {} = {} samples needed, {} given", nx, ny, nz,
+                                            count, values_.size()));
+  min_ = values_.empty() ? 0 : values_[0];
+  max_ = min_;
+  for (size_t i = 0; i < values_.size(); ++i) {
+    const float v = values_[i];
+    if (!std::isfinite(v) || v < 0)
+      throw std::invalid_argument(
+          fmt::format("density sample {} (x {}, y {}, z {}) is {}: densities must be finite and "
+                      "not negative",
+                      i, i % size_t(nx), (i / size_t(nx)) % size_t(ny), i / (size_t(nx) * size_t(ny)),
+                      v));
+    min_ = std::min(min_, v);
+    max_ = std::max(max_, v);
+  }
+}
+
+float DensityGrid::lookup(Vec3f p) const {
+  const float sx = p.x * float(nx_) - 0.5f, sy = p.y * float(ny_) - 0.5f,
+              sz = p.z * float(nz_) - 0.5f;
+  const float fx = std::floor(sx), fy = std::floor(sy), fz = std::floor(sz);
+  // Far outside (or NaN): nothing there.
+  if (!(fx >= -1 && fy >= -1 && fz >= -1 && fx < float(nx_) && fy < float(ny_) && fz < float(nz_)))
+    return 0;
+  const int x = int(fx), y = int(fy), z = int(fz);
+  const float dx = sx - fx, dy = sy - fy, dz = sz - fz;
+  auto lerp = [](float t, float a, float b) { return (1 - t) * a + t * b; };
+  const float d00 = lerp(dx, at(x, y, z), at(x + 1, y, z));
+  const float d10 = lerp(dx, at(x, y + 1, z), at(x + 1, y + 1, z));
+  const float d01 = lerp(dx, at(x, y, z + 1), at(x + 1, y, z + 1));
+  const float d11 = lerp(dx, at(x, y + 1, z + 1), at(x + 1, y + 1, z + 1));
+  return lerp(dz, lerp(dy, d00, d10), lerp(dy, d01, d11));
+}
+
+float DensityGrid::maxIn(Vec3f lo, Vec3f hi) const {
+  const int n[3] = {nx_, ny_, nz_};
+  int first[3], last[3];
+  for (int a = 0; a < 3; ++a) {
+    const float l = std::floor(lo[a] * float(n[a]) - 0.5f);
+    const float h = std::floor(hi[a] * float(n[a]) - 0.5f) + 1;
+    first[a] = int(std::clamp(l, 0.0f, float(n[a] - 1)));
+    last[a] = int(std::clamp(h, 0.0f, float(n[a] - 1)));
+  }
+  float m = 0;
+  for (int z = first[2]; z <= last[2]; ++z)
+    for (int y = first[1]; y <= last[1]; ++y)
+      for (int x = first[0]; x <= last[0]; ++x) m = std::max(m, at(x, y, z));
+  return m;
+}
+
+}  // namespace ferry

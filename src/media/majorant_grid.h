@@ -1,0 +1,92 @@
+// Coarse cells over a density grid's unit cube, each holding the largest
+// density a lookup inside it can return: the majorant that delta and ratio
+// tracking step against, cell by cell, so thin regions cost few steps and
+// empty cells none (pbrt-v4's MajorantGrid and DDA iterator).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "core/math.h"
+#include "media/density_grid.h"
+
+namespace ferry {
+
+class MajorantGrid {
+ public:
+  // At most `cells` cells along each axis, and no more than the grid has voxels.
+  explicit MajorantGrid(const DensityGrid& grid, int cells = 16);
+
+  int cells(int axis) const { return res_[axis]; }
+  float at(int x, int y, int z) const {
+    return values_[(size_t(z) * size_t(res_[1]) + size_t(y)) * size_t(res_[0]) + size_t(x)];
+  }
+
+  // Calls visit(tEnter, tExit, maxDensity) for every cell the ray o + t d
+  // (unit-cube coordinates) passes within [t0, t1], in order, until visit
+  // returns false. [t0, t1] must already lie within the unit cube.
+  template <typename Visit>
+  void walk(Vec3f o, Vec3f d, float t0, float t1, Visit&& visit) const;
+
+ private:
+  int res_[3] = {1, 1, 1};
+  std::vector<float> values_;
+};
+
+// Where the ray o + t d meets the unit cube, clipped to [tMin, tMax]; false if
+// it misses.
+inline bool clipToUnitCube(Vec3f o, Vec3f d, float& tMin, float& tMax) {
+  for (int a = 0; a < 3; ++a) {
+    const float inv = 1 / d[a];
+    float tNear = (0 - o[a]) * inv, tFar = (1 - o[a]) * inv;
+    if (tNear > tFar) std::swap(tNear, tFar);
+    // NaN (d[a] == 0 with o on a face) leaves the bounds as they are.
+    if (tNear > tMin) tMin = tNear;
+    if (tFar < tMax) tMax = tFar;
+    if (d[a] == 0 && (o[a] < 0 || o[a] > 1)) return false;
+  }
+  return tMin < tMax;
+}
+
+template <typename Visit>
+void MajorantGrid::walk(Vec3f o, Vec3f d, float t0, float t1, Visit&& visit) const {
+  int cell[3], step[3], stop[3];
+  float next[3], delta[3];
+  const Vec3f p = o + d * t0;
+  for (int a = 0; a < 3; ++a) {
+    const float r = float(res_[a]);
+    cell[a] = std::clamp(int(p[a] * r), 0, res_[a] - 1);
+    if (d[a] > 0) {
+      step[a] = 1;
+      stop[a] = res_[a];
+      next[a] = t0 + (float(cell[a] + 1) / r - p[a]) / d[a];
+      delta[a] = 1 / (r * d[a]);
+    } else if (d[a] < 0) {
+      step[a] = -1;
+      stop[a] = -1;
+      next[a] = t0 + (float(cell[a]) / r - p[a]) / d[a];
+      delta[a] = -1 / (r * d[a]);
+    } else {
+      step[a] = 0;
+      stop[a] = -2;
+      next[a] = kInfinity;
+      delta[a] = kInfinity;
+    }
+  }
+  float t = t0;
+  for (;;) {
+    // The axis whose cell boundary comes first.
+    const int a = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
+    const float exit = std::min(next[a], t1);
+    if (exit > t && !visit(t, exit, at(cell[0], cell[1], cell[2]))) return;
+    if (next[a] >= t1) return;
+    t = exit;
+    cell[a] += step[a];
+    if (cell[a] == stop[a]) return;
+    next[a] += delta[a];
+  }
+}
+
+}  // namespace ferry
