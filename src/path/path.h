@@ -171,6 +171,20 @@ static_assert(std::is_trivially_copyable_v<Path8> && std::is_trivially_copyable_
                   std::is_trivially_copyable_v<PathReplay>,
               "paths are sent over MPI as bytes");
 
+// The medium a camera path travels in: in a scene with participating media
+// (which takes no light paths: render/path_shading.h), the 16 bits of
+// lightRatio hold instead its index in Scene::media plus 1 (0: none), so
+// the medium costs the path no byte. Shadow rays carry none: their
+// transmittance is estimated where they are made.
+template <typename Path>
+int32_t pathMedium(const Path& p) {
+  return int32_t(p.lightRatio) - 1;
+}
+template <typename Path>
+void setPathMedium(Path& p, int32_t medium) {
+  p.lightRatio = uint16_t(medium + 1);
+}
+
 // A wavefront's queue of paths. Every path in a queue is written before it is
 // read, so growing a queue need not zero it (value-initializing the new paths
 // would be a memset of the whole image's queue per sample): the allocator

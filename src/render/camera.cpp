@@ -21,9 +21,11 @@ FilmWindow filmWindow(int filmWidth, int filmHeight, const CropWindow& crop) {
   FilmWindow w;
   w.filmWidth = filmWidth;
   w.filmHeight = filmHeight;
-  // pbrt-v3's Film: croppedPixelBounds from ceil(fullResolution x fraction).
+  // pbrt-v3's Film: croppedPixelBounds from ceil(fullResolution x fraction),
+  // the product in float as pbrt forms it (600 x 0.8f is 480 in float, 481
+  // in double).
   auto bound = [](int resolution, float fraction) {
-    return std::clamp(int(std::ceil(double(resolution) * double(fraction))), 0, resolution);
+    return std::clamp(int(std::ceil(float(resolution) * fraction)), 0, resolution);
   };
   w.x0 = bound(filmWidth, crop.x0);
   w.y0 = bound(filmHeight, crop.y0);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "media/phase.h"
 #include "scene/scene.h"
 
 namespace ferry {
@@ -41,13 +42,19 @@ inline float emissionDensityOverCosine(bool bothSides) {
 template <typename Path>
 PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth,
                                uint32_t seed, LightStrategy strategy, const Camera* lightPathCamera,
-                               const FilmWindow* window)
+                               const FilmWindow* window, TransmittanceEstimator transmittance)
     : scene_(scene),
       lights_(lights),
       surfaces_(scene),
       maxDepth_(maxDepth),
       seed_(seed),
-      strategy_(strategy) {
+      strategy_(strategy),
+      transmittance_(transmittance) {
+  if (scene.hasMedia()) {
+    media_ = std::make_shared<MediaAlongRays>(scene);
+    cameraMedium_ = scene.cameraMedium;
+    lightPathCamera = nullptr;
+  }
   if (window && !window->whole()) {
     window_ = *window;
     cropped_ = true;
@@ -65,6 +72,8 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
     FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const {
   if (path.has(kPathLight))
     return shadeLightPath(path, hit, sampleIndex, bounce, continuation, shadowRay);
+  if (media_)
+    return shadeInMedia(path, hit, sampleIndex, bounce, frameBuffer, continuation, shadowRay);
   if (!path.hasHit()) {
     addEscapedLight(path, frameBuffer);
     return {};
@@ -450,6 +459,147 @@ template <typename Path>
       makeRay(shadowRay, origin, ls.direction, kInfinity, contribution, vertex.pixel, kPathShadow);
   if (std::isfinite(ls.distance)) shadowRay.tmax = shadowRayTmax(position, origin, stored, ls);
   return true;
+}
+
+// ------------------------------------------------------------------ media
+//
+// A path in a scene with media first goes its way through them to its hit
+// (or to infinity): it may scatter or be absorbed on the way (delta
+// tracking), and the media's emission along it counts. If it arrives, the
+// surface shades as without media, its continuation leaves into the medium
+// on the side it goes to (the surface's MediumInterface, or the medium it
+// arrived in), and its shadow ray carries the transmittance to the light
+// (ratio tracking). A vertex in a medium scatters by the phase function,
+// with a light sample weighed by MIS against phase sampling, as a surface
+// does against its BSDF. pbrt's volpath counts depth the same way: each
+// scattering event, in a medium or at a surface, is a bounce.
+
+namespace {
+// The random dimensions the media draw from a vertex's key: the flight to
+// the vertex, and its shadow ray's transmittance (the surface's own
+// decisions use the RandomDim values, all below).
+constexpr uint32_t kFlightDimension = 64;
+constexpr uint32_t kTransmittanceDimension = 1u << 30;
+}  // namespace
+
+template <typename Path>
+MediumCounts PathShading<Path>::takeMediumCounts() const {
+  MediumCounts total;
+  for (MediumCounts& c : mediumCounts_) {
+    total.add(c);
+    c = MediumCounts{};
+  }
+  return total;
+}
+
+template <typename Path>
+const MediumInterface& PathShading<Path>::surfaceMedia(const TraceHit& hit) const {
+  static const MediumInterface none;
+  const Object& object = scene_.objects[size_t(scene_.instances[size_t(hit.instance)].object)];
+  if (size_t(hit.slot) >= object.meshes.size()) return none;
+  return scene_.meshes[size_t(object.meshes[size_t(hit.slot)])].media;
+}
+
+template <typename Path>
+bool PathShading<Path>::throughMedia(Path& shadowRay, int32_t medium, uint32_t keyHash) const {
+  const Vec3f stored = shadowRay.dir();
+  const float scale = length(stored);
+  const float tEnd = std::isfinite(shadowRay.tmax) ? shadowRay.tmax * scale : kInfinity;
+  TrackingRandom random(keyHash, kTransmittanceDimension);
+  const Vec3f tr = media_->transmittance(shadowRay.origin, stored * (1 / scale), tEnd, medium,
+                                         transmittance_, random, mediumCounts_.local());
+  if (!(maxComponent(tr) > 0)) return false;
+  const Vec3f weight = shadowRay.weight() * tr;
+  if (!usable(weight)) return false;
+  shadowRay.setWeight(weight);
+  return true;
+}
+
+template <typename Path>
+typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
+    const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
+    FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const {
+  const Vec3f stored = path.dir();
+  const float scale = length(stored);
+  const Vec3f d = stored * (1 / scale);
+  const float tEnd = path.hasHit() ? path.tmax * scale : kInfinity;
+  const uint32_t keyHash =
+      randomKeyHash(RandomKey{randomPixel(path.pixel()), sampleIndex, bounce, seed_});
+  TrackingRandom random(keyHash, kFlightDimension);
+  const MediaFlight f =
+      media_->flight(path.origin, d, tEnd, pathMedium(path), random, mediumCounts_.local());
+  const Vec3f throughput = path.weight();
+  if (const Vec3f e = throughput * f.emitted; usable(e)) frameBuffer.add(path.pixel(), e);
+  if (f.event == FreeFlight::Event::Absorbed) return {};
+  // The path with what the media took from it.
+  Path arrived = path;
+  arrived.setWeight(throughput * f.weight);
+  if (f.event == FreeFlight::Event::Scattered)
+    return shadeMediumVertex(arrived, path.origin + d * f.t, f.medium, sampleIndex, bounce,
+                             continuation, shadowRay);
+  if (!path.hasHit()) {
+    addEscapedLight(arrived, frameBuffer);
+    return {};
+  }
+  const PathVertex vertex = surfaceVertex(arrived, hit, bounce);
+  addEmission(vertex, hit, frameBuffer);
+  if (bounce >= maxDepth_) return {};
+  const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
+  const MediumInterface& sides = surfaceMedia(hit);
+  auto leaving = [&](Vec3f direction) {
+    return sides.isTransition() ? sides.along(direction, vertex.surface.geometricNormal)
+                                : f.medium;
+  };
+  Spawned spawned;
+  spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);
+  if (spawned.continuation) setPathMedium(continuation, leaving(continuation.dir()));
+  if (!scattering.bsdf.isDelta() && strategy_ != LightStrategy::BsdfSamples)
+    spawned.shadowRay = sampleLight(vertex, scattering, 0, shadowRay) &&
+                        throughMedia(shadowRay, leaving(shadowRay.dir()), keyHash);
+  return spawned;
+}
+
+template <typename Path>
+typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
+    const Path& path, Vec3f position, int32_t medium, uint32_t sampleIndex, uint32_t bounce,
+    Path& continuation, Path& shadowRay) const {
+  if (bounce >= maxDepth_) return {};
+  const float g = media_->medium(medium).g;
+  const Vec3f wo = normalize(-path.dir());
+  const RandomKey key{randomPixel(path.pixel()), sampleIndex, bounce, seed_};
+  const RandomStream random(key);
+  const Vec3f throughput = path.weight();
+  Spawned spawned;
+  if (strategy_ != LightStrategy::BsdfSamples) {
+    LightSample ls;
+    const Vec2f u{random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)};
+    if (lights_.sample(position, Frame(wo), true, random(RandomDim::LightSelect), u, ls)) {
+      const float phase = phaseValue(wo, ls.direction, g);
+      const bool weighed = strategy_ == LightStrategy::Mis && ls.mis;
+      const float weight = weighed ? powerHeuristic(ls.pdf, stored(phase)) : 1.0f;
+      const Vec3f contribution = throughput * ls.radiance * (phase * weight / ls.pdf);
+      if (usable(contribution)) {
+        const Vec3f storedDir = makeRay(shadowRay, position, ls.direction, kInfinity, contribution,
+                                        path.pixel(), kPathShadow);
+        if (std::isfinite(ls.distance))
+          shadowRay.tmax = shadowRayTmax(position, position, storedDir, ls);
+        spawned.shadowRay = throughMedia(shadowRay, medium, randomKeyHash(key));
+      }
+    }
+  }
+  Vec3f wi;
+  const float pdf = samplePhase(wo, g, {random(RandomDim::BsdfU), random(RandomDim::BsdfV)}, wi);
+  Vec3f weight = throughput;  // the phase function over its own density
+  if (bounce + 1 >= kRouletteStartBounce) {
+    const float q = std::min(1.0f, maxComponent(weight));
+    if (random(RandomDim::Roulette) >= q) return spawned;
+    weight = weight * (1 / q);
+  }
+  if (!usable(weight) || !(pdf > 0)) return spawned;
+  makeRay(continuation, position, wi, kInfinity, weight, path.pixel(), 0, pdf);
+  setPathMedium(continuation, medium);
+  spawned.continuation = true;
+  return spawned;
 }
 
 template class PathShading<Path8>;

@@ -20,11 +20,17 @@
 
 #include "core/math.h"
 #include "core/random.h"
+#include <memory>
+
+#include <tbb/enumerable_thread_specific.h>
+
 #include "material/bsdf.h"
+#include "media/tracking.h"
 #include "path/path.h"
 #include "render/camera.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
+#include "render/media_along_rays.h"
 #include "render/surface.h"
 #include "trace/trace_backend.h"
 
@@ -115,13 +121,22 @@ class PathShading {
   // need MIS and an emissive triangle, else there are none either).
   // `window`: the part of the film the image is (a crop); random numbers
   // are keyed by the film's pixel (null: the image is the film).
+  // `transmittance`: how shadow rays through media estimate it. A scene with
+  // participating media takes no light paths (its camera paths carry their
+  // medium where light paths keep a ratio: path/path.h, pathMedium).
   PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed,
               LightStrategy strategy = LightStrategy::Mis, const Camera* lightPathCamera = nullptr,
-              const FilmWindow* window = nullptr);
+              const FilmWindow* window = nullptr,
+              TransmittanceEstimator transmittance = TransmittanceEstimator::Ratio);
 
   // The pixel index random numbers of image pixel `pixel` are keyed by:
   // its index in the whole film.
   uint32_t randomPixel(uint32_t pixel) const { return cropped_ ? window_.filmPixel(pixel) : pixel; }
+
+  // The medium camera rays start in (kNoMedium: none, or no media).
+  int32_t cameraMedium() const { return cameraMedium_; }
+  // What tracking through media did since the last call (summed over threads).
+  MediumCounts takeMediumCounts() const;
 
   // Whether pixel samples start light paths.
   bool lightPaths() const { return camera_ != nullptr; }
@@ -176,6 +191,19 @@ class PathShading {
                          uint32_t bounce, Path& continuation, Path& shadowRay) const;
   bool emission(uint32_t index, uint32_t sampleIndex, EmissionSample& out) const;
 
+  // Participating media (path_shading.cpp, "Media"): the path's way to its
+  // hit through the media, then the surface, or a vertex in a medium.
+  Spawned shadeInMedia(const Path& path, const TraceHit& hit, uint32_t sampleIndex,
+                       uint32_t bounce, FrameBuffer& frameBuffer, Path& continuation,
+                       Path& shadowRay) const;
+  Spawned shadeMediumVertex(const Path& path, Vec3f position, int32_t medium,
+                            uint32_t sampleIndex, uint32_t bounce, Path& continuation,
+                            Path& shadowRay) const;
+  // Multiplies a shadow ray leaving into `medium` by its transmittance to the
+  // light; false if none is left.
+  bool throughMedia(Path& shadowRay, int32_t medium, uint32_t keyHash) const;
+  const MediumInterface& surfaceMedia(const TraceHit& hit) const;
+
   const Scene& scene_;
   const LightSampler& lights_;
   SurfaceTable surfaces_;  // for reconstructSurface
@@ -186,6 +214,10 @@ class PathShading {
   float lightPathScale_ = 1;        // light path throughputs are stored divided by it
   FilmWindow window_;
   bool cropped_ = false;
+  std::shared_ptr<const MediaAlongRays> media_;  // null: no media
+  TransmittanceEstimator transmittance_ = TransmittanceEstimator::Ratio;
+  int32_t cameraMedium_ = kNoMedium;
+  mutable tbb::enumerable_thread_specific<MediumCounts> mediumCounts_;
 };
 
 }  // namespace ferry

@@ -28,7 +28,8 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
       window_(settings.window()),
       camera_(settings.camera ? *settings.camera : scene.view(settings.view), window_),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
-               settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr, &window_) {
+               settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr, &window_,
+               settings.transmittance) {
   if (uint64_t(window_.width) * uint64_t(window_.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", window_.width,
                                  window_.height, kMaxPixels));
@@ -140,6 +141,7 @@ void WavefrontRenderer<Path>::makeCameraPath(uint32_t sampleIndex, uint32_t pixe
   float y = float(py + uint32_t(window_.y0)) + random(RandomDim::PixelJitterY);
   makeRay(path, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
           kPathAfterSpecular);
+  if (shading_.cameraMedium() != kNoMedium) setPathMedium(path, shading_.cameraMedium());
 }
 
 template <typename Path>

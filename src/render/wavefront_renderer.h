@@ -59,6 +59,9 @@ struct RenderSettings {
   // the camera, weighed by MIS against the camera path's two strategies.
   // Needs MIS and an emissive triangle (else there are none).
   bool lightPaths = false;
+  // How shadow rays through participating media estimate their
+  // transmittance (--transmittance): ratio tracking, or delta tracking (a baseline).
+  TransmittanceEstimator transmittance = TransmittanceEstimator::Ratio;
   // One rank: pixels that go through the wavefront together, on one thread
   // (WavefrontRenderer::renderFrame). Any value gives the same image.
   uint32_t chunkPixels = 8192;

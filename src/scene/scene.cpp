@@ -1,5 +1,7 @@
 #include "scene/scene.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "core/error.h"
@@ -161,6 +163,27 @@ void Scene::validate() const {
     if (!isFinite(m.baseColor) || !isFinite(m.emission))
       fail(fmt::format("material '{}' has a non-finite parameter", m.name));
   }
+  if (media.size() > 0xfffe) fail(fmt::format("{} media: at most 65534", media.size()));
+  auto checkMedium = [&](int32_t m, const std::string& who) {
+    if (m != kNoMedium && (m < 0 || size_t(m) >= media.size()))
+      fail(fmt::format("{} refers to medium {} of {}", who, m, media.size()));
+  };
+  auto checkInterface = [&](const MediumInterface& i, const std::string& who) {
+    checkMedium(i.inside, who);
+    checkMedium(i.outside, who);
+  };
+  checkMedium(cameraMedium, "the camera");
+  for (const MediumBoundary& b : mediumBoundaries) {
+    checkInterface(b.media, "medium boundary '" + b.mesh.name + "'");
+    if (const std::string problem = b.mesh.arrayProblem(); !problem.empty())
+      fail(fmt::format("medium boundary '{}': {}", b.mesh.name, problem));
+  }
+  for (const Medium& m : media)
+    if (!isFinite(m.sigmaA) || !isFinite(m.sigmaS) || std::min({m.sigmaA.x, m.sigmaA.y, m.sigmaA.z, m.sigmaS.x, m.sigmaS.y, m.sigmaS.z}) < 0 ||
+        !(std::abs(m.g) < 1) || !isFinite(m.emission))
+      fail(fmt::format("medium '{}': sigma_a and sigma_s must be finite and not negative, g in "
+                       "(-1, 1)",
+                       m.name));
   for (const Material& m : materials) {
     size_t steps = 0;
     for (int32_t k = m.mixedWith; k >= 0; k = materials[size_t(k)].mixedWith)
@@ -172,6 +195,7 @@ void Scene::validate() const {
       fail(fmt::format("mesh '{}' refers to material {} of {}", mesh.name, mesh.material,
                        materials.size()));
     if (std::string problem = mesh.arrayProblem(); !problem.empty()) fail(problem);
+    checkInterface(mesh.media, "mesh '" + mesh.name + "'");
   }
   for (const Geometry& g : geometries) {
     if (g.material < 0 || size_t(g.material) >= materials.size())

@@ -18,6 +18,7 @@
 #include "core/shared_array.h"
 #include "material/fourier_bsdf_table.h"
 #include "material/material_model.h"
+#include "media/medium.h"
 #include "scene/shape.h"
 #include "scene/texture.h"
 
@@ -91,6 +92,9 @@ struct Mesh {
   SharedArray<Vec2f> uvs;      // empty, or one per position
   SharedArray<Vec3i> indices;  // 32-bit triangle indices into positions
   int32_t material = 0;
+  // The media on its two sides (outside: where the geometric normal
+  // points); no transition for most meshes.
+  MediumInterface media;
   std::optional<StoredMesh> stored;  // set: the arrays above are empty and in Scene::meshStore
 
   uint64_t triangleCount() const { return stored ? stored->triangles : indices.size(); }
@@ -169,6 +173,14 @@ struct CameraView {
 
 class MeshStore;
 
+// A surface that only bounds media (pbrt's Material "" or "interface" with a
+// MediumInterface): rays pass through it and change medium, nothing else
+// sees it. Its mesh is in world space, outside its interface's normal side.
+struct MediumBoundary {
+  Mesh mesh;
+  MediumInterface media;
+};
+
 // Whether pbrt's Integrator `type` transports light from the emitters too
 // (bdpt, mlt, pbrt-v4's lightpath, vcm): Ferry then adds light paths.
 inline bool integratorWantsLightPaths(const std::string& type) {
@@ -189,6 +201,12 @@ struct Scene {
   std::vector<SunLight> suns;
   EnvironmentLight environment;
   std::vector<CameraView> views;  // views[0] is the default
+  // Participating media (media/medium.h), the surfaces that only bound them,
+  // and the medium the camera is in. Every rank holds them whole.
+  std::vector<Medium> media;
+  std::vector<MediumBoundary> mediumBoundaries;
+  int32_t cameraMedium = kNoMedium;
+  bool hasMedia() const { return !media.empty(); }
   // What the scene file asks for (pbrt's Film), used when the command line
   // does not say: image size and output file name (relative to the scene file's
   // directory as written; the caller decides where to put it).

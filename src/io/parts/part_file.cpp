@@ -46,8 +46,9 @@ static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 static_assert(sizeof(Material) == 112,
               "Material changed: update part_file.cpp and kPartFormatVersion");
 // (Mesh::stored is not written: a part holds its meshes' arrays; 136 before
-// it; the arrays became SharedArrays at 392, and 192 for Texture, same fields.)
-static_assert(sizeof(Mesh) == 392, "Mesh changed: update part_file.cpp and kPartFormatVersion");
+// it; the arrays became SharedArrays at 392, and 192 for Texture, same fields.
+// Mesh::media is not written either: part files refuse scenes with media.)
+static_assert(sizeof(Mesh) == 400, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 80,
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Texture) == 192,
@@ -757,6 +758,10 @@ WrittenFile writePartFile(const std::string& path, const Scene& scene,
                           int rank, int ranks) {
   FERRY_CHECK_EQ(owners.size(), scene.instances.size());
   FERRY_CHECK(std::is_sorted(instances.begin(), instances.end()));
+  if (scene.hasMedia())
+    throw InputError(fmt::format("{}: scene '{}' has participating media, which part files do "
+                                 "not store yet: render the scene file itself",
+                                 path, scene.name));
   WrittenFile written;
   writeFileAtomically(path, [&](const std::string& tmp) {
     FileWriter w(tmp);

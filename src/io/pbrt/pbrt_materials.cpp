@@ -1153,6 +1153,12 @@ int32_t PbrtMaterials::materialFor(int32_t definition, Vec3f emission, int32_t a
   return index;
 }
 
+bool PbrtMaterials::isInterface(int32_t definition) const {
+  if (definition < 0) return false;
+  const std::string& type = impl_->definitions[size_t(definition)].type;
+  return type == "interface" || type == "none" || type.empty();
+}
+
 int32_t PbrtMaterials::shapeAlpha(const PbrtParams& shape) {
   const PbrtParam* p = shape.find("alpha");
   if (!p) return kNoTexture;

@@ -59,6 +59,9 @@ class PbrtMaterials {
   // `emitsBackSide`: false for a one-sided area light (pbrt's default).
   int32_t materialFor(int32_t definition, Vec3f emission, int32_t alphaTexture,
                       bool emitsBackSide = true);
+  // Whether `definition` is pbrt's Material "" / "interface" / "none": a
+  // surface that only bounds media.
+  bool isInterface(int32_t definition) const;
   // A shape's "alpha" (float or float texture) as an alpha texture;
   // kNoTexture when it is the constant 1.
   int32_t shapeAlpha(const PbrtParams& shapeParams);

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -21,6 +22,7 @@
 #include "io/pbrt/pbrt_tokenizer.h"
 #include "io/ply/ply_reader.h"
 #include "io/shape_tessellation.h"
+#include "media/medium_presets.h"
 
 namespace ferry {
 namespace {
@@ -88,6 +90,9 @@ struct GraphicsState {
   bool reverseOrientation = false;
   int32_t material = -1;  // definition id; -1: pbrt's default diffuse
   std::optional<AreaLight> areaLight;
+  // MediumInterface: the named media inside and outside the shapes that
+  // follow ("": vacuum); the camera is in the outside one.
+  std::string mediumInside, mediumOutside;
   std::map<std::string, PbrtParams> attributes;  // v4 `Attribute` defaults by target
 };
 
@@ -589,16 +594,119 @@ class Parser {
     } else if (name == "Texture") {
       texture(in, where);
     } else if (name == "MakeNamedMedium") {
-      string(in, n);
-      skipped(name, params(in), where, "participating media are not supported");
+      makeNamedMedium(in, where);
     } else if (name == "MediumInterface") {
-      string(in, n);
-      if (in.tokens.peek().kind == PbrtToken::Kind::String) string(in, n);
-      skipped(name, PbrtParams(), where, "participating media are not supported");
+      state_.mediumInside = string(in, n);
+      state_.mediumOutside = in.tokens.peek().kind == PbrtToken::Kind::String
+                                 ? string(in, n)
+                                 : state_.mediumInside;
+      mediumOf(state_.mediumInside, where);
+      mediumOf(state_.mediumOutside, where);
+    } else if (name == "CameraMedium") {
+      state_.mediumOutside = string(in, n);
+      mediumOf(state_.mediumOutside, where);
     } else {
       return false;
     }
     return true;
+  }
+
+  // ------------------------------------------------------------------ media
+
+  // The medium named `name` ("": vacuum); an error names an undefined one.
+  int32_t mediumOf(const std::string& name, const SourceLocation& where) {
+    if (name.empty()) return kNoMedium;
+    auto it = namedMedia_.find(name);
+    if (it == namedMedia_.end())
+      fail(where, fmt::format("no medium named \"{}\" (MakeNamedMedium defines one first)", name));
+    return it->second;
+  }
+
+  // The media on the sides of the shapes being defined now.
+  MediumInterface currentMedia(const SourceLocation& where) {
+    return {mediumOf(state_.mediumInside, where), mediumOf(state_.mediumOutside, where)};
+  }
+
+  // pbrt-v3's homogeneous and heterogeneous media and pbrt-v4's homogeneous
+  // and uniformgrid, with the CTM here placing a grid's p0-p1 box.
+  void makeNamedMedium(Input& in, const SourceLocation& where) {
+    const std::string name = string(in, "MakeNamedMedium");
+    PbrtParams p = withDefaults(params(in), "medium");
+    if (!p.has("type"))
+      fail(where, fmt::format("MakeNamedMedium \"{}\" has no \"string type\"", name));
+    const std::string type = p.getString("type", "");
+    const std::string what = fmt::format("MakeNamedMedium \"{}\" (\"{}\")", name, type);
+    if (type == "nanovdb")
+      fail(where, fmt::format("{}: .nvdb files need NanoVDB, which Debian does not package; "
+                              "convert the grid to an OpenVDB .vdb file",
+                              what));
+    if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid") {
+      p.markAllUsed();
+      warnings_.once("medium|" + type,
+                     fmt::format("{} is not supported: the medium is left out (vacuum; first at "
+                                 "{})",
+                                 what, where.toString()));
+      namedMedia_[name] = kNoMedium;
+      return;
+    }
+    // pbrt-v3's defaults (its MakeMedium); pbrt-v4's uniformgrid defaults to 1.
+    const bool v4 = type == "uniformgrid";
+    Vec3f sigmaA = v4 ? Vec3f(1) : Vec3f(0.0011f, 0.0024f, 0.014f);
+    Vec3f sigmaS = v4 ? Vec3f(1) : Vec3f(2.55f, 3.21f, 3.77f);
+    if (const std::string preset = p.getString("preset", ""); !preset.empty()) {
+      if (!mediumPreset(preset, sigmaA, sigmaS))
+        warnings_.once("preset|" + preset,
+                       fmt::format("{}: unknown preset \"{}\" (its default coefficients are "
+                                   "used; at {})",
+                                   what, preset, where.toString()));
+    }
+    const float scale = p.getFloat("scale", 1);
+    sigmaA = materials_.constantColor(p, "sigma_a", sigmaA, SpectrumUse::Reflectance) * scale;
+    sigmaS = materials_.constantColor(p, "sigma_s", sigmaS, SpectrumUse::Reflectance) * scale;
+    const float g = p.getFloat("g", 0);
+    if (!(std::abs(g) < 1)) fail(where, fmt::format("{}: \"g\" {} must be in (-1, 1)", what, g));
+    if (!isFinite(sigmaA) || !isFinite(sigmaS) || std::min({sigmaA.x, sigmaA.y, sigmaA.z}) < 0 ||
+        std::min({sigmaS.x, sigmaS.y, sigmaS.z}) < 0)
+      fail(where, fmt::format("{}: sigma_a and sigma_s must be finite and not negative", what));
+    const Vec3f emitted = materials_.constantColor(p, "Le", Vec3f(0), SpectrumUse::Illuminant) *
+                          p.getFloat("Lescale", 1);
+    Medium m;
+    if (type == "homogeneous") {
+      m.name = name;
+      m.sigmaA = sigmaA;
+      m.sigmaS = sigmaS;
+      m.g = g;
+      m.emission = emitted;
+    } else {
+      const int nx = p.getInt("nx", 1), ny = p.getInt("ny", 1), nz = p.getInt("nz", 1);
+      const PbrtParam* density = p.getArray("density", {"float"});
+      if (!density) fail(where, fmt::format("{} needs \"float density\"", what));
+      if (nx <= 0 || ny <= 0 || nz <= 0)
+        fail(where, fmt::format("{}: nx, ny, nz ({} {} {}) must be positive", what, nx, ny, nz));
+      const uint64_t count = uint64_t(nx) * uint64_t(ny) * uint64_t(nz);
+      if (count != density->floats.size())
+        PbrtParams::fail(*density, fmt::format("{} values for nx * ny * nz = {} x {} x {} = {}",
+                                               density->floats.size(), nx, ny, nz, count));
+      const Vec3f p0 = p.getPoint3("p0").value_or(Vec3f(0)),
+                  p1 = p.getPoint3("p1").value_or(Vec3f(1));
+      if (!(p0.x < p1.x && p0.y < p1.y && p0.z < p1.z))
+        fail(where, fmt::format("{}: p0 must be below p1 on every axis", what));
+      std::shared_ptr<const DensityGrid> grid;
+      try {
+        grid = std::make_shared<DensityGrid>(nx, ny, nz, density->floats);
+      } catch (const std::invalid_argument& e) {
+        PbrtParams::fail(*density, e.what());
+      }
+      m = gridMedium(name, sigmaA, sigmaS, g, std::move(grid), state_.ctm, Box3f{p0, p1});
+      if (maxComponent(emitted) > 0)
+        warnings_.once("grid emission",
+                       fmt::format("{}: emission (\"Le\") from grid media is not supported yet "
+                                   "(at {})",
+                                   what, where.toString()));
+    }
+    reportUnused(p, what);
+    scene_.media.push_back(std::move(m));
+    namedMedia_[name] = int32_t(scene_.media.size() - 1);
   }
 
   void makeNamedMaterial(Input& in, const SourceLocation& where) {
@@ -703,6 +811,7 @@ class Parser {
                                                 type, where.toString()));
     }
     reportUnused(p, fmt::format("Camera \"{}\"", type));
+    scene_.cameraMedium = mediumOf(state_.mediumOutside, where);
     camera_ = c;
     coordinateSystems_["camera"] =
         state_.ctm.determinant() != 0 ? state_.ctm.inverse() : state_.ctm;
@@ -1022,6 +1131,14 @@ class Parser {
         return;
       }
       if (type == "trianglemesh") meshShapes = mesh.indices.size();
+      const MediumInterface media = shapeMedia(where);
+      if (media.isTransition() && materials_.isInterface(state_.material)) {
+        reportUnused(p, what);
+        if (!plyPath.empty()) mesh = readPlyAt(plyPath, where);
+        mesh.name = type;
+        addMediumBoundary(std::move(mesh), media);
+        return;
+      }
       Vec3f emission = state_.areaLight ? state_.areaLight->radiance : Vec3f(0);
       if (state_.areaLight && state_.areaLight->power)
         emission *= powerScale(type, mesh, shapeArea, meshShapes, where);
@@ -1036,7 +1153,7 @@ class Parser {
               "displacement",
               fmt::format("plymesh displacement is not supported (first at {})", where.toString()));
         reportUnused(p, what);
-        addPly(plyPath, material, where);
+        addPly(plyPath, material, media, where);
         return;
       }
       reportUnused(p, what);
@@ -1044,6 +1161,7 @@ class Parser {
       dropUselessNormals(mesh, where);
       mesh.name = type;
       mesh.material = material;
+      mesh.media = media;
       addMesh(std::move(mesh));
     } catch (const InputError& e) {
       if (!e.where().file.empty()) throw;
@@ -1227,9 +1345,14 @@ class Parser {
   // as a normal (render/surface.h; the handedness flip is already in that),
   // so the winding is set here: reversed under ReverseOrientation, or turned
   // triangle by triangle to its vertex normals.
+  // A mesh that bounds media is oriented the same way (its outside is on
+  // pbrt's normal's side).
   void orientEmitter(Mesh& mesh) const {
     const Material& material = scene_.materials[size_t(mesh.material)];
-    if (!material.isEmissive() || material.emitsBackSide) return;
+    if ((!material.isEmissive() || material.emitsBackSide) && !mesh.media.isTransition()) return;
+    orientToPbrtNormal(mesh);
+  }
+  void orientToPbrtNormal(Mesh& mesh) const {
     for (Vec3i& tri : mesh.indices) {
       bool flip = state_.reverseOrientation;
       if (!mesh.normals.empty()) {
@@ -1242,6 +1365,35 @@ class Parser {
       }
       if (flip) std::swap(tri.y, tri.z);
     }
+  }
+
+  // The media a shape bounds: none inside an object definition (pbrt does
+  // not place media with instances either).
+  MediumInterface shapeMedia(const SourceLocation& where) {
+    const MediumInterface media = currentMedia(where);
+    if (currentObject_ && media.isTransition()) {
+      warnings_.once("instanced media",
+                     fmt::format("a MediumInterface inside ObjectBegin is ignored: instanced "
+                                 "shapes bound no media (first at {})",
+                                 where.toString()));
+      return {};
+    }
+    return media;
+  }
+
+  // A shape that only bounds media (Material "" or "interface"): oriented
+  // as pbrt orients its normal (the outside), in world space.
+  void addMediumBoundary(Mesh mesh, const MediumInterface& media) {
+    if (mesh.indices.empty()) return;
+    orientToPbrtNormal(mesh);
+    bake(mesh, state_.ctm);
+    // Baking through a mirror turns the winding's normal around.
+    if (state_.ctm.determinant() < 0)
+      for (Vec3i& tri : mesh.indices) std::swap(tri.y, tri.z);
+    mesh.normals.clear();
+    mesh.uvs.clear();
+    mesh.material = 0;
+    scene_.mediumBoundaries.push_back({std::move(mesh), media});
   }
 
   // Out-of-core loading (LoadOptions::meshStore): the meshes finished so far
@@ -1276,13 +1428,14 @@ class Parser {
     return index;
   }
 
-  void addPly(const std::string& path, int32_t material, const SourceLocation& where) {
+  void addPly(const std::string& path, int32_t material, const MediumInterface& media,
+              const SourceLocation& where) {
     // A one-sided emitter's winding depends on ReverseOrientation and the
     // transform's handedness (orientEmitter): meshes differing in those are not shared.
     const int orientation =
         (state_.reverseOrientation ? 1 : 0) | (state_.ctm.determinant() < 0 ? 2 : 0);
     if (!currentObject_) {
-      auto key = std::make_tuple(path, material, orientation);
+      auto key = std::make_tuple(path, material, orientation, media.inside, media.outside);
       auto it = topLevelPly_.find(key);
       if (it != topLevelPly_.end()) {
         scene_.instances.push_back({it->second, state_.ctm});
@@ -1290,6 +1443,7 @@ class Parser {
       }
       Mesh mesh = readPlyAt(path, where);
       mesh.material = material;
+      mesh.media = media;
       addMesh(std::move(mesh));
       topLevelPly_.emplace(key, int32_t(scene_.objects.size() - 1));
       return;
@@ -1305,6 +1459,7 @@ class Parser {
     }
     Mesh mesh = readPlyAt(path, where);
     mesh.material = material;
+    mesh.media = media;
     objectPly_.emplace(key, addMesh(std::move(mesh)));
   }
 
@@ -1489,6 +1644,7 @@ class Parser {
   std::string mainDirectory_;
   Scene scene_;
   PbrtMaterials materials_;
+  std::map<std::string, int32_t> namedMedia_;  // kNoMedium: defined, but not supported
   std::vector<std::unique_ptr<Input>> inputs_;
   std::vector<Block> blocks_;
   GraphicsState state_;
@@ -1498,7 +1654,7 @@ class Parser {
   std::map<std::string, Affine3f> coordinateSystems_;
   std::map<std::string, int32_t> objects_;
   std::optional<int32_t> currentObject_;
-  std::map<std::tuple<std::string, int32_t, int>, int32_t> topLevelPly_;
+  std::map<std::tuple<std::string, int32_t, int, int32_t, int32_t>, int32_t> topLevelPly_;
   std::map<std::string, int32_t> objectPly_;
   struct CurveBatch {
     int32_t mesh, material, object;
