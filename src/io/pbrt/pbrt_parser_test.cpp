@@ -602,6 +602,56 @@ TEST(PbrtParser, ParameterListsGoOnAfterAnIncludedFileEnds) {
   fs::remove_all(dir);
 }
 
+TEST(PbrtParser, MediaAsPbrtDefinesThem) {
+  // A grid medium placed by the CTM, bounded by a Material "" box; a sphere
+  // of glass with fog inside; the camera in a haze.
+  const Scene s = fromText(R"(
+MakeNamedMedium "haze" "string type" "homogeneous" "rgb sigma_a" [0.01 0.02 0.03]
+  "rgb sigma_s" [0.1 0.1 0.1] "float scale" 2
+MediumInterface "" "haze"
+LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective"
+WorldBegin
+Translate 10 0 0
+MakeNamedMedium "smoke" "string type" "heterogeneous" "integer nx" 2 "integer ny" 1 "integer nz" 1
+  "point p0" [0 0 0] "point p1" [2 1 1] "float density" [0.5 1.5] "float g" 0.3
+  "color sigma_a" [1 1 1] "color sigma_s" [4 4 4]
+AttributeBegin
+  Material ""
+  MediumInterface "smoke" "haze"
+  Shape "trianglemesh" "point P" [0 0 0 2 0 0 2 1 0 0 1 0] "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+MakeNamedMedium "fog" "string type" "homogeneous" "string preset" "Wholemilk"
+AttributeBegin
+  Material "glass"
+  MediumInterface "fog" "haze"
+  Shape "sphere"
+AttributeEnd
+)");
+  ASSERT_EQ(s.media.size(), 3u);
+  EXPECT_EQ(s.cameraMedium, 0);
+  EXPECT_TRUE(s.media[0].homogeneous());
+  EXPECT_EQ(s.media[0].sigmaA, Vec3f(0.02f, 0.04f, 0.06f));
+  EXPECT_EQ(s.media[0].sigmaS, Vec3f(0.2f));
+  const Medium& smoke = s.media[1];
+  ASSERT_FALSE(smoke.homogeneous());
+  EXPECT_EQ(smoke.density->nx(), 2);
+  EXPECT_FLOAT_EQ(smoke.g, 0.3f);
+  // World (11.5, 0.5, 0.5) is the grid's second sample: the CTM (x + 10)
+  // and the p0-p1 box place it.
+  const Vec3f unit = smoke.gridFromWorld.transformPoint({11.5f, 0.5f, 0.5f});
+  EXPECT_NEAR(unit.x, 0.75f, 1e-6f);
+  EXPECT_FLOAT_EQ(smoke.density->lookup(unit), 1.5f);
+  EXPECT_EQ(s.media[2].sigmaS, Vec3f(2.55f, 3.21f, 3.77f));  // pbrt's Wholemilk
+  // The Material "" quad bounds media only: not a mesh, a boundary, in world space.
+  ASSERT_EQ(s.mediumBoundaries.size(), 1u);
+  EXPECT_EQ(s.mediumBoundaries[0].media, (MediumInterface{1, 0}));
+  EXPECT_EQ(s.mediumBoundaries[0].mesh.positions[0], Vec3f(10, 0, 0));
+  // The glass sphere is a surface with fog inside.
+  ASSERT_EQ(s.meshes.size(), 1u);
+  EXPECT_EQ(s.meshes[0].media, (MediumInterface{2, 0}));
+}
+
 TEST(PbrtParser, MissingEnvironmentMapFailsOrFallsBack) {
   std::string path = corpus("missing_envmap.pbrt");
   try {
@@ -959,6 +1009,13 @@ const std::vector<BadPbrt> kBadPbrt = {
      "integer '3000000000' does not fit in 32 bits"},
     {"curve_count.pbrt", "curve_count.pbrt", 2, 1,
      "a degree-3 Bezier curve needs 4 + 3k control points, found 3"},
+    {"medium_density_count.pbrt", "medium_density_count.pbrt", 3, 3,
+     "3 values for nx * ny * nz = 2 x 1 x 1 = 2"},
+    {"medium_negative_density.pbrt", "medium_negative_density.pbrt", 3, 3,
+     "density sample 1 (x 1, y 0, z 0) is -1"},
+    {"medium_undefined.pbrt", "medium_undefined.pbrt", 2, 1, "no medium named \"fog\""},
+    {"medium_nanovdb.pbrt", "medium_nanovdb.pbrt", 1, 1, ".nvdb files need NanoVDB"},
+    {"medium_bad_g.pbrt", "medium_bad_g.pbrt", 2, 1, "\"g\" 1.5 must be in (-1, 1)"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Corpus, PbrtCorpusError, testing::ValuesIn(kBadPbrt));
