@@ -106,6 +106,11 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--light-paths {}: expected auto, on or off", o.lightPaths));
   if (s.lightPaths.value_or(false) && s.render.lightStrategy != LightStrategy::Mis)
     throw InputError("--light-paths on needs --mis on (light paths are weighed by MIS)");
+  if (o.transmittance != "ratio" && o.transmittance != "delta")
+    throw InputError(
+        fmt::format("--transmittance {}: expected ratio or delta", o.transmittance));
+  s.render.transmittance = o.transmittance == "ratio" ? TransmittanceEstimator::Ratio
+                                                      : TransmittanceEstimator::Delta;
   s.render.seed = o.seed;
   s.render.view = o.view;
   s.render.toneMapping.exposure = o.exposure;
@@ -221,6 +226,11 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                    "Light paths: on (each pixel sample also traces a path from an emitter and\n"
                    "connects it to the camera, weighed by MIS: light through glass, small\n"
                    "apertures), off, or auto (on when the pbrt scene's Integrator is bdpt)")
+      ->capture_default_str();
+  command
+      ->add_option("--transmittance", o.transmittance,
+                   "How shadow rays through participating media estimate transmittance: ratio\n"
+                   "(ratio tracking) or delta (delta tracking: 0 or 1, a baseline to compare)")
       ->capture_default_str();
   command->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   command->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")

@@ -158,6 +158,11 @@ std::string RenderStats::summaryText(int ranks) const {
                   "composite {:.2f} (summed over ranks, and on one rank over threads)",
                   t.times.generate, t.times.trace, t.times.exchange, t.times.shade, t.times.wait,
                   t.times.composite));
+  if (t.mediumRealCollisions || t.mediumNullCollisions || t.mediumMajorantCells)
+    row("media", fmt::format("{} real collisions, {} null collisions, {} majorant cells",
+                             formatCount(t.mediumRealCollisions),
+                             formatCount(t.mediumNullCollisions),
+                             formatCount(t.mediumMajorantCells)));
   if (t.retraceMisses) row("re-trace misses", fmt::format("{}", t.retraceMisses));
   return out;
 }

@@ -77,6 +77,11 @@ struct FrameStats {
                                  // owner; distributed/forwarding.h, reachingOwners)
   uint64_t primaryBytesSent = 0;  // pixel ids sent to the ranks that generate their camera paths
   uint64_t terminationWaves = 0;  // overlapped exchange: non-blocking sums until a sample ended
+  // Tracking through participating media (media/tracking.h): collisions that
+  // scattered or absorbed, tentative ones that went on, majorant cells stepped.
+  uint64_t mediumRealCollisions = 0;
+  uint64_t mediumNullCollisions = 0;
+  uint64_t mediumMajorantCells = 0;
   std::vector<ExchangeCounters> perBounce;
   StageTimes times;
 
@@ -119,6 +124,9 @@ inline constexpr StatsField<FrameStats, uint64_t> kFrameCounters[] = {
     {"traces", "replica_queries", &FrameStats::replicaQueries},
     {nullptr, "primary_bytes_sent", &FrameStats::primaryBytesSent},
     {nullptr, "termination_waves", &FrameStats::terminationWaves},
+    {"media", "real_collisions", &FrameStats::mediumRealCollisions},
+    {"media", "null_collisions", &FrameStats::mediumNullCollisions},
+    {"media", "majorant_cells", &FrameStats::mediumMajorantCells},
 };
 // Per bounce under "exchange_per_bounce", and summed over bounces under "exchange".
 inline constexpr StatsField<ExchangeCounters, uint64_t> kExchangeCounters[] = {

@@ -92,6 +92,10 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
     }
     if (progress) progress(s + 1, settings_.samplesPerPixel);
   }
+  const MediumCounts media = shading_.takeMediumCounts();
+  stats.mediumRealCollisions += media.realCollisions;
+  stats.mediumNullCollisions += media.nullCollisions;
+  stats.mediumMajorantCells += media.majorantCells;
   stats.seconds = secondsSince(frameStart);
   stats.cpuSeconds = processCpuSeconds() - cpuStart;
   return stats;

@@ -46,6 +46,24 @@ SceneSummary summarize(const Scene& scene) {
   s.suns = scene.suns.size();
   s.environments = scene.environment.isBlack() ? 0 : 1;
   s.views = scene.views.size();
+  for (const ferry::Medium& m : scene.media) {
+    SceneSummary::Medium out;
+    out.name = m.name;
+    out.kind = m.homogeneous() ? "homogeneous"
+                               : fmt::format("grid {}x{}x{}", m.density->nx(), m.density->ny(),
+                                             m.density->nz());
+    out.bytes = m.bytes();
+    if (m.density) {
+      out.minDensity = m.density->minValue();
+      out.maxDensity = m.density->maxValue();
+    }
+    out.sigmaA = m.sigmaA;
+    out.sigmaS = m.sigmaS;
+    out.g = m.g;
+    s.media.push_back(out);
+  }
+  s.mediumBoundaries = scene.mediumBoundaries.size();
+  for (const MediumBoundary& b : scene.mediumBoundaries) s.boundaryTriangles += b.mesh.triangleCount();
   s.bounds = scene.worldBounds();
   return s;
 }
@@ -154,6 +172,22 @@ nlohmann::json SceneSummary::toJson() const {
                  {"emissive_meshes", emissiveMeshes},
                  {"emissive_triangles", emissiveTriangles}};
   j["views"] = views;
+  // (Only when there are media: the summary is part of a checkpoint's scene
+  // identity, which scenes without media keep as it was.)
+  if (!media.empty() || mediumBoundaries > 0) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const Medium& m : media)
+      list.push_back({{"name", m.name},
+                      {"kind", m.kind},
+                      {"bytes", m.bytes},
+                      {"density", {m.minDensity, m.maxDensity}},
+                      {"sigma_a", {m.sigmaA.x, m.sigmaA.y, m.sigmaA.z}},
+                      {"sigma_s", {m.sigmaS.x, m.sigmaS.y, m.sigmaS.z}},
+                      {"g", m.g}});
+    j["media"] = {{"media", list},
+                  {"boundaries", mediumBoundaries},
+                  {"boundary_triangles", boundaryTriangles}};
+  }
   if (!bounds.empty())
     j["bounds"] = {{bounds.lower.x, bounds.lower.y, bounds.lower.z},
                    {bounds.upper.x, bounds.upper.y, bounds.upper.z}};
@@ -185,6 +219,16 @@ std::string SceneSummary::toText() const {
       fmt::format("{} ({} sun, {} environment, {} emissive meshes / {} triangles)", lights(), suns,
                   environments, emissiveMeshes, formatCount(emissiveTriangles)));
   row("views", fmt::format("{}", views));
+  if (!media.empty() || mediumBoundaries > 0) {
+    row("media", fmt::format("{} ({} boundary meshes / {} triangles)", media.size(),
+                             mediumBoundaries, formatCount(boundaryTriangles)));
+    for (const Medium& m : media)
+      row("  " + m.name,
+          fmt::format("{}, density {:.4g} .. {:.4g}, {}, sigma_a ({:.4g}, {:.4g}, {:.4g}), "
+                      "sigma_s ({:.4g}, {:.4g}, {:.4g}), g {:.3g}",
+                      m.kind, m.minDensity, m.maxDensity, formatBytes(m.bytes), m.sigmaA.x,
+                      m.sigmaA.y, m.sigmaA.z, m.sigmaS.x, m.sigmaS.y, m.sigmaS.z, m.g));
+  }
   if (!bounds.empty())
     row("bounds", fmt::format("({:.4g}, {:.4g}, {:.4g}) - ({:.4g}, {:.4g}, {:.4g})", bounds.lower.x,
                               bounds.lower.y, bounds.lower.z, bounds.upper.x, bounds.upper.y,

@@ -33,6 +33,19 @@ struct SceneSummary {
   uint64_t emissiveMeshes = 0;
   uint64_t emissiveTriangles = 0;
   uint64_t views = 0;
+  // Participating media, each as `ferry info` lists it, and the surfaces
+  // that only bound them.
+  struct Medium {
+    std::string name;
+    std::string kind;  // "homogeneous", or "grid NXxNYxNZ"
+    uint64_t bytes = 0;
+    float minDensity = 1, maxDensity = 1;
+    Vec3f sigmaA, sigmaS;
+    float g = 0;
+  };
+  std::vector<Medium> media;
+  uint64_t mediumBoundaries = 0;
+  uint64_t boundaryTriangles = 0;
   Box3f bounds;
   MemoryCost memory;
 

@@ -189,8 +189,15 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
   if (given) given->validate();
   settings_.render.retraceAll = settings.retrace == Retrace::All;
   rank_ = std::make_unique<Rank>(settings_, comm_, given);
+  // Light paths do not go through media: a scene with media renders by
+  // camera paths alone (their medium rides where light paths keep a ratio).
+  const bool media = rank_->scene.hasMedia();
+  if (media && settings_.lightPaths.value_or(false))
+    throw InputError(fmt::format("--light-paths on: scene '{}' has participating media, which "
+                                 "light paths do not cross; render it without them",
+                                 rank_->scene.name));
   settings_.render.lightPaths =
-      settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
+      !media && settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
 }
 
 RenderSession::~RenderSession() = default;
@@ -212,6 +219,7 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
           r.samplesPerPixel, r.maxDepth, lightStrategyName(r.lightStrategy), r.seed, v.name,
           v.from.x, v.from.y, v.from.z, v.at.x, v.at.y, v.at.z, v.up.x, v.up.y, v.up.z, v.fovY) +
       (r.lightPaths ? "; light-paths=on" : "") +
+      (r.transmittance == TransmittanceEstimator::Delta ? "; transmittance=delta" : "") +
       (r.crop.whole()
            ? std::string()
            : fmt::format("; crop={},{},{},{}", r.crop.x0, r.crop.x1, r.crop.y0, r.crop.y1));
