@@ -48,20 +48,26 @@ float DensityGrid::lookup(Vec3f p) const {
   return lerp(dz, lerp(dy, d00, d10), lerp(dy, d01, d11));
 }
 
-float DensityGrid::maxIn(Vec3f lo, Vec3f hi) const {
+std::pair<float, float> DensityGrid::rangeIn(Vec3f lo, Vec3f hi) const {
   const int n[3] = {nx_, ny_, nz_};
   int first[3], last[3];
+  bool outside = false;  // a sample outside the grid (0) takes part
   for (int a = 0; a < 3; ++a) {
     const float l = std::floor(lo[a] * float(n[a]) - 0.5f);
     const float h = std::floor(hi[a] * float(n[a]) - 0.5f) + 1;
+    outside = outside || l < 0 || h > float(n[a] - 1);
     first[a] = int(std::clamp(l, 0.0f, float(n[a] - 1)));
     last[a] = int(std::clamp(h, 0.0f, float(n[a] - 1)));
   }
-  float m = 0;
+  float smallest = outside ? 0.0f : max_, largest = 0;
   for (int z = first[2]; z <= last[2]; ++z)
     for (int y = first[1]; y <= last[1]; ++y)
-      for (int x = first[0]; x <= last[0]; ++x) m = std::max(m, at(x, y, z));
-  return m;
+      for (int x = first[0]; x <= last[0]; ++x) {
+        const float v = at(x, y, z);
+        smallest = std::min(smallest, v);
+        largest = std::max(largest, v);
+      }
+  return {smallest, largest};
 }
 
 }  // namespace ferry

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/math.h"
@@ -36,7 +37,10 @@ class DensityGrid {
   // The largest density lookup() can return anywhere in the box [lo, hi]
   // (unit-cube coordinates): the largest sample whose voxel a lookup there
   // interpolates (pbrt-v4's SampledGrid::MaxValue).
-  float maxIn(Vec3f lo, Vec3f hi) const;
+  float maxIn(Vec3f lo, Vec3f hi) const { return rangeIn(lo, hi).second; }
+  // The smallest and largest density lookup() can return in [lo, hi] (the
+  // smallest is 0 where the box comes within half a voxel of the grid's faces).
+  std::pair<float, float> rangeIn(Vec3f lo, Vec3f hi) const;
 
  private:
   float at(int x, int y, int z) const {

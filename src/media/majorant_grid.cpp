@@ -7,6 +7,7 @@ MajorantGrid::MajorantGrid(const DensityGrid& grid, int cells) {
   res_[1] = std::clamp(grid.ny(), 1, cells);
   res_[2] = std::clamp(grid.nz(), 1, cells);
   values_.resize(size_t(res_[0]) * size_t(res_[1]) * size_t(res_[2]));
+  minima_.resize(values_.size());
   for (int z = 0; z < res_[2]; ++z)
     for (int y = 0; y < res_[1]; ++y)
       for (int x = 0; x < res_[0]; ++x) {
@@ -14,8 +15,9 @@ MajorantGrid::MajorantGrid(const DensityGrid& grid, int cells) {
                        float(z) / float(res_[2])};
         const Vec3f hi{float(x + 1) / float(res_[0]), float(y + 1) / float(res_[1]),
                        float(z + 1) / float(res_[2])};
-        values_[(size_t(z) * size_t(res_[1]) + size_t(y)) * size_t(res_[0]) + size_t(x)] =
-            grid.maxIn(lo, hi);
+        const auto [smallest, largest] = grid.rangeIn(lo, hi);
+        values_[index(x, y, z)] = largest;
+        minima_[index(x, y, z)] = smallest;
       }
 }
 

@@ -1,7 +1,8 @@
 // Coarse cells over a density grid's unit cube, each holding the largest
-// density a lookup inside it can return: the majorant that delta and ratio
+// density a lookup inside it can return (the majorant that delta and ratio
 // tracking step against, cell by cell, so thin regions cost few steps and
-// empty cells none (pbrt-v4's MajorantGrid and DDA iterator).
+// empty cells none: pbrt-v4's MajorantGrid and DDA iterator) and the
+// smallest (the control that residual ratio tracking takes out in closed form).
 #pragma once
 
 #include <algorithm>
@@ -20,19 +21,21 @@ class MajorantGrid {
   explicit MajorantGrid(const DensityGrid& grid, int cells = 16);
 
   int cells(int axis) const { return res_[axis]; }
-  float at(int x, int y, int z) const {
-    return values_[(size_t(z) * size_t(res_[1]) + size_t(y)) * size_t(res_[0]) + size_t(x)];
-  }
+  float at(int x, int y, int z) const { return values_[index(x, y, z)]; }
+  float minAt(int x, int y, int z) const { return minima_[index(x, y, z)]; }
 
-  // Calls visit(tEnter, tExit, maxDensity) for every cell the ray o + t d
+  // Calls visit(tEnter, tExit, maxDensity, minDensity) for every cell the ray o + t d
   // (unit-cube coordinates) passes within [t0, t1], in order, until visit
   // returns false. [t0, t1] must already lie within the unit cube.
   template <typename Visit>
   void walk(Vec3f o, Vec3f d, float t0, float t1, Visit&& visit) const;
 
  private:
+  size_t index(int x, int y, int z) const {
+    return (size_t(z) * size_t(res_[1]) + size_t(y)) * size_t(res_[0]) + size_t(x);
+  }
   int res_[3] = {1, 1, 1};
-  std::vector<float> values_;
+  std::vector<float> values_, minima_;
 };
 
 // Where the ray o + t d meets the unit cube, clipped to [tMin, tMax]; false if
@@ -80,7 +83,8 @@ void MajorantGrid::walk(Vec3f o, Vec3f d, float t0, float t1, Visit&& visit) con
     // The axis whose cell boundary comes first.
     const int a = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
     const float exit = std::min(next[a], t1);
-    if (exit > t && !visit(t, exit, at(cell[0], cell[1], cell[2]))) return;
+    const size_t i = index(cell[0], cell[1], cell[2]);
+    if (exit > t && !visit(t, exit, values_[i], minima_[i])) return;
     if (next[a] >= t1) return;
     t = exit;
     cell[a] += step[a];

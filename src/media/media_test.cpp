@@ -37,7 +37,7 @@ TEST(DensityGrid, RefusesBadInput) {
   EXPECT_THROW(DensityGrid(2, 1, 1, {1, std::nanf("")}), std::invalid_argument);
 }
 
-TEST(MajorantGrid, BoundsEveryLookupInItsCell) {
+TEST(MajorantGrid, BoundsEveryLookupInItsCellFromAboveAndBelow) {
   std::vector<float> v(20 * 17 * 9);
   uint32_t h = 1;
   for (float& x : v) x = random01FromBits(h = hashMix(h + 1)) * 5;
@@ -49,6 +49,7 @@ TEST(MajorantGrid, BoundsEveryLookupInItsCell) {
     const Vec3f p{x, y, z};
     int cx = std::min(int(p.x * 4), 3), cy = std::min(int(p.y * 4), 3), cz = std::min(int(p.z * 4), 3);
     ASSERT_LE(g.lookup(p), m.at(cx, cy, cz) * (1 + 1e-6f)) << p.x << " " << p.y << " " << p.z;
+    ASSERT_GE(g.lookup(p), m.minAt(cx, cy, cz) * (1 - 1e-6f)) << p.x << " " << p.y << " " << p.z;
   }
 }
 
@@ -61,7 +62,7 @@ TEST(MajorantGrid, WalksTheCellsAlongARayInOrder) {
   ASSERT_TRUE(clipToUnitCube(o, d, t0, t1));
   float last = t0, covered = 0;
   int cells = 0;
-  m.walk(o, d, t0, t1, [&](float a, float b, float) {
+  m.walk(o, d, t0, t1, [&](float a, float b, float, float) {
     EXPECT_NEAR(a, last, 1e-5f);
     EXPECT_GT(b, a);
     covered += b - a;

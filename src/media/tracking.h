@@ -1,7 +1,7 @@
 // Sampling a ray's way through one medium: free-flight distances by delta
 // tracking (spectral tracking for chromatic media: Kutz et al. 2017, so a
-// different sigma per channel is unbiased) and transmittance by ratio
-// tracking (or delta tracking, to compare), both stepping against the
+// different sigma per channel is unbiased) and transmittance by residual
+// ratio tracking (or delta tracking, to compare), both stepping against the
 // majorant grid cell by cell. A homogeneous medium is sampled in closed
 // form (pbrt-v3's HomogeneousMedium: a channel picked uniformly, weighed by
 // the average density). `d` is a unit direction; distances are world lengths.
@@ -56,7 +56,8 @@ FreeFlight sampleFreeFlight(const Medium& medium, Vec3f o, Vec3f d, float tMin, 
                             TrackingRandom& random, MediumCounts& counts);
 
 enum class TransmittanceEstimator : uint8_t {
-  Ratio,  // ratio tracking: the product of null-collision probabilities
+  Ratio,  // residual ratio tracking: each majorant cell's smallest density in
+          // closed form, the rest a product of null-collision probabilities
   Delta   // delta tracking: 0 at the first real collision, else 1 (a baseline)
 };
 
