@@ -12,25 +12,34 @@
 #include "builtin/island.h"
 #include "builtin/landscape.h"
 #include "builtin/scene_plan.h"
+#include "builtin/volume.h"
 #include "core/error.h"
 
 namespace ferry {
 namespace {
 
 constexpr std::string_view kPrefix = "builtin:";
-constexpr const char* kAcceptedKeys = "scale (a positive number), seed (an integer 0..4294967295)";
+constexpr const char* kAcceptedKeys =
+    "scale (a positive number), seed (an integer 0..4294967295), size (builtin:volume: samples a "
+    "side)";
 
 struct BuiltinEntry {
   const char* name;
-  builtin::ScenePlan (*plan)(double scale, uint32_t seed);
+  builtin::ScenePlan (*plan)(const BuiltinParams& params);
+  bool hasSize = false;  // takes `size` (and not `scale`)
 };
 
 // The order is the order `builtinNames()` lists them in.
 constexpr BuiltinEntry kBuiltins[] = {
-    {"island", builtin::planIsland},
-    {"landscape", builtin::planLandscape},
-    {"cornell", builtin::planCornell},
-    {"furnace", builtin::planFurnace},
+    {"island", [](const BuiltinParams& p) { return builtin::planIsland(p.scale, p.seed); }},
+    {"landscape", [](const BuiltinParams& p) { return builtin::planLandscape(p.scale, p.seed); }},
+    {"cornell", [](const BuiltinParams& p) { return builtin::planCornell(p.scale, p.seed); }},
+    {"furnace", [](const BuiltinParams& p) { return builtin::planFurnace(p.scale, p.seed); }},
+    {"volume",
+     [](const BuiltinParams& p) {
+       return builtin::planVolume(p.size.value_or(builtin::kDefaultVolumeSize), p.seed);
+     },
+     true},
 };
 
 std::string namesList() {
@@ -55,7 +64,9 @@ builtin::ScenePlan planFor(const BuiltinParams& params) {
   std::string what = "builtin:" + params.name;
   const BuiltinEntry& entry = lookup(params.name, what);
   checkScale(params.scale, what);
-  return entry.plan(params.scale, params.seed);
+  if (params.size && !entry.hasSize)
+    throw InputError(fmt::format("{} has no size (builtin:volume has; use scale)", what));
+  return entry.plan(params);
 }
 
 double parseScale(std::string_view text, const std::string& spec) {
@@ -113,6 +124,14 @@ BuiltinParams parseBuiltinSpec(const std::string& spec) {
       params.scale = parseScale(value, spec);
     } else if (key == "seed") {
       params.seed = parseSeed(value, spec);
+    } else if (key == "size") {
+      uint32_t size = 0;
+      const char* end = value.data() + value.size();
+      auto [ptr, ec] = std::from_chars(value.data(), end, size);
+      if (value.empty() || ec != std::errc() || ptr != end || size < 2 || size > 4096)
+        throw InputError(
+            fmt::format("bad size '{}' in '{}': expected an integer 2..4096", value, spec));
+      params.size = int(size);
     } else {
       throw InputError(
           fmt::format("unknown parameter '{}' in '{}' (accepted: {})", key, spec, kAcceptedKeys));

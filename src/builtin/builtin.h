@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@ struct BuiltinParams {
   std::string name;    // "island", "landscape", "cornell", "furnace"
   double scale = 1.0;  // grows the scene; meaning per built-in (see its header)
   uint32_t seed = 1;
+  std::optional<int> size;  // builtin:volume: samples a side
 };
 
 bool isBuiltinSpec(const std::string& spec);  // starts with "builtin:"

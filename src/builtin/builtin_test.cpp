@@ -73,8 +73,8 @@ TEST(BuiltinSpec, UnknownNameListsTheBuiltins) {
 }
 
 TEST(BuiltinSpec, UnknownKeyListsTheAcceptedKeys) {
-  std::string msg = expectThrowMessage("builtin:island?size=3");
-  EXPECT_NE(msg.find("size"), std::string::npos) << msg;
+  std::string msg = expectThrowMessage("builtin:island?depth=3");
+  EXPECT_NE(msg.find("depth"), std::string::npos) << msg;
   EXPECT_NE(msg.find("scale"), std::string::npos) << msg;
   EXPECT_NE(msg.find("seed"), std::string::npos) << msg;
   expectThrowMessage("builtin:island?scale");  // no value
@@ -95,9 +95,9 @@ TEST(BuiltinSpec, RejectsBadSeeds) {
   expectThrowMessage("builtin:island?seed=1&seed=2");
 }
 
-TEST(BuiltinSpec, NamesAreTheFourBuiltins) {
+TEST(BuiltinSpec, NamesAreTheFiveBuiltins) {
   EXPECT_EQ(builtinNames(),
-            (std::vector<std::string>{"island", "landscape", "cornell", "furnace"}));
+            (std::vector<std::string>{"island", "landscape", "cornell", "furnace", "volume"}));
 }
 
 TEST(BuiltinSpec, GenerateRejectsBadParams) {
@@ -299,6 +299,47 @@ TEST(BuiltinViews, CamerasLookAtSomethingAndAreNotBuried) {
       EXPECT_LE(v.from.x, bounds.upper.x);
     }
   }
+}
+
+}  // namespace
+}  // namespace ferry
+
+namespace ferry {
+namespace {
+
+TEST(BuiltinVolume, IsAGridMediumOfTheSizeAskedInItsBox) {
+  const BuiltinParams params = parseBuiltinSpec("builtin:volume?size=12&seed=3");
+  ASSERT_EQ(params.size, 12);
+  const SceneSummary described = describeBuiltin(params);
+  ASSERT_EQ(described.media.size(), 1u);
+  EXPECT_EQ(described.media[0].kind, "grid 12x12x12");
+  const Scene scene = generateBuiltin(params);
+  scene.validate();
+  ASSERT_EQ(scene.media.size(), 1u);
+  const Medium& cloud = scene.media[0];
+  ASSERT_FALSE(cloud.homogeneous());
+  EXPECT_EQ(cloud.density->nx(), 12);
+  EXPECT_GE(cloud.density->minValue(), described.media[0].minDensity);
+  EXPECT_LE(cloud.density->maxValue(), described.media[0].maxDensity);
+  EXPECT_GT(cloud.density->maxValue(), 0.5f);  // a cloud, not a haze
+  ASSERT_EQ(scene.mediumBoundaries.size(), 1u);
+  EXPECT_EQ(scene.mediumBoundaries[0].media, (MediumInterface{0, kNoMedium}));
+  // Its box's normals point out of it (inside is the cloud).
+  const Mesh& box = scene.mediumBoundaries[0].mesh;
+  for (const Vec3i& t : box.indices) {
+    const Vec3f a = box.positions[size_t(t.x)];
+    const Vec3f n = cross(box.positions[size_t(t.y)] - a, box.positions[size_t(t.z)] - a);
+    EXPECT_GT(dot(n, (a + box.positions[size_t(t.y)] + box.positions[size_t(t.z)]) * (1.0f / 3)),
+              0);
+  }
+  // The same seed, the same densities.
+  EXPECT_EQ(generateBuiltin(params).media[0].density->values(), cloud.density->values());
+}
+
+TEST(BuiltinVolume, SizeBelongsToTheVolumeAlone) {
+  EXPECT_THROW(describeBuiltin(parseBuiltinSpec("builtin:cornell?size=4")), InputError);
+  EXPECT_THROW(parseBuiltinSpec("builtin:volume?size=1"), InputError);
+  EXPECT_THROW(parseBuiltinSpec("builtin:volume?size=huge"), InputError);
 }
 
 }  // namespace

@@ -103,6 +103,9 @@ SceneSummary describePlan(const ScenePlan& plan) {
   s.suns = plan.suns.size();
   s.environments = plan.environmentImage || maxComponent(plan.environmentColor) > 0 ? 1 : 0;
   s.views = plan.views.size();
+  s.media = plan.mediaSummary;
+  s.mediumBoundaries = plan.mediumBoundaries;
+  s.boundaryTriangles = plan.boundaryTriangles;
   s.bounds = plan.bounds;
   return s;
 }
@@ -176,6 +179,7 @@ Scene materializePlan(const ScenePlan& plan, std::shared_ptr<MeshStore> store) {
   scene.environment.color = plan.environmentColor;
   if (plan.environmentImage) scene.environment.image = plan.environmentImage();
   scene.views = plan.views;
+  if (plan.makeMedia) plan.makeMedia(scene);
   scene.meshStore = std::move(store);
   return scene;
 }

@@ -62,6 +62,11 @@ struct ScenePlan {
   Vec3f environmentColor{0, 0, 0};
   std::function<std::shared_ptr<const HdrImage>()> environmentImage;  // optional
   std::vector<CameraView> views;
+  // Participating media: what `ferry info` says of them without making them,
+  // and what makes them and their boundaries into the scene (optional).
+  std::vector<SceneSummary::Medium> mediaSummary;
+  uint64_t mediumBoundaries = 0, boundaryTriangles = 0;
+  std::function<void(Scene&)> makeMedia;
   // The world bounds of everything the plan makes. Each generator guarantees
   // by construction that its content spans exactly this box (some vertex
   // touches each face), without making the content to find out.
