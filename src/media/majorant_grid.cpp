@@ -2,12 +2,16 @@
 
 namespace ferry {
 
-MajorantGrid::MajorantGrid(const DensityGrid& grid, int cells) {
+MajorantGrid::MajorantGrid(const DensityGrid& grid, int cells)
+    : MajorantGrid(
+          grid, [](float lo, float hi) { return std::pair{hi, Vec3f(lo)}; }, cells) {}
+
+MajorantGrid::MajorantGrid(const DensityGrid& grid, const Extinction& extinction, int cells) {
   res_[0] = std::clamp(grid.nx(), 1, cells);
   res_[1] = std::clamp(grid.ny(), 1, cells);
   res_[2] = std::clamp(grid.nz(), 1, cells);
   values_.resize(size_t(res_[0]) * size_t(res_[1]) * size_t(res_[2]));
-  minima_.resize(values_.size());
+  controls_.resize(values_.size());
   for (int z = 0; z < res_[2]; ++z)
     for (int y = 0; y < res_[1]; ++y)
       for (int x = 0; x < res_[0]; ++x) {
@@ -16,8 +20,9 @@ MajorantGrid::MajorantGrid(const DensityGrid& grid, int cells) {
         const Vec3f hi{float(x + 1) / float(res_[0]), float(y + 1) / float(res_[1]),
                        float(z + 1) / float(res_[2])};
         const auto [smallest, largest] = grid.rangeIn(lo, hi);
-        values_[index(x, y, z)] = largest;
-        minima_[index(x, y, z)] = smallest;
+        const auto [majorant, control] = extinction(smallest, largest);
+        values_[index(x, y, z)] = majorant;
+        controls_[index(x, y, z)] = control;
       }
 }
 

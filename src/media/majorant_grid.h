@@ -1,13 +1,16 @@
-// Coarse cells over a density grid's unit cube, each holding the largest
-// density a lookup inside it can return (the majorant that delta and ratio
-// tracking step against, cell by cell, so thin regions cost few steps and
-// empty cells none: pbrt-v4's MajorantGrid and DDA iterator) and the
-// smallest (the control that residual ratio tracking takes out in closed form).
+// Coarse cells over a grid medium's unit cube, each holding the largest
+// extinction any channel can have inside it (the majorant that delta and
+// ratio tracking step against, cell by cell, so thin regions cost few steps
+// and empty cells none: pbrt-v4's MajorantGrid and DDA iterator) and each
+// channel's smallest (the control that residual ratio tracking takes out in
+// closed form).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <utility>
 #include <vector>
 
 #include "core/math.h"
@@ -17,14 +20,19 @@ namespace ferry {
 
 class MajorantGrid {
  public:
+  // For the grid's values in [lo, hi] (what a cell's lookups can return):
+  // the largest extinction of any channel, and each channel's smallest.
+  using Extinction = std::function<std::pair<float, Vec3f>(float lo, float hi)>;
   // At most `cells` cells along each axis, and no more than the grid has voxels.
+  MajorantGrid(const DensityGrid& grid, const Extinction& extinction, int cells = 16);
+  // The grid's values themselves as the extinction.
   explicit MajorantGrid(const DensityGrid& grid, int cells = 16);
 
   int cells(int axis) const { return res_[axis]; }
   float at(int x, int y, int z) const { return values_[index(x, y, z)]; }
-  float minAt(int x, int y, int z) const { return minima_[index(x, y, z)]; }
+  Vec3f controlAt(int x, int y, int z) const { return controls_[index(x, y, z)]; }
 
-  // Calls visit(tEnter, tExit, maxDensity, minDensity) for every cell the ray o + t d
+  // Calls visit(tEnter, tExit, majorant, control) for every cell the ray o + t d
   // (unit-cube coordinates) passes within [t0, t1], in order, until visit
   // returns false. [t0, t1] must already lie within the unit cube.
   template <typename Visit>
@@ -35,7 +43,8 @@ class MajorantGrid {
     return (size_t(z) * size_t(res_[1]) + size_t(y)) * size_t(res_[0]) + size_t(x);
   }
   int res_[3] = {1, 1, 1};
-  std::vector<float> values_, minima_;
+  std::vector<float> values_;
+  std::vector<Vec3f> controls_;
 };
 
 // Where the ray o + t d meets the unit cube, clipped to [tMin, tMax]; false if
@@ -84,7 +93,7 @@ void MajorantGrid::walk(Vec3f o, Vec3f d, float t0, float t1, Visit&& visit) con
     const int a = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
     const float exit = std::min(next[a], t1);
     const size_t i = index(cell[0], cell[1], cell[2]);
-    if (exit > t && !visit(t, exit, values_[i], minima_[i])) return;
+    if (exit > t && !visit(t, exit, values_[i], controls_[i])) return;
     if (next[a] >= t1) return;
     t = exit;
     cell[a] += step[a];

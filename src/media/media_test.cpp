@@ -12,6 +12,7 @@
 #include "media/medium.h"
 #include "media/phase.h"
 #include "media/tracking.h"
+#include "media/transfer_function.h"
 
 namespace ferry {
 namespace {
@@ -49,7 +50,7 @@ TEST(MajorantGrid, BoundsEveryLookupInItsCellFromAboveAndBelow) {
     const Vec3f p{x, y, z};
     int cx = std::min(int(p.x * 4), 3), cy = std::min(int(p.y * 4), 3), cz = std::min(int(p.z * 4), 3);
     ASSERT_LE(g.lookup(p), m.at(cx, cy, cz) * (1 + 1e-6f)) << p.x << " " << p.y << " " << p.z;
-    ASSERT_GE(g.lookup(p), m.minAt(cx, cy, cz) * (1 - 1e-6f)) << p.x << " " << p.y << " " << p.z;
+    ASSERT_GE(g.lookup(p), m.controlAt(cx, cy, cz).x * (1 - 1e-6f)) << p.x << " " << p.y << " " << p.z;
   }
 }
 
@@ -62,7 +63,7 @@ TEST(MajorantGrid, WalksTheCellsAlongARayInOrder) {
   ASSERT_TRUE(clipToUnitCube(o, d, t0, t1));
   float last = t0, covered = 0;
   int cells = 0;
-  m.walk(o, d, t0, t1, [&](float a, float b, float, float) {
+  m.walk(o, d, t0, t1, [&](float a, float b, float, const Vec3f&) {
     EXPECT_NEAR(a, last, 1e-5f);
     EXPECT_GT(b, a);
     covered += b - a;
@@ -168,6 +169,48 @@ TEST(Tracking, HomogeneousEmissionIsTheClosedFormIntegral) {
   EXPECT_NEAR(f.emitted.x, 1 * 3 * (1 - std::exp(-2 * 0.5f)) / 2, 1e-5f);
   EXPECT_NEAR(f.emitted.y, 2 * 3 * (1 - std::exp(-2 * 0.5f)) / 2, 1e-5f);
   EXPECT_EQ(f.emitted.z, 0);
+}
+
+TEST(TransferFunction, InterpolatesItsPointsAndBoundsItsOpacity) {
+  const TransferFunction tf({{0.2f, {1, 0, 0}}, {0.6f, {0, 0, 1}}},
+                            {{0.0f, 0.0f}, {0.5f, 2.0f}, {1.0f, 1.0f}}, 3);
+  EXPECT_EQ(tf.color(0.0f), Vec3f(1, 0, 0));  // flat before the first point
+  EXPECT_EQ(tf.color(1.0f), Vec3f(0, 0, 1));  // and after the last
+  EXPECT_NEAR(tf.color(0.4f).x, 0.5f, 1e-6f);
+  EXPECT_NEAR(tf.opacity(0.25f), 1.0f, 1e-6f);
+  EXPECT_NEAR(tf.opacity(0.75f), 1.5f, 1e-6f);
+  // The peak between two values counts.
+  const auto [lo, hi] = tf.opacityRange(0.25f, 0.75f);
+  EXPECT_NEAR(lo, 1.0f, 1e-6f);
+  EXPECT_NEAR(hi, 2.0f, 1e-6f);
+  EXPECT_THROW(TransferFunction({}, {{0, 1}}, 1), std::invalid_argument);
+  EXPECT_THROW(TransferFunction({{0.5f, {1, 1, 1}}, {0.4f, {1, 1, 1}}}, {{0, 1}}, 1),
+               std::invalid_argument);
+  EXPECT_THROW(TransferFunction({{0.5f, {2, 1, 1}}}, {{0, 1}}, 1), std::invalid_argument);
+  EXPECT_THROW(TransferFunction({{0.5f, {1, 1, 1}}}, {{0, -1}}, 1), std::invalid_argument);
+  EXPECT_THROW(TransferFunction({{0.5f, {1, 1, 1}}}, {{0, 1}}, -2), std::invalid_argument);
+}
+
+TEST(Tracking, ATransferFunctionVolumeTransmitsByItsOpacity) {
+  // Values 0.5 everywhere through a ramp to opacity 1 at 1, scale 2: sigma_t
+  // 1 inside (fading at the faces as the values do).
+  auto tf = std::make_shared<TransferFunction>(
+      std::vector<TransferFunction::ColorPoint>{{0, {0.5f, 0.5f, 0.5f}}},
+      std::vector<TransferFunction::OpacityPoint>{{0, 0}, {1, 1}}, 2.0f);
+  const int n = 8;
+  const Medium m = transferFunctionMedium(
+      "tf", std::make_shared<DensityGrid>(n, n, n, std::vector<float>(n * n * n, 0.5f)), tf,
+      Box3f{{0, 0, 0}, {1, 1, 1}});
+  const float depth = 1 - 0.25f / n;
+  Vec3f sum{0, 0, 0};
+  MediumCounts counts;
+  const int samples = 20000;
+  for (int i = 0; i < samples; ++i) {
+    TrackingRandom random(hashMix(uint32_t(i) + 99), 0);
+    sum += transmittance(m, {-1, 0.5f, 0.5f}, {1, 0, 0}, 0, 3, TransmittanceEstimator::Ratio,
+                         random, counts);
+  }
+  EXPECT_NEAR(sum.x / samples, std::exp(-depth), 0.01);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "core/math.h"
 #include "media/density_grid.h"
 #include "media/majorant_grid.h"
+#include "media/transfer_function.h"
 
 namespace ferry {
 
@@ -45,9 +46,24 @@ struct Medium {
   std::shared_ptr<const DensityGrid> density;
   std::shared_ptr<const MajorantGrid> majorants;
   Affine3f gridFromWorld;
+  // A sci-vis volume: the grid holds values in [0, 1] that this maps to
+  // extinction and albedo (sigmaA and sigmaS are then unused).
+  std::shared_ptr<const TransferFunction> transfer;
 
   bool homogeneous() const { return density == nullptr; }
   Vec3f sigmaT() const { return sigmaA + sigmaS; }
+  // A grid medium's coefficients at `unit` (the unit cube's coordinates).
+  void coefficients(Vec3f unit, Vec3f& sa, Vec3f& ss) const {
+    const float v = density->lookup(unit);
+    if (transfer) {
+      const float t = transfer->scale() * transfer->opacity(v);
+      ss = transfer->color(v) * t;
+      sa = Vec3f(t) - ss;
+    } else {
+      sa = sigmaA * v;
+      ss = sigmaS * v;
+    }
+  }
   bool emits() const { return maxComponent(emission) > 0; }
   // Bytes it holds (its grid and majorants).
   size_t bytes() const;
@@ -58,5 +74,11 @@ struct Medium {
 Medium gridMedium(std::string name, Vec3f sigmaA, Vec3f sigmaS, float g,
                   std::shared_ptr<const DensityGrid> density, const Affine3f& worldFromMedium,
                   const Box3f& box);
+// A sci-vis volume: values in [0, 1] over `box` (world space), rendered
+// through `transfer` (isotropic scattering).
+Medium transferFunctionMedium(std::string name, std::shared_ptr<const DensityGrid> values,
+                              std::shared_ptr<const TransferFunction> transfer, const Box3f& box);
+// Rebuilds the majorants after the transfer function changed.
+void setTransferFunction(Medium& medium, std::shared_ptr<const TransferFunction> transfer);
 
 }  // namespace ferry

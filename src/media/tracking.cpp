@@ -78,17 +78,15 @@ FreeFlight sampleFreeFlight(const Medium& m, Vec3f o, Vec3f d, float tMin, float
   FreeFlight f;
   const Vec3f og = m.gridFromWorld.transformPoint(o), dg = m.gridFromWorld.transformVector(d);
   float t0 = tMin, t1 = tMax;
-  const float sigmaTMax = maxComponent(m.sigmaT());
-  if (!(sigmaTMax > 0) || !clipToUnitCube(og, dg, t0, t1)) return f;
-  m.majorants->walk(og, dg, t0, t1, [&](float a, float b, float maxDensity, float) {
+  if (!clipToUnitCube(og, dg, t0, t1)) return f;
+  m.majorants->walk(og, dg, t0, t1, [&](float a, float b, float majorant, const Vec3f&) {
     ++counts.majorantCells;
-    const float majorant = maxDensity * sigmaTMax;
     if (!(majorant > 0)) return true;
     for (float t = a;;) {
       t += exponential(random.next(), majorant);
       if (!(t < b)) return true;
-      const float density = m.density->lookup(og + dg * t);
-      const Vec3f sa = m.sigmaA * density, ss = m.sigmaS * density;
+      Vec3f sa, ss;
+      m.coefficients(og + dg * t, sa, ss);
       const Vec3f sn = max(Vec3f(majorant) - sa - ss, Vec3f(0));
       // Spectral tracking: each event chosen by its largest channel, each
       // channel weighed by its coefficient over the event's probability.
@@ -125,27 +123,31 @@ Vec3f transmittance(const Medium& m, Vec3f o, Vec3f d, float tMin, float tMax,
   Vec3f tr{1, 1, 1};
   const Vec3f og = m.gridFromWorld.transformPoint(o), dg = m.gridFromWorld.transformVector(d);
   float t0 = tMin, t1 = tMax;
-  const Vec3f sigmaT = m.sigmaT();
-  const float sigmaTMax = maxComponent(sigmaT);
-  if (!(sigmaTMax > 0) || !clipToUnitCube(og, dg, t0, t1)) return tr;
-  m.majorants->walk(og, dg, t0, t1, [&](float a, float b, float maxDensity, float minDensity) {
+  if (!clipToUnitCube(og, dg, t0, t1)) return tr;
+  m.majorants->walk(og, dg, t0, t1, [&](float a, float b, float majorant, const Vec3f& control) {
     ++counts.majorantCells;
+    if (!(majorant > 0)) return true;
+    auto sigmaTAt = [&](float t) {
+      Vec3f sa, ss;
+      m.coefficients(og + dg * t, sa, ss);
+      return sa + ss;
+    };
     if (estimator == TransmittanceEstimator::Ratio) {
       // Residual ratio tracking (Novak et al. 2014): the cell's smallest
-      // density in closed form, the rest by ratio tracking against the
-      // residual's majorant.
-      if (minDensity > 0) {
-        const Vec3f control = sigmaT * (minDensity * (b - a));
-        tr = tr * Vec3f(std::exp(-control.x), std::exp(-control.y), std::exp(-control.z));
+      // extinction in closed form, the rest by ratio tracking against the
+      // residual's majorant, loosened.
+      if (maxComponent(control) > 0) {
+        const Vec3f depth = control * (b - a);
+        tr = tr * Vec3f(std::exp(-depth.x), std::exp(-depth.y), std::exp(-depth.z));
       }
-      const float residual = (maxDensity - minDensity) * sigmaTMax * kResidualMajorantScale;
+      const float residual =
+          (majorant - std::min({control.x, control.y, control.z})) * kResidualMajorantScale;
       if (!(residual > 0)) return maxComponent(tr) > 0;
       for (float t = a;;) {
         t += exponential(random.next(), residual);
         if (!(t < b)) return true;
-        const float density = m.density->lookup(og + dg * t) - minDensity;
         ++counts.nullCollisions;
-        tr = tr * max(Vec3f(1) - sigmaT * (density / residual), Vec3f(0));
+        tr = tr * max(Vec3f(1) - (sigmaTAt(t) - control) * (1 / residual), Vec3f(0));
         if (maxComponent(tr) < kRouletteTransmittance) {
           if (random.next() < 0.5f) {
             tr = Vec3f(0);
@@ -155,13 +157,10 @@ Vec3f transmittance(const Medium& m, Vec3f o, Vec3f d, float tMin, float tMax,
         }
       }
     }
-    const float majorant = maxDensity * sigmaTMax;
-    if (!(majorant > 0)) return true;
     for (float t = a;;) {
       t += exponential(random.next(), majorant);
       if (!(t < b)) return true;
-      const float density = m.density->lookup(og + dg * t);
-      const Vec3f nullFraction = max(Vec3f(1) - sigmaT * (density / majorant), Vec3f(0));
+      const Vec3f nullFraction = max(Vec3f(1) - sigmaTAt(t) * (1 / majorant), Vec3f(0));
       // Delta tracking: a real collision (with the channels' mean
       // probability) ends it; each channel is weighed by its own null
       // fraction over the mean's (for a grey medium, 0 or 1).

@@ -67,7 +67,7 @@ Medium grid(Vec3f sigmaA, Vec3f sigmaS, float g, const Box3f& box, int n, Densit
 
 // Mean and standard error of every pixel's every channel, against `expected`.
 void expectImage(const PixelStatistics& stats, Vec3f expected, const char* what) {
-  const double z = twoSidedNormalQuantile(sidak(0.01, 3 * 6));
+  const double z = twoSidedNormalQuantile(sidak(0.01, 3 * 7));
   for (int k = 0; k < 3; ++k) {
     double mean, se;
     stats.imageMean(k, mean, se);
@@ -104,6 +104,18 @@ TEST(MediaRender, AWhiteFurnaceLooksWhite) {
   expectImage(furnace(grid(Vec3f(0), Vec3f(2), 0.2f, box, 6, lumpy)), Vec3f(1), "grey grid");
   expectImage(furnace(grid(Vec3f(0), {0.5f, 2, 4}, 0.0f, box, 6, lumpy)), Vec3f(1),
               "chromatic grid");
+  // A sci-vis volume whose colour map is white everywhere: albedo 1.
+  std::vector<float> values;
+  for (int z = 0; z < 6; ++z)
+    for (int y = 0; y < 6; ++y)
+      for (int x = 0; x < 6; ++x) values.push_back(lumpy(x, y, z) / 3.2f);
+  expectImage(furnace(transferFunctionMedium(
+                  "tf", std::make_shared<DensityGrid>(6, 6, 6, values),
+                  std::make_shared<TransferFunction>(
+                      std::vector<TransferFunction::ColorPoint>{{0, {1, 1, 1}}},
+                      std::vector<TransferFunction::OpacityPoint>{{0, 0}, {0.5f, 3}, {1, 1}}, 2.0f),
+                  box)),
+              Vec3f(1), "transfer function");
 }
 
 TEST(MediaRender, AnAbsorbingSlabSeenThroughTransmitsExpMinusSigmaD) {
