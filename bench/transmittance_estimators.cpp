@@ -40,8 +40,8 @@ struct Ray {
 };
 
 struct Measured {
-  double mse = 0;           // per estimate, against the rays' truths
-  double secondsEach = 0;   // per estimate
+  double mse = 0;          // per estimate, against the rays' truths
+  double secondsEach = 0;  // per estimate
   MediumCounts counts;
 };
 
@@ -72,13 +72,15 @@ int main(int argc, char** argv) {
   std::string scenePath = "../shared/scenes/smoke/smoke.pbrt";
   int rays = 2000, reference = 1024, estimates = 64;
   double minRatio = 0;
-  CLI::App app{"Shadow-ray transmittance through a scene's grid medium: ratio tracking against "
-               "delta tracking at equal time (docs/volumes.md)."};
+  CLI::App app{
+      "Shadow-ray transmittance through a scene's grid medium: ratio tracking against "
+      "delta tracking at equal time (docs/volumes.md)."};
   app.add_option("scene", scenePath, "A scene with a grid medium")->capture_default_str();
   app.add_option("--rays", rays, "Rays sampled")->capture_default_str();
   app.add_option("--reference", reference, "Ratio-tracking estimates per ray for its truth")
       ->capture_default_str();
-  app.add_option("--estimates", estimates, "Estimates per ray per estimator")->capture_default_str();
+  app.add_option("--estimates", estimates, "Estimates per ray per estimator")
+      ->capture_default_str();
   app.add_option("--min-ratio", minRatio, "Exit 1 when the equal-time error ratio is below this")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -105,8 +107,8 @@ int main(int argc, char** argv) {
       const Vec3f p{u(0), u(1), u(2)};
       if (!(medium.density->lookup(p) >= threshold)) continue;
       const float z = 1 - 2 * u(3), r = std::sqrt(std::max(0.0f, 1 - z * z)), phi = 2 * kPi * u(4);
-      sample.push_back({worldFromGrid.transformPoint(p), {r * std::cos(phi), r * std::sin(phi), z},
-                        grid});
+      sample.push_back(
+          {worldFromGrid.transformPoint(p), {r * std::cos(phi), r * std::sin(phi), z}, grid});
     }
     for (size_t i = 0; i < sample.size(); ++i) {
       MediumCounts ignored;

@@ -11,6 +11,7 @@ packages=(
   libstb-dev libtinyobjloader-dev libtinygltf-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libopenexr-dev
+  libopenvdb-dev                  # .vdb volumes (io/volumes/vdb_file.cpp)
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format                    # tests/format_test.sh keeps the tree clean under .clang-format
   clang libclang-rt-14-dev        # scripts/fuzz.sh: libFuzzer with ASan and UBSan (docs/fuzzing.md)

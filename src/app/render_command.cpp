@@ -107,10 +107,9 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   if (s.lightPaths.value_or(false) && s.render.lightStrategy != LightStrategy::Mis)
     throw InputError("--light-paths on needs --mis on (light paths are weighed by MIS)");
   if (o.transmittance != "ratio" && o.transmittance != "delta")
-    throw InputError(
-        fmt::format("--transmittance {}: expected ratio or delta", o.transmittance));
-  s.render.transmittance = o.transmittance == "ratio" ? TransmittanceEstimator::Ratio
-                                                      : TransmittanceEstimator::Delta;
+    throw InputError(fmt::format("--transmittance {}: expected ratio or delta", o.transmittance));
+  s.render.transmittance =
+      o.transmittance == "ratio" ? TransmittanceEstimator::Ratio : TransmittanceEstimator::Delta;
   s.render.seed = o.seed;
   s.render.view = o.view;
   s.render.toneMapping.exposure = o.exposure;

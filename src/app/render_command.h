@@ -53,7 +53,7 @@ struct RenderOptions {
   // --mis: "on" weighs light and BSDF samples (multiple importance
   // sampling); "off" counts emitters only through light samples.
   std::string mis = "on";
-  std::string lightPaths = "auto";  // --light-paths: auto, on or off
+  std::string lightPaths = "auto";      // --light-paths: auto, on or off
   std::string transmittance = "ratio";  // --transmittance: ratio or delta
   // --instancing: "shared" gives an Embree instance level only to objects a
   // rank places more than once or transformed; "always" to every object.

@@ -26,21 +26,6 @@ float cloudDensity(Vec3f p, uint32_t seed) {
   return std::clamp(ball * (0.55f + 0.9f * n), 0.0f, 1.0f);
 }
 
-Mesh boxMesh(Vec3f lo, Vec3f hi) {
-  Mesh m;
-  m.name = "volume box";
-  for (int i = 0; i < 8; ++i)
-    m.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
-  // Two triangles a face, wound so their normals point out of the box.
-  const int faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-  for (const auto& f : faces) {
-    m.indices.push_back({f[0], f[1], f[2]});
-    m.indices.push_back({f[0], f[2], f[3]});
-  }
-  return m;
-}
-
 }  // namespace
 
 ScenePlan planVolume(int size, uint32_t seed) {
@@ -64,8 +49,8 @@ ScenePlan planVolume(int size, uint32_t seed) {
     return m;
   };
   plan.addSingleInstanceMesh(std::move(floor));
-  addDaylight(plan, {0.5f, 1, 0.3f}, {0.25f, 0.45f, 0.9f}, {0.8f, 0.85f, 0.95f},
-              {0.3f, 0.3f, 0.3f}, 0.3f);
+  addDaylight(plan, {0.5f, 1, 0.3f}, {0.25f, 0.45f, 0.9f}, {0.8f, 0.85f, 0.95f}, {0.3f, 0.3f, 0.3f},
+              0.3f);
 
   SceneSummary::Medium summary;
   summary.name = "cloud";
@@ -96,7 +81,7 @@ ScenePlan planVolume(int size, uint32_t seed) {
         gridMedium("cloud", kSigmaA, kSigmaS, kG,
                    std::make_shared<DensityGrid>(size, size, size, std::move(values)),
                    Affine3f::identity(), box));
-    scene.mediumBoundaries.push_back({boxMesh(box.lower, box.upper), {0, kNoMedium}});
+    scene.mediumBoundaries.push_back({boxMesh(box, "volume box"), {0, kNoMedium}});
   };
 
   CameraView view;

@@ -11,6 +11,7 @@
 #include "io/obj/obj_loader.h"
 #include "io/pbrt/pbrt_parser.h"
 #include "io/ply/ply_reader.h"
+#include "io/volumes/volume_files.h"
 #include "scene/mesh_store.h"
 
 namespace ferry {
@@ -31,6 +32,7 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
     scene.reserveVertexSlack();  // so the trace backend shares every vertex array
     return scene;
   }
+  if (isRawVolumeSpec(spec)) return loadRawVolume(spec);
   if (!std::filesystem::exists(spec)) throw InputError(fmt::format("{}: no such file", spec));
   std::string ext = lowerExtension(spec);
   Scene scene;
@@ -42,10 +44,17 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
     scene = loadPbrt(spec, options);
   } else if (ext == ".gltf" || ext == ".glb") {
     scene = loadGltf(spec, options);
+  } else if (ext == ".vdb") {
+    scene = loadVdbScene(spec);
+  } else if (ext == ".nvdb") {
+    throw InputError(
+        fmt::format("{}: .nvdb files need NanoVDB, which Debian does not package; "
+                    "convert the grid to an OpenVDB .vdb file",
+                    spec));
   } else {
     throw InputError(
         fmt::format("{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
-                    "builtin:NAME)",
+                    ".vdb, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
                     spec, ext));
   }
   scene.validate();

@@ -11,21 +11,21 @@ namespace ferry {
 DensityGrid::DensityGrid(int nx, int ny, int nz, std::vector<float> values)
     : nx_(nx), ny_(ny), nz_(nz), values_(std::move(values)) {
   if (nx <= 0 || ny <= 0 || nz <= 0)
-    throw std::invalid_argument(fmt::format("grid dimensions {} x {} x {} must be positive", nx, ny, nz));
+    throw std::invalid_argument(
+        fmt::format("grid dimensions {} x {} x {} must be positive", nx, ny, nz));
   const uint64_t count = uint64_t(nx) * uint64_t(ny) * uint64_t(nz);
   if (values_.size() != count)
-    throw std::invalid_argument(fmt::format("{} x {} x {} = {} samples needed, {} given", nx, ny, nz,
-                                            count, values_.size()));
+    throw std::invalid_argument(fmt::format("{} x {} x {} = {} samples needed, {} given", nx, ny,
+                                            nz, count, values_.size()));
   min_ = values_.empty() ? 0 : values_[0];
   max_ = min_;
   for (size_t i = 0; i < values_.size(); ++i) {
     const float v = values_[i];
     if (!std::isfinite(v) || v < 0)
-      throw std::invalid_argument(
-          fmt::format("density sample {} (x {}, y {}, z {}) is {}: densities must be finite and "
-                      "not negative",
-                      i, i % size_t(nx), (i / size_t(nx)) % size_t(ny), i / (size_t(nx) * size_t(ny)),
-                      v));
+      throw std::invalid_argument(fmt::format(
+          "density sample {} (x {}, y {}, z {}) is {}: densities must be finite and "
+          "not negative",
+          i, i % size_t(nx), (i / size_t(nx)) % size_t(ny), i / (size_t(nx) * size_t(ny)), v));
     min_ = std::min(min_, v);
     max_ = std::max(max_, v);
   }

@@ -4,7 +4,11 @@ namespace ferry {
 
 MajorantGrid::MajorantGrid(const DensityGrid& grid, int cells)
     : MajorantGrid(
-          grid, [](float lo, float hi) { return std::pair{hi, Vec3f(lo)}; }, cells) {}
+          grid,
+          [](float lo, float hi) {
+            return std::pair{hi, Vec3f(lo)};
+          },
+          cells) {}
 
 MajorantGrid::MajorantGrid(const DensityGrid& grid, const Extinction& extinction, int cells) {
   res_[0] = std::clamp(grid.nx(), 1, cells);

@@ -48,9 +48,11 @@ TEST(MajorantGrid, BoundsEveryLookupInItsCellFromAboveAndBelow) {
   for (int i = 0; i < 20000; ++i) {
     const float x = next(), y = next(), z = next();
     const Vec3f p{x, y, z};
-    int cx = std::min(int(p.x * 4), 3), cy = std::min(int(p.y * 4), 3), cz = std::min(int(p.z * 4), 3);
+    int cx = std::min(int(p.x * 4), 3), cy = std::min(int(p.y * 4), 3),
+        cz = std::min(int(p.z * 4), 3);
     ASSERT_LE(g.lookup(p), m.at(cx, cy, cz) * (1 + 1e-6f)) << p.x << " " << p.y << " " << p.z;
-    ASSERT_GE(g.lookup(p), m.controlAt(cx, cy, cz).x * (1 - 1e-6f)) << p.x << " " << p.y << " " << p.z;
+    ASSERT_GE(g.lookup(p), m.controlAt(cx, cy, cz).x * (1 - 1e-6f))
+        << p.x << " " << p.y << " " << p.z;
   }
 }
 
@@ -153,7 +155,8 @@ TEST(Tracking, FreeFlightPassesWithTheTransmittanceAndScattersWithTheAlbedo) {
     for (int c = 0; c < 3; ++c) {
       const float t = std::exp(-sigmaT[c] * length);
       EXPECT_NEAR(passed[c] / n, t, 0.015) << homogeneous << " " << c;
-      EXPECT_NEAR(scattered[c] / n, (1 - t) * sigmaS[c] / sigmaT[c], 0.015) << homogeneous << " " << c;
+      EXPECT_NEAR(scattered[c] / n, (1 - t) * sigmaS[c] / sigmaT[c], 0.015)
+          << homogeneous << " " << c;
     }
   }
 }

@@ -25,8 +25,8 @@ Medium gridMedium(std::string name, Vec3f sigmaA, Vec3f sigmaS, float g,
   });
   m.density = std::move(density);
   const Vec3f size = box.size();
-  const Affine3f unitFromBox = Affine3f::scale({1 / size.x, 1 / size.y, 1 / size.z}) *
-                               Affine3f::translate(-box.lower);
+  const Affine3f unitFromBox =
+      Affine3f::scale({1 / size.x, 1 / size.y, 1 / size.z}) * Affine3f::translate(-box.lower);
   m.gridFromWorld = unitFromBox * worldFromMedium.inverse();
   return m;
 }

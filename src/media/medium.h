@@ -37,9 +37,9 @@ struct MediumInterface {
 
 struct Medium {
   std::string name;
-  Vec3f sigmaA{0, 0, 0};  // absorption at density 1 (pbrt's sigma_a times scale)
-  Vec3f sigmaS{0, 0, 0};  // scattering at density 1
-  float g = 0;            // Henyey-Greenstein asymmetry, in (-1, 1)
+  Vec3f sigmaA{0, 0, 0};    // absorption at density 1 (pbrt's sigma_a times scale)
+  Vec3f sigmaS{0, 0, 0};    // scattering at density 1
+  float g = 0;              // Henyey-Greenstein asymmetry, in (-1, 1)
   Vec3f emission{0, 0, 0};  // radiance emitted where light is absorbed (pbrt-v4's Le x Lescale)
   // Null: homogeneous (density 1 everywhere). Else the density over the box
   // that gridFromWorld maps to the unit cube, with its majorants.

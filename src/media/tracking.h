@@ -63,7 +63,6 @@ enum class TransmittanceEstimator : uint8_t {
 
 // An unbiased estimate of the transmittance along [tMin, tMax].
 Vec3f transmittance(const Medium& medium, Vec3f o, Vec3f d, float tMin, float tMax,
-                    TransmittanceEstimator estimator, TrackingRandom& random,
-                    MediumCounts& counts);
+                    TransmittanceEstimator estimator, TrackingRandom& random, MediumCounts& counts);
 
 }  // namespace ferry

@@ -17,9 +17,8 @@ void checkPositions(const std::vector<Point>& points, const char* what) {
       throw std::invalid_argument(
           fmt::format("{} point {}: position {} is outside [0, 1]", what, i, points[i].x));
     if (i > 0 && !(points[i].x > points[i - 1].x))
-      throw std::invalid_argument(
-          fmt::format("{} point {}: positions must increase ({} after {})", what, i, points[i].x,
-                      points[i - 1].x));
+      throw std::invalid_argument(fmt::format("{} point {}: positions must increase ({} after {})",
+                                              what, i, points[i].x, points[i - 1].x));
   }
 }
 

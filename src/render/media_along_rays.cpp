@@ -44,7 +44,8 @@ void MediaAlongRays::walk(Vec3f o, Vec3f d, float tEnd, int32_t medium, Segment&
     const MediumBoundary& b = *meshes_[size_t(hit.instance)];
     const Vec3i tri = b.mesh.indices[hit.primitive];
     const Vec3f p0 = b.mesh.positions[size_t(tri.x)];
-    const Vec3f n = cross(b.mesh.positions[size_t(tri.y)] - p0, b.mesh.positions[size_t(tri.z)] - p0);
+    const Vec3f n =
+        cross(b.mesh.positions[size_t(tri.y)] - p0, b.mesh.positions[size_t(tri.z)] - p0);
     medium = interfaces_[size_t(hit.instance)].along(d, n);
     // Past this crossing (and past a neighbour triangle's at the same edge).
     t = hit.t + 1e-5f * (hit.t + 1);

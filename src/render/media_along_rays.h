@@ -23,10 +23,10 @@ struct MediumBoundary;
 // infinity): passed, scattered or absorbed in a medium.
 struct MediaFlight {
   FreeFlight::Event event = FreeFlight::Event::Passed;
-  float t = 0;                     // where it scattered or was absorbed
-  int32_t medium = kNoMedium;      // the medium it is in there (or at the end)
-  Vec3f weight{1, 1, 1};           // throughput factor up to there
-  Vec3f emitted{0, 0, 0};          // light the media emit along it, weighed
+  float t = 0;                 // where it scattered or was absorbed
+  int32_t medium = kNoMedium;  // the medium it is in there (or at the end)
+  Vec3f weight{1, 1, 1};       // throughput factor up to there
+  Vec3f emitted{0, 0, 0};      // light the media emit along it, weighed
 };
 
 class MediaAlongRays {
@@ -54,8 +54,9 @@ class MediaAlongRays {
   const std::vector<Medium>& media_;
   std::vector<MediumInterface> interfaces_;    // per boundary (its instance)
   std::vector<const MediumBoundary*> meshes_;  // per boundary, for the normal at a hit
-  std::unique_ptr<Scene> boundaryScene_;      // the boundaries as a scene (the backend shares its arrays)
-  std::unique_ptr<TraceBackend> boundaries_;   // null: no boundaries
+  std::unique_ptr<Scene>
+      boundaryScene_;  // the boundaries as a scene (the backend shares its arrays)
+  std::unique_ptr<TraceBackend> boundaries_;  // null: no boundaries
 };
 
 }  // namespace ferry

@@ -547,8 +547,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
   const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
   const MediumInterface& sides = surfaceMedia(hit);
   auto leaving = [&](Vec3f direction) {
-    return sides.isTransition() ? sides.along(direction, vertex.surface.geometricNormal)
-                                : f.medium;
+    return sides.isTransition() ? sides.along(direction, vertex.surface.geometricNormal) : f.medium;
   };
   Spawned spawned;
   spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);

@@ -18,9 +18,9 @@
 #include <algorithm>
 #include <cstdint>
 
+#include <memory>
 #include "core/math.h"
 #include "core/random.h"
-#include <memory>
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -193,12 +193,10 @@ class PathShading {
 
   // Participating media (path_shading.cpp, "Media"): the path's way to its
   // hit through the media, then the surface, or a vertex in a medium.
-  Spawned shadeInMedia(const Path& path, const TraceHit& hit, uint32_t sampleIndex,
-                       uint32_t bounce, FrameBuffer& frameBuffer, Path& continuation,
-                       Path& shadowRay) const;
-  Spawned shadeMediumVertex(const Path& path, Vec3f position, int32_t medium,
-                            uint32_t sampleIndex, uint32_t bounce, Path& continuation,
-                            Path& shadowRay) const;
+  Spawned shadeInMedia(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
+                       FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const;
+  Spawned shadeMediumVertex(const Path& path, Vec3f position, int32_t medium, uint32_t sampleIndex,
+                            uint32_t bounce, Path& continuation, Path& shadowRay) const;
   // Multiplies a shadow ray leaving into `medium` by its transmittance to the
   // light; false if none is left.
   bool throughMedia(Path& shadowRay, int32_t medium, uint32_t keyHash) const;

@@ -159,10 +159,10 @@ std::string RenderStats::summaryText(int ranks) const {
                   t.times.generate, t.times.trace, t.times.exchange, t.times.shade, t.times.wait,
                   t.times.composite));
   if (t.mediumRealCollisions || t.mediumNullCollisions || t.mediumMajorantCells)
-    row("media", fmt::format("{} real collisions, {} null collisions, {} majorant cells",
-                             formatCount(t.mediumRealCollisions),
-                             formatCount(t.mediumNullCollisions),
-                             formatCount(t.mediumMajorantCells)));
+    row("media",
+        fmt::format("{} real collisions, {} null collisions, {} majorant cells",
+                    formatCount(t.mediumRealCollisions), formatCount(t.mediumNullCollisions),
+                    formatCount(t.mediumMajorantCells)));
   if (t.retraceMisses) row("re-trace misses", fmt::format("{}", t.retraceMisses));
   return out;
 }

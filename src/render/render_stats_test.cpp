@@ -68,7 +68,9 @@ TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
             (std::set<std::string>{"frame", "seconds", "cpu_seconds", "camera_paths", "light_paths",
                                    "continuation_rays", "shadow_rays", "traces", "rays_per_second",
                                    "exchange", "exchange_per_bounce", "stage_seconds",
-                                   "primary_bytes_sent", "termination_waves"}));
+                                   "primary_bytes_sent", "termination_waves", "media"}));
+  EXPECT_EQ(keysOf(j.at("media")),
+            (std::set<std::string>{"real_collisions", "null_collisions", "majorant_cells"}));
   EXPECT_EQ(
       keysOf(j.at("traces")),
       (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses", "proxy_queries",

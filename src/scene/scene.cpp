@@ -40,6 +40,21 @@ const Mesh& Scene::geometry(int32_t m, Mesh& scratch) const {
   return scratch;
 }
 
+Mesh boxMesh(const Box3f& box, std::string name) {
+  Mesh m;
+  m.name = std::move(name);
+  const Vec3f lo = box.lower, hi = box.upper;
+  for (int i = 0; i < 8; ++i)
+    m.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
+  const int faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  for (const auto& f : faces) {
+    m.indices.push_back({f[0], f[1], f[2]});
+    m.indices.push_back({f[0], f[2], f[3]});
+  }
+  return m;
+}
+
 int32_t Scene::addSingleInstanceMesh(Mesh mesh) {
   mesh.reserveVertexSlack();
   meshes.push_back(std::move(mesh));
@@ -179,11 +194,13 @@ void Scene::validate() const {
       fail(fmt::format("medium boundary '{}': {}", b.mesh.name, problem));
   }
   for (const Medium& m : media)
-    if (!isFinite(m.sigmaA) || !isFinite(m.sigmaS) || std::min({m.sigmaA.x, m.sigmaA.y, m.sigmaA.z, m.sigmaS.x, m.sigmaS.y, m.sigmaS.z}) < 0 ||
+    if (!isFinite(m.sigmaA) || !isFinite(m.sigmaS) ||
+        std::min({m.sigmaA.x, m.sigmaA.y, m.sigmaA.z, m.sigmaS.x, m.sigmaS.y, m.sigmaS.z}) < 0 ||
         !(std::abs(m.g) < 1) || !isFinite(m.emission))
-      fail(fmt::format("medium '{}': sigma_a and sigma_s must be finite and not negative, g in "
-                       "(-1, 1)",
-                       m.name));
+      fail(
+          fmt::format("medium '{}': sigma_a and sigma_s must be finite and not negative, g in "
+                      "(-1, 1)",
+                      m.name));
   for (const Material& m : materials) {
     size_t steps = 0;
     for (int32_t k = m.mixedWith; k >= 0; k = materials[size_t(k)].mixedWith)

@@ -180,6 +180,9 @@ struct MediumBoundary {
   Mesh mesh;
   MediumInterface media;
 };
+// A closed box's twelve triangles, their normals pointing out of it (a
+// volume's boundary, with the volume inside).
+Mesh boxMesh(const Box3f& box, std::string name);
 
 // Whether pbrt's Integrator `type` transports light from the emitters too
 // (bdpt, mlt, pbrt-v4's lightpath, vcm): Ferry then adds light paths.

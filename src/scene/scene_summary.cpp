@@ -49,9 +49,10 @@ SceneSummary summarize(const Scene& scene) {
   for (const ferry::Medium& m : scene.media) {
     SceneSummary::Medium out;
     out.name = m.name;
-    out.kind = m.homogeneous() ? "homogeneous"
-                               : fmt::format("grid {}x{}x{}", m.density->nx(), m.density->ny(),
-                                             m.density->nz());
+    out.kind = m.homogeneous()
+                   ? "homogeneous"
+                   : fmt::format("grid {}x{}x{}{}", m.density->nx(), m.density->ny(),
+                                 m.density->nz(), m.transfer ? " through a transfer function" : "");
     out.bytes = m.bytes();
     if (m.density) {
       out.minDensity = m.density->minValue();
@@ -63,7 +64,8 @@ SceneSummary summarize(const Scene& scene) {
     s.media.push_back(out);
   }
   s.mediumBoundaries = scene.mediumBoundaries.size();
-  for (const MediumBoundary& b : scene.mediumBoundaries) s.boundaryTriangles += b.mesh.triangleCount();
+  for (const MediumBoundary& b : scene.mediumBoundaries)
+    s.boundaryTriangles += b.mesh.triangleCount();
   s.bounds = scene.worldBounds();
   return s;
 }

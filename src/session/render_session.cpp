@@ -193,9 +193,10 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
   // camera paths alone (their medium rides where light paths keep a ratio).
   const bool media = rank_->scene.hasMedia();
   if (media && settings_.lightPaths.value_or(false))
-    throw InputError(fmt::format("--light-paths on: scene '{}' has participating media, which "
-                                 "light paths do not cross; render it without them",
-                                 rank_->scene.name));
+    throw InputError(
+        fmt::format("--light-paths on: scene '{}' has participating media, which "
+                    "light paths do not cross; render it without them",
+                    rank_->scene.name));
   settings_.render.lightPaths =
       !media && settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
 }

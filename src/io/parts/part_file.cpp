@@ -759,9 +759,10 @@ WrittenFile writePartFile(const std::string& path, const Scene& scene,
   FERRY_CHECK_EQ(owners.size(), scene.instances.size());
   FERRY_CHECK(std::is_sorted(instances.begin(), instances.end()));
   if (scene.hasMedia())
-    throw InputError(fmt::format("{}: scene '{}' has participating media, which part files do "
-                                 "not store yet: render the scene file itself",
-                                 path, scene.name));
+    throw InputError(
+        fmt::format("{}: scene '{}' has participating media, which part files do "
+                    "not store yet: render the scene file itself",
+                    path, scene.name));
   WrittenFile written;
   writeFileAtomically(path, [&](const std::string& tmp) {
     FileWriter w(tmp);

@@ -22,6 +22,7 @@
 #include "io/pbrt/pbrt_tokenizer.h"
 #include "io/ply/ply_reader.h"
 #include "io/shape_tessellation.h"
+#include "io/volumes/volume_files.h"
 #include "media/medium_presets.h"
 
 namespace ferry {
@@ -597,9 +598,8 @@ class Parser {
       makeNamedMedium(in, where);
     } else if (name == "MediumInterface") {
       state_.mediumInside = string(in, n);
-      state_.mediumOutside = in.tokens.peek().kind == PbrtToken::Kind::String
-                                 ? string(in, n)
-                                 : state_.mediumInside;
+      state_.mediumOutside =
+          in.tokens.peek().kind == PbrtToken::Kind::String ? string(in, n) : state_.mediumInside;
       mediumOf(state_.mediumInside, where);
       mediumOf(state_.mediumOutside, where);
     } else if (name == "CameraMedium") {
@@ -636,11 +636,16 @@ class Parser {
       fail(where, fmt::format("MakeNamedMedium \"{}\" has no \"string type\"", name));
     const std::string type = p.getString("type", "");
     const std::string what = fmt::format("MakeNamedMedium \"{}\" (\"{}\")", name, type);
-    if (type == "nanovdb")
-      fail(where, fmt::format("{}: .nvdb files need NanoVDB, which Debian does not package; "
-                              "convert the grid to an OpenVDB .vdb file",
-                              what));
-    if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid") {
+    if (type == "nanovdb") {
+      const std::string file = p.getString("filename", "");
+      if (file.empty()) fail(where, fmt::format("{} needs \"string filename\"", what));
+      if (!file.ends_with(".vdb"))
+        fail(where, fmt::format("{}: \"{}\": .nvdb files need NanoVDB, which Debian does not "
+                                "package; convert the grid to an OpenVDB .vdb file",
+                                what, file));
+    }
+    if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid" &&
+        type != "nanovdb") {
       p.markAllUsed();
       warnings_.once("medium|" + type,
                      fmt::format("{} is not supported: the medium is left out (vacuum; first at "
@@ -649,8 +654,8 @@ class Parser {
       namedMedia_[name] = kNoMedium;
       return;
     }
-    // pbrt-v3's defaults (its MakeMedium); pbrt-v4's uniformgrid defaults to 1.
-    const bool v4 = type == "uniformgrid";
+    // pbrt-v3's defaults (its MakeMedium); pbrt-v4's grids default to 1.
+    const bool v4 = type == "uniformgrid" || type == "nanovdb";
     Vec3f sigmaA = v4 ? Vec3f(1) : Vec3f(0.0011f, 0.0024f, 0.014f);
     Vec3f sigmaS = v4 ? Vec3f(1) : Vec3f(2.55f, 3.21f, 3.77f);
     if (const std::string preset = p.getString("preset", ""); !preset.empty()) {
@@ -677,6 +682,19 @@ class Parser {
       m.sigmaS = sigmaS;
       m.g = g;
       m.emission = emitted;
+    } else if (type == "nanovdb") {
+      // The same grid as an OpenVDB file: its "density" grid, in its own box.
+      const std::string path = resolve(p.getString("filename", ""), where, "volume file");
+      VdbDensity vdb;
+      try {
+        vdb = readVdbDensity(path, "density");
+      } catch (const InputError& e) {
+        fail(where, fmt::format("{}: {}", what, e.what()));
+      }
+      m = gridMedium(name, sigmaA, sigmaS, g, vdb.grid, state_.ctm, vdb.box);
+      p.find("LeScale");
+      p.find("temperaturecutoff");
+      p.find("temperaturescale");
     } else {
       const int nx = p.getInt("nx", 1), ny = p.getInt("ny", 1), nz = p.getInt("nz", 1);
       const PbrtParam* density = p.getArray("density", {"float"});

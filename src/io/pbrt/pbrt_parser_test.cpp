@@ -585,19 +585,19 @@ TEST(PbrtParser, ParameterListsGoOnAfterAnIncludedFileEnds) {
   std::ofstream(dir / "points.pbrt") << "Shape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0]\n";
   std::ofstream(dir / "nested.pbrt") << "Include \"points.pbrt\"\n";
   const std::string rest = "  \"integer indices\" [0 1 2]\n";
-  Scene s = loadPbrtFromString("WorldBegin\nInclude \"points.pbrt\"\n" + rest, "main.pbrt",
-                               dir.string());
+  Scene s =
+      loadPbrtFromString("WorldBegin\nInclude \"points.pbrt\"\n" + rest, "main.pbrt", dir.string());
   ASSERT_EQ(s.meshes.size(), 1u);
   EXPECT_EQ(s.meshes[0].triangleCount(), 1u);
   // Through two levels of includes.
-  s = loadPbrtFromString("WorldBegin\nInclude \"nested.pbrt\"\n" + rest, "main.pbrt",
-                         dir.string());
+  s = loadPbrtFromString("WorldBegin\nInclude \"nested.pbrt\"\n" + rest, "main.pbrt", dir.string());
   ASSERT_EQ(s.meshes.size(), 1u);
   try {
     loadPbrtFromString("WorldBegin\nImport \"points.pbrt\"\n" + rest, "main.pbrt", dir.string());
     ADD_FAILURE() << "an Import's list went on in its importer";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("main.pbrt:3:3: expected a directive"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("main.pbrt:3:3: expected a directive"), std::string::npos)
+        << e.what();
   }
   fs::remove_all(dir);
 }

@@ -1,0 +1,104 @@
+// The one file that includes OpenVDB (scripts/check_layering.py keeps it so).
+#include <openvdb/openvdb.h>
+
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "io/volumes/volume_files.h"
+
+namespace ferry {
+
+VdbDensity readVdbDensity(const std::string& path, const std::string& gridName) {
+  static std::once_flag initialized;
+  std::call_once(initialized, [] { openvdb::initialize(); });
+  if (!std::filesystem::exists(path)) throw InputError(fmt::format("{}: no such file", path));
+  openvdb::GridPtrVecPtr grids;
+  try {
+    openvdb::io::File file(path);
+    file.open(false);  // read everything now: no delayed loading from a file that may change
+    grids = file.getGrids();
+    file.close();
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("{}: not a readable OpenVDB file ({})", path, e.what()));
+  }
+  openvdb::FloatGrid::Ptr grid;
+  std::string names;
+  for (const openvdb::GridBase::Ptr& g : *grids) {
+    names += (names.empty() ? "" : ", ") + g->getName() + " (" + g->valueType() + ")";
+    auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
+    if (!f) continue;
+    const bool wanted =
+        gridName.empty() ? (!grid || g->getName() == "density") : g->getName() == gridName;
+    if (wanted && !(grid && grid->getName() == "density" && gridName.empty())) grid = f;
+  }
+  if (!grid)
+    throw InputError(fmt::format("{}: no float grid{} (grids: {})", path,
+                                 gridName.empty() ? "" : " named \"" + gridName + "\"",
+                                 names.empty() ? "none" : names));
+  const openvdb::math::Transform& transform = grid->transform();
+  if (!transform.isLinear())
+    throw InputError(
+        fmt::format("{}: grid \"{}\" has a non-linear transform", path, grid->getName()));
+  const openvdb::CoordBBox active = grid->evalActiveVoxelBoundingBox();
+  VdbDensity out;
+  out.gridName = grid->getName();
+  if (active.empty())
+    throw InputError(fmt::format("{}: grid \"{}\" has no active voxels", path, out.gridName));
+  const openvdb::Coord lo = active.min(), dim = active.dim();
+  const uint64_t count = uint64_t(dim.x()) * uint64_t(dim.y()) * uint64_t(dim.z());
+  std::vector<float> values(count);
+  auto accessor = grid->getConstAccessor();
+  for (int z = 0; z < dim.z(); ++z)
+    for (int y = 0; y < dim.y(); ++y)
+      for (int x = 0; x < dim.x(); ++x) {
+        const openvdb::Coord c(lo.x() + x, lo.y() + y, lo.z() + z);
+        const float v = accessor.getValue(c);
+        if (!std::isfinite(v) || v < 0)
+          throw InputError(
+              fmt::format("{}: grid \"{}\" voxel ({}, {}, {}) is {}: densities must "
+                          "be finite and not negative",
+                          path, out.gridName, c.x(), c.y(), c.z(), v));
+        values[(size_t(z) * size_t(dim.y()) + size_t(y)) * size_t(dim.x()) + size_t(x)] = v;
+      }
+  // Each voxel is a cell centred on its index: the box runs half a voxel
+  // beyond the first and last centres. Only scale and translation keep it a box.
+  const openvdb::Vec3d a =
+      transform.indexToWorld(openvdb::Vec3d(lo.x() - 0.5, lo.y() - 0.5, lo.z() - 0.5));
+  const openvdb::Vec3d b = transform.indexToWorld(
+      openvdb::Vec3d(lo.x() + dim.x() - 0.5, lo.y() + dim.y() - 0.5, lo.z() + dim.z() - 0.5));
+  const openvdb::math::Mat3d linear = transform.baseMap()->getAffineMap()->getMat4().getMat3();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (r != c && std::abs(linear(r, c)) > 1e-9 * std::abs(linear(r, r)))
+        throw InputError(
+            fmt::format("{}: grid \"{}\" is rotated or sheared; only scaled and "
+                        "translated grids are read",
+                        path, out.gridName));
+  out.box = Box3f{
+      {float(std::min(a.x(), b.x())), float(std::min(a.y(), b.y())), float(std::min(a.z(), b.z()))},
+      {float(std::max(a.x(), b.x())), float(std::max(a.y(), b.y())),
+       float(std::max(a.z(), b.z()))}};
+  // (A negative scale mirrors the grid: its samples then run the other way.)
+  if (linear(0, 0) < 0 || linear(1, 1) < 0 || linear(2, 2) < 0)
+    throw InputError(fmt::format("{}: grid \"{}\" is mirrored; only positive scales are read", path,
+                                 out.gridName));
+  try {
+    out.grid = std::make_shared<DensityGrid>(dim.x(), dim.y(), dim.z(), std::move(values));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(fmt::format("{}: grid \"{}\": {}", path, out.gridName, e.what()));
+  }
+  return out;
+}
+
+Scene loadVdbScene(const std::string& path) {
+  const VdbDensity vdb = readVdbDensity(path);
+  const std::string name = std::filesystem::path(path).filename().string();
+  Medium m = gridMedium(name, Vec3f(1), Vec3f(9), 0, vdb.grid, Affine3f::identity(), vdb.box);
+  return volumeScene(name, std::move(m), vdb.box);
+}
+
+}  // namespace ferry

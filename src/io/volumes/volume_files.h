@@ -1,0 +1,63 @@
+// Volumes as users have them: OpenVDB files (.vdb, through Debian's
+// libopenvdb, which only vdb_file.cpp includes) and raw structured grids
+// ("raw:PATH?dims=X,Y,Z&format=uint8|uint16|float32", sci-vis style, drawn
+// through a transfer function), each loaded as a scene of its own: the grid
+// medium in its box, bounded by that box, with a default camera and light
+// (as a lone mesh gets them). pbrt's "nanovdb" medium reads .vdb files too.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "media/density_grid.h"
+#include "media/transfer_function.h"
+#include "scene/scene.h"
+
+namespace ferry {
+
+// ------------------------------------------------------------------ OpenVDB
+
+// A .vdb file's float grid as a dense density grid: the grid named
+// `gridName` ("density" if there is one and no name is given, else the first
+// float grid), over the active voxels' bounding box, and the world box it
+// covers (each voxel a cell of the grid's voxel size). InputError naming the
+// file: unreadable, no float grid, a transform that is not axis-aligned
+// scale and translation, or a negative or NaN value (naming the voxel).
+struct VdbDensity {
+  std::string gridName;
+  std::shared_ptr<const DensityGrid> grid;
+  Box3f box;  // world (the file's) space
+};
+VdbDensity readVdbDensity(const std::string& path, const std::string& gridName = "");
+
+// `ferry render cloud.vdb`: its density as smoke (sigma_a 1, sigma_s 9 per
+// unit of density and world length, g 0), framed and lit by default.
+Scene loadVdbScene(const std::string& path);
+
+// --------------------------------------------------------------- raw grids
+
+bool isRawVolumeSpec(const std::string& spec);  // starts with "raw:"
+
+// "raw:PATH?dims=X,Y,Z&format=uint8|uint16|float32[&spacing=SX,SY,SZ]
+// [&origin=OX,OY,OZ][&tf=FILE][&opacity=S]": X*Y*Z samples, x fastest,
+// little-endian, each the centre of a cell `spacing` wide (default 1) from
+// `origin` (default 0). Values are normalised to [0, 1] (uint8 / 255,
+// uint16 / 65535, float32 by the data's own range) and drawn through the
+// transfer function in FILE (readTransferFunction; default: the standard
+// one), its opacity scale (mean free paths across the box's longest side
+// at opacity 1) S when given. InputError naming the file: a
+// size that does not match dims and format, dims that are not positive or
+// overflow, an unknown format or key, a NaN.
+Scene loadRawVolume(const std::string& spec);
+
+// A transfer function file (JSON): {"colors": [[x, r, g, b], ...],
+// "opacity": [[x, a], ...], "scale": S} (scale: mean free paths across the
+// volume's longest side at opacity 1; optional, default the standard
+// one's, 20). InputError naming the file and what is wrong.
+TransferFunction readTransferFunction(const std::string& path);
+
+// A scene of `medium` alone in `box` (world space), bounded by it, with a
+// default view and lights.
+Scene volumeScene(const std::string& name, Medium medium, const Box3f& box);
+
+}  // namespace ferry

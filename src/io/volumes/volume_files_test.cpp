@@ -1,0 +1,164 @@
+// Volume files: OpenVDB grids, raw structured grids and transfer functions,
+// read right (placement, values, normalisation) and refused with one clear
+// error naming the file (tests/corpus/volumes).
+#include "io/volumes/volume_files.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "io/pbrt/pbrt_parser.h"
+#include "io/scene_loader.h"
+
+namespace ferry {
+namespace {
+
+namespace fs = std::filesystem;
+const fs::path kCorpus = fs::path(FERRY_SOURCE_DIR) / "tests" / "corpus" / "volumes";
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError";
+  return "";
+}
+
+TEST(VdbFile, ReadsTheDensityGridWhereItIs) {
+  const VdbDensity vdb = readVdbDensity((kCorpus / "density.vdb").string());
+  EXPECT_EQ(vdb.gridName, "density");
+  ASSERT_TRUE(vdb.grid);
+  EXPECT_EQ(vdb.grid->nx(), 2);
+  EXPECT_EQ(vdb.grid->ny(), 3);
+  EXPECT_EQ(vdb.grid->nz(), 4);
+  // Voxels (10..11, 20..22, 30..33) of size 0.5, each a cell about its centre.
+  EXPECT_EQ(vdb.box.lower, Vec3f(4.75f, 9.75f, 14.75f));
+  EXPECT_EQ(vdb.box.upper, Vec3f(5.75f, 11.25f, 16.75f));
+  // Voxel (11, 22, 33) holds 0.25 x (1 + 2 + 3): the centre of the last cell.
+  EXPECT_FLOAT_EQ(vdb.grid->lookup({0.75f, 5.0f / 6, 7.0f / 8}), 1.5f);
+  const Scene scene = loadScene((kCorpus / "density.vdb").string());
+  EXPECT_EQ(scene.media.size(), 1u);
+  EXPECT_EQ(scene.mediumBoundaries.size(), 1u);
+  EXPECT_EQ(scene.views.size(), 1u);
+}
+
+TEST(VdbFile, RefusesWhatIsNotADensity) {
+  EXPECT_NE(errorOf([] {
+              readVdbDensity((kCorpus / "negative_density.vdb").string());
+            }).find("voxel (1, 0, 0) is -2"),
+            std::string::npos);
+  const std::string none =
+      errorOf([] { readVdbDensity((kCorpus / "no_float_grid.vdb").string()); });
+  EXPECT_NE(none.find("no float grid"), std::string::npos) << none;
+  EXPECT_NE(none.find("velocity"), std::string::npos) << none;
+  EXPECT_NE(errorOf([] {
+              readVdbDensity((kCorpus / "not_vdb.vdb").string());
+            }).find("not_vdb.vdb: not a readable OpenVDB file"),
+            std::string::npos);
+  EXPECT_NE(errorOf([] {
+              readVdbDensity((kCorpus / "density.vdb").string(), "temperature");
+            }).find("no float grid named \"temperature\""),
+            std::string::npos);
+}
+
+TEST(VdbFile, PbrtNanovdbMediaReadTheSameGridFromVdb) {
+  const std::string text =
+      "MakeNamedMedium \"cloud\" \"string type\" \"nanovdb\" \"string filename\" "
+      "\"density.vdb\" \"rgb sigma_s\" [2 2 2]\nWorldBegin\n";
+  const Scene s = loadPbrtFromString(text, "cloud.pbrt", kCorpus.string());
+  ASSERT_EQ(s.media.size(), 1u);
+  EXPECT_EQ(s.media[0].density->nx(), 2);
+  EXPECT_EQ(s.media[0].sigmaS, Vec3f(2));
+}
+
+class RawFile {
+ public:
+  explicit RawFile(const std::vector<unsigned char>& bytes)
+      : path_((fs::temp_directory_path() /
+               ("ferry-raw-" + std::to_string(::getpid()) + "-" + std::to_string(next_++)))
+                  .string()) {
+    std::ofstream(path_, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  }
+  ~RawFile() { fs::remove(path_); }
+  const std::string& path() const { return path_; }
+
+ private:
+  static inline int next_ = 0;
+  std::string path_;
+};
+
+TEST(RawVolume, NormalisesEachFormatAndPlacesTheBox) {
+  RawFile u8({0, 255, 51, 102, 0, 0, 0, 0});
+  Scene s = loadScene("raw:" + u8.path() + "?dims=2,2,2&format=uint8&spacing=0.5,1,2&origin=1,2,3");
+  ASSERT_EQ(s.media.size(), 1u);
+  const Medium& m = s.media[0];
+  ASSERT_TRUE(m.transfer);
+  EXPECT_FLOAT_EQ(m.density->values()[1], 1.0f);
+  EXPECT_FLOAT_EQ(m.density->values()[2], 0.2f);
+  // The box: dims x spacing from the origin.
+  EXPECT_EQ(m.gridFromWorld.transformPoint({1, 2, 3}), Vec3f(0));
+  EXPECT_EQ(m.gridFromWorld.transformPoint({2, 4, 7}), Vec3f(1));
+  RawFile u16({0xff, 0xff, 0, 0});
+  s = loadScene("raw:" + u16.path() + "?dims=2,1,1&format=uint16");
+  EXPECT_FLOAT_EQ(s.media[0].density->values()[0], 1.0f);
+  std::vector<unsigned char> floats(12);
+  const float f[3] = {-1, 3, 1};
+  std::memcpy(floats.data(), f, 12);
+  RawFile f32(floats);
+  s = loadScene("raw:" + f32.path() + "?dims=3,1,1&format=float32");
+  EXPECT_EQ(s.media[0].density->values(), (std::vector<float>{0, 1, 0.5f}));
+}
+
+TEST(RawVolume, ATransferFunctionFileAndOpacityScale) {
+  RawFile u8({0, 255});
+  const std::string tf = (kCorpus / "ramp.tf.json").string();
+  const Scene s = loadScene("raw:" + u8.path() + "?dims=2,1,1&format=uint8&tf=" + tf);
+  const TransferFunction& t = *s.media[0].transfer;
+  EXPECT_NEAR(t.color(0.5f).x, 0.6f, 1e-6f);
+  // Its scale (5 mean free paths at opacity 1) across the box's longest side (2).
+  EXPECT_FLOAT_EQ(t.scale(), 2.5f);
+  const Scene scaled =
+      loadScene("raw:" + u8.path() + "?dims=2,1,1&format=uint8&tf=" + tf + "&opacity=8");
+  EXPECT_FLOAT_EQ(scaled.media[0].transfer->scale(), 4.0f);
+}
+
+TEST(RawVolume, RefusesMalformedNames) {
+  RawFile u8(std::vector<unsigned char>(8, 1));
+  const std::string base = "raw:" + u8.path();
+  auto expect = [&](const std::string& spec, const std::string& piece) {
+    const std::string e = errorOf([&] { loadScene(spec); });
+    EXPECT_NE(e.find(piece), std::string::npos) << spec << ": " << e;
+  };
+  expect(base + "?dims=2,2,3&format=uint8", "8 bytes, but dims 2x2x3 of uint8 need 12");
+  expect(base + "?dims=4294967296,4294967296,2&format=uint8", "overflow");
+  expect(base + "?dims=2,2&format=uint8", "expected three positive integers");
+  expect(base + "?dims=2,2,2&format=int7", "format 'int7'");
+  expect(base + "?format=uint8", "no dims");
+  expect(base + "?dims=2,2,2&format=uint8&colour=red", "unknown key 'colour'");
+  expect(base + "?dims=2,2,2&format=uint8&opacity=-1", "opacity '-1'");
+  expect("raw:/no/such/file?dims=1,1,1&format=uint8", "/no/such/file: cannot read");
+  std::vector<unsigned char> nan(8);
+  const float v[2] = {1, std::numeric_limits<float>::quiet_NaN()};
+  std::memcpy(nan.data(), v, 8);
+  RawFile withNan(nan);
+  expect("raw:" + withNan.path() + "?dims=2,1,1&format=float32", "sample 1 (x 1, y 0, z 0) is nan");
+  expect(base + "?dims=2,2,2&format=uint8&tf=" + (kCorpus / "bad_order.tf.json").string(),
+         "positions must increase");
+  expect(base + "?dims=2,2,2&format=uint8&tf=" + (kCorpus / "short_color.tf.json").string(),
+         "\"colors\" entry 0 is not 4 numbers");
+}
+
+}  // namespace
+}  // namespace ferry
