@@ -194,7 +194,7 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
   const bool media = rank_->scene.hasMedia();
   if (media && settings_.lightPaths.value_or(false))
     throw InputError(
-        fmt::format("--light-paths on: scene '{}' has participating media, which "
+        fmt::format("light paths were asked for, but scene '{}' has participating media, which "
                     "light paths do not cross; render it without them",
                     rank_->scene.name));
   settings_.render.lightPaths =
