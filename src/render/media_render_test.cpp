@@ -21,30 +21,6 @@ namespace {
 
 using namespace ferry::testing;
 
-// A closed box, its geometric normals outwards.
-Mesh makeBox(Vec3f lo, Vec3f hi) {
-  Mesh m;
-  m.name = "box";
-  const Vec3f c = (lo + hi) * 0.5f;
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side = 0; side < 2; ++side) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      Vec3f corner = lo, edgeU{0, 0, 0}, edgeV{0, 0, 0};
-      corner[axis] = side ? hi[axis] : lo[axis];
-      edgeU[u] = hi[u] - lo[u];
-      edgeV[v] = hi[v] - lo[v];
-      Mesh q = makeQuad(corner, edgeU, edgeV, 0);
-      const Vec3f outward = corner + (edgeU + edgeV) * 0.5f - c;
-      const int32_t base = int32_t(m.positions.size());
-      for (const Vec3f& p : q.positions) m.positions.push_back(p);
-      for (Vec3i t : q.indices) {
-        if (dot(cross(edgeU, edgeV), outward) < 0) std::swap(t.y, t.z);
-        m.indices.push_back({t.x + base, t.y + base, t.z + base});
-      }
-    }
-  return m;
-}
-
 Medium homogeneous(Vec3f sigmaA, Vec3f sigmaS, float g = 0) {
   Medium m;
   m.name = "homogeneous";
@@ -124,7 +100,8 @@ TEST(MediaRender, AnAbsorbingSlabSeenThroughTransmitsExpMinusSigmaD) {
   scene.materials.push_back(diffuseMaterial(Vec3f(0.5f)));
   const Vec3f sigmaA{0.3f, 1.0f, 2.5f};
   scene.media.push_back(homogeneous(sigmaA, Vec3f(0)));
-  scene.mediumBoundaries.push_back({makeBox({-20, -20, -0.5f}, {20, 20, 0.5f}), {0, kNoMedium}});
+  scene.mediumBoundaries.push_back(
+      {boxMesh(Box3f{{-20, -20, -0.5f}, {20, 20, 0.5f}}, "slab"), {0, kNoMedium}});
   scene.environment.color = Vec3f(1);
   CameraView view;
   view.from = {0, 0, 5};
@@ -158,7 +135,7 @@ TEST(MediaRender, AnAbsorbingSlabShadowsASunlitPlaneByItsTransmittance) {
                                                          4, 4, 4, std::vector<float>(64, 1.0f)),
                                                      Affine3f::identity(), slab)
                                  : homogeneous(sigmaA, Vec3f(0)));
-      scene.mediumBoundaries.push_back({makeBox(slab.lower, slab.upper), {0, kNoMedium}});
+      scene.mediumBoundaries.push_back({boxMesh(slab, "slab"), {0, kNoMedium}});
       SunLight sun;
       sun.direction = {0, 1, 0};
       sun.irradiance = Vec3f(3);
@@ -193,7 +170,7 @@ TEST(MediaRender, TheImageIsTheSameOnOneAndThreeRanks) {
   const Box3f box{{-1, 0.1f, -1}, {1, 1.5f, 1}};
   scene.media.push_back(grid({0.5f, 0.6f, 0.7f}, {3, 2, 1}, 0.4f, box, 5,
                              [](int x, int y, int z) { return float((x + 2 * y + z) % 3); }));
-  scene.mediumBoundaries.push_back({makeBox(box.lower, box.upper), {0, kNoMedium}});
+  scene.mediumBoundaries.push_back({boxMesh(box, "box"), {0, kNoMedium}});
   scene.environment.color = {0.8f, 0.9f, 1.0f};
   CameraView view;
   view.from = {0, 2, 5};
