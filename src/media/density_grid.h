@@ -34,12 +34,10 @@ class DensityGrid {
 
   // The density at `p` in the unit cube's coordinates (0 outside it).
   float lookup(Vec3f p) const;
-  // The largest density lookup() can return anywhere in the box [lo, hi]
-  // (unit-cube coordinates): the largest sample whose voxel a lookup there
-  // interpolates (pbrt-v4's SampledGrid::MaxValue).
-  float maxIn(Vec3f lo, Vec3f hi) const { return rangeIn(lo, hi).second; }
-  // The smallest and largest density lookup() can return in [lo, hi] (the
-  // smallest is 0 where the box comes within half a voxel of the grid's faces).
+  // The smallest and largest density lookup() can return anywhere in the box
+  // [lo, hi] (unit-cube coordinates): over the samples a lookup there
+  // interpolates (pbrt-v4's SampledGrid::MaxValue); the smallest is 0 where
+  // the box comes within half a voxel of the grid's faces.
   std::pair<float, float> rangeIn(Vec3f lo, Vec3f hi) const;
 
  private:

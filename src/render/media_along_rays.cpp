@@ -1,8 +1,5 @@
 #include "render/media_along_rays.h"
 
-#include <algorithm>
-
-#include "core/error.h"
 #include "scene/scene.h"
 #include "trace/embree_backend.h"
 
