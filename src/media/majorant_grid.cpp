@@ -1,5 +1,7 @@
 #include "media/majorant_grid.h"
 
+#include <tuple>
+
 namespace ferry {
 
 MajorantGrid::MajorantGrid(const DensityGrid& grid, int cells)
@@ -16,6 +18,7 @@ MajorantGrid::MajorantGrid(const DensityGrid& grid, const Extinction& extinction
   res_[2] = std::clamp(grid.nz(), 1, cells);
   values_.resize(size_t(res_[0]) * size_t(res_[1]) * size_t(res_[2]));
   controls_.resize(values_.size());
+  ranges_.resize(values_.size());
   for (int z = 0; z < res_[2]; ++z)
     for (int y = 0; y < res_[1]; ++y)
       for (int x = 0; x < res_[0]; ++x) {
@@ -24,10 +27,20 @@ MajorantGrid::MajorantGrid(const DensityGrid& grid, const Extinction& extinction
         const Vec3f hi{float(x + 1) / float(res_[0]), float(y + 1) / float(res_[1]),
                        float(z + 1) / float(res_[2])};
         const auto [smallest, largest] = grid.rangeIn(lo, hi);
+        ranges_[index(x, y, z)] = {smallest, largest};
         const auto [majorant, control] = extinction(smallest, largest);
         values_[index(x, y, z)] = majorant;
         controls_[index(x, y, z)] = control;
       }
+}
+
+MajorantGrid::MajorantGrid(float majorant, Vec3f control) : values_{majorant}, controls_{control} {}
+
+MajorantGrid::MajorantGrid(const MajorantGrid& cells, const Extinction& extinction)
+    : values_(cells.values_.size()), controls_(cells.values_.size()), ranges_(cells.ranges_) {
+  std::copy(cells.res_, cells.res_ + 3, res_);
+  for (size_t i = 0; i < ranges_.size(); ++i)
+    std::tie(values_[i], controls_[i]) = extinction(ranges_[i].first, ranges_[i].second);
 }
 
 }  // namespace ferry

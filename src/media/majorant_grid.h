@@ -27,6 +27,11 @@ class MajorantGrid {
   MajorantGrid(const DensityGrid& grid, const Extinction& extinction, int cells = 16);
   // The grid's values themselves as the extinction.
   explicit MajorantGrid(const DensityGrid& grid, int cells = 16);
+  // One cell over the whole cube (pbrt-v4's cloud: a bound known without a grid).
+  MajorantGrid(float majorant, Vec3f control);
+  // The cells of `cells` (made over a grid) with another extinction, from the
+  // value ranges it kept: no pass over the grid (a transfer function's change).
+  MajorantGrid(const MajorantGrid& cells, const Extinction& extinction);
 
   int cells(int axis) const { return res_[axis]; }
   float at(int x, int y, int z) const { return values_[index(x, y, z)]; }
@@ -45,6 +50,7 @@ class MajorantGrid {
   int res_[3] = {1, 1, 1};
   std::vector<float> values_;
   std::vector<Vec3f> controls_;
+  std::vector<std::pair<float, float>> ranges_;  // each cell's values (empty: none kept)
 };
 
 // Where the ray o + t d meets the unit cube, clipped to [tMin, tMax]; false if

@@ -216,5 +216,155 @@ TEST(Tracking, ATransferFunctionVolumeTransmitsByItsOpacity) {
   EXPECT_NEAR(sum.x / samples, std::exp(-depth), 0.01);
 }
 
+// The integral of f along o + t d over [0, 1], by the midpoint rule.
+template <typename F>
+Vec3f quadrature(F&& f, int steps = 4000) {
+  Vec3f sum{0, 0, 0};
+  for (int i = 0; i < steps; ++i) sum += f((float(i) + 0.5f) / float(steps));
+  return sum * (1.0f / float(steps));
+}
+
+// An rgb grid whose voxels vary: sigma_a and sigma_s per channel.
+Medium testRgbGrid(bool emitting) {
+  const int n = 4;
+  auto grids = std::make_shared<RgbGrids>();
+  uint32_t h = 5;
+  for (RgbGrids::Channels* g : {&grids->sigmaA, &grids->sigmaS, &grids->emission}) {
+    if (g == &grids->emission && !emitting) continue;
+    for (auto& channel : *g) {
+      std::vector<float> v(n * n * n);
+      for (float& x : v) x = random01FromBits(h = hashMix(h + 1)) * 1.5f;
+      channel = std::make_shared<DensityGrid>(n, n, n, v);
+    }
+  }
+  return rgbGridMedium("rgb", grids, 2.0f, 3.0f, 0, Affine3f::identity(),
+                       Box3f{{0, 0, 0}, {1, 1, 1}});
+}
+
+TEST(Tracking, RatioTrackingThroughAnRgbGridMatchesQuadraturePerChannel) {
+  const Medium m = testRgbGrid(false);
+  const Vec3f o{0, 0.3f, 0.6f}, d = normalize(Vec3f{1, 0.2f, -0.1f});
+  // The true optical depth along the ray inside the unit cube (to x = 1).
+  const float length = 1 / d.x;
+  const Vec3f depth = quadrature([&](float u) {
+                        Vec3f sa, ss;
+                        m.coefficients(o + d * (u * length), sa, ss);
+                        return sa + ss;
+                      }) *
+                      length;
+  Vec3f sum{0, 0, 0};
+  MediumCounts counts;
+  const int samples = 40000;
+  for (int i = 0; i < samples; ++i) {
+    TrackingRandom random(hashMix(uint32_t(i) * 3 + 11), 0);
+    sum += transmittance(m, o, d, 0, length, TransmittanceEstimator::Ratio, random, counts);
+  }
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c] / samples, std::exp(-depth[c]), 0.01) << c;
+}
+
+TEST(Tracking, AGridMediumEmitsTheIntegralOfTransmittanceAbsorptionAndItsLe) {
+  // The light an emitting grid gives a ray is the integral of T sigma_a Le;
+  // free flights add it where they are absorbed.
+  const Medium m = testRgbGrid(true);
+  const Vec3f o{0, 0.45f, 0.55f}, d{1, 0, 0};
+  Vec3f tau{0, 0, 0};
+  const int steps = 4000;
+  Vec3f expected{0, 0, 0};
+  for (int i = 0; i < steps; ++i) {
+    const Vec3f p = o + d * ((float(i) + 0.5f) / steps);
+    Vec3f sa, ss;
+    m.coefficients(p, sa, ss);
+    const Vec3f st = sa + ss;
+    const Vec3f mid = tau + st * (0.5f / steps);
+    const Vec3f t{std::exp(-mid.x), std::exp(-mid.y), std::exp(-mid.z)};
+    expected += t * sa * m.emittedAt(p) * (1.0f / steps);
+    tau += st * (1.0f / steps);
+  }
+  Vec3f sum{0, 0, 0};
+  MediumCounts counts;
+  const int samples = 100000;
+  for (int i = 0; i < samples; ++i) {
+    TrackingRandom random(hashMix(uint32_t(i) * 5 + 2), 0);
+    sum += sampleFreeFlight(m, o, d, 0, 1, random, counts).emitted;
+  }
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(sum[c] / samples, expected[c], 0.03 * expected[c] + 0.003) << c;
+}
+
+TEST(Cloud, IsDenseBelowHalfHeightAndEmptyAtTheTop) {
+  CloudDensity c;
+  c.box = Box3f{{0, 0, 0}, {1, 1, 1}};
+  uint32_t h = 3;
+  for (int i = 0; i < 2000; ++i) {
+    const float x = random01FromBits(h = hashMix(h + 1)), z = random01FromBits(h = hashMix(h + 1));
+    const float y = random01FromBits(h = hashMix(h + 1));
+    const float d = c.at({x, y, z});
+    ASSERT_GE(d, 0);
+    ASSERT_LE(d, 1);
+    // pbrt-v4's altitude term: 2 (0.5 - y) alone reaches 1 at y = 0.
+    EXPECT_EQ(c.at({x, 0, z}), 1);
+    EXPECT_EQ(c.at({x, 1, z}), 0);
+  }
+  // The noise makes it vary in between.
+  float lo = 1, hi = 0;
+  for (int i = 0; i < 200; ++i) {
+    const float d = c.at({float(i) / 200, 0.7f, 0.3f});
+    lo = std::min(lo, d);
+    hi = std::max(hi, d);
+  }
+  EXPECT_GT(hi - lo, 0.2f);
+  // Its medium's one majorant bounds it: transmittance from ratio tracking
+  // averages to the quadrature of the density.
+  const Medium m = cloudMedium("cloud", Vec3f(1), Vec3f(2), 0, c, Affine3f::identity());
+  const Vec3f o{0.1f, 0.6f, 0}, d{0, 0, 1};
+  const float depth = quadrature([&](float u) { return Vec3f(c.at(o + d * u)); }).x * 3;
+  Vec3f sum{0, 0, 0};
+  MediumCounts counts;
+  const int samples = 20000;
+  for (int i = 0; i < samples; ++i) {
+    TrackingRandom random(hashMix(uint32_t(i) * 9 + 4), 0);
+    sum += transmittance(m, o, d, 0, 1, TransmittanceEstimator::Ratio, random, counts);
+  }
+  EXPECT_NEAR(sum.x / samples, std::exp(-depth), 0.01);
+}
+
+TEST(TemperatureEmission, IsABlackbodyTableAboveAHundredKelvin) {
+  TemperatureEmission t;
+  t.kelvin = std::make_shared<DensityGrid>(1, 1, 1, std::vector<float>{1000});
+  t.table = {Vec3f(0), Vec3f(1, 0, 0), Vec3f(3, 2, 0)};
+  t.step = 1000;
+  t.offset = 500;
+  t.scale = 3;  // (1000 - 500) x 3 = 1500 K at the centre: halfway between entries 1 and 2
+  const Vec3f e = t.at({0.5f, 0.5f, 0.5f});
+  EXPECT_FLOAT_EQ(e.x, 2);
+  EXPECT_FLOAT_EQ(e.y, 1);
+  t.offset = 990;  // 30 K: nothing
+  EXPECT_EQ(t.at({0.5f, 0.5f, 0.5f}).x, 0);
+  t.offset = 0;
+  t.scale = 100;  // beyond the table: its last entry
+  EXPECT_EQ(t.at({0.5f, 0.5f, 0.5f}).x, 3);
+}
+
+TEST(MajorantGrid, ATransferFunctionChangeRebuildsFromTheKeptRanges) {
+  std::vector<float> v(10 * 10 * 10);
+  uint32_t h = 1;
+  for (float& x : v) x = random01FromBits(h = hashMix(h + 1));
+  auto grid = std::make_shared<DensityGrid>(10, 10, 10, v);
+  auto ramp = [](float scale) {
+    return std::make_shared<TransferFunction>(
+        std::vector<TransferFunction::ColorPoint>{{0, Vec3f(1)}},
+        std::vector<TransferFunction::OpacityPoint>{{0, 0}, {1, 1}}, scale);
+  };
+  Medium m = transferFunctionMedium("tf", grid, ramp(2), Box3f{{0, 0, 0}, {1, 1, 1}});
+  setTransferFunction(m, ramp(6));
+  const Medium fresh = transferFunctionMedium("tf", grid, ramp(6), Box3f{{0, 0, 0}, {1, 1, 1}});
+  for (int z = 0; z < m.majorants->cells(2); ++z)
+    for (int y = 0; y < m.majorants->cells(1); ++y)
+      for (int x = 0; x < m.majorants->cells(0); ++x) {
+        EXPECT_EQ(m.majorants->at(x, y, z), fresh.majorants->at(x, y, z));
+        EXPECT_EQ(m.majorants->controlAt(x, y, z), fresh.majorants->controlAt(x, y, z));
+      }
+}
+
 }  // namespace
 }  // namespace ferry

@@ -97,7 +97,7 @@ FreeFlight sampleFreeFlight(const Medium& m, Vec3f o, Vec3f d, float tMin, float
         if (!(pa > 0)) return true;
         ++counts.realCollisions;
         f.weight = f.weight * sa * (sum / (majorant * pa));
-        if (m.emits()) f.emitted = f.weight * m.emission;
+        if (m.emits()) f.emitted = f.weight * m.emittedAt(og + dg * t);
         f.event = FreeFlight::Event::Absorbed;
         f.t = t;
         return false;

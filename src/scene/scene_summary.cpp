@@ -49,10 +49,18 @@ SceneSummary summarize(const Scene& scene) {
   for (const ferry::Medium& m : scene.media) {
     SceneSummary::Medium out;
     out.name = m.name;
-    out.kind = m.homogeneous()
-                   ? "homogeneous"
-                   : fmt::format("grid {}x{}x{}{}", m.density->nx(), m.density->ny(),
-                                 m.density->nz(), m.transfer ? " through a transfer function" : "");
+    if (m.cloud)
+      out.kind = "cloud (procedural)";
+    else if (m.homogeneous())
+      out.kind = "homogeneous";
+    else
+      out.kind =
+          fmt::format("{}grid {}x{}x{}{}", m.rgb ? "rgb " : "", m.density->nx(), m.density->ny(),
+                      m.density->nz(), m.transfer ? " through a transfer function" : "");
+    if (m.temperature)
+      out.kind += ", emitting by temperature";
+    else if (m.emits())
+      out.kind += ", emitting";
     out.bytes = m.bytes();
     if (m.density) {
       out.minDensity = m.density->minValue();

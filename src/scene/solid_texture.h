@@ -13,6 +13,7 @@
 #include <cstdint>
 
 #include "core/math.h"
+#include "core/perlin_noise.h"
 
 namespace ferry {
 
@@ -32,8 +33,6 @@ struct SolidTexture {
   Vec3f evaluate(Vec3f p) const;
 };
 
-// Perlin noise as pbrt-v3's Noise(): 0 at the lattice points, in about [-1, 1].
-float perlinNoise(Vec3f p);
 // Sums of `octaves` octaves (frequency x1.99, weight x omega), as pbrt-v3's
 // FBm and Turbulence with every octave taken (turbulence then adds pbrt's
 // 0.2 for the next octave).

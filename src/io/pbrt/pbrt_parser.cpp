@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -32,6 +33,9 @@ namespace fs = std::filesystem;
 
 constexpr int kMaxIncludeDepth = 64;
 constexpr int kMaxFilmSide = 16384;
+// Media emitting by temperature look the blackbody's RGB up every 10 K up to 40000 K.
+constexpr size_t kBlackbodyEntries = 4001;
+constexpr float kBlackbodyStep = 10;
 
 float radians(float degrees) {
   return degrees * kPi / 180.0f;
@@ -627,8 +631,102 @@ class Parser {
     return {mediumOf(state_.mediumInside, where), mediumOf(state_.mediumOutside, where)};
   }
 
-  // pbrt-v3's homogeneous and heterogeneous media and pbrt-v4's homogeneous
-  // and uniformgrid, with the CTM here placing a grid's p0-p1 box.
+  // `values` (nx x ny x nz, checked) as a grid; errors at the parameter.
+  std::shared_ptr<const DensityGrid> voxelGrid(const PbrtParam& values, int nx, int ny, int nz,
+                                               const std::string& what, const SourceLocation& where,
+                                               int stride = 1, int offset = 0) {
+    if (nx <= 0 || ny <= 0 || nz <= 0)
+      fail(where, fmt::format("{}: nx, ny, nz ({} {} {}) must be positive", what, nx, ny, nz));
+    const uint64_t count = uint64_t(nx) * uint64_t(ny) * uint64_t(nz);
+    if (count * uint64_t(stride) != values.floats.size())
+      PbrtParams::fail(
+          values, fmt::format("{} values for {}nx * ny * nz = {} x {} x {} = {}",
+                              values.floats.size(), stride > 1 ? fmt::format("{} x ", stride) : "",
+                              nx, ny, nz, count * uint64_t(stride)));
+    std::vector<float> v(count);
+    for (uint64_t i = 0; i < count; ++i)
+      v[i] = values.floats[i * uint64_t(stride) + uint64_t(offset)];
+    try {
+      return std::make_shared<DensityGrid>(nx, ny, nz, std::move(v));
+    } catch (const std::invalid_argument& e) {
+      PbrtParams::fail(values, e.what());
+    }
+  }
+
+  // pbrt-v4's rgbgrid: one RGB per voxel of "sigma_a", "sigma_s" and "Le".
+  std::shared_ptr<const RgbGrids> rgbGrids(const PbrtParams& p, const std::string& what,
+                                           const SourceLocation& where) {
+    const int nx = p.getInt("nx", 1), ny = p.getInt("ny", 1), nz = p.getInt("nz", 1);
+    const PbrtParam* sa = p.getArray("sigma_a", {"rgb"});
+    const PbrtParam* ss = p.getArray("sigma_s", {"rgb"});
+    const PbrtParam* le = p.getArray("Le", {"rgb"});
+    if (!sa && !ss)
+      fail(where,
+           fmt::format("{} needs \"rgb sigma_a\" or \"rgb sigma_s\" (an RGB per voxel)", what));
+    if (le && !sa) fail(where, fmt::format("{}: \"Le\" needs \"sigma_a\" too", what));
+    auto grids = std::make_shared<RgbGrids>();
+    auto channels = [&](const PbrtParam* param, RgbGrids::Channels& out) {
+      if (param)
+        for (int c = 0; c < 3; ++c)
+          out[size_t(c)] = voxelGrid(*param, nx, ny, nz, what, where, 3, c);
+    };
+    channels(sa, grids->sigmaA);
+    channels(ss, grids->sigmaS);
+    channels(le, grids->emission);
+    return grids;
+  }
+
+  // Emission by temperature: the grid in kelvin and pbrt-v4's offset and scale.
+  TemperatureEmission temperatureEmission(const PbrtParams& p,
+                                          std::shared_ptr<const DensityGrid> kelvin) {
+    static const std::vector<Vec3f> table = [] {
+      std::vector<Vec3f> t(kBlackbodyEntries);
+      for (size_t i = 0; i < t.size(); ++i) {
+        const float k = float(i) * kBlackbodyStep;
+        if (k > 100) t[i] = spectrumToRgb(blackbodySpectrum(k), SpectrumUse::Illuminant);
+      }
+      return t;
+    }();
+    TemperatureEmission t;
+    t.kelvin = std::move(kelvin);
+    t.offset = p.getFloat("temperatureoffset", p.getFloat("temperaturecutoff", 0));
+    t.scale = p.getFloat("temperaturescale", 1);
+    t.table = table;
+    t.step = kBlackbodyStep;
+    return t;
+  }
+
+  // A grid medium's emission as pbrt-v4's uniformgrid has it: "Le" or a
+  // "temperature" grid, times the "Lescale" grid (one value per voxel;
+  // absent, a single voxel of 1, which fades towards the box's faces as
+  // pbrt's lookup of it does).
+  void gridEmission(const PbrtParams& p, Medium& m, int nx, int ny, int nz, const std::string& what,
+                    const SourceLocation& where) {
+    const PbrtParam* temperature = p.getArray("temperature", {"float"});
+    if (temperature && p.has("Le"))
+      fail(where, fmt::format("{}: both \"Le\" and \"temperature\" are given", what));
+    const Vec3f le = materials_.constantColor(p, "Le", Vec3f(0), SpectrumUse::Illuminant);
+    const PbrtParam* leScale = p.getArray("Lescale", {"float"});
+    if (!temperature && !(maxComponent(le) > 0)) {
+      p.find("temperatureoffset");
+      p.find("temperaturecutoff");
+      p.find("temperaturescale");
+      return;
+    }
+    m.emissionScale = leScale ? voxelGrid(*leScale, nx, ny, nz, what, where)
+                              : std::make_shared<DensityGrid>(1, 1, 1, std::vector<float>{1});
+    if (temperature) {
+      m.temperature = std::make_shared<TemperatureEmission>(
+          temperatureEmission(p, voxelGrid(*temperature, nx, ny, nz, what, where)));
+      m.emission = Vec3f(1);
+    } else {
+      m.emission = le;
+    }
+  }
+
+  // pbrt-v3's homogeneous and heterogeneous media and pbrt-v4's homogeneous,
+  // uniformgrid, rgbgrid, cloud and nanovdb (given a .vdb file), with the CTM here placing a grid's
+  // p0-p1 box.
   void makeNamedMedium(Input& in, const SourceLocation& where) {
     const std::string name = string(in, "MakeNamedMedium");
     PbrtParams p = withDefaults(params(in), "medium");
@@ -645,7 +743,7 @@ class Parser {
                                 what, file));
     }
     if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid" &&
-        type != "nanovdb") {
+        type != "nanovdb" && type != "rgbgrid" && type != "cloud") {
       p.markAllUsed();
       warnings_.once("medium|" + type,
                      fmt::format("{} is not supported: the medium is left out (vacuum; first at "
@@ -654,73 +752,87 @@ class Parser {
       namedMedia_[name] = kNoMedium;
       return;
     }
-    // pbrt-v3's defaults (its MakeMedium); pbrt-v4's grids default to 1.
-    const bool v4 = type == "uniformgrid" || type == "nanovdb";
-    Vec3f sigmaA = v4 ? Vec3f(1) : Vec3f(0.0011f, 0.0024f, 0.014f);
-    Vec3f sigmaS = v4 ? Vec3f(1) : Vec3f(2.55f, 3.21f, 3.77f);
-    if (const std::string preset = p.getString("preset", ""); !preset.empty()) {
-      if (!mediumPreset(preset, sigmaA, sigmaS))
-        warnings_.once("preset|" + preset,
-                       fmt::format("{}: unknown preset \"{}\" (its default coefficients are "
-                                   "used; at {})",
-                                   what, preset, where.toString()));
-    }
-    const float scale = p.getFloat("scale", 1);
-    sigmaA = materials_.constantColor(p, "sigma_a", sigmaA, SpectrumUse::Reflectance) * scale;
-    sigmaS = materials_.constantColor(p, "sigma_s", sigmaS, SpectrumUse::Reflectance) * scale;
     const float g = p.getFloat("g", 0);
     if (!(std::abs(g) < 1)) fail(where, fmt::format("{}: \"g\" {} must be in (-1, 1)", what, g));
-    if (!isFinite(sigmaA) || !isFinite(sigmaS) || std::min({sigmaA.x, sigmaA.y, sigmaA.z}) < 0 ||
-        std::min({sigmaS.x, sigmaS.y, sigmaS.z}) < 0)
-      fail(where, fmt::format("{}: sigma_a and sigma_s must be finite and not negative", what));
-    const Vec3f emitted = materials_.constantColor(p, "Le", Vec3f(0), SpectrumUse::Illuminant) *
-                          p.getFloat("Lescale", 1);
+    const Vec3f p0 = p.getPoint3("p0").value_or(Vec3f(0)),
+                p1 = p.getPoint3("p1").value_or(Vec3f(1));
+    const bool boxed =
+        type == "heterogeneous" || type == "uniformgrid" || type == "rgbgrid" || type == "cloud";
+    if (boxed && !(p0.x < p1.x && p0.y < p1.y && p0.z < p1.z))
+      fail(where, fmt::format("{}: p0 must be below p1 on every axis", what));
     Medium m;
-    if (type == "homogeneous") {
-      m.name = name;
-      m.sigmaA = sigmaA;
-      m.sigmaS = sigmaS;
-      m.g = g;
-      m.emission = emitted;
-    } else if (type == "nanovdb") {
-      // The same grid as an OpenVDB file: its "density" grid, in its own box.
-      const std::string path = resolve(p.getString("filename", ""), where, "volume file");
-      VdbDensity vdb;
-      try {
-        vdb = readVdbDensity(path, "density");
-      } catch (const InputError& e) {
-        fail(where, fmt::format("{}: {}", what, e.what()));
-      }
-      m = gridMedium(name, sigmaA, sigmaS, g, vdb.grid, state_.ctm, vdb.box);
-      p.find("LeScale");
-      p.find("temperaturecutoff");
-      p.find("temperaturescale");
+    if (type == "rgbgrid") {
+      m = rgbGridMedium(name, rgbGrids(p, what, where), p.getFloat("scale", 1),
+                        p.getFloat("Lescale", 1), g, state_.ctm, Box3f{p0, p1});
     } else {
-      const int nx = p.getInt("nx", 1), ny = p.getInt("ny", 1), nz = p.getInt("nz", 1);
-      const PbrtParam* density = p.getArray("density", {"float"});
-      if (!density) fail(where, fmt::format("{} needs \"float density\"", what));
-      if (nx <= 0 || ny <= 0 || nz <= 0)
-        fail(where, fmt::format("{}: nx, ny, nz ({} {} {}) must be positive", what, nx, ny, nz));
-      const uint64_t count = uint64_t(nx) * uint64_t(ny) * uint64_t(nz);
-      if (count != density->floats.size())
-        PbrtParams::fail(*density, fmt::format("{} values for nx * ny * nz = {} x {} x {} = {}",
-                                               density->floats.size(), nx, ny, nz, count));
-      const Vec3f p0 = p.getPoint3("p0").value_or(Vec3f(0)),
-                  p1 = p.getPoint3("p1").value_or(Vec3f(1));
-      if (!(p0.x < p1.x && p0.y < p1.y && p0.z < p1.z))
-        fail(where, fmt::format("{}: p0 must be below p1 on every axis", what));
-      std::shared_ptr<const DensityGrid> grid;
-      try {
-        grid = std::make_shared<DensityGrid>(nx, ny, nz, density->floats);
-      } catch (const std::invalid_argument& e) {
-        PbrtParams::fail(*density, e.what());
+      // pbrt-v3's defaults (its MakeMedium); pbrt-v4's grids and clouds default to 1.
+      const bool v4 = type != "homogeneous" && type != "heterogeneous";
+      Vec3f sigmaA = v4 ? Vec3f(1) : Vec3f(0.0011f, 0.0024f, 0.014f);
+      Vec3f sigmaS = v4 ? Vec3f(1) : Vec3f(2.55f, 3.21f, 3.77f);
+      if (const std::string preset = p.getString("preset", ""); !preset.empty()) {
+        if (!mediumPreset(preset, sigmaA, sigmaS))
+          warnings_.once("preset|" + preset,
+                         fmt::format("{}: unknown preset \"{}\" (its default coefficients are "
+                                     "used; at {})",
+                                     what, preset, where.toString()));
       }
-      m = gridMedium(name, sigmaA, sigmaS, g, std::move(grid), state_.ctm, Box3f{p0, p1});
-      if (maxComponent(emitted) > 0)
-        warnings_.once("grid emission",
-                       fmt::format("{}: emission (\"Le\") from grid media is not supported yet "
-                                   "(at {})",
-                                   what, where.toString()));
+      const float scale = p.getFloat("scale", 1);
+      sigmaA = materials_.constantColor(p, "sigma_a", sigmaA, SpectrumUse::Reflectance) * scale;
+      sigmaS = materials_.constantColor(p, "sigma_s", sigmaS, SpectrumUse::Reflectance) * scale;
+      if (!isFinite(sigmaA) || !isFinite(sigmaS) || std::min({sigmaA.x, sigmaA.y, sigmaA.z}) < 0 ||
+          std::min({sigmaS.x, sigmaS.y, sigmaS.z}) < 0)
+        fail(where, fmt::format("{}: sigma_a and sigma_s must be finite and not negative", what));
+      if (type == "homogeneous") {
+        m.name = name;
+        m.sigmaA = sigmaA;
+        m.sigmaS = sigmaS;
+        m.g = g;
+        m.emission = materials_.constantColor(p, "Le", Vec3f(0), SpectrumUse::Illuminant) *
+                     p.getFloat("Lescale", 1);
+      } else if (type == "cloud") {
+        CloudDensity cloud;
+        cloud.density = p.getFloat("density", 1);
+        cloud.wispiness = p.getFloat("wispiness", 1);
+        cloud.frequency = p.getFloat("frequency", 5);
+        cloud.box = Box3f{p0, p1};
+        if (!(cloud.density >= 0) || !std::isfinite(cloud.density) ||
+            !std::isfinite(cloud.wispiness) || !std::isfinite(cloud.frequency))
+          fail(where, fmt::format("{}: \"density\", \"wispiness\" and \"frequency\" must be "
+                                  "finite, the density not negative",
+                                  what));
+        m = cloudMedium(name, sigmaA, sigmaS, g, cloud, state_.ctm);
+      } else if (type == "nanovdb") {
+        // The same grids as an OpenVDB file: "density", and "temperature" if there.
+        const std::string path = resolve(p.getString("filename", ""), where, "volume file");
+        VdbDensity vdb, kelvin;
+        try {
+          std::tie(vdb, kelvin) = readVdbDensityAndTemperature(path);
+        } catch (const InputError& e) {
+          fail(where, fmt::format("{}: {}", what, e.what()));
+        }
+        m = gridMedium(name, sigmaA, sigmaS, g, vdb.grid, state_.ctm, vdb.box);
+        const float leScale = p.getFloat("Lescale", 1);
+        if (kelvin.grid && leScale > 0) {
+          TemperatureEmission t = temperatureEmission(p, kelvin.grid);
+          // Its own box: its unit cube from the density's.
+          const Vec3f size = kelvin.box.size();
+          t.unitScale = vdb.box.size() / size;
+          t.unitOffset = (vdb.box.lower - kelvin.box.lower) / size;
+          m.temperature = std::make_shared<TemperatureEmission>(std::move(t));
+          m.emission = Vec3f(leScale);
+        } else {
+          p.find("temperaturecutoff");
+          p.find("temperatureoffset");
+          p.find("temperaturescale");
+        }
+      } else {
+        const int nx = p.getInt("nx", 1), ny = p.getInt("ny", 1), nz = p.getInt("nz", 1);
+        const PbrtParam* density = p.getArray("density", {"float"});
+        if (!density) fail(where, fmt::format("{} needs \"float density\"", what));
+        m = gridMedium(name, sigmaA, sigmaS, g, voxelGrid(*density, nx, ny, nz, what, where),
+                       state_.ctm, Box3f{p0, p1});
+        gridEmission(p, m, nx, ny, nz, what, where);
+      }
     }
     reportUnused(p, what);
     scene_.media.push_back(std::move(m));

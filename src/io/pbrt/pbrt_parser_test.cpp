@@ -652,6 +652,52 @@ AttributeEnd
   EXPECT_EQ(s.meshes[0].media, (MediumInterface{2, 0}));
 }
 
+TEST(PbrtParser, PbrtV4GridsCloudsAndEmission) {
+  std::vector<std::string> w;
+  const Scene s = fromText(R"(WorldBegin
+MakeNamedMedium "rgb" "string type" "rgbgrid" "integer nx" 2 "float scale" 3
+  "rgb sigma_a" [1 0 0  0 1 0] "rgb Le" [2 2 2  0 0 0] "float Lescale" 5
+MakeNamedMedium "cloud" "string type" "cloud" "float wispiness" 0 "point3 p0" [0 0 0]
+  "point3 p1" [2 1 1] "rgb sigma_s" [4 4 4]
+MakeNamedMedium "glow" "string type" "uniformgrid" "integer nx" 2 "float density" [1 1]
+  "rgb Le" [1 2 3] "float Lescale" [1 0]
+MakeNamedMedium "fire" "string type" "uniformgrid" "float density" [1]
+  "float temperature" [1000] "float temperaturecutoff" 500 "float temperaturescale" 10
+MakeNamedMedium "lamp" "string type" "uniformgrid" "float density" [1] "rgb Le" [1 1 1]
+Shape "sphere"
+)",
+                           &w);
+  EXPECT_TRUE(w.empty()) << w.front();
+  ASSERT_EQ(s.media.size(), 5u);
+  // rgbgrid: voxel colours times the scale, sigma_s 1 where none is given.
+  const Medium& rgb = s.media[0];
+  ASSERT_TRUE(rgb.rgb);
+  Vec3f sa, ss;
+  rgb.coefficients({0.25f, 0.5f, 0.5f}, sa, ss);
+  EXPECT_EQ(sa, Vec3f(3, 0, 0));
+  EXPECT_EQ(ss, Vec3f(3));
+  EXPECT_EQ(rgb.emittedAt({0.25f, 0.5f, 0.5f}), Vec3f(10));
+  EXPECT_EQ(rgb.density->maxValue(), 6);  // (1 + 1) x 3: the majorants' source
+  // cloud: pbrt-v4's procedural density, in the medium's space (x from 0 to 2).
+  const Medium& cloud = s.media[1];
+  ASSERT_TRUE(cloud.cloud);
+  EXPECT_FALSE(cloud.homogeneous());
+  EXPECT_EQ(cloud.cloud->box.upper.x, 2);
+  cloud.coefficients({0.5f, 0, 0.5f}, sa, ss);  // at the bottom: density 1
+  EXPECT_EQ(ss, Vec3f(4));
+  // uniformgrid: Le times the Lescale grid.
+  EXPECT_EQ(s.media[2].emittedAt({0.25f, 0.5f, 0.5f}), Vec3f(1, 2, 3));
+  EXPECT_EQ(s.media[2].emittedAt({0.75f, 0.5f, 0.5f}), Vec3f(0));
+  // temperature: a blackbody at (1000 - 500) x 10 = 5000 K, reddish white.
+  const Vec3f fire = s.media[3].emittedAt({0.5f, 0.5f, 0.5f});
+  EXPECT_GT(fire.x, fire.z);
+  EXPECT_GT(fire.z, 0);
+  // Le alone: pbrt-v4's Lescale default is one voxel of 1, which fades
+  // towards the box's corners as its lookup does.
+  EXPECT_EQ(s.media[4].emittedAt({0.5f, 0.5f, 0.5f}), Vec3f(1));
+  EXPECT_FLOAT_EQ(s.media[4].emittedAt({0.0f, 0.0f, 0.0f}).x, 0.125f);
+}
+
 TEST(PbrtParser, MissingEnvironmentMapFailsOrFallsBack) {
   std::string path = corpus("missing_envmap.pbrt");
   try {
@@ -1016,6 +1062,14 @@ const std::vector<BadPbrt> kBadPbrt = {
     {"medium_undefined.pbrt", "medium_undefined.pbrt", 2, 1, "no medium named \"fog\""},
     {"medium_nanovdb.pbrt", "medium_nanovdb.pbrt", 1, 1, ".nvdb files need NanoVDB"},
     {"medium_bad_g.pbrt", "medium_bad_g.pbrt", 2, 1, "\"g\" 1.5 must be in (-1, 1)"},
+    {"medium_rgbgrid_count.pbrt", "medium_rgbgrid_count.pbrt", 3, 3,
+     "3 values for 3 x nx * ny * nz = 2 x 1 x 1 = 6"},
+    {"medium_rgbgrid_le_alone.pbrt", "medium_rgbgrid_le_alone.pbrt", 2, 1,
+     "\"Le\" needs \"sigma_a\" too"},
+    {"medium_temperature_and_le.pbrt", "medium_temperature_and_le.pbrt", 2, 1,
+     "both \"Le\" and \"temperature\" are given"},
+    {"medium_lescale_count.pbrt", "medium_lescale_count.pbrt", 3, 20,
+     "3 values for nx * ny * nz = 2 x 1 x 1 = 2"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Corpus, PbrtCorpusError, testing::ValuesIn(kBadPbrt));

@@ -12,7 +12,9 @@
 
 namespace ferry {
 
-VdbDensity readVdbDensity(const std::string& path, const std::string& gridName) {
+namespace {
+
+openvdb::GridPtrVecPtr readGrids(const std::string& path) {
   static std::once_flag initialized;
   std::call_once(initialized, [] { openvdb::initialize(); });
   if (!std::filesystem::exists(path)) throw InputError(fmt::format("{}: no such file", path));
@@ -25,9 +27,16 @@ VdbDensity readVdbDensity(const std::string& path, const std::string& gridName) 
   } catch (const std::exception& e) {
     throw InputError(fmt::format("{}: not a readable OpenVDB file ({})", path, e.what()));
   }
+  return grids;
+}
+
+// The float grid `gridName` of `grids` (see readVdbDensity); with `required`
+// false, a VdbDensity without a grid if there is none of that name.
+VdbDensity densityOf(const openvdb::GridPtrVec& grids, const std::string& path,
+                     const std::string& gridName, bool required) {
   openvdb::FloatGrid::Ptr grid;
   std::string names;
-  for (const openvdb::GridBase::Ptr& g : *grids) {
+  for (const openvdb::GridBase::Ptr& g : grids) {
     names += (names.empty() ? "" : ", ") + g->getName() + " (" + g->valueType() + ")";
     auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
     if (!f) continue;
@@ -35,6 +44,7 @@ VdbDensity readVdbDensity(const std::string& path, const std::string& gridName) 
         gridName.empty() ? (!grid || g->getName() == "density") : g->getName() == gridName;
     if (wanted && !(grid && grid->getName() == "density" && gridName.empty())) grid = f;
   }
+  if (!grid && !required) return {};
   if (!grid)
     throw InputError(fmt::format("{}: no float grid{} (grids: {})", path,
                                  gridName.empty() ? "" : " named \"" + gridName + "\"",
@@ -92,6 +102,17 @@ VdbDensity readVdbDensity(const std::string& path, const std::string& gridName) 
     throw InputError(fmt::format("{}: grid \"{}\": {}", path, out.gridName, e.what()));
   }
   return out;
+}
+
+}  // namespace
+
+VdbDensity readVdbDensity(const std::string& path, const std::string& gridName) {
+  return densityOf(*readGrids(path), path, gridName, true);
+}
+
+std::pair<VdbDensity, VdbDensity> readVdbDensityAndTemperature(const std::string& path) {
+  const openvdb::GridPtrVecPtr grids = readGrids(path);
+  return {densityOf(*grids, path, "density", true), densityOf(*grids, path, "temperature", false)};
 }
 
 Scene loadVdbScene(const std::string& path) {

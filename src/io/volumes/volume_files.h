@@ -8,6 +8,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "media/density_grid.h"
 #include "media/transfer_function.h"
@@ -29,6 +30,9 @@ struct VdbDensity {
   Box3f box;  // world (the file's) space
 };
 VdbDensity readVdbDensity(const std::string& path, const std::string& gridName = "");
+// pbrt-v4's nanovdb grids from one read: "density" (required) and
+// "temperature" (no grid if the file has none).
+std::pair<VdbDensity, VdbDensity> readVdbDensityAndTemperature(const std::string& path);
 
 // `ferry render cloud.vdb`: its density as smoke (sigma_a 1, sigma_s 9 per
 // unit of density and world length, g 0), framed and lit by default.

@@ -80,6 +80,23 @@ TEST(VdbFile, PbrtNanovdbMediaReadTheSameGridFromVdb) {
   ASSERT_EQ(s.media.size(), 1u);
   EXPECT_EQ(s.media[0].density->nx(), 2);
   EXPECT_EQ(s.media[0].sigmaS, Vec3f(2));
+  EXPECT_FALSE(s.media[0].emits());  // density.vdb has no temperature grid
+}
+
+TEST(VdbFile, PbrtNanovdbMediaEmitByTheirTemperatureGrid) {
+  // fire.vdb: 4^3 voxels 0.5 apart of density 1 and temperature 3000 K.
+  const std::string text =
+      "MakeNamedMedium \"fire\" \"string type\" \"nanovdb\" \"string filename\" "
+      "\"fire.vdb\" \"float Lescale\" 2 \"float temperaturescale\" 2\nWorldBegin\n";
+  const Scene s = loadPbrtFromString(text, "fire.pbrt", kCorpus.string());
+  ASSERT_EQ(s.media.size(), 1u);
+  const Medium& m = s.media[0];
+  ASSERT_TRUE(m.temperature);
+  EXPECT_EQ(m.emission, Vec3f(2));
+  // 6000 K at the centre, twice Lescale: a blackbody a little warmer than white.
+  const Vec3f e = m.emittedAt({0.5f, 0.5f, 0.5f});
+  EXPECT_GT(e.x, 0);
+  EXPECT_NEAR(e.x / e.z, 1.1, 0.15) << e.x << " " << e.y << " " << e.z;
 }
 
 class RawFile {
