@@ -3,7 +3,8 @@
 # camera change restarts the accumulation and changes the image, a corpus of
 # bad requests each gets a 4xx and the server stays up), the page in headless
 # Chromium (the image is not blank, dragging orbits the camera and restarts
-# the accumulation; the screenshot is kept), POST /quit and Ctrl-C end every
+# the accumulation; the screenshot is kept), a raw volume's colour map and
+# opacity changed from the page, POST /quit and Ctrl-C end every
 # rank within 5 s, a long session keeps resident memory flat, a rank's
 # failure ends the viewer with its message, and a port in use is a clear
 # error.
@@ -64,6 +65,22 @@ ends_within "$pid" 5
 [ "$code" -eq 0 ] || fail "after POST /quit, exit code $code"
 grep -q "ferry view: stopped" "$work/main.log" || fail "no 'stopped' line"
 echo "  POST /quit: every rank ended, exit 0, $((SECONDS - t0)) s"
+
+echo "== a volume's transfer function"
+python3 -c "
+import sys
+n = 32
+out = bytearray()
+for z in range(n):
+    for y in range(n):
+        for x in range(n):
+            r = ((x - n / 2) ** 2 + (y - n / 2) ** 2 + (z - n / 2) ** 2) ** 0.5 / (n / 2)
+            out.append(max(0, min(255, int(255 * (1 - r)))))
+open(sys.argv[1], 'wb').write(out)" "$work/ball.raw"
+start volume "raw:$work/ball.raw?dims=32,32,32&format=uint8" --port 0 --size 96x64 --threads 1
+$check "$url" volume "${FERRY_VIEWER_VOLUME_SCREENSHOT:-$work/volume.png}" || fail "volume"
+$check "$url" quit
+ends_within "$pid" 5
 
 echo "== a long session"
 start memory builtin:cornell --port 0 --size 16x16 --max-depth 2 --threads 1

@@ -1,6 +1,7 @@
 #include "app/render_command.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include "distributed/distributed_traversal.h"
 #include "distributed/forwarding.h"
 #include "io/images/image_io.h"
+#include "media/volume_look.h"
 #include "path/path.h"
 #include "scene/scene_summary.h"
 #include "session/image_file_sink.h"
@@ -110,6 +112,13 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--transmittance {}: expected ratio or delta", o.transmittance));
   s.render.transmittance =
       o.transmittance == "ratio" ? TransmittanceEstimator::Ratio : TransmittanceEstimator::Delta;
+  if (!(o.volumeOpacity > 0) || !std::isfinite(o.volumeOpacity))
+    throw InputError(
+        fmt::format("--volume-opacity {}: expected a positive scale", o.volumeOpacity));
+  if (!o.colorMap.empty() && !colorMap(o.colorMap))
+    throw InputError(fmt::format("--color-map {}: expected one of {}", o.colorMap,
+                                 fmt::join(colorMapNames(), ", ")));
+  s.render.volumeLook = {o.volumeOpacity, o.colorMap};
   s.render.seed = o.seed;
   s.render.view = o.view;
   s.render.toneMapping.exposure = o.exposure;
@@ -231,6 +240,14 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                    "How shadow rays through participating media estimate transmittance: ratio\n"
                    "(ratio tracking) or delta (delta tracking: 0 or 1, a baseline to compare)")
       ->capture_default_str();
+  command
+      ->add_option("--volume-opacity", o.volumeOpacity,
+                   "Volumes drawn through a transfer function (raw: grids): their opacity scale\n"
+                   "times this")
+      ->capture_default_str();
+  command->add_option("--color-map", o.colorMap,
+                      "Volumes drawn through a transfer function: this colour map instead of\n"
+                      "their own (cool-to-warm, viridis, inferno, black-body, grayscale)");
   command->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   command->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")
       ->capture_default_str();

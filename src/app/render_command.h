@@ -55,6 +55,9 @@ struct RenderOptions {
   std::string mis = "on";
   std::string lightPaths = "auto";      // --light-paths: auto, on or off
   std::string transmittance = "ratio";  // --transmittance: ratio or delta
+  // --volume-opacity, --color-map: transfer-function volumes restyled.
+  float volumeOpacity = 1;
+  std::string colorMap;
   // --instancing: "shared" gives an Embree instance level only to objects a
   // rank places more than once or transformed; "always" to every object.
   std::string instancing = "shared";

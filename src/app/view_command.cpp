@@ -53,8 +53,10 @@ int runView(const ViewOptions& o, const Communicator& comm) {
     if (comm.isRoot()) {
       const Scene& scene = session->scene();
       const RenderSettings& r = session->settings().render;
+      ViewLimits limits;
+      limits.volumeLook = session->hasTransferFunctionVolumes();
       server.emplace(o.bind, o.port, scene.views, r.camera ? *r.camera : scene.view(r.view), r,
-                     comm.size());
+                     comm.size(), limits);
     }
   } catch (const std::exception& e) {
     error = e.what();

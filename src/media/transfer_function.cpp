@@ -78,6 +78,10 @@ TransferFunction TransferFunction::withScale(float scale) const {
   return TransferFunction(colors_, opacities_, scale);
 }
 
+TransferFunction TransferFunction::withColors(std::vector<ColorPoint> colors) const {
+  return TransferFunction(std::move(colors), opacities_, scale_);
+}
+
 std::pair<float, float> TransferFunction::opacityRange(float lo, float hi) const {
   float smallest = std::min(opacity(lo), opacity(hi));
   float largest = std::max(opacity(lo), opacity(hi));

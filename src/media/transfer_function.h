@@ -37,6 +37,8 @@ class TransferFunction {
   float scale() const { return scale_; }
   // Returns a copy with another scale (what a viewer's slider changes).
   TransferFunction withScale(float scale) const;
+  // Returns a copy with another colour map (a viewer's choice).
+  TransferFunction withColors(std::vector<ColorPoint> colors) const;
   const std::vector<ColorPoint>& colors() const { return colors_; }
   const std::vector<OpacityPoint>& opacities() const { return opacities_; }
   // The smallest and largest opacity over values in [lo, hi].

@@ -21,6 +21,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
+#include "media/volume_look.h"
 #include "render/camera.h"
 #include "render/frame_buffer.h"
 #include "render/lights.h"
@@ -62,6 +63,9 @@ struct RenderSettings {
   // How shadow rays through participating media estimate their
   // transmittance (--transmittance): ratio tracking, or delta tracking (a baseline).
   TransmittanceEstimator transmittance = TransmittanceEstimator::Ratio;
+  // Volumes drawn through a transfer function: opacity scale and colour map
+  // (--volume-opacity, --color-map, the viewer); the session applies it.
+  VolumeLook volumeLook;
   // One rank: pixels that go through the wavefront together, on one thread
   // (WavefrontRenderer::renderFrame). Any value gives the same image.
   uint32_t chunkPixels = 8192;

@@ -65,6 +65,9 @@ SceneSummary summarize(const Scene& scene) {
     if (m.density) {
       out.minDensity = m.density->minValue();
       out.maxDensity = m.density->maxValue();
+    } else if (m.cloud) {
+      out.minDensity = 0;  // pbrt-v4's cloud density lies in [0, 1]
+      out.maxDensity = 1;
     }
     out.sigmaA = m.sigmaA;
     out.sigmaS = m.sigmaS;

@@ -9,6 +9,7 @@
 #include <span>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <tbb/global_control.h>
 
 #include "compositing/compositor.h"
@@ -21,6 +22,7 @@
 #include "distributed/proxy_bvh.h"
 #include "io/checkpoints/checkpoint_file.h"
 #include "io/parts/manifest.h"
+#include "media/volume_look.h"
 #include "partition/partition.h"
 #include "path/path.h"
 #include "render/lights.h"
@@ -199,6 +201,26 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
                     rank_->scene.name));
   settings_.render.lightPaths =
       !media && settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
+  for (const Medium& m : rank_->scene.media) loadedTransfers_.push_back(m.transfer);
+  if (!settings_.render.volumeLook.isDefault()) applyVolumeLook(settings_.render.volumeLook);
+}
+
+bool RenderSession::hasTransferFunctionVolumes() const {
+  return std::any_of(loadedTransfers_.begin(), loadedTransfers_.end(),
+                     [](const auto& t) { return t != nullptr; });
+}
+
+void RenderSession::applyVolumeLook(const VolumeLook& look) {
+  for (size_t i = 0; i < loadedTransfers_.size(); ++i) {
+    if (!loadedTransfers_[i]) continue;
+    try {
+      setTransferFunction(rank_->scene.media[i], std::make_shared<const TransferFunction>(
+                                                     restyled(*loadedTransfers_[i], look)));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(
+          fmt::format("{} (the colour maps: {})", e.what(), fmt::join(colorMapNames(), ", ")));
+    }
+  }
 }
 
 RenderSession::~RenderSession() = default;
@@ -221,6 +243,9 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
           v.from.x, v.from.y, v.from.z, v.at.x, v.at.y, v.at.z, v.up.x, v.up.y, v.up.z, v.fovY) +
       (r.lightPaths ? "; light-paths=on" : "") +
       (r.transmittance == TransmittanceEstimator::Delta ? "; transmittance=delta" : "") +
+      (r.volumeLook.opacity != 1 ? fmt::format("; volume-opacity={}", r.volumeLook.opacity)
+                                 : std::string()) +
+      (r.volumeLook.colorMap.empty() ? std::string() : "; color-map=" + r.volumeLook.colorMap) +
       (r.crop.whole()
            ? std::string()
            : fmt::format("; crop={},{},{},{}", r.crop.x0, r.crop.x1, r.crop.y0, r.crop.y1));
@@ -385,6 +410,12 @@ void ViewChange::applyTo(CameraView& camera, RenderSettings& settings) const {
     settings.maxDepth = maxDepth;
   }
   if (flags & kExposure) settings.toneMapping.exposure = exposure;
+  if (flags & kVolume) {
+    settings.volumeLook.opacity = volumeOpacity;
+    settings.volumeLook.colorMap = colorMap >= 0 && size_t(colorMap) < colorMapNames().size()
+                                       ? colorMapNames()[size_t(colorMap)]
+                                       : std::string();
+  }
 }
 
 // The frames of one run, whatever the path layout: the render settings, the
@@ -658,7 +689,8 @@ class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy
  public:
   InteractiveFrames(RenderSession& session, InteractiveControl* control, uint64_t maxFrames,
                     double sliceSeconds)
-      : comm_(session.comm_),
+      : session_(session),
+        comm_(session.comm_),
         rank_(*session.rank_),
         control_(control),
         maxFrames_(maxFrames),
@@ -673,7 +705,8 @@ class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy
     RenderSettings& render = frames.render;
     const int oldWidth = render.imageWidth(), oldHeight = render.imageHeight();
     change.applyTo(*render.camera, render);
-    if (change.flags & (ViewChange::kCamera | ViewChange::kSettings)) {
+    if (change.flags & ViewChange::kVolume) session_.applyVolumeLook(render.volumeLook);
+    if (change.flags & (ViewChange::kCamera | ViewChange::kSettings | ViewChange::kVolume)) {
       if (render.imageWidth() != oldWidth || render.imageHeight() != oldHeight)
         frames.buffer = FrameBuffer(render.imageWidth(), render.imageHeight());
       else
@@ -734,6 +767,7 @@ class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy
   }
 
  private:
+  RenderSession& session_;
   const Communicator& comm_;
   Rank& rank_;
   InteractiveControl* control_;

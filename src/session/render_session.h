@@ -102,12 +102,14 @@ using SessionProgress = std::function<void(const RenderProgress&)>;
 // frame boundary (rank 0's is broadcast: plain data). Any change but the
 // exposure restarts the accumulation.
 struct ViewChange {
-  enum : uint32_t { kCamera = 1, kSettings = 2, kExposure = 4, kQuit = 8 };
+  enum : uint32_t { kCamera = 1, kSettings = 2, kExposure = 4, kQuit = 8, kVolume = 16 };
   uint32_t flags = 0;
   float from[3], at[3], up[3];
   float fovY;
   int32_t width, height, samplesPerPixel, maxDepth;
   float exposure;
+  float volumeOpacity;
+  int32_t colorMap;  // into colorMapNames(); -1: each volume's own colours
   // The change made to a camera and settings (only the parts its flags name).
   void applyTo(CameraView& camera, RenderSettings& settings) const;
 };
@@ -199,6 +201,9 @@ class RenderSession {
   const Scene& scene() const;
   // The whole scene, summarized before this rank released what it does not own.
   const SceneSummary& summary() const;
+  // Whether the scene has volumes drawn through a transfer function (whose
+  // look RenderSettings::volumeLook changes).
+  bool hasTransferFunctionVolumes() const;
   // The partitioner that made the parts: a part directory's (from its
   // manifest) or the one run on the fly.
   const std::string& partitionerName() const;
@@ -210,6 +215,9 @@ class RenderSession {
   struct Rank;
 
   RenderSession(const SessionSettings& settings, const Communicator& comm, Scene* given);
+  // Restyles every transfer-function volume from its loaded transfer
+  // function; throws InputError for a look that cannot be (unknown map).
+  void applyVolumeLook(const VolumeLook& look);
   class Frames;  // the frame loop's frames, renderer and frame buffer
   template <typename Path>
   class FramesFor;
@@ -231,6 +239,8 @@ class RenderSession {
   const Communicator& comm_;
   std::unique_ptr<Rank> rank_;
   std::unique_ptr<Checkpoint> resume_;  // rank 0, from resumeFrom()
+  // Per medium, its transfer function as loaded (null: none).
+  std::vector<std::shared_ptr<const TransferFunction>> loadedTransfers_;
 };
 
 }  // namespace ferry

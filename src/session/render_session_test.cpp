@@ -16,6 +16,8 @@
 #include "core/error.h"
 #include "io/parts/part_directory.h"
 #include "io/scene_loader.h"
+#include "io/volumes/volume_files.h"
+#include "media/volume_look.h"
 #include "partition/partitioner.h"
 #include "scene/light_scene.h"
 #include "session/session_stats.h"
@@ -265,6 +267,96 @@ TEST(RenderSession, AnInMemorySceneRendersAsItsFileDoes) {
   Scene broken = loadScene("builtin:cornell");
   broken.meshes[0].material = 1000;
   EXPECT_THROW(RenderSession(std::move(broken), cornellSettings(), oneRank()), InputError);
+}
+
+// A transfer-function volume: a ball of values over [0, 1]^3 through the
+// standard transfer function (or `transfer`).
+Scene volumeBall(const TransferFunction& transfer = TransferFunction::standard()) {
+  const int n = 12;
+  std::vector<float> v(size_t(n * n * n));
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const Vec3f p =
+            (Vec3f(float(x), float(y), float(z)) + Vec3f(0.5f)) * (1.0f / n) - Vec3f(0.5f);
+        v[size_t((z * n + y) * n + x)] = std::max(0.0f, 1 - 2 * length(p));
+      }
+  const Box3f box{{0, 0, 0}, {1, 1, 1}};
+  return volumeScene("ball",
+                     transferFunctionMedium("ball", std::make_shared<DensityGrid>(n, n, n, v),
+                                            std::make_shared<TransferFunction>(transfer), box),
+                     box);
+}
+
+TEST(RenderSession, AVolumeLookRestylesTheTransferFunctionOnEveryRank) {
+  const VolumeLook look{4, "viridis"};
+  std::vector<Vec3f> restyledScene, withLook, plain;
+  for (int ranks : {1, 2})
+    for (int which = 0; which < 3; ++which)
+      runRanks(ranks, [&](const Communicator& comm) {
+        SessionSettings settings = cornellSettings();
+        settings.scene = "ball";
+        settings.load.warn = {};
+        if (which == 1) settings.render.volumeLook = look;
+        RenderSession session(
+            which == 0 ? volumeBall(restyled(TransferFunction::standard(), look)) : volumeBall(),
+            settings, comm);
+        EXPECT_TRUE(session.hasTransferFunctionVolumes());
+        RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+        session.run(sink);
+        if (!comm.isRoot()) return;
+        std::vector<Vec3f>& out = which == 0 ? restyledScene : which == 1 ? withLook : plain;
+        if (out.empty())
+          out = sink.images.at(0).linear;
+        else
+          EXPECT_TRUE(out == sink.images.at(0).linear) << which << ": " << ranks << " ranks";
+      });
+  ASSERT_TRUE(nonBlack(withLook));
+  EXPECT_TRUE(withLook == restyledScene);
+  EXPECT_FALSE(withLook == plain);
+  SessionSettings unknown = cornellSettings();
+  unknown.render.volumeLook.colorMap = "jet";
+  EXPECT_THROW(RenderSession(volumeBall(), unknown, oneRank()), InputError);
+}
+
+// The viewer restyles a volume: the accumulation restarts with the new look.
+class VolumeControl final : public InteractiveControl {
+ public:
+  bool restartPending() override { return false; }
+  ViewChange takeChange() override {
+    ViewChange change;
+    if (published.size() == 2 && !sent) {
+      change.flags = ViewChange::kVolume;
+      change.volumeOpacity = 0.25f;
+      change.colorMap = 2;
+      sent = true;
+    }
+    if (published.size() == 4) change.flags |= ViewChange::kQuit;
+    return change;
+  }
+  void publish(const InteractiveFrame& frame) override {
+    published.push_back({frame.accumulated, frame.settings.volumeLook});
+  }
+  struct Published {
+    int accumulated;
+    VolumeLook look;
+  };
+  std::vector<Published> published;
+  bool sent = false;
+};
+
+TEST(RenderSession, InteractiveVolumeLookRestartsTheAccumulation) {
+  SessionSettings settings = cornellSettings();
+  settings.scene = "ball";
+  VolumeControl control;
+  RenderSession session(volumeBall(), settings, oneRank());
+  session.runInteractive(&control, 10, 0);
+  ASSERT_EQ(control.published.size(), 4u);
+  EXPECT_EQ(control.published[1].accumulated, 2);
+  EXPECT_EQ(control.published[2].accumulated, 1);
+  EXPECT_EQ(control.published[2].look.colorMap, colorMapNames()[2]);
+  EXPECT_EQ(control.published[2].look.opacity, 0.25f);
+  EXPECT_EQ(control.published[3].accumulated, 2);
 }
 
 TEST(RenderSession, SetUpIntervalsAddUpToTheFirstPixelOnEveryRank) {

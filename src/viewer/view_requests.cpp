@@ -1,10 +1,14 @@
 #include "viewer/view_requests.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
+
+#include "media/volume_look.h"
 
 namespace ferry {
 namespace {
@@ -87,8 +91,8 @@ void applyCameraRequest(const std::string& body, const CameraView& current, View
 void applySettingsRequest(const std::string& body, const RenderSettings& current,
                           const std::vector<CameraView>& views, const ViewLimits& limits,
                           ViewChange& change) {
-  const nlohmann::json j =
-      parseObject(body, {"width", "height", "spp", "max_depth", "exposure", "view"});
+  const nlohmann::json j = parseObject(body, {"width", "height", "spp", "max_depth", "exposure",
+                                              "view", "volume_opacity", "color_map"});
   int width = current.width, height = current.height;
   int spp = current.samplesPerPixel, depth = current.maxDepth;
   if (j.contains("width")) width = integerIn(j, "width", 1, limits.maxSide);
@@ -109,6 +113,39 @@ void applySettingsRequest(const std::string& body, const RenderSettings& current
       if (v.name == name) found = &v;
     if (!found) throw RequestError(fmt::format("no view named '{}'", name));
     setCamera(*found, change);
+  }
+  if (j.contains("volume_opacity") || j.contains("color_map")) {
+    if (!limits.volumeLook)
+      throw RequestError("the scene has no volume drawn through a transfer function");
+    float opacity =
+        (change.flags & ViewChange::kVolume) ? change.volumeOpacity : current.volumeLook.opacity;
+    int32_t map = -1;
+    if (change.flags & ViewChange::kVolume) {
+      map = change.colorMap;
+    } else {
+      const auto& names = colorMapNames();
+      const auto it = std::find(names.begin(), names.end(), current.volumeLook.colorMap);
+      if (it != names.end()) map = int32_t(it - names.begin());
+    }
+    if (j.contains("volume_opacity")) {
+      const double o = finiteNumber(j, "volume_opacity");
+      if (!(o >= 1.0 / 1024 && o <= 1024))
+        throw RequestError("'volume_opacity' must be between 1/1024 and 1024");
+      opacity = float(o);
+    }
+    if (j.contains("color_map")) {
+      if (!j.at("color_map").is_string()) throw RequestError("'color_map' must be a string");
+      const std::string name = j.at("color_map").get<std::string>();
+      const auto& names = colorMapNames();
+      const auto it = std::find(names.begin(), names.end(), name);
+      if (!name.empty() && it == names.end())
+        throw RequestError(
+            fmt::format("no colour map named '{}' (known: {})", name, fmt::join(names, ", ")));
+      map = name.empty() ? -1 : int32_t(it - names.begin());
+    }
+    change.volumeOpacity = opacity;
+    change.colorMap = map;
+    change.flags |= ViewChange::kVolume;
   }
   if (width != current.width || height != current.height || spp != current.samplesPerPixel ||
       depth != current.maxDepth) {

@@ -25,16 +25,20 @@ struct ViewLimits {
   int maxSide = 4096;
   int maxSamplesPerPixel = 64;
   int maxDepth = 64;
+  // The scene has volumes drawn through a transfer function: "volume_opacity"
+  // and "color_map" may restyle them.
+  bool volumeLook = false;
 };
 
 // {"from":[x,y,z],"at":[x,y,z],"up":[x,y,z],"fov":degrees}: from and at are
 // required; up and fov keep `current`'s when absent. Adds kCamera to `change`.
 void applyCameraRequest(const std::string& body, const CameraView& current, ViewChange& change);
 
-// {"width":W,"height":H,"spp":N,"max_depth":D,"exposure":stops,"view":"name"}:
-// every field optional; a field absent keeps `current`'s. "view" moves the
-// camera to that named view of the scene (`views`). Adds kSettings,
-// kExposure or kCamera to `change` as needed.
+// {"width":W,"height":H,"spp":N,"max_depth":D,"exposure":stops,"view":"name",
+// "volume_opacity":scale,"color_map":"name"}: every field optional; a field
+// absent keeps `current`'s. "view" moves the camera to that named view of
+// the scene (`views`); "color_map" is a colorMapNames() entry or "" (each
+// volume's own). Adds kSettings, kExposure, kCamera or kVolume to `change`.
 void applySettingsRequest(const std::string& body, const RenderSettings& current,
                           const std::vector<CameraView>& views, const ViewLimits& limits,
                           ViewChange& change);

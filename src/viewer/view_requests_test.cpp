@@ -3,6 +3,8 @@
 // become exactly the change they ask for.
 #include "viewer/view_requests.h"
 
+#include "media/volume_look.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
@@ -106,6 +108,60 @@ TEST(ViewRequests, SettingsChangeOnlyWhatTheyName) {
   ViewChange same;  // asking for what is already there changes nothing
   applySettingsRequest(R"({"width":64,"height":48})", settings(), views(), {}, same);
   EXPECT_EQ(same.flags, 0u);
+}
+
+TEST(ViewRequests, AVolumesLookBecomesTheChange) {
+  ViewLimits limits;
+  limits.volumeLook = true;
+  ViewChange change;
+  applySettingsRequest(R"({"volume_opacity":4,"color_map":"viridis"})", settings(), views(), limits,
+                       change);
+  EXPECT_EQ(change.flags, ViewChange::kVolume);
+  EXPECT_EQ(change.volumeOpacity, 4);
+  ASSERT_GE(change.colorMap, 0);
+  EXPECT_EQ(colorMapNames()[size_t(change.colorMap)], "viridis");
+  // One field alone keeps the other's current value; "" is the volume's own map.
+  RenderSettings s = settings();
+  s.volumeLook = {2, "inferno"};
+  ViewChange opacityOnly;
+  applySettingsRequest(R"({"volume_opacity":0.5})", s, views(), limits, opacityOnly);
+  EXPECT_EQ(colorMapNames()[size_t(opacityOnly.colorMap)], "inferno");
+  ViewChange own;
+  applySettingsRequest(R"({"color_map":""})", s, views(), limits, own);
+  EXPECT_EQ(own.colorMap, -1);
+  EXPECT_EQ(own.volumeOpacity, 2);
+  RenderSettings applied = settings();
+  CameraView camera = current();
+  change.applyTo(camera, applied);
+  EXPECT_EQ(applied.volumeLook.colorMap, "viridis");
+  EXPECT_EQ(applied.volumeLook.opacity, 4);
+}
+
+TEST(ViewRequests, MalformedVolumeLooksAreRefusedWithAReason) {
+  ViewLimits limits;
+  limits.volumeLook = true;
+  const std::vector<std::pair<std::string, std::string>> corpus = {
+      {R"({"volume_opacity":0})", "between 1/1024 and 1024"},
+      {R"({"volume_opacity":-2})", "between 1/1024 and 1024"},
+      {R"({"volume_opacity":1e6})", "between 1/1024 and 1024"},
+      {R"({"volume_opacity":"dense"})", "number"},
+      {R"({"color_map":"jet"})", "no colour map named 'jet' (known: cool-to-warm, viridis"},
+      {R"({"color_map":7})", "string"},
+  };
+  for (const auto& [body, reason] : corpus) {
+    ViewChange change;
+    try {
+      applySettingsRequest(body, settings(), views(), limits, change);
+      ADD_FAILURE() << "accepted: " << body;
+    } catch (const RequestError& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
+          << body << " -> " << e.what();
+    }
+  }
+  // A scene without such volumes refuses any look.
+  ViewChange change;
+  EXPECT_THROW(applySettingsRequest(R"({"color_map":"viridis"})", settings(), views(), {}, change),
+               RequestError);
 }
 
 TEST(ViewRequests, MalformedSettingsAreRefusedWithAReason) {

@@ -45,6 +45,12 @@ const std::string& viewerPage() {
   <label>max depth <input id="depth" type="number" min="0"></label>
   <label>exposure (stops) <input id="exposure" type="number" step="0.25"></label>
   <button id="apply">Apply</button><button id="quit">Quit</button>
+  <div id="volume" hidden>
+    <h2>Volume</h2>
+    <label>opacity <span><input id="opacity" type="range" min="-8" max="8" step="0.25" value="0">
+      <span id="opacityValue">1</span></span></label>
+    <label>colour map <select id="colormap"></select></label>
+  </div>
   <div id="error"></div>
   <h2>Stats</h2>
   <table id="stats"></table>
@@ -184,6 +190,17 @@ $("views").addEventListener("change", () => post("/settings", { view: $("views")
 $("apply").addEventListener("click", () => post("/settings", {
   width: Number($("width").value), height: Number($("height").value), spp: Number($("spp").value),
   max_depth: Number($("depth").value), exposure: Number($("exposure").value) }));
+// The volume's look: the opacity scale on a log2 slider, the colour map by
+// name ("" is each volume's own); either restarts the accumulation.
+const showOpacity = () => {
+  $("opacityValue").textContent = (2 ** Number($("opacity").value)).toPrecision(3);
+};
+$("opacity").addEventListener("input", showOpacity);
+$("opacity").addEventListener("change", () => {
+  showOpacity();
+  post("/settings", { volume_opacity: 2 ** Number($("opacity").value) });
+});
+$("colormap").addEventListener("change", () => post("/settings", { color_map: $("colormap").value }));
 $("quit").addEventListener("click", async () => {
   await post("/quit", {});
   showError("the viewer was asked to quit");
@@ -201,6 +218,14 @@ function showStats(s) {
     $("depth").value = st.max_depth; $("exposure").value = st.exposure;
     const select = $("views");
     select.replaceChildren(...s.views.map((v) => new Option(v, v)));
+    if (s.color_maps) {
+      $("volume").hidden = false;
+      $("colormap").replaceChildren(new Option("(the volume's own)", ""),
+                                    ...s.color_maps.map((m) => new Option(m, m)));
+      $("colormap").value = st.color_map;
+      $("opacity").value = Math.log2(st.volume_opacity);
+      $("opacityValue").textContent = st.volume_opacity.toPrecision(3);
+    }
     settingsShown = true;
   }
   const f = s.frame || {}, ex = f.exchange || {}, st = f.stage_seconds || {}, tr = f.traces || {};

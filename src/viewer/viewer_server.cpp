@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "io/images/image_io.h"
+#include "media/volume_look.h"
 #include "viewer/viewer_page.h"
 
 namespace ferry {
@@ -41,7 +42,9 @@ nlohmann::json settingsJson(const RenderSettings& s) {
           {"height", s.height},
           {"spp", s.samplesPerPixel},
           {"max_depth", s.maxDepth},
-          {"exposure", s.toneMapping.exposure}};
+          {"exposure", s.toneMapping.exposure},
+          {"volume_opacity", s.volumeLook.opacity},
+          {"color_map", s.volumeLook.colorMap}};
 }
 
 }  // namespace
@@ -144,6 +147,7 @@ void ViewerServer::State::routes() {
     nlohmann::json names = nlohmann::json::array();
     for (const CameraView& v : views) names.push_back(v.name);
     j["views"] = names;
+    if (limits.volumeLook) j["color_maps"] = colorMapNames();
     j["limits"] = {{"max_side", limits.maxSide},
                    {"max_spp", limits.maxSamplesPerPixel},
                    {"max_depth", limits.maxDepth}};

@@ -7,6 +7,7 @@ chromium and chromium-driver).
   viewer_check.py URL api                      the API: frames, PNGs, camera changes, bad requests
   viewer_check.py URL browser SCREENSHOT.png   load the page, check the image, drag to orbit
   viewer_check.py URL memory FRAMES            let FRAMES frames pass; resident memory must stay flat
+  viewer_check.py URL volume SCREENSHOT.png    a transfer-function volume restyled from the page and the API
   viewer_check.py URL quit
 
 Exits non-zero with a message on the first failed check. Every wait is bounded.
@@ -112,6 +113,7 @@ def check_api(base):
         ("POST", "settings", '{"width":1000000,"height":1000000}'),
         ("POST", "settings", '{"spp":-1}'), ("POST", "settings", '{"view":"nowhere"}'),
         ("POST", "settings", '{"exposure":"x"}'), ("POST", "settings", "\u0000\u0001"),
+        ("POST", "settings", '{"color_map":"viridis"}'),  # no transfer-function volume here
         ("POST", "settings", "x" * 100000),  # over the body limit
         ("GET", "camera", None), ("GET", "nowhere", None), ("DELETE", "stats", None),
         ("GET", "frame.png?after=banana", None),
@@ -235,6 +237,43 @@ def check_browser(base, screenshot):
         driver.close()
 
 
+def check_volume(base, screenshot):
+    s = wait_for("a first frame", lambda: (lambda s: s["frames"] >= 2 and s)(stats(base)))
+    if "color_maps" not in s or "viridis" not in s["color_maps"]:
+        fail(f"/stats offers no colour maps for a volume: {sorted(s)}")
+    _, _, before = request(base + "frame.png")
+    driver = WebDriver()
+    try:
+        driver.call("POST", "/url", {"url": base})
+        wait_for("the page's volume controls",
+                 lambda: driver.script("return !document.getElementById('volume').hidden"), 20)
+        # Pick a colour map on the page, as a user would.
+        driver.script("const m = document.getElementById('colormap'); m.value = 'inferno';"
+                      "m.dispatchEvent(new Event('change'));")
+        picked = wait_for("the colour map to be taken",
+                          lambda: (lambda s: s["settings"]["color_map"] == "inferno" and s)(stats(base)), 20)
+        if picked["frames"] >= s["frames"] + 20:
+            fail("frames did not restart after the colour map changed")
+        wait_for("the restyled image", lambda: request(base + "frame.png")[2] != before, 20)
+        # And the opacity slider.
+        driver.script("const o = document.getElementById('opacity'); o.value = '2';"
+                      "o.dispatchEvent(new Event('change'));")
+        wait_for("the opacity scale to be taken",
+                 lambda: stats(base)["settings"]["volume_opacity"] == 4, 20)
+        time.sleep(1.0)
+        png = base64.b64decode(driver.call("GET", "/screenshot"))
+        os.makedirs(os.path.dirname(os.path.abspath(screenshot)), exist_ok=True)
+        with open(screenshot, "wb") as f:
+            f.write(png)
+    finally:
+        driver.close()
+    status, _, body = request(base + "settings", "POST", json.dumps({"color_map": "jet"}))
+    if status != 400 or b"no colour map named" not in body:
+        fail(f"an unknown colour map: {status} {body!r}")
+    print(f"  volume: colour maps {s['color_maps']}; the page's map and opacity restyle it "
+          f"(frames restart, image changes); an unknown map is a 400; screenshot {screenshot}")
+
+
 def check_memory(base, frames):
     def resident():
         s = stats(base)
@@ -262,6 +301,8 @@ def main():
         check_api(base)
     elif what == "browser":
         check_browser(base, sys.argv[3])
+    elif what == "volume":
+        check_volume(base, sys.argv[3])
     elif what == "memory":
         check_memory(base, int(sys.argv[3]))
     elif what == "quit":

@@ -1,5 +1,7 @@
-#include "media/color_maps.h"
+#include "media/volume_look.h"
 
+#include <cmath>
+#include <stdexcept>
 #include <utility>
 
 namespace ferry {
@@ -7,8 +9,8 @@ namespace {
 
 using Points = std::vector<TransferFunction::ColorPoint>;
 
-// Each map at a few of its points (linear sRGB-encoded values as the tools
-// publish them, interpolated linearly in between).
+// Each map at a few of its points, the values the tools publish (used as
+// albedo, as the default map's are), interpolated linearly in between.
 const std::vector<std::pair<std::string, Points>>& maps() {
   static const std::vector<std::pair<std::string, Points>> m = {
       {"cool-to-warm", TransferFunction::standard().colors()},
@@ -57,6 +59,16 @@ std::optional<std::vector<TransferFunction::ColorPoint>> colorMap(std::string_vi
   for (const auto& [n, points] : maps())
     if (n == name) return points;
   return std::nullopt;
+}
+
+TransferFunction restyled(const TransferFunction& loaded, const VolumeLook& look) {
+  if (!(look.opacity > 0) || !std::isfinite(look.opacity))
+    throw std::invalid_argument("the volume opacity scale must be positive and finite");
+  TransferFunction tf = loaded.withScale(loaded.scale() * look.opacity);
+  if (look.colorMap.empty()) return tf;
+  const auto colors = colorMap(look.colorMap);
+  if (!colors) throw std::invalid_argument("no colour map named '" + look.colorMap + "'");
+  return tf.withColors(*colors);
 }
 
 }  // namespace ferry
