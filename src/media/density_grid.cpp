@@ -41,11 +41,38 @@ float DensityGrid::lookup(Vec3f p) const {
   const int x = int(fx), y = int(fy), z = int(fz);
   const float dx = sx - fx, dy = sy - fy, dz = sz - fz;
   auto lerp = [](float t, float a, float b) { return (1 - t) * a + t * b; };
-  const float d00 = lerp(dx, at(x, y, z), at(x + 1, y, z));
-  const float d10 = lerp(dx, at(x, y + 1, z), at(x + 1, y + 1, z));
-  const float d01 = lerp(dx, at(x, y, z + 1), at(x + 1, y, z + 1));
-  const float d11 = lerp(dx, at(x, y + 1, z + 1), at(x + 1, y + 1, z + 1));
+  float d00, d10, d01, d11;
+  if (x >= 0 && y >= 0 && z >= 0 && x + 1 < nx_ && y + 1 < ny_ && z + 1 < nz_) {
+    // Inside: the eight samples by offsets from the first (the same sums).
+    const size_t row = size_t(nx_), slice = size_t(nx_) * size_t(ny_);
+    const float* v = values_.data() + (size_t(z) * size_t(ny_) + size_t(y)) * row + size_t(x);
+    d00 = lerp(dx, v[0], v[1]);
+    d10 = lerp(dx, v[row], v[row + 1]);
+    d01 = lerp(dx, v[slice], v[slice + 1]);
+    d11 = lerp(dx, v[slice + row], v[slice + row + 1]);
+  } else {
+    d00 = lerp(dx, at(x, y, z), at(x + 1, y, z));
+    d10 = lerp(dx, at(x, y + 1, z), at(x + 1, y + 1, z));
+    d01 = lerp(dx, at(x, y, z + 1), at(x + 1, y, z + 1));
+    d11 = lerp(dx, at(x, y + 1, z + 1), at(x + 1, y + 1, z + 1));
+  }
   return lerp(dz, lerp(dy, d00, d10), lerp(dy, d01, d11));
+}
+
+float DensityGrid::meanIn(Vec3f lo, Vec3f hi) const {
+  const int n[3] = {nx_, ny_, nz_};
+  int first[3], last[3];
+  for (int a = 0; a < 3; ++a) {
+    first[a] = int(std::floor(lo[a] * float(n[a]) - 0.5f));
+    last[a] = int(std::floor(hi[a] * float(n[a]) - 0.5f)) + 1;
+  }
+  double sum = 0;
+  for (int z = first[2]; z <= last[2]; ++z)
+    for (int y = first[1]; y <= last[1]; ++y)
+      for (int x = first[0]; x <= last[0]; ++x) sum += at(x, y, z);
+  const double count = double(last[0] - first[0] + 1) * double(last[1] - first[1] + 1) *
+                       double(last[2] - first[2] + 1);
+  return float(sum / count);
 }
 
 std::pair<float, float> DensityGrid::rangeIn(Vec3f lo, Vec3f hi) const {

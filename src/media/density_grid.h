@@ -39,6 +39,8 @@ class DensityGrid {
   // interpolates (pbrt-v4's SampledGrid::MaxValue); the smallest is 0 where
   // the box comes within half a voxel of the grid's faces.
   std::pair<float, float> rangeIn(Vec3f lo, Vec3f hi) const;
+  // The mean of the samples those lookups interpolate (outside ones as 0).
+  float meanIn(Vec3f lo, Vec3f hi) const;
 
  private:
   float at(int x, int y, int z) const {

@@ -7,7 +7,7 @@ namespace ferry {
 MajorantGrid::MajorantGrid(const DensityGrid& grid, int cells)
     : MajorantGrid(
           grid,
-          [](float lo, float hi) {
+          [](float lo, float hi, float) {
             return std::pair{hi, Vec3f(lo)};
           },
           cells) {}
@@ -27,8 +27,9 @@ MajorantGrid::MajorantGrid(const DensityGrid& grid, const Extinction& extinction
         const Vec3f hi{float(x + 1) / float(res_[0]), float(y + 1) / float(res_[1]),
                        float(z + 1) / float(res_[2])};
         const auto [smallest, largest] = grid.rangeIn(lo, hi);
-        ranges_[index(x, y, z)] = {smallest, largest};
-        const auto [majorant, control] = extinction(smallest, largest);
+        const float mean = std::clamp(grid.meanIn(lo, hi), smallest, largest);
+        ranges_[index(x, y, z)] = {smallest, largest, mean};
+        const auto [majorant, control] = extinction(smallest, largest, mean);
         values_[index(x, y, z)] = majorant;
         controls_[index(x, y, z)] = control;
       }
@@ -40,7 +41,7 @@ MajorantGrid::MajorantGrid(const MajorantGrid& cells, const Extinction& extincti
     : values_(cells.values_.size()), controls_(cells.values_.size()), ranges_(cells.ranges_) {
   std::copy(cells.res_, cells.res_ + 3, res_);
   for (size_t i = 0; i < ranges_.size(); ++i)
-    std::tie(values_[i], controls_[i]) = extinction(ranges_[i].first, ranges_[i].second);
+    std::tie(values_[i], controls_[i]) = extinction(ranges_[i].lo, ranges_[i].hi, ranges_[i].mean);
 }
 
 }  // namespace ferry

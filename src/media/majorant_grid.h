@@ -1,9 +1,10 @@
-// Coarse cells over a grid medium's unit cube, each holding the largest
-// extinction any channel can have inside it (the majorant that delta and
-// ratio tracking step against, cell by cell, so thin regions cost few steps
-// and empty cells none: pbrt-v4's MajorantGrid and DDA iterator) and each
-// channel's smallest (the control that residual ratio tracking takes out in
-// closed form).
+// Cells over a grid medium's unit cube (one per voxel along each axis, at
+// most 32), each holding the largest extinction any channel can have
+// inside it (the majorant that delta and ratio tracking step against, cell
+// by cell, so thin regions cost few steps and empty cells none: pbrt-v4's
+// MajorantGrid and DDA iterator) and each channel's control (an extinction
+// near the cell's mean, which residual ratio tracking takes out in closed
+// form).
 #pragma once
 
 #include <algorithm>
@@ -18,15 +19,21 @@
 
 namespace ferry {
 
+// Cells per axis at most (docs/volumes.md, "Shadow rays": finer cells, lower
+// shadow-ray error at equal time; at most 7 MiB a medium).
+constexpr int kMajorantCells = 32;
+
 class MajorantGrid {
  public:
-  // For the grid's values in [lo, hi] (what a cell's lookups can return):
-  // the largest extinction of any channel, and each channel's smallest.
-  using Extinction = std::function<std::pair<float, Vec3f>(float lo, float hi)>;
-  // At most `cells` cells along each axis, and no more than the grid has voxels.
-  MajorantGrid(const DensityGrid& grid, const Extinction& extinction, int cells = 16);
+  // For the grid's values in [lo, hi] (what a cell's lookups can return),
+  // `mean` their samples' mean: the largest extinction of any channel, and
+  // each channel's control (an extinction near the cell's typical one, at
+  // most the majorant).
+  using Extinction = std::function<std::pair<float, Vec3f>(float lo, float hi, float mean)>;
+  // One cell per voxel along each axis, at most `cells`.
+  MajorantGrid(const DensityGrid& grid, const Extinction& extinction, int cells = kMajorantCells);
   // The grid's values themselves as the extinction.
-  explicit MajorantGrid(const DensityGrid& grid, int cells = 16);
+  explicit MajorantGrid(const DensityGrid& grid, int cells = kMajorantCells);
   // One cell over the whole cube (pbrt-v4's cloud: a bound known without a grid).
   MajorantGrid(float majorant, Vec3f control);
   // The cells of `cells` (made over a grid) with another extinction, from the
@@ -50,7 +57,10 @@ class MajorantGrid {
   int res_[3] = {1, 1, 1};
   std::vector<float> values_;
   std::vector<Vec3f> controls_;
-  std::vector<std::pair<float, float>> ranges_;  // each cell's values (empty: none kept)
+  struct Values {
+    float lo, hi, mean;
+  };
+  std::vector<Values> ranges_;  // each cell's values (empty: none kept)
 };
 
 // Where the ray o + t d meets the unit cube, clipped to [tMin, tMax]; false if

@@ -88,8 +88,8 @@ Medium gridMedium(std::string name, Vec3f sigmaA, Vec3f sigmaS, float g,
   m.sigmaS = sigmaS;
   m.g = g;
   const Vec3f sigmaT = sigmaA + sigmaS;
-  m.majorants = std::make_shared<MajorantGrid>(*density, [sigmaT](float lo, float hi) {
-    return std::pair{hi * maxComponent(sigmaT), sigmaT * lo};
+  m.majorants = std::make_shared<MajorantGrid>(*density, [sigmaT](float lo, float hi, float mean) {
+    return std::pair{hi * maxComponent(sigmaT), sigmaT * mean};
   });
   m.density = std::move(density);
   m.gridFromWorld = unitFromBox(box) * worldFromMedium.inverse();
@@ -123,7 +123,7 @@ Medium rgbGridMedium(std::string name, std::shared_ptr<const RgbGrids> grids, fl
   m.emission = grids->emission[0] ? Vec3f(emissionScale) : Vec3f(0);
   m.density =
       std::make_shared<DensityGrid>(shape->nx(), shape->ny(), shape->nz(), std::move(largest));
-  m.majorants = std::make_shared<MajorantGrid>(*m.density, [](float, float hi) {
+  m.majorants = std::make_shared<MajorantGrid>(*m.density, [](float, float hi, float) {
     return std::pair{hi, Vec3f(0)};
   });
   m.rgb = std::move(grids);
@@ -157,9 +157,9 @@ Medium transferFunctionMedium(std::string name, std::shared_ptr<const DensityGri
 
 void setTransferFunction(Medium& m, std::shared_ptr<const TransferFunction> transfer) {
   const TransferFunction& tf = *transfer;
-  auto extinction = [&tf](float lo, float hi) {
+  auto extinction = [&tf](float lo, float hi, float mean) {
     const auto [smallest, largest] = tf.opacityRange(lo, hi);
-    return std::pair{largest * tf.scale(), Vec3f(smallest * tf.scale())};
+    return std::pair{largest * tf.scale(), Vec3f(tf.opacity(mean) * tf.scale())};
   };
   // A change keeps the cells' value ranges: no pass over the grid.
   m.majorants = m.majorants ? std::make_shared<MajorantGrid>(*m.majorants, extinction)

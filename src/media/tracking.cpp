@@ -7,16 +7,17 @@ namespace ferry {
 namespace {
 
 // Transmittance paths below this take Russian roulette (survive half the time, doubled).
-constexpr float kRouletteTransmittance = 0.05f;
-// Residual ratio tracking steps against this times the residual's majorant:
-// a ratio-tracking estimate's relative variance is exp(integral of
-// sigma^2 / majorant) - 1, so a looser majorant costs more steps but fewer
-// estimates for an error (docs/volumes.md, "Shadow rays": 4 is the best
-// measured on pbrt's smoke, 1.76x lower error than delta tracking at equal time).
-constexpr float kResidualMajorantScale = 4;
+constexpr float kRouletteTransmittance = 0.005f;
+// Residual ratio tracking steps against this times the residual's bound: a
+// ratio-tracking estimate's relative variance is exp(integral of r^2 / rate)
+// - 1 for a residual r, so a higher rate costs more steps but fewer
+// estimates for an error (docs/volumes.md, "Shadow rays", measures it).
+constexpr float kResidualMajorantScale = 8;
 
+// A distance with density rate x exp(-rate x), from u in [0, 1) (1 - u > 0;
+// logf, not log1pf: a third of ratio tracking's time went to log1pf).
 float exponential(float u, float rate) {
-  return -std::log1p(-u) / rate;
+  return -std::log(1 - u) / rate;
 }
 
 Vec3f homogeneousTransmittance(const Medium& m, float length) {
@@ -133,9 +134,10 @@ Vec3f transmittance(const Medium& m, Vec3f o, Vec3f d, float tMin, float tMax,
       return sa + ss;
     };
     if (estimator == TransmittanceEstimator::Ratio) {
-      // Residual ratio tracking (Novak et al. 2014): the cell's smallest
-      // extinction in closed form, the rest by ratio tracking against the
-      // residual's majorant, loosened.
+      // Residual ratio tracking (Novak et al. 2014): the cell's control (its
+      // mean extinction) in closed form, the rest by ratio tracking at a
+      // rate above the residual's largest (so weights stay >= 0; where the
+      // extinction is below the control they exceed 1).
       if (maxComponent(control) > 0) {
         const Vec3f depth = control * (b - a);
         tr = tr * Vec3f(std::exp(-depth.x), std::exp(-depth.y), std::exp(-depth.z));

@@ -20,6 +20,7 @@
 #include "io/pbrt/pbrt_parser.h"
 #include "io/pbrt/pbrt_tokenizer.h"
 #include "io/ply/ply_reader.h"
+#include "io/volumes/volume_files.h"
 #include "viewer/view_requests.h"
 
 namespace ferry::fuzz {
@@ -148,8 +149,27 @@ void settings(std::string_view bytes) {
   current.maxDepth = 5;
   const std::vector<CameraView> views = {someCamera("default", Vec3f(0, 1, 5)),
                                          someCamera("top", Vec3f(0, 10, 0.1f))};
+  ViewLimits limits;
+  limits.volumeLook = true;  // the volume fields too
   ViewChange change;
-  applySettingsRequest(std::string(bytes), current, views, ViewLimits{}, change);
+  applySettingsRequest(std::string(bytes), current, views, limits, change);
+}
+
+// A raw volume: the first line is the name's query ("dims=2,2,2&format=
+// uint8..."), the rest the file's bytes.
+void raw(std::string_view bytes) {
+  const size_t eol = bytes.find('\n');
+  const std::string query(bytes.substr(0, eol));
+  const std::string_view data = eol == std::string_view::npos ? "" : bytes.substr(eol + 1);
+  loadRawVolume("raw:" + writeScratch("volume.raw", data) + "?" + query);
+}
+
+void tf(std::string_view bytes) {
+  readTransferFunction(writeScratch("fuzz.tf.json", bytes));
+}
+
+void vdb(std::string_view bytes) {
+  loadVdbScene(writeScratch("fuzz.vdb", bytes));
 }
 
 }  // namespace
@@ -159,7 +179,8 @@ const std::vector<Kind>& kinds() {
       {"pbrt", pbrt},     {"ply", ply},           {"obj", obj},
       {"gltf", gltf},     {"glb", glb},           {"bsdf", bsdf},
       {"part", part},     {"manifest", manifest}, {"checkpoint", checkpoint},
-      {"camera", camera}, {"settings", settings},
+      {"camera", camera}, {"settings", settings}, {"raw", raw},
+      {"tf", tf},         {"vdb", vdb},
   };
   return all;
 }

@@ -51,4 +51,15 @@ printf '{"width":32,"height":24}' > "$corpus/settings/size.json"
 printf '{"spp":4,"max_depth":8,"exposure":-1.5}' > "$corpus/settings/samples.json"
 printf '{"view":"top"}' > "$corpus/settings/view.json"
 printf '{"view":"nowhere","width":-1}' > "$corpus/settings/bad.json"
+printf '{"volume_opacity":4,"color_map":"viridis"}' > "$corpus/settings/volume.json"
+
+fresh raw
+python3 -c "import sys; sys.stdout.buffer.write(b'dims=2,2,2&format=uint8\\n' + bytes(range(0, 256, 32)))" \
+  > "$corpus/raw/ball-uint8.raw"
+python3 -c "import struct, sys; sys.stdout.buffer.write(b'dims=2,1,1&format=float32&spacing=0.5,1,1&origin=1,2,3&opacity=5\\n' + struct.pack('<2f', 0.5, 2))" \
+  > "$corpus/raw/float32.raw"
+python3 -c "import sys; sys.stdout.buffer.write(b'dims=2,1,1&format=uint16\\n' + bytes([0, 0, 255, 255]))" \
+  > "$corpus/raw/uint16.raw"
+fresh tf && cp tests/corpus/volumes/*.tf.json "$corpus/tf/"
+fresh vdb && cp tests/corpus/volumes/*.vdb "$corpus/vdb/"
 echo "seeds in $corpus: $(ls "$corpus" | tr '\n' ' ')"
