@@ -39,6 +39,21 @@ std::vector<CameraView> views() {
   return {current(), top};
 }
 
+// Every body of `corpus` is refused with a reason holding its string.
+void expectSettingsRefused(const std::vector<std::pair<std::string, std::string>>& corpus,
+                           const ViewLimits& limits) {
+  for (const auto& [body, reason] : corpus) {
+    ViewChange change;
+    try {
+      applySettingsRequest(body, settings(), views(), limits, change);
+      ADD_FAILURE() << "accepted: " << body;
+    } catch (const RequestError& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
+          << body << " -> " << e.what();
+    }
+  }
+}
+
 TEST(ViewRequests, CameraGoodRequestBecomesTheChange) {
   ViewChange change;
   applyCameraRequest(R"({"from":[1,2,3],"at":[0,0,0],"up":[0,0,1],"fov":30})", current(), change);
@@ -148,16 +163,7 @@ TEST(ViewRequests, MalformedVolumeLooksAreRefusedWithAReason) {
       {R"({"color_map":"jet"})", "no colour map named 'jet' (known: cool-to-warm, viridis"},
       {R"({"color_map":7})", "string"},
   };
-  for (const auto& [body, reason] : corpus) {
-    ViewChange change;
-    try {
-      applySettingsRequest(body, settings(), views(), limits, change);
-      ADD_FAILURE() << "accepted: " << body;
-    } catch (const RequestError& e) {
-      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
-          << body << " -> " << e.what();
-    }
-  }
+  expectSettingsRefused(corpus, limits);
   // A scene without such volumes refuses any look.
   ViewChange change;
   EXPECT_THROW(applySettingsRequest(R"({"color_map":"viridis"})", settings(), views(), {}, change),
@@ -185,16 +191,7 @@ TEST(ViewRequests, MalformedSettingsAreRefusedWithAReason) {
       {R"({"width":64,"frames":3})", "unknown field 'frames'"},
       {R"({"width":99999999999999999999})", "whole number"},
   };
-  for (const auto& [body, reason] : corpus) {
-    ViewChange change;
-    try {
-      applySettingsRequest(body, settings(), views(), {}, change);
-      ADD_FAILURE() << "accepted: " << body;
-    } catch (const RequestError& e) {
-      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
-          << body << " -> " << e.what();
-    }
-  }
+  expectSettingsRefused(corpus, {});
 }
 
 }  // namespace

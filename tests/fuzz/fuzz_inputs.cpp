@@ -168,10 +168,6 @@ void tf(std::string_view bytes) {
   readTransferFunction(writeScratch("fuzz.tf.json", bytes));
 }
 
-void vdb(std::string_view bytes) {
-  loadVdbScene(writeScratch("fuzz.vdb", bytes));
-}
-
 }  // namespace
 
 const std::vector<Kind>& kinds() {
@@ -180,7 +176,7 @@ const std::vector<Kind>& kinds() {
       {"gltf", gltf},     {"glb", glb},           {"bsdf", bsdf},
       {"part", part},     {"manifest", manifest}, {"checkpoint", checkpoint},
       {"camera", camera}, {"settings", settings}, {"raw", raw},
-      {"tf", tf},         {"vdb", vdb},
+      {"tf", tf},
   };
   return all;
 }
