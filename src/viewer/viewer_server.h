@@ -5,13 +5,10 @@
 //
 //   GET  /            the page (viewer_page.h)
 //   GET  /frame.png   the image, tone mapped (?after=ID: waits up to 2 s for a newer frame)
-//   GET  /stats       JSON: frames, camera, settings, views, last frame's stats
-//                     (and "color_maps" when the scene's volumes can be restyled)
+//   GET  /stats       JSON: frames, camera, settings, views, stats, colour maps
 //   POST /camera      {"from":[x,y,z],"at":[x,y,z],"up":[x,y,z],"fov":deg}
-//   POST /settings    {"width","height","spp","max_depth","exposure","view",
-//                      "volume_opacity","color_map"}
+//   POST /settings    {"width","height","spp","max_depth","exposure","view",...}
 //   POST /quit        ends every rank at the next frame boundary
-//
 // Requests are checked (view_requests.h): a bad one gets a 4xx with the
 // reason and changes nothing. The server runs on its own threads; the render
 // loop only takes changes and publishes frames, under one mutex.
