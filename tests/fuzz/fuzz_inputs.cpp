@@ -168,6 +168,12 @@ void tf(std::string_view bytes) {
   readTransferFunction(writeScratch("fuzz.tf.json", bytes));
 }
 
+// An OpenVDB file: its density and temperature grids, each at most 4 M
+// voxels when made dense (a few MiB, well inside a fuzzer's limits).
+void vdb(std::string_view bytes) {
+  readVdbDensityAndTemperature(writeScratch("fuzz.vdb", bytes), uint64_t(1) << 22);
+}
+
 }  // namespace
 
 const std::vector<Kind>& kinds() {
@@ -176,7 +182,7 @@ const std::vector<Kind>& kinds() {
       {"gltf", gltf},     {"glb", glb},           {"bsdf", bsdf},
       {"part", part},     {"manifest", manifest}, {"checkpoint", checkpoint},
       {"camera", camera}, {"settings", settings}, {"raw", raw},
-      {"tf", tf},
+      {"tf", tf},         {"vdb", vdb},
   };
   return all;
 }

@@ -61,4 +61,5 @@ python3 -c "import struct, sys; sys.stdout.buffer.write(b'dims=2,1,1&format=floa
 python3 -c "import sys; sys.stdout.buffer.write(b'dims=2,1,1&format=uint16\\n' + bytes([0, 0, 255, 255]))" \
   > "$corpus/raw/uint16.raw"
 fresh tf && cp tests/corpus/volumes/*.tf.json "$corpus/tf/"
+fresh vdb && cp tests/corpus/volumes/*.vdb "$corpus/vdb/"
 echo "seeds in $corpus: $(ls "$corpus" | tr '\n' ' ')"

@@ -94,6 +94,9 @@ struct PbrtMaterials::Impl {
   std::map<std::string, int32_t> bsdfTables;  // resolved path -> Scene::bsdfTables
   std::map<int, int32_t> constantAlpha;
   uint64_t evaluations_ = 0;  // of the current bake or average
+  // Definitions whose class has been warned about: a bake evaluates a
+  // texture per texel, and a warning's message is formatted once per definition.
+  std::set<const PbrtTextureDefinition*> classWarned_;
 
   Impl(Scene& s, LoadWarnings& w, Resolver r) : scene(s), warnings(w), resolve(std::move(r)) {}
 
@@ -330,7 +333,11 @@ struct PbrtMaterials::Impl {
     return colorValue(*p, SpectrumUse::Reflectance);
   }
 
+  // Whether `t`'s class is to be warned about now: true once per definition.
+  bool firstClassWarning(const PbrtTextureDefinition& t) { return classWarned_.insert(&t).second; }
+
   void unsupportedClass(const PbrtTextureDefinition& t) {
+    if (!firstClassWarning(t)) return;
     if (solidKind(t.className) != SolidTextureKind::None) {
       warnings.once("solid in composite|" + t.className,
                     fmt::format("a \"{}\" texture is evaluated in 3D only where a material uses "
@@ -371,7 +378,7 @@ struct PbrtMaterials::Impl {
     }
     if (c == "checkerboard") {
       int dim = t.params.getInt("dimension", 2);
-      if (dim != 2)
+      if (dim != 2 && firstClassWarning(t))
         warnings.once("checkerboard3d", fmt::format("3D checkerboard textures are not supported; "
                                                     "using the 2D one (first at {})",
                                                     t.where.toString()));
@@ -395,9 +402,11 @@ struct PbrtMaterials::Impl {
                   evalParam(t.params, "tex2", Vec3f(1), uv, f, depth), amount);
     }
     if (c == "directionmix") {
-      warnings.once("directionmix", fmt::format("texture class \"directionmix\" is not supported; "
-                                                "using the mean of tex1 and tex2 (first at {})",
-                                                t.where.toString()));
+      if (firstClassWarning(t))
+        warnings.once("directionmix",
+                      fmt::format("texture class \"directionmix\" is not supported; "
+                                  "using the mean of tex1 and tex2 (first at {})",
+                                  t.where.toString()));
       return (evalParam(t.params, "tex1", Vec3f(0), uv, f, depth) +
               evalParam(t.params, "tex2", Vec3f(1), uv, f, depth)) *
              0.5f;

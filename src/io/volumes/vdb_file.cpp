@@ -33,7 +33,7 @@ openvdb::GridPtrVecPtr readGrids(const std::string& path) {
 // The float grid `gridName` of `grids` (see readVdbDensity); with `required`
 // false, a VdbDensity without a grid if there is none of that name.
 VdbDensity densityOf(const openvdb::GridPtrVec& grids, const std::string& path,
-                     const std::string& gridName, bool required) {
+                     const std::string& gridName, bool required, uint64_t maxVoxels) {
   openvdb::FloatGrid::Ptr grid;
   std::string names;
   for (const openvdb::GridBase::Ptr& g : grids) {
@@ -58,8 +58,18 @@ VdbDensity densityOf(const openvdb::GridPtrVec& grids, const std::string& path,
   out.gridName = grid->getName();
   if (active.empty())
     throw InputError(fmt::format("{}: grid \"{}\" has no active voxels", path, out.gridName));
-  const openvdb::Coord lo = active.min(), dim = active.dim();
-  const uint64_t count = uint64_t(dim.x()) * uint64_t(dim.y()) * uint64_t(dim.z());
+  // (Counted in 64 bits: a sparse grid's box may span more than int32 voxels.)
+  const openvdb::Coord lo = active.min();
+  uint64_t side[3], count = 1;
+  for (int a = 0; a < 3; ++a) {
+    side[a] = uint64_t(int64_t(active.max()[a]) - int64_t(lo[a]) + 1);
+    count = side[a] > maxVoxels / count ? maxVoxels + 1 : count * side[a];
+  }
+  if (count > maxVoxels)
+    throw InputError(fmt::format(
+        "{}: grid \"{}\" spans {} x {} x {} voxels, more than the {} read as a dense grid", path,
+        out.gridName, side[0], side[1], side[2], maxVoxels));
+  const openvdb::Coord dim{int(side[0]), int(side[1]), int(side[2])};
   std::vector<float> values(count);
   auto accessor = grid->getConstAccessor();
   for (int z = 0; z < dim.z(); ++z)
@@ -106,13 +116,16 @@ VdbDensity densityOf(const openvdb::GridPtrVec& grids, const std::string& path,
 
 }  // namespace
 
-VdbDensity readVdbDensity(const std::string& path, const std::string& gridName) {
-  return densityOf(*readGrids(path), path, gridName, true);
+VdbDensity readVdbDensity(const std::string& path, const std::string& gridName,
+                          uint64_t maxVoxels) {
+  return densityOf(*readGrids(path), path, gridName, true, maxVoxels);
 }
 
-std::pair<VdbDensity, VdbDensity> readVdbDensityAndTemperature(const std::string& path) {
+std::pair<VdbDensity, VdbDensity> readVdbDensityAndTemperature(const std::string& path,
+                                                               uint64_t maxVoxels) {
   const openvdb::GridPtrVecPtr grids = readGrids(path);
-  return {densityOf(*grids, path, "density", true), densityOf(*grids, path, "temperature", false)};
+  return {densityOf(*grids, path, "density", true, maxVoxels),
+          densityOf(*grids, path, "temperature", false, maxVoxels)};
 }
 
 Scene loadVdbScene(const std::string& path) {

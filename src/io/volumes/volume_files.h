@@ -23,16 +23,20 @@ namespace ferry {
 // float grid), over the active voxels' bounding box, and the world box it
 // covers (each voxel a cell of the grid's voxel size). InputError naming the
 // file: unreadable, no float grid, a transform that is not axis-aligned
-// scale and translation, or a negative or NaN value (naming the voxel).
+// scale and translation, a negative or NaN value (naming the voxel), or an
+// active box of more than `maxVoxels` (a sparse grid made dense).
 struct VdbDensity {
   std::string gridName;
   std::shared_ptr<const DensityGrid> grid;
   Box3f box;  // world (the file's) space
 };
-VdbDensity readVdbDensity(const std::string& path, const std::string& gridName = "");
+constexpr uint64_t kMaxVdbVoxels = uint64_t(1) << 34;  // 64 GiB of floats
+VdbDensity readVdbDensity(const std::string& path, const std::string& gridName = "",
+                          uint64_t maxVoxels = kMaxVdbVoxels);
 // pbrt-v4's nanovdb grids from one read: "density" (required) and
 // "temperature" (no grid if the file has none).
-std::pair<VdbDensity, VdbDensity> readVdbDensityAndTemperature(const std::string& path);
+std::pair<VdbDensity, VdbDensity> readVdbDensityAndTemperature(const std::string& path,
+                                                               uint64_t maxVoxels = kMaxVdbVoxels);
 
 // `ferry render cloud.vdb`: its density as smoke (sigma_a 1, sigma_s 9 per
 // unit of density and world length, g 0), framed and lit by default.

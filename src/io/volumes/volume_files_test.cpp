@@ -72,6 +72,21 @@ TEST(VdbFile, RefusesWhatIsNotADensity) {
             std::string::npos);
 }
 
+// A sparse grid is read dense over its active box: a box larger than the
+// limit is refused before anything is allocated, its size counted in 64 bits.
+TEST(VdbFile, RefusesASparseGridTooLargeToMakeDense) {
+  const std::string far =
+      errorOf([] { readVdbDensity((kCorpus / "sparse_far_apart.vdb").string()); });
+  EXPECT_NE(far.find("sparse_far_apart.vdb: grid \"density\" spans 100001 x 100001 x 100001 "
+                     "voxels, more than the 17179869184 read as a dense grid"),
+            std::string::npos)
+      << far;
+  const std::string density = (kCorpus / "density.vdb").string();  // 2 x 3 x 4 voxels
+  EXPECT_NE(errorOf([&] { readVdbDensity(density, "", 23); }).find("spans 2 x 3 x 4 voxels"),
+            std::string::npos);
+  EXPECT_EQ(readVdbDensity(density, "", 24).grid->nz(), 4);
+}
+
 TEST(VdbFile, PbrtNanovdbMediaReadTheSameGridFromVdb) {
   const std::string text =
       "MakeNamedMedium \"cloud\" \"string type\" \"nanovdb\" \"string filename\" "
