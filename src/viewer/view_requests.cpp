@@ -14,6 +14,8 @@ namespace ferry {
 namespace {
 
 nlohmann::json parseObject(const std::string& body, const std::set<std::string>& allowed) {
+  if (body.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw RequestError("the body is empty: expected a JSON object");
   nlohmann::json j = nlohmann::json::parse(body, nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded()) throw RequestError("the body is not valid JSON");
   if (!j.is_object()) throw RequestError("the body must be a JSON object");

@@ -70,7 +70,7 @@ TEST(ViewRequests, CameraGoodRequestBecomesTheChange) {
 
 TEST(ViewRequests, MalformedCamerasAreRefusedWithAReason) {
   const std::vector<std::pair<std::string, std::string>> corpus = {
-      {"", "not valid JSON"},
+      {"", "the body is empty"},
       {"{", "not valid JSON"},
       {"[1,2,3]", "JSON object"},
       {"\"from\"", "JSON object"},

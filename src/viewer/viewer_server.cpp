@@ -76,16 +76,48 @@ struct ViewerServer::State {
   void routes();
   // Applies a checked request under the lock; 400 with the reason if refused.
   template <typename Apply>
-  void change(const httplib::Request& request, httplib::Response& response, Apply&& apply);
+  void change(const std::string& body, httplib::Response& response, Apply&& apply);
 };
 
+namespace {
+
+constexpr size_t kMaxBodyBytes = 64 * 1024;  // a camera is a few hundred bytes
+
+// A POST's body, read by its handler; false (the response says why) if it
+// could not be read. A POST that says nothing of a body (no Content-Length
+// and not chunked, as `curl -X POST` sends it) has an empty one.
+bool readBody(const httplib::Request& request, httplib::Response& response,
+              const httplib::ContentReader& reader, std::string& body) {
+  if (!request.has_header("Content-Length") && !request.has_header("Transfer-Encoding"))
+    return true;
+  const bool read = reader([&](const char* data, size_t bytes) {
+    body.append(data, bytes);
+    return true;
+  });
+  if (read) return true;
+  if (response.status == 413)
+    response.set_content(fmt::format("{} {}: the body is over the {}-byte limit\n", request.method,
+                                     request.path, kMaxBodyBytes),
+                         "text/plain");
+  else {
+    response.status = 400;
+    response.set_content(fmt::format("{} {}: the body could not be read (cut short, or a "
+                                     "Content-Length that does not match it)\n",
+                                     request.method, request.path),
+                         "text/plain");
+  }
+  return false;
+}
+
+}  // namespace
+
 template <typename Apply>
-void ViewerServer::State::change(const httplib::Request& request, httplib::Response& response,
+void ViewerServer::State::change(const std::string& body, httplib::Response& response,
                                  Apply&& apply) {
   std::lock_guard lock(mutex);
   ViewChange change = pending;
   try {
-    apply(request.body, change);
+    apply(body, change);
   } catch (const RequestError& e) {
     response.status = 400;
     response.set_content(nlohmann::json{{"error", e.what()}}.dump(), "application/json");
@@ -101,7 +133,7 @@ void ViewerServer::State::change(const httplib::Request& request, httplib::Respo
 }
 
 void ViewerServer::State::routes() {
-  server.set_payload_max_length(64 * 1024);  // a camera is a few hundred bytes
+  server.set_payload_max_length(kMaxBodyBytes);
   // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, which lets a
   // second viewer bind the same port and silently share its connections.
   server.set_socket_options([](socket_t sock) {
@@ -154,30 +186,48 @@ void ViewerServer::State::routes() {
     response.set_header("Cache-Control", "no-store");
     response.set_content(j.dump(), "application/json");
   });
-  server.Post("/camera", [this](const httplib::Request& request, httplib::Response& response) {
-    change(request, response, [&](const std::string& body, ViewChange& c) {
-      applyCameraRequest(body, requestedCamera, c);
+  // POST handlers read their bodies themselves (readBody).
+  using Reader = httplib::ContentReader;
+  server.Post("/camera", [this](const httplib::Request& request, httplib::Response& response,
+                                const Reader& reader) {
+    std::string body;
+    if (!readBody(request, response, reader, body)) return;
+    change(body, response,
+           [&](const std::string& b, ViewChange& c) { applyCameraRequest(b, requestedCamera, c); });
+  });
+  server.Post("/settings", [this](const httplib::Request& request, httplib::Response& response,
+                                  const Reader& reader) {
+    std::string body;
+    if (!readBody(request, response, reader, body)) return;
+    change(body, response, [&](const std::string& b, ViewChange& c) {
+      applySettingsRequest(b, requestedSettings, views, limits, c);
     });
   });
-  server.Post("/settings", [this](const httplib::Request& request, httplib::Response& response) {
-    change(request, response, [&](const std::string& body, ViewChange& c) {
-      applySettingsRequest(body, requestedSettings, views, limits, c);
-    });
-  });
-  server.Post("/quit", [this](const httplib::Request&, httplib::Response& response) {
+  // No body needed; one sent is ignored.
+  server.Post("/quit", [this](const httplib::Request&, httplib::Response& response, const Reader&) {
     {
       std::lock_guard lock(mutex);
       pending.flags |= ViewChange::kQuit;
     }
     response.set_content("quitting\n", "text/plain");
   });
-  // Unknown paths and methods (404, 405), bodies over the limit (413): a
-  // line saying so, never an empty answer.
+  // Unknown paths and methods (404), malformed requests (400): a line
+  // saying what was wrong, never an empty answer.
   server.set_error_handler([](const httplib::Request& request, httplib::Response& response) {
-    if (response.body.empty())
-      response.set_content(
-          fmt::format("{} {}: error {}\n", request.method, request.path, response.status),
-          "text/plain");
+    if (!response.body.empty()) return;
+    std::string why;
+    if (response.status == 404)
+      why =
+          "no such endpoint (the viewer serves GET /, /frame.png and /stats, and POST "
+          "/camera, /settings and /quit)";
+    else if (response.status == 413)
+      why = fmt::format("the body is over the {}-byte limit", kMaxBodyBytes);
+    else if (response.status == 400)
+      why = "a malformed HTTP request";
+    else
+      why = fmt::format("error {}", response.status);
+    response.set_content(fmt::format("{} {}: {}\n", request.method, request.path, why),
+                         "text/plain");
   });
 }
 

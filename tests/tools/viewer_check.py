@@ -23,6 +23,7 @@ import sys
 import tempfile
 import time
 import urllib.error
+import urllib.parse
 import urllib.request
 
 
@@ -39,6 +40,18 @@ def request(url, method="GET", body=None, timeout=10):
             return r.status, dict(r.headers), r.read()
     except urllib.error.HTTPError as e:
         return e.code, dict(e.headers), e.read()
+
+
+def raw_post(base, path):
+    """A POST with no body and no Content-Length (urllib always sends one)."""
+    url = urllib.parse.urlparse(base)
+    with socket.create_connection((url.hostname, url.port), timeout=10) as s:
+        s.sendall(f"POST /{path} HTTP/1.1\r\nHost: {url.hostname}\r\nConnection: close\r\n\r\n".encode())
+        answer = b""
+        while chunk := s.recv(4096):
+            answer += chunk
+    head, _, body = answer.partition(b"\r\n\r\n")
+    return int(head.split()[1]), body
 
 
 def stats(base):
@@ -118,12 +131,19 @@ def check_api(base):
         ("GET", "camera", None), ("GET", "nowhere", None), ("DELETE", "stats", None),
         ("GET", "frame.png?after=banana", None),
     ]
+    # What some of them must say.
+    reasons = {("POST", "camera", "{}"): b"are required",
+               ("POST", "settings", "x" * 100000): b"over the 65536-byte limit",
+               ("GET", "nowhere", None): b"no such endpoint",
+               ("DELETE", "stats", None): b"no such endpoint"}
     for method, path, body in corpus:
         status, _, answer = request(base + path, method, body)
         if not 400 <= status < 500:
             fail(f"{method} /{path} {body!r:.40}: status {status}, expected 4xx")
         if not answer:
             fail(f"{method} /{path}: a {status} without a reason")
+        if reasons.get((method, path, body), b"") not in answer:
+            fail(f"{method} /{path}: {answer!r:.120} does not say {reasons[(method, path, body)]!r}")
         if stats(base)["frames"] < 1 and request(base + "stats")[0] != 200:
             fail("the server went down")
     status, _, _ = request(base + "stats")
@@ -306,9 +326,10 @@ def main():
     elif what == "memory":
         check_memory(base, int(sys.argv[3]))
     elif what == "quit":
-        status, _, _ = request(base + "quit", "POST", "")
+        # As `curl -X POST URL/quit` sends it: no body and no Content-Length.
+        status, answer = raw_post(base, "quit")
         if status != 200:
-            fail(f"POST /quit: {status}")
+            fail(f"POST /quit without a body: {status} {answer!r}")
     else:
         fail(f"unknown check {what}")
 
