@@ -15,9 +15,9 @@ CommunicationError::CommunicationError(std::string operation, int rank, const st
       operation_(std::move(operation)),
       rank_(rank) {}
 
-bool Communicator::agreeOnFailure(bool failed, const std::string& message) const {
-  if (sum(uint64_t(failed ? 1 : 0)) == 0) return false;
-  // Gather every rank's message on rank 0 and print it once.
+std::string Communicator::failureMessage(bool failed, const std::string& message) const {
+  if (sum(uint64_t(failed ? 1 : 0)) == 0) return "";
+  // Gather every rank's message on rank 0, merge, and give the result to every rank.
   std::string mine = failed ? message : std::string();
   std::vector<int> lengths = gatherInt(int(mine.size()));
   std::vector<int> offsets(lengths.size(), 0);
@@ -31,6 +31,7 @@ bool Communicator::agreeOnFailure(bool failed, const std::string& message) const
     all.resize(total);
   }
   gatherBytes(mine.data(), int(mine.size()), all.data(), lengths, offsets);
+  std::string merged;
   if (isRoot()) {
     std::vector<std::pair<std::string, std::vector<int>>> distinct;
     for (int r = 0; r < size(); ++r) {
@@ -44,16 +45,38 @@ bool Communicator::agreeOnFailure(bool failed, const std::string& message) const
         it->second.push_back(r);
     }
     for (const auto& [m, ranks] : distinct) {
+      if (!merged.empty()) merged += '\n';
       if (int(ranks.size()) == size() || size() == 1) {
-        fmt::print(stderr, "ferry: error: {}\n", m);
+        merged += m;
       } else {
         std::string list;
         for (int r : ranks) {
           if (!list.empty()) list += ',';
           list += std::to_string(r);
         }
-        fmt::print(stderr, "ferry: error on rank {}: {}\n", list, m);
+        merged += fmt::format("on rank {}: {}", list, m);
       }
+    }
+    if (merged.empty()) merged = "a rank failed without a message";
+  }
+  uint64_t length = merged.size();
+  broadcastBytes(std::as_writable_bytes(std::span(&length, 1)));
+  merged.resize(length);
+  broadcastBytes(std::as_writable_bytes(std::span(merged.data(), merged.size())));
+  return merged;
+}
+
+bool Communicator::agreeOnFailure(bool failed, const std::string& message) const {
+  const std::string merged = failureMessage(failed, message);
+  if (merged.empty()) return false;
+  if (isRoot()) {
+    size_t begin = 0;
+    while (begin <= merged.size()) {
+      size_t end = merged.find('\n', begin);
+      if (end == std::string::npos) end = merged.size();
+      const std::string line = merged.substr(begin, end - begin);
+      fmt::print(stderr, "ferry: error{}{}\n", line.rfind("on rank ", 0) == 0 ? " " : ": ", line);
+      begin = end + 1;
     }
     std::fflush(stderr);
   }

@@ -176,6 +176,10 @@ class Communicator {
   // Collective: true if any rank failed; then rank 0 prints one message (the
   // failing ranks' messages, merged when identical) to stderr.
   bool agreeOnFailure(bool failed, const std::string& message) const;
+  // Collective, printing nothing: empty if no rank failed, else the same on
+  // every rank: the failing ranks' messages, one line each, merged when
+  // identical, "on rank R,S: message" unless every rank failed alike.
+  std::string failureMessage(bool failed, const std::string& message) const;
   // Not collective: called by the one rank that failed. Ends every rank with
   // `message` (MPI: prints "ferry: error on rank R: message" and aborts the
   // job with exit code `code`; in-process: throws here and in every other rank).

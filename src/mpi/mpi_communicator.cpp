@@ -44,7 +44,8 @@ constexpr int kLargePiece = 3;    // one of those pieces
 }  // namespace
 
 struct MpiCommunicator::Messaging {
-  MPI_Comm comm = MPI_COMM_NULL;
+  MPI_Comm collective = MPI_COMM_NULL;  // the collectives' duplicate of the communicator
+  MPI_Comm comm = MPI_COMM_NULL;        // point-to-point messages' duplicate
   struct Send {
     uint64_t id;
     std::vector<std::byte> bytes;
@@ -81,15 +82,40 @@ MpiCommunicator::MpiCommunicator(int* argc, char*** argv) {
   }
   // Errors come back as codes (and exceptions here) rather than killing the job silently.
   check(MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN), "MPI_Comm_set_errhandler");
-  check(MPI_Comm_rank(MPI_COMM_WORLD, &rank_), "MPI_Comm_rank");
-  check(MPI_Comm_size(MPI_COMM_WORLD, &size_), "MPI_Comm_size");
+  MPI_Comm world = MPI_COMM_WORLD;
+  join(&world);
+}
+
+MpiCommunicator::MpiCommunicator(ApplicationCommunicator application) {
+  int initialized = 0, finalized = 0;
+  check(MPI_Initialized(&initialized), "MPI_Initialized");
+  check(MPI_Finalized(&finalized), "MPI_Finalized");
+  if (!initialized || finalized)
+    throw CommunicationError("MpiCommunicator", -1,
+                             "a communicator was given but MPI is not running (MPI_Init first)");
+  MPI_Comm comm = MPI_Comm_f2c(MPI_Fint(application.fortranHandle));
+  if (comm == MPI_COMM_NULL)
+    throw CommunicationError("MpiCommunicator", -1, "the communicator given is MPI_COMM_NULL");
+  join(&comm);
+}
+
+void MpiCommunicator::join(const void* communicator) {
+  const MPI_Comm comm = *static_cast<const MPI_Comm*>(communicator);
   messaging_ = std::make_unique<Messaging>();
-  check(MPI_Comm_dup(MPI_COMM_WORLD, &messaging_->comm), "MPI_Comm_dup");
-  check(MPI_Comm_set_errhandler(messaging_->comm, MPI_ERRORS_RETURN), "MPI_Comm_set_errhandler");
+  // Duplicates, so that Ferry's collectives and messages never match the
+  // application's; errors come back as codes on them.
+  for (MPI_Comm* dup : {&messaging_->collective, &messaging_->comm}) {
+    check(MPI_Comm_dup(comm, dup), "MPI_Comm_dup");
+    check(MPI_Comm_set_errhandler(*dup, MPI_ERRORS_RETURN), "MPI_Comm_set_errhandler");
+  }
+  check(MPI_Comm_rank(messaging_->collective, &rank_), "MPI_Comm_rank");
+  check(MPI_Comm_size(messaging_->collective, &size_), "MPI_Comm_size");
 }
 
 MpiCommunicator::~MpiCommunicator() {
-  if (messaging_ && messaging_->comm != MPI_COMM_NULL) MPI_Comm_free(&messaging_->comm);
+  if (messaging_)
+    for (MPI_Comm* dup : {&messaging_->collective, &messaging_->comm})
+      if (*dup != MPI_COMM_NULL) MPI_Comm_free(dup);
   if (ownsMpi_) MPI_Finalize();
 }
 
@@ -271,25 +297,27 @@ void MpiCommunicator::check(int code, const char* operation) const {
 }
 
 void MpiCommunicator::barrier() const {
-  check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+  check(MPI_Barrier(messaging_->collective), "MPI_Barrier");
 }
 
 uint64_t MpiCommunicator::sum(uint64_t value) const {
   uint64_t out = 0;
-  check(MPI_Allreduce(&value, &out, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+  check(MPI_Allreduce(&value, &out, 1, MPI_UINT64_T, MPI_SUM, messaging_->collective),
+        "MPI_Allreduce");
   return out;
 }
 
 double MpiCommunicator::max(double value) const {
   double out = 0;
-  check(MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+  check(MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MAX, messaging_->collective),
+        "MPI_Allreduce");
   return out;
 }
 
 std::vector<uint64_t> MpiCommunicator::sum(std::span<const uint64_t> values) const {
   std::vector<uint64_t> out(values.size());
   check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_UINT64_T, MPI_SUM,
-                      MPI_COMM_WORLD),
+                      messaging_->collective),
         "MPI_Allreduce");
   return out;
 }
@@ -297,7 +325,7 @@ std::vector<uint64_t> MpiCommunicator::sum(std::span<const uint64_t> values) con
 std::vector<double> MpiCommunicator::sum(std::span<const double> values) const {
   std::vector<double> out(values.size());
   check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_DOUBLE, MPI_SUM,
-                      MPI_COMM_WORLD),
+                      messaging_->collective),
         "MPI_Allreduce");
   return out;
 }
@@ -305,7 +333,7 @@ std::vector<double> MpiCommunicator::sum(std::span<const double> values) const {
 std::vector<double> MpiCommunicator::max(std::span<const double> values) const {
   std::vector<double> out(values.size());
   check(MPI_Allreduce(values.data(), out.data(), int(values.size()), MPI_DOUBLE, MPI_MAX,
-                      MPI_COMM_WORLD),
+                      messaging_->collective),
         "MPI_Allreduce");
   return out;
 }
@@ -313,7 +341,8 @@ std::vector<double> MpiCommunicator::max(std::span<const double> values) const {
 std::vector<int> MpiCommunicator::exchangeCounts(const std::vector<int>& sendCounts) const {
   FERRY_CHECK_EQ(sendCounts.size(), size_);
   std::vector<int> receive(size_);
-  check(MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receive.data(), 1, MPI_INT, MPI_COMM_WORLD),
+  check(MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receive.data(), 1, MPI_INT,
+                     messaging_->collective),
         "MPI_Alltoall");
   return receive;
 }
@@ -326,22 +355,24 @@ void MpiCommunicator::exchangeBytes(const void* send, const std::vector<int>& se
   FERRY_CHECK_EQ(sendOffsets.size(), size_);
   FERRY_CHECK_EQ(receiveCounts.size(), size_);
   FERRY_CHECK_EQ(receiveOffsets.size(), size_);
-  check(MPI_Alltoallv(send, sendCounts.data(), sendOffsets.data(), MPI_BYTE, receive,
-                      receiveCounts.data(), receiveOffsets.data(), MPI_BYTE, MPI_COMM_WORLD),
-        "MPI_Alltoallv");
+  check(
+      MPI_Alltoallv(send, sendCounts.data(), sendOffsets.data(), MPI_BYTE, receive,
+                    receiveCounts.data(), receiveOffsets.data(), MPI_BYTE, messaging_->collective),
+      "MPI_Alltoallv");
 }
 
 void MpiCommunicator::gatherBytes(const void* send, int sendBytes, void* receive,
                                   const std::vector<int>& counts,
                                   const std::vector<int>& offsets) const {
   check(MPI_Gatherv(send, sendBytes, MPI_BYTE, receive, counts.data(), offsets.data(), MPI_BYTE, 0,
-                    MPI_COMM_WORLD),
+                    messaging_->collective),
         "MPI_Gatherv");
 }
 
 std::vector<int> MpiCommunicator::gatherInt(int value) const {
   std::vector<int> out(isRoot() ? size_ : 0);
-  check(MPI_Gather(&value, 1, MPI_INT, out.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+  check(MPI_Gather(&value, 1, MPI_INT, out.data(), 1, MPI_INT, 0, messaging_->collective),
+        "MPI_Gather");
   return out;
 }
 
@@ -350,7 +381,8 @@ void MpiCommunicator::broadcastBytes(std::span<std::byte> bytes) const {
   constexpr size_t kPiece = size_t(1) << 30;
   for (size_t done = 0; done < bytes.size(); done += kPiece) {
     size_t piece = std::min(kPiece, bytes.size() - done);
-    check(MPI_Bcast(bytes.data() + done, int(piece), MPI_BYTE, 0, MPI_COMM_WORLD), "MPI_Bcast");
+    check(MPI_Bcast(bytes.data() + done, int(piece), MPI_BYTE, 0, messaging_->collective),
+          "MPI_Bcast");
   }
 }
 
@@ -362,7 +394,7 @@ void MpiCommunicator::reportFatalSignals() const {
 void MpiCommunicator::abortEveryRank(const std::string& message, int code) const {
   fmt::print(stderr, "ferry: error on rank {}: {}\n", rank_, message);
   std::fflush(stderr);
-  MPI_Abort(MPI_COMM_WORLD, code);
+  MPI_Abort(messaging_ ? messaging_->collective : messaging_->collective, code);
   std::_Exit(code);  // MPI_Abort does not return; be sure
 }
 

@@ -12,11 +12,20 @@
 
 namespace ferry {
 
+// An application's own communicator, by its Fortran handle (MPI_Comm_c2f;
+// mpi4py's Comm.py2f): a plain int, so no header outside mpi/ needs mpi.h.
+struct ApplicationCommunicator {
+  int fortranHandle = 0;
+};
+
 class MpiCommunicator final : public Communicator {
  public:
-  // Initializes MPI if needed (thread level: funneled; TBB threads never
-  // call MPI) and finalizes it on destruction if it did.
+  // Over MPI_COMM_WORLD. Initializes MPI if needed (thread level: funneled;
+  // TBB threads never call MPI) and finalizes it on destruction if it did.
   MpiCommunicator(int* argc, char*** argv);
+  // Over the ranks of an application's communicator (MPI already running;
+  // never finalized here). Ferry talks on duplicates of it, never on it.
+  explicit MpiCommunicator(ApplicationCommunicator application);
   ~MpiCommunicator() override;
   MpiCommunicator(const MpiCommunicator&) = delete;
   MpiCommunicator& operator=(const MpiCommunicator&) = delete;
@@ -69,6 +78,9 @@ class MpiCommunicator final : public Communicator {
   void progressSends() const;
   // Prints "ferry: error on rank R: message" and ends every rank (MPI_Abort).
   void abortEveryRank(const std::string& message, int code) const override;
+  // Duplicates the communicator at `communicator` (an MPI_Comm*) for the
+  // collectives and the messages; learns the rank and size.
+  void join(const void* communicator);
   // Throws a CommunicationError unless `code` is MPI_SUCCESS.
   void check(int code, const char* operation) const;
 

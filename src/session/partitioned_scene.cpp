@@ -1,5 +1,18 @@
 #include "session/partitioned_scene.h"
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "io/parts/part_file.h"
+#include "scene/light_scene.h"
+#include "scene/scene_summary.h"
+
 #include "io/parts/part_directory.h"
 #include "io/scene_loader.h"
 #include "partition/partitioner.h"
@@ -29,6 +42,137 @@ PartitionedScene loadPartitionedScene(const SessionSettings& settings, int ranks
   const PartitionerOptions options = partitionerOptions(settings, ranks);
   out.partition = partitionScene(out.scene, ranks, options);
   out.partitioner = options.chosen().name();
+  return out;
+}
+
+namespace {
+
+// Every rank's `mine` on every rank, in rank order (collective).
+std::vector<std::string> allGather(const Communicator& comm, const std::string& mine) {
+  std::vector<int> lengths = comm.gatherInt(int(mine.size()));
+  lengths.resize(size_t(comm.size()));
+  comm.broadcastBytes(std::as_writable_bytes(std::span(lengths)));
+  std::vector<int> offsets(lengths.size(), 0);
+  size_t total = 0;
+  for (size_t r = 0; r < lengths.size(); ++r) {
+    offsets[r] = int(total);
+    total += size_t(lengths[r]);
+  }
+  std::string all(total, '\0');
+  comm.gatherBytes(mine.data(), int(mine.size()), all.data(), lengths, offsets);
+  comm.broadcastBytes(std::as_writable_bytes(std::span(all.data(), all.size())));
+  std::vector<std::string> out;
+  for (size_t r = 0; r < lengths.size(); ++r) out.push_back(all.substr(offsets[r], lengths[r]));
+  return out;
+}
+
+// The shared data of one piece goes between ranks as a shared part file's
+// bytes (io/parts/part_file.h: one serialization for lights and proxies).
+std::string sharedBytes(const SharedData& shared, int rank) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                     fmt::format("ferry-piece-{}-{}.fpart", getpid(), rank);
+  writeSharedFile(path.string(), shared);
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::filesystem::remove(path);
+  return bytes;
+}
+
+SharedData sharedFromBytes(const std::string& bytes, int rank, int from) {
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() /
+      fmt::format("ferry-piece-{}-{}-from-{}.fpart", getpid(), rank, from);
+  {
+    std::ofstream out(path, std::ios::binary);
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+  }
+  SharedData shared = readSharedFile(path.string());
+  std::filesystem::remove(path);
+  return shared;
+}
+
+// `lights` appended to `all` (materials re-indexed), as lightScene orders them.
+void appendLights(Scene& all, Scene&& lights) {
+  const int32_t materials = int32_t(all.materials.size());
+  for (Material& m : lights.materials) all.materials.push_back(std::move(m));
+  for (Mesh& mesh : lights.meshes) {
+    mesh.material += materials;
+    all.addSingleInstanceMesh(std::move(mesh));
+  }
+}
+
+// The whole's summary: the pieces' counts summed; what every rank holds alike
+// (lights other than emitters, views, media) is the piece's own.
+SceneSummary wholeSummary(const SceneSummary& piece, const Communicator& comm) {
+  SceneSummary whole = piece;
+  uint64_t* fields[] = {
+      &whole.uniqueMeshes,     &whole.geometries,         &whole.shapePrimitives,
+      &whole.triangles,        &whole.vertices,           &whole.objects,
+      &whole.instances,        &whole.instancedTriangles, &whole.textures,
+      &whole.texels,           &whole.emissiveMeshes,     &whole.emissiveTriangles,
+      &whole.memory.vertices,  &whole.memory.normals,     &whole.memory.uvs,
+      &whole.memory.indices,   &whole.memory.texels,      &whole.memory.shapes,
+      &whole.memory.instances, &whole.memory.accel};
+  std::vector<uint64_t> counts;
+  for (uint64_t* f : fields) counts.push_back(*f);
+  counts = comm.sum(std::span<const uint64_t>(counts));
+  for (size_t i = 0; i < counts.size(); ++i) *fields[i] = counts[i];
+  const Box3f b = piece.bounds;
+  const bool empty = b.empty();
+  const std::vector<double> mine = {
+      empty ? -1e30 : -double(b.lower.x), empty ? -1e30 : -double(b.lower.y),
+      empty ? -1e30 : -double(b.lower.z), empty ? -1e30 : double(b.upper.x),
+      empty ? -1e30 : double(b.upper.y),  empty ? -1e30 : double(b.upper.z)};
+  const std::vector<double> extent = comm.max(std::span<const double>(mine));
+  if (extent[0] > -1e30)
+    whole.bounds = Box3f{{-float(extent[0]), -float(extent[1]), -float(extent[2])},
+                         {float(extent[3]), float(extent[4]), float(extent[5])}};
+  return whole;
+}
+
+}  // namespace
+
+PartitionedScene distributedPiece(Scene piece, const Communicator& comm) {
+  const int rank = comm.rank(), ranks = comm.size();
+  std::string error;
+  SharedData mine;
+  try {
+    piece.validate();
+    mine.ranks = ranks;
+    mine.lights = lightScene(piece);
+    Partition local = roundRobinPartition(piece, 1);  // one proxy per instance: its world box
+    for (Proxy& p : local.proxies) p.owners = RankSet::single(rank);
+    mine.proxies = std::move(local.proxies);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (const std::string failure = comm.failureMessage(!error.empty(), error); !failure.empty())
+    throw InputError(failure);
+  const std::vector<std::string> pieces = allGather(comm, sharedBytes(mine, rank));
+
+  PartitionedScene out;
+  out.partition.ranks = ranks;
+  out.partition.instanceOwners.assign(piece.instances.size(), RankSet::single(rank));
+  out.lights.name = piece.name + " (lights)";
+  out.lights.suns = piece.suns;
+  out.lights.environment = piece.environment;
+  for (int r = 0; r < ranks; ++r) {
+    SharedData shared = r == rank ? std::move(mine) : sharedFromBytes(pieces[size_t(r)], rank, r);
+    appendLights(out.lights, std::move(shared.lights));
+    for (Proxy& p : shared.proxies) out.partition.proxies.push_back(p);
+  }
+  Manifest manifest;
+  manifest.scene = piece.name;
+  manifest.partitioner = "distributed";
+  manifest.ranks = ranks;
+  manifest.summary = wholeSummary(summarize(piece), comm).toJson();
+  manifest.filmScale = piece.filmScale;
+  manifest.filmCrop = piece.filmCrop;
+  manifest.integrator = piece.integrator;
+  manifest.integratorMaxDepth = piece.integratorMaxDepth;
+  out.partitioner = manifest.partitioner;
+  out.manifest = std::move(manifest);
+  out.scene = std::move(piece);
   return out;
 }
 

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "comm/communicator.h"
 #include "io/parts/manifest.h"
 #include "partition/partition.h"
 #include "scene/scene.h"
@@ -31,5 +32,15 @@ struct PartitionedScene {
 PartitionedScene loadPartitionedScene(const SessionSettings& settings, int ranks, int rank,
                                       Scene* given = nullptr,
                                       const std::function<void(Scene&)>& beforePartition = {});
+
+// This rank's own piece of a scene that is already spread over the ranks
+// of `comm` (each holds only its piece, as a simulation does), with no
+// partitioning step: the rank owns every instance of its piece; the proxies
+// (one per instance, its world box) and the lights (every emissive triangle)
+// are every rank's, exchanged, in rank order; the summary is the whole's.
+// Suns, environment, views, film and media are the piece's own: every rank
+// gives the same. Collective; InputError (the same on every rank) if a
+// piece is not valid.
+PartitionedScene distributedPiece(Scene piece, const Communicator& comm);
 
 }  // namespace ferry

@@ -51,7 +51,8 @@ struct RenderSession::Rank {
   bool firstPixel = false;                      // setup complete (run() reached its first frame)
 
   // From settings.scene, or from `given` (the whole scene, in memory) when set.
-  Rank(const SessionSettings& settings, const Communicator& comm, Scene* given);
+  Rank(const SessionSettings& settings, const Communicator& comm, Scene* given,
+       PartitionedScene* part);
   double proxyBytes() const { return proxies ? double(proxies->bytes()) : 0.0; }
   // The one place the session names the trace backend: this rank's trace
   // structures over its instances, and what Embree holds for them.
@@ -72,21 +73,24 @@ struct RenderSession::Rank {
   }
 };
 
-RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm, Scene* given) {
+RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm, Scene* given,
+                          PartitionedScene* part) {
   if (settings.threads > 0)
     threadLimit = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, settings.threads);
   lap(&SetupTimes::start);
   PartitionedScene loaded =
-      loadPartitionedScene(settings, comm.size(), comm.rank(), given, [&](Scene& whole) {
-        whole.view(settings.render.view);  // fail on an unknown view before building anything
-        summary = summarize(whole);
-        lap(&SetupTimes::load);
-        // Light data is small and needed everywhere: take it from the scene
-        // as given, before the partitioner rewrites it and ranks release geometry.
-        lights = std::make_unique<LightSampler>(whole);
-        lap(&SetupTimes::lights);
-      });
+      part
+          ? std::move(*part)
+          : loadPartitionedScene(settings, comm.size(), comm.rank(), given, [&](Scene& whole) {
+              whole.view(settings.render.view);  // fail on an unknown view before building anything
+              summary = summarize(whole);
+              lap(&SetupTimes::load);
+              // Light data is small and needed everywhere: take it from the scene
+              // as given, before the partitioner rewrites it and ranks release geometry.
+              lights = std::make_unique<LightSampler>(whole);
+              lap(&SetupTimes::lights);
+            });
   scene = std::move(loaded.scene);
   partition = std::move(loaded.partition);
   partitionerName = std::move(loaded.partitioner);
@@ -177,20 +181,24 @@ void checkRankCount(int ranks, PathLayout layout) {
 }
 
 RenderSession::RenderSession(const SessionSettings& settings, const Communicator& comm)
-    : RenderSession(settings, comm, nullptr) {}
+    : RenderSession(settings, comm, nullptr, nullptr) {}
 
 RenderSession::RenderSession(Scene scene, const SessionSettings& settings, const Communicator& comm)
-    : RenderSession(settings, comm, &scene) {}
+    : RenderSession(settings, comm, &scene, nullptr) {}
+
+RenderSession::RenderSession(PartitionedScene part, const SessionSettings& settings,
+                             const Communicator& comm)
+    : RenderSession(settings, comm, nullptr, &part) {}
 
 RenderSession::RenderSession(const SessionSettings& settings, const Communicator& comm,
-                             Scene* given)
+                             Scene* given, PartitionedScene* part)
     : settings_(settings), comm_(comm) {
   FERRY_CHECK_GE(settings.render.frames, 1);
   FERRY_CHECK_GE(settings.render.samplesPerPixel, 1);
   checkRankCount(comm.size(), settings.pathLayout);
   if (given) given->validate();
   settings_.render.retraceAll = settings.retrace == Retrace::All;
-  rank_ = std::make_unique<Rank>(settings_, comm_, given);
+  rank_ = std::make_unique<Rank>(settings_, comm_, given, part);
   // Light paths do not go through media: a scene with media renders by
   // camera paths alone (their medium rides where light paths keep a ratio).
   const bool media = rank_->scene.hasMedia();
@@ -306,6 +314,13 @@ void RenderSession::setImageSize(int width, int height) {
 
 void RenderSession::setCrop(const CropWindow& crop) {
   settings_.render.crop = crop;
+}
+
+void RenderSession::setSamples(int samplesPerPixel, int frames) {
+  FERRY_CHECK_GE(samplesPerPixel, 1);
+  FERRY_CHECK_GE(frames, 1);
+  settings_.render.samplesPerPixel = samplesPerPixel;
+  settings_.render.frames = frames;
 }
 
 void RenderSession::setMaxDepth(int maxDepth) {

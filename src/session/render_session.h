@@ -28,6 +28,7 @@
 #include "scene/scene.h"
 #include "scene/scene_summary.h"
 #include "session/frame_sink.h"
+#include "session/partitioned_scene.h"
 #include "session/session_settings.h"
 
 namespace ferry {
@@ -153,6 +154,9 @@ class RenderSession {
   // of settings.scene (which then only names it): partitioned on the fly as
   // a loaded one. Throws InputError if the scene is not valid (Scene::validate).
   RenderSession(Scene scene, const SessionSettings& settings, const Communicator& comm);
+  // This rank's part, already made (distributedPiece: data that is spread
+  // over the ranks as given); settings.scene only names it.
+  RenderSession(PartitionedScene part, const SessionSettings& settings, const Communicator& comm);
   ~RenderSession();
   RenderSession(const RenderSession&) = delete;
   RenderSession& operator=(const RenderSession&) = delete;
@@ -179,6 +183,8 @@ class RenderSession {
   void setImageSize(int width, int height);
   // Before run(): renders only this part of the image (pbrt's cropwindow).
   void setCrop(const CropWindow& crop);
+  // Before run(): samples per pixel in each frame, and frames.
+  void setSamples(int samplesPerPixel, int frames);
   // Before run(): the maximum path depth (RenderSettings::maxDepth), a
   // scene's own (pbrt's Integrator maxdepth).
   void setMaxDepth(int maxDepth);
@@ -214,7 +220,8 @@ class RenderSession {
  private:
   struct Rank;
 
-  RenderSession(const SessionSettings& settings, const Communicator& comm, Scene* given);
+  RenderSession(const SessionSettings& settings, const Communicator& comm, Scene* given,
+                PartitionedScene* part);
   // Restyles every transfer-function volume from its loaded transfer
   // function; throws InputError for a look that cannot be (unknown map).
   void applyVolumeLook(const VolumeLook& look);

@@ -1,0 +1,183 @@
+// Ferry as a library: a Session renders a scene on this process alone, or on
+// every rank of an application's communicator (ferry/ferry_mpi.h), and hands
+// back the image as float RGBA. The scene is named (a file or builtin:NAME)
+// or given from memory: meshes, instances, materials, lights, volumes, camera.
+//
+// Every rank of a session makes the same calls in the same order (they are
+// collective). Errors are ferry::api::Error, thrown on every rank with the
+// failing rank's message; the library never exits or aborts the process.
+// No Embree, TBB or MPI type appears here. docs/library.md has the guide.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#define FERRY_API __attribute__((visibility("default")))
+
+namespace ferry::api {
+
+class FERRY_API Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// How a mesh's arrays are held: copied into the session, or borrowed
+// (nothing is copied: the caller keeps them alive and unchanged until the
+// session ends, or hands MeshData::keepAlive an owner of them).
+enum class Arrays { Copy, Borrow };
+
+using Vec3 = std::array<float, 3>;
+// A placement, row-major 3x4 (rotation and scale, then translation per row).
+using Transform = std::array<float, 12>;
+inline constexpr Transform kIdentity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+
+struct MeshData {
+  std::string name;
+  std::span<const float> positions;   // x, y, z per vertex
+  std::span<const uint32_t> indices;  // three per triangle
+  std::span<const float> normals;     // empty, or x, y, z per vertex
+  std::span<const float> uvs;         // empty, or u, v per vertex
+  int material = 0;                   // from addMaterial (0: the default grey)
+  Arrays arrays = Arrays::Copy;
+  // Borrowed: held by the session as long as it uses the arrays (may be null).
+  std::shared_ptr<const void> keepAlive;
+  // Borrowed: the 4 bytes after the last position are readable (Embree
+  // reads 16 bytes at the last vertex); else the tracer keeps a padded
+  // copy of the positions (only).
+  bool readablePastEnd = false;
+};
+
+// A surface's material. type: "diffuse" (color), "conductor" (a metal: color
+// at normal incidence, roughness), "dielectric" (glass: ior, roughness,
+// color as tint), "principled" (glTF's metallic-roughness: color, metallic,
+// roughness). Any type emits `emission` (radiance) from both sides.
+struct MaterialData {
+  std::string name;
+  std::string type = "diffuse";
+  Vec3 color{0.8f, 0.8f, 0.8f};
+  Vec3 emission{0, 0, 0};
+  float roughness = 0;
+  float metallic = 0;
+  float ior = 1.5f;
+};
+
+// A grid of densities (copied) over a world box (x fastest, then y, then z), as
+// smoke (sigma_a and sigma_s per unit density and length, Henyey-Greenstein
+// g), or drawn through a colour map (values in [0, 1]; opacity scales it).
+struct VolumeData {
+  std::string name;
+  std::array<int, 3> dims{0, 0, 0};
+  std::span<const float> values;
+  Vec3 lower{0, 0, 0}, upper{1, 1, 1};
+  Vec3 sigmaA{1, 1, 1}, sigmaS{9, 9, 9};
+  float g = 0;
+  std::string colorMap;  // empty: smoke; else cool-to-warm, viridis, inferno, black-body, grayscale
+  float opacity = 1;
+};
+
+struct Camera {
+  Vec3 from{0, 0, 5}, at{0, 0, 0}, up{0, 1, 0};
+  float fovY = 45;  // degrees
+};
+
+// Whose data a rank gives. Replicated: every rank gives the whole scene (the
+// same calls) and Ferry partitions it over the ranks. Distributed: each rank
+// gives only its own piece (as a simulation holds it); the proxies and
+// lights are exchanged, nothing is partitioned or moved (docs/library.md).
+enum class Distribution { Replicated, Distributed };
+
+struct Options {
+  int width = 0, height = 0;  // 0: the scene's own (pbrt's Film), else 640 x 480
+  int samplesPerPixel = 1;    // per frame
+  int maxDepth = -1;          // -1: the scene's own (pbrt's Integrator), else 5
+  uint32_t seed = 1;
+  int threads = 0;  // per rank; 0: all cores
+  Distribution distribution = Distribution::Replicated;
+  // Replicated: the partitioner (empty: "best" on many ranks).
+  std::string partitioner;
+  bool imageOnEveryRank = false;  // else the image is on rank 0 only
+};
+
+// Linear radiance, RGBA (alpha 1), row 0 at the top; empty off rank 0
+// unless Options::imageOnEveryRank.
+struct Image {
+  int width = 0, height = 0;
+  std::vector<float> rgba;
+  bool empty() const { return rgba.empty(); }
+};
+
+// What the last render() counted, summed over ranks.
+struct Stats {
+  uint64_t raysTraced = 0;     // closest-hit and shadow rays
+  uint64_t raysForwarded = 0;  // sent to another rank
+  double seconds = 0;          // the render's wall time (slowest rank)
+  // Bytes of mesh arrays the ranks hold: copies they own, and borrowed
+  // arrays they read in place (Arrays::Borrow; shared part files).
+  uint64_t meshBytesOwned = 0;
+  uint64_t meshBytesBorrowed = 0;
+  std::string json;  // everything, as `ferry render --stats` writes it
+};
+
+struct SessionAccess;  // the library's own way in (src/api/session_on.h)
+
+class FERRY_API Session {
+ public:
+  // This process alone.
+  explicit Session(const Options& options = {});
+  // The ranks of an application's communicator, by its Fortran handle
+  // (MPI_Comm_c2f; mpi4py's Comm.py2f()): ferry/ferry_mpi.h takes an MPI_Comm.
+  Session(int fortranCommunicator, const Options& options);
+  ~Session();
+  Session(Session&&) noexcept;
+  Session& operator=(Session&&) noexcept;
+
+  int rank() const;
+  int size() const;
+
+  // The scene by name, instead of what was added: a file (.pbrt, .obj,
+  // .ply, .gltf, .glb, .vdb, raw:...) or builtin:NAME[?...]. Collective.
+  void load(const std::string& scene);
+
+  // A scene from memory; indices returned are this rank's, from 0.
+  int addMaterial(const MaterialData& material);
+  // A mesh, not placed: put it in objects with addObject.
+  int addMesh(const MeshData& mesh);
+  // A group of meshes placed together by instances.
+  int addObject(std::span<const int> meshes);
+  void addInstance(int object, const Transform& transform = kIdentity);
+  // A mesh placed once, untransformed (addMesh, addObject, addInstance).
+  int placeMesh(const MeshData& mesh);
+  void addVolume(const VolumeData& volume);
+  // Lights: a sun (towards it; irradiance in W/m^2) and a constant sky.
+  void addSun(const Vec3& direction, const Vec3& irradiance);
+  void setEnvironment(const Vec3& color);
+
+  // Between renders, without reloading.
+  void setCamera(const Camera& camera);
+  void setImageSize(int width, int height);
+  void setSamplesPerPixel(int samples);
+
+  // Renders `frames` frames, accumulated. Collective.
+  Image render(int frames = 1);
+  const Stats& stats() const;
+
+ private:
+  friend struct SessionAccess;
+  struct Impl;
+  explicit Session(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// Writes `image` to `path`: .png (tone mapped as `ferry render` does, with
+// `exposure` in stops), .exr or .pfm (linear). Written whole or not at all.
+FERRY_API void writeImage(const std::string& path, const Image& image, float exposure = 0);
+
+// One call: `scene` rendered on this process alone.
+FERRY_API Image render(const std::string& scene, const Options& options = {}, int frames = 1);
+
+}  // namespace ferry::api

@@ -1,0 +1,519 @@
+// ferry::api::Session (include/ferry/ferry.h) over a RenderSession.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <optional>
+
+#include "api/session_on.h"
+#include "comm/in_process_communicator.h"
+#include "core/error.h"
+#include "io/images/image_io.h"
+#include "io/scene_loader.h"
+#include "io/volumes/volume_files.h"
+#include "material/metallic_roughness.h"
+#include "material/models/conductor.h"
+#include "material/models/dielectric.h"
+#include "media/density_grid.h"
+#include "media/transfer_function.h"
+#include "media/volume_look.h"
+#include "mpi/mpi_communicator.h"
+#include "partition/partitioner.h"
+#include "render/frame_buffer.h"
+#include "session/partitioned_scene.h"
+#include "session/render_session.h"
+#include "session/session_stats.h"
+
+namespace ferry::api {
+
+static_assert(sizeof(ferry::Vec3f) == 3 * sizeof(float) && sizeof(Vec3i) == 3 * sizeof(int32_t) &&
+              sizeof(Vec2f) == 2 * sizeof(float));
+
+namespace {
+
+constexpr int kDefaultWidth = 640, kDefaultHeight = 480;
+
+ferry::Vec3f vec(const Vec3& v) {
+  return {v[0], v[1], v[2]};
+}
+
+// The final image, linear, as rank 0's sink receives it.
+class ImageSink final : public FrameSink {
+ public:
+  Frames frames() const override { return Frames::Last; }
+  Pixels pixels() const override { return Pixels::Linear; }
+  void receive(const FrameImage& frame) override {
+    if (!frame.last) return;
+    image.width = frame.width;
+    image.height = frame.height;
+    image.rgba.resize(size_t(frame.width) * frame.height * 4);
+    for (size_t i = 0; i < frame.linear.size(); ++i) {
+      std::memcpy(&image.rgba[4 * i], &frame.linear[i], 3 * sizeof(float));
+      image.rgba[4 * i + 3] = 1;
+    }
+  }
+  Image image;
+};
+
+// What the caller gave, checked: an Error naming the span.
+template <typename T, typename Element>
+SharedArray<T> arrayOf(std::span<const Element> values, size_t per, const char* what,
+                       const std::string& mesh, const MeshData& data, bool spare) {
+  if (values.size() % per != 0)
+    throw Error(fmt::format("mesh \"{}\": {} has {} values, not a multiple of {}", mesh, what,
+                            values.size(), per));
+  const T* first = reinterpret_cast<const T*>(values.data());
+  const size_t count = values.size() / per;
+  if (data.arrays == Arrays::Copy) return SharedArray<T>(first, first + count);
+  std::shared_ptr<const void> keeper = data.keepAlive;
+  if (!keeper) keeper = std::make_shared<int>(0);  // the caller's promise: alive until the end
+  return SharedArray<T>::shared(first, count, std::move(keeper), spare);
+}
+
+}  // namespace
+
+struct Session::Impl {
+  std::shared_ptr<const void> keep;  // what the communicator needs alive
+  const Communicator* comm = nullptr;
+  Options options;
+  std::string sceneName;  // load(); else the scene from memory
+  ferry::Scene scene;
+  std::optional<CameraView> camera;
+  std::optional<RenderSession> session;  // built at the first render after a scene change
+  Stats stats;
+
+  Impl(const Communicator& c, std::shared_ptr<const void> k, const Options& o)
+      : keep(std::move(k)), comm(&c), options(o) {
+    scene.name = "memory";
+    ferry::Material grey;
+    grey.name = "default";
+    scene.addMaterial(grey);
+    check();
+  }
+
+  void check() const {
+    const Options& o = options;
+    if (o.width < 0 || o.height < 0 || o.width > 16384 || o.height > 16384 ||
+        (o.width == 0) != (o.height == 0))
+      throw Error(fmt::format("image size {}x{}: each side 1 to 16384 (both 0: the scene's)",
+                              o.width, o.height));
+    if (o.samplesPerPixel < 1)
+      throw Error(fmt::format("samplesPerPixel {}: must be at least 1", o.samplesPerPixel));
+    if (o.maxDepth < -1) throw Error(fmt::format("maxDepth {}: must be -1 or more", o.maxDepth));
+    if (o.threads < 0) throw Error(fmt::format("threads {}: must be 0 (all) or more", o.threads));
+  }
+
+  // The scene changed: the next render builds the session again.
+  ferry::Scene& changing() {
+    session.reset();
+    return scene;
+  }
+
+  SessionSettings settings(int frames) const {
+    SessionSettings s;
+    s.scene = sceneName.empty() ? scene.name : sceneName;
+    s.render.width = options.width > 0 ? options.width : kDefaultWidth;
+    s.render.height = options.height > 0 ? options.height : kDefaultHeight;
+    s.render.samplesPerPixel = options.samplesPerPixel;
+    s.render.frames = frames;
+    s.render.maxDepth = options.maxDepth >= 0 ? options.maxDepth : 5;
+    s.render.seed = options.seed;
+    s.render.camera = camera;
+    s.threads = options.threads;
+    if (!options.partitioner.empty()) s.partitioner = &partitionerNamed(options.partitioner);
+    if (!comm->isRoot()) s.load.warn = [](const std::string&) {};
+    return s;
+  }
+
+  // Builds the session (collective); an error on any rank is thrown on every rank.
+  void build(int frames) {
+    std::string error;
+    SessionSettings s;
+    ferry::Scene copy;  // the session partitions (rewrites) its own
+    const bool distributed = options.distribution == Distribution::Distributed;
+    try {
+      s = settings(frames);
+      if (sceneName.empty())
+        copy = scene;
+      else if (distributed)
+        copy = loadScene(sceneName, s.load);  // each rank its own piece
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    agree(error);
+    const bool inMemory = sceneName.empty() || distributed;
+    if (inMemory && copy.views.empty()) {
+      Box3f box = copy.worldBounds();
+      for (const MediumBoundary& b : copy.mediumBoundaries) box.extend(b.mesh.bounds());
+      if (distributed) box = wholeBounds(box);  // the same view on every rank
+      copy.views.push_back(framing(box));
+    }
+    std::optional<PartitionedScene> part;
+    if (distributed) {
+      try {
+        part = distributedPiece(std::move(copy), *comm);  // agrees on errors itself
+      } catch (const std::exception& e) {
+        throw Error(e.what());
+      }
+    }
+    try {
+      if (part)
+        session.emplace(std::move(*part), s, *comm);
+      else if (inMemory)
+        session.emplace(std::move(copy), s, *comm);
+      else
+        session.emplace(s, *comm);
+      // The scene's own size and depth where the options leave them (pbrt's Film, Integrator).
+      const ferry::Scene& own = session->scene();
+      if (options.width == 0 && options.height == 0 && own.filmWidth && own.filmHeight)
+        session->setImageSize(*own.filmWidth, *own.filmHeight);
+      if (options.maxDepth < 0 && own.integratorMaxDepth)
+        session->setMaxDepth(*own.integratorMaxDepth);
+    } catch (const std::exception& e) {
+      error = e.what();
+      session.reset();
+    }
+    agree(error);
+  }
+
+  // Throws `error` (merged with the other ranks') on every rank if any rank has one.
+  void agree(const std::string& error) {
+    const std::string failure = comm->failureMessage(!error.empty(), error);
+    if (!failure.empty()) {
+      session.reset();
+      throw Error(failure);
+    }
+  }
+
+  // The union of every rank's `box` (collective).
+  Box3f wholeBounds(const Box3f& box) const {
+    const bool empty = box.empty();
+    const double none = -1e30;
+    const std::vector<double> mine = {
+        empty ? none : -double(box.lower.x), empty ? none : -double(box.lower.y),
+        empty ? none : -double(box.lower.z), empty ? none : double(box.upper.x),
+        empty ? none : double(box.upper.y),  empty ? none : double(box.upper.z)};
+    const std::vector<double> m = comm->max(std::span<const double>(mine));
+    if (m[0] <= none) return Box3f{};
+    return Box3f{{-float(m[0]), -float(m[1]), -float(m[2])},
+                 {float(m[3]), float(m[4]), float(m[5])}};
+  }
+
+  static CameraView framing(const Box3f& box) {
+    CameraView view;
+    view.name = "default";
+    view.fovY = 45;
+    view.at = box.empty() ? ferry::Vec3f(0) : box.center();
+    const float radius = box.empty() ? 1 : std::max(0.5f * length(box.size()), 1e-3f);
+    view.from = view.at + ferry::Vec3f(0, 0, radius / std::sin(0.5f * view.fovY * kPi / 180));
+    return view;
+  }
+
+  Image render(int frames) {
+    if (frames < 1) throw Error(fmt::format("frames {}: must be at least 1", frames));
+    if (!session) build(frames);
+    session->setSamples(options.samplesPerPixel, frames);
+    if (options.width > 0) session->setImageSize(options.width, options.height);
+    session->setView(session->settings().render.view, camera);
+    ImageSink sink;
+    SessionReport report;
+    try {
+      report = session->run(sink);
+    } catch (const GroupAborted& e) {
+      session.reset();
+      throw Error(e.reason());  // in-process ranks: another rank failed
+    } catch (const std::exception& e) {
+      session.reset();
+      if (comm->size() == 1) throw Error(e.what());
+      // From the middle of collective work, where the other ranks cannot be
+      // told: end them all (in-process ranks: each throws GroupAborted).
+      try {
+        comm->abortAll(e.what());
+      } catch (const GroupAborted& aborted) {
+        throw Error(aborted.reason());
+      }
+    }
+    const FrameStats total = report.stats.total();
+    stats.raysTraced = total.raysTraced();
+    stats.raysForwarded = total.exchangeTotal().raysForwarded;
+    stats.seconds = 0;
+    for (const FrameStats& f : report.stats.frames) stats.seconds += f.seconds;
+    uint64_t bytes[2] = {0, 0};  // owned, borrowed
+    for (const ferry::Mesh& mesh : session->scene().meshes) {
+      auto count = [&](const auto& array) {
+        bytes[array.isShared() ? 1 : 0] += array.size() * sizeof(array[0]);
+      };
+      count(mesh.positions);
+      count(mesh.normals);
+      count(mesh.uvs);
+      count(mesh.indices);
+    }
+    const std::vector<uint64_t> summed = comm->sum(std::span<const uint64_t>(bytes));
+    stats.meshBytesOwned = summed[0];
+    stats.meshBytesBorrowed = summed[1];
+    stats.json = sessionStatsJson(*session, report, {"", stats.seconds}).dump(2);
+    if (options.imageOnEveryRank && comm->size() > 1) {
+      int size[2] = {sink.image.width, sink.image.height};
+      comm->broadcastBytes(std::as_writable_bytes(std::span(size)));
+      sink.image.width = size[0];
+      sink.image.height = size[1];
+      sink.image.rgba.resize(size_t(size[0]) * size[1] * 4);
+      comm->broadcastBytes(std::as_writable_bytes(std::span(sink.image.rgba)));
+    }
+    return std::move(sink.image);
+  }
+};
+
+struct SessionAccess {
+  static Session make(const Communicator& comm, std::shared_ptr<const void> keep,
+                      const Options& options) {
+    return Session(std::make_unique<Session::Impl>(comm, std::move(keep), options));
+  }
+};
+
+Session::Session(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Session::Session(const Options& options) {
+  // This process alone: an in-process group of one (MPI is never started).
+  auto alone = std::make_shared<InProcessGroup>(1);
+  const Communicator& comm = alone->communicator(0);
+  impl_ = std::make_unique<Impl>(comm, alone, options);
+}
+
+Session::Session(int fortranCommunicator, const Options& options) {
+  std::shared_ptr<MpiCommunicator> comm;
+  try {
+    comm = std::make_shared<MpiCommunicator>(ApplicationCommunicator{fortranCommunicator});
+  } catch (const std::exception& e) {
+    throw Error(e.what());
+  }
+  impl_ = std::make_unique<Impl>(*comm, comm, options);
+}
+
+Session::~Session() = default;
+Session::Session(Session&&) noexcept = default;
+Session& Session::operator=(Session&&) noexcept = default;
+
+int Session::rank() const {
+  return impl_->comm->rank();
+}
+int Session::size() const {
+  return impl_->comm->size();
+}
+
+void Session::load(const std::string& scene) {
+  if (scene.empty()) throw Error("load: no scene named");
+  impl_->changing();
+  impl_->sceneName = scene;
+}
+
+int Session::addMaterial(const MaterialData& m) {
+  ferry::Material material;
+  material.name = m.name;
+  material.baseColor = vec(m.color);
+  material.emission = vec(m.emission);
+  for (float v : {m.color[0], m.color[1], m.color[2], m.emission[0], m.emission[1], m.emission[2],
+                  m.roughness, m.metallic, m.ior})
+    if (!std::isfinite(v) || v < 0)
+      throw Error(fmt::format("material \"{}\": values must be finite and not negative", m.name));
+  if (m.type == "diffuse") {
+    material.model = defaultMaterialModel();
+  } else if (m.type == "conductor") {
+    material.model = std::make_shared<ConductorModel>(m.roughness);
+  } else if (m.type == "dielectric") {
+    material.model = std::make_shared<DielectricModel>(m.ior, m.roughness);
+  } else if (m.type == "principled") {
+    MetallicRoughness surface;
+    surface.metallic = std::min(m.metallic, 1.0f);
+    surface.roughness = std::min(m.roughness, 1.0f);
+    surface.ior = m.ior;
+    material.model = modelOf(surface);
+  } else {
+    throw Error(fmt::format(
+        "material \"{}\": type \"{}\": expected diffuse, conductor, dielectric or principled",
+        m.name, m.type));
+  }
+  return impl_->changing().addMaterial(std::move(material));
+}
+
+int Session::addMesh(const MeshData& data) {
+  ferry::Scene& scene = impl_->changing();
+  ferry::Mesh mesh;
+  mesh.name = data.name.empty() ? fmt::format("mesh {}", scene.meshes.size()) : data.name;
+  mesh.positions =
+      arrayOf<ferry::Vec3f>(data.positions, 3, "positions", mesh.name, data, data.readablePastEnd);
+  mesh.indices = arrayOf<Vec3i>(data.indices, 3, "indices", mesh.name, data, false);
+  mesh.normals = arrayOf<ferry::Vec3f>(data.normals, 3, "normals", mesh.name, data, false);
+  mesh.uvs = arrayOf<Vec2f>(data.uvs, 2, "uvs", mesh.name, data, false);
+  if (data.material < 0 || size_t(data.material) >= scene.materials.size())
+    throw Error(fmt::format("mesh \"{}\": material {} (there are {})", mesh.name, data.material,
+                            scene.materials.size()));
+  mesh.material = data.material;
+  if (const std::string problem = mesh.arrayProblem(); !problem.empty())
+    throw Error(fmt::format("mesh \"{}\": {}", mesh.name, problem));
+  if (data.arrays == Arrays::Copy) mesh.reserveVertexSlack();
+  scene.meshes.push_back(std::move(mesh));
+  return int(scene.meshes.size() - 1);
+}
+
+int Session::addObject(std::span<const int> meshes) {
+  ferry::Scene& scene = impl_->changing();
+  ferry::Object object;
+  object.name = fmt::format("object {}", scene.objects.size());
+  for (int m : meshes) {
+    if (m < 0 || size_t(m) >= scene.meshes.size())
+      throw Error(fmt::format("addObject: mesh {} (there are {})", m, scene.meshes.size()));
+    object.meshes.push_back(m);
+  }
+  if (object.meshes.empty()) throw Error("addObject: no meshes");
+  scene.objects.push_back(std::move(object));
+  return int(scene.objects.size() - 1);
+}
+
+void Session::addInstance(int object, const Transform& t) {
+  ferry::Scene& scene = impl_->changing();
+  if (object < 0 || size_t(object) >= scene.objects.size())
+    throw Error(fmt::format("addInstance: object {} (there are {})", object, scene.objects.size()));
+  for (float v : t)
+    if (!std::isfinite(v)) throw Error("addInstance: the transform is not finite");
+  Affine3f transform = Affine3f::identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) transform.l[r][c] = t[size_t(4 * r + c)];
+    transform.t[r] = t[size_t(4 * r + 3)];
+  }
+  scene.instances.push_back({object, transform});
+}
+
+int Session::placeMesh(const MeshData& mesh) {
+  const int m = addMesh(mesh);
+  const int object = addObject(std::span<const int>(&m, 1));
+  addInstance(object);
+  return m;
+}
+
+void Session::addVolume(const VolumeData& v) {
+  const std::string name = v.name.empty() ? "volume" : v.name;
+  const uint64_t count = uint64_t(std::max(v.dims[0], 0)) * uint64_t(std::max(v.dims[1], 0)) *
+                         uint64_t(std::max(v.dims[2], 0));
+  if (v.dims[0] < 1 || v.dims[1] < 1 || v.dims[2] < 1 || count != v.values.size())
+    throw Error(fmt::format("volume \"{}\": dims {} x {} x {} do not match {} values", name,
+                            v.dims[0], v.dims[1], v.dims[2], v.values.size()));
+  const Box3f box{vec(v.lower), vec(v.upper)};
+  if (!(box.lower.x < box.upper.x && box.lower.y < box.upper.y && box.lower.z < box.upper.z))
+    throw Error(fmt::format("volume \"{}\": lower must be below upper on every axis", name));
+  std::shared_ptr<const DensityGrid> grid;
+  try {
+    grid = std::make_shared<DensityGrid>(v.dims[0], v.dims[1], v.dims[2],
+                                         std::vector<float>(v.values.begin(), v.values.end()));
+  } catch (const std::exception& e) {
+    throw Error(fmt::format("volume \"{}\": {}", name, e.what()));
+  }
+  Medium medium;
+  if (v.colorMap.empty()) {
+    medium = gridMedium(name, vec(v.sigmaA), vec(v.sigmaS), v.g, grid, Affine3f::identity(), box);
+  } else {
+    const auto colors = colorMap(v.colorMap);
+    if (!colors) throw Error(fmt::format("volume \"{}\": no colour map \"{}\"", name, v.colorMap));
+    if (!(v.opacity > 0) || !std::isfinite(v.opacity))
+      throw Error(fmt::format("volume \"{}\": opacity {}: must be positive", name, v.opacity));
+    TransferFunction tf = TransferFunction::standard().withColors(*colors);
+    tf = tf.withScale(v.opacity * tf.scale() / maxComponent(box.size()));
+    medium = transferFunctionMedium(name, grid, std::make_shared<TransferFunction>(tf), box);
+  }
+  ferry::Scene& scene = impl_->changing();
+  scene.media.push_back(std::move(medium));
+  scene.mediumBoundaries.push_back(
+      {boxMesh(box, name + " box"), {int32_t(scene.media.size() - 1), kNoMedium}});
+}
+
+void Session::addSun(const Vec3& direction, const Vec3& irradiance) {
+  SunLight sun;
+  const ferry::Vec3f d = vec(direction);
+  if (!(length(d) > 0) || !std::isfinite(length(d))) throw Error("addSun: no direction");
+  sun.direction = normalize(d);
+  sun.irradiance = vec(irradiance);
+  impl_->changing().suns.push_back(sun);
+}
+
+void Session::setEnvironment(const Vec3& color) {
+  impl_->changing().environment.color = vec(color);
+}
+
+void Session::setCamera(const Camera& c) {
+  CameraView view;
+  view.name = "api";
+  view.from = vec(c.from);
+  view.at = vec(c.at);
+  view.up = vec(c.up);
+  view.fovY = c.fovY;
+  if (!(c.fovY > 0 && c.fovY < 180)) throw Error(fmt::format("camera fovY {}: 0 to 180", c.fovY));
+  if (!(length(view.at - view.from) > 0)) throw Error("camera: from and at are the same point");
+  impl_->camera = view;
+}
+
+void Session::setImageSize(int width, int height) {
+  Options o = impl_->options;
+  o.width = width;
+  o.height = height;
+  if (width < 1 || height < 1) throw Error(fmt::format("image size {}x{}", width, height));
+  std::swap(o, impl_->options);
+  try {
+    impl_->check();
+  } catch (...) {
+    std::swap(o, impl_->options);
+    throw;
+  }
+}
+
+void Session::setSamplesPerPixel(int samples) {
+  if (samples < 1) throw Error(fmt::format("samplesPerPixel {}: must be at least 1", samples));
+  impl_->options.samplesPerPixel = samples;
+}
+
+Image Session::render(int frames) {
+  return impl_->render(frames);
+}
+
+const Stats& Session::stats() const {
+  return impl_->stats;
+}
+
+void writeImage(const std::string& path, const Image& image, float exposure) {
+  if (image.empty() || image.rgba.size() != size_t(image.width) * image.height * 4)
+    throw Error(fmt::format("{}: the image is empty or its size does not match", path));
+  std::vector<ferry::Vec3f> linear(size_t(image.width) * image.height);
+  for (size_t i = 0; i < linear.size(); ++i)
+    std::memcpy(&linear[i], &image.rgba[4 * i], 3 * sizeof(float));
+  try {
+    const std::optional<ImageFormat> format = imageFormatOf(path);
+    if (!format)
+      throw InputError(fmt::format("{}: unknown image format (use .png, .exr or .pfm)", path));
+    if (*format == ImageFormat::Png) {
+      ToneMapping toneMapping;
+      toneMapping.exposure = exposure;
+      writePng(path, image.width, image.height, toneMapToRgba8(linear, toneMapping));
+    } else {
+      ferry::writeImage(path, LinearImage{image.width, image.height, std::move(linear)});
+    }
+  } catch (const std::exception& e) {
+    throw Error(e.what());
+  }
+}
+
+Image render(const std::string& scene, const Options& options, int frames) {
+  Session session(options);
+  session.load(scene);
+  return session.render(frames);
+}
+
+}  // namespace ferry::api
+
+namespace ferry {
+
+api::Session sessionOn(const Communicator& comm, std::shared_ptr<const void> keep,
+                       const api::Options& options) {
+  return api::SessionAccess::make(comm, std::move(keep), options);
+}
+
+}  // namespace ferry

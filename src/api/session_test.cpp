@@ -1,0 +1,303 @@
+// The library's Session: a named scene renders what the command's session
+// renders, bit for bit; the same scene handed over from memory (borrowed
+// arrays) renders the same image; in-process ranks give the 1-rank image;
+// errors are api::Error on every rank, with the failing rank's message.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstring>
+#include <mutex>
+
+#include "api/session_on.h"
+#include "comm/in_process_communicator.h"
+#include "ferry/ferry.h"
+#include "io/scene_loader.h"
+#include "session/render_session.h"
+
+namespace ferry {
+namespace {
+
+api::Options smallOptions() {
+  api::Options o;
+  o.width = 48;
+  o.height = 36;
+  o.samplesPerPixel = 2;
+  o.seed = 3;
+  o.threads = 1;
+  return o;
+}
+
+// What the command's code path (RenderSession over an image sink) renders.
+struct LinearSink final : FrameSink {
+  Frames frames() const override { return Frames::Last; }
+  Pixels pixels() const override { return Pixels::Linear; }
+  void receive(const FrameImage& image) override {
+    if (image.last) linear = image.linear;
+  }
+  std::vector<Vec3f> linear;
+};
+
+std::vector<Vec3f> commandImage(const std::string& scene, const api::Options& o, int frames) {
+  SessionSettings s;
+  s.scene = scene;
+  s.render.width = o.width;
+  s.render.height = o.height;
+  s.render.samplesPerPixel = o.samplesPerPixel;
+  s.render.frames = frames;
+  s.render.seed = o.seed;
+  s.threads = o.threads;
+  InProcessGroup alone(1);
+  RenderSession session(s, alone.communicator(0));
+  LinearSink sink;
+  session.run(sink);
+  return sink.linear;
+}
+
+std::vector<Vec3f> rgbOf(const api::Image& image) {
+  std::vector<Vec3f> out(size_t(image.width) * image.height);
+  for (size_t i = 0; i < out.size(); ++i)
+    out[i] = Vec3f(image.rgba[4 * i], image.rgba[4 * i + 1], image.rgba[4 * i + 2]);
+  return out;
+}
+
+TEST(ApiSession, ANamedSceneRendersTheCommandsImage) {
+  const api::Options o = smallOptions();
+  const api::Image image = api::render("builtin:cornell", o, 2);
+  ASSERT_EQ(image.width, 48);
+  ASSERT_EQ(image.height, 36);
+  ASSERT_EQ(image.rgba.size(), size_t(48 * 36 * 4));
+  EXPECT_EQ(rgbOf(image), commandImage("builtin:cornell", o, 2));
+  for (size_t i = 3; i < image.rgba.size(); i += 4) ASSERT_EQ(image.rgba[i], 1.0f);
+}
+
+// The cornell box handed over as arrays (borrowed, as a simulation would):
+// its meshes, materials, instances, lights and camera.
+api::Image cornellFromMemory(api::Session& session, const Scene& cornell) {
+  std::vector<int> materials;
+  for (size_t m = 1; m < cornell.materials.size() + 1; ++m) {
+    const Material& material = cornell.materials[m - 1];
+    EXPECT_EQ(material.model->name(), "diffuse");
+    api::MaterialData data;
+    data.name = material.name;
+    data.color = {material.baseColor.x, material.baseColor.y, material.baseColor.z};
+    data.emission = {material.emission.x, material.emission.y, material.emission.z};
+    materials.push_back(session.addMaterial(data));
+  }
+  std::vector<int> meshes;
+  for (const Mesh& mesh : cornell.meshes) {
+    api::MeshData data;
+    data.name = mesh.name;
+    data.positions = {&mesh.positions.data()->x, mesh.positions.size() * 3};
+    data.indices = {reinterpret_cast<const uint32_t*>(mesh.indices.data()),
+                    mesh.indices.size() * 3};
+    if (!mesh.normals.empty()) data.normals = {&mesh.normals.data()->x, mesh.normals.size() * 3};
+    if (!mesh.uvs.empty()) data.uvs = {&mesh.uvs.data()->x, mesh.uvs.size() * 2};
+    data.material = materials[size_t(mesh.material)];
+    data.arrays = api::Arrays::Borrow;
+    meshes.push_back(session.addMesh(data));
+  }
+  std::vector<int> objects;
+  for (const Object& object : cornell.objects) {
+    std::vector<int> ids;
+    for (int32_t m : object.meshes) ids.push_back(meshes[size_t(m)]);
+    objects.push_back(session.addObject(ids));
+  }
+  for (const Instance& instance : cornell.instances) {
+    api::Transform t;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) t[size_t(4 * r + c)] = instance.transform.l[r][c];
+      t[size_t(4 * r + 3)] = instance.transform.t[r];
+    }
+    session.addInstance(objects[size_t(instance.object)], t);
+  }
+  for (const SunLight& sun : cornell.suns)
+    session.addSun({sun.direction.x, sun.direction.y, sun.direction.z},
+                   {sun.irradiance.x, sun.irradiance.y, sun.irradiance.z});
+  const Vec3f sky = cornell.environment.color;
+  session.setEnvironment({sky.x, sky.y, sky.z});
+  const CameraView& v = cornell.views[0];
+  session.setCamera(
+      {{v.from.x, v.from.y, v.from.z}, {v.at.x, v.at.y, v.at.z}, {v.up.x, v.up.y, v.up.z}, v.fovY});
+  return session.render(2);
+}
+
+TEST(ApiSession, ASceneFromMemoryRendersTheFilesImage) {
+  const Scene cornell = loadScene("builtin:cornell");
+  ASSERT_TRUE(cornell.suns.empty() && !cornell.environment.image);
+  api::Session session(smallOptions());
+  const api::Image fromMemory = cornellFromMemory(session, cornell);
+  EXPECT_EQ(rgbOf(fromMemory), rgbOf(api::render("builtin:cornell", smallOptions(), 2)));
+  // A new camera renders again without reloading.
+  session.setCamera({{278, 273, -500}, {278, 273, 0}, {0, 1, 0}, 50});
+  const api::Image closer = session.render(1);
+  EXPECT_EQ(closer.width, 48);
+  EXPECT_NE(rgbOf(closer), rgbOf(fromMemory));
+}
+
+TEST(ApiSession, InProcessRanksRenderTheOneRankImage) {
+  api::Options o = smallOptions();
+  const api::Image alone = api::render("builtin:cornell", o, 1);
+  for (int ranks : {2, 3}) {
+    o.imageOnEveryRank = ranks == 3;
+    std::mutex mutex;
+    std::vector<api::Image> images(static_cast<size_t>(ranks));
+    runRanks(ranks, [&](const Communicator& comm) {
+      api::Session session = sessionOn(comm, nullptr, o);
+      EXPECT_EQ(session.size(), ranks);
+      session.load("builtin:cornell");
+      api::Image image = session.render(1);
+      std::lock_guard lock(mutex);
+      images[size_t(comm.rank())] = std::move(image);
+    });
+    EXPECT_EQ(rgbOf(images[0]), rgbOf(alone)) << ranks << " ranks";
+    for (int r = 1; r < ranks; ++r)
+      if (o.imageOnEveryRank)
+        EXPECT_EQ(rgbOf(images[size_t(r)]), rgbOf(alone)) << "rank " << r;
+      else
+        EXPECT_TRUE(images[size_t(r)].empty()) << "rank " << r;
+  }
+}
+
+// Each rank hands over only its own instances of the cornell box (instance i
+// on rank i % ranks): the image equals one rank rendering the box assembled
+// in rank order (so that the emitters come in the same order).
+void addPieceOf(api::Session& session, const Scene& cornell, int rank, int ranks) {
+  for (const Material& material : cornell.materials) {
+    api::MaterialData data;
+    data.color = {material.baseColor.x, material.baseColor.y, material.baseColor.z};
+    data.emission = {material.emission.x, material.emission.y, material.emission.z};
+    session.addMaterial(data);
+  }
+  for (size_t i = 0; i < cornell.instances.size(); ++i) {
+    if (int(i % size_t(ranks)) != rank) continue;
+    const Instance& instance = cornell.instances[i];
+    std::vector<int> ids;
+    for (int32_t m : cornell.objects[size_t(instance.object)].meshes) {
+      const Mesh& mesh = cornell.meshes[size_t(m)];
+      api::MeshData data;
+      data.positions = {&mesh.positions.data()->x, mesh.positions.size() * 3};
+      data.indices = {reinterpret_cast<const uint32_t*>(mesh.indices.data()),
+                      mesh.indices.size() * 3};
+      data.material = mesh.material + 1;
+      data.arrays = api::Arrays::Borrow;
+      ids.push_back(session.addMesh(data));
+    }
+    api::Transform t;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) t[size_t(4 * r + c)] = instance.transform.l[r][c];
+      t[size_t(4 * r + 3)] = instance.transform.t[r];
+    }
+    session.addInstance(session.addObject(ids), t);
+  }
+  const CameraView& v = cornell.views[0];
+  session.setCamera(
+      {{v.from.x, v.from.y, v.from.z}, {v.at.x, v.at.y, v.at.z}, {v.up.x, v.up.y, v.up.z}, v.fovY});
+}
+
+TEST(ApiSession, DataAlreadyDistributedRendersTheAssembledImage) {
+  const Scene cornell = loadScene("builtin:cornell");
+  for (int ranks : {2, 3}) {
+    api::Session assembled(smallOptions());
+    for (int r = 0; r < ranks; ++r) addPieceOf(assembled, cornell, r, ranks);
+    const api::Image expected = assembled.render(1);
+    api::Options o = smallOptions();
+    o.distribution = api::Distribution::Distributed;
+    std::mutex mutex;
+    api::Image image;
+    uint64_t forwarded = 0;
+    runRanks(ranks, [&](const Communicator& comm) {
+      api::Session session = sessionOn(comm, nullptr, o);
+      addPieceOf(session, cornell, comm.rank(), ranks);
+      api::Image mine = session.render(1);
+      std::lock_guard lock(mutex);
+      if (comm.rank() == 0) {
+        image = std::move(mine);
+        forwarded = session.stats().raysForwarded;
+      }
+    });
+    EXPECT_EQ(rgbOf(image), rgbOf(expected)) << ranks << " ranks";
+    EXPECT_GT(forwarded, 0u) << "the pieces did not exchange rays";
+  }
+}
+
+TEST(ApiSession, ARankThatFailsFailsTheSessionOnEveryRankWithItsMessage) {
+  std::atomic<int> thrown{0};
+  runRanks(3, [&](const Communicator& comm) {
+    api::Session session = sessionOn(comm, nullptr, smallOptions());
+    session.load(comm.rank() == 1 ? "/nonexistent/scene.pbrt" : "builtin:cornell");
+    try {
+      session.render(1);
+      ADD_FAILURE() << "rank " << comm.rank() << " rendered";
+    } catch (const api::Error& e) {
+      EXPECT_NE(std::string(e.what()).find("on rank 1:"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.pbrt"), std::string::npos)
+          << e.what();
+      ++thrown;
+    }
+  });
+  EXPECT_EQ(thrown, 3);
+}
+
+TEST(ApiSession, RefusesBadInputWithAnError) {
+  api::Session session(smallOptions());
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const api::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message([&] {
+              session.addMaterial({"m", "velvet"});
+            }).find("type \"velvet\""),
+            std::string::npos);
+  const float positions[] = {0, 0, 0, 1, 0, 0, 0, 1};
+  const uint32_t indices[] = {0, 1, 2};
+  api::MeshData mesh;
+  mesh.name = "bad";
+  mesh.positions = positions;
+  mesh.indices = indices;
+  EXPECT_NE(message([&] { session.addMesh(mesh); }).find("not a multiple of 3"), std::string::npos);
+  const float three[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const uint32_t outOfRange[] = {0, 1, 3};
+  mesh.positions = three;
+  mesh.indices = outOfRange;
+  EXPECT_NE(message([&] { session.addMesh(mesh); }), "no error");
+  EXPECT_NE(message([&] { session.addInstance(7); }).find("object 7"), std::string::npos);
+  api::VolumeData volume;
+  volume.dims = {2, 2, 2};
+  const float values[7] = {};
+  volume.values = values;
+  EXPECT_NE(message([&] { session.addVolume(volume); }).find("do not match 7 values"),
+            std::string::npos);
+  EXPECT_NE(message([&] { session.render(0); }).find("frames 0"), std::string::npos);
+  EXPECT_NE(message([] { api::render("/nonexistent.pbrt"); }).find("/nonexistent.pbrt"),
+            std::string::npos);
+}
+
+TEST(ApiSession, RendersAVolumeFromMemory) {
+  api::Options o = smallOptions();
+  api::Session session(o);
+  std::vector<float> values(8 * 8 * 8);
+  for (int z = 0; z < 8; ++z)
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x) values[size_t((z * 8 + y) * 8 + x)] = float(x + y + z) / 21;
+  api::VolumeData volume;
+  volume.name = "ramp";
+  volume.dims = {8, 8, 8};
+  volume.values = values;
+  volume.colorMap = "viridis";
+  session.addVolume(volume);
+  session.addSun({0.4f, 1, 0.6f}, {3, 3, 3});
+  session.setEnvironment({0.5f, 0.5f, 0.5f});
+  const api::Image image = session.render(1);
+  ASSERT_EQ(image.rgba.size(), size_t(48 * 36 * 4));
+  // The volume covers the middle of the image: its pixels are not the sky's.
+  const size_t middle = size_t(18 * 48 + 24) * 4, corner = 0;
+  EXPECT_NE(image.rgba[middle], image.rgba[corner]);
+  EXPECT_GT(session.stats().raysTraced, 0u);
+}
+
+}  // namespace
+}  // namespace ferry
