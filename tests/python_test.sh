@@ -5,7 +5,8 @@
 #  2. mpirun -np 5 python3: three ranks render on a communicator split off
 #     COMM_WORLD (the one-process image) while the other two keep working;
 #     then each of the three holds one strip of the terrain (distributed
-#     data): the image of the terrain assembled.
+#     data): the image of the terrain assembled; a missing scene on one
+#     renderer fails every renderer with ferry.Error naming that rank.
 #  3. examples/render_island.py on 3 ranks, as the README runs it.
 set -euo pipefail
 ferry=$(realpath "$1")

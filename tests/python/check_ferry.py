@@ -171,6 +171,17 @@ def ranks(binary):
                 fail("distributed strips render another image than the terrain assembled")
             print(f"  each of {sub.size} renderers holding one strip (distributed): the assembled "
                   f"image, {d.stats['rays_forwarded']} rays forwarded")
+        # One renderer's bad input fails the render on every renderer, with its message.
+        bad = ferry.Session(comm=sub, size=(16, 12), threads=1)
+        bad.load("/nonexistent/piece.obj" if sub.rank == 1 else "builtin:cornell")
+        try:
+            bad.render()
+            fail(f"rank {sub.rank} rendered though rank 1's scene is missing")
+        except ferry.Error as e:
+            if "on rank 1" not in str(e) or "/nonexistent/piece.obj" not in str(e):
+                fail(f"rank {sub.rank}: {e!r} does not name rank 1 and its file")
+        if sub.rank == 0:
+            print("  rank 1's missing scene: ferry.Error naming rank 1 and the file on every renderer")
     else:
         # The other ranks keep working among themselves while the renderers render.
         total = sub.allreduce(1)
