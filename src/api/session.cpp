@@ -484,7 +484,7 @@ void writeImage(const std::string& path, const Image& image, float exposure) {
     throw Error(fmt::format("{}: the image is empty or its size does not match", path));
   std::vector<ferry::Vec3f> linear(size_t(image.width) * image.height);
   for (size_t i = 0; i < linear.size(); ++i)
-    std::memcpy(&linear[i], &image.rgba[4 * i], 3 * sizeof(float));
+    linear[i] = ferry::Vec3f(image.rgba[4 * i], image.rgba[4 * i + 1], image.rgba[4 * i + 2]);
   try {
     const std::optional<ImageFormat> format = imageFormatOf(path);
     if (!format)

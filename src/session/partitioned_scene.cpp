@@ -10,6 +10,8 @@
 
 #include "core/error.h"
 #include "io/parts/part_file.h"
+#include "partition/proxies.h"
+#include "partition/units.h"
 #include "scene/light_scene.h"
 #include "scene/scene_summary.h"
 
@@ -140,9 +142,12 @@ PartitionedScene distributedPiece(Scene piece, const Communicator& comm) {
     piece.validate();
     mine.ranks = ranks;
     mine.lights = lightScene(piece);
-    Partition local = roundRobinPartition(piece, 1);  // one proxy per instance: its world box
-    for (Proxy& p : local.proxies) p.owners = RankSet::single(rank);
-    mine.proxies = std::move(local.proxies);
+    // The partitioners' proxies for what this rank holds: a mesh placed once
+    // braided into boxes (as many as the partitioners' default), an
+    // instance of an instanced object its box.
+    const UnitSet units = extractUnits(piece, UnitOptions{});
+    const std::vector<RankSet> owners(units.units.size(), RankSet::single(rank));
+    mine.proxies = instanceProxies(piece, units, owners, PartitionerOptions{}.meshProxies, 1);
   } catch (const std::exception& e) {
     error = e.what();
   }

@@ -36,8 +36,9 @@ PartitionedScene loadPartitionedScene(const SessionSettings& settings, int ranks
 // This rank's own piece of a scene that is already spread over the ranks
 // of `comm` (each holds only its piece, as a simulation does), with no
 // partitioning step: the rank owns every instance of its piece; the proxies
-// (one per instance, its world box) and the lights (every emissive triangle)
-// are every rank's, exchanged, in rank order; the summary is the whole's.
+// (as the partitioners make them: a mesh placed once braided into boxes, an
+// instance of an instanced object its box) and the lights (every emissive
+// triangle) are every rank's, exchanged, in rank order; the summary is the whole's.
 // Suns, environment, views, film and media are the piece's own: every rank
 // gives the same. Collective; InputError (the same on every rank) if a
 // piece is not valid.
