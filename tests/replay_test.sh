@@ -56,6 +56,8 @@ for forwarding in proxies ring broadcast; do
   done
   echo "island, 4 ranks, $forwarding, replay:"
   $compare "$work/island.pfm" "$work/island-4-$forwarding-replay.pfm" --outliers 0.002
+  echo "island, 4 ranks, $forwarding, mask:"
+  $compare "$work/island.pfm" "$work/island-4-$forwarding-mask.pfm" --outliers 0.002
   check_stats "$work/island-4-$forwarding-replay.pfm.json"
   check_layout "$work/island-4-$forwarding-replay.pfm.json" 4 replay
   check_layout "$work/island-4-$forwarding-mask.pfm.json" 4 mask8
