@@ -1,7 +1,8 @@
-// A toy simulation renders its own data in situ: every rank of MPI_COMM_WORLD
-// makes a strip of a terrain, the even ranks render it with Ferry on a
-// communicator of their own (the odd ones go on working), and the first of
-// them writes the PNG. Usage: mpirun -np 4 in_situ [out.png]
+// A toy simulation renders its own data in situ: the even ranks of
+// MPI_COMM_WORLD each make one strip of a terrain and render the whole of it
+// with Ferry on a communicator of their own, each holding only its strip
+// (the odd ranks go on working); the first writes the PNG.
+// Usage: mpirun -np 4 in_situ [out.png]
 #include <mpi.h>
 
 #include <cmath>
@@ -17,16 +18,19 @@ int main(int argc, char** argv) {
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
   MPI_Comm renderers;  // the even ranks render; the odd ones keep simulating
   MPI_Comm_split(MPI_COMM_WORLD, rank % 2, rank, &renderers);
-  // The whole terrain, 64 x 64 cells over [-1, 1]^2, as every renderer knows it.
-  const int n = 64;
+  int piece = 0, pieces = 1;  // this renderer's strip of the terrain's rows
+  MPI_Comm_rank(renderers, &piece);
+  MPI_Comm_size(renderers, &pieces);
+  // A terrain of 64 x 64 cells over [-1, 1]^2; this rank makes its rows only.
+  const int n = 64, rows0 = n * piece / pieces, rows1 = n * (piece + 1) / pieces;
   std::vector<float> positions;
   std::vector<uint32_t> indices;
-  for (int j = 0; j <= n; ++j)
+  for (int j = rows0; j <= rows1; ++j)
     for (int i = 0; i <= n; ++i) {
       const float x = -1 + 2.0f * i / n, z = -1 + 2.0f * j / n;
       positions.insert(positions.end(), {x, 0.25f * std::sin(6 * x) * std::cos(5 * z), z});
     }
-  for (int j = 0; j < n; ++j)
+  for (int j = 0; j < rows1 - rows0; ++j)
     for (int i = 0; i < n; ++i) {
       const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
       indices.insert(indices.end(), {a, c, b, b, c, d});
@@ -37,6 +41,7 @@ int main(int argc, char** argv) {
       options.width = 320;
       options.height = 240;
       options.samplesPerPixel = 8;
+      options.distribution = ferry::api::Distribution::Distributed;  // each holds its strip
       ferry::api::Session session = ferry::api::sessionOn(renderers, options);
       const int ground = session.addMaterial({"ground", "diffuse", {0.6f, 0.5f, 0.3f}});
       ferry::api::MeshData mesh{"terrain", positions, indices};
@@ -49,8 +54,11 @@ int main(int argc, char** argv) {
       const ferry::api::Image image = session.render(2);
       if (session.rank() == 0) {
         ferry::api::writeImage(argc > 1 ? argv[1] : "in_situ.png", image);
-        std::printf("in_situ: %d renderers of %d ranks, %llu rays\n", session.size(), ranks,
-                    (unsigned long long)session.stats().raysTraced);
+        std::printf(
+            "in_situ: %d renderers of %d ranks, each holding its strip: %llu rays, %llu "
+            "forwarded\n",
+            session.size(), ranks, (unsigned long long)session.stats().raysTraced,
+            (unsigned long long)session.stats().raysForwarded);
       }
     } catch (const ferry::api::Error& e) {
       std::fprintf(stderr, "in_situ: rank %d: %s\n", rank, e.what());
