@@ -9,6 +9,7 @@
 #include "api/session_on.h"
 #include "comm/in_process_communicator.h"
 #include "core/error.h"
+#include "io/default_lighting.h"
 #include "io/images/image_io.h"
 #include "io/scene_loader.h"
 #include "io/volumes/volume_files.h"
@@ -89,11 +90,10 @@ struct Session::Impl {
     ferry::Material grey;
     grey.name = "default";
     scene.addMaterial(grey);
-    check();
+    check(options);
   }
 
-  void check() const {
-    const Options& o = options;
+  static void check(const Options& o) {
     if (o.width < 0 || o.height < 0 || o.width > 16384 || o.height > 16384 ||
         (o.width == 0) != (o.height == 0))
       throw Error(fmt::format("image size {}x{}: each side 1 to 16384 (both 0: the scene's)",
@@ -146,8 +146,8 @@ struct Session::Impl {
     if (inMemory && copy.views.empty()) {
       Box3f box = copy.worldBounds();
       for (const MediumBoundary& b : copy.mediumBoundaries) box.extend(b.mesh.bounds());
-      if (distributed) box = wholeBounds(box);  // the same view on every rank
-      copy.views.push_back(framing(box));
+      if (distributed) box = wholeBounds(box, *comm);  // the same view on every rank
+      copy.views.push_back(framingView(box));
     }
     std::optional<PartitionedScene> part;
     if (distributed) {
@@ -184,30 +184,6 @@ struct Session::Impl {
       session.reset();
       throw Error(failure);
     }
-  }
-
-  // The union of every rank's `box` (collective).
-  Box3f wholeBounds(const Box3f& box) const {
-    const bool empty = box.empty();
-    const double none = -1e30;
-    const std::vector<double> mine = {
-        empty ? none : -double(box.lower.x), empty ? none : -double(box.lower.y),
-        empty ? none : -double(box.lower.z), empty ? none : double(box.upper.x),
-        empty ? none : double(box.upper.y),  empty ? none : double(box.upper.z)};
-    const std::vector<double> m = comm->max(std::span<const double>(mine));
-    if (m[0] <= none) return Box3f{};
-    return Box3f{{-float(m[0]), -float(m[1]), -float(m[2])},
-                 {float(m[3]), float(m[4]), float(m[5])}};
-  }
-
-  static CameraView framing(const Box3f& box) {
-    CameraView view;
-    view.name = "default";
-    view.fovY = 45;
-    view.at = box.empty() ? ferry::Vec3f(0) : box.center();
-    const float radius = box.empty() ? 1 : std::max(0.5f * length(box.size()), 1e-3f);
-    view.from = view.at + ferry::Vec3f(0, 0, radius / std::sin(0.5f * view.fovY * kPi / 180));
-    return view;
   }
 
   Image render(int frames) {
@@ -457,13 +433,8 @@ void Session::setImageSize(int width, int height) {
   o.width = width;
   o.height = height;
   if (width < 1 || height < 1) throw Error(fmt::format("image size {}x{}", width, height));
-  std::swap(o, impl_->options);
-  try {
-    impl_->check();
-  } catch (...) {
-    std::swap(o, impl_->options);
-    throw;
-  }
+  Impl::check(o);
+  impl_->options = o;
 }
 
 void Session::setSamplesPerPixel(int samples) {

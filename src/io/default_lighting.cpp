@@ -6,7 +6,10 @@
 namespace ferry {
 
 void addDefaultView(Scene& scene) {
-  Box3f bounds = scene.worldBounds();
+  scene.views.push_back(framingView(scene.worldBounds()));
+}
+
+CameraView framingView(const Box3f& bounds) {
   CameraView view;
   view.name = "default";
   view.fovY = 45.0f;
@@ -17,7 +20,7 @@ void addDefaultView(Scene& scene) {
   float distance = radius / std::sin(0.5f * view.fovY * kPi / 180.0f);
   view.from = view.at + Vec3f(0, 0, distance);
   view.up = {0, 1, 0};
-  scene.views.push_back(view);
+  return view;
 }
 
 void addDefaultViewAndLights(Scene& scene) {

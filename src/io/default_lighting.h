@@ -15,4 +15,7 @@ void addDefaultViewAndLights(Scene& scene);
 // Only the view (for formats that bring their own lights but no camera).
 void addDefaultView(Scene& scene);
 
+// That view for `bounds`: the bounding sphere fits the vertical field of view.
+CameraView framingView(const Box3f& bounds);
+
 }  // namespace ferry

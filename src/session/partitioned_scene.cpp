@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -119,20 +120,24 @@ SceneSummary wholeSummary(const SceneSummary& piece, const Communicator& comm) {
   for (uint64_t* f : fields) counts.push_back(*f);
   counts = comm.sum(std::span<const uint64_t>(counts));
   for (size_t i = 0; i < counts.size(); ++i) *fields[i] = counts[i];
-  const Box3f b = piece.bounds;
-  const bool empty = b.empty();
-  const std::vector<double> mine = {
-      empty ? -1e30 : -double(b.lower.x), empty ? -1e30 : -double(b.lower.y),
-      empty ? -1e30 : -double(b.lower.z), empty ? -1e30 : double(b.upper.x),
-      empty ? -1e30 : double(b.upper.y),  empty ? -1e30 : double(b.upper.z)};
-  const std::vector<double> extent = comm.max(std::span<const double>(mine));
-  if (extent[0] > -1e30)
-    whole.bounds = Box3f{{-float(extent[0]), -float(extent[1]), -float(extent[2])},
-                         {float(extent[3]), float(extent[4]), float(extent[5])}};
+  whole.bounds = wholeBounds(piece.bounds, comm);
   return whole;
 }
 
 }  // namespace
+
+Box3f wholeBounds(const Box3f& box, const Communicator& comm) {
+  // Maxima of -lower and upper; an empty box contributes the lowest double.
+  const double none = std::numeric_limits<double>::lowest();
+  const bool empty = box.empty();
+  std::vector<double> mine(6, none);
+  if (!empty)
+    mine = {-double(box.lower.x), -double(box.lower.y), -double(box.lower.z),
+            double(box.upper.x),  double(box.upper.y),  double(box.upper.z)};
+  const std::vector<double> m = comm.max(std::span<const double>(mine));
+  if (m[0] == none) return Box3f{};
+  return Box3f{{-float(m[0]), -float(m[1]), -float(m[2])}, {float(m[3]), float(m[4]), float(m[5])}};
+}
 
 PartitionedScene distributedPiece(Scene piece, const Communicator& comm) {
   const int rank = comm.rank(), ranks = comm.size();

@@ -44,4 +44,7 @@ PartitionedScene loadPartitionedScene(const SessionSettings& settings, int ranks
 // piece is not valid.
 PartitionedScene distributedPiece(Scene piece, const Communicator& comm);
 
+// The union of every rank's `box` (collective; empty boxes add nothing).
+Box3f wholeBounds(const Box3f& box, const Communicator& comm);
+
 }  // namespace ferry
