@@ -60,11 +60,15 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // Under mpirun every rank parses the same flags: only rank 0 speaks.
-    if (launcherRank() != 0) return e.get_exit_code();
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help
-    fmt::print(stderr, "ferry: error: {} (see ferry --help)\n", e.what());
-    return e.get_exit_code();
+    if (e.get_exit_code() == 0) return launcherRank() == 0 ? app.exit(e) : 0;  // --help
+    // Under mpirun every rank parses the same flags: rank 0 speaks, and the
+    // others wait for it (else mpirun may end rank 0 before it has spoken).
+    auto report = [&](const Communicator& comm) {
+      if (comm.isRoot()) fmt::print(stderr, "ferry: error: {} (see ferry --help)\n", e.what());
+      comm.barrier();
+      return e.get_exit_code();
+    };
+    return runOnRanks(&argc, &argv, report);
   }
   try {
     if (app.got_subcommand("render"))
