@@ -55,8 +55,13 @@ py::array_t<float> rgbOf(const Image& image) {
 
 Options options(std::optional<std::pair<int, int>> size, int spp, int maxDepth, uint32_t seed,
                 int threads, const std::string& partitioner, bool imageOnEveryRank,
-                const std::string& distribution = "replicated") {
+                const std::string& distribution, const py::dict& settings) {
   Options o;
+  // Values as text, the way the command line gives them (True: "true").
+  for (const auto& [name, value] : settings)
+    o.settings[std::string(py::str(name))] =
+        py::isinstance<py::bool_>(value) ? std::string(value.cast<bool>() ? "true" : "false")
+                                         : std::string(py::str(value));
   if (distribution == "distributed")
     o.distribution = Distribution::Distributed;
   else if (distribution != "replicated")
@@ -91,8 +96,9 @@ PYBIND11_MODULE(ferry, m) {
   m.def(
       "render",
       [](const std::string& scene, std::optional<std::pair<int, int>> size, int spp, uint32_t seed,
-         int frames, int maxDepth, int threads) {
-        const Options o = options(size, spp, maxDepth, seed, threads, "", false);
+         int frames, int maxDepth, int threads, const py::dict& settings) {
+        const Options o =
+            options(size, spp, maxDepth, seed, threads, "", false, "replicated", settings);
         Image image;
         {
           py::gil_scoped_release release;
@@ -102,8 +108,10 @@ PYBIND11_MODULE(ferry, m) {
       },
       py::arg("scene"), py::arg("size") = py::none(), py::arg("spp") = 1, py::arg("seed") = 1,
       py::arg("frames") = 1, py::arg("max_depth") = -1, py::arg("threads") = 0,
+      py::arg("settings") = py::dict(),
       "Renders a scene (a file or builtin:NAME) on this process; returns an (H, W, 3) float32 "
-      "array of linear radiance. size=(W, H); default the scene's, else 640 x 480.");
+      "array of linear radiance. size=(W, H); default the scene's, else 1280 x 720. settings: "
+      "any other flag of `ferry render` by name, as {\"forwarding\": \"ring\"}.");
 
   m.def(
       "write_image",
@@ -126,18 +134,20 @@ PYBIND11_MODULE(ferry, m) {
   py::class_<PySession>(m, "Session")
       .def(py::init([](const py::object& comm, std::optional<std::pair<int, int>> size, int spp,
                        uint32_t seed, int maxDepth, int threads, const std::string& partitioner,
-                       bool imageOnEveryRank, const std::string& distribution) {
+                       bool imageOnEveryRank, const std::string& distribution,
+                       const py::dict& settings) {
              return std::make_unique<PySession>(
                  comm, options(size, spp, maxDepth, seed, threads, partitioner, imageOnEveryRank,
-                               distribution));
+                               distribution, settings));
            }),
            py::arg("comm") = py::none(), py::arg("size") = py::none(), py::arg("spp") = 1,
            py::arg("seed") = 1, py::arg("max_depth") = -1, py::arg("threads") = 0,
            py::arg("partitioner") = "", py::arg("image_on_every_rank") = false,
-           py::arg("distribution") = "replicated",
+           py::arg("distribution") = "replicated", py::arg("settings") = py::dict(),
            "A render session on this process (comm=None) or on the ranks of an mpi4py "
            "communicator; every rank makes the same calls. distribution: replicated (every "
-           "rank gives the whole scene) or distributed (each rank its own piece).")
+           "rank gives the whole scene) or distributed (each rank its own piece). settings: any "
+           "other flag of `ferry render` by name.")
       .def_property_readonly("rank", [](const PySession& s) { return s.session->rank(); })
       .def_property_readonly("size", [](const PySession& s) { return s.session->size(); })
       .def(
@@ -292,6 +302,7 @@ PYBIND11_MODULE(ferry, m) {
         d["seconds"] = st.seconds;
         d["mesh_bytes_owned"] = st.meshBytesOwned;
         d["mesh_bytes_borrowed"] = st.meshBytesBorrowed;
+        d["summary"] = st.summary;
         return d;
       });
 }

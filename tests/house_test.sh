@@ -28,8 +28,8 @@ if hits=$(grep -rnE "(==|!=) *\"($pattern)\"|\"($pattern)\" *(==|!=)" src --incl
 fi
 
 if hits=$(grep -rnE '"[^"]*--[a-z][a-z-]+' src --include='*.cpp' --include='*.h' |
-  grep -vE '^src/app/|_test\.cpp:|_test_util\.h:' | grep -vE '^[^:]+:[0-9]+: *//'); then
-  fail "a layer below app/ spells a flag in a message (name the setting):"$'\n'"$hits"
+  grep -vE '^src/(app|flags)/|_test\.cpp:|_test_util\.h:' | grep -vE '^[^:]+:[0-9]+: *//'); then
+  fail "a layer below app/ and flags/ spells a flag in a message (name the setting):"$'\n'"$hits"
 fi
 
 for f in src/trace/*; do

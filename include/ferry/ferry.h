@@ -11,6 +11,8 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <memory>
 #include <span>
 #include <stdexcept>
@@ -91,8 +93,22 @@ struct Camera {
 // lights are exchanged, nothing is partitioned or moved (docs/library.md).
 enum class Distribution { Replicated, Distributed };
 
+// How far a session's work has come (Options::progress, on rank 0).
+struct Progress {
+  std::string stage;  // "load" (reading and spreading the scene) or "render"
+  // load: of the file or part `what`, in its reader's units; render: samples
+  // per pixel done, over every frame of the render() call.
+  uint64_t done = 0, total = 0;
+  // load: what is being read; when finished, the set-up's intervals in
+  // seconds ("load 1.20, build 0.40").
+  std::string what;
+  int frame = 0;            // render: the frame being rendered (0-based)
+  double secondsLeft = -1;  // render: estimated; -1 while unknown
+  bool finished = false;    // the stage is over
+};
+
 struct Options {
-  int width = 0, height = 0;  // 0: the scene's own (pbrt's Film), else 640 x 480
+  int width = 0, height = 0;  // 0: the scene's own (pbrt's Film), else 1280 x 720
   int samplesPerPixel = 1;    // per frame
   int maxDepth = -1;          // -1: the scene's own (pbrt's Integrator), else 5
   uint32_t seed = 1;
@@ -101,6 +117,15 @@ struct Options {
   // Replicated: the partitioner (empty: "best" on many ranks).
   std::string partitioner;
   bool imageOnEveryRank = false;  // else the image is on rank 0 only
+  // Every other setting of `ferry render`, by its flag's name without the
+  // dashes, with the value as the flag takes it: {"forwarding", "ring"},
+  // {"crop", "0,0.5,0,1"}, {"checkpoint", "run.ckpt"} (docs/library.md
+  // lists them). Not those with a field above (size, spp, max-depth, seed,
+  // threads, partitioner) nor the command's own (frames, output, stats,
+  // quiet, show-partition). An unknown name or a bad value is an Error.
+  std::map<std::string, std::string> settings;
+  // Called on rank 0 as the scene loads and renders (may be empty).
+  std::function<void(const Progress&)> progress;
 };
 
 // Linear radiance, RGBA (alpha 1), row 0 at the top; empty off rank 0
@@ -121,6 +146,9 @@ struct Stats {
   uint64_t meshBytesOwned = 0;
   uint64_t meshBytesBorrowed = 0;
   std::string json;  // everything, as `ferry render --stats` writes it
+  // Rank 0: the table `ferry render` prints (counters, memory per rank,
+  // time to first pixel, compositing).
+  std::string summary;
 };
 
 struct SessionAccess;  // the library's own way in (src/api/session_on.h)
@@ -161,6 +189,13 @@ class FERRY_API Session {
   void setCamera(const Camera& camera);
   void setImageSize(int width, int height);
   void setSamplesPerPixel(int samples);
+
+  // Loads and spreads the scene now (else the next render does): errors in
+  // it surface here. Collective.
+  void prepare();
+  // After prepare() or render(): the image file the scene names for itself
+  // (pbrt's Film "filename"), or empty.
+  std::string filmFilename() const;
 
   // Renders `frames` frames, accumulated. Collective.
   Image render(int frames = 1);

@@ -1,14 +1,17 @@
 // ferry::api::Session (include/ferry/ferry.h) over a RenderSession.
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <optional>
+#include <set>
 
 #include "api/session_on.h"
 #include "comm/in_process_communicator.h"
 #include "core/error.h"
+#include "flags/render_flags.h"
 #include "io/default_lighting.h"
 #include "io/images/image_io.h"
 #include "io/scene_loader.h"
@@ -32,8 +35,6 @@ static_assert(sizeof(ferry::Vec3f) == 3 * sizeof(float) && sizeof(Vec3i) == 3 * 
               sizeof(Vec2f) == 2 * sizeof(float));
 
 namespace {
-
-constexpr int kDefaultWidth = 640, kDefaultHeight = 480;
 
 ferry::Vec3f vec(const Vec3& v) {
   return {v[0], v[1], v[2]};
@@ -72,13 +73,54 @@ SharedArray<T> arrayOf(std::span<const Element> values, size_t per, const char* 
   return SharedArray<T>::shared(first, count, std::move(keeper), spare);
 }
 
+// Options::settings parsed by `ferry render`'s own flags, with the fields
+// of Options in the flags they stand for.
+RenderOptions renderFlags(const Options& options) {
+  static const std::set<std::string> fields = {"size",    "spp",         "max-depth", "seed",
+                                               "threads", "partitioner", "partition"};
+  static const std::set<std::string> command = {"frames", "output",        "o", "stats", "quiet",
+                                                "q",      "show-partition"};
+  RenderOptions flags;
+  CLI::App app;
+  app.set_help_flag();
+  addRenderingOptions(&app, flags);
+  addRunOptions(&app, flags);
+  std::vector<std::string> args;
+  for (const auto& [name, value] : options.settings) {
+    if (fields.count(name))
+      throw Error(fmt::format("setting \"{}\": given by a field of Options instead", name));
+    if (command.count(name) || name.empty() || name[0] == '-' ||
+        !app.get_option_no_throw("--" + name))
+      throw Error(
+          fmt::format("setting \"{}\": no such setting (docs/library.md lists them)", name));
+    args.push_back(value.empty() ? "--" + name : fmt::format("--{}={}", name, value));
+  }
+  std::reverse(args.begin(), args.end());  // CLI11 takes them last first
+  try {
+    app.parse(args);
+  } catch (const CLI::ParseError& e) {
+    throw Error(fmt::format("settings: {}", e.what()));
+  }
+  if (options.width > 0) flags.size = fmt::format("{}x{}", options.width, options.height);
+  flags.samplesPerPixel = options.samplesPerPixel;
+  flags.maxDepth = options.maxDepth >= 0 ? options.maxDepth : 5;
+  flags.seed = options.seed;
+  flags.threads = options.threads;
+  flags.partition.partitioner = options.partitioner;
+  flags.quiet = true;  // progress goes to Options::progress
+  flags.writesImage = false;
+  return flags;
+}
+
 }  // namespace
 
 struct Session::Impl {
   std::shared_ptr<const void> keep;  // what the communicator needs alive
   const Communicator* comm = nullptr;
   Options options;
-  std::string sceneName;  // load(); else the scene from memory
+  RenderOptions flags;         // options.settings parsed
+  bool resumePending = false;  // the first render continues flags.resume
+  std::string sceneName;       // load(); else the scene from memory
   ferry::Scene scene;
   std::optional<CameraView> camera;
   std::optional<RenderSession> session;  // built at the first render after a scene change
@@ -91,6 +133,14 @@ struct Session::Impl {
     grey.name = "default";
     scene.addMaterial(grey);
     check(options);
+    flags = renderFlags(options);
+    resumePending = !flags.resume.empty();
+    try {
+      // Every value checked now; a camera given by settings is the first setCamera.
+      camera = sessionSettings(flags, *comm).render.camera;
+    } catch (const std::exception& e) {
+      throw Error(e.what());
+    }
   }
 
   static void check(const Options& o) {
@@ -111,18 +161,20 @@ struct Session::Impl {
   }
 
   SessionSettings settings(int frames) const {
-    SessionSettings s;
+    SessionSettings s = sessionSettings(flags, *comm);
     s.scene = sceneName.empty() ? scene.name : sceneName;
-    s.render.width = options.width > 0 ? options.width : kDefaultWidth;
-    s.render.height = options.height > 0 ? options.height : kDefaultHeight;
-    s.render.samplesPerPixel = options.samplesPerPixel;
     s.render.frames = frames;
-    s.render.maxDepth = options.maxDepth >= 0 ? options.maxDepth : 5;
-    s.render.seed = options.seed;
-    s.render.camera = camera;
-    s.threads = options.threads;
-    if (!options.partitioner.empty()) s.partitioner = &partitionerNamed(options.partitioner);
-    if (!comm->isRoot()) s.load.warn = [](const std::string&) {};
+    if (camera) s.render.camera = camera;
+    if (comm->isRoot() && options.progress)
+      s.load.progress = [report = options.progress](uint64_t done, uint64_t total,
+                                                    const std::string& what) {
+        Progress p;
+        p.stage = "load";
+        p.done = done;
+        p.total = total;
+        p.what = what;
+        report(p);
+      };
     return s;
   }
 
@@ -170,11 +222,25 @@ struct Session::Impl {
         session->setImageSize(*own.filmWidth, *own.filmHeight);
       if (options.maxDepth < 0 && own.integratorMaxDepth)
         session->setMaxDepth(*own.integratorMaxDepth);
+      if (flags.crop.empty() && own.filmCrop) {
+        const auto& c = *own.filmCrop;
+        session->setCrop({c[0], c[1], c[2], c[3]});
+      }
+      // A crop that holds no pixel of the image fails here, agreed.
+      session->settings().render.window();
     } catch (const std::exception& e) {
       error = e.what();
       session.reset();
     }
     agree(error);
+    if (comm->isRoot() && options.progress) {
+      Progress p;
+      p.stage = "load";
+      p.done = p.total = 1;
+      p.what = setupIntervalsText(session->setupTimes(), "agree");
+      p.finished = true;
+      options.progress(p);
+    }
   }
 
   // Throws `error` (merged with the other ranks') on every rank if any rank has one.
@@ -189,13 +255,31 @@ struct Session::Impl {
   Image render(int frames) {
     if (frames < 1) throw Error(fmt::format("frames {}: must be at least 1", frames));
     if (!session) build(frames);
-    session->setSamples(options.samplesPerPixel, frames);
-    if (options.width > 0) session->setImageSize(options.width, options.height);
-    session->setView(session->settings().render.view, camera);
+    std::string error;
+    try {
+      session->setSamples(options.samplesPerPixel, frames);
+      if (options.width > 0) session->setImageSize(options.width, options.height);
+      session->setView(session->settings().render.view, camera);
+      if (resumePending && comm->isRoot()) session->resumeFrom(flags.resume);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    resumePending = false;
+    agree(error);
     ImageSink sink;
     SessionReport report;
     try {
-      report = session->run(sink);
+      report = session->run(sink, [&](const RenderProgress& r) {
+        if (!options.progress) return;
+        Progress p;
+        p.stage = "render";
+        p.done = uint64_t(r.frame) * uint64_t(r.samplesPerFrame) + uint64_t(r.samplesDone);
+        p.total = uint64_t(frames) * uint64_t(options.samplesPerPixel);
+        p.frame = r.frame;
+        p.secondsLeft = r.secondsLeft;
+        p.finished = r.rendered;
+        options.progress(p);
+      });
     } catch (const GroupAborted& e) {
       session.reset();
       throw Error(e.reason());  // in-process ranks: another rank failed
@@ -229,6 +313,7 @@ struct Session::Impl {
     stats.meshBytesOwned = summed[0];
     stats.meshBytesBorrowed = summed[1];
     stats.json = sessionStatsJson(*session, report, {"", stats.seconds}).dump(2);
+    stats.summary = comm->isRoot() ? sessionSummaryText(*session, report) : std::string();
     if (options.imageOnEveryRank && comm->size() > 1) {
       int size[2] = {sink.image.width, sink.image.height};
       comm->broadcastBytes(std::as_writable_bytes(std::span(size)));
@@ -440,6 +525,14 @@ void Session::setImageSize(int width, int height) {
 void Session::setSamplesPerPixel(int samples) {
   if (samples < 1) throw Error(fmt::format("samplesPerPixel {}: must be at least 1", samples));
   impl_->options.samplesPerPixel = samples;
+}
+
+void Session::prepare() {
+  if (!impl_->session) impl_->build(1);
+}
+
+std::string Session::filmFilename() const {
+  return impl_->session ? impl_->session->scene().filmFilename : std::string();
 }
 
 Image Session::render(int frames) {

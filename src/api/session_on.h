@@ -1,6 +1,6 @@
 // The library's Session over any Communicator: the public constructors use
-// it (one process, an application's MPI communicator); tests use it with
-// in-process ranks.
+// it (one process, an application's MPI communicator), `ferry render` uses it
+// on the job's ranks, tests with in-process ranks.
 #pragma once
 
 #include <memory>

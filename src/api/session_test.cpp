@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstring>
+#include <map>
 #include <mutex>
 
 #include "api/session_on.h"
@@ -274,6 +275,90 @@ TEST(ApiSession, RefusesBadInputWithAnError) {
   EXPECT_NE(message([&] { session.render(0); }).find("frames 0"), std::string::npos);
   EXPECT_NE(message([] { api::render("/nonexistent.pbrt"); }).find("/nonexistent.pbrt"),
             std::string::npos);
+}
+
+// Options::settings are `ferry render`'s flags by name: they change what the
+// flags change (a crop renders that part), not what must stay the same (the
+// image at any forwarding, exchange or chunk size).
+TEST(ApiSession, SettingsByNameAreTheCommandsFlags) {
+  api::Options o = smallOptions();
+  const api::Image whole = api::render("builtin:cornell", o, 1);
+  o.settings = {{"forwarding", "ring"}, {"exchange", "bulk"}, {"chunk", "64"}};
+  std::mutex mutex;
+  api::Image image;
+  runRanks(3, [&](const Communicator& comm) {
+    api::Session session = sessionOn(comm, nullptr, o);
+    session.load("builtin:cornell");
+    api::Image mine = session.render(1);
+    std::lock_guard lock(mutex);
+    if (comm.rank() == 0) image = std::move(mine);
+  });
+  EXPECT_EQ(rgbOf(image), rgbOf(whole));
+  api::Options cropped = smallOptions();
+  cropped.settings = {{"crop", "0,0.5,0,1"}};
+  const api::Image left = api::render("builtin:cornell", cropped, 1);
+  ASSERT_EQ(left.width, o.width / 2);
+  ASSERT_EQ(left.height, o.height);
+  for (int y = 0; y < left.height; ++y)
+    for (int x = 0; x < left.width; ++x)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_EQ(left.rgba[size_t(4 * (y * left.width + x) + k)],
+                  whole.rgba[size_t(4 * (y * whole.width + x) + k)]);
+  // A camera by settings is the camera setCamera gives.
+  api::Options looking = smallOptions();
+  looking.settings = {{"look-from", "0.2,0.5,2.5"}, {"look-at", "0,0.4,0"}, {"fov", "50"}};
+  const api::Image bySettings = api::render("builtin:cornell", looking, 1);
+  api::Session session(smallOptions());
+  session.load("builtin:cornell");
+  session.setCamera({{0.2f, 0.5f, 2.5f}, {0, 0.4f, 0}, {0, 1, 0}, 50});
+  const api::Image byCall = session.render(1);
+  EXPECT_EQ(rgbOf(bySettings), rgbOf(byCall));
+  EXPECT_NE(rgbOf(bySettings), rgbOf(whole));
+}
+
+TEST(ApiSession, RefusesUnknownSettingsNamingThem) {
+  auto message = [](std::map<std::string, std::string> settings) {
+    api::Options o = smallOptions();
+    o.settings = std::move(settings);
+    try {
+      api::Session session(o);
+    } catch (const api::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({{"colour", "red"}}).find("setting \"colour\": no such setting"),
+            std::string::npos);
+  EXPECT_NE(message({{"spp", "4"}}).find("a field of Options"), std::string::npos);
+  EXPECT_NE(message({{"output", "x.png"}}).find("no such setting"), std::string::npos);
+  EXPECT_NE(message({{"forwarding", "pigeons"}}).find("--forwarding"), std::string::npos);
+  EXPECT_NE(message({{"chunk", "many"}}).find("chunk"), std::string::npos);
+  EXPECT_EQ(message({{"env-fallback", ""}, {"mis", "off"}}), "no error");
+}
+
+TEST(ApiSession, ReportsProgressOnRankZero) {
+  api::Options o = smallOptions();
+  o.samplesPerPixel = 3;
+  std::vector<api::Progress> seen;
+  o.progress = [&](const api::Progress& p) { seen.push_back(p); };
+  api::Session session(o);
+  session.load("builtin:cornell");
+  session.prepare();
+  ASSERT_FALSE(seen.empty());
+  EXPECT_EQ(seen.back().stage, "load");
+  EXPECT_TRUE(seen.back().finished);
+  session.render(2);
+  EXPECT_EQ(seen.back().stage, "render");
+  EXPECT_TRUE(seen.back().finished);
+  uint64_t last = 0;
+  for (const api::Progress& p : seen)
+    if (p.stage == "render") {
+      EXPECT_EQ(p.total, 6u);
+      EXPECT_GE(p.done, last);
+      last = p.done;
+    }
+  EXPECT_EQ(last, 6u);
+  EXPECT_NE(session.stats().summary.find("memory per rank"), std::string::npos);
 }
 
 TEST(ApiSession, RendersAVolumeFromMemory) {

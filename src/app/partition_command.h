@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <string>
 
-#include "app/camera_flags.h"
-#include "app/partition_flags.h"
+#include "flags/camera_flags.h"
+#include "flags/partition_flags.h"
 
 #include "partition/partitioner.h"
 

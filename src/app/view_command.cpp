@@ -10,6 +10,7 @@
 #include "comm/communicator.h"
 #include "core/error.h"
 #include "session/render_session.h"
+#include "session/session_stats.h"
 #include "viewer/viewer_server.h"
 
 namespace ferry {

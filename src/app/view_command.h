@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <string>
 
-#include "app/render_command.h"
+#include "flags/render_flags.h"
 
 namespace CLI {
 class App;

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "io/images/image_io.h"
+#include "scene/scene_summary.h"
 
 namespace ferry {
 namespace {
@@ -93,6 +94,40 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
   j["seconds"]["slowest"] = setupPerRank[slowestSetup(report.setup)];
   j["seconds"]["per_rank"] = setupPerRank;
   return j;
+}
+
+std::string setupIntervalsText(const SetupTimes& times, std::string_view until) {
+  std::string out;
+  for (const auto& field : kSetupTimes) {
+    if (field.key == until) break;
+    const double seconds = times.*field.member;
+    if (seconds == 0) continue;  // e.g. no partitioning for a part directory
+    out += fmt::format("{}{} {:.2f}", out.empty() ? "" : ", ", field.key, seconds);
+  }
+  return out;
+}
+
+std::string sessionSummaryText(const RenderSession& session, const SessionReport& report) {
+  const int ranks = session.communicator().size();
+  std::string out = report.stats.summaryText(ranks);
+  auto largest = [](const std::vector<double>& v) { return uint64_t(maxOf(v)); };
+  const RankMemory& memory = report.memory;
+  out += fmt::format(
+      "  {:<22}{} of {} estimated, {} Embree, {} proxies, {} peak resident (largest rank)\n",
+      "memory per rank", formatBytes(largest(memory.estimated)),
+      formatBytes(session.summary().memory.total()), formatBytes(largest(memory.embree)),
+      formatBytes(largest(memory.proxies)), formatBytes(largest(memory.residentPeak)));
+  const size_t slowest = slowestSetup(report.setup);
+  if (slowest < report.setup.size())
+    out += fmt::format("  {:<22}{:.2f} s; {}: {} s\n", "time to first pixel",
+                       report.setup[slowest].firstPixel,
+                       ranks > 1 ? fmt::format("slowest rank {}", slowest) : std::string("set-up"),
+                       setupIntervalsText(report.setup[slowest], "first_pixel"));
+  out += fmt::format("  {:<22}{} ({} sent by direct send)\n", "composite",
+                     fmt::format("{:.3f} s", report.compositeSeconds),
+                     formatBytes(report.compositeBytes));
+  if (report.revisits) out += fmt::format("  {:<22}{}\n", "REVISITS", report.revisits);
+  return out;
 }
 
 void writeStatsFile(const std::string& path, const nlohmann::json& stats) {

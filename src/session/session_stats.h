@@ -7,6 +7,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -29,6 +30,13 @@ size_t slowestSetup(const std::vector<SetupTimes>& setup);
 
 nlohmann::json sessionStatsJson(const RenderSession& session, const SessionReport& report,
                                 const StatsContext& context);
+// The table `ferry render` prints after a render: counters, memory per
+// rank, time to first pixel, compositing (rank 0's view of every rank).
+std::string sessionSummaryText(const RenderSession& session, const SessionReport& report);
+// A set-up's intervals up to (not including) the one named `until`, as
+// "start 0.10, load 7.28, build 2.93" (kSetupTimes; intervals of 0 left out).
+std::string setupIntervalsText(const SetupTimes& times, std::string_view until);
+
 // Writes `stats` to `path` through a temporary file and a rename.
 void writeStatsFile(const std::string& path, const nlohmann::json& stats);
 

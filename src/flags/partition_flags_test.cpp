@@ -1,7 +1,7 @@
 // The partition flags are defined once (partition_flags.h) for `ferry
 // partition` and `ferry render`: the same words give both the same options,
 // and every bad value is refused naming its flag.
-#include "app/partition_flags.h"
+#include "flags/partition_flags.h"
 
 #include <gtest/gtest.h>
 #include <CLI/CLI.hpp>

@@ -1,4 +1,4 @@
-#include "app/camera_flags.h"
+#include "flags/camera_flags.h"
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>

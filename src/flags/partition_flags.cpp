@@ -1,4 +1,4 @@
-#include "app/partition_flags.h"
+#include "flags/partition_flags.h"
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
