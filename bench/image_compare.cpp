@@ -5,7 +5,7 @@
 // a quarter of the reference's width and height: the reference's own noise
 // and Ferry's per-pixel noise both average down, and a 256x256 render of a
 // 1024x1024 reference needs no resampling), then averaged again over BxB
-// blocks. Two figures come out:
+// blocks. Three figures come out:
 //   bias   per channel, mean(image) / mean(reference) - 1: energy gained or
 //          lost over the whole picture, which noise does not move (only its
 //          mean matters), so a few percent of bias is a real difference;
@@ -13,7 +13,9 @@
 //          divided by the mean over blocks and channels of R_b: where the
 //          energy is, at a scale coarse enough that per-pixel noise is small,
 //          so a wrong shadow or a missing highlight counts and Monte Carlo
-//          noise counts little.
+//          noise counts little;
+//   p99 ratio   the 99th-percentile pixel luminance, image over reference:
+//          fireflies (a heavy tail) read far above 1.
 // One normalisation for all blocks (the mean, not each block's own value)
 // keeps dark blocks, where a relative error is mostly noise, from dominating.
 //
@@ -264,6 +266,17 @@ int run(const Options& options) {
     return squares > 0 ? part / squares : 0.0;
   };
   const double worst1 = shareOfWorst(0.01), worst5 = shareOfWorst(0.05);
+  // Fireflies: the 99th-percentile pixel luminance at the comparison size,
+  // the image's over the reference's (a heavy tail reads far above 1).
+  auto percentile99 = [](const Image& im) {
+    std::vector<double> l;
+    l.reserve(im.pixels.size());
+    for (const Rgb& p : im.pixels) l.push_back(luminance(p));
+    const size_t k = std::min(l.size() - 1, size_t(0.99 * double(l.size())));
+    std::nth_element(l.begin(), l.begin() + ptrdiff_t(k), l.end());
+    return l[k];
+  };
+  const double rP99 = percentile99(r), fP99 = percentile99(f);
 
   const auto signedOrNa = [](double v) {
     return std::isnan(v) ? std::string("n/a") : fmt::format("{:+.4f}", v);
@@ -283,6 +296,8 @@ int run(const Options& options) {
   fmt::print("{:<10} {:>12.6g} {:>12.6g} {:>9}\n", "luminance", rLum, fLum,
              signedOrNa(bias(fLum, rLum)));
   fmt::print("block relative RMSE  {}\n", std::isnan(rmse) ? "n/a" : fmt::format("{:.4f}", rmse));
+  fmt::print("p99 pixel luminance  reference {:.6g}, image {:.6g}, ratio {}\n", rP99, fP99,
+             rP99 > 0 ? fmt::format("{:.3f}", fP99 / rP99) : std::string("n/a"));
   fmt::print(
       "worst blocks         1 % of the blocks hold {:.1f} % of the squared error, 5 % hold "
       "{:.1f} %; the worst at block ({}, {})\n",
@@ -327,6 +342,8 @@ int run(const Options& options) {
     out["excluded_blocks"] = excludedBlocks;
     out["exclude"] = options.exclude;
     out["squared_error_share_of_worst_blocks"] = {{"1%", worst1}, {"5%", worst5}};
+    out["p99_luminance"] = {
+        {"reference", rP99}, {"image", fP99}, {"ratio", rP99 > 0 ? fP99 / rP99 : std::nan("")}};
     nlohmann::json worst = nlohmann::json::array();
     for (size_t i = 0; i < std::min<size_t>(10, blockErrors.size()); ++i)
       worst.push_back({{"x", blockErrors[i].second % size_t(width / b)},
@@ -384,6 +401,7 @@ int main(int argc, char** argv) {
       "  bias (per channel c)  = mean(F_c) / mean(R_c) - 1   (luminance: Rec. 709 weights)\n"
       "  block relative RMSE   = sqrt(mean over blocks b and channels c of (F_bc - R_bc)^2)\n"
       "                          / (mean over blocks b and channels c of R_bc)\n"
+      "  p99 ratio             = the 99th-percentile pixel luminance of F over that of R\n"
       "Exit status: 0 compared; 1 an image is missing or unreadable, or the sizes do not match.");
   try {
     app.parse(argc, argv);

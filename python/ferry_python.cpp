@@ -268,11 +268,11 @@ PYBIND11_MODULE(ferry, m) {
       .def(
           "set_camera",
           [](PySession& s, std::array<float, 3> lookFrom, std::array<float, 3> lookAt,
-             std::array<float, 3> up, float fov) {
-            s.session->setCamera({lookFrom, lookAt, up, fov});
+             std::array<float, 3> up, float fov, float lensRadius, float focalDistance) {
+            s.session->setCamera({lookFrom, lookAt, up, fov, lensRadius, focalDistance});
           },
           py::arg("look_from"), py::arg("look_at"), py::arg("up") = std::array<float, 3>{0, 1, 0},
-          py::arg("fov") = 45.0f)
+          py::arg("fov") = 45.0f, py::arg("lens_radius") = 0.0f, py::arg("focal_distance") = 1e6f)
       .def(
           "set_image_size",
           [](PySession& s, int width, int height) { s.session->setImageSize(width, height); },

@@ -89,6 +89,18 @@ assert all(b["share"] == 0 for b in w[1:]), w
 print("  local.pfm: the one differing block holds all the squared error")
 EOF
 
+# The 99th-percentile pixel: of the 16 pixels at the comparison size, the
+# 16th smallest (index int(0.99 * 16) = 15), the brightest: the right half's
+# luminance; local.pfm doubles only the left half, so the ratio is 1, and
+# scaled.pfm's is 1.1.
+python3 - <<'EOF'
+import json
+for path, ratio in (("local.json", 1.0), ("scaled.json", 1.1)):
+    p = json.load(open(path))["p99_luminance"]
+    assert abs(p["ratio"] - ratio) < 1e-6, (path, p)
+print("  p99 pixel luminance ratios: 1 (local.pfm), 1.1 (scaled.pfm)")
+EOF
+
 # --reference-crop compares with that part of the reference: its right half
 # equals right.pfm.
 "$compare" ref.pfm right.pfm --reference-crop 0.5,1,0,1 --size 2x4 --block 1 --json right.json > /dev/null

@@ -85,6 +85,10 @@ struct VolumeData {
 struct Camera {
   Vec3 from{0, 0, 5}, at{0, 0, 0}, up{0, 1, 0};
   float fovY = 45;  // degrees
+  // A thin lens: rays leave a disk of this radius around `from` and meet on
+  // the plane focalDistance ahead along the view axis (0: a pinhole).
+  float lensRadius = 0;
+  float focalDistance = 1e6f;
 };
 
 // Whose data a rank gives. Replicated: every rank gives the whole scene (the

@@ -136,8 +136,12 @@ struct Session::Impl {
     flags = renderFlags(options);
     resumePending = !flags.resume.empty();
     try {
-      // Every value checked now; a camera given by settings is the first setCamera.
-      camera = sessionSettings(flags, *comm).render.camera;
+      // Every value checked now; a camera given by settings is the first
+      // setCamera (with the lens the settings give).
+      const SessionSettings s = sessionSettings(flags, *comm);
+      camera = s.render.camera;
+      if (camera && s.render.lensRadius) camera->lensRadius = *s.render.lensRadius;
+      if (camera && s.render.focalDistance) camera->focalDistance = *s.render.focalDistance;
     } catch (const std::exception& e) {
       throw Error(e.what());
     }
@@ -222,6 +226,12 @@ struct Session::Impl {
         session->setImageSize(*own.filmWidth, *own.filmHeight);
       if (options.maxDepth < 0 && own.integratorMaxDepth)
         session->setMaxDepth(*own.integratorMaxDepth);
+      if (std::isnan(flags.maxSampleLuminance)) {
+        if (own.filmMaxSampleLuminance > 0)
+          session->setSampleClamp({SampleClamp::Measure::Luminance, own.filmMaxSampleLuminance});
+        else if (own.filmMaxComponentValue > 0)
+          session->setSampleClamp({SampleClamp::Measure::MaxComponent, own.filmMaxComponentValue});
+      }
       if (flags.crop.empty() && own.filmCrop) {
         const auto& c = *own.filmCrop;
         session->setCrop({c[0], c[1], c[2], c[3]});
@@ -508,7 +518,13 @@ void Session::setCamera(const Camera& c) {
   view.at = vec(c.at);
   view.up = vec(c.up);
   view.fovY = c.fovY;
+  view.lensRadius = c.lensRadius;
+  view.focalDistance = c.focalDistance;
   if (!(c.fovY > 0 && c.fovY < 180)) throw Error(fmt::format("camera fovY {}: 0 to 180", c.fovY));
+  if (!(c.lensRadius >= 0 && std::isfinite(c.lensRadius)))
+    throw Error(fmt::format("camera lensRadius {}: 0 or more", c.lensRadius));
+  if (!(c.focalDistance > 0 && std::isfinite(c.focalDistance)))
+    throw Error(fmt::format("camera focalDistance {}: positive", c.focalDistance));
   if (!(length(view.at - view.from) > 0)) throw Error("camera: from and at are the same point");
   impl_->camera = view;
 }

@@ -36,6 +36,8 @@ enum class RandomDim : uint32_t {
   Roulette,
   OwnerPick,
   MaterialSelect,  // which material of a mix shades the vertex
+  LensU,           // the thin lens point of a camera ray or a connection to the camera
+  LensV,
   Count
 };
 

@@ -55,6 +55,13 @@ class DistributedTraversal final : public RayTraversal<Path> {
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override;
   bool anyRaysLeft(size_t localRays) override { return comm_.sum(uint64_t(localRays)) > 0; }
+  bool sumOverRanks(std::vector<int64_t>& values) override {
+    // Two's complement: summing as unsigned gives the signed sums.
+    std::vector<uint64_t> words(values.begin(), values.end());
+    words = comm_.sum(std::span<const uint64_t>(words));
+    for (size_t i = 0; i < values.size(); ++i) values[i] = int64_t(words[i]);
+    return comm_.isRoot();
+  }
 
   // Rays that arrived for tracing on a rank they had already visited (must
   // stay 0). Replay layout: rays arriving back at their generating rank, or

@@ -46,6 +46,8 @@ struct SceneCase {
   std::string name, spec;
   int width, height, samplesPerPixel, maxDepth;
   bool lightPaths = false;
+  float maxSampleLuminance = 0;  // pbrt's film clamp of each camera sample; 0: none
+  float lensRadius = 0, focalDistance = 1;
 };
 
 RenderSettings settingsFor(const SceneCase& c) {
@@ -56,6 +58,12 @@ RenderSettings settingsFor(const SceneCase& c) {
   s.maxDepth = c.maxDepth;
   s.seed = 3;
   s.lightPaths = c.lightPaths;
+  if (c.maxSampleLuminance > 0)
+    s.sampleClamp = {SampleClamp::Measure::Luminance, c.maxSampleLuminance};
+  if (c.lensRadius > 0) {
+    s.lensRadius = c.lensRadius;
+    s.focalDistance = c.focalDistance;
+  }
   return s;
 }
 
@@ -280,12 +288,18 @@ const SceneCase kIsland{"island", "builtin:island?scale=0.05", 48, 27, 1, 3};
 // Light paths: rays that start at the emitter (on any rank) and shadow rays
 // to the camera that add to any pixel.
 const SceneCase kCornellLightPaths{"cornell_light_paths", "builtin:cornell", 40, 40, 2, 4, true};
+// A thin lens, and each camera sample's total clamped (its contributions are
+// made on several ranks; the totals are summed before the clamp), with light
+// paths (their splats clamped one by one).
+const SceneCase kCornellClampedThroughALens{
+    "cornell_clamped_lens", "builtin:cornell", 40, 40, 2, 4, true, 0.3f, 20.0f, 1000.0f};
 
 std::vector<Case> allCases() {
   std::vector<Case> cases;
   for (const SceneCase& scene : {kCornell, kIsland})
     for (const char* partitioner : {"round-robin", "best"}) cases.push_back({scene, partitioner});
   cases.push_back({kCornellLightPaths, "best"});
+  cases.push_back({kCornellClampedThroughALens, "best"});
   return cases;
 }
 

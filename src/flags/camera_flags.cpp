@@ -1,5 +1,7 @@
 #include "flags/camera_flags.h"
 
+#include <cmath>
+
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
@@ -16,6 +18,31 @@ void addCameraFlags(CLI::App* command, CameraFlags& f) {
   command->add_option("--look-at", f.lookAt, "The point it looks at, x,y,z")->type_name("X,Y,Z");
   command->add_option("--up", f.up, "Its up direction (default 0,1,0)")->type_name("X,Y,Z");
   command->add_option("--fov", f.fov, "Its vertical field of view in degrees (default 45)");
+  command->add_option("--lens-radius", f.lensRadius,
+                      "A thin lens of this radius (world units) for the camera rendered, given or\n"
+                      "named (pbrt's lensradius; 0: a pinhole; default: the view's own)");
+  command->add_option("--focal-distance", f.focalDistance,
+                      "The distance of the plane in focus along the view axis (pbrt's\n"
+                      "focaldistance; default: the view's own, else 1e6)");
+}
+
+void lensFromFlags(const CameraFlags& f, std::optional<float>& lensRadius,
+                   std::optional<float>& focalDistance) {
+  // (NaN: not given; CLI11 reads "nan" too, which is refused like any non-number.)
+  auto given = [](float v) { return !std::isnan(v); };
+  lensRadius.reset();
+  focalDistance.reset();
+  if (given(f.lensRadius)) {
+    if (!(f.lensRadius >= 0 && std::isfinite(f.lensRadius)))
+      throw InputError(fmt::format("--lens-radius {}: expected 0 or more", f.lensRadius));
+    lensRadius = f.lensRadius;
+  }
+  if (given(f.focalDistance)) {
+    if (!(f.focalDistance > 0 && std::isfinite(f.focalDistance)))
+      throw InputError(
+          fmt::format("--focal-distance {}: expected a positive distance", f.focalDistance));
+    focalDistance = f.focalDistance;
+  }
 }
 
 Vec3f parseVectorFlag(const std::string& flag, const std::string& text) {

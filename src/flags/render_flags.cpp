@@ -88,6 +88,13 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   checkRankCount(comm.size(), s.pathLayout);
   parseImageSize(o.size, s.render.width, s.render.height);
   if (!o.crop.empty()) s.render.crop = parseCropWindow("--crop", o.crop);
+  if (!std::isnan(o.maxSampleLuminance)) {
+    if (!(o.maxSampleLuminance >= 0) || !std::isfinite(o.maxSampleLuminance))
+      throw InputError(fmt::format("--max-sample-luminance {}: expected 0 (no clamp) or more",
+                                   o.maxSampleLuminance));
+    if (o.maxSampleLuminance > 0)
+      s.render.sampleClamp = {SampleClamp::Measure::Luminance, o.maxSampleLuminance};
+  }
   s.render.samplesPerPixel = o.samplesPerPixel;
   s.render.frames = o.frames;
   s.render.maxDepth = o.maxDepth;
@@ -118,6 +125,7 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   s.load = sceneLoadOptions(o, comm);
   s.threads = o.threads;
   s.render.camera = cameraFromFlags(o.camera);
+  lensFromFlags(o.camera, s.render.lensRadius, s.render.focalDistance);
   return s;
 }
 
@@ -140,6 +148,10 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
   command->add_option("--crop", o.crop,
                       "Render only this part of the image, X0,X1,Y0,Y1 as fractions of its\n"
                       "width and height, y down (pbrt's cropwindow); the output holds that part");
+  command->add_option("--max-sample-luminance", o.maxSampleLuminance,
+                      "Scale each camera sample whose luminance exceeds this down to it, as\n"
+                      "pbrt-v3's Film maxsampleluminance (light path splats one by one); 0: no\n"
+                      "clamp. Default: the scene's own (pbrt's Film), else none");
   command->add_option("--spp", o.samplesPerPixel, "Samples (paths) per pixel in each frame")
       ->capture_default_str();
   command

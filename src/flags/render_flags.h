@@ -33,6 +33,8 @@ struct RenderOptions {
   std::string output = "ferry.png";
   std::string statsPath;
   float exposure = 0;
+  // --max-sample-luminance: NaN: the scene's own clamp (pbrt's Film); 0: none.
+  float maxSampleLuminance = std::nanf("");
   bool quiet = false;
   // --env-fallback: a missing environment map becomes a constant light.
   bool envFallback = false;

@@ -31,9 +31,10 @@ class Bsdf {
   // Scatters nothing.
   Bsdf();
   // `delta`: every direction sample() draws is a delta (a mirror or a smooth
-  // window); `transmits`: light may leave on the other side of the surface
-  // (the sign of wo.z then says which side it arrived from; the others are
-  // shaded on the side the ray arrived from).
+  // window); `transmits`: light may leave on the other side of the surface,
+  // or its two sides scatter differently (a tabulated BSDF with a distinct
+  // bottom): the sign of wo.z then says which side it arrived from; the
+  // others are shaded on the side the ray arrived from.
   template <class Lobe>
   Bsdf(const Lobe& lobe, bool delta, bool transmits);
 

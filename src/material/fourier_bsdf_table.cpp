@@ -31,6 +31,7 @@ std::string FourierBsdfTable::finish() {
     if (!std::isfinite(c)) return "a coefficient is not finite";
   a0.assign(entries, 0);
   hasTransmission = false;
+  hasBackSide = false;
   for (int32_t o = 0; o < nMu; ++o)
     for (int32_t i = 0; i < nMu; ++i) {
       const size_t e = entry(i, o);
@@ -45,6 +46,7 @@ std::string FourierBsdfTable::finish() {
       if (m > 0) {
         a0[e] = coefficients[offset[e]];
         if (mu[i] * mu[o] > 0 && a0[e] != 0) hasTransmission = true;
+        if (mu[o] < 0 && mu[i] > 0 && a0[e] != 0) hasBackSide = true;
       }
     }
   recip.assign(size_t(mMax), 0);

@@ -35,11 +35,15 @@ struct FourierBsdfTable {
   std::vector<uint32_t> offset;     // nMu * nMu: where entry (i, o)'s coefficients start
   std::vector<int32_t> order;       // nMu * nMu: its series length
   std::vector<float> coefficients;  // order * nChannels per entry, channel after channel
-  // Derived (finish()): each entry's zeroth luminance coefficient, 1/k, and
-  // whether any entry has light on the far side (mu_i mu_o > 0).
+  // Derived (finish()): each entry's zeroth luminance coefficient, 1/k,
+  // whether any entry has light on the far side (mu_i mu_o > 0), and whether
+  // the bottom reflects (mu_o < 0 < mu_i): its two sides then scatter
+  // differently (paint.bsdf: a glossy coat of albedo 0.4 on top, a
+  // Lambertian 0.6 beneath).
   std::vector<float> a0;
   std::vector<float> recip;
   bool hasTransmission = false;
+  bool hasBackSide = false;
 
   size_t entry(int32_t i, int32_t o) const { return size_t(o) * size_t(nMu) + size_t(i); }
   // Entry (i, o)'s coefficients (channel c starts at c * m).
@@ -51,6 +55,9 @@ struct FourierBsdfTable {
   // pbrt-v3's tables with eta != 1 describe an interface light crosses; any
   // table with light on the far side transmits.
   bool transmits() const { return eta != 1 || hasTransmission; }
+  // Whether the side a ray arrives on matters: pbrt-v3 reads the table in its
+  // shading frame, so a ray from below the shading normal sees the bottom.
+  bool sided() const { return transmits() || hasBackSide; }
 
   // Checks every size, index and number, then computes the derived arrays;
   // returns what is wrong ("" when nothing): the reader and the part file

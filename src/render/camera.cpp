@@ -72,6 +72,54 @@ Camera::Camera(const CameraView& view, const FilmWindow& window)
   tanHalfX_ = tanHalfY_ * float(width) / float(height);
   xScale_ = 2 * tanHalfX_ / float(width);
   yScale_ = 2 * tanHalfY_ / float(height);
+  if (view.lensRadius > 0) {
+    if (!(view.focalDistance > 0) || !std::isfinite(view.focalDistance) ||
+        !std::isfinite(view.lensRadius))
+      throw InputError(
+          fmt::format("camera: lens radius {} needs a positive, finite focal "
+                      "distance (it is {})",
+                      view.lensRadius, view.focalDistance));
+    lensRadius_ = view.lensRadius;
+    focalDistance_ = view.focalDistance;
+  }
+}
+
+namespace {
+// Shirley and Chiu's concentric map of the unit square onto the unit disk
+// (pbrt's ConcentricSampleDisk): uniform, and nearby points stay near.
+Vec2f concentricDisk(Vec2f u) {
+  const float x = 2 * u.x - 1, y = 2 * u.y - 1;
+  if (x == 0 && y == 0) return {0, 0};
+  float r, theta;
+  if (std::abs(x) > std::abs(y)) {
+    r = x;
+    theta = (kPi / 4) * (y / x);
+  } else {
+    r = y;
+    theta = kPi / 2 - (kPi / 4) * (x / y);
+  }
+  return {r * std::cos(theta), r * std::sin(theta)};
+}
+}  // namespace
+
+Vec3f Camera::lensPoint(Vec2f uLens) const {
+  if (!hasLens()) return origin_;
+  const Vec2f d = concentricDisk(uLens);
+  return origin_ + right_ * (d.x * lensRadius_) + up_ * (d.y * lensRadius_);
+}
+
+void Camera::ray(float x, float y, Vec2f uLens, Vec3f& rayOrigin, Vec3f& rayDirection) const {
+  if (!hasLens()) {
+    rayOrigin = origin_;
+    rayDirection = direction(x, y);
+    return;
+  }
+  const float sx = x * xScale_ - tanHalfX_;
+  const float sy = tanHalfY_ - y * yScale_;
+  // The pinhole ray's point on the focal plane (its forward component is 1).
+  const Vec3f focus = origin_ + (forward_ + right_ * sx + up_ * sy) * focalDistance_;
+  rayOrigin = lensPoint(uLens);
+  rayDirection = normalize(focus - rayOrigin);
 }
 
 bool Camera::project(Vec3f d, float& x, float& y) const {
@@ -84,8 +132,21 @@ bool Camera::project(Vec3f d, float& x, float& y) const {
 }
 
 bool Camera::pixelOf(Vec3f point, uint32_t& pixel) const {
+  return pixelOf(point, origin_, pixel);
+}
+
+bool Camera::pixelOf(Vec3f point, Vec3f lens, uint32_t& pixel) const {
   float x, y;
-  if (!project(point - origin_, x, y)) return false;
+  Vec3f seen = point - origin_;
+  if (hasLens()) {
+    // Where the ray from the lens point through `point` meets the focal
+    // plane, seen from the pinhole.
+    const Vec3f w = point - lens;
+    const float z = dot(w, forward_);
+    if (!(z > 0)) return false;
+    seen = lens + w * (focalDistance_ / z) - origin_;
+  }
+  if (!project(seen, x, y)) return false;
   x -= float(x0_);
   y -= float(y0_);
   if (!(x >= 0 && y >= 0 && x < float(width_) && y < float(height_))) return false;

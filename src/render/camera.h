@@ -1,4 +1,5 @@
-// A pinhole camera made from a named scene view and the image size.
+// A perspective camera, a pinhole or a thin lens, made from a named scene
+// view and the image size.
 #pragma once
 
 #include <cstdint>
@@ -58,10 +59,21 @@ class Camera {
   // Inverse: the film position a world direction projects to; false if behind.
   bool project(Vec3f direction, float& x, float& y) const;
 
+  // The thin lens (CameraView::lensRadius): a camera ray leaves the lens
+  // point `uLens` ([0, 1)^2, mapped concentrically onto the disk) picks,
+  // towards where the pinhole's ray through film point (x, y) meets the
+  // focal plane. A pinhole's ray is (origin(), direction(x, y)).
+  bool hasLens() const { return lensRadius_ > 0; }
+  Vec3f lensPoint(Vec2f uLens) const;
+  void ray(float x, float y, Vec2f uLens, Vec3f& rayOrigin, Vec3f& rayDirection) const;
+
   // For light tracing (a light path's vertex connected to the camera):
   // The image pixel `point` projects to; false if outside the image (the
   // window) or behind.
   bool pixelOf(Vec3f point, uint32_t& pixel) const;
+  // The same for the ray from the lens point `lens` to `point`: the pixel
+  // whose camera rays from `lens` pass through `point`.
+  bool pixelOf(Vec3f point, Vec3f lens, uint32_t& pixel) const;
   // The cosine between the viewing axis and unit `direction` from the camera.
   float cosToAxis(Vec3f direction) const { return dot(direction, forward_); }
   // The image plane's area at distance 1 (the image's pixels, within the
@@ -79,6 +91,7 @@ class Camera {
   float xScale_ = 0, yScale_ = 0;      // 2 tan(half angle) / film pixels
   int x0_ = 0, y0_ = 0;                // the window's corner in the film
   int width_ = 1, height_ = 1;         // the image
+  float lensRadius_ = 0, focalDistance_ = 1;
 };
 
 }  // namespace ferry

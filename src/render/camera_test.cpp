@@ -1,8 +1,10 @@
 // The camera's pixel <-> direction maps, whole and cropped (pbrt's crop
-// window), and the crop's rounding and checks.
+// window), the crop's rounding and checks, and the thin lens.
 #include "render/camera.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "core/error.h"
 #include "scene/scene.h"
@@ -73,6 +75,53 @@ TEST(Camera, ACroppedCameraSeesThePartOfTheWholeImage) {
   // per image pixel, splat 1 / (area cos^4).
   EXPECT_NEAR(part.planeArea() / whole.planeArea(), float(w.width * w.height) / (64.0f * 48.0f),
               1e-5f);
+}
+
+// The thin lens: every ray through a film point meets the pinhole's ray on
+// the focal plane; lens points fill the disk (area fractions); a point a
+// lens ray reaches maps back to the ray's pixel; radius 0 is the pinhole.
+TEST(Camera, AThinLensFocusesOnItsFocalPlane) {
+  CameraView view = testView();
+  const Camera pinhole(view, 64, 48);
+  Vec3f o, d;
+  pinhole.ray(10.5f, 20.5f, {0.3f, 0.8f}, o, d);
+  EXPECT_EQ(o, view.from);
+  EXPECT_EQ(d, pinhole.direction(10.5f, 20.5f));
+  EXPECT_FALSE(pinhole.hasLens());
+
+  view.lensRadius = 0.5f;
+  view.focalDistance = 6;
+  const Camera lens(view, 64, 48);
+  ASSERT_TRUE(lens.hasLens());
+  const Vec3f forward = normalize(view.at - view.from);
+  int inner = 0, samples = 0;
+  for (float u : {0.02f, 0.3f, 0.5f, 0.77f, 0.98f})
+    for (float v : {0.05f, 0.41f, 0.5f, 0.66f, 0.93f}) {
+      for (float x : {0.5f, 31.25f, 63.5f})
+        for (float y : {0.5f, 17.75f, 47.5f}) {
+          lens.ray(x, y, {u, v}, o, d);
+          EXPECT_LE(length(o - view.from), 0.5f + 1e-5f);
+          EXPECT_NEAR(dot(o - view.from, forward), 0, 1e-5f);  // across the axis
+          // Where it meets the focal plane: on the pinhole's ray.
+          const float t = (6 - dot(o - view.from, forward)) / dot(d, forward);
+          const Vec3f focus = o + d * t;
+          const Vec3f expected =
+              view.from + pinhole.direction(x, y) * (6 / dot(pinhole.direction(x, y), forward));
+          EXPECT_LT(length(focus - expected), 1e-4f * 6);
+          // A point further along maps back to the pixel.
+          uint32_t pixel = 0;
+          ASSERT_TRUE(lens.pixelOf(o + d * (t * 0.37f), o, pixel));
+          EXPECT_EQ(pixel, uint32_t(y) * 64 + uint32_t(x));
+        }
+      inner += length(lens.lensPoint({u, v}) - view.from) < 0.5f * std::sqrt(0.5f);
+      ++samples;
+    }
+  // The concentric map is uniform: about half of a grid of samples lands in
+  // the inner disk of half the area (a coarse check).
+  EXPECT_NEAR(double(inner) / samples, 0.5, 0.2);
+  // A lens needs a focal distance.
+  view.focalDistance = 0;
+  EXPECT_THROW(Camera(view, 64, 48), InputError);
 }
 
 }  // namespace

@@ -60,5 +60,48 @@ TEST(FourierRender, APaintedPlaneUnderAWhiteSkyShowsTheTablesAlbedo) {
   }
 }
 
+// paint.bsdf's two sides differ (a glossy coat of albedo about 0.4 on top, a
+// Lambertian 0.6 beneath): seen from below its normal, the plane shows the
+// table's bottom, as pbrt-v3 reads it in the shading frame.
+TEST(FourierRender, APaintedPlaneSeenFromBelowShowsTheTablesBottom) {
+  const std::filesystem::path path =
+      std::filesystem::path(FERRY_SHARED_SCENES) / "breakfast" / "bsdfs" / "paint.bsdf";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "paint.bsdf is not available";
+  Scene scene;
+  scene.bsdfTables.push_back(readFourierBsdfFile(path.string()));
+  ASSERT_TRUE(scene.bsdfTables[0]->hasBackSide);
+  Material paint = diffuseMaterial(Vec3f(0.5f));
+  paint.model = std::make_shared<FourierModel>(0);
+  const int32_t m = scene.addMaterial(paint);
+  scene.addSingleInstanceMesh(makeQuad({-50, 0, 50}, {100, 0, 0}, {0, 0, -100}, m));  // normal +y
+  const float theta = 50 * kPi / 180;
+  CameraView view;  // below the plane, 50 degrees from its (downward) back
+  view.from = {0, -10 * std::cos(theta), 10 * std::sin(theta)};
+  view.at = {0, 0, 0};
+  view.fovY = 1;
+  const PixelStatistics stats = renderUnderWhiteSky(scene, view);
+  // The bottom's albedo for this wo (below: wo.z < 0), from the BSDF's samples.
+  const Bsdf bsdf = fourierBsdf(*scene.bsdfTables[0]);
+  const Vec3f wo{0, std::sin(theta), -std::cos(theta)};
+  TestRng rng(5);
+  MeanVariance albedo[3];
+  for (int i = 0; i < 400000; ++i) {
+    BsdfSample s;
+    const bool ok = bsdf.sample(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, s);
+    for (int k = 0; k < 3; ++k) albedo[k].add(ok && s.wi.z < 0 ? s.weight[k] : 0.0);
+  }
+  const double z = twoSidedNormalQuantile(sidak(0.01, 3));
+  for (int k = 0; k < 3; ++k) {
+    double mean, se;
+    stats.imageMean(k, mean, se);
+    const double bound =
+        z * std::hypot(se, albedo[k].standardError()) + 2 * kHalfRelativeError * albedo[k].mean;
+    std::printf("[ fourier  ] ch%d: from below: render %.5f +- %.1e, albedo %.5f +- %.1e\n", k,
+                mean, se, albedo[k].mean, albedo[k].standardError());
+    EXPECT_NEAR(mean, albedo[k].mean, bound) << k;
+    EXPECT_NEAR(mean, 0.6, 0.03) << k;  // the Lambertian bottom, not the coat's 0.4
+  }
+}
+
 }  // namespace
 }  // namespace ferry

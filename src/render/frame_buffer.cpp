@@ -1,10 +1,55 @@
 #include "render/frame_buffer.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "scene/texture.h"
 
 namespace ferry {
+
+float SampleClamp::scale(Vec3f v) const {
+  float measured = 0;
+  switch (measure) {
+    case Measure::None:
+      return 1;
+    case Measure::Luminance:  // pbrt-v3's RGBSpectrum::y()
+      measured = 0.212671f * v.x + 0.715160f * v.y + 0.072169f * v.z;
+      break;
+    case Measure::MaxComponent:
+      measured = std::max({v.x, v.y, v.z});
+      break;
+  }
+  return measured > limit ? limit / measured : 1.0f;
+}
+
+void FrameBuffer::setSampleClamp(const SampleClamp& clamp) {
+  clamp_ = clamp;
+  if (!clamp_.active())
+    sampleSum_ = {};
+  else if (sampleSum_.size() != sum_.size())
+    sampleSum_.assign(sum_.size(), 0);
+}
+
+void FrameBuffer::finishSample(bool addHere) {
+  if (!clamp_.active()) return;
+  if (addHere) {
+    for (size_t p = 0; p < pixelCount(); ++p) {
+      const int64_t* s = &sampleSum_[3 * p];
+      const Vec3f total(toLinear(s[0], 1), toLinear(s[1], 1), toLinear(s[2], 1));
+      const float scale = clamp_.scale(total);
+      int64_t* out = &sum_[3 * p];
+      if (scale == 1) {
+        for (int k = 0; k < 3; ++k) out[k] += s[k];
+      } else {
+        const Vec3f clamped = total * scale;
+        out[0] += toFixed(clamped.x);
+        out[1] += toFixed(clamped.y);
+        out[2] += toFixed(clamped.z);
+      }
+    }
+  }
+  std::fill(sampleSum_.begin(), sampleSum_.end(), 0);
+}
 
 std::vector<Vec3f> FrameBuffer::sum(double scale) const {
   std::vector<Vec3f> out(pixelCount());

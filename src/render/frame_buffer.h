@@ -20,6 +20,17 @@
 
 namespace ferry {
 
+// pbrt's film clamp of one camera sample's radiance: v3's
+// "maxsampleluminance" scales a sample whose luminance exceeds the limit
+// down to it, v4's "maxcomponentvalue" one whose largest channel does.
+struct SampleClamp {
+  enum class Measure { None, Luminance, MaxComponent } measure = Measure::None;
+  float limit = 0;
+  bool active() const { return measure != Measure::None; }
+  // The factor a sample of radiance `v` is scaled by (1: within the limit).
+  float scale(Vec3f v) const;
+};
+
 class FrameBuffer {
  public:
   // 2^-28 (3.7e-9) resolution. A contribution is clamped to [0, 2^26]
@@ -31,9 +42,31 @@ class FrameBuffer {
   FrameBuffer(int width, int height)
       : width_(width), height_(height), sum_(size_t(width) * height * 3, 0) {}
 
-  // Adds one contribution. NaN and negative values add nothing.
+  // Adds one contribution of the pixel's camera sample. NaN and negative
+  // values add nothing.
   void add(uint32_t pixel, Vec3f value) {
-    int64_t* s = &sum_[size_t(pixel) * 3];
+    addTo(clamp_.active() ? sampleSum_ : sum_, pixel, value);
+  }
+  // Adds a light path's contribution (a splat): under a sample clamp it is
+  // clamped alone, as pbrt clamps light tracing's splats.
+  void addSplat(uint32_t pixel, Vec3f value) {
+    if (clamp_.active()) value = value * clamp_.scale(value);
+    addTo(sum_, pixel, value);
+  }
+
+  // While `clamp` is active, add() collects the current camera sample of
+  // every pixel apart; finishSample() then clamps each pixel's sample total
+  // and adds it (if `addHere`: a distributed render sums the ranks' sample
+  // totals first, sampleSums(), and one rank adds them). The totals are
+  // integer sums, so the clamp does not depend on the order or the ranks.
+  void setSampleClamp(const SampleClamp& clamp);
+  const SampleClamp& sampleClamp() const { return clamp_; }
+  std::vector<int64_t>& sampleSums() { return sampleSum_; }
+  void finishSample(bool addHere);
+
+ private:
+  void addTo(std::vector<int64_t>& sums, uint32_t pixel, Vec3f value) {
+    int64_t* s = &sums[size_t(pixel) * 3];
     if (atomicAdds_) {
       std::atomic_ref<int64_t>(s[0]).fetch_add(toFixed(value.x), std::memory_order_relaxed);
       std::atomic_ref<int64_t>(s[1]).fetch_add(toFixed(value.y), std::memory_order_relaxed);
@@ -44,6 +77,8 @@ class FrameBuffer {
       s[2] += toFixed(value.z);
     }
   }
+
+ public:
   // Whether add() may be called for one pixel from several threads at once.
   void setAtomicAdds(bool atomic) { atomicAdds_ = atomic; }
   static int64_t toFixed(float v) {
@@ -69,6 +104,8 @@ class FrameBuffer {
   int width_, height_;
   std::vector<int64_t> sum_;
   bool atomicAdds_ = false;
+  SampleClamp clamp_;
+  std::vector<int64_t> sampleSum_;  // the current camera sample, while clamped
 };
 
 // Exposure (in stops), the ACES filmic curve (Narkowicz's fit), then sRGB.

@@ -89,7 +89,8 @@ LightSampler::LightSampler(const Scene& scene)
       // (Two-sided emitters keep their edges: where a sample lands does not
       // change for them.)
       const bool oneSided = !material.emitsBackSide;
-      const bool swapEdges = oneSided && inst.transform.determinant() < 0;
+      const bool swapEdges =
+          oneSided && ((inst.transform.determinant() < 0) != material.lightSampledOnBackSide);
       for (const Vec3i& tri : mesh.indices) {
         const std::array<Vec3f, 3> corners{inst.transform.transformPoint(mesh.positions[tri.x]),
                                            inst.transform.transformPoint(mesh.positions[tri.y]),

@@ -182,6 +182,64 @@ TEST(Mis, EmittersAreFoundThroughTheLightSceneAndUnderMirroringTransforms) {
             LightSampler::kNotAnEmitter);
 }
 
+// pbrt-v3 under a mirror (Material::lightSampledOnBackSide): rays see the
+// emitter on its hit side while light samples leave the other side. A
+// mirrored quad whose hit side faces up (object winding +y) over a floor:
+// seen emitting from above either way; the floor below is lit only with the
+// flag, and then by light samples alone (BSDF rays meet the dark side).
+TEST(Mis, LightSampledOnBackSideLeavesTheSideRaysDoNotSee) {
+  for (const bool flag : {false, true}) {
+    Scene scene;
+    const int32_t floor = scene.addMaterial(diffuseMaterial(Vec3f(0.5f)));
+    Material e = emitter({4, 4, 4}, false);
+    e.lightSampledOnBackSide = flag;
+    const int32_t light = scene.addMaterial(e);
+    scene.addSingleInstanceMesh(makeQuad({-2, 0, 2}, {4, 0, 0}, {0, 0, -4}, floor));
+    Object object;
+    object.meshes.push_back(int32_t(scene.meshes.size()));
+    scene.meshes.push_back(makeQuad({-0.5f, 1, 0.5f}, {1, 0, 0}, {0, 0, -1}, light));
+    scene.objects.push_back(object);
+    scene.instances.push_back({int32_t(scene.objects.size() - 1), Affine3f::scale({-1, 1, 1})});
+
+    const LightSampler lights(scene);
+    LightSample below, above;
+    const bool fromBelow = lights.sample({0, 0, 0}, {0, 1, 0}, false, 0.5f, {0.5f, 0.5f}, below) &&
+                           below.pdf > 0 && maxComponent(below.radiance) > 0;
+    const bool fromAbove = lights.sample({0, 2, 0}, {0, -1, 0}, false, 0.5f, {0.5f, 0.5f}, above) &&
+                           above.pdf > 0 && maxComponent(above.radiance) > 0;
+    EXPECT_EQ(fromBelow, flag);
+    EXPECT_EQ(fromAbove, !flag);
+
+    RenderSettings s;
+    s.width = s.height = 16;
+    s.samplesPerPixel = 4;
+    s.maxDepth = 1;
+    auto meanOf = [&](const CameraView& view) {
+      Scene copy = scene;
+      copy.views = {view};
+      RenderSetup setup(copy, s);
+      double sum = 0;
+      const std::vector<Vec3f> pixels = setup.frameMean(0);
+      for (const Vec3f& p : pixels) sum += p.y;
+      return sum / double(pixels.size());
+    };
+    CameraView top;  // the quad fills the view: its radiance
+    top.from = {0, 1.5f, 0};
+    top.at = {0, 0, 0};
+    top.up = {0, 0, -1};
+    top.fovY = 40;
+    EXPECT_NEAR(meanOf(top), 4.0, 1e-3) << flag;
+    CameraView side;  // the floor under the quad
+    side.from = {0, 0.4f, 2.5f};
+    side.at = {0, 0, 0};
+    side.fovY = 30;
+    if (flag)
+      EXPECT_GT(meanOf(side), 0.02);
+    else
+      EXPECT_EQ(meanOf(side), 0.0);
+  }
+}
+
 // Light paths start where sampleEmission puts them: each emissive triangle
 // chosen in proportion to its power, the densities it reports equal to the
 // ones MIS recomputes (emissionPositionPdf), the direction cosine-weighted
@@ -275,6 +333,35 @@ TEST(Mis, LightSamplesBsdfSamplesMisAndLightPathsRenderTheSameMean) {
   for (int k = 0; k < 3; ++k) {
     EXPECT_LT(se[0][k], se[1][k]) << "ch" << k;
     EXPECT_LT(se[0][k], se[2][k]) << "ch" << k;
+  }
+}
+
+// Through a thin lens (render/camera.h) light paths connect to a point on
+// the lens: the mean stays that of camera paths alone.
+TEST(Mis, LightPathsThroughAThinLensRenderTheSameMean) {
+  Scene scene = misScene(4);
+  scene.views[0].lensRadius = 0.2f;
+  scene.views[0].focalDistance = 2.5f;
+  RenderSettings s;
+  s.width = 24;
+  s.height = 18;
+  s.samplesPerPixel = 8;
+  s.maxDepth = 2;
+  double mean[2][3], se[2][3];
+  for (int i = 0; i < 2; ++i) {
+    s.lightPaths = i == 1;
+    s.seed = 201 + uint32_t(i);
+    Scene copy = scene;
+    const PixelStatistics stats = renderStatistics(copy, s, 48);
+    for (int k = 0; k < 3; ++k) stats.imageMean(k, mean[i][k], se[i][k]);
+  }
+  const double z = twoSidedNormalQuantile(sidak(kAlpha, 3));
+  for (int k = 0; k < 3; ++k) {
+    const double bound =
+        z * std::hypot(se[0][k], se[1][k]) + 2 * kHalfRelativeError * std::abs(mean[0][k]);
+    std::printf("[ lens     ] ch%d: camera paths %.5f +- %.1e, with light paths %.5f +- %.1e\n", k,
+                mean[0][k], se[0][k], mean[1][k], se[1][k]);
+    EXPECT_NEAR(mean[1][k], mean[0][k], bound) << "ch" << k;
   }
 }
 

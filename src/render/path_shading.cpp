@@ -171,11 +171,17 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
 
   // The connection to the camera.
   if (!bsdf.isDelta()) {
-    const Vec3f toCamera = camera_->origin() - position;
+    // A point on the lens (the eye for a pinhole): the lens density and the
+    // camera's importance per lens area cancel, as in pbrt's Sample_Wi.
+    const Vec3f lens = camera_->hasLens()
+                           ? camera_->lensPoint({scattering.random(RandomDim::LensU),
+                                                 scattering.random(RandomDim::LensV)})
+                           : camera_->origin();
+    const Vec3f toCamera = lens - position;
     const bool front = dot(toCamera, ng) > 0;
     const Vec3f origin = offsetRayOrigin(position, front ? ng : -ng);
     uint32_t pixel;
-    if ((bsdf.transmits() || front) && camera_->pixelOf(origin, pixel)) {
+    if ((bsdf.transmits() || front) && camera_->pixelOf(origin, lens, pixel)) {
       const float dist2 = dot(toCamera, toCamera);
       const Vec3f wc = toCamera * (1 / std::sqrt(dist2));
       const float cosAxis = camera_->cosToAxis(-wc);
@@ -202,7 +208,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
           makeRay(shadowRay, origin, wc, kInfinity, contribution, vertex.pixel,
                   kPathShadow | kPathLight);
           shadowRay.tmax =
-              length(camera_->origin() - origin) / length(shadowRay.dir()) * (1 - 1e-4f);
+              length(lens - origin) / length(shadowRay.dir()) * kCameraConnectionShortening;
           spawned.shadowRay = true;
         }
       }

@@ -38,6 +38,10 @@ namespace ferry {
 
 struct Scene;
 
+// A light path's shadow ray to the camera stops this fraction of the way to
+// the camera's lens point (so that it never finds the lens as a surface).
+constexpr float kCameraConnectionShortening = 1 - 1e-4f;
+
 // A path at a surface (the surface step): what it brings and where it is.
 struct PathVertex {
   uint32_t pixel;
@@ -150,7 +154,12 @@ class PathShading {
       pixel = shadowRay.pixel();
       return true;
     }
-    return camera_ && camera_->pixelOf(shadowRay.origin, pixel);
+    if (!camera_) return false;
+    if (!camera_->hasLens()) return camera_->pixelOf(shadowRay.origin, pixel);
+    // The lens point the connection chose: the ray's end (shadeLightPath).
+    const Vec3f lens =
+        shadowRay.origin + shadowRay.dir() * (shadowRay.tmax / kCameraConnectionShortening);
+    return camera_->pixelOf(shadowRay.origin, lens, pixel);
   }
 
   // What shading one path made: each is written only when made.

@@ -85,6 +85,12 @@ class RayTraversal {
                         ExchangeCounters& exchange, FrameStats& stats) = 0;
   // True while any rank still has rays (a collective in the distributed case).
   virtual bool anyRaysLeft(size_t localRays) = 0;
+  // Sums `values` element-wise over the ranks, in place (a collective when
+  // distributed); true on the one rank that is to use the sums.
+  virtual bool sumOverRanks(std::vector<int64_t>& values) {
+    (void)values;
+    return true;
+  }
 };
 
 // TraceBackend::trace on this rank, its queries and time added to `stats`.

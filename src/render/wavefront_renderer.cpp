@@ -17,6 +17,13 @@
 
 namespace ferry {
 
+CameraView RenderSettings::cameraIn(const Scene& scene) const {
+  CameraView v = camera ? *camera : scene.view(view);
+  if (lensRadius) v.lensRadius = *lensRadius;
+  if (focalDistance) v.focalDistance = *focalDistance;
+  return v;
+}
+
 template <typename Path>
 WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBackend& geometry,
                                            const LightSampler& lights,
@@ -26,7 +33,7 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
       traversal_(traversal),
       settings_(settings),
       window_(settings.window()),
-      camera_(settings.camera ? *settings.camera : scene.view(settings.view), window_),
+      camera_(settings.cameraIn(scene), window_),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
                settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr, &window_,
                settings.transmittance) {
@@ -53,6 +60,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   FERRY_CHECK_LE(lastPixel, pixelCount());
   // Light paths add to any pixel from any thread.
   if (shading_.lightPaths()) frameBuffer.setAtomicAdds(true);
+  frameBuffer.setSampleClamp(settings_.sampleClamp);
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
     if (traversal_.runsSamples()) {
@@ -90,6 +98,10 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
       for (const FrameStats& local : chunkStats)
         stats.merge(local);  // counters and stage times summed
     }
+    // Every path and shadow ray of this sample is done on every rank: its
+    // totals are complete.
+    if (frameBuffer.sampleClamp().active())
+      frameBuffer.finishSample(traversal_.sumOverRanks(frameBuffer.sampleSums()));
     if (progress) progress(s + 1, settings_.samplesPerPixel);
   }
   const MediumCounts media = shading_.takeMediumCounts();
@@ -143,8 +155,12 @@ void WavefrontRenderer<Path>::makeCameraPath(uint32_t sampleIndex, uint32_t pixe
   // The film's pixel (a crop's image is offset in it), then the jitter.
   float x = float(px + uint32_t(window_.x0)) + random(RandomDim::PixelJitterX);
   float y = float(py + uint32_t(window_.y0)) + random(RandomDim::PixelJitterY);
-  makeRay(path, camera_.origin(), camera_.direction(x, y), kInfinity, Vec3f(1), pixel,
-          kPathAfterSpecular);
+  Vec3f origin = camera_.origin(), direction;
+  if (camera_.hasLens())
+    camera_.ray(x, y, {random(RandomDim::LensU), random(RandomDim::LensV)}, origin, direction);
+  else
+    direction = camera_.direction(x, y);
+  makeRay(path, origin, direction, kInfinity, Vec3f(1), pixel, kPathAfterSpecular);
   if (shading_.cameraMedium() != kNoMedium) setPathMedium(path, shading_.cameraMedium());
 }
 
@@ -286,8 +302,12 @@ void WavefrontRenderer<Path>::addUnoccludedLight(const PathQueue<Path>& shadowRa
     for (size_t i = begin; i != end; ++i) {
       const Path& ray = shadowRays[i];
       uint32_t pixel;
-      if (!ray.has(kPathOccluded) && shading_.shadowRayPixel(ray, pixel))
-        frameBuffer.add(pixel, ray.weight());
+      if (!ray.has(kPathOccluded) && shading_.shadowRayPixel(ray, pixel)) {
+        if (ray.has(kPathLight))
+          frameBuffer.addSplat(pixel, ray.weight());
+        else
+          frameBuffer.add(pixel, ray.weight());
+      }
     }
   };
   if (chunked()) {

@@ -49,6 +49,13 @@ struct RenderSettings {
   std::string view;  // empty: the scene's first view
   // A camera given outright (--look-from/--look-at, the viewer): used instead of `view`.
   std::optional<CameraView> camera;
+  // pbrt's film clamp of each camera sample (Film "maxsampleluminance",
+  // "maxcomponentvalue"; --max-sample-luminance): render/frame_buffer.h.
+  SampleClamp sampleClamp;
+  // --lens-radius, --focal-distance: the thin lens of whichever camera is used.
+  std::optional<float> lensRadius, focalDistance;
+  // The camera rendered: `camera`, else the scene's view `view`, with the lens set above.
+  CameraView cameraIn(const Scene& scene) const;
   // Shading re-traces every path it shades (the paper, whose compact path
   // carries no hit) instead of only those whose hit was found on another
   // rank. The image is the same either way (tests check it); only the speed differs.

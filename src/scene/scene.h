@@ -43,6 +43,11 @@ struct Material {
   // glTF), or only the side its winding normal faces (pbrt's area lights
   // unless "twosided": the loader orients the winding as pbrt would).
   bool emitsBackSide = true;
+  // A one-sided emitter whose light is sampled (next-event estimation,
+  // light paths) leaving the side opposite the one a ray sees emitting:
+  // pbrt-v3's area lights under a transform that swaps handedness
+  // (docs/fidelity.md). False everywhere else.
+  bool lightSampledOnBackSide = false;
   // Shading-normal perturbation (render/surface.h), in uv space: a bump map
   // (a displacement along the normal of bumpScale times the texture's grey
   // value, in world units) or a tangent-space normal map (RGB in [0, 1] ->
@@ -169,6 +174,11 @@ struct CameraView {
   // instead of cross(forward, up). Set by the pbrt loader when the camera
   // transform says so; the picture is then mirrored left to right.
   bool leftHanded = false;
+  // A thin lens (pbrt's "lensradius" and "focaldistance", world units):
+  // rays leave a disk of this radius around `from`, across the view axis,
+  // and meet on the plane focalDistance ahead. Radius 0: a pinhole.
+  float lensRadius = 0;
+  float focalDistance = 1e6f;
 };
 
 class MeshStore;
@@ -221,6 +231,9 @@ struct Scene {
   // pbrt's Film "cropwindow": x0, x1, y0, y1, fractions of the image, y down
   // (render/camera.h's CropWindow); absent: the whole image.
   std::optional<std::array<float, 4>> filmCrop;
+  // pbrt's Film clamp of each camera sample (render/frame_buffer.h's
+  // SampleClamp): v3's "maxsampleluminance", v4's "maxcomponentvalue"; 0: none.
+  float filmMaxSampleLuminance = 0, filmMaxComponentValue = 0;
   // pbrt's Integrator, as named ("bdpt", "path", ...; empty: none): a
   // bidirectional one turns light paths on (render/path_shading.h).
   std::string integrator;

@@ -177,6 +177,8 @@ PartitionedScene distributedPiece(Scene piece, const Communicator& comm) {
   manifest.ranks = ranks;
   manifest.summary = wholeSummary(summarize(piece), comm).toJson();
   manifest.filmScale = piece.filmScale;
+  manifest.filmMaxSampleLuminance = piece.filmMaxSampleLuminance;
+  manifest.filmMaxComponentValue = piece.filmMaxComponentValue;
   manifest.filmCrop = piece.filmCrop;
   manifest.integrator = piece.integrator;
   manifest.integratorMaxDepth = piece.integratorMaxDepth;

@@ -99,6 +99,8 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     scene.view(settings.render.view);
     summary = summaryFromJson(manifest->summary);
     scene.filmScale = manifest->filmScale;
+    scene.filmMaxSampleLuminance = manifest->filmMaxSampleLuminance;
+    scene.filmMaxComponentValue = manifest->filmMaxComponentValue;
     scene.filmCrop = manifest->filmCrop;
     scene.integrator = manifest->integrator;
     scene.integratorMaxDepth = manifest->integratorMaxDepth;
@@ -240,7 +242,7 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
   // partitioner, exchange or threads, which do not. "key=value" fields, so
   // that a mismatch can name the ones that differ.
   const std::string summary = rank_->summary.toJson().dump();
-  const CameraView& v = r.camera ? *r.camera : rank_->scene.view(r.view);
+  const CameraView v = r.cameraIn(rank_->scene);
   const std::string description =
       fmt::format(
           "scene={} (content {}); size={}x{}; spp={}; max-depth={}; light-strategy={}; seed={}; "
@@ -249,6 +251,15 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
           settings_.scene, hashToHex(hash64(summary.data(), summary.size())), r.width, r.height,
           r.samplesPerPixel, r.maxDepth, lightStrategyName(r.lightStrategy), r.seed, v.name,
           v.from.x, v.from.y, v.from.z, v.at.x, v.at.y, v.at.z, v.up.x, v.up.y, v.up.z, v.fovY) +
+      (v.lensRadius > 0
+           ? fmt::format("; lens radius {} focal distance {}", v.lensRadius, v.focalDistance)
+           : std::string()) +
+      (r.sampleClamp.active()
+           ? fmt::format("; sample-clamp={} {}",
+                         r.sampleClamp.measure == SampleClamp::Measure::Luminance ? "luminance"
+                                                                                  : "component",
+                         r.sampleClamp.limit)
+           : std::string()) +
       (r.lightPaths ? "; light-paths=on" : "") +
       (r.transmittance == TransmittanceEstimator::Delta ? "; transmittance=delta" : "") +
       (r.volumeLook.opacity != 1 ? fmt::format("; volume-opacity={}", r.volumeLook.opacity)
@@ -316,6 +327,10 @@ void RenderSession::setCrop(const CropWindow& crop) {
   settings_.render.crop = crop;
 }
 
+void RenderSession::setSampleClamp(const SampleClamp& clamp) {
+  settings_.render.sampleClamp = clamp;
+}
+
 void RenderSession::setSamples(int samplesPerPixel, int frames) {
   FERRY_CHECK_GE(samplesPerPixel, 1);
   FERRY_CHECK_GE(frames, 1);
@@ -332,6 +347,10 @@ void RenderSession::setView(const std::string& view, const std::optional<CameraV
   if (!camera) rank_->scene.view(view);  // an unknown name fails here, before any collective
   settings_.render.view = view;
   settings_.render.camera = camera;
+  if (camera) {  // a camera given outright brings its own lens
+    settings_.render.lensRadius.reset();
+    settings_.render.focalDistance.reset();
+  }
 }
 
 const Scene& RenderSession::scene() const {
@@ -417,6 +436,8 @@ void ViewChange::applyTo(CameraView& camera, RenderSettings& settings) const {
     camera.at = Vec3f(at[0], at[1], at[2]);
     camera.up = Vec3f(up[0], up[1], up[2]);
     camera.fovY = fovY;
+    camera.lensRadius = lensRadius;
+    camera.focalDistance = focalDistance;
   }
   if (flags & kSettings) {
     settings.width = width;
@@ -800,7 +821,7 @@ void RenderSession::runInteractive(InteractiveControl* control, uint64_t maxFram
   InteractiveFrames policy(*this, control, maxFrames, sliceSeconds);
   RenderSettings render = settings_.render;
   render.frames = 1;
-  if (!render.camera) render.camera = rank_->scene.view(render.view);
+  render.camera = render.cameraIn(rank_->scene);
   withPathLayout([&]<typename Path>() { renderFrames<Path>(policy, render); });
 }
 

@@ -107,6 +107,7 @@ struct ViewChange {
   uint32_t flags = 0;
   float from[3], at[3], up[3];
   float fovY;
+  float lensRadius, focalDistance;  // the thin lens (CameraView)
   int32_t width, height, samplesPerPixel, maxDepth;
   float exposure;
   float volumeOpacity;
@@ -183,13 +184,17 @@ class RenderSession {
   void setImageSize(int width, int height);
   // Before run(): renders only this part of the image (pbrt's cropwindow).
   void setCrop(const CropWindow& crop);
+  // Before run(): clamps each camera sample (pbrt's Film maxsampleluminance,
+  // maxcomponentvalue: render/frame_buffer.h).
+  void setSampleClamp(const SampleClamp& clamp);
   // Before run(): samples per pixel in each frame, and frames.
   void setSamples(int samplesPerPixel, int frames);
   // Before run(): the maximum path depth (RenderSettings::maxDepth), a
   // scene's own (pbrt's Integrator maxdepth).
   void setMaxDepth(int maxDepth);
   // Before run(): renders this view instead (a named one, or `camera` if
-  // given); throws InputError for an unknown name. run() may be called again
+  // given, with its own lens: the lens settings then no longer apply);
+  // throws InputError for an unknown name. run() may be called again
   // after it (the bandwidth predictor renders several views from one load).
   void setView(const std::string& view, const std::optional<CameraView>& camera);
   // Rank 0, before run() (not collective): continues the render held in a

@@ -67,11 +67,14 @@ void setCamera(const CameraView& c, ViewChange& change) {
     change.up[i] = c.up[i];
   }
   change.fovY = c.fovY;
+  change.lensRadius = c.lensRadius;
+  change.focalDistance = c.focalDistance;
   change.flags |= ViewChange::kCamera;
 }
 
 void applyCameraRequest(const std::string& body, const CameraView& current, ViewChange& change) {
-  const nlohmann::json j = parseObject(body, {"from", "at", "up", "fov"});
+  const nlohmann::json j =
+      parseObject(body, {"from", "at", "up", "fov", "lens_radius", "focal_distance"});
   if (!j.contains("from") || !j.contains("at")) throw RequestError("'from' and 'at' are required");
   CameraView c = current;
   c.from = vector3(j, "from");
@@ -82,6 +85,16 @@ void applyCameraRequest(const std::string& body, const CameraView& current, View
     if (!(fov > 0.01 && fov < 179))
       throw RequestError("'fov' must be between 0.01 and 179 degrees");
     c.fovY = float(fov);
+  }
+  if (j.contains("lens_radius")) {
+    const double radius = finiteNumber(j, "lens_radius");
+    if (!(radius >= 0)) throw RequestError("'lens_radius' must be 0 (a pinhole) or more");
+    c.lensRadius = float(radius);
+  }
+  if (j.contains("focal_distance")) {
+    const double distance = finiteNumber(j, "focal_distance");
+    if (!(distance > 0 && distance < 1e30)) throw RequestError("'focal_distance' must be positive");
+    c.focalDistance = float(distance);
   }
   const Vec3f forward = c.at - c.from;
   if (!(length(forward) > 0)) throw RequestError("'from' and 'at' must differ");

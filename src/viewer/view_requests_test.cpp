@@ -66,6 +66,12 @@ TEST(ViewRequests, CameraGoodRequestBecomesTheChange) {
   applyCameraRequest(R"({"from":[0,1,9],"at":[0,1,0]})", current(), keep);
   EXPECT_EQ(keep.up[1], 1);
   EXPECT_EQ(keep.fovY, 40);
+  EXPECT_EQ(keep.lensRadius, 0);  // the current lens: a pinhole
+  ViewChange lens;                // the thin lens travels with the camera
+  applyCameraRequest(R"({"from":[0,1,9],"at":[0,1,0],"lens_radius":0.2,"focal_distance":9})",
+                     current(), lens);
+  EXPECT_FLOAT_EQ(lens.lensRadius, 0.2f);
+  EXPECT_FLOAT_EQ(lens.focalDistance, 9);
 }
 
 TEST(ViewRequests, MalformedCamerasAreRefusedWithAReason) {
@@ -91,6 +97,8 @@ TEST(ViewRequests, MalformedCamerasAreRefusedWithAReason) {
       {R"({"from":[0,0,1],"at":[0,0,0],"fov":0})", "fov"},
       {R"({"from":[0,0,1],"at":[0,0,0],"fov":180})", "fov"},
       {R"({"from":[0,0,1],"at":[0,0,0],"fov":"wide"})", "number"},
+      {R"({"from":[0,0,1],"at":[0,0,0],"lens_radius":-1})", "lens_radius"},
+      {R"({"from":[0,0,1],"at":[0,0,0],"focal_distance":0})", "focal_distance"},
   };
   for (const auto& [body, reason] : corpus) {
     ViewChange change;

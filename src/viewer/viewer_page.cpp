@@ -45,6 +45,10 @@ const std::string& viewerPage() {
   <label>max depth <input id="depth" type="number" min="0"></label>
   <label>exposure (stops) <input id="exposure" type="number" step="0.25"></label>
   <button id="apply">Apply</button><button id="quit">Quit</button>
+  <h2>Depth of field</h2>
+  <label>lens radius <input id="lens" type="number" min="0" step="0.01"></label>
+  <label>focal distance <input id="focus" type="number" min="0" step="0.1"></label>
+  <button id="lensApply">Apply</button><button id="focusCentre">Focus on the orbit centre</button>
   <div id="volume" hidden>
     <h2>Volume</h2>
     <label>opacity <span><input id="opacity" type="range" min="-8" max="8" step="0.25" value="0">
@@ -201,6 +205,22 @@ $("opacity").addEventListener("change", () => {
   post("/settings", { volume_opacity: 2 ** Number($("opacity").value) });
 });
 $("colormap").addEventListener("change", () => post("/settings", { color_map: $("colormap").value }));
+// The thin lens travels with the camera (radius 0: a pinhole).
+function showLens() {
+  $("lens").value = camera.lens_radius; $("focus").value = Number(camera.focal_distance.toPrecision(6));
+}
+$("lensApply").addEventListener("click", () => {
+  if (!camera) return;
+  camera.lens_radius = Number($("lens").value);
+  camera.focal_distance = Number($("focus").value);
+  sendCamera();
+});
+$("focusCentre").addEventListener("click", () => {
+  if (!camera) return;
+  camera.focal_distance = len(sub(camera.at, camera.from));
+  showLens();
+  sendCamera();
+});
 $("quit").addEventListener("click", async () => {
   await post("/quit", {});
   showError("the viewer was asked to quit");
@@ -213,6 +233,7 @@ function showStats(s) {
   const requested = s.requested;
   if (!camera || !cameraDirty) camera = requested.camera;
   if (!settingsShown) {
+    showLens();
     const st = requested.settings;
     $("width").value = st.width; $("height").value = st.height; $("spp").value = st.spp;
     $("depth").value = st.max_depth; $("exposure").value = st.exposure;

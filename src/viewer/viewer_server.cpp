@@ -34,7 +34,12 @@ nlohmann::json vec(Vec3f v) {
 }
 
 nlohmann::json cameraJson(const CameraView& c) {
-  return {{"from", vec(c.from)}, {"at", vec(c.at)}, {"up", vec(c.up)}, {"fov", c.fovY}};
+  return {{"from", vec(c.from)},
+          {"at", vec(c.at)},
+          {"up", vec(c.up)},
+          {"fov", c.fovY},
+          {"lens_radius", c.lensRadius},
+          {"focal_distance", c.focalDistance}};
 }
 
 nlohmann::json settingsJson(const RenderSettings& s) {

@@ -51,6 +51,8 @@ nlohmann::json Manifest::toJson() const {
   j["ranks"] = ranks;
   j["summary"] = summary;
   j["film_scale"] = filmScale;
+  if (filmMaxSampleLuminance > 0) j["film_max_sample_luminance"] = filmMaxSampleLuminance;
+  if (filmMaxComponentValue > 0) j["film_max_component_value"] = filmMaxComponentValue;
   if (filmCrop) j["film_crop"] = *filmCrop;
   if (!integrator.empty()) j["integrator"] = integrator;
   if (integratorMaxDepth) j["integrator_max_depth"] = *integratorMaxDepth;
@@ -115,6 +117,12 @@ Manifest readManifest(const std::string& directory) {
     m.filmScale = j.value("film_scale", 1.0f);  // absent in directories made before it existed
     if (!(m.filmScale > 0) || !std::isfinite(m.filmScale))
       throw InputError(fmt::format("{}: bad film_scale {}", path, m.filmScale));
+    m.filmMaxSampleLuminance = j.value("film_max_sample_luminance", 0.0f);
+    m.filmMaxComponentValue = j.value("film_max_component_value", 0.0f);
+    if (!(m.filmMaxSampleLuminance >= 0) || !std::isfinite(m.filmMaxSampleLuminance) ||
+        !(m.filmMaxComponentValue >= 0) || !std::isfinite(m.filmMaxComponentValue))
+      throw InputError(
+          fmt::format("{}: bad film_max_sample_luminance or film_max_component_value", path));
     if (j.contains("film_crop")) {
       const auto crop = j.at("film_crop").get<std::vector<float>>();
       if (crop.size() != 4 || !isCropWindow(crop[0], crop[1], crop[2], crop[3]))

@@ -47,8 +47,9 @@ struct Manifest {
   double partitionSeconds = 0;
   float filmScale = 1;                           // the scene's Film scale (Scene::filmScale)
   std::optional<std::array<float, 4>> filmCrop;  // Scene::filmCrop
-  std::string integrator;                        // Scene::integrator
-  std::optional<int> integratorMaxDepth;         // Scene::integratorMaxDepth
+  float filmMaxSampleLuminance = 0, filmMaxComponentValue = 0;  // Scene's, 0: none
+  std::string integrator;                                       // Scene::integrator
+  std::optional<int> integratorMaxDepth;                        // Scene::integratorMaxDepth
   ManifestFile shared;
   std::vector<ManifestPart> parts;
   // `ferry partition --predict-forwards`: ForwardPrediction::toJson() per

@@ -121,6 +121,8 @@ Manifest writeParts(const std::string& directory, const Scene& scene, const Part
   m.proxies = partition.proxies.size();
   m.partitionSeconds = info.partitionSeconds;
   m.filmScale = scene.filmScale;
+  m.filmMaxSampleLuminance = scene.filmMaxSampleLuminance;
+  m.filmMaxComponentValue = scene.filmMaxComponentValue;
   m.filmCrop = scene.filmCrop;
   m.integrator = scene.integrator;
   m.integratorMaxDepth = scene.integratorMaxDepth;

@@ -49,7 +49,7 @@ static_assert(sizeof(Material) == 112,
 // it; the arrays became SharedArrays at 392, and 192 for Texture, same fields.
 // Mesh::media is not written either: part files refuse scenes with media.)
 static_assert(sizeof(Mesh) == 400, "Mesh changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(CameraView) == 80,
+static_assert(sizeof(CameraView) == 88,
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Texture) == 192,
               "Texture changed: update part_file.cpp and kPartFormatVersion");
@@ -158,7 +158,7 @@ void writeMaterial(FileWriter& w, const Material& m,
   w.pod(m.emission);
   w.pod(m.alphaTexture);
   w.pod(m.alphaCutoff);
-  w.pod(uint8_t(m.emitsBackSide ? 1 : 0));
+  w.pod(uint8_t((m.emitsBackSide ? 1 : 0) | (m.lightSampledOnBackSide ? 2 : 0)));
   w.pod(m.bumpTexture);
   w.pod(m.bumpScale);
   w.pod(m.normalTexture);
@@ -534,7 +534,9 @@ Material readMaterial(FileReader& r, size_t bsdfTables) {
     m.emission = r.pod<Vec3f>();
     m.alphaTexture = r.pod<int32_t>();
     m.alphaCutoff = r.pod<float>();
-    m.emitsBackSide = r.pod<uint8_t>() != 0;
+    const uint8_t sides = r.pod<uint8_t>();
+    m.emitsBackSide = (sides & 1) != 0;
+    m.lightSampledOnBackSide = (sides & 2) != 0;
     readMapsAndMix(r, m);
     const std::string model = r.str();
     const std::vector<uint8_t> bytes = r.array<uint8_t>();
@@ -812,6 +814,8 @@ WrittenFile writeSharedFile(const std::string& path, const SharedData& shared) {
       w.pod(v.up);
       w.pod(v.fovY);
       w.pod(uint8_t(v.leftHanded));
+      w.pod(v.lensRadius);
+      w.pod(v.focalDistance);
     }
     w.pod(uint8_t(shared.filmWidth.has_value()));
     w.pod(int32_t(shared.filmWidth.value_or(0)));
@@ -895,6 +899,10 @@ SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
     v.up = r.pod<Vec3f>();
     v.fovY = r.pod<float>();
     v.leftHanded = r.pod<uint8_t>() != 0;
+    if (r.version() >= 10) {  // older: pinholes
+      v.lensRadius = r.pod<float>();
+      v.focalDistance = r.pod<float>();
+    }
     shared.views.push_back(std::move(v));
   }
   const bool hasWidth = r.pod<uint8_t>() != 0;

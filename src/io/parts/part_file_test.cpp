@@ -66,7 +66,8 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
   };
   return a.name == b.name && a.baseColor == b.baseColor && a.model->name() == b.model->name() &&
          record(a) == record(b) && a.emission == b.emission && a.alphaCutoff == b.alphaCutoff &&
-         a.emitsBackSide == b.emitsBackSide && a.bumpScale == b.bumpScale &&
+         a.emitsBackSide == b.emitsBackSide &&
+         a.lightSampledOnBackSide == b.lightSampledOnBackSide && a.bumpScale == b.bumpScale &&
          a.normalScale == b.normalScale && a.mixAmount == b.mixAmount &&
          (a.mixedWith < 0) == (b.mixedWith < 0) &&
          sameTexture(a.baseColorTexture, b.baseColorTexture) &&
@@ -114,6 +115,7 @@ Written writeDirectory(const std::string& dir, const std::string& partitioner, i
   w.scene = island();
   // One material as a pbrt area light has it (one-sided), so the round trips cover the flag.
   w.scene.materials.back().emitsBackSide = false;
+  w.scene.materials.back().lightSampledOnBackSide = true;  // pbrt-v3 under a mirror
   // And one coated, Oren-Nayar material, for a model's record.
   Material& coated = w.scene.materials.front();
   auto coat = std::make_shared<CoatedDiffuseModel>();

@@ -84,7 +84,7 @@ struct PbrtMaterials::Impl {
   std::vector<std::optional<Look>> looks;
   std::vector<uint8_t> converting;
   std::map<std::string, int32_t> named;
-  std::map<std::tuple<int32_t, float, float, float, int32_t, bool>, int32_t> ferryMaterials;
+  std::map<std::tuple<int32_t, float, float, float, int32_t, bool, bool>, int32_t> ferryMaterials;
   std::map<std::string, std::shared_ptr<const ImageData>> images;
   std::map<std::string, int32_t> bakedColor, bakedAlpha, solidTextures;
   std::map<std::string, std::pair<int32_t, float>> bakedBump;
@@ -1146,15 +1146,16 @@ std::optional<int32_t> PbrtMaterials::namedMaterial(const std::string& name) con
 }
 
 int32_t PbrtMaterials::materialFor(int32_t definition, Vec3f emission, int32_t alphaTexture,
-                                   bool emitsBackSide) {
-  auto key =
-      std::make_tuple(definition, emission.x, emission.y, emission.z, alphaTexture, emitsBackSide);
+                                   bool emitsBackSide, bool lightSampledOnBackSide) {
+  auto key = std::make_tuple(definition, emission.x, emission.y, emission.z, alphaTexture,
+                             emitsBackSide, lightSampledOnBackSide);
   auto it = impl_->ferryMaterials.find(key);
   if (it != impl_->ferryMaterials.end()) return it->second;
   Look look = impl_->convert(definition, 0);
   Material m = look.m;
   m.emission = emission;
   m.emitsBackSide = emitsBackSide;
+  m.lightSampledOnBackSide = lightSampledOnBackSide;
   m.alphaTexture = look.alpha != kNoTexture ? look.alpha : alphaTexture;
   if (m.isEmissive()) m.name += " (emitting)";
   int32_t index = impl_->scene.addMaterial(std::move(m));

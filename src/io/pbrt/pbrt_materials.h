@@ -56,9 +56,11 @@ class PbrtMaterials {
 
   // The Ferry material for shapes of `definition` (-1: pbrt's default, diffuse
   // 0.5) emitting `emission` (area light) and cut out by `alphaTexture`.
-  // `emitsBackSide`: false for a one-sided area light (pbrt's default).
+  // `emitsBackSide`: false for a one-sided area light (pbrt's default);
+  // `lightSampledOnBackSide`: Material's flag of that name (pbrt-v3 under a
+  // mirroring transform).
   int32_t materialFor(int32_t definition, Vec3f emission, int32_t alphaTexture,
-                      bool emitsBackSide = true);
+                      bool emitsBackSide = true, bool lightSampledOnBackSide = false);
   // Whether `definition` is pbrt's Material "" / "interface" / "none": a
   // surface that only bounds media.
   bool isInterface(int32_t definition) const;

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <tuple>
 
@@ -126,6 +127,7 @@ struct Block {
 struct CameraDefinition {
   Affine3f cameraFromWorld;
   float fov = 90;
+  float lensRadius = 0, focalDistance = 1e6f;  // camera space
   SourceLocation where;
 };
 
@@ -144,6 +146,10 @@ struct PointEmitter {
 
 class Parser {
  public:
+  // Which pbrt wrote the file, from the first directive only one of them
+  // knows (noteDialect); Unknown is read as pbrt-v4.
+  enum class Dialect { Unknown, V3, V4 };
+
   Parser(std::string mainDirectory, const LoadOptions& options)
       : options_(options),
         warnings_(options),
@@ -538,6 +544,7 @@ class Parser {
     } else if (name == "AttributeEnd") {
       popBlock(BlockKind::Attribute, where);
     } else if (name == "Attribute") {
+      noteDialect(Dialect::V4);
       attribute(in, where);
     } else if (name == "ReverseOrientation") {
       // Shading and emission are two-sided in Ferry: orientation changes nothing.
@@ -588,6 +595,7 @@ class Parser {
     } else if (name == "Material") {
       std::string type = string(in, n);
       PbrtParams p = withDefaults(params(in), "material");
+      noteMaterialDialect(type);
       state_.material = materials_.addMaterial({type, std::move(p), where, ""});
     } else if (name == "MakeNamedMaterial") {
       makeNamedMaterial(in, where);
@@ -845,6 +853,7 @@ class Parser {
     std::string type = p.getString("type", "");
     if (!p.has("type"))
       fail(where, fmt::format("MakeNamedMaterial \"{}\" has no \"string type\"", materialName));
+    noteMaterialDialect(type);
     materials_.nameMaterial(materialName,
                             materials_.addMaterial({type, std::move(p), where, materialName}));
   }
@@ -871,6 +880,10 @@ class Parser {
     } else if (name == "Integrator") {
       std::string type = string(in, n);
       scene_.integrator = type;
+      if (type == "whitted" || type == "directlighting") noteDialect(Dialect::V3);
+      if (type == "lightpath" || type == "randomwalk" || type == "simplepath" ||
+          type == "simplevolpath" || type == "aov")
+        noteDialect(Dialect::V4);
       PbrtParams p = params(in);
       if (p.find("maxdepth")) {
         const int depth = p.getInt("maxdepth", 5);
@@ -891,8 +904,10 @@ class Parser {
       skipped(name, params(in), where,
               fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type));
     } else if (name == "Option") {
+      noteDialect(Dialect::V4);
       skipped(name, params(in), where, "rendering options are Ferry's own");
     } else if (name == "ColorSpace") {
+      noteDialect(Dialect::V4);
       std::string space = string(in, n);
       if (space != "srgb")
         warnings_.once("colorspace", fmt::format("ColorSpace \"{}\" ignored: Ferry renders in "
@@ -927,12 +942,14 @@ class Parser {
       c.fov = p.getFloat("fov", 90);
       if (!(c.fov > 0 && c.fov < 180))
         fail(where, fmt::format("Camera: fov {} must be between 0 and 180", c.fov));
-      if (p.getFloat("lensradius", 0) > 0)
-        warnings_.once("lens",
-                       fmt::format("Camera: lensradius ignored: Ferry's camera is a pinhole "
-                                   "(no depth of field; at {})",
-                                   where.toString()));
-      p.find("focaldistance");
+      // pbrt-v3's and v4's thin lens, in camera space (default: a pinhole).
+      c.lensRadius = p.getFloat("lensradius", 0);
+      c.focalDistance = p.getFloat("focaldistance", 1e6f);
+      if (!(c.lensRadius >= 0) || !std::isfinite(c.lensRadius))
+        fail(where, fmt::format("Camera: \"float lensradius\" {} must be 0 or more", c.lensRadius));
+      if (!(c.focalDistance > 0) || !std::isfinite(c.focalDistance))
+        fail(where,
+             fmt::format("Camera: \"float focaldistance\" {} must be positive", c.focalDistance));
     } else {
       p.markAllUsed();
       warnings_.once("camera type", fmt::format("Camera \"{}\" is not supported: using a "
@@ -948,6 +965,8 @@ class Parser {
   }
 
   void film(const std::string& type, const PbrtParams& p, const SourceLocation& where) {
+    if (type == "image") noteDialect(Dialect::V3);
+    if (type == "rgb" || type == "gbuffer" || type == "spectral") noteDialect(Dialect::V4);
     int w = p.getInt("xresolution", 1280), h = p.getInt("yresolution", 720);
     if (w < 1 || h < 1 || w > kMaxFilmSide || h > kMaxFilmSide)
       fail(where, fmt::format("Film: resolution {} x {} must be between 1 and {} per side", w, h,
@@ -975,6 +994,17 @@ class Parser {
       filmScale *= iso / 100;
     }
     scene_.filmScale = filmScale;
+    // The clamp of each camera sample: v3 on its luminance, v4 on its
+    // largest channel (default: none, pbrt's infinity).
+    auto clampLimit = [&](const char* name) {
+      if (!p.find(name)) return 0.0f;
+      const float limit = p.getFloat(name, 0);
+      if (!(limit > 0))
+        fail(where, fmt::format("Film: \"float {}\" {} must be positive", name, limit));
+      return std::isfinite(limit) ? limit : 0.0f;
+    };
+    scene_.filmMaxSampleLuminance = clampLimit("maxsampleluminance");
+    scene_.filmMaxComponentValue = clampLimit("maxcomponentvalue");
     if (const PbrtParam* crop = p.find("cropwindow")) {
       const std::vector<float>& c = crop->floats;
       if (crop->type != "float" || c.size() != 4 || !isCropWindow(c[0], c[1], c[2], c[3]))
@@ -1274,7 +1304,8 @@ class Parser {
         emission *= powerScale(type, mesh, shapeArea, meshShapes, where);
       const int32_t alpha = materials_.shapeAlpha(p);
       const int32_t material = materials_.materialFor(
-          state_.material, emission, alpha, !state_.areaLight || state_.areaLight->twoSided);
+          state_.material, emission, alpha, !state_.areaLight || state_.areaLight->twoSided,
+          lightSampledOnBackSide(where));
       if (!plyPath.empty()) {
         p.find("displacement");
         p.find("edgelength");
@@ -1418,7 +1449,7 @@ class Parser {
     const int32_t alpha = materials_.shapeAlpha(p);
     const int32_t material = materials_.materialFor(
         state_.material, state_.areaLight ? state_.areaLight->radiance : Vec3f(0), alpha,
-        !state_.areaLight || state_.areaLight->twoSided);
+        !state_.areaLight || state_.areaLight->twoSided, lightSampledOnBackSide(where));
     // Consecutive curves with the same material and transform share a mesh.
     bool reuse = curveBatch_ && curveBatch_->material == material &&
                  curveBatch_->object == currentObject_.value_or(-1) &&
@@ -1477,12 +1508,43 @@ class Parser {
   // triangle by triangle to its vertex normals.
   // A mesh that bounds media is oriented the same way (its outside is on
   // pbrt's normal's side).
+  // pbrt-v3 under a mirror (Material::lightSampledOnBackSide) sees the
+  // emitting side with vertex normals on the normals' side turned by
+  // ReverseOrientation XOR the mirror (its shading normal's flip), while it
+  // samples light leaving the side the normals (turned by
+  // ReverseOrientation) face; without normals it sees the side pbrt-v4 does.
   void orientEmitter(Mesh& mesh) const {
     const Material& material = scene_.materials[size_t(mesh.material)];
     if ((!material.isEmissive() || material.emitsBackSide) && !mesh.media.isTransition()) return;
+    orientToPbrtNormal(mesh, material.lightSampledOnBackSide && !state_.reverseOrientation);
+  }
+  // pbrt-v3 reads a tabulated BSDF whose sides differ (FourierBsdfTable::
+  // sided) in its shading frame: with vertex normals, the normals turned by
+  // ReverseOrientation XOR a handedness swap (Triangle::Intersect and
+  // SetShadingGeometry); without, the winding normal turned by
+  // ReverseOrientation (as seen after the transform). Ferry's frame is the
+  // mesh's normals (or winding): a v3 mesh of such a material gets them
+  // turned so, its winding following its normals.
+  void orientSidedSurface(Mesh& mesh) const {
+    if (dialect_ != Dialect::V3 || currentObject_ || mesh.media.isTransition()) return;
+    const Material& material = scene_.materials[size_t(mesh.material)];
+    const int32_t table = material.bsdfTable();
+    if (table < 0 || size_t(table) >= scene_.bsdfTables.size() ||
+        !scene_.bsdfTables[size_t(table)]->sided())
+      return;
+    if (material.isEmissive() && !material.emitsBackSide) return;  // oriented as an emitter
+    if (mesh.normals.empty()) {
+      if (state_.reverseOrientation)
+        for (Vec3i& tri : mesh.indices) std::swap(tri.y, tri.z);
+      return;
+    }
+    if (state_.reverseOrientation != (state_.ctm.determinant() < 0))
+      for (size_t i = 0; i < mesh.normals.size(); ++i) mesh.normals[i] = -mesh.normals[i];
     orientToPbrtNormal(mesh);
   }
-  void orientToPbrtNormal(Mesh& mesh) const {
+
+  // `againstNormals`: with vertex normals, the winding faces away from them.
+  void orientToPbrtNormal(Mesh& mesh, bool againstNormals = false) const {
     for (Vec3i& tri : mesh.indices) {
       bool flip = state_.reverseOrientation;
       if (!mesh.normals.empty()) {
@@ -1491,10 +1553,42 @@ class Parser {
             cross(mesh.positions[size_t(tri.y)] - a, mesh.positions[size_t(tri.z)] - a);
         const Vec3f normal =
             mesh.normals[size_t(tri.x)] + mesh.normals[size_t(tri.y)] + mesh.normals[size_t(tri.z)];
-        flip = dot(winding, normal) < 0;
+        flip = (dot(winding, normal) < 0) != againstNormals;
       }
       if (flip) std::swap(tri.y, tri.z);
     }
+  }
+
+  // Whether the shapes that follow are pbrt-v3 one-sided area lights under a
+  // transform that swaps handedness: pbrt-v3 samples their light leaving the
+  // side opposite to the one a ray sees emitting (its Triangle::Sample turns
+  // the normal by ReverseOrientation alone, its Intersect by ReverseOrientation
+  // XOR the handedness swap); Ferry keeps that (Material::lightSampledOnBackSide).
+  bool lightSampledOnBackSide(const SourceLocation& where) {
+    if (dialect_ != Dialect::V3 || !state_.areaLight || state_.areaLight->twoSided ||
+        currentObject_ || !(state_.ctm.determinant() < 0))
+      return false;
+    warnings_.once("v3 mirrored emitter",
+                   fmt::format("pbrt-v3 scene: a one-sided area light under a transform that "
+                               "swaps handedness emits as pbrt-v3 has it: its light is sampled "
+                               "leaving the side opposite to the one a ray sees emitting (first "
+                               "at {})",
+                               where.toString()));
+    return true;
+  }
+
+  void noteDialect(Dialect d) {
+    if (dialect_ == Dialect::Unknown) dialect_ = d;
+  }
+  void noteMaterialDialect(const std::string& type) {
+    static const std::set<std::string> v3{"matte",       "plastic", "uber",         "substrate",
+                                          "translucent", "fourier", "kdsubsurface", "mirror",
+                                          "glass",       "metal",   "disney"};
+    static const std::set<std::string> v4{
+        "diffuse",    "coateddiffuse",  "coatedconductor",     "conductor",
+        "dielectric", "thindielectric", "diffusetransmission", "measured"};
+    if (v3.count(type)) noteDialect(Dialect::V3);
+    if (v4.count(type)) noteDialect(Dialect::V4);
   }
 
   // The media a shape bounds: none inside an object definition (pbrt does
@@ -1541,6 +1635,7 @@ class Parser {
   int32_t addMesh(Mesh mesh) {
     storeFinishedMeshes();
     orientEmitter(mesh);
+    orientSidedSurface(mesh);
     if (currentObject_) {
       if (!sameTransform(state_.ctm, Affine3f::identity())) bake(mesh, state_.ctm);
       scene_.meshes.push_back(std::move(mesh));
@@ -1766,6 +1861,10 @@ class Parser {
     float w = float(filmWidth_), h = float(filmHeight_);
     float half = std::tan(radians(c.fov) / 2);
     view.fovY = w < h ? 2 * std::atan(half * h / w) * 180 / kPi : c.fov;
+    // The lens lies across the view axis, the focal plane along it: camera
+    // space lengths scaled as the camera transform scales those axes.
+    view.lensRadius = c.lensRadius * length(right);
+    view.focalDistance = c.focalDistance * length(forward);
     scene_.views.push_back(view);
   }
 
@@ -1780,6 +1879,7 @@ class Parser {
   GraphicsState state_;
   bool activeStart_ = true;
   bool inWorld_ = false;
+  Dialect dialect_ = Dialect::Unknown;
   bool ended_ = false;
   std::map<std::string, Affine3f> coordinateSystems_;
   std::map<std::string, int32_t> objects_;

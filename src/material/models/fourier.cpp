@@ -300,7 +300,9 @@ struct FourierLobe {
 }  // namespace
 
 Bsdf fourierBsdf(const FourierBsdfTable& table) {
-  return Bsdf(FourierLobe{&table}, false, table.transmits());
+  // A table whose sides differ is shaded on the side the ray arrives on in
+  // the shading normal's frame, as a transmitting one is (Bsdf's `transmits`).
+  return Bsdf(FourierLobe{&table}, false, table.sided());
 }
 
 Bsdf FourierModel::bsdf(Vec3f color, const MaterialResources& resources) const {
