@@ -314,6 +314,15 @@ TEST(ApiSession, SettingsByNameAreTheCommandsFlags) {
   const api::Image byCall = session.render(1);
   EXPECT_EQ(rgbOf(bySettings), rgbOf(byCall));
   EXPECT_NE(rgbOf(bySettings), rgbOf(whole));
+  // The thin lens likewise: by settings with the camera, or in the Camera.
+  looking.settings["lens-radius"] = "0.05";
+  looking.settings["focal-distance"] = "2";
+  const api::Image lensBySettings = api::render("builtin:cornell", looking, 1);
+  session.setCamera({{0.2f, 0.5f, 2.5f}, {0, 0.4f, 0}, {0, 1, 0}, 50, 0.05f, 2});
+  const api::Image lensByCall = session.render(1);
+  EXPECT_EQ(rgbOf(lensBySettings), rgbOf(lensByCall));
+  EXPECT_NE(rgbOf(lensByCall), rgbOf(byCall));
+  EXPECT_THROW(session.setCamera({{0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 50, -1, 2}), api::Error);
 }
 
 TEST(ApiSession, RefusesUnknownSettingsNamingThem) {
