@@ -13,6 +13,7 @@
 
 #include "core/error.h"
 #include "io/images/image_io.h"
+#include "material/bsdf.h"
 #include "material/models/coated_conductor.h"
 #include "material/models/coated_diffuse.h"
 #include "material/models/conductor.h"
@@ -907,6 +908,14 @@ TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
   EXPECT_EQ(uberCoat->specular, Vec3f(0.3f));
   EXPECT_FLOAT_EQ(uberCoat->eta, 1.7f);
   EXPECT_FALSE(uberCoat->layered);
+  // uber's "index" is its eta (pbrt-v3 reads "eta", else "index"); 1 leaves
+  // no specular to speak of; "opacity" below 1 lets that share through.
+  const Material indexed = only("Material \"uber\" \"rgb Ks\" [0.3 0.3 0.3] \"float index\" 1.7");
+  EXPECT_FLOAT_EQ(modelAs<CoatedDiffuseModel>(indexed)->eta, 1.7f);
+  const Material clear = only("Material \"uber\" \"float index\" 1");
+  EXPECT_LT(fresnelDielectric(1, modelAs<CoatedDiffuseModel>(clear)->eta), 1e-4f);
+  const Material seeThrough = only("Material \"uber\" \"rgb opacity\" [0.4 0.4 0.4]");
+  EXPECT_NE(seeThrough.alphaTexture, kNoTexture);
   // v4 coateddiffuse: a layered coat of the interface's eta.
   const Material coated = only(
       "Material \"coateddiffuse\" \"rgb reflectance\" [0.7 0.6 0.5] \"float roughness\" 0.04 "
@@ -1081,6 +1090,34 @@ TEST(PbrtParser, PbrtV3MirroredEmittersAreSampledFromTheOtherSide) {
     }
     EXPECT_EQ(emitters, 1);
   }
+}
+
+// Blackbody emitters: pbrt-v3's [T scale] is Planck's spectrum over its
+// peak (Wien) times the scale, pbrt-v4's [T] is normalised to luminance 1.
+// Analytically, at 6500 K the visible band lies near the peak (relative
+// luminance about 0.9); at 2700 K the peak is at 1073 nm and 555 nm is at
+// 0.26 of it (B(555) / B(1073) = (1073/555)^5 (e^4.966 - 1) / (e^9.602 - 1)).
+TEST(PbrtParser, BlackbodyEmittersAreNormalisedAsEachPbrt) {
+  auto emission = [](const std::string& header, const std::string& light) {
+    const Scene s = fromText(header + "WorldBegin\nAreaLightSource \"diffuse\" " + light +
+                             "\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] "
+                             "\"integer indices\" [0 1 2]\nWorldEnd\n");
+    for (const Material& m : s.materials)
+      if (m.isEmissive()) return m.emission;
+    ADD_FAILURE() << "no emitter";
+    return Vec3f(0);
+  };
+  const Vec3f window = emission("Film \"image\"\n", "\"blackbody L\" [6500 100]");
+  EXPECT_GT(luminance(window), 85.0f);
+  EXPECT_LT(luminance(window), 100.0f);
+  const Vec3f lamp = emission("Film \"image\"\n", "\"blackbody L\" [2700 10]");
+  EXPECT_GT(luminance(lamp), 10 * 0.15f);
+  EXPECT_LT(luminance(lamp), 10 * 0.35f);
+  EXPECT_GT(lamp.x, lamp.z);  // warm
+  const Vec3f v4 = emission("Film \"rgb\"\n", "\"blackbody L\" [2700]");
+  EXPECT_NEAR(luminance(v4), 1.0f, 1e-3f);
+  // The same colour either way.
+  EXPECT_NEAR(v4.x / v4.z, lamp.x / lamp.z, 1e-3f * lamp.x / lamp.z);
 }
 
 // Film clamps: v3's maxsampleluminance, v4's maxcomponentvalue (0: none).
