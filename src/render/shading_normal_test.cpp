@@ -72,6 +72,37 @@ TEST(ShadingNormals, ABumpRampTiltsTheNormalByItsSlope) {
   EXPECT_NEAR(s.shadingNormal.z, 0, 1e-4f);
 }
 
+// A solid (3D) bump map, here an fbm times 0.025 on a square without
+// uvs: the normal is tilted by the displacement's slope in space, the
+// gradient of 0.025 fbm across the plane (estimated here by central
+// differences at another step), as pbrt's Bump() tilts it.
+TEST(ShadingNormals, ASolidBumpTiltsTheNormalByItsGradientWithoutUvs) {
+  Material material = diffuseMaterial(Vec3f(0.5f));
+  material.bumpScale = 0.025f;
+  material.bumpTexture = 0;
+  Scene scene = texturedSquare(material);
+  scene.meshes[0].uvs = {};
+  Texture fbm;
+  fbm.name = "fbm";
+  fbm.solid.kind = SolidTextureKind::Fbm;
+  fbm.solid.worldToTexture = Affine3f::scale({10, 10, 10});
+  // Two octaves: the finest wavelength (1/4 texture unit) far above the
+  // step pbrt's Bump() takes without differentials (0.0005 of the uv range,
+  // 0.02 texture units here), so that step's difference is the gradient.
+  fbm.solid.octaves = 2;
+  scene.textures.push_back(fbm);
+  const SurfacePoint s = surfaceAtCentre(scene);
+  ASSERT_NE(s.shadingNormal, s.geometricNormal) << "no bump without uvs";
+  const Vec3f p = s.position;
+  auto d = [&](Vec3f q) { return 0.025f * fbm.solid.evaluate(q).x; };
+  const float h = 2e-4f;
+  const float slopeX = (d(p + Vec3f{h, 0, 0}) - d(p - Vec3f{h, 0, 0})) / (2 * h);
+  const float slopeZ = (d(p + Vec3f{0, 0, h}) - d(p - Vec3f{0, 0, h})) / (2 * h);
+  const Vec3f expected = normalize(Vec3f{-slopeX, 1, -slopeZ});
+  EXPECT_GT(length(Vec3f{slopeX, 0, slopeZ}), 0.05f) << "a visible bump";
+  EXPECT_GT(dot(s.shadingNormal, expected), std::cos(0.05f));
+}
+
 TEST(ShadingNormals, ANormalMapIsReadInTheUvTangentFrame) {
   // Tangent-space (0.6, 0, 0.8): tilted towards +u (+x) by asin(0.6); then
   // (0, 0.6, 0.8): towards +v, which is -z here.

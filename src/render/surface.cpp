@@ -6,9 +6,12 @@ namespace ferry {
 
 void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
                           const SurfaceTable::MeshArrays& mesh, const Vec3i& tri, SurfacePoint& s) {
-  // The triangle's dp/du and dp/dv (pbrt's, from its three uvs), in world
-  // space; a triangle whose uvs are degenerate keeps its normal.
-  const Vec2f uv0 = mesh.uvs[tri.x], uv1 = mesh.uvs[tri.y], uv2 = mesh.uvs[tri.z];
+  // The triangle's dp/du and dp/dv (pbrt's, from its three uvs; without uvs
+  // the barycentric ones SurfacePoint::uv then holds), in world space; a
+  // triangle whose uvs are degenerate keeps its normal.
+  const Vec2f uv0 = mesh.uvs ? mesh.uvs[tri.x] : Vec2f{0, 0};
+  const Vec2f uv1 = mesh.uvs ? mesh.uvs[tri.y] : Vec2f{1, 0};
+  const Vec2f uv2 = mesh.uvs ? mesh.uvs[tri.z] : Vec2f{0, 1};
   const Vec2f d02 = uv0 - uv2, d12 = uv1 - uv2;
   const Vec3f p02 = mesh.positions[tri.x] - mesh.positions[tri.z],
               p12 = mesh.positions[tri.y] - mesh.positions[tri.z];
@@ -36,14 +39,26 @@ Vec3f bentNormal(const Scene& scene, const Material& material, const SurfacePoin
     // texel (the slope of the bilinear lookup; pbrt steps by the ray
     // differentials' footprint, which Ferry's paths do not carry).
     const Texture& bump = scene.textures[material.bumpTexture];
-    const float du = bump.width > 0 ? 0.5f / float(bump.width) : 0.0005f;
-    const float dv = bump.height > 0 ? 0.5f / float(bump.height) : 0.0005f;
-    auto displacement = [&](Vec2f uv) {
-      return material.bumpScale * bump.evaluate(uv, s.position).x;
-    };
-    const float d = displacement(s.uv);
-    const float ddu = (displacement(s.uv + Vec2f{du, 0}) - d) / du;
-    const float ddv = (displacement(s.uv + Vec2f{0, dv}) - d) / dv;
+    float ddu = 0, ddv = 0;
+    if (bump.isSolid()) {
+      // A solid texture: displaced at the points du dp/du and dv dp/dv away
+      // (pbrt's step without ray differentials, 0.0005), its raw value (fBm
+      // is negative half the time).
+      constexpr float kStep = 0.0005f;
+      auto displacement = [&](Vec3f p) { return material.bumpScale * bump.solid.evaluate(p).x; };
+      const float d = displacement(s.position);
+      ddu = (displacement(s.position + dpdu * kStep) - d) / kStep;
+      ddv = (displacement(s.position + dpdv * kStep) - d) / kStep;
+    } else {
+      const float du = bump.width > 0 ? 0.5f / float(bump.width) : 0.0005f;
+      const float dv = bump.height > 0 ? 0.5f / float(bump.height) : 0.0005f;
+      auto displacement = [&](Vec2f uv) {
+        return material.bumpScale * bump.evaluate(uv, s.position).x;
+      };
+      const float d = displacement(s.uv);
+      ddu = (displacement(s.uv + Vec2f{du, 0}) - d) / du;
+      ddv = (displacement(s.uv + Vec2f{0, dv}) - d) / dv;
+    }
     bent = cross(dpdu + n * ddu, dpdv + n * ddv);
     // The parametrization may be mirrored: keep the side of the normal.
     if (dot(bent, n) < 0) bent = -bent;

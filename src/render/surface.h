@@ -73,7 +73,7 @@ inline bool hasNormalPerturbation(const Material& material) {
 }
 
 // Bends `s`'s shading normal by its material's bump map or normal map (in
-// the triangle's uv parametrization; nothing without uvs), and for a mix
+// the triangle's uv parametrization, or without uvs its barycentric one), and for a mix
 // keeps what bentNormal needs for the other materials. Out of line: few
 // materials have either.
 void perturbShadingNormal(const Scene& scene, const Affine3f& transform,
@@ -139,7 +139,7 @@ inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, con
   s.uv = !mesh.uvs ? Vec2f{hit.u, hit.v}
                    : mesh.uvs[tri.x] * w + mesh.uvs[tri.y] * hit.u + mesh.uvs[tri.z] * hit.v;
   s.material = mesh.material;
-  if ((hasNormalPerturbation(*s.material) || s.material->mixedWith >= 0) && mesh.uvs)
+  if (hasNormalPerturbation(*s.material) || s.material->mixedWith >= 0)
     perturbShadingNormal(scene, transform, mesh, tri, s);
   s.baseColor = materialBaseColor(scene, *s.material, s.uv, s.position);
   return s;

@@ -341,8 +341,9 @@ struct PbrtMaterials::Impl {
     if (solidKind(t.className) != SolidTextureKind::None) {
       warnings.once("solid in composite|" + t.className,
                     fmt::format("a \"{}\" texture is evaluated in 3D only where a material uses "
-                                "it directly; inside another texture or on a scalar it is the "
-                                "constant 0.5 (first at {})",
+                                "it as a colour or (alone or scaled) as a bump map; inside "
+                                "another texture or on a scalar it is the constant 0.5 (first "
+                                "at {})",
                                 t.className, t.where.toString()));
       return;
     }
@@ -574,12 +575,39 @@ struct PbrtMaterials::Impl {
   // A float texture as a bump map's displacement: baked into a linear grey
   // texture spanning its range (only the slopes matter), `scale` set to the
   // range in world units. kNoTexture where it is flat.
+  // A solid texture times constants (itself, or pbrt's "scale" of one with a
+  // constant, nested): the solid texture's definition, `factor` the product.
+  const PbrtTextureDefinition* scaledSolid(const PbrtTextureDefinition& t, float& factor,
+                                           int depth = 0) {
+    if (depth > 16) return nullptr;
+    if (solidKind(t.className) != SolidTextureKind::None) return &t;
+    if (t.className != "scale") return nullptr;
+    const PbrtParam* a = t.params.find("tex1");
+    const PbrtParam* b = t.params.find("tex2");
+    if (!a || !b) return nullptr;
+    if (a->type != "texture") std::swap(a, b);
+    if (a->type != "texture" || b->type != "float" || b->floats.size() != 1) return nullptr;
+    const PbrtTextureDefinition* inner = scaledSolid(textureOf(*a, true), factor, depth + 1);
+    if (inner) factor *= b->floats[0];
+    return inner;
+  }
+
   int32_t bakeBump(const PbrtParam& p, float& scale) {
     const PbrtTextureDefinition& t = textureOf(p, true);
     auto it = bakedBump.find(t.name);
     if (it != bakedBump.end()) {
       scale = it->second.second;
       return it->second.first;
+    }
+    // A solid bump (fbm, wrinkled, ... or a scale of one): evaluated in 3D at
+    // the shading point (render/surface.cpp), not baked over uv.
+    float factor = 1;
+    if (const PbrtTextureDefinition* solid = scaledSolid(t, factor)) {
+      const int32_t id = solidTexture(*solid);
+      scale = factor;
+      t.params.markAllUsed();
+      bakedBump.emplace(t.name, std::make_pair(id, scale));
+      return id;
     }
     int width, height;
     bakeResolution(t, width, height);
@@ -684,11 +712,14 @@ struct PbrtMaterials::Impl {
     texture.name = t.className + " \"" + t.name + "\"";
     SolidTexture& s = texture.solid;
     s.kind = solidKind(t.className);
-    // pbrt-v4's texture space: the inverse of the CTM at the definition
-    // (pbrt-v3 applies the CTM itself; the two agree for the usual
-    // identity, and differ only for transformed textures).
-    s.worldToTexture =
-        t.transform.determinant() != 0 ? t.transform.inverse() : Affine3f::identity();
+    // The texture's space: pbrt-v4's inverse of the CTM at the definition,
+    // or pbrt-v3's CTM itself (PbrtTextureDefinition); the two agree for the
+    // usual identity, and differ only for transformed textures.
+    if (t.transformIsWorldToTexture)
+      s.worldToTexture = t.transform;
+    else
+      s.worldToTexture =
+          t.transform.determinant() != 0 ? t.transform.inverse() : Affine3f::identity();
     s.octaves = std::clamp(t.params.getInt("octaves", 8), 0, 32);
     s.omega = t.params.getFloat("roughness", 0.5f);
     s.scale = t.params.getFloat("scale", 1);

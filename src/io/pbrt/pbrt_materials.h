@@ -30,6 +30,10 @@ struct PbrtTextureDefinition {
   PbrtParams params;
   SourceLocation where;
   Affine3f transform;  // the CTM where it was defined (solid textures' space)
+  // pbrt-v3 maps world points to a solid texture's space by that CTM itself
+  // (its IdentityMapping3D is given the texture-to-world transform);
+  // pbrt-v4 by its inverse. The two agree for the usual identity.
+  bool transformIsWorldToTexture = false;
 };
 
 struct PbrtMaterialDefinition {

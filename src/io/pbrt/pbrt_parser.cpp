@@ -1031,6 +1031,7 @@ class Parser {
     t.params = withDefaults(params(in), "texture");
     t.where = where;
     t.transform = state_.ctm;
+    t.transformIsWorldToTexture = dialect_ == Dialect::V3;
     materials_.defineTexture(std::move(t));
   }
 

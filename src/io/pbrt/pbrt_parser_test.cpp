@@ -969,6 +969,32 @@ TEST(PbrtParser, SolidTexturesAreEvaluatedInTheirSpace) {
   EXPECT_EQ(wrinkled.solid.octaves, 8);
 }
 
+// A solid texture as a bump map, alone or scaled by constants (the
+// bathroom's towels: scale of fbm by 0.025), is displaced in 3D; its space
+// is the CTM at its definition in pbrt-v3 (which applies it) and its
+// inverse in pbrt-v4.
+TEST(PbrtParser, ScaledSolidBumpMapsAreEvaluatedInTheirSpace) {
+  auto bumped = [](const std::string& header) {
+    std::vector<std::string> warnings;
+    const Scene scene = fromText(
+        header +
+            "WorldBegin\nTransformBegin\nScale 10 10 10\nTexture \"base\" \"float\" \"fbm\"\n"
+            "Texture \"bump\" \"float\" \"scale\" \"texture tex1\" \"base\" \"float tex2\" 0.025\n"
+            "TransformEnd\nMaterial \"matte\" \"texture bumpmap\" \"bump\"\nShape "
+            "\"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n"
+            "WorldEnd\n",
+        &warnings);
+    EXPECT_FALSE(anyContains(warnings, "constant 0.5"));
+    const Material& m = scene.materials.at(size_t(scene.meshes.at(0).material));
+    EXPECT_FLOAT_EQ(m.bumpScale, 0.025f);
+    const Texture& t = scene.textures.at(size_t(m.bumpTexture));
+    EXPECT_EQ(t.solid.kind, SolidTextureKind::Fbm);
+    return t.solid.worldToTexture.transformPoint({1, 0, 0}).x;
+  };
+  EXPECT_FLOAT_EQ(bumped("Film \"image\"\n"), 10);  // v3: the CTM
+  EXPECT_FLOAT_EQ(bumped("Film \"rgb\"\n"), 0.1f);  // v4: its inverse
+}
+
 TEST(PbrtParser, DotsAreBakedAsPbrtV3Draws) {
   const Scene scene = fromText(
       "WorldBegin\nTexture \"d\" \"color\" \"dots\" \"rgb inside\" [1 0 0] \"rgb outside\" [0 0 1] "
