@@ -18,16 +18,22 @@ namespace {
 
 using namespace ferry::testing;
 
-TEST(FourierRender, APaintedPlaneUnderAWhiteSkyShowsTheTablesAlbedo) {
+// A 100 x 100 plane of paint.bsdf facing +y; false if the table is not there.
+bool paintedPlane(Scene& scene) {
   const std::filesystem::path path =
       std::filesystem::path(FERRY_SHARED_SCENES) / "breakfast" / "bsdfs" / "paint.bsdf";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "paint.bsdf is not available";
-  Scene scene;
+  if (!std::filesystem::exists(path)) return false;
   scene.bsdfTables.push_back(readFourierBsdfFile(path.string()));
   Material paint = diffuseMaterial(Vec3f(0.5f));
   paint.model = std::make_shared<FourierModel>(0);
   const int32_t m = scene.addMaterial(paint);
   scene.addSingleInstanceMesh(makeQuad({-50, 0, 50}, {100, 0, 0}, {0, 0, -100}, m));
+  return true;
+}
+
+TEST(FourierRender, APaintedPlaneUnderAWhiteSkyShowsTheTablesAlbedo) {
+  Scene scene;
+  if (!paintedPlane(scene)) GTEST_SKIP() << "paint.bsdf is not available";
   // Looking down at 50 degrees from the normal, 1-degree field of view.
   const float theta = 50 * kPi / 180;
   CameraView view;
@@ -64,16 +70,9 @@ TEST(FourierRender, APaintedPlaneUnderAWhiteSkyShowsTheTablesAlbedo) {
 // Lambertian 0.6 beneath): seen from below its normal, the plane shows the
 // table's bottom, as pbrt-v3 reads it in the shading frame.
 TEST(FourierRender, APaintedPlaneSeenFromBelowShowsTheTablesBottom) {
-  const std::filesystem::path path =
-      std::filesystem::path(FERRY_SHARED_SCENES) / "breakfast" / "bsdfs" / "paint.bsdf";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "paint.bsdf is not available";
   Scene scene;
-  scene.bsdfTables.push_back(readFourierBsdfFile(path.string()));
+  if (!paintedPlane(scene)) GTEST_SKIP() << "paint.bsdf is not available";
   ASSERT_TRUE(scene.bsdfTables[0]->hasBackSide);
-  Material paint = diffuseMaterial(Vec3f(0.5f));
-  paint.model = std::make_shared<FourierModel>(0);
-  const int32_t m = scene.addMaterial(paint);
-  scene.addSingleInstanceMesh(makeQuad({-50, 0, 50}, {100, 0, 0}, {0, 0, -100}, m));  // normal +y
   const float theta = 50 * kPi / 180;
   CameraView view;  // below the plane, 50 degrees from its (downward) back
   view.from = {0, -10 * std::cos(theta), 10 * std::sin(theta)};

@@ -336,6 +336,37 @@ TEST(Mis, LightSamplesBsdfSamplesMisAndLightPathsRenderTheSameMean) {
   }
 }
 
+// Camera paths alone and with light paths, each over `frames` frames of
+// `s` (the seeds `seed` and `seed + 1`): per channel, the image means and
+// their standard errors, [0] without light paths, [1] with; the means are
+// checked equal (z-test at kAlpha, Sidak over the channels) and printed
+// under `label`.
+struct WithAndWithoutLightPaths {
+  double mean[2][3], se[2][3];
+};
+WithAndWithoutLightPaths compareLightPaths(const Scene& scene, RenderSettings s, int frames,
+                                           uint32_t seed, const char* label) {
+  WithAndWithoutLightPaths r;
+  for (int i = 0; i < 2; ++i) {
+    s.lightPaths = i == 1;
+    s.seed = seed + uint32_t(i);
+    Scene copy = scene;
+    const PixelStatistics stats = renderStatistics(copy, s, frames);
+    for (int k = 0; k < 3; ++k) stats.imageMean(k, r.mean[i][k], r.se[i][k]);
+  }
+  const double z = twoSidedNormalQuantile(sidak(kAlpha, 3));
+  for (int k = 0; k < 3; ++k) {
+    const double bound =
+        z * std::hypot(r.se[0][k], r.se[1][k]) + 2 * kHalfRelativeError * std::abs(r.mean[0][k]);
+    std::printf(
+        "[ %-8s ] ch%d: camera paths %.5f +- %.1e, with light paths %.5f +- %.1e "
+        "(allowed %.1e)\n",
+        label, k, r.mean[0][k], r.se[0][k], r.mean[1][k], r.se[1][k], bound);
+    EXPECT_NEAR(r.mean[1][k], r.mean[0][k], bound) << label << " ch" << k;
+  }
+  return r;
+}
+
 // Through a thin lens (render/camera.h) light paths connect to a point on
 // the lens: the mean stays that of camera paths alone.
 TEST(Mis, LightPathsThroughAThinLensRenderTheSameMean) {
@@ -347,22 +378,7 @@ TEST(Mis, LightPathsThroughAThinLensRenderTheSameMean) {
   s.height = 18;
   s.samplesPerPixel = 8;
   s.maxDepth = 2;
-  double mean[2][3], se[2][3];
-  for (int i = 0; i < 2; ++i) {
-    s.lightPaths = i == 1;
-    s.seed = 201 + uint32_t(i);
-    Scene copy = scene;
-    const PixelStatistics stats = renderStatistics(copy, s, 48);
-    for (int k = 0; k < 3; ++k) stats.imageMean(k, mean[i][k], se[i][k]);
-  }
-  const double z = twoSidedNormalQuantile(sidak(kAlpha, 3));
-  for (int k = 0; k < 3; ++k) {
-    const double bound =
-        z * std::hypot(se[0][k], se[1][k]) + 2 * kHalfRelativeError * std::abs(mean[0][k]);
-    std::printf("[ lens     ] ch%d: camera paths %.5f +- %.1e, with light paths %.5f +- %.1e\n", k,
-                mean[0][k], se[0][k], mean[1][k], se[1][k]);
-    EXPECT_NEAR(mean[1][k], mean[0][k], bound) << "ch" << k;
-  }
+  compareLightPaths(scene, s, 48, 201, "lens");
 }
 
 // A lamp inside a frosted (rough dielectric) glass shell above a floor: the
@@ -398,25 +414,8 @@ TEST(Mis, LightPathsThroughRoughGlassKeepTheMeanAndLowerTheNoise) {
   s.height = 18;
   s.samplesPerPixel = 8;
   s.maxDepth = 4;
-  double mean[2][3], se[2][3];
-  for (int i = 0; i < 2; ++i) {
-    s.lightPaths = i == 1;
-    s.seed = 7 + uint32_t(i);
-    Scene copy = scene;
-    const PixelStatistics stats = renderStatistics(copy, s, 64);
-    for (int k = 0; k < 3; ++k) stats.imageMean(k, mean[i][k], se[i][k]);
-  }
-  const double z = twoSidedNormalQuantile(sidak(kAlpha, 3));
-  for (int k = 0; k < 3; ++k) {
-    const double bound =
-        z * std::hypot(se[0][k], se[1][k]) + 2 * kHalfRelativeError * std::abs(mean[0][k]);
-    std::printf(
-        "[ frosted  ] ch%d: camera paths %.5f +- %.1e, with light paths %.5f +- %.1e "
-        "(allowed %.1e)\n",
-        k, mean[0][k], se[0][k], mean[1][k], se[1][k], bound);
-    EXPECT_NEAR(mean[1][k], mean[0][k], bound) << "ch" << k;
-    EXPECT_LT(se[1][k], se[0][k]) << "ch" << k;
-  }
+  const WithAndWithoutLightPaths r = compareLightPaths(scene, s, 64, 7, "frosted");
+  for (int k = 0; k < 3; ++k) EXPECT_LT(r.se[1][k], r.se[0][k]) << "ch" << k;
 }
 
 }  // namespace
