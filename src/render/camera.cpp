@@ -114,10 +114,9 @@ void Camera::ray(float x, float y, Vec2f uLens, Vec3f& rayOrigin, Vec3f& rayDire
     rayDirection = direction(x, y);
     return;
   }
-  const float sx = x * xScale_ - tanHalfX_;
-  const float sy = tanHalfY_ - y * yScale_;
-  // The pinhole ray's point on the focal plane (its forward component is 1).
-  const Vec3f focus = origin_ + (forward_ + right_ * sx + up_ * sy) * focalDistance_;
+  // The pinhole ray's point on the focal plane (the plane point's forward
+  // component is 1).
+  const Vec3f focus = origin_ + planePoint(x, y) * focalDistance_;
   rayOrigin = lensPoint(uLens);
   rayDirection = normalize(focus - rayOrigin);
 }
