@@ -139,7 +139,7 @@ TEST(RealScenes, BuddhaFractal) {
 }
 
 // pbrt-v3's bathroom against pbrt-v3's own render (../shared/references):
-// the guard of issue 44's goals at a size the suite affords (150x95, 16 spp,
+// the guard of the fidelity goals at a size the suite affords (150x95, 16 spp,
 // a fixed seed: one image, so the figures cannot wander). Each region tests
 // one pbrt-v3 semantic: the whole image its mirrored lights (+150..220 %
 // when seen and sampled on one side), the upper half its walls' sided
