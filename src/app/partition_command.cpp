@@ -30,6 +30,7 @@
 #include "session/forward_prediction.h"
 #include "session/partitioned_scene.h"
 #include "session/session_settings.h"
+#include "shapes/volume_brick.h"
 
 namespace ferry {
 namespace {
@@ -249,6 +250,7 @@ int writeParts(const PartitionCommandOptions& o, const PartitionerOptions& p, in
   LoadOptions load;
   if (geometryPlan.outOfCore) load.meshStore = std::make_shared<MeshStore>(spillPath(o.output));
   Scene scene = loadScene(o.scene, load);
+  if (o.volumeBricks > 0) brickVolumes(scene, o.volumeBricks);
   if (geometryPlan.outOfCore) checkLargestMesh(scene, geometryPlan, o.scene);
   const double loadSeconds = secondsSince(start);
   // Checked before the work: a bad view or flag fails in a second, not after the write.
@@ -290,6 +292,7 @@ int writeParts(const PartitionCommandOptions& o, const PartitionerOptions& p, in
 int writeReport(const PartitionCommandOptions& o, const PartitionerOptions& p, int first,
                 int last) {
   Scene scene = loadScene(o.scene);
+  if (o.volumeBricks > 0) brickVolumes(scene, o.volumeBricks);
   const std::string name = scene.name.empty() ? o.scene : scene.name;
   MaxPartReport report = maxPartReport(std::move(scene), name, first, last, p);
   writeMaxPartCsv(o.report, report);
@@ -327,6 +330,10 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       "--report", o.report,
       "Write the largest part's estimated bytes per rank count and partitioner as CSV, and\n"
       "a plot of it as PNG (see --plot)");
+  cmd->add_option("--volume-bricks", o.volumeBricks,
+                  "Grid volumes split into bricks of N voxels a side, placed like meshes\n"
+                  "(0: whole; a part file cannot hold a whole medium)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--plot", o.plot, "PNG for --report (default: the report's name with .png)");
   cmd->add_option(
       "--memory-budget", o.memoryBudget,

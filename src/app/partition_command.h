@@ -41,6 +41,8 @@ struct PartitionCommandOptions {
   std::string predictSize = "2560x1080";
   int predictDepth = 5;
   CameraFlags camera;
+  // --volume-bricks N: grid volumes split into bricks of N voxels a side (0: whole).
+  int volumeBricks = 0;
 };
 
 void addPartitionCommand(CLI::App& app, PartitionCommandOptions& options);

@@ -118,6 +118,10 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--color-map {}: expected one of {}", o.colorMap,
                                  fmt::join(colorMapNames(), ", ")));
   s.render.volumeLook = {o.volumeOpacity, o.colorMap};
+  if (o.volumeBricks < 0)
+    throw InputError(fmt::format("--volume-bricks {}: expected 0 (whole) or a brick size in voxels",
+                                 o.volumeBricks));
+  s.volumeBrickVoxels = o.volumeBricks;
   s.render.seed = o.seed;
   s.render.view = o.view;
   s.render.toneMapping.exposure = o.exposure;
@@ -184,6 +188,12 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
   command->add_option("--color-map", o.colorMap,
                       "Volumes drawn through a transfer function: this colour map instead of\n"
                       "their own (cool-to-warm, viridis, inferno, black-body, grayscale)");
+  command
+      ->add_option("--volume-bricks", o.volumeBricks,
+                   "Grid volumes (raw:, .vdb, builtin:volume, a pbrt grid medium filling its\n"
+                   "box) split into bricks of N voxels a side, which the partitioner spreads\n"
+                   "over the ranks like meshes (0: every rank holds every volume whole)")
+      ->capture_default_str();
   command->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   command->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")
       ->capture_default_str();

@@ -62,6 +62,9 @@ struct RenderOptions {
   // --volume-opacity, --color-map: transfer-function volumes restyled.
   float volumeOpacity = 1;
   std::string colorMap;
+  // --volume-bricks N: grid volumes split into bricks of N voxels a side,
+  // spread over the ranks (0: every rank holds them whole).
+  int volumeBricks = 0;
   // --instancing: "shared" gives an Embree instance level only to objects a
   // rank places more than once or transformed; "always" to every object.
   std::string instancing = "shared";

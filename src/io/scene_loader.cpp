@@ -33,6 +33,7 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
     return scene;
   }
   if (isRawVolumeSpec(spec)) return loadRawVolume(spec);
+  if (isBrickManifestSpec(spec)) return loadBrickPiece(spec, -1, 1);  // the whole, assembled
   if (!std::filesystem::exists(spec)) throw InputError(fmt::format("{}: no such file", spec));
   std::string ext = lowerExtension(spec);
   Scene scene;

@@ -1,5 +1,6 @@
 #include "media/majorant_grid.h"
 
+#include <stdexcept>
 #include <tuple>
 
 namespace ferry {
@@ -33,6 +34,13 @@ MajorantGrid::MajorantGrid(const DensityGrid& grid, const Extinction& extinction
         values_[index(x, y, z)] = majorant;
         controls_[index(x, y, z)] = control;
       }
+}
+
+MajorantGrid::MajorantGrid(int rx, int ry, int rz, std::vector<float> majorants)
+    : values_(std::move(majorants)), controls_(values_.size()) {
+  res_[0] = rx, res_[1] = ry, res_[2] = rz;
+  if (rx < 1 || ry < 1 || rz < 1 || values_.size() != size_t(rx) * size_t(ry) * size_t(rz))
+    throw std::invalid_argument("majorant cells: the counts do not match the values");
 }
 
 MajorantGrid::MajorantGrid(float majorant, Vec3f control) : values_{majorant}, controls_{control} {}

@@ -34,6 +34,9 @@ class MajorantGrid {
   MajorantGrid(const DensityGrid& grid, const Extinction& extinction, int cells = kMajorantCells);
   // The grid's values themselves as the extinction.
   explicit MajorantGrid(const DensityGrid& grid, int cells = kMajorantCells);
+  // `rx` x `ry` x `rz` cells over the cube with these majorants, x fastest
+  // (controls 0): a bound made elsewhere (a volume brick's cells).
+  MajorantGrid(int rx, int ry, int rz, std::vector<float> majorants);
   // One cell over the whole cube (pbrt-v4's cloud: a bound known without a grid).
   MajorantGrid(float majorant, Vec3f control);
   // The cells of `cells` (made over a grid) with another extinction, from the

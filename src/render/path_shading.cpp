@@ -78,6 +78,9 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
     addEscapedLight(path, frameBuffer);
     return {};
   }
+  if (const Shape* volume = volumeOf(hit))
+    return shadeVolumeCollision(path, hit, *volume, kNoMedium, sampleIndex, bounce, continuation,
+                                shadowRay);
   const PathVertex vertex = surfaceVertex(path, hit, bounce);
   addEmission(vertex, hit, frameBuffer);
   if (bounce >= maxDepth_) return {};
@@ -541,12 +544,15 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
   Path arrived = path;
   arrived.setWeight(throughput * f.weight);
   if (f.event == FreeFlight::Event::Scattered)
-    return shadeMediumVertex(arrived, path.origin + d * f.t, f.medium, sampleIndex, bounce,
-                             continuation, shadowRay);
+    return shadeMediumVertex(arrived, path.origin + d * f.t, media_->medium(f.medium).g, f.medium,
+                             sampleIndex, bounce, continuation, shadowRay);
   if (!path.hasHit()) {
     addEscapedLight(arrived, frameBuffer);
     return {};
   }
+  if (const Shape* volume = volumeOf(hit))
+    return shadeVolumeCollision(arrived, hit, *volume, f.medium, sampleIndex, bounce, continuation,
+                                shadowRay);
   const PathVertex vertex = surfaceVertex(arrived, hit, bounce);
   addEmission(vertex, hit, frameBuffer);
   if (bounce >= maxDepth_) return {};
@@ -565,11 +571,32 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
 }
 
 template <typename Path>
+const Shape* PathShading<Path>::volumeOf(const TraceHit& hit) const {
+  const Object& object = scene_.objects[size_t(scene_.instances[size_t(hit.instance)].object)];
+  if (size_t(hit.slot) < object.meshes.size()) return nullptr;
+  const Shape* shape =
+      scene_.geometries[size_t(object.geometries[size_t(hit.slot) - object.meshes.size()])]
+          .shape.get();
+  return shape->isVolume() ? shape : nullptr;
+}
+
+template <typename Path>
+typename PathShading<Path>::Spawned PathShading<Path>::shadeVolumeCollision(
+    const Path& path, const TraceHit& hit, const Shape& volume, int32_t medium,
+    uint32_t sampleIndex, uint32_t bounce, Path& continuation, Path& shadowRay) const {
+  // Where the trace found the collision, along the ray as it traced it.
+  const Vec3f position = path.origin + path.dir() * hit.t;
+  Path scattered = path;
+  scattered.setWeight(path.weight() * volume.volumeAlbedo(position));
+  return shadeMediumVertex(scattered, position, volume.volumePhaseG(), medium, sampleIndex, bounce,
+                           continuation, shadowRay);
+}
+
+template <typename Path>
 typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
-    const Path& path, Vec3f position, int32_t medium, uint32_t sampleIndex, uint32_t bounce,
-    Path& continuation, Path& shadowRay) const {
+    const Path& path, Vec3f position, float g, int32_t medium, uint32_t sampleIndex,
+    uint32_t bounce, Path& continuation, Path& shadowRay) const {
   if (bounce >= maxDepth_) return {};
-  const float g = media_->medium(medium).g;
   const Vec3f wo = normalize(-path.dir());
   const RandomKey key{randomPixel(path.pixel()), sampleIndex, bounce, seed_};
   const RandomStream random(key);
@@ -588,7 +615,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
                                         path.pixel(), kPathShadow);
         if (std::isfinite(ls.distance))
           shadowRay.tmax = shadowRayTmax(position, position, storedDir, ls);
-        spawned.shadowRay = throughMedia(shadowRay, medium, randomKeyHash(key));
+        spawned.shadowRay = !media_ || throughMedia(shadowRay, medium, randomKeyHash(key));
       }
     }
   }
@@ -602,7 +629,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
   }
   if (!usable(weight) || !(pdf > 0)) return spawned;
   makeRay(continuation, position, wi, kInfinity, weight, path.pixel(), 0, pdf);
-  setPathMedium(continuation, medium);
+  if (media_) setPathMedium(continuation, medium);
   spawned.continuation = true;
   return spawned;
 }

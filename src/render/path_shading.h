@@ -204,8 +204,18 @@ class PathShading {
   // hit through the media, then the surface, or a vertex in a medium.
   Spawned shadeInMedia(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
                        FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const;
-  Spawned shadeMediumVertex(const Path& path, Vec3f position, int32_t medium, uint32_t sampleIndex,
-                            uint32_t bounce, Path& continuation, Path& shadowRay) const;
+  // A vertex scattering by a Henyey-Greenstein phase function of asymmetry
+  // `g`, in `medium` (the path's medium after it; kNoMedium without media).
+  Spawned shadeMediumVertex(const Path& path, Vec3f position, float g, int32_t medium,
+                            uint32_t sampleIndex, uint32_t bounce, Path& continuation,
+                            Path& shadowRay) const;
+  // The volume (scene/shape.h: isVolume) the hit is a collision in, or null.
+  const Shape* volumeOf(const TraceHit& hit) const;
+  // A path that collided in a volume (a brick: shapes/volume_brick.h): it
+  // scatters there, weighed by the volume's albedo.
+  Spawned shadeVolumeCollision(const Path& path, const TraceHit& hit, const Shape& volume,
+                               int32_t medium, uint32_t sampleIndex, uint32_t bounce,
+                               Path& continuation, Path& shadowRay) const;
   // Multiplies a shadow ray leaving into `medium` by its transmittance to the
   // light; false if none is left.
   bool throughMedia(Path& shadowRay, int32_t medium, uint32_t keyHash) const;

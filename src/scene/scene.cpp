@@ -67,6 +67,11 @@ int32_t Scene::addSingleInstanceMesh(Mesh mesh) {
   return id;
 }
 
+bool Scene::hasVolumes() const {
+  return std::any_of(geometries.begin(), geometries.end(),
+                     [](const Geometry& g) { return g.shape && g.shape->isVolume(); });
+}
+
 int32_t Scene::addSingleInstanceGeometry(Geometry geometry) {
   geometries.push_back(std::move(geometry));
   Object object;

@@ -220,6 +220,8 @@ struct Scene {
   std::vector<MediumBoundary> mediumBoundaries;
   int32_t cameraMedium = kNoMedium;
   bool hasMedia() const { return !media.empty(); }
+  // Whether any geometry is a volume (scene/shape.h: isVolume), a brick of one.
+  bool hasVolumes() const;
   // What the scene file asks for (pbrt's Film), used when the command line
   // does not say: image size and output file name (relative to the scene file's
   // directory as written; the caller decides where to put it).

@@ -26,6 +26,7 @@ SceneSummary summarize(const Scene& scene) {
   s.geometries = scene.geometries.size();
   for (const Geometry& g : scene.geometries) {
     if (g.shape) s.shapePrimitives += g.shape->primitiveCount();
+    if (g.shape && g.shape->isVolume()) ++s.volumeBricks;
     s.memory += geometryCost(g);
   }
   s.objects = scene.objects.size();
@@ -172,6 +173,7 @@ nlohmann::json SceneSummary::toJson() const {
   j["unique_meshes"] = uniqueMeshes;
   j["geometries"] = geometries;
   j["shape_primitives"] = shapePrimitives;
+  j["volume_bricks"] = volumeBricks;
   j["triangles"] = triangles;
   j["vertices"] = vertices;
   j["objects"] = objects;

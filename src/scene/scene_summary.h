@@ -21,7 +21,8 @@ struct SceneSummary {
   uint64_t uniqueMeshes = 0;
   uint64_t geometries = 0;  // of other kinds than triangle meshes (scene/shape.h)
   uint64_t shapePrimitives = 0;
-  uint64_t triangles = 0;  // unique: each mesh counted once
+  uint64_t volumeBricks = 0;  // geometries that are volumes (shapes/volume_brick.h)
+  uint64_t triangles = 0;     // unique: each mesh counted once
   uint64_t vertices = 0;
   uint64_t objects = 0;
   uint64_t instances = 0;

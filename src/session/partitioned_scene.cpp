@@ -109,13 +109,13 @@ void appendLights(Scene& all, Scene&& lights) {
 SceneSummary wholeSummary(const SceneSummary& piece, const Communicator& comm) {
   SceneSummary whole = piece;
   uint64_t* fields[] = {
-      &whole.uniqueMeshes,     &whole.geometries,         &whole.shapePrimitives,
-      &whole.triangles,        &whole.vertices,           &whole.objects,
-      &whole.instances,        &whole.instancedTriangles, &whole.textures,
-      &whole.texels,           &whole.emissiveMeshes,     &whole.emissiveTriangles,
-      &whole.memory.vertices,  &whole.memory.normals,     &whole.memory.uvs,
-      &whole.memory.indices,   &whole.memory.texels,      &whole.memory.shapes,
-      &whole.memory.instances, &whole.memory.accel};
+      &whole.uniqueMeshes,      &whole.geometries,       &whole.shapePrimitives,
+      &whole.volumeBricks,      &whole.triangles,        &whole.vertices,
+      &whole.objects,           &whole.instances,        &whole.instancedTriangles,
+      &whole.textures,          &whole.texels,           &whole.emissiveMeshes,
+      &whole.emissiveTriangles, &whole.memory.vertices,  &whole.memory.normals,
+      &whole.memory.uvs,        &whole.memory.indices,   &whole.memory.texels,
+      &whole.memory.shapes,     &whole.memory.instances, &whole.memory.accel};
   std::vector<uint64_t> counts;
   for (uint64_t* f : fields) counts.push_back(*f);
   counts = comm.sum(std::span<const uint64_t>(counts));

@@ -22,12 +22,14 @@
 #include "distributed/proxy_bvh.h"
 #include "io/checkpoints/checkpoint_file.h"
 #include "io/parts/manifest.h"
+#include "io/volumes/volume_files.h"
 #include "media/volume_look.h"
 #include "partition/partition.h"
 #include "path/path.h"
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
 #include "session/partitioned_scene.h"
+#include "shapes/volume_brick.h"
 #include "trace/embree_backend.h"
 
 namespace ferry {
@@ -73,17 +75,44 @@ struct RenderSession::Rank {
   }
 };
 
+namespace {
+
+// This rank's bricks of a "bricks:" manifest as its piece (collective: a
+// rank that cannot load its bricks ends every rank with its message).
+PartitionedScene loadBrickPieces(const SessionSettings& settings, const Communicator& comm) {
+  Scene piece;
+  std::string error;
+  try {
+    piece = loadBrickPiece(settings.scene, comm.rank(), comm.size(), settings.render.volumeLook);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (const std::string failure = comm.failureMessage(!error.empty(), error); !failure.empty())
+    throw InputError(failure);
+  return distributedPiece(std::move(piece), comm);
+}
+
+}  // namespace
+
 RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm, Scene* given,
                           PartitionedScene* part) {
   if (settings.threads > 0)
     threadLimit = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, settings.threads);
   lap(&SetupTimes::start);
+  // A volume already spread in bricks: each rank loads its own, no partitioning.
+  PartitionedScene fromBricks;
+  if (!part && !given && isBrickManifestSpec(settings.scene)) {
+    fromBricks = loadBrickPieces(settings, comm);
+    part = &fromBricks;
+  }
   PartitionedScene loaded =
       part
           ? std::move(*part)
           : loadPartitionedScene(settings, comm.size(), comm.rank(), given, [&](Scene& whole) {
               whole.view(settings.render.view);  // fail on an unknown view before building anything
+              if (settings.volumeBrickVoxels > 0)
+                brickVolumes(whole, settings.volumeBrickVoxels, settings.render.volumeLook);
               summary = summarize(whole);
               lap(&SetupTimes::load);
               // Light data is small and needed everywhere: take it from the scene
@@ -203,7 +232,8 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
   rank_ = std::make_unique<Rank>(settings_, comm_, given, part);
   // Light paths do not go through media: a scene with media renders by
   // camera paths alone (their medium rides where light paths keep a ratio).
-  const bool media = rank_->scene.hasMedia();
+  // (Volume bricks are spread over ranks: the whole scene's summary counts them.)
+  const bool media = rank_->scene.hasMedia() || rank_->summary.volumeBricks > 0;
   if (media && settings_.lightPaths.value_or(false))
     throw InputError(
         fmt::format("light paths were asked for, but scene '{}' has participating media, which "

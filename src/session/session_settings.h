@@ -24,6 +24,10 @@ struct SessionSettings {
   // retraceAll is the session's to set, from `retrace`.
   RenderSettings render;
   int threads = 0;  // worker threads per rank (0: all cores)
+  // Grid volumes that fill their box are split into bricks of this many
+  // voxels a side, spread over the ranks (shapes/volume_brick.h); 0: every
+  // rank holds every medium whole.
+  int volumeBrickVoxels = 0;
   // Light paths (--light-paths on/off); none given: as the scene's
   // integrator asks (integratorWantsLightPaths). Sets render.lightPaths.
   std::optional<bool> lightPaths;

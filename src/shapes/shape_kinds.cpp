@@ -2,6 +2,7 @@
 
 #include "core/registry.h"
 #include "shapes/spheres.h"
+#include "shapes/volume_brick.h"
 
 namespace ferry {
 namespace {
@@ -12,6 +13,9 @@ Registry<ShapeKind>& registry() {
       {
           {"spheres", "analytic spheres, a centre and a radius each (particles, atoms)",
            Spheres::read},
+          {"volume-brick",
+           "a brick of a grid volume with its ghost layer; crossings are collisions in its medium",
+           VolumeBrick::read},
       });
   return all;
 }

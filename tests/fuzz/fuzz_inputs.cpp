@@ -164,6 +164,13 @@ void raw(std::string_view bytes) {
   loadRawVolume("raw:" + writeScratch("volume.raw", data) + "?" + query);
 }
 
+// A "bricks:" manifest; beside it b.raw, the 2x2x2 uint8 samples a brick
+// of a 2^3 grid holds (or the 8 cells' bricks of a larger grid, in part).
+void bricks(std::string_view bytes) {
+  writeScratch("b.raw", std::string_view("\x00\x20\x40\x60\x80\xa0\xc0\xe0", 8));
+  loadBrickPiece("bricks:" + writeScratch("fuzz.bricks.json", bytes), -1, 1);
+}
+
 void tf(std::string_view bytes) {
   readTransferFunction(writeScratch("fuzz.tf.json", bytes));
 }
@@ -182,7 +189,7 @@ const std::vector<Kind>& kinds() {
       {"gltf", gltf},     {"glb", glb},           {"bsdf", bsdf},
       {"part", part},     {"manifest", manifest}, {"checkpoint", checkpoint},
       {"camera", camera}, {"settings", settings}, {"raw", raw},
-      {"tf", tf},         {"vdb", vdb},
+      {"tf", tf},         {"vdb", vdb},           {"bricks", bricks},
   };
   return all;
 }

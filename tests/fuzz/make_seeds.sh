@@ -60,6 +60,18 @@ python3 -c "import struct, sys; sys.stdout.buffer.write(b'dims=2,1,1&format=floa
   > "$corpus/raw/float32.raw"
 python3 -c "import sys; sys.stdout.buffer.write(b'dims=2,1,1&format=uint16\\n' + bytes([0, 0, 255, 255]))" \
   > "$corpus/raw/uint16.raw"
+fresh bricks
+printf '{"dims":[2,2,2],"format":"uint8","bricks":[{"file":"b.raw","lo":[0,0,0],"hi":[2,2,2]}]}' \
+  > "$corpus/bricks/one-brick.json"
+printf '{"dims":[4,2,2],"format":"uint8","bricks":[{"file":"b.raw","lo":[0,0,0],"hi":[2,2,2],"rank":0},{"file":"c.raw","lo":[2,0,0],"hi":[4,2,2]}]}' \
+  > "$corpus/bricks/two-bricks-one-missing.json"
+printf '{"dims":[2,2,2],"format":"float32","range":[0,1],"spacing":[1,2,3],"origin":[-1,0,1],"opacity":3,"bricks":[{"file":"b.raw","lo":[0,0,0],"hi":[1,2,2]}]}' \
+  > "$corpus/bricks/uncovered.json"
+printf '{"dims":[2,2,2],"format":"uint8","bricks":[{"file":"b.raw","lo":[0,0,0],"hi":[2,2,2]},{"file":"b.raw","lo":[1,1,1],"hi":[2,2,2]}]}' \
+  > "$corpus/bricks/overlapping.json"
+python3 -c "import sys; sys.stdout.buffer.write(bytes(range(0, 27 * 9, 9)))" > "$work/vol.raw"
+"$ferry" partition "raw:$work/vol.raw?dims=3,3,3&format=uint8" --volume-bricks 2 --ranks 2 -o "$work/bricked" -q
+cp "$work"/bricked/part-0000.fpart "$corpus/part/bricks-0.fpart"
 fresh tf && cp tests/corpus/volumes/*.tf.json "$corpus/tf/"
 fresh vdb && cp tests/corpus/volumes/*.vdb "$corpus/vdb/"
 echo "seeds in $corpus: $(ls "$corpus" | tr '\n' ' ')"

@@ -170,6 +170,9 @@ SceneSummary summaryFromJson(const nlohmann::json& j) {
   s.name = j.value("name", std::string());
   s.uniqueMeshes = j.value("unique_meshes", uint64_t(0));
   s.triangles = j.value("triangles", uint64_t(0));
+  s.geometries = j.value("geometries", uint64_t(0));
+  s.shapePrimitives = j.value("shape_primitives", uint64_t(0));
+  s.volumeBricks = j.value("volume_bricks", uint64_t(0));
   s.vertices = j.value("vertices", uint64_t(0));
   s.objects = j.value("objects", uint64_t(0));
   s.instances = j.value("instances", uint64_t(0));

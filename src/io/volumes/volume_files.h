@@ -12,6 +12,7 @@
 
 #include "media/density_grid.h"
 #include "media/transfer_function.h"
+#include "media/volume_look.h"
 #include "scene/scene.h"
 
 namespace ferry {
@@ -67,5 +68,23 @@ TransferFunction readTransferFunction(const std::string& path);
 // A scene of `medium` alone in `box` (world space), bounded by it, with a
 // default view and lights.
 Scene volumeScene(const std::string& name, Medium medium, const Box3f& box);
+// That scene without the medium: the view and lights that frame `box`.
+Scene framedVolumeScene(const std::string& name, const Box3f& box);
+
+// ------------------------------------------------------ distributed bricks
+
+bool isBrickManifestSpec(const std::string& spec);  // starts with "bricks:"
+
+// "bricks:MANIFEST.json": a volume already spread over the ranks in bricks
+// (as a simulation holds it), each rank loading only its own brick files
+// (the manifest's format: docs/volumes.md, "Natively distributed bricks").
+// A brick file holds its cells [lo, hi) and the ghost layer around them.
+// Returns `rank`'s bricks (every brick for rank -1) as VolumeBrick
+// geometries restyled by `look`, leaving out those that never collide,
+// framed as a volume file is. InputError naming the manifest or the
+// brick's file: a malformed manifest, bricks that overlap or leave cells
+// uncovered, a file of the wrong size, a NaN, a float32 volume without a
+// range.
+Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeLook& look = {});
 
 }  // namespace ferry

@@ -6,10 +6,15 @@
 namespace ferry {
 
 Scene volumeScene(const std::string& name, Medium medium, const Box3f& box) {
-  Scene scene;
-  scene.name = name;
+  Scene scene = framedVolumeScene(name, box);
   scene.media.push_back(std::move(medium));
   scene.mediumBoundaries.push_back({boxMesh(box, name + " box"), {0, kNoMedium}});
+  return scene;
+}
+
+Scene framedVolumeScene(const std::string& name, const Box3f& box) {
+  Scene scene;
+  scene.name = name;
   // Framed as a lone mesh is (io/default_lighting.h), lit by a sun and a sky.
   CameraView view;
   view.name = "default";

@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# Volumes in bricks across ranks (docs/volumes.md, "Bricks across ranks"): a
+# raw volume split into bricks renders the same image bit for bit on one
+# rank, on 3 and 4 ranks partitioned on the fly, from a part directory, and
+# loaded natively distributed (each rank reading only its own brick files,
+# cut by scripts/cut_bricks.py); a missing or wrong-sized brick on one rank
+# ends every rank within seconds with a message naming the rank and the file.
+set -uo pipefail
+ferry=$1
+source_dir=$2
+source "$source_dir/tests/tools/multirank_test_env.sh"
+python=/usr/bin/python3  # Debian's, with numpy
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# A float32 volume of 36x30x26 samples: two blobs.
+$python - "$work/vol.raw" << 'PY'
+import sys, numpy as np
+z, y, x = np.mgrid[0:26, 0:30, 0:36].astype(np.float32)
+v = np.exp(-((x - 12) ** 2 + (y - 14) ** 2 + (z - 12) ** 2) / 40) \
+  + 0.7 * np.exp(-((x - 26) ** 2 + (y - 18) ** 2 + (z - 15) ** 2) / 25)
+(v * 3 - 0.5).astype('<f4').tofile(sys.argv[1])
+PY
+raw="raw:$work/vol.raw?dims=36,30,26&format=float32&spacing=0.1,0.1,0.1&opacity=40"
+args="--size 48x40 --spp 2 --max-depth 4 --seed 5 -q --threads 1"
+
+"$ferry" render "$raw" $args --volume-bricks 8 -o "$work/one.pfm" || fail "one rank"
+"$ferry" render "$raw" $args -o "$work/whole.pfm" || fail "one rank, whole"
+cmp -s "$work/one.pfm" "$work/whole.pfm" && fail "bricks and the whole medium gave the very same bytes"
+for n in 3 4; do
+  mpirun_n $n "$ferry" render "$raw" $args --volume-bricks 8 -o "$work/on$n.pfm" || fail "$n ranks"
+  cmp -s "$work/one.pfm" "$work/on$n.pfm" || fail "$n ranks on the fly: not the 1-rank image"
+done
+"$ferry" partition "$raw" --volume-bricks 8 --ranks 3 -o "$work/parts" -q || fail "partition"
+mpirun_n 3 "$ferry" render "$work/parts" $args -o "$work/parts.pfm" || fail "part directory"
+cmp -s "$work/one.pfm" "$work/parts.pfm" || fail "part directory: not the 1-rank image"
+echo "  bricks: 1 rank = 3 and 4 ranks on the fly = a 3-rank part directory"
+
+$python "$source_dir/scripts/cut_bricks.py" "$work/vol.raw" 36,30,26 float32 8 "$work/bricks" > /dev/null \
+  || fail "cut_bricks.py"
+$python - "$work/bricks/volume.json" << 'PY'
+import json, sys
+m = json.load(open(sys.argv[1]))
+m["spacing"] = [0.1, 0.1, 0.1]
+m["opacity"] = 40
+json.dump(m, open(sys.argv[1], "w"))
+PY
+for n in 1 3; do
+  mpirun_n $n "$ferry" render "bricks:$work/bricks/volume.json" $args -o "$work/native$n.pfm" \
+    --stats "$work/native$n.json" || fail "natively distributed on $n ranks"
+  cmp -s "$work/one.pfm" "$work/native$n.pfm" || fail "natively distributed on $n ranks: not the image of the assembled volume"
+done
+$python - "$work/native3.json" << 'PY' || fail "each rank holds about a third"
+import json, sys
+s = json.load(open(sys.argv[1]))["memory"]
+per = [r["estimated_bytes"] for r in s["per_rank"]]
+total = sum(per)
+assert max(per) <= 1.3 * total / 3, per
+PY
+echo "  natively distributed bricks: the same image on 1 and 3 ranks, each rank a third"
+
+# Failures: every rank ends within seconds, the message names rank and file.
+run_failing() {
+  local name=$1
+  shift
+  local start=$SECONDS
+  timeout 60 "$@" > "$work/stdout" 2> "$work/stderr"
+  local code=$?
+  if [ $code -eq 124 ]; then fail "$name: hung"; return; fi
+  [ $code -ne 0 ] || fail "$name: exited 0"
+  echo "  $name: exit $code after $((SECONDS - start)) s: $(head -c 300 "$work/stderr" | tr '\n' ' ')"
+}
+cp -r "$work/bricks" "$work/missing"
+rm "$work/missing/brick_4.raw"
+run_failing "a missing brick" mpirun --oversubscribe -np 3 "$ferry" render "bricks:$work/missing/volume.json" $args -o "$work/x.pfm"
+grep -q "rank 1" "$work/stderr" && grep -q "brick_4.raw" "$work/stderr" || fail "the message names neither rank 1 nor brick_4.raw"
+cp -r "$work/bricks" "$work/short"
+head -c 100 "$work/bricks/brick_2.raw" > "$work/short/brick_2.raw"
+run_failing "a brick of the wrong size" mpirun --oversubscribe -np 3 "$ferry" render "bricks:$work/short/volume.json" $args -o "$work/x.pfm"
+grep -q "brick_2.raw" "$work/stderr" && grep -q "100 bytes" "$work/stderr" || fail "the message does not say the brick's size"
+[ -e "$work/x.pfm" ] && fail "a failed render wrote an image"
+
+if [ $failures -ne 0 ]; then
+  echo "volume_bricks_test: $failures failure(s)"
+  exit 1
+fi
+echo "volume_bricks_test: passed"
