@@ -82,14 +82,24 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
           from[a] = lo[a] + c[a] * kBrickMajorantVoxels - 1;
           to[a] = std::min(lo[a] + (c[a] + 1) * kBrickMajorantVoxels, hi[a]);
         }
+        // The samples held, row by row; those outside the grid are 0.
         float low = kInfinity, high = 0;
+        for (int a = 0; a < 3; ++a) {
+          if (from[a] < first_[a] || to[a] >= first_[a] + count_[a]) low = 0;
+          from[a] = std::max(from[a], first_[a]);
+          to[a] = std::min(to[a], first_[a] + count_[a] - 1);
+        }
         for (int z = from[2]; z <= to[2]; ++z)
-          for (int y = from[1]; y <= to[1]; ++y)
-            for (int x = from[0]; x <= to[0]; ++x) {
-              const float s = sample(x, y, z);
-              low = std::min(low, s);
-              high = std::max(high, s);
+          for (int y = from[1]; y <= to[1]; ++y) {
+            const float* row = samples_.data() +
+                               (size_t(z - first_[2]) * size_t(count_[1]) + size_t(y - first_[1])) *
+                                   size_t(count_[0]) +
+                               size_t(from[0] - first_[0]);
+            for (int x = 0; x <= to[0] - from[0]; ++x) {
+              low = std::min(low, row[x]);
+              high = std::max(high, row[x]);
             }
+          }
         majorants[i] = v.transfer ? v.transfer->scale() * v.transfer->opacityRange(low, high).second
                                   : greyExtinction(v) * high;
         largest_ = std::max(largest_, majorants[i]);

@@ -2,6 +2,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -16,6 +17,7 @@
 namespace ferry {
 namespace {
 
+static_assert(std::endian::native == std::endian::little, "brick files are little-endian");
 constexpr std::string_view kPrefix = "bricks:";
 
 using Json = nlohmann::json;
@@ -183,25 +185,27 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
             e.file, size, e.lo[0], e.lo[1], e.lo[2], e.hi[0], e.hi[1], e.hi[2], format,
             samples * bytesPerSample));
       std::ifstream file(e.file, std::ios::binary);
-      std::vector<unsigned char> bytes(size);
-      if (!file.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
-        throw InputError(fmt::format("{}: read failed", e.file));
       std::vector<float> values(samples);
-      const float range = rangeHi - rangeLo;
-      for (uint64_t i = 0; i < samples; ++i) {
-        float v;
-        if (format == "uint8") {
-          v = float(bytes[i]) / 255.0f;
-        } else if (format == "uint16") {
-          v = float(uint16_t(bytes[2 * i] | (bytes[2 * i + 1] << 8))) / 65535.0f;
-        } else {
-          const uint32_t bits = uint32_t(bytes[4 * i]) | uint32_t(bytes[4 * i + 1]) << 8 |
-                                uint32_t(bytes[4 * i + 2]) << 16 | uint32_t(bytes[4 * i + 3]) << 24;
-          std::memcpy(&v, &bits, 4);
+      auto readInto = [&](void* to) {
+        if (!file.read(static_cast<char*>(to), std::streamsize(size)))
+          throw InputError(fmt::format("{}: read failed", e.file));
+      };
+      if (bytesPerSample == 4) {
+        readInto(values.data());  // little-endian floats, as this machine's
+        const float range = rangeHi - rangeLo;
+        for (uint64_t i = 0; i < samples; ++i) {
+          const float v = values[i];
           if (!std::isfinite(v)) throw InputError(fmt::format("{}: sample {} is {}", e.file, i, v));
-          v = range > 0 ? std::clamp((v - rangeLo) / range, 0.0f, 1.0f) : 0.0f;
+          values[i] = range > 0 ? std::clamp((v - rangeLo) / range, 0.0f, 1.0f) : 0.0f;
         }
-        values[i] = v;
+      } else {
+        std::vector<unsigned char> bytes(size);
+        readInto(bytes.data());
+        if (bytesPerSample == 1)
+          for (uint64_t i = 0; i < samples; ++i) values[i] = float(bytes[i]) / 255.0f;
+        else
+          for (uint64_t i = 0; i < samples; ++i)
+            values[i] = float(uint16_t(bytes[2 * i] | (bytes[2 * i + 1] << 8))) / 65535.0f;
       }
       auto brick = std::make_shared<VolumeBrick>(volume, e.lo, e.hi, std::move(values));
       if (!(brick->majorant() > 0)) continue;  // it never collides: nothing to hold
