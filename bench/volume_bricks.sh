@@ -28,7 +28,7 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 mpi() { mpirun --oversubscribe --bind-to none -np "$@"; }
 trap '[ -z "${KEEP:-}" ] && rm -rf "$work"' EXIT
 
-echo "volume ${size}^3 float32 ($((size * size * size * 4 / 1048576)) MiB), bricks ${brick}^3, $ranks ranks, $(nproc) cores, ferry $(git rev-parse --short HEAD)"
+echo "volume ${size}^3 float32 ($((size * size * size * 4 / 1048576)) MiB), bricks ${brick}^3, $ranks ranks, $(nproc) cores, ferry $(git rev-parse --short HEAD 2> /dev/null || echo "(no git)")"
 $python - "$work/vol.raw" "$size" << 'PY'
 import sys, numpy as np
 n = int(sys.argv[2])
@@ -85,7 +85,11 @@ f1, fn = frame(one), frame(parts)
 print(f"frame: 1 rank {f1:.3f} s, {ranks} ranks {fn:.3f} s ({fn / f1:.2f}x, same cores, binding off)")
 fp = lambda s: max(r["first_pixel"] for r in s["seconds"]["per_rank"])
 peak = lambda s: max(r["peak_resident_bytes"] for r in s["memory"]["per_rank"]) / MiB
+largest = max(r["estimated_bytes"] for r in parts["memory"]["per_rank"]) * ranks / total
+print(f"largest rank: {largest:.2f} x total/{ranks} (the goal: at most 1.3)")
 print(f"\npartitioning the assembled volume: {part_s:.1f} s, peak {part_kib / 1024:.0f} MiB (one process holds it all)")
 print(f"time to first pixel: parts {fp(parts):.2f} s (largest rank peak {peak(parts):.0f} MiB); "
       f"natively distributed {fp(native):.2f} s (largest rank peak {peak(native):.0f} MiB)")
+if largest > 1.3:
+    sys.exit("FAIL: the largest rank holds more than 1.3 x its share")
 PY
