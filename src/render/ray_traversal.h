@@ -102,6 +102,10 @@ void traceCounted(const TraceBackend& backend, PathQueue<Path>& rays, int rank,
   const TraceCounts counts = backend.trace(rays, rank, instanceOwners, kept);
   stats.closestTraces += counts.closest;
   stats.occlusionTraces += counts.occlusion;
+  // Volumes' tracking happens in the trace (shapes/volume_brick.h).
+  stats.mediumRealCollisions += counts.shapes.realCollisions;
+  stats.mediumNullCollisions += counts.shapes.nullCollisions;
+  stats.mediumMajorantCells += counts.shapes.cells;
   stats.times.trace += secondsSince(start);
 }
 

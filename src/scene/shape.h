@@ -16,6 +16,19 @@
 
 namespace ferry {
 
+// What crossing tests cost a trace: a volume's tracking steps (its real
+// and null collisions, majorant cells); surfaces add nothing.
+struct ShapeWork {
+  uint64_t realCollisions = 0;
+  uint64_t nullCollisions = 0;
+  uint64_t cells = 0;
+  void add(const ShapeWork& o) {
+    realCollisions += o.realCollisions;
+    nullCollisions += o.nullCollisions;
+    cells += o.cells;
+  }
+};
+
 // A point on a shape, in the shape's own (object) space.
 struct ShapeSurface {
   Vec3f position;
@@ -40,6 +53,11 @@ class Shape {
   // the same ray gives the same answer on every rank and thread.
   virtual bool intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
                          float& t, Vec2f& uv) const = 0;
+  // The same, adding what the test cost to `work`.
+  virtual bool intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
+                         float& t, Vec2f& uv, ShapeWork& /*work*/) const {
+    return intersect(primitive, origin, direction, tnear, tfar, t, uv);
+  }
   virtual ShapeSurface surface(uint32_t primitive, Vec2f uv) const = 0;
   // A volume (shapes/volume_brick.h) is crossed where a ray collides in its
   // medium; shading scatters there instead of reading a surface: the

@@ -21,6 +21,7 @@ class Spheres final : public Shape {
   uint32_t primitiveCount() const override { return uint32_t(centers_.size()); }
   Box3f primitiveBounds(uint32_t primitive) const override;
   uint64_t bytes() const override;
+  using Shape::intersect;
   bool intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
                  float& t, Vec2f& uv) const override;
   ShapeSurface surface(uint32_t primitive, Vec2f uv) const override;

@@ -40,9 +40,10 @@ float greyExtinction(const VolumeBrick::Volume& v) {
 }  // namespace
 
 VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3> lo,
-                         std::array<int, 3> hi, std::vector<float> samples)
+                         std::array<int, 3> hi, SharedArray<float> samples)
     : volume_(std::move(volume)), lo_(lo), hi_(hi), samples_(std::move(samples)) {
   const Volume& v = *volume_;
+  const SharedArray<float>& held = samples_;  // read only: a mapping stays shared
   size_t expected = 1;
   uint32_t seed = 0x7b5e11u;
   for (int a = 0; a < 3; ++a) {
@@ -61,9 +62,9 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
   if (samples_.size() != expected)
     throw InputError(fmt::format("a volume brick holds {} samples where its cells need {}",
                                  samples_.size(), expected));
-  for (size_t i = 0; i < samples_.size(); ++i)
-    if (!(samples_[i] >= 0) || !std::isfinite(samples_[i]))
-      throw InputError(fmt::format("a volume brick's sample {} is {}", i, samples_[i]));
+  for (size_t i = 0; i < held.size(); ++i)
+    if (!(held[i] >= 0) || !std::isfinite(held[i]))
+      throw InputError(fmt::format("a volume brick's sample {} is {}", i, held[i]));
   if (!v.transfer && !(v.sigmaA.x + v.sigmaS.x == v.sigmaA.y + v.sigmaS.y &&
                        v.sigmaA.y + v.sigmaS.y == v.sigmaA.z + v.sigmaS.z))
     throw InputError("a volume brick's extinction is not grey");
@@ -91,7 +92,7 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
         }
         for (int z = from[2]; z <= to[2]; ++z)
           for (int y = from[1]; y <= to[1]; ++y) {
-            const float* row = samples_.data() +
+            const float* row = held.data() +
                                (size_t(z - first_[2]) * size_t(count_[1]) + size_t(y - first_[1])) *
                                    size_t(count_[0]) +
                                size_t(from[0] - first_[0]);
@@ -172,8 +173,14 @@ uint64_t VolumeBrick::bytes() const {
   return sizeof(*this) + samples_.size() * sizeof(float) + size_t(cells) * sizeof(float) * 4;
 }
 
+bool VolumeBrick::intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear,
+                            float tfar, float& t, Vec2f& uv) const {
+  ShapeWork ignored;
+  return intersect(primitive, origin, direction, tnear, tfar, t, uv, ignored);
+}
+
 bool VolumeBrick::intersect(uint32_t, Vec3f origin, Vec3f direction, float tnear, float tfar,
-                            float& t, Vec2f& uv) const {
+                            float& t, Vec2f& uv, ShapeWork& work) const {
   if (!(largest_ > 0)) return false;
   const Affine3f& toGrid = volume_->gridFromWorld;
   const Vec3f og = toGrid.transformPoint(origin), dg = toGrid.transformVector(direction);
@@ -190,16 +197,19 @@ bool VolumeBrick::intersect(uint32_t, Vec3f origin, Vec3f direction, float tnear
   TrackingRandom random(rayKey(origin, direction, seed_), 0);
   bool found = false;
   majorants_->walk(ol, dl, t0, t1, [&](float a, float b, float majorant, const Vec3f&) {
+    ++work.cells;
     if (!(majorant > 0)) return true;
     for (float s = a;;) {
       s += exponential(random.next(), majorant);
       if (!(s < b)) return true;
       const float sigma = extinction(lookup(og + dg * s));
       if (random.next() * majorant < sigma && s > tnear) {
+        ++work.realCollisions;
         t = s;
         found = true;
         return false;
       }
+      ++work.nullCollisions;
     }
   });
   uv = {0, 0};
@@ -221,6 +231,9 @@ Vec3f VolumeBrick::volumeAlbedo(Vec3f point) const {
 
 void VolumeBrick::write(RecordWriter& record) const {
   const Volume& v = *volume_;
+  // The samples first: at the record's start (16-aligned in a part file) + 8,
+  // so a reader can keep them in the mapping.
+  record.array<float>(std::span<const float>(samples_.data(), samples_.size()));
   for (int a = 0; a < 3; ++a) record.pod(int32_t(v.dims[a]));
   for (int a = 0; a < 3; ++a) record.pod(int32_t(lo_[a]));
   for (int a = 0; a < 3; ++a) record.pod(int32_t(hi_[a]));
@@ -234,10 +247,10 @@ void VolumeBrick::write(RecordWriter& record) const {
     record.array<TransferFunction::OpacityPoint>(v.transfer->opacities());
     record.pod(v.transfer->scale());
   }
-  record.array<float>(samples_);
 }
 
 std::shared_ptr<const Shape> VolumeBrick::read(RecordReader& record) {
+  SharedArray<float> samples = record.sharedArray<float>();
   auto volume = std::make_shared<Volume>();
   std::array<int, 3> lo, hi;
   for (int a = 0; a < 3; ++a) volume->dims[a] = record.pod<int32_t>();
@@ -259,7 +272,6 @@ std::shared_ptr<const Shape> VolumeBrick::read(RecordReader& record) {
   } catch (const std::invalid_argument& e) {
     record.fail(e.what());
   }
-  std::vector<float> samples = record.array<float>();
   const Affine3f& m = volume->gridFromWorld;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)

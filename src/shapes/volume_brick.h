@@ -17,6 +17,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/shared_array.h"
 #include "media/majorant_grid.h"
 #include "media/medium.h"
 #include "media/transfer_function.h"
@@ -45,8 +46,9 @@ class VolumeBrick final : public Shape {
   // The cells [lo, hi) of `volume`'s grid (voxel boundaries along each
   // axis), with `samples` the grid's samples [max(lo - 1, 0), min(hi, n - 1)]
   // (x fastest). Throws InputError if they do not fit together.
+  // `samples` may stay in a part file's mapping (SharedArray).
   VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3> lo, std::array<int, 3> hi,
-              std::vector<float> samples);
+              SharedArray<float> samples);
   // The brick of `grid` (the whole volume's samples) over the cells [lo, hi).
   static std::shared_ptr<VolumeBrick> cut(std::shared_ptr<const Volume> volume,
                                           const DensityGrid& grid, std::array<int, 3> lo,
@@ -58,6 +60,8 @@ class VolumeBrick final : public Shape {
   uint64_t bytes() const override;
   bool intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
                  float& t, Vec2f& uv) const override;
+  bool intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
+                 float& t, Vec2f& uv, ShapeWork& work) const override;
   ShapeSurface surface(uint32_t primitive, Vec2f uv) const override;
   bool isVolume() const override { return true; }
   Vec3f volumeAlbedo(Vec3f point) const override;
@@ -76,13 +80,15 @@ class VolumeBrick final : public Shape {
   const Volume& volume() const { return *volume_; }
   const std::array<int, 3>& lo() const { return lo_; }
   const std::array<int, 3>& hi() const { return hi_; }
+  // Whether the samples are read in place from a mapping (a part file).
+  bool samplesShared() const { return samples_.isShared(); }
 
  private:
   float sample(int x, int y, int z) const;
   std::shared_ptr<const Volume> volume_;
   std::array<int, 3> lo_, hi_;        // cells
   std::array<int, 3> first_, count_;  // the samples held
-  std::vector<float> samples_;
+  SharedArray<float> samples_;
   std::unique_ptr<MajorantGrid> majorants_;  // over the brick's cells
   float largest_ = 0;
   Vec3f unitLo_, unitSize_;  // the brick's cells in the grid's unit cube

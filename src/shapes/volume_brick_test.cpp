@@ -215,6 +215,13 @@ TEST(VolumeBrick, AWhiteFurnaceOfBricksStaysWhite) {
     stats.imageMean(k, mean, se);
     EXPECT_NEAR(mean, 1.0, z * se + 4 * kHalfRelativeError) << k;
   }
+  // The trace counts the bricks' tracking with the media's counters.
+  RenderSetup setup(scene, settings);
+  FrameStats frame;
+  setup.frameMean(0, &frame);
+  EXPECT_GT(frame.mediumRealCollisions, 0u);
+  EXPECT_GT(frame.mediumNullCollisions, 0u);
+  EXPECT_GE(frame.mediumMajorantCells, frame.mediumRealCollisions);
   // The same bricks absorbing half of what they scatter are seen: darker.
   Scene grey = volumeOverFloor(0.5f, false);
   grey.environment.color = Vec3f(1);
@@ -294,6 +301,7 @@ TEST(VolumeBrick, APartFileStoresBricks) {
     const auto* a = dynamic_cast<const VolumeBrick*>(scene.geometries[g].shape.get());
     const auto* b = dynamic_cast<const VolumeBrick*>(part.scene.geometries[g].shape.get());
     ASSERT_NE(b, nullptr);
+    EXPECT_TRUE(b->samplesShared()) << "a brick read from a part file is not copied";
     EXPECT_EQ(a->lo(), b->lo());
     EXPECT_EQ(a->hi(), b->hi());
     EXPECT_EQ(a->majorant(), b->majorant());

@@ -32,7 +32,11 @@ class RayBatch {
  public:
   static constexpr size_t kCapacity = 256;  // in cache, and large enough for the stream API
 
-  void clear() { closestCount_ = occludedCount_ = 0; }
+  void clear() {
+    closestCount_ = occludedCount_ = 0;
+    work_ = {};
+  }
+  ShapeWork shapeWork() const { return work_; }
   void addClosest(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float tnear = 0) {
     closestIndex_[closestCount_] = index;
     closest_[closestCount_++].set(origin, direction, tnear, tmax);
@@ -79,6 +83,7 @@ class RayBatch {
   EmbreeRay occluded_[kCapacity];  // only the ray part is used
   uint32_t closestIndex_[kCapacity], occludedIndex_[kCapacity];
   size_t closestCount_ = 0, occludedCount_ = 0;
+  ShapeWork work_;
 };
 
 #define FERRY_SAME_OFFSET(ours, theirs)                                             \
@@ -164,6 +169,15 @@ void errorCallback(void* user, RTCError code, const char* message) {
   if (code != RTC_ERROR_NONE) static_cast<ErrorLog*>(user)->record(code, message);
 }
 
+// Every query's context: Embree's, and where the shapes' crossings add
+// their work (a batch's; null for single rays). Embree hands callbacks the
+// context it was given, so a callback reads the extension.
+struct TraceContext {
+  RTCIntersectContext embree;
+  ShapeWork* work = nullptr;
+  explicit TraceContext(ShapeWork* w = nullptr) : work(w) { rtcInitIntersectContext(&embree); }
+};
+
 // A geometry of another kind (scene/shape.h) as an Embree user geometry:
 // Embree builds its BVH over the primitives' boxes and asks the shape for
 // each crossing.
@@ -185,9 +199,13 @@ bool shapeCrossing(const Args* args, RTCRayN* ray, unsigned i, float& t, Vec2f& 
   const Vec3f origin{RTCRayN_org_x(ray, n, i), RTCRayN_org_y(ray, n, i), RTCRayN_org_z(ray, n, i)};
   const Vec3f direction{RTCRayN_dir_x(ray, n, i), RTCRayN_dir_y(ray, n, i),
                         RTCRayN_dir_z(ray, n, i)};
-  return static_cast<const Shape*>(args->geometryUserPtr)
-      ->intersect(args->primID, origin, direction, RTCRayN_tnear(ray, n, i),
-                  RTCRayN_tfar(ray, n, i), t, uv);
+  const Shape& shape = *static_cast<const Shape*>(args->geometryUserPtr);
+  ShapeWork* work = reinterpret_cast<const TraceContext*>(args->context)->work;
+  if (!work)
+    return shape.intersect(args->primID, origin, direction, RTCRayN_tnear(ray, n, i),
+                           RTCRayN_tfar(ray, n, i), t, uv);
+  return shape.intersect(args->primID, origin, direction, RTCRayN_tnear(ray, n, i),
+                         RTCRayN_tfar(ray, n, i), t, uv, *work);
 }
 
 void shapeIntersect(const RTCIntersectFunctionNArguments* args) {
@@ -534,18 +552,17 @@ void EmbreeBackend::traceBatch(RayBatch& batch) const {
   FERRY_SAME_OFFSET(primID, hit.primID)
   FERRY_SAME_OFFSET(geomID, hit.geomID)
   FERRY_SAME_OFFSET(instID, hit.instID)
-  RTCIntersectContext context;
   if (batch.closestCount_) {
-    rtcInitIntersectContext(&context);
-    rtcIntersect1M(embree_.top, &context, reinterpret_cast<RTCRayHit*>(batch.closest_),
+    TraceContext context(&batch.work_);
+    rtcIntersect1M(embree_.top, &context.embree, reinterpret_cast<RTCRayHit*>(batch.closest_),
                    unsigned(batch.closestCount_), sizeof(RTCRayHit));
     if (!topLevelMeshes_.empty())
       for (size_t k = 0; k < batch.closestCount_; ++k)
         nameHit(batch.closest_[k].geomID, batch.closest_[k].instID);
   }
   if (batch.occludedCount_) {
-    rtcInitIntersectContext(&context);
-    rtcOccluded1M(embree_.top, &context, reinterpret_cast<RTCRay*>(batch.occluded_),
+    TraceContext context(&batch.work_);
+    rtcOccluded1M(embree_.top, &context.embree, reinterpret_cast<RTCRay*>(batch.occluded_),
                   unsigned(batch.occludedCount_), sizeof(RTCRayHit));
   }
 }
@@ -567,19 +584,17 @@ void EmbreeBackend::retrace(std::span<const RetraceRay> rays, std::span<TraceHit
 }
 
 TraceHit EmbreeBackend::intersect(const TraceRay& ray) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+  TraceContext context;
   RTCRayHit rh = toEmbree(ray);
-  rtcIntersect1(embree_.top, &context, &rh);
+  rtcIntersect1(embree_.top, &context.embree, &rh);
   errors_.throwIfFailed("tracing a ray");
   return hitOf(rh);
 }
 
 bool EmbreeBackend::occluded(const TraceRay& ray) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+  TraceContext context;
   RTCRay r = toEmbree(ray).ray;
-  rtcOccluded1(embree_.top, &context, &r);
+  rtcOccluded1(embree_.top, &context.embree, &r);
   errors_.throwIfFailed("tracing a shadow ray");
   return r.tfar < 0;  // Embree marks occlusion with tfar = -inf
 }

@@ -10,6 +10,7 @@
 //   addClosest(index, origin, direction, tmax), addOccluded(...),
 //   closestCount(), occludedCount(), closestIndex(k), occludedIndex(k),
 //   hitFound(k), hitDistance(k), hit(k) (a TraceHit), isOccluded(k),
+//   shapeWork() (what its shapes' crossings cost since clear()),
 // and a function that traces one batch's two lists.
 #pragma once
 
@@ -17,6 +18,7 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <mutex>
 #include <span>
 
 #include "core/error.h"
@@ -33,10 +35,13 @@ TraceCounts traceQueueInBatches(PathQueue<Path>& paths, int rank,
   TraceHit* found = kept.empty() ? nullptr : kept.data();
   constexpr size_t kBatch = Batch::kCapacity;
   std::atomic<uint64_t> closestCount{0}, shadowCount{0};
+  std::mutex workMutex;
+  ShapeWork work;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, paths.size(), kBatch),
                     [&](const tbb::blocked_range<size_t>& range) {
                       Batch batch;
                       uint64_t closest = 0, shadow = 0;
+                      ShapeWork mine;
                       for (size_t begin = range.begin(); begin < range.end(); begin += kBatch) {
                         const size_t n = std::min(kBatch, range.end() - begin);
                         batch.clear();
@@ -50,6 +55,7 @@ TraceCounts traceQueueInBatches(PathQueue<Path>& paths, int rank,
                             batch.addOccluded(uint32_t(i), p.origin, p.dir(), p.tmax);
                         }
                         traceBatch(batch);
+                        mine.add(batch.shapeWork());
                         closest += batch.closestCount();
                         shadow += batch.occludedCount();
                         for (size_t k = 0; k < batch.closestCount(); ++k) {
@@ -68,8 +74,10 @@ TraceCounts traceQueueInBatches(PathQueue<Path>& paths, int rank,
                       }
                       closestCount += closest;
                       shadowCount += shadow;
+                      const std::lock_guard<std::mutex> lock(workMutex);
+                      work.add(mine);
                     });
-  return {closestCount.load(), shadowCount.load()};
+  return {closestCount.load(), shadowCount.load(), work};
 }
 
 }  // namespace ferry

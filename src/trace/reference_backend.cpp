@@ -256,6 +256,7 @@ class ReferenceBackend final : public TraceBackend {
    public:
     static constexpr size_t kCapacity = 256;
     void clear() { closestCount_ = occludedCount_ = 0; }
+    ShapeWork shapeWork() const { return {}; }  // (the reference counts no work)
     void addClosest(uint32_t index, Vec3f origin, Vec3f direction, float tmax) {
       closestIndex_[closestCount_] = index;
       closest_[closestCount_++] = {origin, direction, 0, tmax};

@@ -16,6 +16,7 @@
 
 #include "core/math.h"
 #include "path/path.h"
+#include "scene/shape.h"
 
 namespace ferry {
 
@@ -48,6 +49,7 @@ struct RetraceRay {
 struct TraceCounts {
   uint64_t closest = 0;    // closest-hit queries (paths)
   uint64_t occlusion = 0;  // occlusion queries (shadow rays not already occluded)
+  ShapeWork shapes;        // what crossing other kinds of geometry cost (volumes' tracking)
 };
 
 // Bytes the backend holds for its acceleration structures (and any copy of

@@ -430,6 +430,8 @@ class FileReader {
   uint32_t version() const { return version_; }
   const std::string& path() const { return path_; }
   void setVersion(uint32_t version) { version_ = version; }
+  // What keeps the mapping alive (for arrays read in place).
+  std::shared_ptr<const void> keeper() const { return file_; }
 
   template <typename T>
   T pod() {
@@ -676,14 +678,16 @@ Geometry readGeometry(FileReader& r) {
   g.name = r.str();
   g.material = r.pod<int32_t>();
   const std::string kind = r.str();
-  const std::vector<uint8_t> bytes = r.array<uint8_t>();
+  // In place: a shape may keep its arrays in the mapping (volume bricks' samples).
+  const SharedArray<uint8_t> bytes = r.sharedArray<uint8_t>();
   const ShapeKind* k = shapeKind(kind);
   if (!k)
     throw InputError(
         fmt::format("{}: geometry \"{}\" is of kind \"{}\", which this Ferry does "
                     "not know (it knows {})",
                     r.path(), g.name, kind, shapeKindNames()));
-  RecordReader record(bytes, fmt::format("{}: geometry \"{}\" ({})", r.path(), g.name, kind));
+  RecordReader record(std::span<const uint8_t>(bytes.data(), bytes.size()),
+                      fmt::format("{}: geometry \"{}\" ({})", r.path(), g.name, kind), r.keeper());
   g.shape = k->read(record);
   record.finish();
   return g;
