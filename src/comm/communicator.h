@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -99,6 +100,11 @@ class Communicator {
   virtual std::vector<int> gatherInt(int value) const = 0;  // on rank 0; empty elsewhere
   // Rank 0's bytes to every rank; every rank passes the same length.
   virtual void broadcastBytes(std::span<std::byte> bytes) const = 0;
+
+  // Collective: the ranks that give the same `color` form a communicator of
+  // their own, ranked in this one's order (MPI_Comm_split; data groups).
+  // Its collectives involve only them; abortAll on it ends every rank.
+  virtual std::unique_ptr<Communicator> split(int color) const = 0;
 
   // Rank 0's values replace every other rank's (e.g. a camera change made on
   // rank 0). Plain data only: the bytes are copied as they are.

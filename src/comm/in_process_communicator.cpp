@@ -47,6 +47,13 @@ struct InProcessHub {
   };
   std::map<uint64_t, PendingSum> sums;
   std::vector<uint64_t> sumsStarted;  // per rank
+
+  // split(): the groups made, by (the split's number, colour); each rank
+  // counts its splits, so the k-th split is the same on every rank. A group
+  // knows its parent, so that an abort anywhere reaches every rank.
+  InProcessHub* parent = nullptr;
+  std::map<std::pair<uint64_t, int>, std::shared_ptr<InProcessHub>> children;
+  std::vector<uint64_t> splitsStarted = std::vector<uint64_t>(size_t(size), 0);
 };
 
 namespace {
@@ -350,13 +357,56 @@ bool InProcessCommunicator::sumDone(SumHandle handle, std::vector<uint64_t>& res
   return true;
 }
 
-void InProcessCommunicator::abortEveryRank(const std::string& message, int) const {
-  std::unique_lock lock(hub_.mutex);
-  if (hub_.abortingRank < 0) {
-    hub_.abortingRank = rank_;
-    hub_.abortMessage = message;
+namespace {
+
+// Marks `hub` and every group split from it aborted (the first abort is the
+// one reported) and wakes their ranks.
+void abortFrom(InProcessHub& hub, int rank, const std::string& message) {
+  std::vector<InProcessHub*> children;
+  {
+    std::unique_lock lock(hub.mutex);
+    if (hub.abortingRank < 0) {
+      hub.abortingRank = rank;
+      hub.abortMessage = message;
+    }
+    hub.changed.notify_all();
+    for (auto& [key, child] : hub.children) children.push_back(child.get());
   }
-  hub_.changed.notify_all();
+  for (InProcessHub* child : children) abortFrom(*child, rank, message);
+}
+
+// An abort anywhere ends every rank of the run, as MPI_Abort ends the job.
+void abortRun(InProcessHub& hub, int rank, const std::string& message) {
+  InProcessHub* root = &hub;
+  while (root->parent) root = root->parent;
+  abortFrom(*root, rank, message);
+}
+
+}  // namespace
+
+std::unique_ptr<Communicator> InProcessCommunicator::split(int color) const {
+  std::vector<int> colors = gatherInt(color);
+  colors.resize(size_t(hub_.size));
+  broadcast(std::span<int>(colors));
+  int rank = 0, size = 0;
+  for (int r = 0; r < hub_.size; ++r)
+    if (colors[size_t(r)] == color) {
+      if (r < rank_) ++rank;
+      ++size;
+    }
+  std::unique_lock lock(hub_.mutex);
+  const uint64_t number = hub_.splitsStarted[size_t(rank_)]++;
+  std::shared_ptr<InProcessHub>& child = hub_.children[{number, color}];
+  if (!child) {
+    child = std::make_shared<InProcessHub>(size);
+    child->parent = &hub_;
+  }
+  return std::unique_ptr<Communicator>(new InProcessCommunicator(*child, rank));
+}
+
+void InProcessCommunicator::abortEveryRank(const std::string& message, int) const {
+  abortRun(hub_, rank_, message);
+  std::unique_lock lock(hub_.mutex);
   throw GroupAborted("abortAll", rank_, hub_.abortingRank, hub_.abortMessage);
 }
 
@@ -386,12 +436,7 @@ void InProcessGroup::leave(int rank) {
 }
 
 void InProcessGroup::abort(int rank, const std::string& message) {
-  std::unique_lock lock(hub_->mutex);
-  if (hub_->abortingRank < 0) {
-    hub_->abortingRank = rank;
-    hub_->abortMessage = message;
-  }
-  hub_->changed.notify_all();
+  abortFrom(*hub_, rank, message);
 }
 
 int InProcessGroup::abortingRank() const {

@@ -59,6 +59,7 @@ class InProcessCommunicator final : public Communicator {
                    const std::vector<int>& offsets) const override;
   std::vector<int> gatherInt(int value) const override;
   void broadcastBytes(std::span<std::byte> bytes) const override;
+  std::unique_ptr<Communicator> split(int color) const override;
 
   // Messages are delivered at once into the receiver's inbox (a send is
   // complete when it returns); a rank waiting for messages sleeps on the

@@ -349,6 +349,7 @@ class FailingExchange final : public Communicator {
   }
   std::vector<int> gatherInt(int value) const override { return inner_.gatherInt(value); }
   void broadcastBytes(std::span<std::byte> bytes) const override { inner_.broadcastBytes(bytes); }
+  std::unique_ptr<Communicator> split(int color) const override { return inner_.split(color); }
   SendHandle sendBytes(int to, std::vector<std::byte> bytes) const override {
     if (rank() == failingRank_ && ++calls_ == failAtCall_)
       throw std::runtime_error("injected failure at exchange");

@@ -122,6 +122,11 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--volume-bricks {}: expected 0 (whole) or a brick size in voxels",
                                  o.volumeBricks));
   s.volumeBrickVoxels = o.volumeBricks;
+  if (o.dataGroups < 1 || comm.size() % o.dataGroups != 0)
+    throw InputError(fmt::format(
+        "--data-groups {}: expected a divisor of the rank count ({}): groups of equal size",
+        o.dataGroups, comm.size()));
+  s.dataGroups = o.dataGroups;
   s.render.seed = o.seed;
   s.render.view = o.view;
   s.render.toneMapping.exposure = o.exposure;
@@ -193,6 +198,12 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                    "Grid volumes (raw:, .vdb, builtin:volume, a pbrt grid medium filling its\n"
                    "box) split into bricks of N voxels a side, which the partitioner spreads\n"
                    "over the ranks like meshes (0: every rank holds every volume whole)")
+      ->capture_default_str();
+  command
+      ->add_option("--data-groups", o.dataGroups,
+                   "Split the ranks into G groups of equal size that each hold the whole scene\n"
+                   "(spread over their ranks; a part directory for that many ranks) and render\n"
+                   "every G-th sample: memory traded for speed, the same image")
       ->capture_default_str();
   command->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   command->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")

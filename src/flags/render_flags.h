@@ -65,6 +65,9 @@ struct RenderOptions {
   // --volume-bricks N: grid volumes split into bricks of N voxels a side,
   // spread over the ranks (0: every rank holds them whole).
   int volumeBricks = 0;
+  // --data-groups G: the ranks split into G groups that each hold the whole
+  // scene and render every G-th sample.
+  int dataGroups = 1;
   // --instancing: "shared" gives an Embree instance level only to objects a
   // rank places more than once or transformed; "always" to every object.
   std::string instancing = "shared";

@@ -84,6 +84,19 @@ MpiCommunicator::MpiCommunicator(int* argc, char*** argv) {
   check(MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN), "MPI_Comm_set_errhandler");
   MPI_Comm world = MPI_COMM_WORLD;
   join(&world);
+  jobRank_ = rank_;
+}
+
+MpiCommunicator::MpiCommunicator(const void* communicator, int jobRank) : jobRank_(jobRank) {
+  join(communicator);
+}
+
+std::unique_ptr<Communicator> MpiCommunicator::split(int color) const {
+  MPI_Comm part = MPI_COMM_NULL;
+  check(MPI_Comm_split(messaging_->collective, color, rank_, &part), "MPI_Comm_split");
+  std::unique_ptr<Communicator> out(new MpiCommunicator(&part, jobRank_));
+  MPI_Comm_free(&part);  // (it joined duplicates)
+  return out;
 }
 
 MpiCommunicator::MpiCommunicator(ApplicationCommunicator application) {
@@ -97,6 +110,7 @@ MpiCommunicator::MpiCommunicator(ApplicationCommunicator application) {
   if (comm == MPI_COMM_NULL)
     throw CommunicationError("MpiCommunicator", -1, "the communicator given is MPI_COMM_NULL");
   join(&comm);
+  jobRank_ = rank_;
 }
 
 void MpiCommunicator::join(const void* communicator) {
@@ -392,7 +406,7 @@ void MpiCommunicator::reportFatalSignals() const {
 }
 
 void MpiCommunicator::abortEveryRank(const std::string& message, int code) const {
-  fmt::print(stderr, "ferry: error on rank {}: {}\n", rank_, message);
+  fmt::print(stderr, "ferry: error on rank {}: {}\n", jobRank_, message);
   std::fflush(stderr);
   MPI_Abort(messaging_ ? messaging_->collective : messaging_->collective, code);
   std::_Exit(code);  // MPI_Abort does not return; be sure

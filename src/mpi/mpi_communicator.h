@@ -49,6 +49,7 @@ class MpiCommunicator final : public Communicator {
                    const std::vector<int>& offsets) const override;
   std::vector<int> gatherInt(int value) const override;
   void broadcastBytes(std::span<std::byte> bytes) const override;
+  std::unique_ptr<Communicator> split(int color) const override;
 
   // Not collective. Makes a fatal signal on this rank (segfault, bus error,
   // abort, ...) print "ferry: rank R died of SIGNAME" before the default
@@ -74,6 +75,9 @@ class MpiCommunicator final : public Communicator {
 
  private:
   struct Messaging;  // MPI requests and buffers in flight (in the .cpp, with mpi.h)
+  // Over the communicator at `communicator` (an MPI_Comm*, freed by the
+  // caller), part of a job whose rank `jobRank` this process is.
+  MpiCommunicator(const void* communicator, int jobRank);
   // Tests every send in flight, releasing the completed ones.
   void progressSends() const;
   // Prints "ferry: error on rank R: message" and ends every rank (MPI_Abort).
@@ -86,6 +90,7 @@ class MpiCommunicator final : public Communicator {
 
   int rank_ = -1;  // until MPI_Comm_rank answers (errors before it name no rank)
   int size_ = 1;
+  int jobRank_ = -1;  // what messages call this rank: its rank in the whole job
   bool ownsMpi_ = false;
   size_t maxPieceBytes_ = size_t(1) << 30;
   std::unique_ptr<Messaging> messaging_;

@@ -63,6 +63,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   frameBuffer.setSampleClamp(settings_.sampleClamp);
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
+    if (sampleIndex % settings_.dataGroups != settings_.dataGroup) continue;  // another group's
     if (traversal_.runsSamples()) {
       // The traversal runs the sample (the overlapped distributed exchange):
       // it calls back for camera paths and shading as rays become ready.

@@ -77,6 +77,11 @@ struct RenderSettings {
   // (WavefrontRenderer::renderFrame). Any value gives the same image.
   uint32_t chunkPixels = 8192;
   ToneMapping toneMapping;
+  // Data groups (the session sets them): this rank renders only the samples
+  // whose index modulo dataGroups is dataGroup; the groups' frame buffers
+  // add up to the image.
+  uint32_t dataGroups = 1;
+  uint32_t dataGroup = 0;
 };
 
 // Progress of one frame: (wavefront finished, wavefronts in the frame).

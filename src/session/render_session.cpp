@@ -229,7 +229,18 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
   checkRankCount(comm.size(), settings.pathLayout);
   if (given) given->validate();
   settings_.render.retraceAll = settings.retrace == Retrace::All;
-  rank_ = std::make_unique<Rank>(settings_, comm_, given, part);
+  if (settings.dataGroups > 1) {
+    // Data groups: each holds the whole scene over size / groups ranks and
+    // renders every groups-th sample; the frame buffers add up over all ranks.
+    const int groups = settings.dataGroups, ranks = comm.size();
+    if (ranks % groups != 0)
+      throw InputError(fmt::format("{} data groups: {} ranks do not split into groups of one size",
+                                   groups, ranks));
+    groupComm_ = comm.split(comm.rank() / (ranks / groups));
+    settings_.render.dataGroups = uint32_t(groups);
+    settings_.render.dataGroup = uint32_t(comm.rank() / (ranks / groups));
+  }
+  rank_ = std::make_unique<Rank>(settings_, group(), given, part);
   // Light paths do not go through media: a scene with media renders by
   // camera paths alone (their medium rides where light paths keep a ratio).
   // (Volume bricks are spread over ranks: the whole scene's summary counts them.)
@@ -401,16 +412,16 @@ std::unique_ptr<RayTraversal<Path>> RenderSession::makeTraversal(
     DistributedTraversal<Path>** distributed) {
   Rank& rank = *rank_;
   // One rank needs no forwarding machinery (no proxy queries, no collectives per round).
-  if (comm_.size() == 1) return std::make_unique<LocalTraversal<Path>>(*rank.geometry);
+  if (group().size() == 1) return std::make_unique<LocalTraversal<Path>>(*rank.geometry);
   if (!rank.proxies) {
     // The tree consumes the proxies: a rank holds each proxy once.
-    rank.proxies = std::make_unique<const ProxyBvh>(std::move(rank.partition.proxies), comm_.rank(),
-                                                    std::move(rank.partition.proxyShapes),
-                                                    std::move(rank.partition.proxyPlacements));
+    rank.proxies = std::make_unique<const ProxyBvh>(
+        std::move(rank.partition.proxies), group().rank(), std::move(rank.partition.proxyShapes),
+        std::move(rank.partition.proxyPlacements));
     malloc_trim(0);  // the builder's temporaries go back to the system
   }
   auto d = std::make_unique<DistributedTraversal<Path>>(
-      comm_, *rank.geometry, rank.partition, *rank.proxies, settings_.forwarding,
+      group(), *rank.geometry, rank.partition, *rank.proxies, settings_.forwarding,
       settings_.exchange, settings_.render.chunkPixels);
   if (distributed) *distributed = d.get();
   return d;
@@ -600,7 +611,7 @@ void RenderSession::renderFrames(FramePolicy& policy, const RenderSettings& rend
 template <typename F>
 void RenderSession::withPathLayout(F&& f) {
   // Masks while they fit (8 then 64 ranks), else replay (or as forced).
-  const int ranks = comm_.size();
+  const int ranks = group().size();
   if (settings_.pathLayout == PathLayout::Replay ||
       (settings_.pathLayout == PathLayout::Auto && ranks > 64))
     f.template operator()<PathReplay>();

@@ -208,6 +208,8 @@ class RenderSession {
   std::pair<uint64_t, std::string> imageIdentity() const;
   const SessionSettings& settings() const { return settings_; }
   const Communicator& communicator() const { return comm_; }
+  // The ranks that hold the scene together: this rank's data group, or all.
+  const Communicator& group() const { return groupComm_ ? *groupComm_ : comm_; }
   // This rank's scene (its part, after partitioning): for its film settings.
   const Scene& scene() const;
   // The whole scene, summarized before this rank released what it does not own.
@@ -249,6 +251,7 @@ class RenderSession {
 
   SessionSettings settings_;
   const Communicator& comm_;
+  std::unique_ptr<Communicator> groupComm_;  // data groups: this rank's
   std::unique_ptr<Rank> rank_;
   std::unique_ptr<Checkpoint> resume_;  // rank 0, from resumeFrom()
   // Per medium, its transfer function as loaded (null: none).

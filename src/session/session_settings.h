@@ -28,6 +28,11 @@ struct SessionSettings {
   // voxels a side, spread over the ranks (shapes/volume_brick.h); 0: every
   // rank holds every medium whole.
   int volumeBrickVoxels = 0;
+  // Data groups (hybrid data and image parallelism): the ranks split into
+  // this many groups of equal size, each holding the whole scene spread over
+  // its ranks (a part directory for that many ranks) and rendering every
+  // dataGroups-th sample. The same image as one group.
+  int dataGroups = 1;
   // Light paths (--light-paths on/off); none given: as the scene's
   // integrator asks (integratorWantsLightPaths). Sets render.lightPaths.
   std::optional<bool> lightPaths;

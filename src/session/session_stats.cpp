@@ -47,6 +47,7 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                    {"view", r.view},
                    {"threads", s.threads},
                    {"ranks", ranks},
+                   {"data_groups", s.dataGroups},
                    {"transport", session.communicator().transport()},
                    {"forwarding", toString(s.forwarding)},
                    {"exchange", ranks > 1 ? toString(s.exchange) : "none"},
@@ -64,6 +65,7 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
   nlohmann::json perRank = nlohmann::json::array();
   for (int rank = 0; rank < ranks; ++rank)
     perRank.push_back({{"rank", rank},
+                       {"data_group", rank / (ranks / std::max(1, s.dataGroups))},
                        {"estimated_bytes", memory.estimated[rank]},
                        {"embree_bytes", memory.embree[rank]},
                        {"embree_peak_bytes", memory.embreePeak[rank]},
