@@ -45,6 +45,12 @@ mpirun_n 4 "$ferry" render "builtin:volume?size=24" --volume-bricks 8 $args --da
 cmp -s "$work/vol1.pfm" "$work/vol4.pfm" || fail "volume bricks in 2 groups: not the 1-rank image"
 echo "  volume bricks: 1 rank = 4 ranks in 2 groups"
 
+# The bench runs (small): it checks every image against the 1-rank image.
+SCENE="$island" SIZE=32x24 SPP=2 FRAMES=1 ROUNDS=1 CONFIGS="1x1 4x2" \
+  bash "$source_dir/bench/data_groups.sh" "$ferry" > "$work/bench.log" 2>&1 \
+  || { cat "$work/bench.log"; fail "bench/data_groups.sh"; }
+echo "  bench/data_groups.sh (32x24, 1x1 and 4x2): $(tail -1 "$work/bench.log")"
+
 start=$SECONDS
 if timeout 60 mpirun --oversubscribe -np 4 "$ferry" render "$island" $args --data-groups 3 \
   -o "$work/bad.pfm" 2> "$work/stderr"; then
