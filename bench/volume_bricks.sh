@@ -49,6 +49,7 @@ timed() { /usr/bin/time -f "%e %M" -o "$work/time" "$@"; cat "$work/time"; }
 
 read -r part_s part_kib < <(timed "$ferry" partition "$raw" --volume-bricks "$brick" --ranks "$ranks" -o "$work/parts" -q)
 mpi 1 "$ferry" render "$raw" --volume-bricks "$brick" $render -o "$work/one.pfm" --stats "$work/one.json"
+sync
 mpi "$ranks" "$ferry" render "$work/parts" $render -o "$work/parts.pfm" --stats "$work/parts.json"
 $python scripts/cut_bricks.py "$work/vol.raw" "$size,$size,$size" float32 "$brick" "$work/bricks" > /dev/null
 $python - "$work/bricks/volume.json" << 'PY'
@@ -56,6 +57,7 @@ import json, sys
 m = json.load(open(sys.argv[1])); m["opacity"] = 60; json.dump(m, open(sys.argv[1], "w"))
 PY
 rm -f "$work/vol.raw"
+sync  # both ways read files already on disk: no write-back during the timed render
 mpi "$ranks" "$ferry" render "bricks:$work/bricks/volume.json" $render -o "$work/native.pfm" --stats "$work/native.json"
 for image_file in parts native; do
   cmp -s "$work/one.pfm" "$work/$image_file.pfm" && echo "image ($image_file, $ranks ranks) = 1-rank image" \

@@ -87,6 +87,11 @@ cp -r "$work/bricks" "$work/short"
 head -c 100 "$work/bricks/brick_2.raw" > "$work/short/brick_2.raw"
 run_failing "a brick of the wrong size" mpirun --oversubscribe -np 3 "$ferry" render "bricks:$work/short/volume.json" $args -o "$work/x.pfm"
 grep -q "brick_2.raw" "$work/stderr" && grep -q "100 bytes" "$work/stderr" || fail "the message does not say the brick's size"
+cp -r "$work/bricks" "$work/nan"
+$python -c "import numpy as np, sys; a = np.fromfile(sys.argv[1], '<f4'); a[7] = np.nan; a.tofile(sys.argv[1])" \
+  "$work/nan/brick_5.raw"
+run_failing "a NaN in a brick" mpirun --oversubscribe -np 3 "$ferry" render "bricks:$work/nan/volume.json" $args -o "$work/x.pfm"
+grep -q "brick_5.raw.*sample 7 is nan" "$work/stderr" || fail "the message does not name the brick and the sample"
 [ -e "$work/x.pfm" ] && fail "a failed render wrote an image"
 
 if [ $failures -ne 0 ]; then

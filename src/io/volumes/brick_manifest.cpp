@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "core/error.h"
+#include "io/byte_stream.h"
 #include "io/volumes/volume_files.h"
 #include "shapes/volume_brick.h"
 
@@ -184,30 +185,35 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
             "{}: {} bytes, but the cells {},{},{}..{},{},{} and their ghost layer of {} need {}",
             e.file, size, e.lo[0], e.lo[1], e.lo[2], e.hi[0], e.hi[1], e.hi[2], format,
             samples * bytesPerSample));
-      std::ifstream file(e.file, std::ios::binary);
+      // Read in chunks that stay in cache, converted as raw: volumes convert.
+      ByteStream file = ByteStream::openFile(e.file);
       std::vector<float> values(samples);
-      auto readInto = [&](void* to) {
-        if (!file.read(static_cast<char*>(to), std::streamsize(size)))
+      constexpr uint64_t kChunk = 16384;
+      std::vector<unsigned char> chunk(kChunk * bytesPerSample);
+      const float range = rangeHi - rangeLo;
+      for (uint64_t first = 0; first < samples; first += kChunk) {
+        const uint64_t n = std::min(kChunk, samples - first);
+        if (file.read(chunk.data(), n * bytesPerSample) != n * bytesPerSample)
           throw InputError(fmt::format("{}: read failed", e.file));
-      };
-      if (bytesPerSample == 4) {
-        readInto(values.data());  // little-endian floats, as this machine's
-        const float range = rangeHi - rangeLo;
-        for (uint64_t i = 0; i < samples; ++i) {
-          const float v = values[i];
-          if (!std::isfinite(v)) throw InputError(fmt::format("{}: sample {} is {}", e.file, i, v));
-          values[i] = range > 0 ? std::clamp((v - rangeLo) / range, 0.0f, 1.0f) : 0.0f;
+        float* out = values.data() + first;
+        if (bytesPerSample == 1) {
+          for (uint64_t i = 0; i < n; ++i) out[i] = float(chunk[i]) / 255.0f;
+        } else if (bytesPerSample == 2) {
+          for (uint64_t i = 0; i < n; ++i)
+            out[i] = float(uint16_t(chunk[2 * i] | (chunk[2 * i + 1] << 8))) / 65535.0f;
+        } else {
+          std::memcpy(out, chunk.data(), n * 4);  // little-endian floats, as this machine's
+          // (A NaN stays one: the brick refuses it below, naming the sample.)
+          for (uint64_t i = 0; i < n; ++i)
+            out[i] = range > 0 ? std::clamp((out[i] - rangeLo) / range, 0.0f, 1.0f) : 0.0f;
         }
-      } else {
-        std::vector<unsigned char> bytes(size);
-        readInto(bytes.data());
-        if (bytesPerSample == 1)
-          for (uint64_t i = 0; i < samples; ++i) values[i] = float(bytes[i]) / 255.0f;
-        else
-          for (uint64_t i = 0; i < samples; ++i)
-            values[i] = float(uint16_t(bytes[2 * i] | (bytes[2 * i + 1] << 8))) / 65535.0f;
       }
-      auto brick = std::make_shared<VolumeBrick>(volume, e.lo, e.hi, std::move(values));
+      std::shared_ptr<VolumeBrick> brick;
+      try {
+        brick = std::make_shared<VolumeBrick>(volume, e.lo, e.hi, std::move(values));
+      } catch (const InputError& error) {
+        throw InputError(fmt::format("{}: {}", e.file, error.what()));
+      }
       if (!(brick->majorant() > 0)) continue;  // it never collides: nothing to hold
       scene.addSingleInstanceGeometry(
           {fmt::format("{} brick {},{},{}", name, e.lo[0], e.lo[1], e.lo[2]), material,
