@@ -63,7 +63,7 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
     throw InputError(fmt::format("a volume brick holds {} samples where its cells need {}",
                                  samples_.size(), expected));
   for (size_t i = 0; i < held.size(); ++i)
-    if (!(held[i] >= 0) || !std::isfinite(held[i]))
+    if (!((held[i] >= 0 || v.normalise) && std::isfinite(held[i])))
       throw InputError(fmt::format("a volume brick's sample {} is {}", i, held[i]));
   if (!v.transfer && !(v.sigmaA.x + v.sigmaS.x == v.sigmaA.y + v.sigmaS.y &&
                        v.sigmaA.y + v.sigmaS.y == v.sigmaA.z + v.sigmaS.z))
@@ -83,10 +83,12 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
           from[a] = lo[a] + c[a] * kBrickMajorantVoxels - 1;
           to[a] = std::min(lo[a] + (c[a] + 1) * kBrickMajorantVoxels, hi[a]);
         }
-        // The samples held, row by row; those outside the grid are 0.
-        float low = kInfinity, high = 0;
+        // The samples held, row by row (as held: normalised after); those
+        // outside the grid are 0.
+        float low = kInfinity, high = -kInfinity;
+        bool outside = false;
         for (int a = 0; a < 3; ++a) {
-          if (from[a] < first_[a] || to[a] >= first_[a] + count_[a]) low = 0;
+          if (from[a] < first_[a] || to[a] >= first_[a] + count_[a]) outside = true;
           from[a] = std::max(from[a], first_[a]);
           to[a] = std::min(to[a], first_[a] + count_[a] - 1);
         }
@@ -101,6 +103,14 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
               high = std::max(high, row[x]);
             }
           }
+        if (v.normalise) {  // (monotonic: the ends map to the ends)
+          low = v.normalised(low);
+          high = v.normalised(high);
+        }
+        if (outside) {
+          low = std::min(low, 0.0f);
+          high = std::max(high, 0.0f);
+        }
         majorants[i] = v.transfer ? v.transfer->scale() * v.transfer->opacityRange(low, high).second
                                   : greyExtinction(v) * high;
         largest_ = std::max(largest_, majorants[i]);
@@ -134,9 +144,10 @@ float VolumeBrick::sample(int x, int y, int z) const {
   const int p[3] = {x, y, z};
   for (int a = 0; a < 3; ++a)
     if (p[a] < first_[a] || p[a] >= first_[a] + count_[a]) return 0;
-  return samples_[(size_t(z - first_[2]) * size_t(count_[1]) + size_t(y - first_[1])) *
-                      size_t(count_[0]) +
-                  size_t(x - first_[0])];
+  const float held = samples_[(size_t(z - first_[2]) * size_t(count_[1]) + size_t(y - first_[1])) *
+                                  size_t(count_[0]) +
+                              size_t(x - first_[0])];
+  return volume_->normalise ? volume_->normalised(held) : held;
 }
 
 float VolumeBrick::lookup(Vec3f p) const {
@@ -241,6 +252,9 @@ void VolumeBrick::write(RecordWriter& record) const {
   record.pod(v.sigmaA);
   record.pod(v.sigmaS);
   record.pod(v.g);
+  record.pod(uint8_t(v.normalise ? 1 : 0));
+  record.pod(v.valueLo);
+  record.pod(v.valueRange);
   record.pod(uint8_t(v.transfer ? 1 : 0));
   if (v.transfer) {
     record.array<TransferFunction::ColorPoint>(v.transfer->colors());
@@ -260,6 +274,10 @@ std::shared_ptr<const Shape> VolumeBrick::read(RecordReader& record) {
   volume->sigmaA = record.pod<Vec3f>();
   volume->sigmaS = record.pod<Vec3f>();
   volume->g = record.pod<float>();
+  volume->normalise = record.pod<uint8_t>() != 0;
+  volume->valueLo = record.number();
+  volume->valueRange = record.number();
+  if (volume->valueRange < 0) record.fail("a volume brick's value range is negative");
   const uint8_t hasTransfer = record.pod<uint8_t>();
   try {
     if (hasTransfer) {

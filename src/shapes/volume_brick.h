@@ -12,6 +12,7 @@
 // docs/volumes.md, "Bricks across ranks", says why.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -41,6 +42,14 @@ class VolumeBrick final : public Shape {
     Vec3f sigmaA{0, 0, 0}, sigmaS{0, 0, 0};  // at value 1 (no transfer function)
     float g = 0;
     std::shared_ptr<const TransferFunction> transfer;  // null: sigma x value
+    // Samples held as a file has them (float32 in a mapping), each mapped to
+    // [0, 1] where it is read: clamp((v - valueLo) / valueRange, 0, 1), 0
+    // without a range (a raw: volume's normalisation, the same floats).
+    bool normalise = false;
+    float valueLo = 0, valueRange = 1;
+    float normalised(float v) const {
+      return valueRange > 0 ? std::clamp((v - valueLo) / valueRange, 0.0f, 1.0f) : 0.0f;
+    }
   };
 
   // The cells [lo, hi) of `volume`'s grid (voxel boundaries along each

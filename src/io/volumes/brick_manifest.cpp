@@ -1,8 +1,12 @@
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/mman.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -22,6 +26,21 @@ static_assert(std::endian::native == std::endian::little, "brick files are littl
 constexpr std::string_view kPrefix = "bricks:";
 
 using Json = nlohmann::json;
+
+// `count` floats of `path`, mapped (read only, kept as long as the array is).
+SharedArray<float> mappedFloats(const std::string& path, uint64_t count) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) throw InputError(fmt::format("{}: cannot open ({})", path, std::strerror(errno)));
+  const size_t bytes = size_t(count) * sizeof(float);
+  void* at = ::mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE, fd, 0);
+  ::close(fd);
+  if (at == MAP_FAILED)
+    throw InputError(fmt::format("{}: cannot map ({})", path, std::strerror(errno)));
+  std::shared_ptr<const void> keeper(
+      at, [bytes](const void* p) { ::munmap(const_cast<void*>(p), bytes); });
+  return SharedArray<float>::shared(static_cast<const float*>(at), size_t(count), std::move(keeper),
+                                    false);
+}
 
 struct BrickEntry {
   std::string file;
@@ -166,6 +185,11 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
         Affine3f::scale({1 / box.size().x, 1 / box.size().y, 1 / box.size().z}) *
         Affine3f::translate(-box.lower);
     volume->transfer = std::make_shared<const TransferFunction>(std::move(tf));
+    if (format == "float32") {
+      volume->normalise = true;
+      volume->valueLo = rangeLo;
+      volume->valueRange = rangeHi - rangeLo;
+    }
 
     const std::string name = std::filesystem::path(path).stem().string();
     Scene scene = framedVolumeScene(name, box);
@@ -185,28 +209,28 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
             "{}: {} bytes, but the cells {},{},{}..{},{},{} and their ghost layer of {} need {}",
             e.file, size, e.lo[0], e.lo[1], e.lo[2], e.hi[0], e.hi[1], e.hi[2], format,
             samples * bytesPerSample));
-      // Read in chunks that stay in cache, converted as raw: volumes convert.
-      ByteStream file = ByteStream::openFile(e.file);
-      std::vector<float> values(samples);
-      constexpr uint64_t kChunk = 16384;
-      std::vector<unsigned char> chunk(kChunk * bytesPerSample);
-      const float range = rangeHi - rangeLo;
-      for (uint64_t first = 0; first < samples; first += kChunk) {
-        const uint64_t n = std::min(kChunk, samples - first);
-        if (file.read(chunk.data(), n * bytesPerSample) != n * bytesPerSample)
-          throw InputError(fmt::format("{}: read failed", e.file));
-        float* out = values.data() + first;
-        if (bytesPerSample == 1) {
-          for (uint64_t i = 0; i < n; ++i) out[i] = float(chunk[i]) / 255.0f;
-        } else if (bytesPerSample == 2) {
-          for (uint64_t i = 0; i < n; ++i)
-            out[i] = float(uint16_t(chunk[2 * i] | (chunk[2 * i + 1] << 8))) / 65535.0f;
-        } else {
-          std::memcpy(out, chunk.data(), n * 4);  // little-endian floats, as this machine's
-          // (A NaN stays one: the brick refuses it below, naming the sample.)
-          for (uint64_t i = 0; i < n; ++i)
-            out[i] = range > 0 ? std::clamp((out[i] - rangeLo) / range, 0.0f, 1.0f) : 0.0f;
+      SharedArray<float> values;
+      if (bytesPerSample == 4) {
+        // float32: kept in the file's mapping, normalised where read (Volume::normalise).
+        values = mappedFloats(e.file, samples);
+      } else {
+        // Read in chunks that stay in cache, converted as raw: volumes convert.
+        ByteStream file = ByteStream::openFile(e.file);
+        std::vector<float> converted(samples);
+        constexpr uint64_t kChunk = 16384;
+        std::vector<unsigned char> chunk(kChunk * bytesPerSample);
+        for (uint64_t first = 0; first < samples; first += kChunk) {
+          const uint64_t n = std::min(kChunk, samples - first);
+          if (file.read(chunk.data(), n * bytesPerSample) != n * bytesPerSample)
+            throw InputError(fmt::format("{}: read failed", e.file));
+          float* out = converted.data() + first;
+          if (bytesPerSample == 1)
+            for (uint64_t i = 0; i < n; ++i) out[i] = float(chunk[i]) / 255.0f;
+          else
+            for (uint64_t i = 0; i < n; ++i)
+              out[i] = float(uint16_t(chunk[2 * i] | (chunk[2 * i + 1] << 8))) / 65535.0f;
         }
+        values = std::move(converted);
       }
       std::shared_ptr<VolumeBrick> brick;
       try {
