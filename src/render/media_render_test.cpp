@@ -15,6 +15,7 @@
 #include "media/medium.h"
 #include "render/render_test_util.h"
 #include "session/render_session.h"
+#include "session/session_test_util.h"
 
 namespace ferry {
 namespace {
@@ -183,15 +184,8 @@ TEST(MediaRender, TheImageIsTheSameOnOneAndThreeRanks) {
   settings.render.maxDepth = 5;
   std::vector<Vec3f> one, three;
   auto render = [&](const Communicator& comm, std::vector<Vec3f>& out) {
-    RenderSession session(scene, settings, comm);
-    struct Sink final : FrameSink {
-      Frames frames() const override { return Frames::Last; }
-      Pixels pixels() const override { return Pixels::Linear; }
-      void receive(const FrameImage& image) override { linear = image.linear; }
-      std::vector<Vec3f> linear;
-    } sink;
-    session.run(sink);
-    if (comm.isRoot()) out = sink.linear;
+    std::vector<Vec3f> image = renderLinear(scene, settings, comm);
+    if (comm.isRoot()) out = std::move(image);
   };
   runRanks(1, [&](const Communicator& comm) { render(comm, one); });
   runRanks(3, [&](const Communicator& comm) { render(comm, three); });

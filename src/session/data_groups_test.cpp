@@ -9,24 +9,13 @@
 #include "io/scene_loader.h"
 #include "partition/partitioner.h"
 #include "session/render_session.h"
+#include "session/session_test_util.h"
 
 namespace ferry {
 namespace {
 
 std::vector<Vec3f> render(const Scene& scene, const SessionSettings& settings, int ranks) {
-  std::vector<Vec3f> image;
-  runRanks(ranks, [&](const Communicator& comm) {
-    RenderSession session(scene, settings, comm);
-    struct Sink final : FrameSink {
-      Frames frames() const override { return Frames::Last; }
-      Pixels pixels() const override { return Pixels::Linear; }
-      void receive(const FrameImage& frame) override { linear = frame.linear; }
-      std::vector<Vec3f> linear;
-    } sink;
-    session.run(sink);
-    if (comm.isRoot()) image = std::move(sink.linear);
-  });
-  return image;
+  return testing::renderOnRanks(scene, settings, ranks);
 }
 
 SessionSettings small() {

@@ -21,6 +21,7 @@
 #include "render/render_test_util.h"
 #include "scene/memory_cost.h"
 #include "session/render_session.h"
+#include "session/session_test_util.h"
 #include "shapes/shape_kinds.h"
 #include "trace/embree_backend.h"
 #include "trace/reference_backend.h"
@@ -160,20 +161,8 @@ const Communicator& oneRank() {
   return group.communicator(0);
 }
 
-// The final image of a session, linear.
-class ImageSink final : public FrameSink {
- public:
-  Frames frames() const override { return Frames::Last; }
-  Pixels pixels() const override { return Pixels::Linear; }
-  void receive(const FrameImage& image) override { linear = image.linear; }
-  std::vector<Vec3f> linear;
-};
-
 std::vector<Vec3f> render(Scene scene, const SessionSettings& settings, const Communicator& comm) {
-  RenderSession session(std::move(scene), settings, comm);
-  ImageSink sink;
-  session.run(sink);
-  return sink.linear;
+  return renderLinear(scene, settings, comm);
 }
 
 TEST(Spheres, TheImageIsTheSameOnOneAndThreeRanks) {

@@ -19,6 +19,7 @@
 #include "render/render_test_util.h"
 #include "scene/scene.h"
 #include "session/render_session.h"
+#include "session/session_test_util.h"
 
 namespace ferry {
 namespace {
@@ -233,18 +234,9 @@ TEST(VolumeBrick, AWhiteFurnaceOfBricksStaysWhite) {
   EXPECT_LT(mean, 0.85);
 }
 
-// The final image of a session, linear.
 std::vector<Vec3f> render(const Scene& scene, const SessionSettings& settings,
                           const Communicator& comm) {
-  RenderSession session(scene, settings, comm);
-  struct Sink final : FrameSink {
-    Frames frames() const override { return Frames::Last; }
-    Pixels pixels() const override { return Pixels::Linear; }
-    void receive(const FrameImage& image) override { linear = image.linear; }
-    std::vector<Vec3f> linear;
-  } sink;
-  session.run(sink);
-  return sink.linear;
+  return renderLinear(scene, settings, comm);
 }
 
 TEST(VolumeBrick, TheImageIsTheSameOnOneToEightRanks) {

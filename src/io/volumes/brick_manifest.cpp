@@ -92,14 +92,8 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
       if (!std::isfinite(origin[a])) fail("origin: expected three numbers");
     }
     const std::string format = j.value("format", std::string());
-    size_t bytesPerSample = 0;
-    if (format == "uint8")
-      bytesPerSample = 1;
-    else if (format == "uint16")
-      bytesPerSample = 2;
-    else if (format == "float32")
-      bytesPerSample = 4;
-    else
+    const size_t bytesPerSample = rawSampleBytes(format);
+    if (bytesPerSample == 0)
       fail(fmt::format("format '{}': expected uint8, uint16 or float32", format));
     float rangeLo = 0, rangeHi = 1;
     if (format == "float32") {

@@ -36,6 +36,10 @@ bool parseTriple(std::string_view text, T out[3]) {
 
 }  // namespace
 
+size_t rawSampleBytes(const std::string& format) {
+  return format == "uint8" ? 1 : format == "uint16" ? 2 : format == "float32" ? 4 : 0;
+}
+
 bool isRawVolumeSpec(const std::string& spec) {
   return std::string_view(spec).starts_with(kPrefix);
 }
@@ -88,14 +92,8 @@ Scene loadRawVolume(const std::string& spec) {
     }
   }
   if (!haveDims) fail("no dims (dims=X,Y,Z)");
-  size_t bytesPerSample = 0;
-  if (format == "uint8")
-    bytesPerSample = 1;
-  else if (format == "uint16")
-    bytesPerSample = 2;
-  else if (format == "float32")
-    bytesPerSample = 4;
-  else
+  const size_t bytesPerSample = rawSampleBytes(format);
+  if (bytesPerSample == 0)
     fail(fmt::format("format '{}': expected uint8, uint16 or float32", format));
   constexpr uint64_t kMaxSide = uint64_t(std::numeric_limits<int32_t>::max());
   if (dims[0] > kMaxSide || dims[1] > kMaxSide || dims[2] > kMaxSide ||

@@ -47,6 +47,9 @@ Scene loadVdbScene(const std::string& path);
 
 bool isRawVolumeSpec(const std::string& spec);  // starts with "raw:"
 
+// Bytes a sample of `format` ("uint8", "uint16", "float32") takes; 0 for any other.
+size_t rawSampleBytes(const std::string& format);
+
 // "raw:PATH?dims=X,Y,Z&format=uint8|uint16|float32[&spacing=SX,SY,SZ]
 // [&origin=OX,OY,OZ][&tf=FILE][&opacity=S]": X*Y*Z samples, x fastest,
 // little-endian, each the centre of a cell `spacing` wide (default 1) from
