@@ -41,14 +41,17 @@ Vec3f bentNormal(const Scene& scene, const Material& material, const SurfacePoin
     const Texture& bump = scene.textures[material.bumpTexture];
     float ddu = 0, ddv = 0;
     if (bump.isSolid()) {
-      // A solid texture: displaced at the points du dp/du and dv dp/dv away
+      // Evaluated at the point (a solid texture, or a combination with
+      // one): displaced at (u + du, p + du dp/du) and (v + dv, p + dv dp/dv)
       // (pbrt's step without ray differentials, 0.0005), its raw value (fBm
       // is negative half the time).
       constexpr float kStep = 0.0005f;
-      auto displacement = [&](Vec3f p) { return material.bumpScale * bump.solid.evaluate(p).x; };
-      const float d = displacement(s.position);
-      ddu = (displacement(s.position + dpdu * kStep) - d) / kStep;
-      ddv = (displacement(s.position + dpdv * kStep) - d) / kStep;
+      auto displacement = [&](Vec2f uv, Vec3f p) {
+        return material.bumpScale * bump.value(uv, p).x;
+      };
+      const float d = displacement(s.uv, s.position);
+      ddu = (displacement(s.uv + Vec2f{kStep, 0}, s.position + dpdu * kStep) - d) / kStep;
+      ddv = (displacement(s.uv + Vec2f{0, kStep}, s.position + dpdv * kStep) - d) / kStep;
     } else {
       const float du = bump.width > 0 ? 0.5f / float(bump.width) : 0.0005f;
       const float dv = bump.height > 0 ? 0.5f / float(bump.height) : 0.0005f;

@@ -56,7 +56,9 @@ MemoryCost textureCost(uint64_t texelCount) {
 }
 
 MemoryCost textureCost(const Texture& texture) {
-  return textureCost(texture.texelCount());
+  uint64_t texels = texture.texelCount();
+  for (const Texture& part : texture.parts) texels += textureCost(part).texels / 4;
+  return textureCost(texels);
 }
 
 MemoryCost bsdfTableCost(const FourierBsdfTable& table) {

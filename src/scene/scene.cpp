@@ -153,7 +153,7 @@ void Scene::releaseAllBut(const std::vector<int32_t>& keptInstances) {
   for (size_t m = 0; m < meshes.size(); ++m)
     if (!keepMesh[m]) meshes[m].releaseArrays();
   for (size_t t = 0; t < textures.size(); ++t)
-    if (!keepTexture[t]) textures[t].rgba.clear();
+    if (!keepTexture[t]) textures[t].release();
   for (size_t t = 0; t < bsdfTables.size(); ++t)
     if (!keepTable[t]) bsdfTables[t].reset();
 }

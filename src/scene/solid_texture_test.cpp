@@ -81,5 +81,67 @@ TEST(SolidTexture, AnImageTextureIgnoresThePointAndASolidOneTheUv) {
   EXPECT_EQ(image.evaluate({0.2f, 0.3f}, {1, 2, 3}).x, 1);
 }
 
+// A combination evaluates its operands at the point: constants, solid parts
+// and image parts, as pbrt's scale, mix, checkerboard, dots and bilerp.
+TEST(SolidTexture, CombinationsEvaluateTheirOperandsAtThePoint) {
+  Texture fbm;
+  fbm.solid.kind = SolidTextureKind::Fbm;
+  Texture image;  // 2x1: red on the left, blue on the right, linear
+  image.width = 2;
+  image.height = 1;
+  image.srgb = false;
+  image.wrap = WrapMode::Clamp;
+  image.rgba = {255, 0, 0, 255, 0, 0, 255, 255};
+  auto combined = [&](TextureCombination kind) {
+    Texture t;
+    t.combination = kind;
+    t.parts = {fbm, image};
+    t.operands[0].part = 0;
+    t.operands[1].part = 1;
+    t.operands[2].constant = Vec3f(0.25f);
+    t.operands[3].constant = Vec3f(2);
+    return t;
+  };
+  const Vec3f p{0.3f, 1.7f, 2.2f}, q{4.1f, 0.2f, 0.9f};
+  const float n = fbm.solid.evaluate(p).x;
+  const Vec2f left{0.1f, 0.5f}, right{0.9f, 0.5f};
+  EXPECT_TRUE(combined(TextureCombination::None).isSolid() == false);
+  const Texture scale = combined(TextureCombination::Scale);
+  EXPECT_TRUE(scale.isSolid());
+  EXPECT_EQ(scale.value(left, p), Vec3f(n, 0, 0));
+  EXPECT_EQ(scale.value(right, p), Vec3f(0, 0, n));
+  EXPECT_NE(scale.value(left, p).x, scale.value(left, q).x);
+  const Texture mix = combined(TextureCombination::Mix);  // by the constant 0.25
+  EXPECT_NEAR(mix.value(left, p).x, 0.75f * n + 0.25f, 1e-6f);
+  EXPECT_NEAR(mix.value(left, p).z, 0.75f * n, 1e-6f);
+  Texture checker = combined(TextureCombination::Checkerboard);
+  checker.mapping = {2, 2, 0, 0};
+  EXPECT_EQ(checker.value({0.25f, 0.25f}, p), Vec3f(n));        // square (0, 0): even
+  EXPECT_EQ(checker.value({0.75f, 0.25f}, p), Vec3f(0, 0, 1));  // (1, 0): odd, the image
+  const Texture dots = combined(TextureCombination::Dots);
+  int inside = 0;
+  for (int i = 0; i < 400; ++i) {
+    const Vec2f uv{float(i % 20) / 20 + 0.025f, float(i / 20) / 20 + 0.025f};
+    const bool in = insideDot(uv);
+    inside += in;
+    EXPECT_EQ(dots.value(uv, p), in ? Vec3f(n) : image.value(uv, p));
+  }
+  EXPECT_GT(inside, 0);
+  EXPECT_LT(inside, 400);
+  const Texture bilerp =
+      combined(TextureCombination::Bilerp);  // v00 fbm, v01 image, v10 0.25, v11 2
+  const Vec2f middle{0.5f, 0.5f};
+  EXPECT_NEAR(bilerp.value(middle, p).x, 0.25f * (n + image.value(middle, p).x + 0.25f + 2), 1e-6f);
+  // A colour clamps the negative values a raw value keeps.
+  const Vec3f negative{-0.5f, 0.5f, 0};
+  Texture shifted;
+  shifted.combination = TextureCombination::Scale;
+  shifted.operands[0].constant = negative;
+  EXPECT_EQ(shifted.value(left, p), negative);
+  const Vec4f colour = shifted.evaluate(left, p);
+  EXPECT_EQ(colour.xyz(), Vec3f(0, 0.5f, 0));
+  EXPECT_EQ(colour.w, 1.0f);
+}
+
 }  // namespace
 }  // namespace ferry

@@ -3,6 +3,8 @@
 #include <array>
 #include <cmath>
 
+#include "core/perlin_noise.h"
+
 namespace ferry {
 namespace {
 
@@ -89,6 +91,49 @@ float Texture::sampleAlpha(Vec2f uv) const {
   auto alpha = [&](int x, int y) { return rgba[(size_t(y) * width + x) * 4 + 3] / 255.0f; };
   return (alpha(t.x0, t.y0) * (1 - t.fx) + alpha(t.x1, t.y0) * t.fx) * (1 - t.fy) +
          (alpha(t.x0, t.y1) * (1 - t.fx) + alpha(t.x1, t.y1) * t.fx) * t.fy;
+}
+
+bool checkerboardEven(Vec2f st) {
+  return (long(std::floor(st.x)) + long(std::floor(st.y))) % 2 == 0;
+}
+
+bool insideDot(Vec2f st) {
+  const float s = std::floor(st.x + 0.5f), u = std::floor(st.y + 0.5f);
+  if (!(perlinNoise({s + 0.5f, u + 0.5f, 0.5f}) > 0)) return false;
+  constexpr float kRadius = 0.35f, kMaxShift = 0.5f - kRadius;
+  const float sCenter = s + kMaxShift * perlinNoise({s + 1.5f, u + 2.8f, 0.5f});
+  const float uCenter = u + kMaxShift * perlinNoise({s + 4.5f, u + 9.8f, 0.5f});
+  const float ds = st.x - sCenter, du = st.y - uCenter;
+  return ds * ds + du * du < kRadius * kRadius;
+}
+
+Vec3f Texture::value(Vec2f uv, Vec3f p) const {
+  if (solid.kind != SolidTextureKind::None) return solid.evaluate(p);
+  if (combination == TextureCombination::None) return sample(uv).xyz();
+  auto operand = [&](int i) {
+    const TextureOperand& o = operands[size_t(i)];
+    return o.part < 0 ? o.constant : parts[size_t(o.part)].value(uv, p);
+  };
+  const Vec2f st{mapping.x * uv.x + mapping.z, mapping.y * uv.y + mapping.w};
+  switch (combination) {
+    case TextureCombination::Scale:
+      return operand(0) * operand(1);
+    case TextureCombination::Mix: {
+      const Vec3f amount = operand(2);
+      return lerp(operand(0), operand(1), (amount.x + amount.y + amount.z) / 3);
+    }
+    case TextureCombination::Checkerboard:
+      return checkerboardEven(st) ? operand(0) : operand(1);
+    case TextureCombination::Dots:
+      return insideDot(st) ? operand(0) : operand(1);
+    case TextureCombination::Bilerp: {
+      const float s = st.x - std::floor(st.x), t = st.y - std::floor(st.y);
+      return lerp(lerp(operand(0), operand(2), s), lerp(operand(1), operand(3), s), t);
+    }
+    case TextureCombination::None:
+      break;
+  }
+  return Vec3f(1);
 }
 
 Vec3f HdrImage::sampleBilinear(Vec2f uv) const {

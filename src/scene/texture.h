@@ -2,6 +2,7 @@
 // filtering and wrap modes, and float RGB images for environment lighting.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -14,6 +15,16 @@ namespace ferry {
 
 enum class WrapMode : uint8_t { Repeat, Clamp, Mirror };
 
+// How a combined texture forms its value from its operands: pbrt's
+// composite texture classes (directionmix as the mean of its two).
+enum class TextureCombination : uint8_t { None, Scale, Mix, Checkerboard, Dots, Bilerp };
+
+// An operand of a combined texture: a constant, or one of its parts.
+struct TextureOperand {
+  Vec3f constant{1};
+  int32_t part = -1;  // index into Texture::parts; -1: the constant
+};
+
 struct Texture {
   std::string name;  // file name or generator name, for messages
   int width = 0;
@@ -25,17 +36,38 @@ struct Texture {
   // rank's mapped part file (core/shared_array.h)
   SharedArray<uint8_t> rgba;
   // A solid texture (pbrt's marble, fbm, wrinkled, windy) has no texels: it
-  // is evaluated at the shading point (evaluate()).
+  // is evaluated at the shading point.
   SolidTexture solid;
+  // A combination of operands of which one at least is solid (pbrt's scale,
+  // mix, checkerboard, dots, bilerp): evaluated at the shading point from its
+  // parts, textures of their own. Operands: scale a * b; mix a, b by the
+  // mean of c; checkerboard and dots a (even, inside), b; bilerp v00, v01,
+  // v10, v11. `mapping` (su, sv, du, dv) maps uv for the patterns.
+  TextureCombination combination = TextureCombination::None;
+  Vec4f mapping{1, 1, 0, 0};
+  std::array<TextureOperand, 4> operands;
+  std::vector<Texture> parts;
 
-  bool isSolid() const { return solid.kind != SolidTextureKind::None; }
-  // The colour at a shading point: the image at uv, or the solid texture at
-  // world point p (alpha 1; negative values clamped to 0, as pbrt's
-  // materials clamp their reflectances: fBm is negative half the time).
+  // Whether it is evaluated at the shading point (solid or combined) rather
+  // than looked up in texels.
+  bool isSolid() const {
+    return solid.kind != SolidTextureKind::None || combination != TextureCombination::None;
+  }
+  // The value at a shading point, unclamped: the image at uv, the solid
+  // texture at world point p, or the combination of its operands there.
+  Vec3f value(Vec2f uv, Vec3f p) const;
+  // The colour at a shading point: the image at uv, or value() with alpha 1
+  // and negative values clamped to 0, as pbrt's materials clamp their
+  // reflectances (fBm is negative half the time).
   Vec4f evaluate(Vec2f uv, Vec3f p) const {
     if (!isSolid()) return sample(uv);
-    const Vec3f c = max(solid.evaluate(p), Vec3f(0));
+    const Vec3f c = max(value(uv, p), Vec3f(0));
     return {c.x, c.y, c.z, 1};
+  }
+  // Drops texels and parts (a texture no shape on this rank uses).
+  void release() {
+    rgba.clear();
+    parts.clear();
   }
 
   uint64_t texelCount() const { return uint64_t(width) * uint64_t(height); }
@@ -55,6 +87,13 @@ struct HdrImage {
   Vec3f at(int x, int y) const { return pixels[size_t(y) * width + x]; }
   Vec3f sampleBilinear(Vec2f uv) const;
 };
+
+// pbrt's 2D patterns at mapped coordinates st: the checkerboard's even
+// squares, and whether st falls in a dot (pbrt-v3's DotsTexture: in each
+// unit cell a dot of radius 0.35 where the noise at the cell is positive,
+// its centre moved by noise).
+bool checkerboardEven(Vec2f st);
+bool insideDot(Vec2f st);
 
 float srgbToLinear(float encoded);
 float linearToSrgb(float linear);

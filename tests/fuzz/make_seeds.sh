@@ -72,6 +72,19 @@ printf '{"dims":[2,2,2],"format":"uint8","bricks":[{"file":"b.raw","lo":[0,0,0],
 python3 -c "import sys; sys.stdout.buffer.write(bytes(range(0, 27 * 9, 9)))" > "$work/vol.raw"
 "$ferry" partition "raw:$work/vol.raw?dims=3,3,3&format=uint8" --volume-bricks 2 --ranks 2 -o "$work/bricked" -q
 cp "$work"/bricked/part-0000.fpart "$corpus/part/bricks-0.fpart"
+# A combined texture (format 11): a mix of constants by an fbm, scaled by wrinkled.
+cat > "$work/combined.pbrt" << 'PBRT'
+WorldBegin
+Texture "n" "float" "fbm" "integer octaves" 2
+Texture "w" "float" "wrinkled" "integer octaves" 2
+Texture "m" "spectrum" "mix" "texture amount" "n" "rgb tex1" [1 0 0] "rgb tex2" [0 0 1]
+Texture "s" "spectrum" "scale" "texture tex1" "m" "texture tex2" "w"
+Material "matte" "texture Kd" "s"
+Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2]
+WorldEnd
+PBRT
+"$ferry" partition "$work/combined.pbrt" --ranks 1 -o "$work/combined" -q
+cp "$work"/combined/part-0000.fpart "$corpus/part/combined-texture-0.fpart"
 fresh tf && cp tests/corpus/volumes/*.tf.json "$corpus/tf/"
 fresh vdb && cp tests/corpus/volumes/*.vdb "$corpus/vdb/"
 echo "seeds in $corpus: $(ls "$corpus" | tr '\n' ' ')"

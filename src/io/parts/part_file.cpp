@@ -46,12 +46,13 @@ static_assert(std::is_trivially_copyable_v<Affine3f> && sizeof(Affine3f) == 48);
 static_assert(sizeof(Material) == 112,
               "Material changed: update part_file.cpp and kPartFormatVersion");
 // (Mesh::stored is not written: a part holds its meshes' arrays; 136 before
-// it; the arrays became SharedArrays at 392, and 192 for Texture, same fields.
+// it; the arrays became SharedArrays at 392, and 192 for Texture, same
+// fields; Texture is 296 with its combination.
 // Mesh::media is not written either: part files refuse scenes with media.)
 static_assert(sizeof(Mesh) == 400, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 88,
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(Texture) == 192,
+static_assert(sizeof(Texture) == 296,
               "Texture changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Affine3f) == 48,
               "Affine3f changed: update part_file.cpp and kPartFormatVersion");
@@ -198,6 +199,14 @@ void writeTexture(FileWriter& w, const Texture& t) {
   w.pod(t.solid.omega);
   w.pod(t.solid.scale);
   w.pod(t.solid.variation);
+  w.pod(uint8_t(t.combination));
+  w.pod(t.mapping);
+  for (const TextureOperand& o : t.operands) {
+    w.pod(o.constant);
+    w.pod(o.part);
+  }
+  w.pod(uint32_t(t.parts.size()));
+  for (const Texture& part : t.parts) writeTexture(w, part);
 }
 
 void writeMesh(FileWriter& w, const Mesh& m, int32_t material) {
@@ -634,7 +643,11 @@ std::shared_ptr<const FourierBsdfTable> readBsdfTable(FileReader& r) {
   return t;
 }
 
-Texture readTexture(FileReader& r) {
+// A combined texture's parts nest at most this deep.
+constexpr int kMaxTextureDepth = 32;
+
+Texture readTexture(FileReader& r, int depth = 0) {
+  if (depth > kMaxTextureDepth) r.fail("textures nested too deeply");
   Texture t;
   t.name = r.str();
   t.width = r.pod<int32_t>();
@@ -656,6 +669,22 @@ Texture readTexture(FileReader& r) {
     t.solid.omega = r.pod<float>();
     t.solid.scale = r.pod<float>();
     t.solid.variation = r.pod<float>();
+  }
+  if (r.version() >= 11) {  // older: no combinations
+    const uint8_t combination = r.pod<uint8_t>();
+    if (combination > uint8_t(TextureCombination::Bilerp)) r.fail("bad texture combination");
+    t.combination = TextureCombination(combination);
+    t.mapping = r.pod<Vec4f>();
+    for (TextureOperand& o : t.operands) {
+      o.constant = r.pod<Vec3f>();
+      o.part = r.pod<int32_t>();
+      if (!isFinite(o.constant)) r.fail("non-finite texture constant");
+    }
+    const uint32_t parts = r.pod<uint32_t>();
+    if (parts > t.operands.size()) r.fail("too many texture parts");
+    for (uint32_t i = 0; i < parts; ++i) t.parts.push_back(readTexture(r, depth + 1));
+    for (const TextureOperand& o : t.operands)
+      if (o.part < -1 || o.part >= int32_t(parts)) r.fail("texture operand out of range");
   }
   return t;
 }

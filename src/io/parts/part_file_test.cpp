@@ -56,7 +56,16 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
            x.srgb == y.srgb && sameBytes(x.rgba, y.rgba) && x.solid.kind == y.solid.kind &&
            std::memcmp(&x.solid.worldToTexture, &y.solid.worldToTexture, sizeof(Affine3f)) == 0 &&
            x.solid.octaves == y.solid.octaves && x.solid.omega == y.solid.omega &&
-           x.solid.scale == y.solid.scale && x.solid.variation == y.solid.variation;
+           x.solid.scale == y.solid.scale && x.solid.variation == y.solid.variation &&
+           x.combination == y.combination && x.parts.size() == y.parts.size() &&
+           [&] {  // the same values everywhere: operands and parts alike
+             for (int i = 0; i < 64; ++i) {
+               const Vec2f uv{float(i % 8) / 8 + 0.03f, float(i / 8) / 8 + 0.07f};
+               const Vec3f p{0.31f * float(i), 0.17f * float(i % 5), 0.05f};
+               if (!(x.value(uv, p) == y.value(uv, p))) return false;
+             }
+             return true;
+           }();
   };
   // The same model with the same parameters: the same record.
   auto record = [](const Material& m) {
@@ -71,7 +80,7 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
          a.normalScale == b.normalScale && a.mixAmount == b.mixAmount &&
          (a.mixedWith < 0) == (b.mixedWith < 0) &&
          sameTexture(a.baseColorTexture, b.baseColorTexture) &&
-         sameTexture(a.alphaTexture, b.alphaTexture);
+         sameTexture(a.alphaTexture, b.alphaTexture) && sameTexture(a.bumpTexture, b.bumpTexture);
 }
 
 // The loaded part holds exactly the listed instances of `scene`, bit for bit.
@@ -136,6 +145,23 @@ Written writeDirectory(const std::string& dir, const std::string& partitioner, i
   marble.solid.variation = 0.25f;
   coated.baseColorTexture = int32_t(w.scene.textures.size());
   w.scene.textures.push_back(marble);
+  // Its bump map a combination (format 11): a checkerboard of the marble and an image.
+  Texture image;
+  image.name = "image";
+  image.width = 2;
+  image.height = 1;
+  image.rgba = {10, 20, 30, 255, 200, 100, 50, 255};
+  Texture checker;
+  checker.name = "checker";
+  checker.combination = TextureCombination::Checkerboard;
+  checker.mapping = {4, 3, 0.5f, 0.25f};
+  checker.parts = {marble, image};
+  checker.operands[0].part = 1;
+  checker.operands[1].part = 0;
+  checker.operands[2].constant = {0.1f, 0.2f, 0.3f};
+  coated.bumpTexture = int32_t(w.scene.textures.size());
+  coated.bumpScale = 0.5f;
+  w.scene.textures.push_back(checker);
   // Mixed with another material, which the part keeps with it.
   coated.mixedWith = int32_t(w.scene.materials.size()) - 1;
   coated.mixAmount = 0.3f;

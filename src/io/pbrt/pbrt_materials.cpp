@@ -24,9 +24,10 @@
 namespace ferry {
 namespace {
 
-constexpr int kMaxDepth = 32;       // nested textures and mixed materials
-constexpr int kMaxBakeSide = 2048;  // texels per side of a baked texture
-constexpr int kAverageGrid = 64;    // samples per side when averaging a texture
+constexpr int kMaxDepth = 32;        // nested textures and mixed materials
+constexpr int kMaxBakeSide = 2048;   // texels per side of a baked texture
+constexpr int kAverageGrid = 64;     // samples per side when averaging a texture
+constexpr float kAverageSpace = 64;  // side of the cube a solid texture is averaged over
 // Texture-tree evaluations for one bake: 8 per texel of the largest texture.
 constexpr uint64_t kMaxEvaluations = uint64_t(8) * kMaxBakeSide * kMaxBakeSide;
 
@@ -86,7 +87,9 @@ struct PbrtMaterials::Impl {
   std::map<std::string, int32_t> named;
   std::map<std::tuple<int32_t, float, float, float, int32_t, bool, bool>, int32_t> ferryMaterials;
   std::map<std::string, std::shared_ptr<const ImageData>> images;
-  std::map<std::string, int32_t> bakedColor, bakedAlpha, solidTextures;
+  std::map<std::string, int32_t> bakedColor, bakedAlpha;
+  std::map<const PbrtTextureDefinition*, int32_t> pointTextures_;
+  std::map<const PbrtTextureDefinition*, bool> solidUse_;
   std::map<std::string, std::pair<int32_t, float>> bakedBump;
   std::map<int32_t, int32_t> mixTargets;  // definition -> its scene material
   std::map<std::string, float> averages;
@@ -339,11 +342,9 @@ struct PbrtMaterials::Impl {
   void unsupportedClass(const PbrtTextureDefinition& t) {
     if (!firstClassWarning(t)) return;
     if (solidKind(t.className) != SolidTextureKind::None) {
-      warnings.once("solid in composite|" + t.className,
-                    fmt::format("a \"{}\" texture is evaluated in 3D only where a material uses "
-                                "it as a colour or (alone or scaled) as a bump map; inside "
-                                "another texture or on a scalar it is the constant 0.5 (first "
-                                "at {})",
+      warnings.once("solid cut-out|" + t.className,
+                    fmt::format("a \"{}\" texture cannot cut out shapes (Ferry's alpha is "
+                                "looked up over uv); it is the constant 0.5 there (first at {})",
                                 t.className, t.where.toString()));
       return;
     }
@@ -351,6 +352,21 @@ struct PbrtMaterials::Impl {
                   fmt::format("texture class \"{}\" is not supported; using the constant 0.5 "
                               "instead (first at {})",
                               t.className, t.where.toString()));
+  }
+
+  void warnCheckerboard3d(const PbrtTextureDefinition& t) {
+    if (t.params.getInt("dimension", 2) != 2 && firstClassWarning(t))
+      warnings.once("checkerboard3d", fmt::format("3D checkerboard textures are not supported; "
+                                                  "using the 2D one (first at {})",
+                                                  t.where.toString()));
+  }
+
+  void warnDirectionMix(const PbrtTextureDefinition& t) {
+    if (firstClassWarning(t))
+      warnings.once("directionmix", fmt::format("texture class \"directionmix\" is not "
+                                                "supported; using the mean of tex1 and tex2 "
+                                                "(first at {})",
+                                                t.where.toString()));
   }
 
   // A texture's value at uv: linear RGB; float textures give grey.
@@ -378,16 +394,10 @@ struct PbrtMaterials::Impl {
       return rgb;
     }
     if (c == "checkerboard") {
-      int dim = t.params.getInt("dimension", 2);
-      if (dim != 2 && firstClassWarning(t))
-        warnings.once("checkerboard3d", fmt::format("3D checkerboard textures are not supported; "
-                                                    "using the 2D one (first at {})",
-                                                    t.where.toString()));
+      warnCheckerboard3d(t);
       Mapping m = mappingOf(t);
-      Vec2f st = m.apply(uv);
-      bool even = (long(std::floor(st.x)) + long(std::floor(st.y))) % 2 == 0;
-      return even ? evalParam(t.params, "tex1", Vec3f(1), uv, f, depth)
-                  : evalParam(t.params, "tex2", Vec3f(0), uv, f, depth);
+      return checkerboardEven(m.apply(uv)) ? evalParam(t.params, "tex1", Vec3f(1), uv, f, depth)
+                                           : evalParam(t.params, "tex2", Vec3f(0), uv, f, depth);
     }
     if (c == "scale") {
       // v4: tex * scale; v3: tex1 * tex2.
@@ -403,29 +413,15 @@ struct PbrtMaterials::Impl {
                   evalParam(t.params, "tex2", Vec3f(1), uv, f, depth), amount);
     }
     if (c == "directionmix") {
-      if (firstClassWarning(t))
-        warnings.once("directionmix",
-                      fmt::format("texture class \"directionmix\" is not supported; "
-                                  "using the mean of tex1 and tex2 (first at {})",
-                                  t.where.toString()));
+      warnDirectionMix(t);
       return (evalParam(t.params, "tex1", Vec3f(0), uv, f, depth) +
               evalParam(t.params, "tex2", Vec3f(1), uv, f, depth)) *
              0.5f;
     }
     if (c == "dots") {
-      // pbrt-v3's DotsTexture: in each unit cell a dot of radius 0.35 where
-      // the noise at the cell is positive, its centre moved by noise.
-      const Vec2f st = mappingOf(t).apply(uv);
-      const float s = std::floor(st.x + 0.5f), u = std::floor(st.y + 0.5f);
-      if (perlinNoise({s + 0.5f, u + 0.5f, 0.5f}) > 0) {
-        constexpr float kRadius = 0.35f, kMaxShift = 0.5f - kRadius;
-        const float sCenter = s + kMaxShift * perlinNoise({s + 1.5f, u + 2.8f, 0.5f});
-        const float uCenter = u + kMaxShift * perlinNoise({s + 4.5f, u + 9.8f, 0.5f});
-        const float ds = st.x - sCenter, du = st.y - uCenter;
-        if (ds * ds + du * du < kRadius * kRadius)
-          return evalParam(t.params, "inside", Vec3f(1), uv, f, depth);
-      }
-      return evalParam(t.params, "outside", Vec3f(0), uv, f, depth);
+      return insideDot(mappingOf(t).apply(uv))
+                 ? evalParam(t.params, "inside", Vec3f(1), uv, f, depth)
+                 : evalParam(t.params, "outside", Vec3f(0), uv, f, depth);
     }
     if (c == "bilerp") {
       Vec2f st = mappingOf(t).apply(uv);
@@ -489,6 +485,14 @@ struct PbrtMaterials::Impl {
     const PbrtTextureDefinition& t = textureOf(p, false);
     auto it = bakedColor.find(t.name);
     if (it != bakedColor.end()) return it->second;
+    int32_t id = addTexture(bakedColorTexture(t));
+    bakedColor.emplace(t.name, id);
+    return id;
+  }
+
+  // A texture that uses no solid texture, as texels over uv: an 8-bit image
+  // as it is, or the texture baked on a grid.
+  Texture bakedColorTexture(const PbrtTextureDefinition& t) {
     Texture out;
     out.name = t.name;
     out.srgb = true;
@@ -532,9 +536,7 @@ struct PbrtMaterials::Impl {
       bakeGrid(t, out, false);
     }
     reportUnused(t.params, fmt::format("Texture \"{}\" \"{}\"", t.name, t.className));
-    int32_t id = addTexture(std::move(out));
-    bakedColor.emplace(t.name, id);
-    return id;
+    return out;
   }
 
   // The grid a texture is baked on: its images' resolution, else enough
@@ -603,9 +605,15 @@ struct PbrtMaterials::Impl {
     // the shading point (render/surface.cpp), not baked over uv.
     float factor = 1;
     if (const PbrtTextureDefinition* solid = scaledSolid(t, factor)) {
-      const int32_t id = solidTexture(*solid);
+      const int32_t id = pointTextureId(*solid);
       scale = factor;
       t.params.markAllUsed();
+      bakedBump.emplace(t.name, std::make_pair(id, scale));
+      return id;
+    }
+    if (usesSolid(t)) {  // a combination with a solid texture: also in 3D
+      const int32_t id = pointTextureId(t);
+      scale = 1;
       bakedBump.emplace(t.name, std::make_pair(id, scale));
       return id;
     }
@@ -703,11 +711,9 @@ struct PbrtMaterials::Impl {
     return SolidTextureKind::None;
   }
 
-  // A solid texture used directly as a colour: evaluated at the shading
-  // point (scene/solid_texture.h), one Ferry texture per pbrt texture.
-  int32_t solidTexture(const PbrtTextureDefinition& t) {
-    auto found = solidTextures.find(t.name);
-    if (found != solidTextures.end()) return found->second;
+  // A solid texture as a Ferry texture, evaluated at the shading point
+  // (scene/solid_texture.h).
+  Texture solidTextureOf(const PbrtTextureDefinition& t) {
     Texture texture;
     texture.name = t.className + " \"" + t.name + "\"";
     SolidTexture& s = texture.solid;
@@ -724,9 +730,121 @@ struct PbrtMaterials::Impl {
     s.omega = t.params.getFloat("roughness", 0.5f);
     s.scale = t.params.getFloat("scale", 1);
     s.variation = t.params.getFloat("variation", 0.2f);
-    const int32_t index = int32_t(scene.textures.size());
-    scene.textures.push_back(std::move(texture));
-    solidTextures.emplace(t.name, index);
+    return texture;
+  }
+
+  // Whether `t` is or uses a solid texture: then it is evaluated at the
+  // shading point (pointTexture), not baked over uv.
+  bool usesSolid(const PbrtTextureDefinition& t, int depth = 0) {
+    if (solidKind(t.className) != SolidTextureKind::None) return true;
+    if (depth > kMaxDepth) return false;
+    auto [known, inserted] = solidUse_.emplace(&t, false);  // false while being decided
+    if (!inserted) return known->second;
+    bool uses = false;
+    for (const PbrtParam& p : t.params.all())
+      if (p.type == "texture" && p.strings.size() == 1)
+        if (const PbrtTextureDefinition* sub = findTexture(p.strings[0], t.isFloat))
+          uses = uses || usesSolid(*sub, depth + 1);
+    solidUse_[&t] = uses;
+    return uses;
+  }
+
+  // A texture that is or uses a solid texture, as one Ferry texture
+  // evaluated at the shading point: the solid texture, or a combination
+  // whose operands are constants, baked textures (those that use no solid
+  // texture) and such textures in turn.
+  Texture pointTexture(const PbrtTextureDefinition& t, int depth) {
+    if (depth > kMaxDepth)
+      throw InputError(t.where, fmt::format("texture \"{}\": textures nested more than {} deep "
+                                            "(a texture that uses itself?)",
+                                            t.name, kMaxDepth));
+    if (solidKind(t.className) != SolidTextureKind::None) return solidTextureOf(t);
+    Texture out;
+    out.name = t.className + " \"" + t.name + "\"";
+    auto operand = [&](int i, const char* name, Vec3f fallback, bool floatContext) {
+      TextureOperand& o = out.operands[size_t(i)];
+      o.constant = fallback;
+      const PbrtParam* p = t.params.find(name);
+      if (!p) return;
+      if (p->type != "texture") {
+        o.constant = colorValue(*p, SpectrumUse::Reflectance);
+        return;
+      }
+      const PbrtTextureDefinition& sub = textureOf(*p, floatContext);
+      if (usesSolid(sub)) {
+        o.part = int32_t(out.parts.size());
+        out.parts.push_back(pointTexture(sub, depth + 1));
+      } else if (sub.className == "constant") {
+        evaluations_ = 0;
+        o.constant = eval(sub, {0.5f, 0.5f}, 0);
+      } else {
+        o.part = int32_t(out.parts.size());
+        out.parts.push_back(bakedColorTexture(sub));
+      }
+    };
+    auto mapped = [&] {
+      const Mapping m = mappingOf(t);
+      out.mapping = {m.su, m.sv, m.du, m.dv};
+    };
+    const std::string& c = t.className;
+    const bool f = t.isFloat;
+    if (c == "scale") {
+      out.combination = TextureCombination::Scale;
+      if (t.params.has("tex1") || t.params.has("tex2")) {  // v3: tex1 * tex2
+        operand(0, "tex1", Vec3f(1), f);
+        operand(1, "tex2", Vec3f(1), f);
+      } else {  // v4: tex * scale
+        operand(0, "tex", Vec3f(1), f);
+        operand(1, "scale", Vec3f(1), true);
+      }
+    } else if (c == "mix" || c == "directionmix") {
+      out.combination = TextureCombination::Mix;
+      operand(0, "tex1", Vec3f(0), f);
+      operand(1, "tex2", Vec3f(1), f);
+      out.operands[2].constant = Vec3f(0.5f);
+      if (c == "mix")
+        operand(2, "amount", Vec3f(0.5f), true);
+      else
+        warnDirectionMix(t);
+    } else if (c == "checkerboard") {
+      out.combination = TextureCombination::Checkerboard;
+      warnCheckerboard3d(t);
+      mapped();
+      operand(0, "tex1", Vec3f(1), f);
+      operand(1, "tex2", Vec3f(0), f);
+    } else if (c == "dots") {
+      out.combination = TextureCombination::Dots;
+      mapped();
+      operand(0, "inside", Vec3f(1), f);
+      operand(1, "outside", Vec3f(0), f);
+    } else if (c == "bilerp") {
+      out.combination = TextureCombination::Bilerp;
+      mapped();
+      operand(0, "v00", Vec3f(0), f);
+      operand(1, "v01", Vec3f(1), f);
+      operand(2, "v10", Vec3f(0), f);
+      operand(3, "v11", Vec3f(1), f);
+    } else {  // constant (of a texture), or a class that cannot hold one
+      out.combination = TextureCombination::Scale;
+      out.operands[1].constant = Vec3f(1);
+      if (c == "constant") {
+        operand(0, "value", Vec3f(1), f);
+      } else {
+        unsupportedClass(t);
+        t.params.markAllUsed();
+        out.operands[0].constant = Vec3f(0.5f);
+      }
+    }
+    reportUnused(t.params, fmt::format("Texture \"{}\" \"{}\"", t.name, t.className));
+    return out;
+  }
+
+  // pointTexture(t) in the scene, once per definition.
+  int32_t pointTextureId(const PbrtTextureDefinition& t) {
+    auto found = pointTextures_.find(&t);
+    if (found != pointTextures_.end()) return found->second;
+    const int32_t index = addTexture(pointTexture(t, 0));
+    pointTextures_.emplace(&t, index);
     return index;
   }
 
@@ -740,7 +858,7 @@ struct PbrtMaterials::Impl {
           evaluations_ = 0;
           return {eval(t, {0.5f, 0.5f}, 0)};
         }
-        if (solidKind(t.className) != SolidTextureKind::None) return {Vec3f(1), solidTexture(t)};
+        if (usesSolid(t)) return {Vec3f(1), pointTextureId(t)};
         return {Vec3f(1), bakeColor(*p)};
       }
       return {colorValue(*p, SpectrumUse::Reflectance)};
@@ -759,9 +877,23 @@ struct PbrtMaterials::Impl {
                                 p.declaration(), p.name, p.where.toString()));
     double sum = 0;
     evaluations_ = 0;
-    for (int y = 0; y < kAverageGrid; ++y)
-      for (int x = 0; x < kAverageGrid; ++x)
-        sum += average(eval(t, {(x + 0.5f) / kAverageGrid, (y + 0.5f) / kAverageGrid}, 0));
+    if (usesSolid(t)) {
+      // Over uv and over points of a cube of space (kAverageSpace a side,
+      // Roberts' R3 sequence): solid textures vary in space.
+      const Texture point = pointTexture(t, 0);
+      const Vec3f step{0.8191725f, 0.6710436f, 0.5497005f};
+      for (int i = 0; i < kAverageGrid * kAverageGrid; ++i) {
+        const Vec2f uv{(i % kAverageGrid + 0.5f) / kAverageGrid,
+                       (i / kAverageGrid + 0.5f) / kAverageGrid};
+        Vec3f r = Vec3f(0.5f) + step * float(i);
+        r = r - Vec3f(std::floor(r.x), std::floor(r.y), std::floor(r.z));
+        sum += average(point.value(uv, r * kAverageSpace));
+      }
+    } else {
+      for (int y = 0; y < kAverageGrid; ++y)
+        for (int x = 0; x < kAverageGrid; ++x)
+          sum += average(eval(t, {(x + 0.5f) / kAverageGrid, (y + 0.5f) / kAverageGrid}, 0));
+    }
     float value = float(sum / (kAverageGrid * kAverageGrid));
     averages.emplace(t.name, value);
     return value;

@@ -995,6 +995,74 @@ TEST(PbrtParser, ScaledSolidBumpMapsAreEvaluatedInTheirSpace) {
   EXPECT_FLOAT_EQ(bumped("Film \"rgb\"\n"), 0.1f);  // v4: its inverse
 }
 
+// Solid textures inside other textures and on scalars are evaluated in
+// space, not the constant 0.5: a mix of two colours by an fbm, a scale of
+// wrinkled by an image-free checkerboard, a bump map mixing two solids, and
+// a roughness averaged over space.
+TEST(PbrtParser, SolidTexturesInsideOtherTexturesAreEvaluatedInSpace) {
+  std::vector<std::string> warnings;
+  const Scene scene = fromText(
+      "WorldBegin\nTexture \"n\" \"float\" \"fbm\" \"integer octaves\" 3\n"
+      "Texture \"w\" \"float\" \"wrinkled\"\n"
+      "Texture \"c\" \"spectrum\" \"mix\" \"texture amount\" \"n\" \"rgb tex1\" [1 0 0] "
+      "\"rgb tex2\" [0 0 1]\n"
+      "Texture \"k\" \"float\" \"checkerboard\" \"float uscale\" 4 \"float vscale\" 4 "
+      "\"float tex1\" 0.25 \"float tex2\" 0.75\n"
+      "Texture \"s\" \"float\" \"scale\" \"texture tex1\" \"w\" \"texture tex2\" \"k\"\n"
+      "Texture \"b\" \"float\" \"mix\" \"texture tex1\" \"n\" \"texture tex2\" \"w\" "
+      "\"float amount\" 0.25\n"
+      "Texture \"sigma\" \"float\" \"scale\" \"texture tex1\" \"w\" \"float tex2\" 20\n"
+      "Material \"plastic\" \"texture Kd\" \"c\" \"texture bumpmap\" \"b\"\nShape \"trianglemesh\" "
+      "\"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer "
+      "indices\" [0 1 2]\n"
+      "Material \"matte\" \"texture Kd\" \"s\" \"texture sigma\" \"sigma\"\nShape \"trianglemesh\" "
+      "\"point3 P\" [0 0 1 1 "
+      "0 1 0 1 1] \"integer indices\" [0 1 2]\nWorldEnd\n",
+      &warnings);
+  EXPECT_FALSE(anyContains(warnings, "constant 0.5"));
+  ASSERT_EQ(scene.meshes.size(), 2u);
+  const Material& plastic = scene.materials.at(size_t(scene.meshes[0].material));
+  const Material& matte = scene.materials.at(size_t(scene.meshes[1].material));
+
+  SolidTexture fbm;
+  fbm.kind = SolidTextureKind::Fbm;
+  fbm.octaves = 3;
+  SolidTexture wrinkled;
+  wrinkled.kind = SolidTextureKind::Wrinkled;
+  const Texture& mix = scene.textures.at(size_t(plastic.baseColorTexture));
+  EXPECT_EQ(mix.combination, TextureCombination::Mix);
+  const Texture& scaled = scene.textures.at(size_t(matte.baseColorTexture));
+  EXPECT_EQ(scaled.combination, TextureCombination::Scale);
+  const Texture& bump = scene.textures.at(size_t(plastic.bumpTexture));
+  EXPECT_EQ(bump.combination, TextureCombination::Mix);
+  EXPECT_EQ(plastic.bumpScale, 1.0f);
+  float lowest = 1, highest = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Vec3f p{0.37f * float(i), 0.11f * float(i % 17), 0.05f * float(i % 5)};
+    const Vec2f uv{float(i % 10) / 10 + 0.01f, float(i / 10 % 10) / 10 + 0.02f};
+    const float n = fbm.evaluate(p).x, w = wrinkled.evaluate(p).x;
+    const Vec3f c = mix.value(uv, p);
+    EXPECT_NEAR(c.x, 1 - n, 1e-5f);
+    EXPECT_NEAR(c.z, n, 1e-5f);
+    lowest = std::min(lowest, n);
+    highest = std::max(highest, n);
+    const float check = checkerboardEven(uv * 4) ? 0.25f : 0.75f;
+    EXPECT_NEAR(scaled.value(uv, p).x, w * check, 0.005f * w);  // the checkerboard baked in 8 bits
+    EXPECT_NEAR(bump.value(uv, p).x, 0.75f * n + 0.25f * w, 1e-5f);
+  }
+  EXPECT_GT(highest - lowest, 0.3f);
+  // Oren-Nayar's sigma is 20 times turbulence's mean over space, not 20 x 0.5.
+  double sum = 0;
+  constexpr int kPoints = 20000;
+  for (int i = 0; i < kPoints; ++i)
+    sum += wrinkled.evaluate(Vec3f(float(i % 97), float(i % 89), float(i % 83)) * 0.6597f).x;
+  const float mean = float(sum / kPoints);
+  EXPECT_GT(std::abs(mean - 0.5f), 0.05f);
+  const auto* diffuse = modelAs<DiffuseModel>(matte);
+  ASSERT_NE(diffuse, nullptr);
+  EXPECT_NEAR(diffuse->sigmaDegrees, 20 * mean, 0.4f);
+}
+
 TEST(PbrtParser, DotsAreBakedAsPbrtV3Draws) {
   const Scene scene = fromText(
       "WorldBegin\nTexture \"d\" \"color\" \"dots\" \"rgb inside\" [1 0 0] \"rgb outside\" [0 0 1] "
