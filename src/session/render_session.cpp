@@ -26,6 +26,7 @@
 #include "media/volume_look.h"
 #include "partition/partition.h"
 #include "path/path.h"
+#include "render/camera.h"
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
 #include "session/partitioned_scene.h"
@@ -783,7 +784,10 @@ class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy
     const int oldWidth = render.imageWidth(), oldHeight = render.imageHeight();
     change.applyTo(*render.camera, render);
     if (change.flags & ViewChange::kVolume) session_.applyVolumeLook(render.volumeLook);
-    if (change.flags & (ViewChange::kCamera | ViewChange::kSettings | ViewChange::kVolume)) {
+    if (change.flags & ViewChange::kFocus) focusAt(change.focusX, change.focusY, render);
+    constexpr uint32_t kRestart =
+        ViewChange::kCamera | ViewChange::kSettings | ViewChange::kVolume | ViewChange::kFocus;
+    if (change.flags & kRestart) {
       if (render.imageWidth() != oldWidth || render.imageHeight() != oldHeight)
         frames.buffer = FrameBuffer(render.imageWidth(), render.imageHeight());
       else
@@ -793,6 +797,24 @@ class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy
     }
     frames.frame = accumulated_;
     return true;
+  }
+
+  // A focus pick: the focal distance becomes the distance along the view
+  // axis to the nearest hit of the camera's centre ray through image point
+  // (x, y), the nearest over every rank's geometry (collective).
+  void focusAt(float x, float y, RenderSettings& render) {
+    const FilmWindow window = render.window();
+    const Camera camera(*render.camera, window);
+    const Vec3f direction = camera.direction(float(window.x0) + x * float(window.width),
+                                             float(window.y0) + y * float(window.height));
+    double nearest = kInfinity;
+    if (rank_.geometry) {
+      const TraceHit hit = rank_.geometry->intersect({camera.origin(), direction});
+      if (hit.valid()) nearest = hit.t;
+    }
+    nearest = -comm_.max(-nearest);
+    const double along = nearest * double(camera.cosToAxis(direction));
+    if (std::isfinite(along) && along > 0) render.camera->focalDistance = float(along);
   }
 
   // A long frame goes through in slices of about `sliceSeconds` (judged by

@@ -103,11 +103,22 @@ using SessionProgress = std::function<void(const RenderProgress&)>;
 // frame boundary (rank 0's is broadcast: plain data). Any change but the
 // exposure restarts the accumulation.
 struct ViewChange {
-  enum : uint32_t { kCamera = 1, kSettings = 2, kExposure = 4, kQuit = 8, kVolume = 16 };
+  enum : uint32_t {
+    kCamera = 1,
+    kSettings = 2,
+    kExposure = 4,
+    kQuit = 8,
+    kVolume = 16,
+    kFocus = 32
+  };
   uint32_t flags = 0;
   float from[3], at[3], up[3];
   float fovY;
   float lensRadius, focalDistance;  // the thin lens (CameraView)
+  // kFocus: focus on the nearest surface under this point of the image
+  // (fractions of its width and height, y down), found over every rank's
+  // geometry after the other changes; the focal distance stays where none is.
+  float focusX, focusY;
   int32_t width, height, samplesPerPixel, maxDepth;
   float exposure;
   float volumeOpacity;

@@ -19,8 +19,10 @@
 #include "io/volumes/volume_files.h"
 #include "media/volume_look.h"
 #include "partition/partitioner.h"
+#include "render/camera.h"
 #include "scene/light_scene.h"
 #include "session/session_stats.h"
+#include "trace/reference_backend.h"
 
 namespace ferry {
 namespace {
@@ -461,6 +463,60 @@ TEST(RenderSession, InteractiveAccumulatesAbandonsForAChangeAndQuits) {
   EXPECT_EQ(control.published[2].fromX, control.camera.from.x + 40);
   EXPECT_EQ(control.published[3].abandoned, 0u);
   EXPECT_EQ(control.published[4].accumulated, 3);
+}
+
+// Asks for a focus pick at the image's centre before the second frame and
+// records each frame's focal distance; quits after three.
+class FocusControl final : public InteractiveControl {
+ public:
+  ViewChange takeChange() override {
+    ViewChange change;
+    if (taken++ == 1) {
+      change.flags = ViewChange::kFocus;
+      change.focusX = 0.5f;
+      change.focusY = 0.5f;
+    }
+    if (published.size() == 3) change.flags |= ViewChange::kQuit;
+    return change;
+  }
+  bool restartPending() override { return false; }
+  void publish(const InteractiveFrame& frame) override {
+    published.push_back(frame.camera.focalDistance);
+    accumulated.push_back(frame.accumulated);
+  }
+  int taken = 0;
+  std::vector<float> published;
+  std::vector<int> accumulated;
+};
+
+// A focus pick (the viewer's double-click) sets the focal distance to the
+// nearest surface under the point, along the view axis, over every rank's
+// geometry: what a trace of the whole scene finds, on 1 rank and on 3.
+TEST(RenderSession, AFocusPickFocusesOnTheNearestSurfaceOverEveryRank) {
+  SessionSettings settings = cornellSettings();
+  settings.render.samplesPerPixel = 1;
+  settings.render.maxDepth = 1;
+  const Scene scene = loadScene("builtin:cornell");
+  const auto whole = makeReferenceBackend(scene);
+  const Camera camera(scene.views.at(0), settings.render.width, settings.render.height);
+  const Vec3f direction =
+      camera.direction(0.5f * float(settings.render.width), 0.5f * float(settings.render.height));
+  const TraceHit hit = whole->intersect({camera.origin(), direction});
+  ASSERT_TRUE(hit.valid());
+  const float expected = hit.t * camera.cosToAxis(direction);
+  for (int ranks : {1, 3}) {
+    SCOPED_TRACE(ranks);
+    FocusControl control;
+    runRanks(ranks, [&](const Communicator& comm) {
+      RenderSession session(settings, comm);
+      session.runInteractive(comm.isRoot() ? &control : nullptr, 10, /*sliceSeconds=*/0);
+    });
+    ASSERT_EQ(control.published.size(), 3u);
+    EXPECT_GT(std::abs(control.published[0] - expected), 1.0f);
+    EXPECT_NEAR(control.published[1], expected, 1e-3f * expected);
+    EXPECT_EQ(control.published[2], control.published[1]);
+    EXPECT_EQ(control.accumulated, (std::vector<int>{1, 1, 2}));  // the pick restarts
+  }
 }
 
 }  // namespace

@@ -103,6 +103,17 @@ void applyCameraRequest(const std::string& body, const CameraView& current, View
   setCamera(c, change);
 }
 
+void applyFocusRequest(const std::string& body, ViewChange& change) {
+  const nlohmann::json j = parseObject(body, {"x", "y"});
+  if (!j.contains("x") || !j.contains("y")) throw RequestError("'x' and 'y' are required");
+  const double x = finiteNumber(j, "x"), y = finiteNumber(j, "y");
+  if (!(x >= 0 && x <= 1 && y >= 0 && y <= 1))
+    throw RequestError("'x' and 'y' must be fractions of the image, in [0, 1]");
+  change.focusX = float(x);
+  change.focusY = float(y);
+  change.flags |= ViewChange::kFocus;
+}
+
 void applySettingsRequest(const std::string& body, const RenderSettings& current,
                           const std::vector<CameraView>& views, const ViewLimits& limits,
                           ViewChange& change) {

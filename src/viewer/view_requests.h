@@ -1,4 +1,4 @@
-// The viewer's API requests, checked: POST /camera and POST /settings bodies
+// The viewer's API requests, checked: POST /camera, /focus and /settings bodies
 // parsed into a ViewChange (session/render_session.h). Pure functions, so
 // the malformed-input corpus is a unit test; the server answers 400 with
 // the message of a RequestError, and no rank ever sees a bad value.
@@ -33,6 +33,10 @@ struct ViewLimits {
 // {"from":[x,y,z],"at":[x,y,z],"up":[x,y,z],"fov":degrees}: from and at are
 // required; up and fov keep `current`'s when absent. Adds kCamera to `change`.
 void applyCameraRequest(const std::string& body, const CameraView& current, ViewChange& change);
+
+// {"x":fraction,"y":fraction}: focus on the nearest surface under that point
+// of the image (y down), both required, in [0, 1]. Adds kFocus to `change`.
+void applyFocusRequest(const std::string& body, ViewChange& change);
 
 // {"width":W,"height":H,"spp":N,"max_depth":D,"exposure":stops,"view":"name",
 // "volume_opacity":scale,"color_map":"name"}: every field optional; a field

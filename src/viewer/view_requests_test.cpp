@@ -1,4 +1,4 @@
-// The viewer's request corpus: every malformed camera or settings body gets
+// The viewer's request corpus: every malformed camera, focus or settings body gets
 // a RequestError with a reason and leaves the change untouched; good ones
 // become exactly the change they ask for.
 #include "viewer/view_requests.h"
@@ -104,6 +104,40 @@ TEST(ViewRequests, MalformedCamerasAreRefusedWithAReason) {
     ViewChange change;
     try {
       applyCameraRequest(body, current(), change);
+      ADD_FAILURE() << "accepted: " << body;
+    } catch (const RequestError& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
+          << body << " -> " << e.what();
+    }
+    EXPECT_EQ(change.flags, 0u) << body;
+  }
+}
+
+TEST(ViewRequests, AFocusPickBecomesTheChange) {
+  ViewChange change;
+  applyFocusRequest(R"({"x":0.25,"y":1})", change);
+  EXPECT_EQ(change.flags, ViewChange::kFocus);
+  EXPECT_EQ(change.focusX, 0.25f);
+  EXPECT_EQ(change.focusY, 1.0f);
+}
+
+TEST(ViewRequests, MalformedFocusPicksAreRefusedWithAReason) {
+  const std::vector<std::pair<std::string, std::string>> corpus = {
+      {"", "empty"},
+      {"{", "not valid JSON"},
+      {"[0.5, 0.5]", "JSON object"},
+      {R"({"x":0.5})", "are required"},
+      {R"({"y":0.5})", "are required"},
+      {R"({"x":"0.5","y":0.5})", "must be a number"},
+      {R"({"x":0.5,"y":-0.01})", "in [0, 1]"},
+      {R"({"x":1.5,"y":0.5})", "in [0, 1]"},
+      {R"({"x":0.5,"y":1e999})", "not valid JSON"},  // out of double's range
+      {R"({"x":0.5,"y":0.5,"z":1})", "unknown field 'z'"},
+  };
+  for (const auto& [body, reason] : corpus) {
+    ViewChange change;
+    try {
+      applyFocusRequest(body, change);
       ADD_FAILURE() << "accepted: " << body;
     } catch (const RequestError& e) {
       EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)

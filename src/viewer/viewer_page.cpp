@@ -35,7 +35,7 @@ const std::string& viewerPage() {
 <div id="side">
   <h1>Ferry</h1>
   <div class="hint">Drag: orbit. Shift-drag or right-drag: pan. Wheel or pinch: zoom.
-    W A S D, Q E: fly. One finger: orbit, two: zoom.</div>
+    W A S D, Q E: fly. One finger: orbit, two: zoom. Double-click: focus there.</div>
   <h2>View</h2>
   <label>named view <select id="views"></select></label>
   <h2>Settings</h2>
@@ -215,6 +215,17 @@ $("lensApply").addEventListener("click", () => {
   camera.focal_distance = Number($("focus").value);
   sendCamera();
 });
+// Double-click: focus on the surface under the pointer (the ranks find it).
+// The point as fractions of the image, which object-fit may letterbox.
+view.addEventListener("dblclick", (e) => {
+  if (!img.naturalWidth) return;
+  const r = img.getBoundingClientRect();
+  const scale = Math.min(r.width / img.naturalWidth, r.height / img.naturalHeight);
+  const w = img.naturalWidth * scale, h = img.naturalHeight * scale;
+  const x = (e.clientX - r.left - (r.width - w) / 2) / w, y = (e.clientY - r.top - (r.height - h) / 2) / h;
+  if (x < 0 || x > 1 || y < 0 || y > 1) return;
+  post("/focus", { x, y });
+});
 $("focusCentre").addEventListener("click", () => {
   if (!camera) return;
   camera.focal_distance = len(sub(camera.at, camera.from));
@@ -232,8 +243,9 @@ const count = (n) => n >= 1e6 ? (n / 1e6).toFixed(2) + " M" : n >= 1e3 ? (n / 1e
 function showStats(s) {
   const requested = s.requested;
   if (!camera || !cameraDirty) camera = requested.camera;
+  // The lens fields follow the camera (a focus pick changes it) unless being edited.
+  if (![$("lens"), $("focus")].includes(document.activeElement)) showLens();
   if (!settingsShown) {
-    showLens();
     const st = requested.settings;
     $("width").value = st.width; $("height").value = st.height; $("spp").value = st.spp;
     $("depth").value = st.max_depth; $("exposure").value = st.exposure;

@@ -11,6 +11,7 @@
 #include <csignal>
 #include <mutex>
 #include <thread>
+#include <utility>
 
 #include "core/error.h"
 #include "io/images/image_io.h"
@@ -72,6 +73,9 @@ struct ViewerServer::State {
   ViewChange pending;
   CameraView requestedCamera;
   RenderSettings requestedSettings;
+  // A focus pick was taken: the next published frame's focal distance
+  // becomes the requested one (only the session knows what the pick found).
+  bool focusTaken = false;
   // The last published frame.
   std::string png;
   uint64_t frameId = 0;
@@ -200,6 +204,12 @@ void ViewerServer::State::routes() {
     change(body, response,
            [&](const std::string& b, ViewChange& c) { applyCameraRequest(b, requestedCamera, c); });
   });
+  server.Post("/focus", [this](const httplib::Request& request, httplib::Response& response,
+                               const Reader& reader) {
+    std::string body;
+    if (!readBody(request, response, reader, body)) return;
+    change(body, response, applyFocusRequest);
+  });
   server.Post("/settings", [this](const httplib::Request& request, httplib::Response& response,
                                   const Reader& reader) {
     std::string body;
@@ -224,7 +234,7 @@ void ViewerServer::State::routes() {
     if (response.status == 404)
       why =
           "no such endpoint (the viewer serves GET /, /frame.png and /stats, and POST "
-          "/camera, /settings and /quit)";
+          "/camera, /focus, /settings and /quit)";
     else if (response.status == 413)
       why = fmt::format("the body is over the {}-byte limit", kMaxBodyBytes);
     else if (response.status == 400)
@@ -289,13 +299,15 @@ ViewChange ViewerServer::takeChange() {
   std::lock_guard lock(state_->mutex);
   ViewChange change = state_->pending;
   if (gQuitSignal) change.flags |= ViewChange::kQuit;
+  if (change.flags & ViewChange::kFocus) state_->focusTaken = true;
   state_->pending.flags = 0;
   return change;
 }
 
 bool ViewerServer::restartPending() {
   std::lock_guard lock(state_->mutex);
-  constexpr uint32_t kRestart = ViewChange::kCamera | ViewChange::kSettings | ViewChange::kQuit;
+  constexpr uint32_t kRestart =
+      ViewChange::kCamera | ViewChange::kSettings | ViewChange::kQuit | ViewChange::kFocus;
   return gQuitSignal || (state_->pending.flags & kRestart) != 0;
 }
 
@@ -323,6 +335,8 @@ void ViewerServer::publish(const InteractiveFrame& frame) {
     std::lock_guard lock(state_->mutex);
     state_->png = std::move(png);
     state_->stats = std::move(j);
+    if (std::exchange(state_->focusTaken, false) && !(state_->pending.flags & ViewChange::kCamera))
+      state_->requestedCamera.focalDistance = frame.camera.focalDistance;
     ++state_->frameId;
   }
   state_->newFrame.notify_all();

@@ -136,8 +136,13 @@ CameraView someCamera(const char* name, Vec3f from) {
   return c;
 }
 
+// The same body as a focus pick (POST /focus: x and y) and as a camera.
 void camera(std::string_view bytes) {
   ViewChange change;
+  try {
+    applyFocusRequest(std::string(bytes), change);
+  } catch (const RequestError&) {
+  }
   applyCameraRequest(std::string(bytes), someCamera("default", Vec3f(0, 1, 5)), change);
 }
 

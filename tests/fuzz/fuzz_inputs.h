@@ -20,7 +20,7 @@ struct Kind {
 };
 
 // Every kind: pbrt, ply, obj, gltf, glb, bsdf, part, manifest, checkpoint,
-// camera (POST /camera bodies), settings (POST /settings bodies), raw (a
+// camera (POST /camera and /focus bodies), settings (POST /settings bodies), raw (a
 // raw volume's name and bytes), tf (transfer function files).
 const std::vector<Kind>& kinds();
 const Kind& kind(std::string_view name);

@@ -106,6 +106,20 @@ def check_api(base):
         fail("the image did not change with the camera")
     print(f"  camera change: frames restart ({grown['frames']} -> {after['frames']}), image changes")
 
+    # A focus pick: the ranks find the surface under the point; the focal
+    # distance they found becomes the camera's, and the frames restart.
+    before = stats(base)
+    status, _, body = request(base + "focus", "POST", json.dumps({"x": 0.5, "y": 0.5}))
+    if status != 200:
+        fail(f"POST /focus: {status} {body!r}")
+    focused = wait_for("the picked focal distance",
+                       lambda: (lambda s: s["requested"]["camera"]["focal_distance"]
+                                != before["requested"]["camera"]["focal_distance"] and s)(stats(base)))
+    distance = focused["requested"]["camera"]["focal_distance"]
+    if not 100 < distance < 3000 or focused["camera"]["focal_distance"] != distance:
+        fail(f"focus pick: focal distance {distance}, shown {focused['camera']['focal_distance']}")
+    print(f"  focus pick: focal distance {before['requested']['camera']['focal_distance']:g} -> {distance:g}")
+
     # Settings: a new size gives PNGs of that size.
     status, _, body = request(base + "settings", "POST", json.dumps({"width": 48, "height": 32, "spp": 2}))
     if status != 200:
@@ -123,6 +137,7 @@ def check_api(base):
         ("POST", "camera", '{"from":[0,0,1e999],"at":[0,0,0]}'),
         ("POST", "camera", '{"from":[1,2,3],"at":[1,2,3]}'),
         ("POST", "camera", '{"from":[0,0,1],"at":[0,0,0],"roll":3}'),
+        ("POST", "focus", '{"x":0.5}'), ("POST", "focus", '{"x":2,"y":0.5}'),
         ("POST", "settings", '{"width":1000000,"height":1000000}'),
         ("POST", "settings", '{"spp":-1}'), ("POST", "settings", '{"view":"nowhere"}'),
         ("POST", "settings", '{"exposure":"x"}'), ("POST", "settings", "\u0000\u0001"),
@@ -133,6 +148,7 @@ def check_api(base):
     ]
     # What some of them must say.
     reasons = {("POST", "camera", "{}"): b"are required",
+               ("POST", "focus", '{"x":2,"y":0.5}'): b"in [0, 1]",
                ("POST", "settings", "x" * 100000): b"over the 65536-byte limit",
                ("GET", "nowhere", None): b"no such endpoint",
                ("DELETE", "stats", None): b"no such endpoint"}
@@ -241,6 +257,16 @@ def check_browser(base, screenshot):
                          lambda: (lambda s: s["camera"]["from"] != camera_before["from"] and s)(stats(base)), 20)
         if moved["frames"] >= frames_before["frames"] + 5:
             fail(f"frames did not restart after the drag ({frames_before['frames']} -> {moved['frames']})")
+        # Double-click off the centre: the page asks for a focus pick there.
+        focus_before = stats(base)["requested"]["camera"]["focal_distance"]
+        driver.script("const r = document.getElementById('frame').getBoundingClientRect();"
+                      "document.getElementById('view').dispatchEvent(new MouseEvent('dblclick', "
+                      "{bubbles: true, clientX: r.left + r.width * 0.45, clientY: r.top + r.height * 0.55}));")
+        focused = wait_for("the double-click's focal distance",
+                           lambda: (lambda s: s["requested"]["camera"]["focal_distance"] != focus_before and s)(stats(base)), 20)
+        wait_for("the page to show it", lambda: driver.script(
+            "return Number(document.getElementById('focus').value) === Number(camera.focal_distance.toPrecision(6))"
+            " && camera.focal_distance === %r" % focused["requested"]["camera"]["focal_distance"]), 20)
         # The page shows the new camera's image.
         wait_for("the page to show the orbited image",
                  lambda: (lambda s: s and abs(s["mean"] - shown["mean"]) > 0.01 and s)(driver.script(IMAGE_STATS)), 20)
@@ -251,7 +277,8 @@ def check_browser(base, screenshot):
         with open(screenshot, "wb") as f:
             f.write(png)
         print(f"  browser: image shown (mean {shown['mean']:.0f}, spread {shown['spread']:.0f}), "
-              f"drag orbits the camera, frames restart ({frames_before['frames']} -> {moved['frames']}); "
+              f"drag orbits the camera, frames restart ({frames_before['frames']} -> {moved['frames']}), "
+              f"double-click focuses ({focus_before:g} -> {focused['requested']['camera']['focal_distance']:g}); "
               f"screenshot {screenshot}")
     finally:
         driver.close()
