@@ -39,6 +39,22 @@
 # (its FilteredStatistics(0.5, 0)). ROUNDS alternate Ferry and Embree runs so
 # a busy machine slows both alike; the figures are medians over rounds.
 #
+# Time to equal error (EQUAL_ERROR=1, the default): paths/s do not say who
+# reaches a clean image first (Embree spends 2 shadow rays a vertex where
+# Ferry spends 1). The same scenes with every Kd a quarter of its value (the
+# bunny's, which has none, 0.25 too), so that no pixel reaches the 1.0 where
+# Embree's tutorial clamps its output. For each renderer, renders at
+# ERROR_SPP samples per pixel and one at REFERENCE_SPP (its own converged
+# image; seeds differ), all as Embree's tutorial writes them (clamped to
+# [0, 1], 8 bits; Ferry's images are put through the same), and the
+# relative RMSE e of each against that
+# renderer's converged image, with t its render seconds (Ferry: --stats frame
+# seconds; Embree: 1 / its --benchmark frames/s at that spp). e sqrt(t) is
+# each renderer's error constant (the median over ERROR_SPP); the time Ferry
+# needs for Embree's error is (constant_Ferry / constant_Embree)^2 of
+# Embree's (< 1: Ferry gets there first). The RMSE between the two converged
+# images says whether both converge to the same image.
+#
 # What differs (so compare paths/s, and read rays/s with care): Embree samples
 # every light at every vertex (2 shadow rays with sun + sky), Ferry picks one
 # (1 shadow ray) and, with --retrace all only, re-traces each hit it shades
@@ -60,6 +76,9 @@ RETRACE=${RETRACE:-remote}
 BASELINE=${BASELINE:-}
 FERRY_ARGS=${FERRY_ARGS:-}
 EMBREE_INSTANCING=${EMBREE_INSTANCING:-}
+EQUAL_ERROR=${EQUAL_ERROR:-1}
+ERROR_SPP=${ERROR_SPP:-4 16 64}
+REFERENCE_SPP=${REFERENCE_SPP:-1024}
 modes=$RETRACE
 if [ -n "$BASELINE" ]; then BASELINE=$(realpath "$BASELINE"); modes="baseline $RETRACE"; fi
 width=${SIZE%x*}
@@ -71,6 +90,12 @@ cp /usr/share/doc/embree3/models/cornell_box.mtl "$work/"
 awk '$1 == "v" { printf "v %s %s %s\n", -$2, $3, -$4; next } { print }' \
   /usr/share/doc/embree3/models/cornell_box.obj > "$work/cornell.obj"
 python3 "$here/ply_to_obj.py" "$shared/stanford-bunny/bun_zipper.ply" "$work/bunny.obj" 2> /dev/null
+# The equal-error scenes: every Kd a quarter (below Embree's output clamp).
+awk '$1 == "Kd" { printf "Kd %g %g %g\n", $2 / 4, $3 / 4, $4 / 4; next } { print }' \
+  "$work/cornell_box.mtl" > "$work/cornell_dim.mtl"
+sed 's/cornell_box[.]mtl/cornell_dim.mtl/' "$work/cornell.obj" > "$work/cornell-dim.obj"
+printf 'newmtl dim\nKd 0.25 0.25 0.25\n' > "$work/bunny_dim.mtl"
+{ printf 'mtllib bunny_dim.mtl\nusemtl dim\n'; cat "$work/bunny.obj"; } > "$work/bunny-dim.obj"
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
   "$(free -g | awk '/Mem:/ {print $2}') GiB; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
@@ -141,5 +166,56 @@ print(f"{sys.argv[1]:8} {sys.argv[3]:8} Ferry {med[0] / 1e6:7.3f} Mpaths/s {med[
       f"Ferry/Embree paths/s {med[0] / med[2]:.3f} (per round: {ratios})")
 EOF
   done
+  if [ "$EQUAL_ERROR" = 1 ]; then
+    # Time to equal error: images at each spp and the converged one, per renderer.
+    for spp in $ERROR_SPP $REFERENCE_SPP; do
+      seed=1
+      [ "$spp" = "$REFERENCE_SPP" ] && seed=7
+      dim=("${embree_args[@]}")
+      dim[1]="$work/$scene-dim.obj"  # (-i OBJ come first)
+      "$ferry" render "$work/$scene-dim.obj" --size "$SIZE" --spp "$spp" --max-depth "$DEPTH" --seed "$seed" \
+        "${ferry_extra[@]}" "${thread_args[@]}" -q -o "$work/ferry-$spp.pfm" --stats "$work/ferry-$spp.json"
+      pathtracer "${dim[@]}" --spp "$spp" -o "$work/embree-$spp.pfm" > /dev/null 2>&1
+      [ "$spp" = "$REFERENCE_SPP" ] ||
+        pathtracer "${dim[@]}" --spp "$spp" --benchmark 1 2 > "$work/embree-$spp.txt" 2>&1
+    done
+    /usr/bin/python3 - "$work" "$scene" "$REFERENCE_SPP" $ERROR_SPP <<'EOF'
+import json, statistics, sys
+import numpy as np
+work, scene, ref_spp, spps = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
+
+def pfm(path):  # as Embree's tutorial stores it: clamped to [0, 1], 8 bits
+    with open(path, "rb") as f:
+        kind = f.readline().strip()
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4").astype(np.float64)
+    image = data.reshape(h, w, 3 if kind == b"PF" else 1)
+    return np.round(np.clip(image, 0, 1) * 255) / 255
+
+def rmse(image, reference):
+    return float(np.sqrt(np.mean((image - reference) ** 2)) / np.mean(reference))
+
+refs = {r: pfm(f"{work}/{r}-{ref_spp}.pfm") for r in ("ferry", "embree")}
+constants = {"ferry": [], "embree": []}
+rows = []
+for spp in spps:
+    frames = json.load(open(f"{work}/ferry-{spp}.json"))["render"]["frames"]
+    t_ferry = sum(f["seconds"] for f in frames)
+    values = {l.split()[0]: float(l.split()[1]) for l in open(f"{work}/embree-{spp}.txt")
+              if l.startswith("BENCHMARK_RENDER_")}
+    t_embree = 1 / values["BENCHMARK_RENDER_AVG"]
+    e_ferry = rmse(pfm(f"{work}/ferry-{spp}.pfm"), refs["ferry"])
+    e_embree = rmse(pfm(f"{work}/embree-{spp}.pfm"), refs["embree"])
+    constants["ferry"].append(e_ferry * t_ferry ** 0.5)
+    constants["embree"].append(e_embree * t_embree ** 0.5)
+    rows.append(f"{spp} spp: Ferry {e_ferry:.4f} in {t_ferry:.3f} s, Embree {e_embree:.4f} in {t_embree:.3f} s")
+cf, ce = statistics.median(constants["ferry"]), statistics.median(constants["embree"])
+print(f"{scene:8} equal error: {'; '.join(rows)}")
+print(f"{scene:8} equal error: Ferry's time to Embree's error = {(cf / ce) ** 2:.3f} of Embree's "
+      f"(< 1: Ferry first); the converged images differ by {rmse(refs['ferry'], refs['embree']):.4f} "
+      f"(relative RMSE, {ref_spp} spp each)")
+EOF
+  fi
 done
 echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -52,6 +52,7 @@ LightSampler::LightSampler(const Scene& scene)
   for (const SunLight& sun : suns_)
     sunConstants_.push_back({sunRadiance(sun), sunConePdf(sun), oneMinusCos(sun.angularRadius),
                              2 * std::sin(0.5f * sun.angularRadius), luminance(sun.irradiance),
+                             std::sin(std::min(sun.angularRadius, 0.5f * kPi)),
                              Frame(sun.direction)});
   if (environment_.image) {
     const HdrImage& img = *environment_.image;
@@ -269,7 +270,7 @@ float LightSampler::selectionTotal(Vec3f p) const {
 }
 
 bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u,
-                          LightSample& out) const {
+                          LightSample& out, Vec3f facing) const {
   // Candidate i is chosen with probability w_i / sum(w): one pass sums the
   // weights, a second stops at the first candidate whose running sum passes
   // uSelect * sum (two cheap passes instead of a division per candidate,
@@ -281,14 +282,44 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
   const float target = uSelect * total;
   float running = 0, chosenWeight = 0;
   int chosen = -1;
-  forEachCandidate(p, [&](int i, float w) {
-    if (!(w > 0)) return false;
-    running += w;
-    chosen = i;  // the last positive one if rounding keeps running <= target
-    chosenWeight = w;
-    return running > target;
-  });
-  const float selection = chosenWeight / total;
+  float selection = 0;
+  // The suns and a constant environment come first and take no part in MIS:
+  // for a surface that only reflects, their share (`distant`, the same as
+  // without `facing`) goes among them by what each can give there.
+  const bool constantEnvironment = !environment_.isBlack() && !environmentTakesPartInMis();
+  float distant = constantEnvironment ? environmentWeight_ : 0.0f;
+  for (const SunConstants& c : sunConstants_) distant += std::max(c.selectionWeight, 0.0f);
+  if (!twoSided && !(facing == Vec3f(0)) && target < distant) {
+    auto facingWeight = [&](int i) {
+      if (i == envIndex) return environmentWeight_;
+      const SunConstants& c = sunConstants_[size_t(i)];
+      return std::max(c.selectionWeight, 0.0f) *
+             std::max(dot(facing, c.frame.n) + c.sinRadius, 0.0f);
+    };
+    const int count = envIndex + (constantEnvironment ? 1 : 0);
+    float facingTotal = 0;
+    for (int i = 0; i < count; ++i) facingTotal += facingWeight(i);
+    if (!(facingTotal > 0)) return false;  // no distant light reaches this side
+    const float facingTarget = target / distant * facingTotal;
+    for (int i = 0; i < count; ++i) {
+      const float w = facingWeight(i);
+      if (!(w > 0)) continue;
+      running += w;
+      chosen = i;
+      chosenWeight = w;
+      if (running > facingTarget) break;
+    }
+    selection = distant / total * (chosenWeight / facingTotal);
+  } else {
+    forEachCandidate(p, [&](int i, float w) {
+      if (!(w > 0)) return false;
+      running += w;
+      chosen = i;  // the last positive one if rounding keeps running <= target
+      chosenWeight = w;
+      return running > target;
+    });
+    selection = chosenWeight / total;
+  }
 
   if (chosen < envIndex) {
     const SunConstants& constants = sunConstants_[chosen];

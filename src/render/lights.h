@@ -4,12 +4,13 @@
 //
 // One light sample per path vertex, chosen with a single uniform number over
 // every candidate with probability w_i / sum(w), so the choice is a pure
-// function of the path's random key. The weights depend only on the shading
-// point, not on its normal, so a path that finds an emitter by BSDF sampling
-// can recompute the light sample's density there (emitterPdf,
-// environmentPdf): the other half of the MIS weight. Emissive triangles and
-// an environment map take part in MIS; suns and a constant environment are
-// left to the light sample alone. docs/path-tracer.md, "Light sampling".
+// function of the path's random key. The emitters' and an environment map's
+// share depends only on the shading point, not on its normal, so a path that
+// finds one by BSDF sampling can recompute the light sample's density there
+// (emitterPdf, environmentPdf): the other half of the MIS weight. Suns and a
+// constant environment are left to the light sample alone; at a surface that
+// only reflects they share their part by the normal. docs/path-tracer.md,
+// "Light sampling".
 #pragma once
 
 #include <array>
@@ -56,8 +57,14 @@ class LightSampler {
   }
   static constexpr uint32_t kNotAnEmitter = 0xffffffffu;
   // The same, given the frame about n (shading has built it already).
-  bool sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u,
-              LightSample& out) const;
+  // `facing`, when not zero, is the geometric normal of a surface that only
+  // reflects: a sun wholly below its horizon cannot light it and is not
+  // chosen, and the suns and a constant environment share their selection
+  // by what each can give there (suns by their cosine). The emitters' and an
+  // environment map's selection is the same either way, so their MIS
+  // densities do not depend on it.
+  bool sample(Vec3f p, const Frame& frame, bool twoSided, float uSelect, Vec2f u, LightSample& out,
+              Vec3f facing = Vec3f(0)) const;
 
   // Radiance arriving along `direction` from infinitely far away: environment
   // plus any sun whose disk `direction` falls in.
@@ -134,6 +141,7 @@ class LightSampler {
     float oneMinusCosRadius;
     float chordRadius;      // 2 sin(r / 2): the cone test on |d - s|
     float selectionWeight;  // luminance(irradiance)
+    float sinRadius;        // of the cone: how far below a horizon part of the disk still shows
     Frame frame;            // Frame(direction), for sampling the cone
   };
   std::vector<SunConstants> sunConstants_;

@@ -437,7 +437,7 @@ template <typename Path>
   LightSample ls;
   const Vec2f u{random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)};
   if (!lights_.sample(position, scattering.frame, bsdf.transmits(), random(RandomDim::LightSelect),
-                      u, ls))
+                      u, ls, bsdf.transmits() ? Vec3f(0) : scattering.ng))
     return false;
   const Vec3f wiLocal = scattering.frame.toLocal(ls.direction);
   const Vec3f f = bsdf.eval(scattering.woLocal, wiLocal);
