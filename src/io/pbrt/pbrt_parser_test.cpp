@@ -998,7 +998,7 @@ TEST(PbrtParser, ScaledSolidBumpMapsAreEvaluatedInTheirSpace) {
 // Solid textures inside other textures and on scalars are evaluated in
 // space, not the constant 0.5: a mix of two colours by an fbm, a scale of
 // wrinkled by an image-free checkerboard, a bump map mixing two solids, and
-// a roughness averaged over space.
+// Oren-Nayar's sigma averaged over space.
 TEST(PbrtParser, SolidTexturesInsideOtherTexturesAreEvaluatedInSpace) {
   std::vector<std::string> warnings;
   const Scene scene = fromText(
