@@ -195,6 +195,11 @@ files, largest = sum(sizes), max(sizes)
 print(f"  peak resident {peak / 2**20:.0f} MiB (the process alone {base / 2**20:.0f} MiB); "
       f"parts {files / 2**20:.0f} MiB in all, largest {largest / 2**20:.0f} MiB")
 assert files > 3 * largest, "the scene should be several times larger than one part"
-assert peak - base < 1.5 * files, "partitioning held more than one copy of the scene"
+if os.environ.get("ASAN_OPTIONS"):
+    # Under AddressSanitizer (scripts/sanitize.sh) the peak holds its shadow
+    # memory and quarantine, not the program's own: the bound is not checked.
+    print("  (ASan: the peak is not the program's own; not checked)")
+else:
+    assert peak - base < 1.5 * files, "partitioning held more than one copy of the scene"
 PY
 echo "partition_test: all passed in ${SECONDS}s"
