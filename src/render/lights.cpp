@@ -72,6 +72,11 @@ LightSampler::LightSampler(const Scene& scene)
   } else {
     environmentWeight_ = luminance(environment_.color) * kPi;
   }
+  // The suns and a constant environment: the share that sample() divides
+  // by the surface's normal.
+  constantEnvironmentSelected_ = !environment_.isBlack() && !environmentTakesPartInMis();
+  distantWeight_ = constantEnvironmentSelected_ ? environmentWeight_ : 0.0f;
+  for (const SunConstants& c : sunConstants_) distantWeight_ += std::max(c.selectionWeight, 0.0f);
 
   // Emissive triangles in world space, from every instance of every emissive mesh.
   std::vector<std::vector<int32_t>> emissiveMeshesPerObject(scene.objects.size());
@@ -284,23 +289,20 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
   int chosen = -1;
   float selection = 0;
   // The suns and a constant environment come first and take no part in MIS:
-  // for a surface that only reflects, their share (`distant`, the same as
-  // without `facing`) goes among them by what each can give there.
-  const bool constantEnvironment = !environment_.isBlack() && !environmentTakesPartInMis();
-  float distant = constantEnvironment ? environmentWeight_ : 0.0f;
-  for (const SunConstants& c : sunConstants_) distant += std::max(c.selectionWeight, 0.0f);
-  if (!twoSided && !(facing == Vec3f(0)) && target < distant) {
+  // for a surface that only reflects, their share (distantWeight_, the same
+  // as without `facing`) goes among them by what each can give there.
+  if (!twoSided && !(facing == Vec3f(0)) && target < distantWeight_) {
     auto facingWeight = [&](int i) {
       if (i == envIndex) return environmentWeight_;
       const SunConstants& c = sunConstants_[size_t(i)];
       return std::max(c.selectionWeight, 0.0f) *
              std::max(dot(facing, c.frame.n) + c.sinRadius, 0.0f);
     };
-    const int count = envIndex + (constantEnvironment ? 1 : 0);
+    const int count = envIndex + (constantEnvironmentSelected_ ? 1 : 0);
     float facingTotal = 0;
     for (int i = 0; i < count; ++i) facingTotal += facingWeight(i);
     if (!(facingTotal > 0)) return false;  // no distant light reaches this side
-    const float facingTarget = target / distant * facingTotal;
+    const float facingTarget = target / distantWeight_ * facingTotal;
     for (int i = 0; i < count; ++i) {
       const float w = facingWeight(i);
       if (!(w > 0)) continue;
@@ -309,7 +311,7 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
       chosenWeight = w;
       if (running > facingTarget) break;
     }
-    selection = distant / total * (chosenWeight / facingTotal);
+    selection = distantWeight_ / total * (chosenWeight / facingTotal);
   } else {
     forEachCandidate(p, [&](int i, float w) {
       if (!(w > 0)) return false;

@@ -148,6 +148,10 @@ class LightSampler {
   EnvironmentLight environment_;
   Distribution2D environmentDistribution_;
   float environmentWeight_ = 0;
+  // The lights chosen first, which take no part in MIS: the suns and a
+  // constant environment (when it is one), and their summed weight.
+  bool constantEnvironmentSelected_ = false;
+  float distantWeight_ = 0;
   std::vector<EmissiveTriangle> triangles_;
   std::vector<Group> groups_;       // empty when every triangle is its own candidate
   Distribution1D emissionByPower_;  // over triangles_, for sampleEmission
