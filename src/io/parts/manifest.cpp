@@ -5,6 +5,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <type_traits>
 
 #include "core/error.h"
 #include "core/hash64.h"
@@ -14,6 +16,42 @@
 
 namespace ferry {
 namespace {
+
+// Numbers read from the manifest: a value that does not fit the field's type
+// (a fraction, a negative count, 2e82 for a byte count, 1e300 for a float)
+// is a JSON type error, reported with the path, never a conversion that
+// overflows.
+template <typename T>
+T checkedNumber(const nlohmann::json& v) {
+  using Limits = std::numeric_limits<T>;
+  if constexpr (std::is_integral_v<T>) {
+    if (v.is_number_unsigned()) {
+      const uint64_t u = v.get<uint64_t>();
+      if (u <= uint64_t(Limits::max())) return T(u);
+    } else if (v.is_number_integer()) {
+      const int64_t i = v.get<int64_t>();
+      if (i >= int64_t(Limits::lowest()) && (i < 0 || uint64_t(i) <= uint64_t(Limits::max())))
+        return T(i);
+    }
+    throw nlohmann::json::type_error::create(302, "expected a whole number that fits", &v);
+  } else {
+    if (v.is_number()) {
+      const double d = v.get<double>();
+      if (std::isfinite(d) && std::abs(d) <= double(Limits::max())) return T(d);
+    }
+    throw nlohmann::json::type_error::create(302, "expected a finite number that fits", &v);
+  }
+}
+
+template <typename T>
+T checkedNumber(const nlohmann::json& j, const char* key) {
+  return checkedNumber<T>(j.at(key));
+}
+
+template <typename T>
+T checkedNumberOr(const nlohmann::json& j, const char* key, T fallback) {
+  return j.is_object() && j.contains(key) ? checkedNumber<T>(j.at(key)) : fallback;
+}
 
 std::string manifestPath(const std::string& directory) {
   return (std::filesystem::path(directory) / kManifestName).string();
@@ -31,7 +69,7 @@ uint64_t parseHash(const std::string& hex, const std::string& where) {
 
 void readFile(const nlohmann::json& j, ManifestFile& f, const std::string& where) {
   f.file = j.at("file").get<std::string>();
-  f.bytes = j.at("bytes").get<uint64_t>();
+  f.bytes = checkedNumber<uint64_t>(j, "bytes");
   f.hash = parseHash(j.at("hash").get<std::string>(), where);
   // Files live in the directory: no absolute paths, no way out of it.
   std::filesystem::path p(f.file);
@@ -103,7 +141,7 @@ Manifest readManifest(const std::string& directory) {
   try {
     if (!j.is_object() || j.value("format", std::string()) != kManifestFormat)
       throw InputError(fmt::format("{}: not a Ferry part manifest", path));
-    m.version = j.at("version").get<uint32_t>();
+    m.version = checkedNumber<uint32_t>(j, "version");
     if (m.version < kOldestPartFormatVersion || m.version > kPartFormatVersion)
       throw InputError(fmt::format(
           "{}: made by another version of Ferry (part format {}, this Ferry reads formats "
@@ -112,34 +150,38 @@ Manifest readManifest(const std::string& directory) {
     m.scene = j.at("scene").get<std::string>();
     m.partitioner = j.at("partitioner").get<std::string>();
     m.options = j.value("options", nlohmann::json::object());
-    m.ranks = j.at("ranks").get<int>();
+    m.ranks = checkedNumber<int>(j, "ranks");
     m.summary = j.at("summary");
-    m.filmScale = j.value("film_scale", 1.0f);  // absent in directories made before it existed
+    m.filmScale =
+        checkedNumberOr(j, "film_scale", 1.0f);  // absent in directories made before it existed
     if (!(m.filmScale > 0) || !std::isfinite(m.filmScale))
       throw InputError(fmt::format("{}: bad film_scale {}", path, m.filmScale));
-    m.filmMaxSampleLuminance = j.value("film_max_sample_luminance", 0.0f);
-    m.filmMaxComponentValue = j.value("film_max_component_value", 0.0f);
+    m.filmMaxSampleLuminance = checkedNumberOr(j, "film_max_sample_luminance", 0.0f);
+    m.filmMaxComponentValue = checkedNumberOr(j, "film_max_component_value", 0.0f);
     if (!(m.filmMaxSampleLuminance >= 0) || !std::isfinite(m.filmMaxSampleLuminance) ||
         !(m.filmMaxComponentValue >= 0) || !std::isfinite(m.filmMaxComponentValue))
       throw InputError(
           fmt::format("{}: bad film_max_sample_luminance or film_max_component_value", path));
     if (j.contains("film_crop")) {
-      const auto crop = j.at("film_crop").get<std::vector<float>>();
+      const nlohmann::json& cropJson = j.at("film_crop");
+      std::vector<float> crop;
+      if (cropJson.is_array())
+        for (const nlohmann::json& v : cropJson) crop.push_back(checkedNumber<float>(v));
       if (crop.size() != 4 || !isCropWindow(crop[0], crop[1], crop[2], crop[3]))
         throw InputError(fmt::format("{}: bad film_crop", path));
       m.filmCrop = std::array<float, 4>{crop[0], crop[1], crop[2], crop[3]};
     }
     m.integrator = j.value("integrator", std::string());
     if (j.contains("integrator_max_depth")) {
-      m.integratorMaxDepth = j.at("integrator_max_depth").get<int>();
+      m.integratorMaxDepth = checkedNumber<int>(j, "integrator_max_depth");
       if (*m.integratorMaxDepth < 0)
         throw InputError(
             fmt::format("{}: bad integrator_max_depth {}", path, *m.integratorMaxDepth));
     }
-    m.inputBytes = j.value("input_bytes", uint64_t(0));
-    m.replicatedBytes = j.value("replicated_bytes", uint64_t(0));
-    m.proxies = j.value("proxies", uint64_t(0));
-    m.partitionSeconds = j.value("partition_seconds", 0.0);
+    m.inputBytes = checkedNumberOr(j, "input_bytes", uint64_t(0));
+    m.replicatedBytes = checkedNumberOr(j, "replicated_bytes", uint64_t(0));
+    m.proxies = checkedNumberOr(j, "proxies", uint64_t(0));
+    m.partitionSeconds = checkedNumberOr(j, "partition_seconds", 0.0);
     m.predictions = j.value("predictions", nlohmann::json::array());
     if (!m.predictions.is_array())
       throw InputError(fmt::format("{}: predictions must be an array", path));
@@ -152,11 +194,11 @@ Manifest readManifest(const std::string& directory) {
     for (size_t r = 0; r < parts.size(); ++r) {
       ManifestPart p;
       readFile(parts[r], p, path);
-      p.rank = parts[r].at("rank").get<int>();
+      p.rank = checkedNumber<int>(parts[r], "rank");
       if (p.rank != int(r))
         throw InputError(fmt::format("{}: part {} is listed as rank {}", path, r, p.rank));
-      p.instances = parts[r].value("instances", uint64_t(0));
-      p.estimatedBytes = parts[r].value("estimated_bytes", uint64_t(0));
+      p.instances = checkedNumberOr(parts[r], "instances", uint64_t(0));
+      p.estimatedBytes = checkedNumberOr(parts[r], "estimated_bytes", uint64_t(0));
       m.parts.push_back(std::move(p));
     }
   } catch (const nlohmann::json::exception& e) {
@@ -168,39 +210,41 @@ Manifest readManifest(const std::string& directory) {
 SceneSummary summaryFromJson(const nlohmann::json& j) {
   SceneSummary s;
   s.name = j.value("name", std::string());
-  s.uniqueMeshes = j.value("unique_meshes", uint64_t(0));
-  s.triangles = j.value("triangles", uint64_t(0));
-  s.geometries = j.value("geometries", uint64_t(0));
-  s.shapePrimitives = j.value("shape_primitives", uint64_t(0));
-  s.volumeBricks = j.value("volume_bricks", uint64_t(0));
-  s.vertices = j.value("vertices", uint64_t(0));
-  s.objects = j.value("objects", uint64_t(0));
-  s.instances = j.value("instances", uint64_t(0));
-  s.instancedTriangles = j.value("instanced_triangles", uint64_t(0));
-  s.textures = j.value("textures", uint64_t(0));
-  s.texels = j.value("texels", uint64_t(0));
-  s.views = j.value("views", uint64_t(0));
+  s.uniqueMeshes = checkedNumberOr(j, "unique_meshes", uint64_t(0));
+  s.triangles = checkedNumberOr(j, "triangles", uint64_t(0));
+  s.geometries = checkedNumberOr(j, "geometries", uint64_t(0));
+  s.shapePrimitives = checkedNumberOr(j, "shape_primitives", uint64_t(0));
+  s.volumeBricks = checkedNumberOr(j, "volume_bricks", uint64_t(0));
+  s.vertices = checkedNumberOr(j, "vertices", uint64_t(0));
+  s.objects = checkedNumberOr(j, "objects", uint64_t(0));
+  s.instances = checkedNumberOr(j, "instances", uint64_t(0));
+  s.instancedTriangles = checkedNumberOr(j, "instanced_triangles", uint64_t(0));
+  s.textures = checkedNumberOr(j, "textures", uint64_t(0));
+  s.texels = checkedNumberOr(j, "texels", uint64_t(0));
+  s.views = checkedNumberOr(j, "views", uint64_t(0));
   if (j.contains("lights")) {
     const auto& l = j["lights"];
-    s.suns = l.value("suns", uint64_t(0));
-    s.environments = l.value("environments", uint64_t(0));
-    s.emissiveMeshes = l.value("emissive_meshes", uint64_t(0));
-    s.emissiveTriangles = l.value("emissive_triangles", uint64_t(0));
+    s.suns = checkedNumberOr(l, "suns", uint64_t(0));
+    s.environments = checkedNumberOr(l, "environments", uint64_t(0));
+    s.emissiveMeshes = checkedNumberOr(l, "emissive_meshes", uint64_t(0));
+    s.emissiveTriangles = checkedNumberOr(l, "emissive_triangles", uint64_t(0));
   }
   if (j.contains("bounds") && j["bounds"].is_array() && j["bounds"].size() == 2) {
     const auto& b = j["bounds"];
-    s.bounds.lower = {b[0][0].get<float>(), b[0][1].get<float>(), b[0][2].get<float>()};
-    s.bounds.upper = {b[1][0].get<float>(), b[1][1].get<float>(), b[1][2].get<float>()};
+    s.bounds.lower = {checkedNumber<float>(b[0][0]), checkedNumber<float>(b[0][1]),
+                      checkedNumber<float>(b[0][2])};
+    s.bounds.upper = {checkedNumber<float>(b[1][0]), checkedNumber<float>(b[1][1]),
+                      checkedNumber<float>(b[1][2])};
   }
   if (j.contains("memory_bytes")) {
     const auto& m = j["memory_bytes"];
-    s.memory.vertices = m.value("vertices", uint64_t(0));
-    s.memory.normals = m.value("normals", uint64_t(0));
-    s.memory.uvs = m.value("uvs", uint64_t(0));
-    s.memory.indices = m.value("indices", uint64_t(0));
-    s.memory.texels = m.value("texels", uint64_t(0));
-    s.memory.instances = m.value("instances", uint64_t(0));
-    s.memory.accel = m.value("accel", uint64_t(0));
+    s.memory.vertices = checkedNumberOr(m, "vertices", uint64_t(0));
+    s.memory.normals = checkedNumberOr(m, "normals", uint64_t(0));
+    s.memory.uvs = checkedNumberOr(m, "uvs", uint64_t(0));
+    s.memory.indices = checkedNumberOr(m, "indices", uint64_t(0));
+    s.memory.texels = checkedNumberOr(m, "texels", uint64_t(0));
+    s.memory.instances = checkedNumberOr(m, "instances", uint64_t(0));
+    s.memory.accel = checkedNumberOr(m, "accel", uint64_t(0));
   }
   return s;
 }

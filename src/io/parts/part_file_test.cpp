@@ -462,6 +462,30 @@ TEST(PartFiles, ManifestFromAnotherVersionOrBrokenIsRefused) {
   std::ofstream(manifest) << j.dump();
   e = errorOf([&] { loadRankPart(dir.path.string(), 0, 2); });
   EXPECT_NE(e.find("bad integrator_max_depth -3"), std::string::npos) << e;
+  j.erase("integrator_max_depth");
+  // Numbers that do not fit their field are the manifest's error, not an
+  // overflowing conversion (a fuzzer's finding: 2e82 instances).
+  for (auto [key, value] : std::vector<std::pair<std::string, nlohmann::json>>{{"instances", 2e82},
+                                                                               {"instances", -1},
+                                                                               {"instances", 1.5},
+                                                                               {"rank", 3e9},
+                                                                               {"bytes", "12"}}) {
+    nlohmann::json broken = j;
+    broken["parts"][1][key] = value;
+    std::ofstream(manifest) << broken.dump();
+    e = errorOf([&] { loadRankPart(dir.path.string(), 0, 2); });
+    EXPECT_NE(e.find("manifest.json: missing or bad field"), std::string::npos)
+        << key << " " << value << ": " << e;
+  }
+  for (auto [key, value] : std::vector<std::pair<std::string, nlohmann::json>>{
+           {"film_scale", 1e300}, {"ranks", 1e10}, {"version", -2}}) {
+    nlohmann::json broken = j;
+    broken[key] = value;
+    std::ofstream(manifest) << broken.dump();
+    e = errorOf([&] { loadRankPart(dir.path.string(), 0, 2); });
+    EXPECT_NE(e.find("manifest.json: missing or bad field"), std::string::npos)
+        << key << " " << value << ": " << e;
+  }
   fs::remove(manifest);
   EXPECT_FALSE(isPartDirectory(dir.path.string()));
 }
