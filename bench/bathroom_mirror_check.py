@@ -1,0 +1,170 @@
+#!/usr/bin/env python3
+"""The bathroom's window pane seen directly and through the mirror, in the
+reference and in Ferry's render (docs/fidelity.md, "The region left of the
+mirror").
+
+The pane (mesh_00062, pbrt-v3's default matte under the area light) is two
+quads, A (x > 1.674) and B (x < 1.674). A Lambertian surface sends the same
+radiance every way, so through the mirror (Kr 0.9) each quad must read at
+most 0.9 of what it reads seen directly. For each renderer this prints the
+mean radiance of each quad in both views and their ratio. Pixels are
+classified by tracing the camera's rays (pinhole; the renders use the
+scene's thin lens) through the scene's meshes here, in numpy.
+
+  /usr/bin/python3 bench/bathroom_mirror_check.py [--ferry build/ferry] [--spp 64]
+"""
+import argparse, os, re, subprocess, sys, tempfile
+
+import numpy as np
+import OpenImageIO as oiio
+
+here = os.path.dirname(os.path.abspath(__file__))
+ap = argparse.ArgumentParser()
+ap.add_argument("--ferry", default=os.path.join(here, "..", "build", "ferry"))
+ap.add_argument("--shared", default=os.path.join(here, "..", "..", "shared"))
+ap.add_argument("--spp", type=int, default=64)
+ap.add_argument("--step", type=int, default=3, help="trace every STEP-th pixel")
+args = ap.parse_args()
+scene_dir = os.path.join(args.shared, "scenes", "bathroom")
+reference = os.path.join(args.shared, "references", "bathroom.exr")
+W, H = 1200, 760
+# The mirror's top left (the worst blocks) and the pane seen directly.
+MIRROR_CROP = (0.28, 0.40, 0.0, 0.08)
+DIRECT_CROP = (0.62, 0.84, 0.0, 0.10)
+
+
+def read_ply(path):
+    data = open(path, "rb").read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    head = data[:end].decode()
+    nv = int(re.search(r"element vertex (\d+)", head).group(1))
+    nf = int(re.search(r"element face (\d+)", head).group(1))
+    props = re.findall(r"property float (\w+)", head)
+    v = np.frombuffer(data, dtype="<f4", count=nv * len(props), offset=end).reshape(nv, len(props))
+    off = end + nv * len(props) * 4
+    faces = []
+    for _ in range(nf):
+        n = data[off]
+        off += 1
+        faces.append(np.frombuffer(data, dtype="<i4", count=n, offset=off))
+        off += 4 * n
+    return dict(zip(props, v.T)), np.array(faces)
+
+
+# Every mesh with its named material; the scene's `Scale -1 1 1` mirrors x.
+text = open(os.path.join(scene_dir, "bathroom.pbrt")).read()
+material, items = None, []
+for line in text.splitlines():
+    if line.strip().startswith("#"):
+        continue
+    m = re.match(r'\s*NamedMaterial\s+"([^"]+)"', line)
+    if m:
+        material = m.group(1)
+    m = re.search(r'"(geometry/mesh_\d+)\.ply"', line)
+    if m:
+        items.append((m.group(1).split("/")[1], material))
+corners, owner = [], []
+for k, (name, _) in enumerate(items):
+    v, f = read_ply(os.path.join(scene_dir, "geometry", name + ".ply"))
+    p = np.stack([-v["x"], v["y"], v["z"]], 1).astype(np.float64)
+    corners.append(p[f])
+    owner += [k] * len(f)
+corners = np.concatenate(corners)
+owner = np.array(owner)
+v0 = corners[:, 0]
+e1 = corners[:, 1] - v0
+e2 = corners[:, 2] - v0
+
+
+def hit(o, d):
+    pv = np.cross(d, e2)
+    det = (e1 * pv).sum(1)
+    with np.errstate(all="ignore"):
+        inv = 1 / det
+        tv = o - v0
+        u = (tv * pv).sum(1) * inv
+        q = np.cross(tv, e1)
+        w = (q @ d) * inv
+        t = (e2 * q).sum(1) * inv
+    ok = (np.abs(det) > 1e-12) & (u >= 0) & (w >= 0) & (u + w <= 1) & (t > 1e-4)
+    if not ok.any():
+        return None
+    i = np.flatnonzero(ok)[np.argmin(t[ok])]
+    n = np.cross(e1[i], e2[i])
+    return o + t[i] * d, items[owner[i]], n / np.linalg.norm(n)
+
+
+def camera_ray(px, py):
+    # pbrt's perspective camera: LookAt 0 23 30  10.2 5 0  0 1 0, fov 50 on
+    # the shorter side; raster x runs along pbrt's camera +x (up x view).
+    eye, at, up = np.array([0, 23, 30.0]), np.array([10.2, 5, 0.0]), np.array([0, 1, 0.0])
+    view = (at - eye) / np.linalg.norm(at - eye)
+    right = np.cross(up, view)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(view, right)
+    tan = np.tan(np.radians(50) / 2)
+    sx = (-1 + 2 * (px + 0.5) / W) * W / H
+    sy = 1 - 2 * (py + 0.5) / H
+    d = view + (right * sx + true_up * sy) * tan
+    return eye, d / np.linalg.norm(d)
+
+
+def quad(p):
+    if not 16.3 < p[1] < 18.3:
+        return None
+    if -0.2 < p[0] < 1.2:
+        return "B"
+    if 2.2 < p[0] < 5.6:
+        return "A"
+    return None
+
+
+def pixels(crop):
+    x0, x1, y0, y1 = crop
+    return range(int(round(x0 * W)), int(round(x1 * W))), range(int(round(y0 * H)), int(round(y1 * H)))
+
+
+def render(crop, out):
+    cmd = [args.ferry, "render", os.path.join(scene_dir, "bathroom.pbrt"), "--size", f"{W}x{H}",
+           "--crop", ",".join(map(str, crop)), "--spp", str(args.spp), "-q", "-o", out]
+    subprocess.run(cmd, check=True, stderr=subprocess.DEVNULL)
+    return oiio.ImageBuf(out).get_pixels(oiio.FLOAT)[..., :3]
+
+
+ref = oiio.ImageBuf(reference).get_pixels(oiio.FLOAT)[..., :3]
+tmp = tempfile.mkdtemp()
+ferry = {"mirror": render(MIRROR_CROP, os.path.join(tmp, "mirror.exr")),
+         "direct": render(DIRECT_CROP, os.path.join(tmp, "direct.exr"))}
+sums = {}
+for view, crop in (("mirror", MIRROR_CROP), ("direct", DIRECT_CROP)):
+    xs, ys = pixels(crop)
+    for py in ys[:: args.step]:
+        for px in xs[:: args.step]:
+            o, d = camera_ray(px, py)
+            h = hit(o, d)
+            if h is None:
+                continue
+            p, (mesh, mat), n = h
+            if view == "mirror":
+                if mat != "mirror":
+                    continue
+                h = hit(p, d - 2 * (d @ n) * n)
+                if h is None:
+                    continue
+                p, (mesh, mat), n = h
+            if mesh != "mesh_00062" or quad(p) is None:
+                continue
+            key = (view, quad(p))
+            s = sums.setdefault(key, [0, np.zeros(3), np.zeros(3)])
+            s[0] += 1
+            s[1] += ref[py, px]
+            s[2] += ferry[view][py - ys[0], px - xs[0]]
+
+lum = np.array([0.2126, 0.7152, 0.0722])
+print("| quad | pixels direct / mirror | reference: direct, mirror, mirror/direct | Ferry: direct, mirror, mirror/direct |")
+print("|---|---:|---:|---:|")
+for q in ("A", "B"):
+    nd, rd, fd = sums[("direct", q)]
+    nm, rm, fm = sums[("mirror", q)]
+    r_d, r_m, f_d, f_m = (float(lum @ (x / n)) for x, n in ((rd, nd), (rm, nm), (fd, nd), (fm, nm)))
+    print(f"| {q} | {nd} / {nm} | {r_d:.3f}, {r_m:.3f}, **{r_m / r_d:.2f}** | {f_d:.3f}, {f_m:.3f}, **{f_m / f_d:.2f}** |")
