@@ -95,9 +95,15 @@ for round in $(seq "$ROUNDS"); do
     if [ -n "$BASELINE" ]; then run "$n" proxies "base-$n-$round" "$BASELINE"; fi
   done
 done
+# The forwarding modes at 4 and 8 ranks, where RANKS has them.
+forwarding_ranks=""
 for n in 4 8; do
-  for mode in ring broadcast; do run "$n" "$mode" "$mode-$n"; done
+  if [[ " $RANKS " == *" $n "* ]]; then
+    forwarding_ranks+=" $n"
+    for mode in ring broadcast; do run "$n" "$mode" "$mode-$n"; done
+  fi
 done
+export FORWARDING_RANKS=$forwarding_ranks
 
 python3 - "$work" "$ROUNDS" "$CORES" "${BASELINE:-none}" "$EXCHANGES" "$THREADS" $RANKS <<'EOF'
 import json, os, statistics, sys
@@ -182,7 +188,7 @@ for n in ranks:
 
 print("\nrays forwarded per frame (exact counters; bytes and rounds per frame too)")
 frames = lambda s: len(s["render"]["frames"])
-for n in (4, 8):
+for n in (int(r) for r in os.environ["FORWARDING_RANKS"].split()):
     for mode in ("proxies", "ring", "broadcast"):
         s = load(f"time-{n}-1") if mode == "proxies" else load(f"{mode}-{n}")
         ex, t = s["render"]["total"]["exchange"], s["render"]["total"]

@@ -28,6 +28,10 @@ RANKS=${RANKS:-8}
 SIZE=${SIZE:-640x270}
 FRAMES=${FRAMES:-4}
 ROUNDS=${ROUNDS:-2}
+if ((FRAMES < 2)); then
+  echo "instanced_shapes: FRAMES must be 2 or more (the first frame, with set-up, is left out)" >&2
+  exit 2
+fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 OUT=${OUT:-$work/out}

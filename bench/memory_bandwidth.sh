@@ -10,7 +10,7 @@
 # (forwards per path against the largest part) into OUT.
 #
 #   OUT=docs/images/memory-bandwidth bash bench/memory_bandwidth.sh [FERRY]
-#   SCENES="island landscape" RANKS=8 CAPS="1.25 2 3 3.8 4.2 6" (the defaults)
+#   SCENES="island landscape" RANKS=8 CAPS="1.25 2 3 3.8 4.2 6" (the defaults); SCALE=0.05 a small island
 #
 # Counts only: deterministic, independent of the machine's load.
 set -euo pipefail
@@ -19,6 +19,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 scenes=${SCENES:-island landscape}
 ranks=${RANKS:-8}
 caps=${CAPS:-1.25 2 3 3.8 4.2 6}
+scale=${SCALE:-}  # the builtin scenes' scale (their default when empty)
 out=${OUT:-memory-bandwidth}
 work=$(mktemp -d -p "${TMPDIR:-/tmp}")
 trap 'rm -rf "$work"' EXIT
@@ -47,7 +48,7 @@ for scene in $scenes; do
     [ -n "$cap" ] && flags=(--max-part "$cap")
     dir="$work/$scene-$p-$cap"
     # shellcheck disable=SC2086 # the camera is several flags
-    "$ferry" partition "builtin:$scene" --ranks "$ranks" --partitioner "$p" "${flags[@]}" -o "$dir" -q \
+    "$ferry" partition "builtin:$scene${scale:+?scale=$scale}" --ranks "$ranks" --partitioner "$p" "${flags[@]}" -o "$dir" -q \
       --predict-forwards ${!camera_var} > "$dir.log" 2>&1 ||
       { tail -5 "$dir.log" >&2; echo "memory_bandwidth: partition $scene $p $cap failed" >&2; exit 1; }
   done

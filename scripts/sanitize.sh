@@ -39,9 +39,10 @@ if [ "$what" = asan ] || [ "$what" = all ]; then
   # Left out: python_test (this configuration builds no Python module: an
   # uninstrumented interpreter cannot load an instrumented one) and
   # library_test (it builds the examples against the installed library
-  # with the compiler's plain flags).
+  # with the compiler's plain flags), and bench_smoke_test (the benches run
+  # the command as the other tests do, at length, under perf and mpirun).
   ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan -j"$(nproc)" \
-    -R '^([^.]*|MpiCommunicator[.].*)$' -E '^(python_test|library_test)$' \
+    -R '^([^.]*|MpiCommunicator[.].*)$' -E '^(python_test|library_test|bench_smoke_test)$' \
     --output-on-failure --timeout 2700 || status=1
   echo "sanitize.sh: ASan + UBSan suite: $([ $status = 0 ] && echo clean || echo FAILED)"
 fi
