@@ -152,6 +152,7 @@ Manifest readManifest(const std::string& directory) {
     m.options = j.value("options", nlohmann::json::object());
     m.ranks = checkedNumber<int>(j, "ranks");
     m.summary = j.at("summary");
+    summaryFromJson(m.summary);  // its numbers checked here, where an error names the file
     m.filmScale =
         checkedNumberOr(j, "film_scale", 1.0f);  // absent in directories made before it existed
     if (!(m.filmScale > 0) || !std::isfinite(m.filmScale))
@@ -209,25 +210,28 @@ Manifest readManifest(const std::string& directory) {
 
 SceneSummary summaryFromJson(const nlohmann::json& j) {
   SceneSummary s;
+  auto count = [](const nlohmann::json& o, const char* key) {
+    return checkedNumberOr(o, key, uint64_t(0));
+  };
   s.name = j.value("name", std::string());
-  s.uniqueMeshes = checkedNumberOr(j, "unique_meshes", uint64_t(0));
-  s.triangles = checkedNumberOr(j, "triangles", uint64_t(0));
-  s.geometries = checkedNumberOr(j, "geometries", uint64_t(0));
-  s.shapePrimitives = checkedNumberOr(j, "shape_primitives", uint64_t(0));
-  s.volumeBricks = checkedNumberOr(j, "volume_bricks", uint64_t(0));
-  s.vertices = checkedNumberOr(j, "vertices", uint64_t(0));
-  s.objects = checkedNumberOr(j, "objects", uint64_t(0));
-  s.instances = checkedNumberOr(j, "instances", uint64_t(0));
-  s.instancedTriangles = checkedNumberOr(j, "instanced_triangles", uint64_t(0));
-  s.textures = checkedNumberOr(j, "textures", uint64_t(0));
-  s.texels = checkedNumberOr(j, "texels", uint64_t(0));
-  s.views = checkedNumberOr(j, "views", uint64_t(0));
+  s.uniqueMeshes = count(j, "unique_meshes");
+  s.triangles = count(j, "triangles");
+  s.geometries = count(j, "geometries");
+  s.shapePrimitives = count(j, "shape_primitives");
+  s.volumeBricks = count(j, "volume_bricks");
+  s.vertices = count(j, "vertices");
+  s.objects = count(j, "objects");
+  s.instances = count(j, "instances");
+  s.instancedTriangles = count(j, "instanced_triangles");
+  s.textures = count(j, "textures");
+  s.texels = count(j, "texels");
+  s.views = count(j, "views");
   if (j.contains("lights")) {
     const auto& l = j["lights"];
-    s.suns = checkedNumberOr(l, "suns", uint64_t(0));
-    s.environments = checkedNumberOr(l, "environments", uint64_t(0));
-    s.emissiveMeshes = checkedNumberOr(l, "emissive_meshes", uint64_t(0));
-    s.emissiveTriangles = checkedNumberOr(l, "emissive_triangles", uint64_t(0));
+    s.suns = count(l, "suns");
+    s.environments = count(l, "environments");
+    s.emissiveMeshes = count(l, "emissive_meshes");
+    s.emissiveTriangles = count(l, "emissive_triangles");
   }
   if (j.contains("bounds") && j["bounds"].is_array() && j["bounds"].size() == 2) {
     const auto& b = j["bounds"];
@@ -238,13 +242,13 @@ SceneSummary summaryFromJson(const nlohmann::json& j) {
   }
   if (j.contains("memory_bytes")) {
     const auto& m = j["memory_bytes"];
-    s.memory.vertices = checkedNumberOr(m, "vertices", uint64_t(0));
-    s.memory.normals = checkedNumberOr(m, "normals", uint64_t(0));
-    s.memory.uvs = checkedNumberOr(m, "uvs", uint64_t(0));
-    s.memory.indices = checkedNumberOr(m, "indices", uint64_t(0));
-    s.memory.texels = checkedNumberOr(m, "texels", uint64_t(0));
-    s.memory.instances = checkedNumberOr(m, "instances", uint64_t(0));
-    s.memory.accel = checkedNumberOr(m, "accel", uint64_t(0));
+    s.memory.vertices = count(m, "vertices");
+    s.memory.normals = count(m, "normals");
+    s.memory.uvs = count(m, "uvs");
+    s.memory.indices = count(m, "indices");
+    s.memory.texels = count(m, "texels");
+    s.memory.instances = count(m, "instances");
+    s.memory.accel = count(m, "accel");
   }
   return s;
 }
