@@ -115,5 +115,9 @@ for n in ranks:
     line += f" {total:9.1f} {total - total1:+7.1f} {'':>6s}"
 print(line)
 for n in ranks:
-    print(f"  {n} ranks: {sum(rows[n].values()) / total1:.2f}x the 1-rank CPU time per frame")
+    if total1 > 0:
+        print(f"  {n} ranks: {sum(rows[n].values()) / total1:.2f}x the 1-rank CPU time per frame")
+    else:  # a frame shorter than the sampling's noise (tiny SIZE or few FRAMES)
+        print(f"  {n} ranks: no ratio: the 1-rank CPU time per frame measured {total1:.1f} ms"
+              " (too few samples: more FRAMES or a larger SIZE)")
 EOF
