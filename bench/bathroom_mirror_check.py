@@ -25,6 +25,10 @@ import argparse, os, re, subprocess, sys, tempfile
 import numpy as np
 import OpenImageIO as oiio
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import bathroom_scene
+from bathroom_scene import H, W, camera_ray
+
 here = os.path.dirname(os.path.abspath(__file__))
 ap = argparse.ArgumentParser()
 ap.add_argument("--ferry", default=os.path.join(here, "..", "build", "ferry"))
@@ -35,86 +39,13 @@ ap.add_argument("--by-material", metavar="IMAGE", help="split IMAGE's squared er
 args = ap.parse_args()
 scene_dir = os.path.join(args.shared, "scenes", "bathroom")
 reference = os.path.join(args.shared, "references", "bathroom.exr")
-W, H = 1200, 760
 # The mirror's top left (the worst blocks) and the pane seen directly.
 MIRROR_CROP = (0.28, 0.40, 0.0, 0.08)
 DIRECT_CROP = (0.62, 0.84, 0.0, 0.10)
 
 
-def read_ply(path):
-    data = open(path, "rb").read()
-    end = data.index(b"end_header\n") + len(b"end_header\n")
-    head = data[:end].decode()
-    nv = int(re.search(r"element vertex (\d+)", head).group(1))
-    nf = int(re.search(r"element face (\d+)", head).group(1))
-    props = re.findall(r"property float (\w+)", head)
-    v = np.frombuffer(data, dtype="<f4", count=nv * len(props), offset=end).reshape(nv, len(props))
-    off = end + nv * len(props) * 4
-    faces = []
-    for _ in range(nf):
-        n = data[off]
-        off += 1
-        faces.append(np.frombuffer(data, dtype="<i4", count=n, offset=off))
-        off += 4 * n
-    return dict(zip(props, v.T)), np.array(faces)
-
-
-# Every mesh with its named material; the scene's `Scale -1 1 1` mirrors x.
-text = open(os.path.join(scene_dir, "bathroom.pbrt")).read()
-material, items = None, []
-for line in text.splitlines():
-    if line.strip().startswith("#"):
-        continue
-    m = re.match(r'\s*NamedMaterial\s+"([^"]+)"', line)
-    if m:
-        material = m.group(1)
-    m = re.search(r'"(geometry/mesh_\d+)\.ply"', line)
-    if m:
-        items.append((m.group(1).split("/")[1], material))
-corners, owner = [], []
-for k, (name, _) in enumerate(items):
-    v, f = read_ply(os.path.join(scene_dir, "geometry", name + ".ply"))
-    p = np.stack([-v["x"], v["y"], v["z"]], 1).astype(np.float64)
-    corners.append(p[f])
-    owner += [k] * len(f)
-corners = np.concatenate(corners)
-owner = np.array(owner)
-v0 = corners[:, 0]
-e1 = corners[:, 1] - v0
-e2 = corners[:, 2] - v0
-
-
-def hit(o, d):
-    pv = np.cross(d, e2)
-    det = (e1 * pv).sum(1)
-    with np.errstate(all="ignore"):
-        inv = 1 / det
-        tv = o - v0
-        u = (tv * pv).sum(1) * inv
-        q = np.cross(tv, e1)
-        w = (q @ d) * inv
-        t = (e2 * q).sum(1) * inv
-    ok = (np.abs(det) > 1e-12) & (u >= 0) & (w >= 0) & (u + w <= 1) & (t > 1e-4)
-    if not ok.any():
-        return None
-    i = np.flatnonzero(ok)[np.argmin(t[ok])]
-    n = np.cross(e1[i], e2[i])
-    return o + t[i] * d, items[owner[i]], n / np.linalg.norm(n)
-
-
-def camera_ray(px, py):
-    # pbrt's perspective camera: LookAt 0 23 30  10.2 5 0  0 1 0, fov 50 on
-    # the shorter side; raster x runs along pbrt's camera +x (up x view).
-    eye, at, up = np.array([0, 23, 30.0]), np.array([10.2, 5, 0.0]), np.array([0, 1, 0.0])
-    view = (at - eye) / np.linalg.norm(at - eye)
-    right = np.cross(up, view)
-    right /= np.linalg.norm(right)
-    true_up = np.cross(view, right)
-    tan = np.tan(np.radians(50) / 2)
-    sx = (-1 + 2 * (px + 0.5) / W) * W / H
-    sy = 1 - 2 * (py + 0.5) / H
-    d = view + (right * sx + true_up * sy) * tan
-    return eye, d / np.linalg.norm(d)
+scene = bathroom_scene.Scene(scene_dir)
+hit = scene.hit
 
 
 def quad(p):

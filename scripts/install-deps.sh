@@ -18,7 +18,7 @@ packages=(
   libcpp-httplib-dev              # ferry view: the HTTP server on rank 0
   chromium chromium-driver        # tests/viewer_test.sh: the viewer page in a headless browser
   python3 python3-matplotlib   # python3-matplotlib: the plots of bench/paper-eval
-  python3-openimageio             # bench/bathroom_mirror_check.py reads the EXR reference
+  python3-openimageio             # bench/bathroom_*.py read the EXR reference
   linux-perf                      # bench/distribution_profile.sh: perf record of each rank
   pybind11-dev python3-dev python3-numpy python3-mpi4py  # the Python module (python/)
 )

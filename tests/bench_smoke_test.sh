@@ -62,11 +62,13 @@ fi
 if [ -d "$source_dir/../shared/scenes/bathroom" ]; then
   bench bathroom_mirror_check '^[|] B [|]' /usr/bin/python3 bench/bathroom_mirror_check.py \
     --ferry "$ferry" --step 24 --spp 4
+  bench bathroom_experiments '^[|] hand mirror' /usr/bin/python3 bench/bathroom_experiments.py \
+    --ferry "$ferry" --spp 1 --step 8
   bench fidelity 'against Ferry at' env ONLY=bathroom SPP=1 EQUAL_TIME=1 CONVERGED_SPP=2 \
     OUT="$work/fidelity" FERRY="$ferry" \
     IMAGE_COMPARE="$(dirname "$ferry")/bench/image_compare" bench/fidelity
 else
-  echo "  fidelity, bathroom_mirror_check: skipped (no ../shared/scenes beside the source tree)"
+  echo "  fidelity, bathroom_mirror_check, bathroom_experiments: skipped (no ../shared/scenes beside the source tree)"
 fi
 
 if ((failures > 0)); then
