@@ -11,47 +11,12 @@
 #include "core/error.h"
 #include "core/hash64.h"
 #include "io/images/image_io.h"
+#include "io/json_numbers.h"
 #include "io/parts/part_file.h"
 #include "scene/scene.h"
 
 namespace ferry {
 namespace {
-
-// Numbers read from the manifest: a value that does not fit the field's type
-// (a fraction, a negative count, 2e82 for a byte count, 1e300 for a float)
-// is a JSON type error, reported with the path, never a conversion that
-// overflows.
-template <typename T>
-T checkedNumber(const nlohmann::json& v) {
-  using Limits = std::numeric_limits<T>;
-  if constexpr (std::is_integral_v<T>) {
-    if (v.is_number_unsigned()) {
-      const uint64_t u = v.get<uint64_t>();
-      if (u <= uint64_t(Limits::max())) return T(u);
-    } else if (v.is_number_integer()) {
-      const int64_t i = v.get<int64_t>();
-      if (i >= int64_t(Limits::lowest()) && (i < 0 || uint64_t(i) <= uint64_t(Limits::max())))
-        return T(i);
-    }
-    throw nlohmann::json::type_error::create(302, "expected a whole number that fits", &v);
-  } else {
-    if (v.is_number()) {
-      const double d = v.get<double>();
-      if (std::isfinite(d) && std::abs(d) <= double(Limits::max())) return T(d);
-    }
-    throw nlohmann::json::type_error::create(302, "expected a finite number that fits", &v);
-  }
-}
-
-template <typename T>
-T checkedNumber(const nlohmann::json& j, const char* key) {
-  return checkedNumber<T>(j.at(key));
-}
-
-template <typename T>
-T checkedNumberOr(const nlohmann::json& j, const char* key, T fallback) {
-  return j.is_object() && j.contains(key) ? checkedNumber<T>(j.at(key)) : fallback;
-}
 
 std::string manifestPath(const std::string& directory) {
   return (std::filesystem::path(directory) / kManifestName).string();

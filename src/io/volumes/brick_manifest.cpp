@@ -16,6 +16,7 @@
 
 #include "core/error.h"
 #include "io/byte_stream.h"
+#include "io/json_numbers.h"
 #include "io/volumes/volume_files.h"
 #include "shapes/volume_brick.h"
 
@@ -73,8 +74,9 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
     decltype(fallback) out;
     if (!v.is_array() || v.size() != 3) fail(fmt::format("{}: expected three numbers", key));
     for (int a = 0; a < 3; ++a) {
-      if (!v[a].is_number()) fail(fmt::format("{}: expected three numbers", key));
-      out[a] = v[a].get<T>();
+      const std::optional<T> n = numberAs<T>(v[a]);
+      if (!n) fail(fmt::format("{}: expected three numbers that fit", key));
+      out[a] = *n;
     }
     return out;
   };
@@ -99,12 +101,11 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
     if (format == "float32") {
       if (!j.contains("range")) fail("a float32 volume needs its whole range ([LO, HI])");
       const Json& r = j["range"];
-      if (!r.is_array() || r.size() != 2 || !r[0].is_number() || !r[1].is_number())
-        fail("range: expected [LO, HI]");
-      rangeLo = r[0].get<float>();
-      rangeHi = r[1].get<float>();
-      if (!std::isfinite(rangeLo) || !std::isfinite(rangeHi) || !(rangeHi >= rangeLo))
-        fail("range: expected finite LO <= HI");
+      if (!r.is_array() || r.size() != 2) fail("range: expected [LO, HI]");
+      const std::optional<float> lo = numberAs<float>(r[0]), hi = numberAs<float>(r[1]);
+      if (!lo || !hi || !(*hi >= *lo)) fail("range: expected finite LO <= HI");
+      rangeLo = *lo;
+      rangeHi = *hi;
     }
     if (!j.contains("bricks") || !j["bricks"].is_array() || j["bricks"].empty())
       fail("no bricks (a list of {file, lo, hi})");
@@ -166,9 +167,9 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
     }
     float opacity = tf.scale();
     if (j.contains("opacity")) {
-      if (!j["opacity"].is_number() || !(j["opacity"].get<float>() >= 0))
-        fail("opacity: expected a number 0 or more");
-      opacity = j["opacity"].get<float>();
+      const std::optional<float> o = numberAs<float>(j["opacity"]);
+      if (!o || !(*o >= 0)) fail("opacity: expected a number 0 or more");
+      opacity = *o;
     }
     // As a raw: volume: mean free paths across the box's longest side at opacity 1.
     tf = tf.withScale(opacity / maxComponent(box.size()));
@@ -241,6 +242,7 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
   } catch (const Json::exception& e) {
     fail(fmt::format("malformed ({})", e.what()));
   }
+  return {};  // (not reached: fail throws)
 }
 
 }  // namespace ferry

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "io/json_numbers.h"
 #include "io/volumes/volume_files.h"
 
 namespace ferry {
@@ -32,8 +33,9 @@ TransferFunction readTransferFunction(const std::string& path) {
       fail(fmt::format("\"{}\" entry {} is not {} numbers", what, index, n));
     std::vector<float> out;
     for (const auto& v : row) {
-      if (!v.is_number()) fail(fmt::format("\"{}\" entry {} is not {} numbers", what, index, n));
-      out.push_back(v.get<float>());
+      const std::optional<float> f = numberAs<float>(v);
+      if (!f) fail(fmt::format("\"{}\" entry {} is not {} numbers", what, index, n));
+      out.push_back(*f);
     }
     return out;
   };
@@ -49,8 +51,9 @@ TransferFunction readTransferFunction(const std::string& path) {
   }
   float scale = TransferFunction::standard().scale();
   if (j.contains("scale")) {
-    if (!j["scale"].is_number()) fail("\"scale\" is not a number");
-    scale = j["scale"].get<float>();
+    const std::optional<float> f = numberAs<float>(j["scale"]);
+    if (!f) fail("\"scale\" is not a finite number");
+    scale = *f;
   }
   try {
     return TransferFunction(std::move(colors), std::move(opacities), scale);
