@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <array>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -186,15 +188,74 @@ void vdb(std::string_view bytes) {
   readVdbDensityAndTemperature(writeScratch("fuzz.vdb", bytes), uint64_t(1) << 22);
 }
 
+// The fuzzer's bytes read in order, as little-endian numbers; zeros past the end.
+class ByteReader {
+ public:
+  explicit ByteReader(std::string_view bytes) : bytes_(bytes) {}
+  uint8_t byte() { return at_ < bytes_.size() ? uint8_t(bytes_[at_++]) : 0; }
+  int16_t int16() { return int16_t(uint16_t(byte() | (uint16_t(byte()) << 8))); }
+  float float32() {
+    uint32_t u = 0;
+    for (int i = 0; i < 4; ++i) u |= uint32_t(byte()) << (8 * i);
+    float f;
+    std::memcpy(&f, &u, 4);
+    return f;
+  }
+
+ private:
+  std::string_view bytes_;
+  size_t at_ = 0;
+};
+
+// OpenVDB grids described by the bytes, written by OpenVDB and read back
+// as a pbrt-v4 medium reads them (density and temperature): Ferry's reading
+// of any grid OpenVDB writes, where mutating the file's bytes (vdb) finds
+// OpenVDB's own behaviours. Per grid: name, value type, a scale per axis
+// (n / 16), a rotation about z (a multiple of 30 degrees), a translation
+// (n / 8), the background, then up to 64 active voxels (int16 coordinates,
+// float values).
+void vdbgrids(std::string_view bytes) {
+  ByteReader in(bytes);
+  static const char* const names[] = {"density", "temperature", "smoke", ""};
+  std::vector<VdbGridToWrite> grids(1 + in.byte() % 3);
+  for (VdbGridToWrite& g : grids) {
+    g.name = names[in.byte() % 4];
+    g.type = VdbGridToWrite::Type(in.byte() % 3);
+    for (double& s : g.scale) s = int8_t(in.byte()) / 16.0;
+    g.rotateZDegrees = (in.byte() % 4) * 30.0;
+    for (double& t : g.translation) t = in.int16() / 8.0;
+    g.background = in.float32();
+    const int count = in.byte() % 65;
+    for (int i = 0; i < count; ++i) {
+      const std::array<int32_t, 3> c{in.int16(), in.int16(), in.int16()};
+      g.voxels.emplace_back(c, in.float32());
+    }
+  }
+  const std::string path = (scratchDirectory() / "fuzz-grids.vdb").string();
+  writeVdbFile(path, grids);
+  readVdbDensityAndTemperature(path, uint64_t(1) << 22);
+}
+
 }  // namespace
 
 const std::vector<Kind>& kinds() {
   static const std::vector<Kind> all = {
-      {"pbrt", pbrt},     {"ply", ply},           {"obj", obj},
-      {"gltf", gltf},     {"glb", glb},           {"bsdf", bsdf},
-      {"part", part},     {"manifest", manifest}, {"checkpoint", checkpoint},
-      {"camera", camera}, {"settings", settings}, {"raw", raw},
-      {"tf", tf},         {"vdb", vdb},           {"bricks", bricks},
+      {"pbrt", pbrt},
+      {"ply", ply},
+      {"obj", obj},
+      {"gltf", gltf},
+      {"glb", glb},
+      {"bsdf", bsdf},
+      {"part", part},
+      {"manifest", manifest},
+      {"checkpoint", checkpoint},
+      {"camera", camera},
+      {"settings", settings},
+      {"raw", raw},
+      {"tf", tf},
+      {"vdb", vdb},
+      {"bricks", bricks},
+      {"vdbgrids", vdbgrids},
   };
   return all;
 }

@@ -21,7 +21,8 @@ struct Kind {
 
 // Every kind: pbrt, ply, obj, gltf, glb, bsdf, part, manifest, checkpoint,
 // camera (POST /camera and /focus bodies), settings (POST /settings bodies), raw (a
-// raw volume's name and bytes), tf (transfer function files).
+// raw volume's name and bytes), tf (transfer function files), bricks (a volume's
+// bricks manifest), vdb (.vdb files), vdbgrids (grids OpenVDB writes).
 const std::vector<Kind>& kinds();
 const Kind& kind(std::string_view name);
 

@@ -87,4 +87,27 @@ PBRT
 cp "$work"/combined/part-0000.fpart "$corpus/part/combined-texture-0.fpart"
 fresh tf && cp tests/corpus/volumes/*.tf.json "$corpus/tf/"
 fresh vdb && cp tests/corpus/volumes/*.vdb "$corpus/vdb/"
+# Grid descriptions (tests/fuzz/fuzz_inputs.cpp, vdbgrids): a count byte, then
+# per grid name, type, scale, rotation, translation, background, voxels.
+fresh vdbgrids
+python3 - "$corpus/vdbgrids" << 'PY'
+import os, struct, sys
+def grid(name, typ, scale=(16, 16, 16), rot=0, trans=(0, 0, 0), bg=0.0, voxels=()):
+    b = bytes([name, typ, *[s & 0xFF for s in scale], rot]) + struct.pack("<hhhf", *trans, bg)
+    return b + bytes([len(voxels)]) + b"".join(struct.pack("<hhhf", *v) for v in voxels)
+cube = [(x, y, z, 0.25 * (1 + x + y + z)) for x in range(2) for y in range(2) for z in range(2)]
+seeds = {
+    "density-cube": bytes([0]) + grid(0, 0, voxels=cube),
+    "density-and-temperature": bytes([1]) + grid(0, 0, scale=(8, 16, 32), trans=(-8, 0, 16), voxels=cube)
+    + grid(1, 0, voxels=[(0, 0, 0, 1500.0), (1, 1, 1, 800.0)]),
+    "rotated": bytes([0]) + grid(0, 0, rot=1, voxels=cube),
+    "double-only": bytes([0]) + grid(0, 1, voxels=cube),
+    "negative-value": bytes([0]) + grid(0, 0, voxels=[(0, 0, 0, 1.0), (1, 0, 0, -1.0)]),
+    "far-apart": bytes([0]) + grid(0, 0, voxels=[(-30000, 0, 0, 1.0), (30000, 30000, 30000, 1.0)]),
+    "mirrored": bytes([0]) + grid(0, 0, scale=(-16, 16, 16), voxels=cube),
+    "first-float-grid-unnamed": bytes([0]) + grid(3, 0, voxels=cube),
+}
+for name, b in seeds.items():
+    open(os.path.join(sys.argv[1], name), "wb").write(b)
+PY
 echo "seeds in $corpus: $(ls "$corpus" | tr '\n' ' ')"

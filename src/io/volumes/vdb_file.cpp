@@ -1,9 +1,11 @@
 // The one file that includes OpenVDB (scripts/check_layering.py keeps it so).
 #include <openvdb/openvdb.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <mutex>
+#include <type_traits>
 
 #include <fmt/format.h>
 
@@ -14,9 +16,13 @@ namespace ferry {
 
 namespace {
 
-openvdb::GridPtrVecPtr readGrids(const std::string& path) {
+void initializeOpenVdb() {
   static std::once_flag initialized;
   std::call_once(initialized, [] { openvdb::initialize(); });
+}
+
+openvdb::GridPtrVecPtr readGrids(const std::string& path) {
+  initializeOpenVdb();
   if (!std::filesystem::exists(path)) throw InputError(fmt::format("{}: no such file", path));
   openvdb::GridPtrVecPtr grids;
   try {
@@ -71,7 +77,10 @@ VdbDensity densityOf(const openvdb::GridPtrVec& grids, const std::string& path,
         out.gridName, side[0], side[1], side[2], maxVoxels));
   const openvdb::Coord dim{int(side[0]), int(side[1]), int(side[2])};
   std::vector<float> values(count);
-  auto accessor = grid->getConstAccessor();
+  // (Unsafe accessors: not registered with the tree, whose registry is a TBB
+  // concurrent_hash_map that casts a flag value to a node pointer, undefined
+  // behaviour UBSan stops at; nothing changes the tree while it is read.)
+  auto accessor = grid->getConstUnsafeAccessor();
   for (int z = 0; z < dim.z(); ++z)
     for (int y = 0; y < dim.y(); ++y)
       for (int x = 0; x < dim.x(); ++x) {
@@ -114,7 +123,62 @@ VdbDensity densityOf(const openvdb::GridPtrVec& grids, const std::string& path,
   return out;
 }
 
+// The value a grid of type T stores for `v` (integers: toward zero, NaN 0,
+// clamped to T's range, so that no conversion is undefined).
+template <typename T>
+T storedValue(float v) {
+  if constexpr (std::is_floating_point_v<T>) {
+    return T(v);
+  } else {
+    if (!(v == v)) return 0;
+    return T(std::clamp(double(v), -2147483648.0, 2147483647.0));
+  }
+}
+
+template <typename GridT>
+openvdb::GridBase::Ptr makeGrid(const VdbGridToWrite& g, const openvdb::math::Transform::Ptr& map) {
+  using Value = typename GridT::ValueType;
+  typename GridT::Ptr grid = GridT::create(storedValue<Value>(g.background));
+  auto accessor = grid->getUnsafeAccessor();  // (unsafe: as in densityOf)
+  for (const auto& [c, v] : g.voxels)
+    accessor.setValue(openvdb::Coord(c[0], c[1], c[2]), storedValue<Value>(v));
+  grid->setTransform(map);
+  grid->setName(g.name);
+  return grid;
+}
+
 }  // namespace
+
+void writeVdbFile(const std::string& path, const std::vector<VdbGridToWrite>& grids) {
+  initializeOpenVdb();
+  try {
+    openvdb::GridPtrVec out;
+    for (const VdbGridToWrite& g : grids) {
+      openvdb::math::Transform::Ptr map = openvdb::math::Transform::createLinearTransform(1.0);
+      map->preScale(openvdb::Vec3d(g.scale[0], g.scale[1], g.scale[2]));
+      map->postRotate(g.rotateZDegrees * (openvdb::math::pi<double>() / 180),
+                      openvdb::math::Z_AXIS);
+      map->postTranslate(openvdb::Vec3d(g.translation[0], g.translation[1], g.translation[2]));
+      switch (g.type) {
+        case VdbGridToWrite::Type::Float:
+          out.push_back(makeGrid<openvdb::FloatGrid>(g, map));
+          break;
+        case VdbGridToWrite::Type::Double:
+          out.push_back(makeGrid<openvdb::DoubleGrid>(g, map));
+          break;
+        case VdbGridToWrite::Type::Int32:
+          out.push_back(makeGrid<openvdb::Int32Grid>(g, map));
+          break;
+      }
+    }
+    openvdb::io::File file(path);
+    file.write(out);
+    file.close();
+  } catch (const std::exception& e) {
+    throw InputError(
+        fmt::format("{}: cannot write the grids as an OpenVDB file ({})", path, e.what()));
+  }
+}
 
 VdbDensity readVdbDensity(const std::string& path, const std::string& gridName,
                           uint64_t maxVoxels) {

@@ -6,9 +6,12 @@
 // (as a lone mesh gets them). pbrt's "nanovdb" medium reads .vdb files too.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "media/density_grid.h"
 #include "media/transfer_function.h"
@@ -38,6 +41,26 @@ VdbDensity readVdbDensity(const std::string& path, const std::string& gridName =
 // "temperature" (no grid if the file has none).
 std::pair<VdbDensity, VdbDensity> readVdbDensityAndTemperature(const std::string& path,
                                                                uint64_t maxVoxels = kMaxVdbVoxels);
+
+// One grid of a .vdb file to write (writeVdbFile): its name and value type,
+// its index-to-world map (a scale per axis, then a rotation about z, then a
+// translation), its background and its active voxels. Values are given as
+// floats; an integer grid takes each rounded toward zero (0 for NaN, clamped
+// to its range).
+struct VdbGridToWrite {
+  enum class Type : uint8_t { Float, Double, Int32 };
+  std::string name;
+  Type type = Type::Float;
+  std::array<double, 3> scale{1, 1, 1};
+  double rotateZDegrees = 0;
+  std::array<double, 3> translation{0, 0, 0};
+  float background = 0;
+  std::vector<std::pair<std::array<int32_t, 3>, float>> voxels;
+};
+// Writes `grids` to a .vdb file at `path` with OpenVDB (tests and the
+// vdbgrids fuzz target build their files so). InputError naming the path if
+// OpenVDB refuses a grid (a scale of 0) or the file cannot be written.
+void writeVdbFile(const std::string& path, const std::vector<VdbGridToWrite>& grids);
 
 // `ferry render cloud.vdb`: its density as smoke (sigma_a 1, sigma_s 9 per
 // unit of density and world length, g 0), framed and lit by default.

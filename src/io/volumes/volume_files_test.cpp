@@ -87,6 +87,43 @@ TEST(VdbFile, RefusesASparseGridTooLargeToMakeDense) {
   EXPECT_EQ(readVdbDensity(density, "", 24).grid->nz(), 4);
 }
 
+// What writeVdbFile writes reads back where it was put; what the reader
+// refuses (a rotation, a mirror, a scale OpenVDB refuses) says so.
+TEST(VdbFile, WrittenGridsReadBackWhereTheyWerePut) {
+  const std::string path =
+      (fs::temp_directory_path() / ("ferry-vdb-" + std::to_string(getpid()) + ".vdb")).string();
+  VdbGridToWrite density;
+  density.name = "density";
+  density.scale = {0.5, 1, 2};
+  density.translation = {1, 2, 3};
+  density.voxels = {{{0, 0, 0}, 0.5f}, {{1, 0, 0}, 1.5f}};
+  VdbGridToWrite temperature = density;
+  temperature.name = "temperature";
+  temperature.type = VdbGridToWrite::Type::Double;  // not a float grid: no temperature
+  writeVdbFile(path, {density, temperature});
+  const auto [d, t] = readVdbDensityAndTemperature(path);
+  ASSERT_TRUE(d.grid);
+  EXPECT_FALSE(t.grid);
+  EXPECT_EQ(d.grid->nx(), 2);
+  EXPECT_EQ(d.grid->ny(), 1);
+  // Cells about their centres: x from -0.25 to 0.75, y -0.5..0.5, z -1..1, moved by (1, 2, 3).
+  EXPECT_EQ(d.box.lower, Vec3f(0.75f, 1.5f, 2.0f));
+  EXPECT_EQ(d.box.upper, Vec3f(1.75f, 2.5f, 4.0f));
+  EXPECT_FLOAT_EQ(d.grid->lookup({0.75f, 0.5f, 0.5f}), 1.5f);
+  density.rotateZDegrees = 30;
+  writeVdbFile(path, {density});
+  EXPECT_NE(errorOf([&] { readVdbDensity(path); }).find("is rotated or sheared"),
+            std::string::npos);
+  density.rotateZDegrees = 0;
+  density.scale = {-1, 1, 1};
+  writeVdbFile(path, {density});
+  EXPECT_NE(errorOf([&] { readVdbDensity(path); }).find("is mirrored"), std::string::npos);
+  density.scale = {0, 1, 1};
+  EXPECT_NE(errorOf([&] { writeVdbFile(path, {density}); }).find("cannot write the grids"),
+            std::string::npos);
+  fs::remove(path);
+}
+
 TEST(VdbFile, PbrtNanovdbMediaReadTheSameGridFromVdb) {
   const std::string text =
       "MakeNamedMedium \"cloud\" \"string type\" \"nanovdb\" \"string filename\" "
@@ -190,6 +227,35 @@ TEST(RawVolume, RefusesMalformedNames) {
          "positions must increase");
   expect(base + "?dims=2,2,2&format=uint8&tf=" + (kCorpus / "short_color.tf.json").string(),
          "\"colors\" entry 0 is not 4 numbers");
+}
+
+// JSON numbers a field's type cannot hold (found by fuzzing: 2.5e50 samples
+// converted to int64_t) are the file's error, not a conversion.
+TEST(VolumeJson, NumbersThatDoNotFitTheirFieldAreRefused) {
+  auto text = [](const std::string& t) {
+    return RawFile(std::vector<unsigned char>(t.begin(), t.end()));
+  };
+  const RawFile tf = text(R"({"colors":[[0,1,1,1]],"opacity":[[0,1e300]]})");
+  EXPECT_NE(errorOf([&] {
+              readTransferFunction(tf.path());
+            }).find("\"opacity\" entry 0 is not 2 numbers"),
+            std::string::npos);
+  const RawFile scale = text(R"({"colors":[[0,1,1,1]],"opacity":[[0,1]],"scale":-1e39})");
+  EXPECT_NE(
+      errorOf([&] { readTransferFunction(scale.path()); }).find("\"scale\" is not a finite number"),
+      std::string::npos);
+  for (const auto& [manifest, error] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"dims":[2,2,2.5e50],"format":"uint8","bricks":[]})",
+            "dims: expected three numbers that fit"},
+           {R"({"dims":[2,2,2],"spacing":[1,1e300,1],"format":"uint8","bricks":[]})",
+            "spacing: expected three numbers that fit"},
+           {R"({"dims":[2,2,2],"format":"float32","range":[0,1e39],"bricks":[]})",
+            "range: expected finite LO <= HI"}}) {
+    const RawFile f = text(manifest);
+    EXPECT_NE(errorOf([&] { loadBrickPiece("bricks:" + f.path(), 0, 1); }).find(error),
+              std::string::npos)
+        << manifest;
+  }
 }
 
 }  // namespace
