@@ -19,24 +19,19 @@ Ferry / reference on each face seen directly and through the mirror.
 
 About 4 minutes on 2 cores at 256 spp.
 """
-import argparse, atexit, os, shutil, subprocess, sys, tempfile
+import atexit, os, shutil, subprocess, sys, tempfile
 
 import numpy as np
-import OpenImageIO as oiio
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bathroom_scene
-from bathroom_scene import H, W, camera_ray
+from bathroom_scene import H, W, camera_ray, read_image as read
 
-here = os.path.dirname(os.path.abspath(__file__))
-ap = argparse.ArgumentParser()
-ap.add_argument("--ferry", default=os.path.join(here, "..", "build", "ferry"))
-ap.add_argument("--shared", default=os.path.join(here, "..", "..", "shared"))
-ap.add_argument("--spp", type=int, default=256)
+ap = bathroom_scene.arguments(spp=256)
 ap.add_argument("--threads", type=int, default=0)
 ap.add_argument("--step", type=int, default=2, help="trace every STEP-th pixel of the crops")
 args = ap.parse_args()
-scene_dir = os.path.join(args.shared, "scenes", "bathroom")
+scene_dir, reference = bathroom_scene.paths(args)
 RW, RH = 300, 190  # the render size; the reference is brought to it by 4x4 means
 LUM = np.array([0.2126, 0.7152, 0.0722])
 REGIONS = [  # name, (x0, x1, y0, y1) as fractions, y down
@@ -45,10 +40,6 @@ REGIONS = [  # name, (x0, x1, y0, y1) as fractions, y down
     ("metal fitting (1 of the 10 worst)", (0.72, 0.74, 0.32, 0.34)),
     ("whole image", (0.0, 1.0, 0.0, 1.0)),
 ]
-
-
-def read(path):
-    return oiio.ImageBuf(path).get_pixels(oiio.FLOAT)[..., :3]
 
 
 def srgb_mean(path):
@@ -81,7 +72,7 @@ variants = [
     ("coat off", variant("coat-off", coat, coat.replace('"rgb Ks" [ 0.2 0.2 0.2 ]', '"rgb Ks" [ 0 0 0 ]'))),
 ]
 
-ref_full = read(os.path.join(args.shared, "references", "bathroom.exr"))
+ref_full = read(reference)
 ref = ref_full.reshape(RH, H // RH, RW, W // RW, 3).mean((1, 3))
 images = {}
 for name, scene in variants:

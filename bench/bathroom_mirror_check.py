@@ -20,25 +20,19 @@ centre ray meets first (through mirrors: "mirror>" and what the mirror
 shows): blocks, share of the squared error, both means. About 14,000 rays:
 about half an hour on one core.
 """
-import argparse, os, re, subprocess, sys, tempfile
+import os, subprocess, sys, tempfile
 
 import numpy as np
-import OpenImageIO as oiio
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bathroom_scene
-from bathroom_scene import H, W, camera_ray
+from bathroom_scene import H, W, camera_ray, read_image
 
-here = os.path.dirname(os.path.abspath(__file__))
-ap = argparse.ArgumentParser()
-ap.add_argument("--ferry", default=os.path.join(here, "..", "build", "ferry"))
-ap.add_argument("--shared", default=os.path.join(here, "..", "..", "shared"))
-ap.add_argument("--spp", type=int, default=64)
+ap = bathroom_scene.arguments(spp=64)
 ap.add_argument("--step", type=int, default=3, help="trace every STEP-th pixel")
 ap.add_argument("--by-material", metavar="IMAGE", help="split IMAGE's squared error by material")
 args = ap.parse_args()
-scene_dir = os.path.join(args.shared, "scenes", "bathroom")
-reference = os.path.join(args.shared, "references", "bathroom.exr")
+scene_dir, reference = bathroom_scene.paths(args)
 # The mirror's top left (the worst blocks) and the pane seen directly.
 MIRROR_CROP = (0.28, 0.40, 0.0, 0.08)
 DIRECT_CROP = (0.62, 0.84, 0.0, 0.10)
@@ -67,12 +61,12 @@ def render(crop, out):
     cmd = [args.ferry, "render", os.path.join(scene_dir, "bathroom.pbrt"), "--size", f"{W}x{H}",
            "--crop", ",".join(map(str, crop)), "--spp", str(args.spp), "-q", "-o", out]
     subprocess.run(cmd, check=True, stderr=subprocess.DEVNULL)
-    return oiio.ImageBuf(out).get_pixels(oiio.FLOAT)[..., :3]
+    return read_image(out)
 
 
-ref = oiio.ImageBuf(reference).get_pixels(oiio.FLOAT)[..., :3]
+ref = read_image(reference)
 if args.by_material:
-    image = oiio.ImageBuf(args.by_material).get_pixels(oiio.FLOAT)[..., :3]
+    image = read_image(args.by_material)
     BX, BY = 150, 95  # 2x2 blocks of the 300x190 comparison: 8x8 reference pixels
     ref_blocks = ref.reshape(BY, 8, BX, 8, 3).mean((1, 3))
     image_blocks = image.reshape(BY, image.shape[0] // BY, BX, image.shape[1] // BX, 3).mean((1, 3))

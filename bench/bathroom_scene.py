@@ -1,15 +1,38 @@
-"""The bathroom's geometry in numpy, for the bathroom benches
-(bathroom_mirror_check.py, bathroom_experiments.py): every mesh of
+"""The bathroom benches' shared parts (bathroom_mirror_check.py,
+bathroom_experiments.py): their common arguments and paths, reading an
+image, and the bathroom's geometry in numpy: every mesh of
 ../shared/scenes/bathroom with its named material (the scene's `Scale -1 1 1`
 applied), the nearest hit of a ray among them, and the camera's ray through a
 pixel of the reference's 1200x760 film (pinhole; the renders use the scene's
 thin lens). About 0.1 s a ray: brute force over every triangle.
 """
-import os, re
+import argparse, os, re
 
 import numpy as np
+import OpenImageIO as oiio
 
 W, H = 1200, 760
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def arguments(spp):
+    """A parser with --ferry, --shared and --spp (default `spp`); add the script's own."""
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--ferry", default=os.path.join(HERE, "..", "build", "ferry"))
+    ap.add_argument("--shared", default=os.path.join(HERE, "..", "..", "shared"))
+    ap.add_argument("--spp", type=int, default=spp)
+    return ap
+
+
+def paths(args):
+    """The scene's directory and the reference render under args.shared."""
+    return (os.path.join(args.shared, "scenes", "bathroom"),
+            os.path.join(args.shared, "references", "bathroom.exr"))
+
+
+def read_image(path):
+    """An image's RGB as float32, rows top down."""
+    return oiio.ImageBuf(path).get_pixels(oiio.FLOAT)[..., :3]
 
 
 def read_ply(path):

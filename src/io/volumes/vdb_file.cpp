@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <mutex>
 #include <type_traits>
 
@@ -131,7 +132,8 @@ T storedValue(float v) {
     return T(v);
   } else {
     if (!(v == v)) return 0;
-    return T(std::clamp(double(v), -2147483648.0, 2147483647.0));
+    using Limits = std::numeric_limits<T>;
+    return T(std::clamp(double(v), double(Limits::lowest()), double(Limits::max())));
   }
 }
 
