@@ -200,10 +200,10 @@ SceneSummary summaryFromJson(const nlohmann::json& j) {
   }
   if (j.contains("bounds") && j["bounds"].is_array() && j["bounds"].size() == 2) {
     const auto& b = j["bounds"];
-    s.bounds.lower = {checkedNumber<float>(b[0][0]), checkedNumber<float>(b[0][1]),
-                      checkedNumber<float>(b[0][2])};
-    s.bounds.upper = {checkedNumber<float>(b[1][0]), checkedNumber<float>(b[1][1]),
-                      checkedNumber<float>(b[1][2])};
+    s.bounds.lower = {checkedNumber<float>(b.at(0).at(0)), checkedNumber<float>(b.at(0).at(1)),
+                      checkedNumber<float>(b.at(0).at(2))};
+    s.bounds.upper = {checkedNumber<float>(b.at(1).at(0)), checkedNumber<float>(b.at(1).at(1)),
+                      checkedNumber<float>(b.at(1).at(2))};
   }
   if (j.contains("memory_bytes")) {
     const auto& m = j["memory_bytes"];

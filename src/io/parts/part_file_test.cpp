@@ -477,11 +477,12 @@ TEST(PartFiles, ManifestFromAnotherVersionOrBrokenIsRefused) {
     EXPECT_NE(e.find("manifest.json: missing or bad field"), std::string::npos)
         << key << " " << value << ": " << e;
   }
-  for (auto [key, value] :
-       std::vector<std::pair<std::string, nlohmann::json>>{{"film_scale", 1e300},
-                                                           {"ranks", 1e10},
-                                                           {"version", -2},
-                                                           {"summary", {{"triangles", 2e82}}}}) {
+  for (auto [key, value] : std::vector<std::pair<std::string, nlohmann::json>>{
+           {"film_scale", 1e300},
+           {"ranks", 1e10},
+           {"version", -2},
+           {"summary", {{"triangles", 2e82}}},
+           {"summary", nlohmann::json::parse(R"({"bounds": [[0, 0, 0], [1, 2]]})")}}) {
     nlohmann::json broken = j;
     broken[key] = value;
     std::ofstream(manifest) << broken.dump();
