@@ -343,6 +343,11 @@ TEST(ApiSession, RefusesUnknownSettingsNamingThem) {
   EXPECT_NE(message({{"forwarding", "pigeons"}}).find("--forwarding"), std::string::npos);
   EXPECT_NE(message({{"chunk", "many"}}).find("chunk"), std::string::npos);
   EXPECT_EQ(message({{"env-fallback", ""}, {"mis", "off"}}), "no error");
+  EXPECT_NE(message({{"mis-heuristic", "cubic"}}).find("--mis-heuristic cubic: expected power or"),
+            std::string::npos);
+  EXPECT_NE(message({{"light-choice", "far"}}).find("--light-choice far: expected near or power"),
+            std::string::npos);
+  EXPECT_EQ(message({{"mis-heuristic", "balance"}, {"light-choice", "power"}}), "no error");
 }
 
 TEST(ApiSession, ReportsProgressOnRankZero) {

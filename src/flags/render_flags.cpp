@@ -101,6 +101,12 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
   if (o.mis != "on" && o.mis != "off")
     throw InputError(fmt::format("--mis {}: expected on or off", o.mis));
   s.render.lightStrategy = o.mis == "on" ? LightStrategy::Mis : LightStrategy::LightSamples;
+  if (o.misHeuristic != "power" && o.misHeuristic != "balance")
+    throw InputError(fmt::format("--mis-heuristic {}: expected power or balance", o.misHeuristic));
+  s.render.misHeuristic = o.misHeuristic == "power" ? MisHeuristic::Power : MisHeuristic::Balance;
+  if (o.lightChoice != "near" && o.lightChoice != "power")
+    throw InputError(fmt::format("--light-choice {}: expected near or power", o.lightChoice));
+  s.render.lightChoice = o.lightChoice == "near" ? LightChoice::Near : LightChoice::Power;
   if (o.lightPaths == "on" || o.lightPaths == "off")
     s.lightPaths = o.lightPaths == "on";
   else if (o.lightPaths != "auto")
@@ -173,6 +179,18 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                    "Multiple importance sampling: on (light and BSDF samples both find emitters\n"
                    "and the environment map, weighed by the power heuristic) or off (emitters\n"
                    "only through light samples, as the paper)")
+      ->capture_default_str();
+  command
+      ->add_option("--mis-heuristic", o.misHeuristic,
+                   "How MIS weighs its strategies: power (Veach's power heuristic, pbrt's path\n"
+                   "integrator's) or balance (pbrt's bdpt's). The same image in expectation\n"
+                   "but for pbrt-v3's mirrored emitters; only the noise differs")
+      ->capture_default_str();
+  command
+      ->add_option("--light-choice", o.lightChoice,
+                   "How a light sample chooses among emitters: near (by power over squared\n"
+                   "distance) or power (by power alone, pbrt's \"power\" light sample\n"
+                   "strategy). Unbiased either way")
       ->capture_default_str();
   command
       ->add_option("--light-paths", o.lightPaths,

@@ -57,6 +57,8 @@ struct RenderOptions {
   // --mis: "on" weighs light and BSDF samples (multiple importance
   // sampling); "off" counts emitters only through light samples.
   std::string mis = "on";
+  std::string misHeuristic = "power";   // --mis-heuristic: power or balance
+  std::string lightChoice = "near";     // --light-choice: near or power
   std::string lightPaths = "auto";      // --light-paths: auto, on or off
   std::string transmittance = "ratio";  // --transmittance: ratio or delta
   // --volume-opacity, --color-map: transfer-function volumes restyled.

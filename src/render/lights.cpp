@@ -47,8 +47,8 @@ uint64_t cornersKey(std::array<Vec3f, 3> corners) {
 
 }  // namespace
 
-LightSampler::LightSampler(const Scene& scene)
-    : suns_(scene.suns), environment_(scene.environment) {
+LightSampler::LightSampler(const Scene& scene, LightChoice choice)
+    : suns_(scene.suns), environment_(scene.environment), choice_(choice) {
   for (const SunLight& sun : suns_)
     sunConstants_.push_back({sunRadiance(sun), sunConePdf(sun), oneMinusCos(sun.angularRadius),
                              2 * std::sin(0.5f * sun.angularRadius), luminance(sun.irradiance),
@@ -120,6 +120,7 @@ LightSampler::LightSampler(const Scene& scene)
       sum += t.power;
     }
     emittedPower_ = float(sum * kPi);
+    trianglePower_ = float(sum);
     emissionByPower_ = Distribution1D(std::move(powers));
   }
   if (triangles_.size() > kMaxIndividualTriangles) {
@@ -248,6 +249,18 @@ float LightSampler::groupWeight(size_t group, Vec3f p) const {
   return g.power / std::max(dot(d, d), g.bounds.surfaceArea() * 0.25f);
 }
 
+// LightChoice::Power: the emitters' share as Near gives it at p, split by
+// power alone: each triangle's weight is its power times this.
+float LightSampler::emittersPerPower(Vec3f p) const {
+  if (!(trianglePower_ > 0)) return 0;
+  float share = 0;
+  if (groups_.empty())
+    for (const EmissiveTriangle& t : triangles_) share += triangleWeight(t, p);
+  else
+    for (size_t g = 0; g < groups_.size(); ++g) share += groupWeight(g, p);
+  return share / trianglePower_;
+}
+
 template <typename Visit>
 void LightSampler::forEachCandidate(Vec3f p, Visit&& visit) const {
   const int sunCount = int(suns_.size());
@@ -256,12 +269,14 @@ void LightSampler::forEachCandidate(Vec3f p, Visit&& visit) const {
   int next = sunCount;
   if (!environment_.isBlack() && visit(next, environmentWeight_)) return;
   ++next;
+  const bool byPower = choice_ == LightChoice::Power;
+  const float perPower = byPower ? emittersPerPower(p) : 0.0f;
   if (groups_.empty()) {
     for (const EmissiveTriangle& t : triangles_)
-      if (visit(next++, triangleWeight(t, p))) return;
+      if (visit(next++, byPower ? t.power * perPower : triangleWeight(t, p))) return;
   } else {
     for (size_t g = 0; g < groups_.size(); ++g)
-      if (visit(next++, groupWeight(g, p))) return;
+      if (visit(next++, byPower ? groups_[g].power * perPower : groupWeight(g, p))) return;
   }
 }
 
@@ -420,7 +435,9 @@ float LightSampler::emitterPdf(Vec3f from, uint32_t index, Vec3f point) const {
   const float total = selectionTotal(from);
   if (!(total > 0)) return 0;
   float selection;
-  if (groups_.empty()) {
+  if (choice_ == LightChoice::Power) {
+    selection = t.power * emittersPerPower(from) / total;
+  } else if (groups_.empty()) {
     selection = triangleWeight(t, from) / total;
   } else {
     // Groups are consecutive runs of kTrianglesPerGroup triangles.

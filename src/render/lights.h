@@ -45,9 +45,18 @@ struct EmissionSample {
   float pdfDirection = 0;  // solid angle: cos / pi, halved for a two-sided emitter
 };
 
+// How a light sample chooses among the emissive triangles: Near (the
+// default) by power over squared distance from the shading point; Power by
+// power alone (pbrt's "power" light sample strategy). Either way the distant
+// lights (suns, environment) keep their share, and the estimate is unbiased.
+enum class LightChoice { Near, Power };
+inline const char* lightChoiceName(LightChoice c) {
+  return c == LightChoice::Near ? "near" : "power";
+}
+
 class LightSampler {
  public:
-  explicit LightSampler(const Scene& scene);
+  explicit LightSampler(const Scene& scene, LightChoice choice = LightChoice::Near);
 
   // Samples a light as seen from `p` (with normal `n` for the selection
   // weights). `twoSided` surfaces (dielectrics) receive light from both
@@ -126,6 +135,7 @@ class LightSampler {
   float selectionTotal(Vec3f p) const;
   float triangleWeight(const EmissiveTriangle& t, Vec3f p) const;
   float groupWeight(size_t group, Vec3f p) const;
+  float emittersPerPower(Vec3f p) const;
   Vec2f directionToUv(Vec3f d) const;
   Vec3f uvToDirection(Vec2f uv) const;
   bool sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u, LightSample& out) const;
@@ -152,6 +162,8 @@ class LightSampler {
   // constant environment (when it is one), and their summed weight.
   bool constantEnvironmentSelected_ = false;
   float distantWeight_ = 0;
+  LightChoice choice_ = LightChoice::Near;
+  float trianglePower_ = 0;  // the sum of triangles_' power (LightChoice::Power)
   std::vector<EmissiveTriangle> triangles_;
   std::vector<Group> groups_;       // empty when every triangle is its own candidate
   Distribution1D emissionByPower_;  // over triangles_, for sampleEmission

@@ -1,6 +1,8 @@
 // Light selection for a surface that only reflects (LightSampler::sample's
 // `facing`): suns below its horizon are never chosen, the estimate of the
 // light arriving stays unbiased, and the emitters' densities do not change.
+// LightChoice: Near prefers the emitter near the point, Power chooses by
+// power alone wherever the point is.
 #include "render/lights.h"
 
 #include <gtest/gtest.h>
@@ -76,6 +78,38 @@ TEST(Lights, NoDistantLightAboveMeansNoSample) {
                              Vec3f{0, 1, 0}));
   // A surface that transmits takes light from below: `facing` is not given.
   EXPECT_TRUE(lights.sample({0, 0, 0}, Frame(Vec3f{0, 1, 0}), true, 0.5f, {0.5f, 0.5f}, ls));
+}
+
+// Two emissive quads facing down: a dim one (power 1) above the point and a
+// bright one (power 4) far away. Near chooses the dim one mostly; Power
+// chooses the bright one 4 times in 5, as pbrt's "power" strategy does.
+TEST(Lights, PowerChoiceFollowsPowerAloneNearFollowsDistance) {
+  Scene scene;
+  Material dim, bright;
+  dim.emission = Vec3f(1);
+  bright.emission = Vec3f(4);
+  const int32_t d = scene.addMaterial(dim), b = scene.addMaterial(bright);
+  scene.addSingleInstanceMesh(testing::makeQuad({-0.5f, 1, 0.5f}, {0, 0, -1}, {1, 0, 0}, d));
+  scene.addSingleInstanceMesh(testing::makeQuad({19.5f, 1, 0.5f}, {0, 0, -1}, {1, 0, 0}, b));
+  for (const LightChoice choice : {LightChoice::Near, LightChoice::Power}) {
+    const LightSampler lights(scene, choice);
+    testing::TestRng rng(3);
+    int brightChosen = 0, samples = 0;
+    for (int i = 0; i < 20000; ++i) {
+      LightSample ls;
+      if (!lights.sample({0, 0, 0}, Frame(Vec3f{0, 1, 0}), false, rng.uniform(),
+                         {rng.uniform(), rng.uniform()}, ls))
+        continue;
+      ++samples;
+      brightChosen += ls.direction.x > 0.5f;
+    }
+    ASSERT_GT(samples, 19000);
+    const double share = double(brightChosen) / samples;
+    if (choice == LightChoice::Power)
+      EXPECT_NEAR(share, 0.8, 0.015);
+    else
+      EXPECT_LT(share, 0.05);
+  }
 }
 
 }  // namespace

@@ -42,13 +42,15 @@ inline float emissionDensityOverCosine(bool bothSides) {
 template <typename Path>
 PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth,
                                uint32_t seed, LightStrategy strategy, const Camera* lightPathCamera,
-                               const FilmWindow* window, TransmittanceEstimator transmittance)
+                               const FilmWindow* window, TransmittanceEstimator transmittance,
+                               MisHeuristic heuristic)
     : scene_(scene),
       lights_(lights),
       surfaces_(scene),
       maxDepth_(maxDepth),
       seed_(seed),
       strategy_(strategy),
+      heuristic_(heuristic),
       transmittance_(transmittance) {
   if (scene.hasMedia()) {
     media_ = std::make_shared<MediaAlongRays>(scene);
@@ -134,9 +136,9 @@ bool PathShading<Path>::makeLightPath(uint32_t index, uint32_t sampleIndex, Path
   const Vec3f weight = e.radiance * (q / lightPathScale_);
   if (!usable(weight) || !std::isfinite(q)) return false;
   // The other strategies' density over the light path's, so far: 1 / p_position
-  // and cos / p_direction (the rest comes at the next vertices), squared.
+  // and cos / p_direction (the rest comes at the next vertices), to the heuristic's beta.
   makeRay(out, offsetRayOrigin(e.position, e.normal), e.direction, kInfinity, weight, index,
-          kPathLight, 0, square(q));
+          kPathLight, 0, misPow(q));
   return true;
 }
 
@@ -160,7 +162,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
   if (!(cosIn > 0)) return {};
   const float ratio = unpackDensity(path.lightRatio);
   // At the first vertex the light sample could have found the emitter too:
-  // its density from here, for the factor (1 + (p_light / p_bsdf)^2).
+  // its density from here, for the factor (1 + (p_light / p_bsdf)^beta).
   float lightSamplePdf = 0;
   if (bounce == 0 && !bsdf.isDelta()) {
     EmissionSample e;
@@ -168,7 +170,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
       lightSamplePdf = lights_.emitterPdf(position, e.emitter, e.position);
   }
   auto withLightSample = [&](float bsdfPdf) {
-    return lightSamplePdf > 0 && bsdfPdf > 0 ? 1 + square(lightSamplePdf / bsdfPdf) : 1.0f;
+    return lightSamplePdf > 0 && bsdfPdf > 0 ? 1 + misPow(lightSamplePdf / bsdfPdf) : 1.0f;
   };
   Spawned spawned;
 
@@ -198,11 +200,11 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
         const Vec3f f = bsdf.eval(wcLocal, scattering.woLocal);
         // The camera path's density of this vertex (the image, in area
         // measure) and of the next one towards the light, over the light
-        // path's; squared and summed with the light sample's.
+        // path's; to the heuristic's beta and summed with the light sample's.
         const float cameraPdf = cosCamera / (area * cosAxis * cosAxis * cosAxis * dist2);
         const float forward = stored(bsdf.pdf(wcLocal, scattering.woLocal));
         const float others =
-            ratio * square(forward / cosIn) * square(cameraPdf) * withLightSample(forward);
+            ratio * misPow(forward / cosIn) * misPow(cameraPdf) * withLightSample(forward);
         const float weight = 1 / (1 + others);
         const Vec3f contribution =
             vertex.throughput * f *
@@ -243,7 +245,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
   // path's density of it (delta lobes: density 1 both ways).
   const float forward = bs.delta ? 1.0f : stored(bsdf.pdf(bs.wi, scattering.woLocal));
   const float reverse = bs.delta ? 1.0f : stored(bs.pdf);
-  float next = ratio * square(forward / cosIn) * square(cosOut / reverse);
+  float next = ratio * misPow(forward / cosIn) * misPow(cosOut / reverse);
   if (!bs.delta) next *= withLightSample(forward);
   if (!std::isfinite(next)) return spawned;
   const Vec3f origin = offsetRayOrigin(position, dot(wi, ng) > 0 ? ng : -ng);
@@ -262,7 +264,7 @@ template <typename Path>
     l = path.weight() * lights_.background(normalize(path.dir()));
   } else if (strategy_ == LightStrategy::Mis && lights_.environmentTakesPartInMis()) {
     const Vec3f d = path.dir();
-    const float weight = powerHeuristic(path.bsdfPdf(), lights_.environmentPdf(path.origin, d));
+    const float weight = misWeight(path.bsdfPdf(), lights_.environmentPdf(path.origin, d));
     l = path.weight() * lights_.environmentAlong(d) * weight;
   } else {
     return;
@@ -312,10 +314,10 @@ template <typename Path>
                                 lights_.emissionPositionPdf(emitter) *
                                 emissionDensityOverCosine(lights_.emitsBothSides(emitter));
         const float lightSample = vertex.afterSpecular ? 0.0f : lightSamplePdf / vertex.bsdfPdf;
-        weight = 1 / (1 + square(lightSample) + square(lightPath));
+        weight = 1 / (1 + misPow(lightSample) + misPow(lightPath));
         if (!std::isfinite(weight)) weight = 0;
       } else {
-        weight = powerHeuristic(vertex.bsdfPdf, lightSamplePdf);
+        weight = misWeight(vertex.bsdfPdf, lightSamplePdf);
       }
     }
   }
@@ -445,7 +447,7 @@ template <typename Path>
   // the BSDF density as a continuation would store it.
   const bool weighed = strategy_ == LightStrategy::Mis && ls.mis;
   const float bsdfPdf = weighed ? stored(bsdf.pdf(scattering.woLocal, wiLocal)) : 0.0f;
-  float weight = weighed ? powerHeuristic(ls.pdf, bsdfPdf) : 1.0f;
+  float weight = weighed ? misWeight(ls.pdf, bsdfPdf) : 1.0f;
   if (lightBase > 0 && ls.emitter != LightSampler::kNotAnEmitter) {
     // And against the light path that could have made it: the camera
     // path's ratio with this vertex's reverse density towards the light,
@@ -455,7 +457,7 @@ template <typename Path>
                             std::abs(dot(vertex.surface.geometricNormal, ls.direction)) *
                             lights_.emissionPositionPdf(ls.emitter) *
                             emissionDensityOverCosine(lights_.emitsBothSides(ls.emitter)) / ls.pdf;
-    weight = 1 / (1 + square(bsdfPdf / ls.pdf) + square(lightPath));
+    weight = 1 / (1 + misPow(bsdfPdf / ls.pdf) + misPow(lightPath));
     if (!std::isfinite(weight)) weight = 0;
   }
   const Vec3f contribution = vertex.throughput * f * ls.radiance * (weight / ls.pdf);
@@ -608,7 +610,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
     if (lights_.sample(position, Frame(wo), true, random(RandomDim::LightSelect), u, ls)) {
       const float phase = phaseValue(wo, ls.direction, g);
       const bool weighed = strategy_ == LightStrategy::Mis && ls.mis;
-      const float weight = weighed ? powerHeuristic(ls.pdf, stored(phase)) : 1.0f;
+      const float weight = weighed ? misWeight(ls.pdf, stored(phase)) : 1.0f;
       const Vec3f contribution = throughput * ls.radiance * (phase * weight / ls.pdf);
       if (usable(contribution)) {
         const Vec3f storedDir = makeRay(shadowRay, position, ls.direction, kInfinity, contribution,

@@ -116,6 +116,15 @@ inline const char* lightStrategyName(LightStrategy s) {
   return 1 / (1 + r * r);
 }
 
+// How MIS weighs strategies (--mis-heuristic): Veach's power heuristic
+// (beta = 2, the default, pbrt's path integrator's) or the balance heuristic
+// (beta = 1, pbrt's bdpt's). Either is unbiased; they differ only in noise,
+// and where pbrt-v3's mirrored emitters make one strategy see no light.
+enum class MisHeuristic { Power, Balance };
+inline const char* misHeuristicName(MisHeuristic h) {
+  return h == MisHeuristic::Power ? "power" : "balance";
+}
+
 template <typename Path>
 class PathShading {
  public:
@@ -131,7 +140,8 @@ class PathShading {
   PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed,
               LightStrategy strategy = LightStrategy::Mis, const Camera* lightPathCamera = nullptr,
               const FilmWindow* window = nullptr,
-              TransmittanceEstimator transmittance = TransmittanceEstimator::Ratio);
+              TransmittanceEstimator transmittance = TransmittanceEstimator::Ratio,
+              MisHeuristic heuristic = MisHeuristic::Power);
 
   // The pixel index random numbers of image pixel `pixel` are keyed by:
   // its index in the whole film.
@@ -227,6 +237,17 @@ class PathShading {
   uint32_t maxDepth_;
   uint32_t seed_;
   LightStrategy strategy_;
+  MisHeuristic heuristic_;
+  // A density ratio raised to the heuristic's beta (the weights below sum these).
+  float misPow(float ratio) const {
+    return heuristic_ == MisHeuristic::Power ? ratio * ratio : ratio;
+  }
+  // own^beta / (own^beta + other^beta), as powerHeuristic.
+  float misWeight(float own, float other) const {
+    if (!(other > 0)) return 1;
+    if (!(own > 0)) return 0;
+    return 1 / (1 + misPow(other / own));
+  }
   const Camera* camera_ = nullptr;  // light paths connect to it (null: none)
   float lightPathScale_ = 1;        // light path throughputs are stored divided by it
   FilmWindow window_;

@@ -235,7 +235,7 @@ struct RenderSetup {
 
   RenderSetup(const Scene& scene, const RenderSettings& s) : settings(s) {
     geometry = makeEmbreeBackend(scene);
-    lights = std::make_unique<LightSampler>(scene);
+    lights = std::make_unique<LightSampler>(scene, s.lightChoice);
     traversal = std::make_unique<LocalTraversal<Path8>>(*geometry);
     renderer =
         std::make_unique<WavefrontRenderer<Path8>>(scene, *geometry, *lights, *traversal, settings);

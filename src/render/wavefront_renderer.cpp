@@ -36,7 +36,7 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
       camera_(settings.cameraIn(scene), window_),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
                settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr, &window_,
-               settings.transmittance) {
+               settings.transmittance, settings.misHeuristic) {
   if (uint64_t(window_.width) * uint64_t(window_.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", window_.width,
                                  window_.height, kMaxPixels));

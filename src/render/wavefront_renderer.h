@@ -63,6 +63,12 @@ struct RenderSettings {
   // Which samples find emitters and the sky (render/path_shading.h): MIS of
   // light and BSDF samples (--mis on), light samples only (--mis off).
   LightStrategy lightStrategy = LightStrategy::Mis;
+  // How MIS weighs its strategies (--mis-heuristic): the same image in
+  // expectation, but for pbrt-v3's mirrored emitters (docs/path-tracer.md).
+  MisHeuristic misHeuristic = MisHeuristic::Power;
+  // How light samples choose among the lights (--light-choice; the session
+  // builds the LightSampler with it).
+  LightChoice lightChoice = LightChoice::Near;
   // Light paths (render/path_shading.h): one per pixel sample, connected to
   // the camera, weighed by MIS against the camera path's two strategies.
   // Needs MIS and an emissive triangle (else there are none).

@@ -118,7 +118,7 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
               lap(&SetupTimes::load);
               // Light data is small and needed everywhere: take it from the scene
               // as given, before the partitioner rewrites it and ranks release geometry.
-              lights = std::make_unique<LightSampler>(whole);
+              lights = std::make_unique<LightSampler>(whole, settings.render.lightChoice);
               lap(&SetupTimes::lights);
             });
   scene = std::move(loaded.scene);
@@ -138,7 +138,7 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     std::iota(owned.begin(), owned.end(), 0);
     ownedEstimate = ownedMemory(scene, owned);
     lap(&SetupTimes::load);
-    lights = std::make_unique<LightSampler>(loaded.lights);
+    lights = std::make_unique<LightSampler>(loaded.lights, settings.render.lightChoice);
     lap(&SetupTimes::lights);
   } else {
     owned = partition.instancesOf(comm.rank());
@@ -303,6 +303,12 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
                          r.sampleClamp.limit)
            : std::string()) +
       (r.lightPaths ? "; light-paths=on" : "") +
+      (r.misHeuristic != MisHeuristic::Power
+           ? std::string("; mis-heuristic=") + misHeuristicName(r.misHeuristic)
+           : std::string()) +
+      (r.lightChoice != LightChoice::Near
+           ? std::string("; light-choice=") + lightChoiceName(r.lightChoice)
+           : std::string()) +
       (r.transmittance == TransmittanceEstimator::Delta ? "; transmittance=delta" : "") +
       (r.volumeLook.opacity != 1 ? fmt::format("; volume-opacity={}", r.volumeLook.opacity)
                                  : std::string()) +

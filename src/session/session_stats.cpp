@@ -43,6 +43,8 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                    {"frames", r.frames},
                    {"max_depth", r.maxDepth},
                    {"light_strategy", lightStrategyName(r.lightStrategy)},
+                   {"mis_heuristic", misHeuristicName(r.misHeuristic)},
+                   {"light_choice", lightChoiceName(r.lightChoice)},
                    {"seed", r.seed},
                    {"view", r.view},
                    {"threads", s.threads},
