@@ -10,14 +10,20 @@ the regions that hold the ten worst blocks:
   wood flat        the counters' wood texture (a stand-in in this copy)
                    replaced by its own mean colour
   coat off         the counters' glossy coat off (bois_ "Ks" 0)
+  balance          MIS by the balance heuristic (--mis-heuristic balance)
+  by power         lights chosen by power alone (--light-choice power)
+  bdpt's weights   both: pbrt-v3's bdpt weighs its strategies so. The image
+                   differs in expectation only where pbrt-v3's mirrored
+                   emitters show a BSDF sample their dark side.
 
 Then it traces the camera's rays (bathroom_scene.py) to find which faces
 of the walls under the window the big mirror's blocks show, and prints
-Ferry / reference on each face seen directly and through the mirror.
+Ferry / reference on each face seen directly and through the mirror, as
+given and with bdpt's weights.
 
   /usr/bin/python3 bench/bathroom_experiments.py [--ferry build/ferry] [--spp 256]
 
-About 4 minutes on 2 cores at 256 spp.
+About 8 minutes on 2 cores at 256 spp.
 """
 import atexit, os, shutil, subprocess, sys, tempfile
 
@@ -66,19 +72,23 @@ def variant(name, old, new):
 wood = '"color" "imagemap" "string filename" "textures/WoodFine0016_L.png"'
 mean = srgb_mean(os.path.join(scene_dir, "textures", "WoodFine0016_L.png"))
 coat = '"texture Kd" "wood"\n        "rgb Ks" [ 0.2 0.2 0.2 ]'
-variants = [
-    ("as given", os.path.join(scene_dir, "bathroom.pbrt")),
-    ("wood flat", variant("wood-flat", wood, '"color" "constant" "rgb value" [%g %g %g]' % tuple(mean))),
-    ("coat off", variant("coat-off", coat, coat.replace('"rgb Ks" [ 0.2 0.2 0.2 ]', '"rgb Ks" [ 0 0 0 ]'))),
+given = os.path.join(scene_dir, "bathroom.pbrt")
+variants = [  # name, scene, render flags
+    ("as given", given, []),
+    ("wood flat", variant("wood-flat", wood, '"color" "constant" "rgb value" [%g %g %g]' % tuple(mean)), []),
+    ("coat off", variant("coat-off", coat, coat.replace('"rgb Ks" [ 0.2 0.2 0.2 ]', '"rgb Ks" [ 0 0 0 ]')), []),
+    ("balance", given, ["--mis-heuristic", "balance"]),
+    ("by power", given, ["--light-choice", "power"]),
+    ("bdpt's weights", given, ["--mis-heuristic", "balance", "--light-choice", "power"]),
 ]
 
 ref_full = read(reference)
 ref = ref_full.reshape(RH, H // RH, RW, W // RW, 3).mean((1, 3))
 images = {}
-for name, scene in variants:
-    out = os.path.join(work, name.replace(" ", "-") + ".exr")
+for name, scene, flags in variants:
+    out = os.path.join(work, name.replace(" ", "-").replace("'", "") + ".exr")
     subprocess.run([args.ferry, "render", scene, "--size", f"{RW}x{RH}", "--spp", str(args.spp),
-                    "--threads", str(args.threads), "-q", "-o", out], check=True)
+                    "--threads", str(args.threads), "-q", "-o", out] + flags, check=True)
     images[name] = read(out)
 
 
@@ -89,11 +99,11 @@ def region(image, box):
 
 print(f"Ferry / reference, {RW}x{RH}, {args.spp} spp (wood flat: the texture's mean, "
       f"linear rgb {mean[0]:.3f} {mean[1]:.3f} {mean[2]:.3f})")
-print("| region | reference | " + " | ".join(name for name, _ in variants) + " |")
+print("| region | reference | " + " | ".join(v[0] for v in variants) + " |")
 print("|---|---:|" + "---:|" * len(variants))
 for label, box in REGIONS:
     r = region(ref, box)
-    print(f"| {label} | {r:.3f} | " + " | ".join(f"{region(images[n], box) / r:.3f}" for n, _ in variants) + " |")
+    print(f"| {label} | {r:.3f} | " + " | ".join(f"{region(images[v[0]], box) / r:.3f}" for v in variants) + " |")
 
 # What the big mirror's worst blocks show, seen directly and through it: the
 # faces of the walls mesh (mesh_00065) under the window, by plane.
@@ -113,18 +123,19 @@ for label, (x0, x1, y0, y1) in views.items():
             p, _, n = h
             axis = int(np.argmax(np.abs(n)))
             key = f"{'xyz'[axis]} = {p[axis]:.1f}"
-            g = groups.setdefault(key, {}).setdefault(label, [0, 0.0, 0.0, []])
+            g = groups.setdefault(key, {}).setdefault(label, [0, 0.0, 0.0, [], 0.0])
             g[0] += 1
             g[1] += ref[py, px] @ LUM
             g[2] += images["as given"][py, px] @ LUM
             g[3].append(np.degrees(np.arcsin(abs(d @ n))))
-print("\nThe walls mesh's faces the big mirror's blocks show (mesh_00065, mur_blanc; Ferry as given):")
-print("| plane | seen | pixels | reference | Ferry / reference | view's angle to the face |")
-print("|---|---|---:|---:|---:|---:|")
+            g[4] += images["bdpt's weights"][py, px] @ LUM
+print("\nThe walls mesh's faces the big mirror's blocks show (mesh_00065, mur_blanc):")
+print("| plane | seen | pixels | reference | Ferry / reference: as given | bdpt's weights | view's angle to the face |")
+print("|---|---|---:|---:|---:|---:|---:|")
 for key, by_view in sorted(groups.items()):
     if "big mirror" not in by_view:
         continue
     for label in views:
         if label in by_view:
-            n, r, f, angles = by_view[label]
-            print(f"| {key} | {label} | {n} | {r / n:.3f} | {f / r:.3f} | {np.median(angles):.0f} degrees |")
+            n, r, f, angles, b = by_view[label]
+            print(f"| {key} | {label} | {n} | {r / n:.3f} | {f / r:.3f} | {b / r:.3f} | {np.median(angles):.0f} degrees |")
