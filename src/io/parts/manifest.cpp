@@ -13,6 +13,7 @@
 #include "io/images/image_io.h"
 #include "io/json_numbers.h"
 #include "io/parts/part_file.h"
+#include "io/text_file.h"
 #include "scene/scene.h"
 
 namespace ferry {
@@ -94,11 +95,10 @@ void writeManifest(const std::string& directory, const Manifest& manifest) {
 
 Manifest readManifest(const std::string& directory) {
   const std::string path = manifestPath(directory);
-  std::ifstream in(path);
-  if (!in) throw InputError(fmt::format("{}: no such file (not a part directory?)", path));
+  const std::string text = readTextFile(path, "the part directory's manifest");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(in);
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(fmt::format("{}: not valid JSON ({})", path, e.what()));
   }

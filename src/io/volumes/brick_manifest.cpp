@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "io/byte_stream.h"
 #include "io/json_numbers.h"
+#include "io/text_file.h"
 #include "io/volumes/volume_files.h"
 #include "shapes/volume_brick.h"
 
@@ -58,11 +59,10 @@ bool isBrickManifestSpec(const std::string& spec) {
 Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeLook& look) {
   const std::string path(std::string_view(spec).substr(kPrefix.size()));
   auto fail = [&](const std::string& what) { throw InputError(fmt::format("{}: {}", path, what)); };
-  std::ifstream in(path);
-  if (!in) fail("cannot read the brick manifest");
+  const std::string text = readTextFile(path, "the brick manifest");
   Json j;
   try {
-    j = Json::parse(in);
+    j = Json::parse(text);
   } catch (const Json::exception& e) {
     fail(fmt::format("not JSON ({})", e.what()));
   }

@@ -6,13 +6,13 @@
 
 #include "core/error.h"
 #include "io/json_numbers.h"
+#include "io/text_file.h"
 #include "io/volumes/volume_files.h"
 
 namespace ferry {
 
 TransferFunction readTransferFunction(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(fmt::format("{}: cannot open the transfer function", path));
+  const std::string text = readTextFile(path, "the transfer function");
   auto fail = [&](const std::string& what) {
     throw InputError(
         fmt::format("{}: {} (expected {{\"colors\": [[x, r, g, b], ...], "
@@ -21,7 +21,7 @@ TransferFunction readTransferFunction(const std::string& path) {
   };
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(in);
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     fail(fmt::format("not JSON: {}", e.what()));
   }

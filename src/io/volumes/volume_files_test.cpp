@@ -231,6 +231,24 @@ TEST(RawVolume, RefusesMalformedNames) {
 
 // JSON numbers a field's type cannot hold (found by fuzzing: 2.5e50 samples
 // converted to int64_t) are the file's error, not a conversion.
+// A directory opens as a stream on Linux and throws from its first read,
+// past the JSON parser (a fuzzer's finding: "tf=/"); it is the file's error.
+TEST(VolumeJson, ADirectoryOrAMissingFileIsTheFilesError) {
+  const std::string dir = ::testing::TempDir();
+  EXPECT_NE(errorOf([&] {
+              readTransferFunction(dir);
+            }).find(": cannot read the transfer function: not a regular file"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              loadBrickPiece("bricks:" + dir, 0, 1);
+            }).find(": cannot read the brick manifest: not a regular file"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              readTransferFunction(dir + "/no-such.tf.json");
+            }).find("no-such.tf.json: cannot read the transfer function: no such file"),
+            std::string::npos);
+}
+
 TEST(VolumeJson, NumbersThatDoNotFitTheirFieldAreRefused) {
   auto text = [](const std::string& t) {
     return RawFile(std::vector<unsigned char>(t.begin(), t.end()));
