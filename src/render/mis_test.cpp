@@ -193,19 +193,30 @@ TEST(Mis, EmittersAreFoundThroughTheLightSceneAndUnderMirroringTransforms) {
 // mirrored quad whose hit side faces up (object winding +y) over a floor:
 // seen emitting from above either way; the floor below is lit only with the
 // flag, and then by light samples alone (BSDF rays meet the dark side).
+// A diffuse floor (y = 0) under a one-sided 1x1 lamp at y = 1 (radiance 4),
+// placed with its winding facing up (+y) or down, instanced under
+// Scale(-1, 1, 1) or the identity; `sampledOnBackSide` as pbrt-v3's
+// mirrored emitters (Material::lightSampledOnBackSide).
+Scene floorUnderLamp(bool sampledOnBackSide, bool facingUp, bool mirroring) {
+  Scene scene;
+  const int32_t floor = scene.addMaterial(diffuseMaterial(Vec3f(0.5f)));
+  Material e = emitter({4, 4, 4}, false);
+  e.lightSampledOnBackSide = sampledOnBackSide;
+  const int32_t light = scene.addMaterial(e);
+  scene.addSingleInstanceMesh(makeQuad({-2, 0, 2}, {4, 0, 0}, {0, 0, -4}, floor));
+  Object object;
+  object.meshes.push_back(int32_t(scene.meshes.size()));
+  scene.meshes.push_back(facingUp ? makeQuad({-0.5f, 1, 0.5f}, {1, 0, 0}, {0, 0, -1}, light)
+                                  : makeQuad({-0.5f, 1, 0.5f}, {0, 0, -1}, {1, 0, 0}, light));
+  scene.objects.push_back(object);
+  scene.instances.push_back({int32_t(scene.objects.size() - 1),
+                             mirroring ? Affine3f::scale({-1, 1, 1}) : Affine3f::identity()});
+  return scene;
+}
+
 TEST(Mis, LightSampledOnBackSideLeavesTheSideRaysDoNotSee) {
   for (const bool flag : {false, true}) {
-    Scene scene;
-    const int32_t floor = scene.addMaterial(diffuseMaterial(Vec3f(0.5f)));
-    Material e = emitter({4, 4, 4}, false);
-    e.lightSampledOnBackSide = flag;
-    const int32_t light = scene.addMaterial(e);
-    scene.addSingleInstanceMesh(makeQuad({-2, 0, 2}, {4, 0, 0}, {0, 0, -4}, floor));
-    Object object;
-    object.meshes.push_back(int32_t(scene.meshes.size()));
-    scene.meshes.push_back(makeQuad({-0.5f, 1, 0.5f}, {1, 0, 0}, {0, 0, -1}, light));
-    scene.objects.push_back(object);
-    scene.instances.push_back({int32_t(scene.objects.size() - 1), Affine3f::scale({-1, 1, 1})});
+    const Scene scene = floorUnderLamp(flag, true, true);
 
     const LightSampler lights(scene);
     LightSample below, above;
@@ -252,23 +263,9 @@ TEST(Mis, LightSampledOnBackSideLeavesTheSideRaysDoNotSee) {
 // balance; docs/fidelity.md). For a consistent emitter the two agree.
 TEST(Mis, TheHeuristicDecidesWhatAMirroredEmittersDarkSideLoses) {
   for (const bool mirrored : {false, true}) {
-    Scene scene;
-    const int32_t floor = scene.addMaterial(diffuseMaterial(Vec3f(0.5f)));
-    Material e = emitter({4, 4, 4}, false);
-    e.lightSampledOnBackSide = mirrored;
-    const int32_t light = scene.addMaterial(e);
-    scene.addSingleInstanceMesh(makeQuad({-2, 0, 2}, {4, 0, 0}, {0, 0, -4}, floor));
-    Object object;
-    object.meshes.push_back(int32_t(scene.meshes.size()));
-    // Consistent: faces the floor (-y). Mirrored: faces up (+y) as placed, so
-    // that rays from the floor see its dark side while its light samples
-    // leave towards the floor (as LightSampledOnBackSide... checks).
-    scene.meshes.push_back(mirrored ? makeQuad({-0.5f, 1, 0.5f}, {1, 0, 0}, {0, 0, -1}, light)
-                                    : makeQuad({-0.5f, 1, 0.5f}, {0, 0, -1}, {1, 0, 0}, light));
-    scene.objects.push_back(object);
-    scene.instances.push_back(
-        {int32_t(scene.objects.size() - 1),
-         mirrored ? Affine3f::scale({-1, 1, 1}) : Affine3f::scale({1, 1, 1})});
+    // Consistent: faces the floor. Mirrored: rays from the floor see its
+    // dark side while its light samples leave towards the floor.
+    Scene scene = mirrored ? floorUnderLamp(true, true, true) : floorUnderLamp(false, false, false);
     CameraView side;  // the floor under the quad
     side.from = {0, 0.4f, 2.5f};
     side.at = {0, 0, 0};
