@@ -277,7 +277,8 @@ std::shared_ptr<const Shape> VolumeBrick::read(RecordReader& record) {
   volume->normalise = record.pod<uint8_t>() != 0;
   volume->valueLo = record.number();
   volume->valueRange = record.number();
-  if (volume->valueRange < 0) record.fail("a volume brick's value range is negative");
+  if (!(volume->valueRange >= 0) || !std::isfinite(volume->valueRange))
+    record.fail("a volume brick's value range is negative or not finite");
   const uint8_t hasTransfer = record.pod<uint8_t>();
   try {
     if (hasTransfer) {

@@ -104,6 +104,7 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
       if (!r.is_array() || r.size() != 2) fail("range: expected [LO, HI]");
       const std::optional<float> lo = numberAs<float>(r[0]), hi = numberAs<float>(r[1]);
       if (!lo || !hi || !(*hi >= *lo)) fail("range: expected finite LO <= HI");
+      if (!std::isfinite(*hi - *lo)) fail("range: HI - LO is more than a float holds");
       rangeLo = *lo;
       rangeHi = *hi;
     }

@@ -131,8 +131,9 @@ Scene loadRawVolume(const std::string& spec) {
       lo = std::min(lo, v);
       hi = std::max(hi, v);
     }
-    const float range = hi - lo;
-    for (float& v : values) v = range > 0 ? (v - lo) / range : 0.0f;
+    // In double: the range of two finite floats can overflow a float.
+    const double range = double(hi) - double(lo);
+    for (float& v : values) v = range > 0 ? float((double(v) - double(lo)) / range) : 0.0f;
   }
   TransferFunction tf =
       tfPath.empty() ? TransferFunction::standard() : readTransferFunction(tfPath);

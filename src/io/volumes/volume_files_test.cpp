@@ -188,6 +188,12 @@ TEST(RawVolume, NormalisesEachFormatAndPlacesTheBox) {
   RawFile f32(floats);
   s = loadScene("raw:" + f32.path() + "?dims=3,1,1&format=float32");
   EXPECT_EQ(s.media[0].density->values(), (std::vector<float>{0, 1, 0.5f}));
+  // A range wider than a float holds (a fuzzer's finding: NaN densities).
+  const float wide[3] = {-3e38f, 3e38f, 0};
+  std::memcpy(floats.data(), wide, 12);
+  RawFile f32wide(floats);
+  s = loadScene("raw:" + f32wide.path() + "?dims=3,1,1&format=float32");
+  EXPECT_EQ(s.media[0].density->values(), (std::vector<float>{0, 1, 0.5f}));
 }
 
 TEST(RawVolume, ATransferFunctionFileAndOpacityScale) {
@@ -268,7 +274,9 @@ TEST(VolumeJson, NumbersThatDoNotFitTheirFieldAreRefused) {
            {R"({"dims":[2,2,2],"spacing":[1,1e300,1],"format":"uint8","bricks":[]})",
             "spacing: expected three numbers that fit"},
            {R"({"dims":[2,2,2],"format":"float32","range":[0,1e39],"bricks":[]})",
-            "range: expected finite LO <= HI"}}) {
+            "range: expected finite LO <= HI"},
+           {R"({"dims":[2,2,2],"format":"float32","range":[-3e38,3e38],"bricks":[]})",
+            "range: HI - LO is more than a float holds"}}) {
     const RawFile f = text(manifest);
     EXPECT_NE(errorOf([&] { loadBrickPiece("bricks:" + f.path(), 0, 1); }).find(error),
               std::string::npos)
