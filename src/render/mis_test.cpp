@@ -5,9 +5,10 @@
 //  - emitters are found from a hit's world-space corners, also through the
 //    light scene (part directories) and under mirroring transforms;
 //  - light samples alone, BSDF samples alone, MIS, and MIS with light paths
-//    (each heuristic, each light choice) render the same mean (z-tests at significance 0.01, Sidak
-//    over every comparison); light paths through a rough glass shell around a lamp too (the adjoint
-//    of a rough dielectric), with less noise.
+//    (each heuristic, each light choice) render the same mean (z-tests at
+//    significance 0.01, Sidak over every comparison); light paths through a
+//    rough glass shell around a lamp too (the adjoint of a rough
+//    dielectric), with less noise.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -188,11 +189,6 @@ TEST(Mis, EmittersAreFoundThroughTheLightSceneAndUnderMirroringTransforms) {
             LightSampler::kNotAnEmitter);
 }
 
-// pbrt-v3 under a mirror (Material::lightSampledOnBackSide): rays see the
-// emitter on its hit side while light samples leave the other side. A
-// mirrored quad whose hit side faces up (object winding +y) over a floor:
-// seen emitting from above either way; the floor below is lit only with the
-// flag, and then by light samples alone (BSDF rays meet the dark side).
 // A diffuse floor (y = 0) under a one-sided 1x1 lamp at y = 1 (radiance 4),
 // placed with its winding facing up (+y) or down, instanced under
 // Scale(-1, 1, 1) or the identity; `sampledOnBackSide` as pbrt-v3's
@@ -214,6 +210,11 @@ Scene floorUnderLamp(bool sampledOnBackSide, bool facingUp, bool mirroring) {
   return scene;
 }
 
+// pbrt-v3 under a mirror (Material::lightSampledOnBackSide): rays see the
+// emitter on its hit side while light samples leave the other side. A
+// mirrored quad whose hit side faces up (object winding +y) over a floor:
+// seen emitting from above either way; the floor below is lit only with the
+// flag, and then by light samples alone (BSDF rays meet the dark side).
 TEST(Mis, LightSampledOnBackSideLeavesTheSideRaysDoNotSee) {
   for (const bool flag : {false, true}) {
     const Scene scene = floorUnderLamp(flag, true, true);

@@ -106,16 +106,6 @@ inline const char* lightStrategyName(LightStrategy s) {
   return s == LightStrategy::Mis ? "mis" : s == LightStrategy::LightSamples ? "light" : "bsdf";
 }
 
-// Veach's power heuristic (beta = 2) for a sample drawn with density `own`
-// against another strategy's `other`: own^2 / (own^2 + other^2), written as
-// a ratio so that large densities do not overflow.
-[[gnu::always_inline]] inline float powerHeuristic(float own, float other) {
-  if (!(other > 0)) return 1;
-  if (!(own > 0)) return 0;
-  const float r = other / own;
-  return 1 / (1 + r * r);
-}
-
 // How MIS weighs strategies (--mis-heuristic): Veach's power heuristic
 // (beta = 2, the default, pbrt's path integrator's) or the balance heuristic
 // (beta = 1, pbrt's bdpt's). Either is unbiased; they differ only in noise,
@@ -242,7 +232,9 @@ class PathShading {
   float misPow(float ratio) const {
     return heuristic_ == MisHeuristic::Power ? ratio * ratio : ratio;
   }
-  // own^beta / (own^beta + other^beta), as powerHeuristic.
+  // The weight of a sample drawn with density `own` against another
+  // strategy's `other`: own^beta / (own^beta + other^beta), written as a
+  // ratio so that large densities do not overflow.
   float misWeight(float own, float other) const {
     if (!(other > 0)) return 1;
     if (!(own > 0)) return 0;
