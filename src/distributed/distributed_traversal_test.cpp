@@ -294,12 +294,26 @@ const SceneCase kCornellLightPaths{"cornell_light_paths", "builtin:cornell", 40,
 const SceneCase kCornellClampedThroughALens{
     "cornell_clamped_lens", "builtin:cornell", 40, 40, 2, 4, true, 0.3f, 20.0f, 1000.0f};
 
+// pbrt-v4's stochastic cut-outs (a hole with probability 1 - alpha, by a
+// hash of the ray and the hit) on a sheet and on instanced leaves cut by a
+// solid texture: every rank that traces a ray decides alike, whatever the
+// partitioner cut the meshes into.
+const SceneCase kStochasticCutouts{
+    "cutouts_v4",
+    std::string(FERRY_SOURCE_DIR) + "/tests/corpus/pbrt/cutouts_v4.pbrt",
+    40,
+    40,
+    2,
+    4};
+
 std::vector<Case> allCases() {
   std::vector<Case> cases;
   for (const SceneCase& scene : {kCornell, kIsland})
     for (const char* partitioner : {"round-robin", "best"}) cases.push_back({scene, partitioner});
   cases.push_back({kCornellLightPaths, "best"});
   cases.push_back({kCornellClampedThroughALens, "best"});
+  for (const char* partitioner : {"round-robin", "best"})
+    cases.push_back({kStochasticCutouts, partitioner});
   return cases;
 }
 

@@ -178,8 +178,6 @@ void Scene::validate() const {
                        materials.size()));
     if (!(m.mixAmount >= 0 && m.mixAmount <= 1))
       fail(fmt::format("material '{}' has a mix amount {} outside [0, 1]", m.name, m.mixAmount));
-    if (m.alphaTexture != kNoTexture && textures[m.alphaTexture].isSolid())
-      fail(fmt::format("material '{}': a solid texture cannot be a cut-out", m.name));
     if (!isFinite(m.baseColor) || !isFinite(m.emission))
       fail(fmt::format("material '{}' has a non-finite parameter", m.name));
   }

@@ -26,6 +26,16 @@ namespace ferry {
 
 constexpr int32_t kNoTexture = -1;
 
+// How a cut-out's alpha makes a hole (trace/alpha_cutout.h).
+enum class AlphaTest : uint8_t {
+  Below,       // where alpha < the cutoff (glTF's MASK, OBJ, the built-ins)
+  Zero,        // only where alpha is exactly 0 (pbrt-v3)
+  Stochastic,  // with probability 1 - alpha, a hash of the ray and the hit (pbrt-v4)
+};
+// Which rays a cut-out lets through: pbrt-v3's "alpha" is for paths and its
+// "shadowalpha" for shadow rays.
+enum class AlphaRays : uint8_t { All, NotShadowRays, ShadowRaysOnly };
+
 // A surface's material: what every surface has (colour and its texture,
 // emission, cut-out, bump or normal map, mix) and how it scatters light, its
 // model (material/material_model.h: diffuse, conductor, dielectric, ...).
@@ -36,9 +46,13 @@ struct Material {
   Vec3f baseColor{0.8f, 0.8f, 0.8f};
   int32_t baseColorTexture = kNoTexture;
   std::shared_ptr<const MaterialModel> model = defaultMaterialModel();  // never null
-  Vec3f emission{0, 0, 0};            // radiance leaving the surface
-  int32_t alphaTexture = kNoTexture;  // cut-out: texel alpha < alphaCutoff is a hole
+  Vec3f emission{0, 0, 0};  // radiance leaving the surface
+  // A cut-out: where the texture's alpha passes `alphaTest` (with
+  // alphaCutoff for Below), `alphaRays` go through (trace/alpha_cutout.h).
+  int32_t alphaTexture = kNoTexture;
   float alphaCutoff = 0.5f;
+  AlphaTest alphaTest = AlphaTest::Below;
+  AlphaRays alphaRays = AlphaRays::All;
   // An emitter lights both sides of its triangles (Ferry's built-ins, OBJ,
   // glTF), or only the side its winding normal faces (pbrt's area lights
   // unless "twosided": the loader orients the winding as pbrt would).

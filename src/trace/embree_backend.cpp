@@ -78,6 +78,7 @@ class RayBatch {
       tfar = tmax, mask = 0xffffffffu, id = 0, flags = 0;
       geomID = kNoGeometry, instID = kNoGeometry;
     }
+    void hashRay() { id = alphaRayHash({orgX, orgY, orgZ}, {dirX, dirY, dirZ}); }
   };
   EmbreeRay closest_[kCapacity];
   EmbreeRay occluded_[kCapacity];  // only the ray part is used
@@ -90,16 +91,30 @@ class RayBatch {
   static_assert(offsetof(RayBatch::EmbreeRay, ours) == offsetof(RTCRayHit, theirs), \
                 #ours " must sit where RTCRayHit has " #theirs);
 
-// Rejects hits in alpha cut-outs; used for both closest-hit and occlusion
-// queries, so shadows see the same cut-outs as camera rays.
+// A mesh's cut-out with the scene's instances, whose transforms place a hit
+// through an instance in the world (solid alpha textures are functions of it).
+struct EmbreeCutout {
+  AlphaCutout cutout;
+  const std::vector<Instance>* instances;
+};
+
+// Rejects hits in alpha cut-outs: the intersect filter for paths, the
+// occluded filter for shadow rays (the cut-out says which it cuts). A ray's
+// id holds its alphaRayHash when the scene has stochastic cut-outs.
 void alphaFilter(const RTCFilterFunctionNArguments* args) {
-  const auto* cutout = static_cast<const AlphaCutout*>(args->geometryUserPtr);
+  const auto* filter = static_cast<const EmbreeCutout*>(args->geometryUserPtr);
+  // Instance geometries are attached under their instance's id; a top-level
+  // mesh has none and is untransformed.
+  const unsigned instance = args->context->instID[0];
+  const Affine3f* toWorld =
+      instance == RTC_INVALID_GEOMETRY_ID ? nullptr : &(*filter->instances)[instance].transform;
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] != -1) continue;
     float u = RTCHitN_u(args->hit, args->N, i);
     float v = RTCHitN_v(args->hit, args->N, i);
     uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
-    if (cutout->isHole(prim, u, v)) args->valid[i] = 0;
+    if (filter->cutout.isHole(prim, u, v, toWorld, RTCRayN_id(args->ray, args->N, i)))
+      args->valid[i] = 0;
   }
 }
 
@@ -356,9 +371,10 @@ class EmbreeBackend final : public TraceBackend {
   uint32_t topLevelBase_ = 0;
   uint64_t topLevelObjects_ = 0;
   uint64_t instanceCount_ = 0;
-  std::vector<std::unique_ptr<AlphaCutout>> cutouts_;
+  std::vector<std::unique_ptr<EmbreeCutout>> cutouts_;
+  bool hashesRays_ = false;  // a cut-out is stochastic: rays carry their alphaRayHash as id
   std::unordered_map<const Mesh*, std::vector<Vec3f>> paddedPositions_;
-  std::mutex buildMutex_;  // guards the two above while objects build concurrently
+  std::mutex buildMutex_;  // guards the three above while objects build concurrently
   // Last, so released first: Embree calls the counters and reads the buffers above until then.
   EmbreeHandles embree_;
 };
@@ -466,14 +482,15 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
                                mesh.indices.size());
     const AlphaCutout cutout = AlphaCutout::of(scene_, mesh);
     if (cutout.active()) {
-      auto owned = std::make_unique<AlphaCutout>(cutout);
+      auto owned = std::make_unique<EmbreeCutout>(EmbreeCutout{cutout, &scene_.instances});
       rtcSetGeometryUserData(g, owned.get());
       {
         std::lock_guard lock(buildMutex_);  // objects are built concurrently
         cutouts_.push_back(std::move(owned));
+        if (cutout.test == AlphaTest::Stochastic) hashesRays_ = true;
       }
-      rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
-      rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
+      if (cutout.cutsPaths()) rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
+      if (cutout.cutsShadowRays()) rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
     }
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(target, g, idForSlot(int32_t(slot)));
@@ -552,6 +569,10 @@ void EmbreeBackend::traceBatch(RayBatch& batch) const {
   FERRY_SAME_OFFSET(primID, hit.primID)
   FERRY_SAME_OFFSET(geomID, hit.geomID)
   FERRY_SAME_OFFSET(instID, hit.instID)
+  if (hashesRays_) {
+    for (size_t k = 0; k < batch.closestCount_; ++k) batch.closest_[k].hashRay();
+    for (size_t k = 0; k < batch.occludedCount_; ++k) batch.occluded_[k].hashRay();
+  }
   if (batch.closestCount_) {
     TraceContext context(&batch.work_);
     rtcIntersect1M(embree_.top, &context.embree, reinterpret_cast<RTCRayHit*>(batch.closest_),
@@ -586,6 +607,7 @@ void EmbreeBackend::retrace(std::span<const RetraceRay> rays, std::span<TraceHit
 TraceHit EmbreeBackend::intersect(const TraceRay& ray) const {
   TraceContext context;
   RTCRayHit rh = toEmbree(ray);
+  if (hashesRays_) rh.ray.id = alphaRayHash(ray.origin, ray.direction);
   rtcIntersect1(embree_.top, &context.embree, &rh);
   errors_.throwIfFailed("tracing a ray");
   return hitOf(rh);
@@ -594,6 +616,7 @@ TraceHit EmbreeBackend::intersect(const TraceRay& ray) const {
 bool EmbreeBackend::occluded(const TraceRay& ray) const {
   TraceContext context;
   RTCRay r = toEmbree(ray).ray;
+  if (hashesRays_) r.id = alphaRayHash(ray.origin, ray.direction);
   rtcOccluded1(embree_.top, &context.embree, &r);
   errors_.throwIfFailed("tracing a shadow ray");
   return r.tfar < 0;  // Embree marks occlusion with tfar = -inf

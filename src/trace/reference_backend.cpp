@@ -200,9 +200,15 @@ struct ObjectGeometry {
     v = uv.y;
     return true;
   }
-  bool isHole(Triangle tri, double u, double v) const {
-    return tri.slot < cutouts.size() && cutouts[tri.slot].active() &&
-           cutouts[tri.slot].isHole(tri.primitive, float(u), float(v));
+  // Whether a path (or a shadow ray) whose alphaRayHash is `rayHash` passes
+  // through item `tri` there; `toWorld`: the placement's transform (null:
+  // the identity).
+  bool isHole(Triangle tri, double u, double v, const Affine3f* toWorld, uint32_t rayHash,
+              bool shadowRay) const {
+    if (tri.slot >= cutouts.size()) return false;
+    const AlphaCutout& c = cutouts[tri.slot];
+    return (shadowRay ? c.cutsShadowRays() : c.cutsPaths()) &&
+           c.isHole(tri.primitive, float(u), float(v), toWorld, rayHash);
   }
   Box3f bounds;
   Bvh bvh;
@@ -214,6 +220,8 @@ struct Placement {
   uint32_t object = 0;       // into ReferenceBackend::objects_
   bool transformed = false;  // else entered as is (the top level, or an identity transform)
   Affine3f toObject;         // world to object space
+  Affine3f toWorld;          // object to world space
+  const Affine3f* transform() const { return transformed ? &toWorld : nullptr; }
 };
 
 class ReferenceBackend final : public TraceBackend {
@@ -372,6 +380,7 @@ ReferenceBackend::ReferenceBackend(const Scene& scene, std::span<const int32_t> 
     topLevelObjects_ += topLevel;
     p.transformed = !inst.transform.isIdentity();
     p.toObject = inst.transform.inverse();
+    p.toWorld = inst.transform;
     placements_.push_back(p);
     worldBoxes.push_back(inst.transform.transformBox(objects_[p.object].bounds));
     bounds_.extend(worldBoxes.back());
@@ -381,6 +390,7 @@ ReferenceBackend::ReferenceBackend(const Scene& scene, std::span<const int32_t> 
 
 TraceHit ReferenceBackend::intersect(const TraceRay& ray) const {
   TraceHit best;
+  const uint32_t hash = alphaRayHash(ray.origin, ray.direction);
   double bestT = ray.tmax;  // accept t <= tmax, then only closer hits
   float prune = ray.tmax;   // bestT for the box tests (the boxes are padded)
   forPlacements(ray, prune, [&](const Placement& placement, Vec3f origin, Vec3f direction) {
@@ -391,7 +401,7 @@ TraceHit ReferenceBackend::intersect(const TraceRay& ray) const {
       double t, u, v;
       if (!g.crosses(tri, o, d, origin, direction, ray.tnear, bestT, t, u, v)) return true;
       if (!(t > ray.tnear && (best.valid() ? t < bestT : t <= bestT))) return true;
-      if (g.isHole(tri, u, v)) return true;
+      if (g.isHole(tri, u, v, placement.transform(), hash, false)) return true;
       bestT = t;
       prune = float(t);
       best = {float(t), placement.instance, int32_t(tri.slot), tri.primitive, float(u), float(v)};
@@ -404,6 +414,7 @@ TraceHit ReferenceBackend::intersect(const TraceRay& ray) const {
 
 bool ReferenceBackend::occluded(const TraceRay& ray) const {
   bool blocked = false;
+  const uint32_t hash = alphaRayHash(ray.origin, ray.direction);
   const float tfar = ray.tmax;
   forPlacements(ray, tfar, [&](const Placement& placement, Vec3f origin, Vec3f direction) {
     const ObjectGeometry& g = objects_[placement.object];
@@ -413,7 +424,7 @@ bool ReferenceBackend::occluded(const TraceRay& ray) const {
       double t, u, v;
       if (!g.crosses(tri, o, d, origin, direction, ray.tnear, ray.tmax, t, u, v)) return true;
       if (!(t > ray.tnear && t <= ray.tmax)) return true;
-      if (g.isHole(tri, u, v)) return true;
+      if (g.isHole(tri, u, v, placement.transform(), hash, true)) return true;
       blocked = true;
       return false;
     });

@@ -85,6 +85,8 @@ WorldEnd
 PBRT
 "$ferry" partition "$work/combined.pbrt" --ranks 1 -o "$work/combined" -q
 cp "$work"/combined/part-0000.fpart "$corpus/part/combined-texture-0.fpart"
+"$ferry" partition tests/corpus/pbrt/cutouts_v4.pbrt --ranks 1 -o "$work/cutouts" -q
+cp "$work"/cutouts/part-0000.fpart "$corpus/part/cutouts-0.fpart"
 fresh tf && cp tests/corpus/volumes/*.tf.json "$corpus/tf/"
 fresh vdb && cp tests/corpus/volumes/*.vdb "$corpus/vdb/"
 # Grid descriptions (tests/fuzz/fuzz_inputs.cpp, vdbgrids): a count byte, then

@@ -159,7 +159,9 @@ void writeMaterial(FileWriter& w, const Material& m,
   w.pod(m.emission);
   w.pod(m.alphaTexture);
   w.pod(m.alphaCutoff);
-  w.pod(uint8_t((m.emitsBackSide ? 1 : 0) | (m.lightSampledOnBackSide ? 2 : 0)));
+  // Bits 0, 1: the emitter's sides; 2, 3: the alpha test; 4, 5: the rays it cuts.
+  w.pod(uint8_t((m.emitsBackSide ? 1 : 0) | (m.lightSampledOnBackSide ? 2 : 0) |
+                (uint8_t(m.alphaTest) << 2) | (uint8_t(m.alphaRays) << 4)));
   w.pod(m.bumpTexture);
   w.pod(m.bumpScale);
   w.pod(m.normalTexture);
@@ -548,6 +550,14 @@ Material readMaterial(FileReader& r, size_t bsdfTables) {
     const uint8_t sides = r.pod<uint8_t>();
     m.emitsBackSide = (sides & 1) != 0;
     m.lightSampledOnBackSide = (sides & 2) != 0;
+    if (r.version() >= 12) {  // older: alpha below the cutoff cuts every ray
+      const uint8_t test = (sides >> 2) & 3, rays = (sides >> 4) & 3;
+      if (test > uint8_t(AlphaTest::Stochastic) || rays > uint8_t(AlphaRays::ShadowRaysOnly) ||
+          sides >> 6)
+        r.fail(fmt::format("material \"{}\": bad flags {:#x}", m.name, sides));
+      m.alphaTest = AlphaTest(test);
+      m.alphaRays = AlphaRays(rays);
+    }
     readMapsAndMix(r, m);
     const std::string model = r.str();
     const std::vector<uint8_t> bytes = r.array<uint8_t>();

@@ -76,7 +76,8 @@ bool sameMaterial(const Scene& sa, const Material& a, const Scene& sb, const Mat
   return a.name == b.name && a.baseColor == b.baseColor && a.model->name() == b.model->name() &&
          record(a) == record(b) && a.emission == b.emission && a.alphaCutoff == b.alphaCutoff &&
          a.emitsBackSide == b.emitsBackSide &&
-         a.lightSampledOnBackSide == b.lightSampledOnBackSide && a.bumpScale == b.bumpScale &&
+         a.lightSampledOnBackSide == b.lightSampledOnBackSide && a.alphaTest == b.alphaTest &&
+         a.alphaRays == b.alphaRays && a.bumpScale == b.bumpScale &&
          a.normalScale == b.normalScale && a.mixAmount == b.mixAmount &&
          (a.mixedWith < 0) == (b.mixedWith < 0) &&
          sameTexture(a.baseColorTexture, b.baseColorTexture) &&
@@ -125,6 +126,14 @@ Written writeDirectory(const std::string& dir, const std::string& partitioner, i
   // One material as a pbrt area light has it (one-sided), so the round trips cover the flag.
   w.scene.materials.back().emitsBackSide = false;
   w.scene.materials.back().lightSampledOnBackSide = true;  // pbrt-v3 under a mirror
+  // The leaves' cut-outs as pbrt-v4 (stochastic) and pbrt-v3 (paths only) have them.
+  bool v4 = true;
+  for (Material& m : w.scene.materials)
+    if (m.alphaTexture != kNoTexture) {
+      m.alphaTest = v4 ? AlphaTest::Stochastic : AlphaTest::Zero;
+      m.alphaRays = v4 ? AlphaRays::All : AlphaRays::NotShadowRays;
+      v4 = !v4;
+    }
   // And one coated, Oren-Nayar material, for a model's record.
   Material& coated = w.scene.materials.front();
   auto coat = std::make_shared<CoatedDiffuseModel>();

@@ -33,7 +33,7 @@ constexpr uint64_t kMaxEvaluations = uint64_t(8) * kMaxBakeSide * kMaxBakeSide;
 
 struct Look {
   Material m;
-  int32_t alpha = kNoTexture;  // from the material itself (interface, uber opacity)
+  PbrtAlpha alpha;  // from the material itself (interface, uber opacity)
 };
 
 // An image as linear float RGB (and alpha when it has one), for evaluation.
@@ -85,7 +85,9 @@ struct PbrtMaterials::Impl {
   std::vector<std::optional<Look>> looks;
   std::vector<uint8_t> converting;
   std::map<std::string, int32_t> named;
-  std::map<std::tuple<int32_t, float, float, float, int32_t, bool, bool>, int32_t> ferryMaterials;
+  std::map<std::tuple<int32_t, float, float, float, int32_t, AlphaTest, AlphaRays, bool, bool>,
+           int32_t>
+      ferryMaterials;
   std::map<std::string, std::shared_ptr<const ImageData>> images;
   std::map<std::string, int32_t> bakedColor, bakedAlpha;
   std::map<const PbrtTextureDefinition*, int32_t> pointTextures_;
@@ -341,13 +343,6 @@ struct PbrtMaterials::Impl {
 
   void unsupportedClass(const PbrtTextureDefinition& t) {
     if (!firstClassWarning(t)) return;
-    if (solidKind(t.className) != SolidTextureKind::None) {
-      warnings.once("solid cut-out|" + t.className,
-                    fmt::format("a \"{}\" texture cannot cut out shapes (Ferry's alpha is "
-                                "looked up over uv); it is the constant 0.5 there (first at {})",
-                                t.className, t.where.toString()));
-      return;
-    }
     warnings.once("texture class|" + t.className,
                   fmt::format("texture class \"{}\" is not supported; using the constant 0.5 "
                               "instead (first at {})",
@@ -651,6 +646,11 @@ struct PbrtMaterials::Impl {
     const PbrtTextureDefinition& t = textureOf(p, true);
     auto it = bakedAlpha.find(t.name);
     if (it != bakedAlpha.end()) return it->second;
+    if (usesSolid(t)) {  // evaluated at the hit's world point (trace/alpha_cutout.h)
+      const int32_t id = pointTextureId(t);
+      bakedAlpha.emplace(t.name, id);
+      return id;
+    }
     Texture out;
     out.name = t.name;
     out.srgb = false;
@@ -1190,8 +1190,12 @@ struct PbrtMaterials::Impl {
         m.model = coated;
         if (maxComponent(kr.value) > 0) layerWarning(type, def.where, "the mirror layer (Kr)");
       }
+      // pbrt-v3's uber passes 1 - opacity of the light straight through (a
+      // specular transmission of index 1): in expectation a stochastic
+      // cut-out for paths; shadow rays, which see no materials, it stops.
       if (opacity.texture == kNoTexture && average(opacity.value) < 1)
-        look.alpha = alphaConstant(average(opacity.value));
+        look.alpha = {alphaConstant(std::max(average(opacity.value), 0.0f)), AlphaTest::Stochastic,
+                      AlphaRays::NotShadowRays};
     } else if (type == "disney") {
       setColor(color(p, {"color"}, Vec3f(0.5f)));
       MetallicRoughness surface;
@@ -1233,7 +1237,7 @@ struct PbrtMaterials::Impl {
       // (m's model reads the table; a file that is not there falls through to
       // the grey diffuse below, with a warning naming it.)
     } else if (type == "interface" || type == "none" || type.empty()) {
-      look.alpha = alphaConstant(0);
+      look.alpha = {alphaConstant(0), AlphaTest::Below, AlphaRays::All};
     } else {
       Color c{Vec3f(0.5f)};
       for (const char* name : {"reflectance", "Kd", "color"}) {
@@ -1308,10 +1312,10 @@ std::optional<int32_t> PbrtMaterials::namedMaterial(const std::string& name) con
   return it->second;
 }
 
-int32_t PbrtMaterials::materialFor(int32_t definition, Vec3f emission, int32_t alphaTexture,
+int32_t PbrtMaterials::materialFor(int32_t definition, Vec3f emission, PbrtAlpha alpha,
                                    bool emitsBackSide, bool lightSampledOnBackSide) {
-  auto key = std::make_tuple(definition, emission.x, emission.y, emission.z, alphaTexture,
-                             emitsBackSide, lightSampledOnBackSide);
+  auto key = std::make_tuple(definition, emission.x, emission.y, emission.z, alpha.texture,
+                             alpha.test, alpha.rays, emitsBackSide, lightSampledOnBackSide);
   auto it = impl_->ferryMaterials.find(key);
   if (it != impl_->ferryMaterials.end()) return it->second;
   Look look = impl_->convert(definition, 0);
@@ -1319,7 +1323,10 @@ int32_t PbrtMaterials::materialFor(int32_t definition, Vec3f emission, int32_t a
   m.emission = emission;
   m.emitsBackSide = emitsBackSide;
   m.lightSampledOnBackSide = lightSampledOnBackSide;
-  m.alphaTexture = look.alpha != kNoTexture ? look.alpha : alphaTexture;
+  const PbrtAlpha& cut = look.alpha.texture != kNoTexture ? look.alpha : alpha;
+  m.alphaTexture = cut.texture;
+  m.alphaTest = cut.test;
+  m.alphaRays = cut.rays;
   if (m.isEmissive()) m.name += " (emitting)";
   int32_t index = impl_->scene.addMaterial(std::move(m));
   impl_->ferryMaterials.emplace(key, index);
@@ -1332,13 +1339,36 @@ bool PbrtMaterials::isInterface(int32_t definition) const {
   return type == "interface" || type == "none" || type.empty();
 }
 
-int32_t PbrtMaterials::shapeAlpha(const PbrtParams& shape) {
-  const PbrtParam* p = shape.find("alpha");
-  if (!p) return kNoTexture;
-  if (p->type == "texture") return impl_->bakeAlpha(*p);
-  float a = shape.getFloat("alpha", 1);
-  if (a >= 1) return kNoTexture;
-  return impl_->alphaConstant(std::max(a, 0.0f));
+PbrtAlpha PbrtMaterials::shapeAlpha(const PbrtParams& shape, bool v3) {
+  if (!v3) {
+    const PbrtParam* p = shape.find("alpha");
+    if (!p) return {};
+    int32_t texture;
+    if (p->type == "texture") {
+      texture = impl_->bakeAlpha(*p);
+    } else {
+      const float a = shape.getFloat("alpha", 1);
+      if (a >= 1) return {};
+      texture = impl_->alphaConstant(std::max(a, 0.0f));
+    }
+    return {texture, AlphaTest::Stochastic, AlphaRays::All};
+  }
+  auto one = [&](const char* name) {
+    const PbrtParam* p = shape.find(name);
+    if (!p) return kNoTexture;
+    if (p->type == "texture") return impl_->bakeAlpha(*p);
+    return shape.getFloat(name, 1) == 0 ? impl_->alphaConstant(0) : kNoTexture;
+  };
+  const int32_t paths = one("alpha"), shadows = one("shadowalpha");
+  if (paths == kNoTexture && shadows == kNoTexture) return {};
+  if (paths == kNoTexture) return {shadows, AlphaTest::Zero, AlphaRays::ShadowRaysOnly};
+  if (shadows == kNoTexture) return {paths, AlphaTest::Zero, AlphaRays::NotShadowRays};
+  if (paths != shadows)
+    impl_->warnings.once("shadowalpha",
+                         fmt::format("\"shadowalpha\" differs from \"alpha\": Ferry cuts "
+                                     "shadow rays by \"alpha\" too (first at {})",
+                                     shape.find("shadowalpha")->where.toString()));
+  return {paths, AlphaTest::Zero, AlphaRays::All};
 }
 
 Vec3f PbrtMaterials::constantColor(const PbrtParams& params, const std::string& name,

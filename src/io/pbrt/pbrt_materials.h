@@ -43,6 +43,14 @@ struct PbrtMaterialDefinition {
   std::string name;  // for named materials; anonymous: empty
 };
 
+// A cut-out as a shape or a material states it: Material's alpha fields.
+struct PbrtAlpha {
+  int32_t texture = kNoTexture;
+  AlphaTest test = AlphaTest::Below;
+  AlphaRays rays = AlphaRays::All;
+  auto operator<=>(const PbrtAlpha&) const = default;
+};
+
 class PbrtMaterials {
  public:
   // `resolve` turns a file name written in the scene into a path (relative
@@ -59,18 +67,21 @@ class PbrtMaterials {
   std::optional<int32_t> namedMaterial(const std::string& name) const;
 
   // The Ferry material for shapes of `definition` (-1: pbrt's default, diffuse
-  // 0.5) emitting `emission` (area light) and cut out by `alphaTexture`.
+  // 0.5) emitting `emission` (area light) and cut out by `alpha` (unless the
+  // material cuts itself out: an interface, uber's opacity).
   // `emitsBackSide`: false for a one-sided area light (pbrt's default);
   // `lightSampledOnBackSide`: Material's flag of that name (pbrt-v3 under a
   // mirroring transform).
-  int32_t materialFor(int32_t definition, Vec3f emission, int32_t alphaTexture,
+  int32_t materialFor(int32_t definition, Vec3f emission, PbrtAlpha alpha = {},
                       bool emitsBackSide = true, bool lightSampledOnBackSide = false);
   // Whether `definition` is pbrt's Material "" / "interface" / "none": a
   // surface that only bounds media.
   bool isInterface(int32_t definition) const;
-  // A shape's "alpha" (float or float texture) as an alpha texture;
-  // kNoTexture when it is the constant 1.
-  int32_t shapeAlpha(const PbrtParams& shapeParams);
+  // A shape's cut-out, none when it has none. pbrt-v4: "alpha" (a float or
+  // float texture) is a hole with probability 1 - alpha for every ray.
+  // pbrt-v3 (`v3`): "alpha" cuts paths and "shadowalpha" shadow rays, each
+  // only where it is 0 (a float other than 0 is none).
+  PbrtAlpha shapeAlpha(const PbrtParams& shapeParams, bool v3);
 
   // A colour-valued parameter that cannot be a texture (lights): rgb,
   // spectrum (named, .spd file, inline) or blackbody ([T] normalised to

@@ -1303,7 +1303,7 @@ class Parser {
       Vec3f emission = state_.areaLight ? state_.areaLight->radiance : Vec3f(0);
       if (state_.areaLight && state_.areaLight->power)
         emission *= powerScale(type, mesh, shapeArea, meshShapes, where);
-      const int32_t alpha = materials_.shapeAlpha(p);
+      const PbrtAlpha alpha = materials_.shapeAlpha(p, dialect_ == Dialect::V3);
       const int32_t material = materials_.materialFor(
           state_.material, emission, alpha, !state_.areaLight || state_.areaLight->twoSided,
           lightSampledOnBackSide(where));
@@ -1447,7 +1447,7 @@ class Parser {
                                  "pieces per segment (first at {})",
                                  c.linearPerSegment, where.toString()));
     }
-    const int32_t alpha = materials_.shapeAlpha(p);
+    const PbrtAlpha alpha = materials_.shapeAlpha(p, dialect_ == Dialect::V3);
     const int32_t material = materials_.materialFor(
         state_.material, state_.areaLight ? state_.areaLight->radiance : Vec3f(0), alpha,
         !state_.areaLight || state_.areaLight->twoSided, lightSampledOnBackSide(where));

@@ -1063,6 +1063,110 @@ TEST(PbrtParser, SolidTexturesInsideOtherTexturesAreEvaluatedInSpace) {
   EXPECT_NEAR(diffuse->sigmaDegrees, 20 * mean, 0.4f);
 }
 
+// A solid texture as a shape's alpha is kept solid, evaluated at the hit in
+// space (trace/alpha_cutout.h), alone or inside a combination; no warning.
+TEST(PbrtParser, SolidAlphaTexturesStaySolid) {
+  std::vector<std::string> warnings;
+  const Scene scene = fromText(
+      "WorldBegin\nTexture \"n\" \"float\" \"fbm\" \"integer octaves\" 3\n"
+      "Texture \"s\" \"float\" \"scale\" \"texture tex1\" \"n\" \"float tex2\" 2\n"
+      "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] "
+      "\"texture alpha\" \"n\"\n"
+      "Shape \"trianglemesh\" \"point3 P\" [0 0 1 1 0 1 0 1 1] \"integer indices\" [0 1 2] "
+      "\"texture alpha\" \"s\"\nWorldEnd\n",
+      &warnings);
+  EXPECT_FALSE(anyContains(warnings, "constant 0.5"));
+  EXPECT_FALSE(anyContains(warnings, "not supported"));
+  ASSERT_EQ(scene.meshes.size(), 2u);
+  const Texture& fbm =
+      scene.textures.at(size_t(scene.materials.at(size_t(scene.meshes[0].material)).alphaTexture));
+  EXPECT_EQ(fbm.solid.kind, SolidTextureKind::Fbm);
+  EXPECT_EQ(fbm.solid.octaves, 3);
+  const Texture& scaled =
+      scene.textures.at(size_t(scene.materials.at(size_t(scene.meshes[1].material)).alphaTexture));
+  EXPECT_EQ(scaled.combination, TextureCombination::Scale);
+  const Vec3f p{0.3f, 1.7f, 0.2f};
+  EXPECT_NEAR(scaled.value({0, 0}, p).x, 2 * fbm.value({0, 0}, p).x, 1e-6f);
+  EXPECT_NO_THROW(scene.validate());
+}
+
+// Cut-outs as each pbrt has them. v4: "alpha" below 1 is a hole with
+// probability 1 - alpha for every ray. v3: "alpha" cuts paths and
+// "shadowalpha" shadow rays, each only where it is 0; uber's opacity passes
+// paths through stochastically and stops shadow rays.
+TEST(PbrtParser, CutOutsFollowEachVersionsAlphaSemantics) {
+  const std::string triangle =
+      "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2] ";
+  struct Cut {
+    bool any;
+    AlphaTest test;
+    AlphaRays rays;
+    float alpha;  // the texture's alpha at uv (0.5, 0.5)
+  };
+  auto cutOf = [&](const std::string& header, const std::string& shape,
+                   std::vector<std::string>* warnings = nullptr) {
+    const Scene scene =
+        fromText(header +
+                     "WorldBegin\nTexture \"mask\" \"float\" \"constant\" \"float value\" 0\n"
+                     "Texture \"other\" \"float\" \"constant\" \"float value\" 0.25\n" +
+                     shape + "\nWorldEnd\n",
+                 warnings);
+    const Material& m = scene.materials.at(size_t(scene.meshes.at(0).material));
+    if (m.alphaTexture == kNoTexture) return Cut{false, m.alphaTest, m.alphaRays, 1};
+    return Cut{true, m.alphaTest, m.alphaRays,
+               scene.textures.at(size_t(m.alphaTexture)).sampleAlpha({0.5f, 0.5f})};
+  };
+  const std::string v3 = "Film \"image\"\n", v4 = "Film \"rgb\"\n";
+
+  Cut c = cutOf(v4, triangle + "\"float alpha\" 0.25");
+  EXPECT_TRUE(c.any);
+  EXPECT_EQ(c.test, AlphaTest::Stochastic);
+  EXPECT_EQ(c.rays, AlphaRays::All);
+  EXPECT_NEAR(c.alpha, 0.25f, 0.5f / 255);
+  EXPECT_FALSE(cutOf(v4, triangle + "\"float alpha\" 1").any);
+
+  EXPECT_FALSE(cutOf(v3, triangle + "\"float alpha\" 0.25").any);  // only 0 counts
+  c = cutOf(v3, triangle + "\"float alpha\" 0");
+  EXPECT_TRUE(c.any);
+  EXPECT_EQ(c.test, AlphaTest::Zero);
+  EXPECT_EQ(c.rays, AlphaRays::NotShadowRays);
+  EXPECT_EQ(c.alpha, 0.0f);
+  c = cutOf(v3, triangle + "\"texture alpha\" \"mask\" \"texture shadowalpha\" \"mask\"");
+  EXPECT_EQ(c.test, AlphaTest::Zero);
+  EXPECT_EQ(c.rays, AlphaRays::All);
+  c = cutOf(v3, triangle + "\"texture shadowalpha\" \"mask\"");
+  EXPECT_EQ(c.rays, AlphaRays::ShadowRaysOnly);
+  std::vector<std::string> warnings;
+  c = cutOf(v3, triangle + "\"texture alpha\" \"mask\" \"texture shadowalpha\" \"other\"",
+            &warnings);
+  EXPECT_EQ(c.rays, AlphaRays::All);
+  EXPECT_TRUE(anyContains(warnings, "\"shadowalpha\" differs from \"alpha\""));
+
+  c = cutOf(v3, "Material \"uber\" \"rgb opacity\" [0.25 0.25 0.25]\n" + triangle);
+  EXPECT_EQ(c.test, AlphaTest::Stochastic);
+  EXPECT_EQ(c.rays, AlphaRays::NotShadowRays);
+  EXPECT_NEAR(c.alpha, 0.25f, 0.5f / 255);
+  EXPECT_FALSE(cutOf(v3, "Material \"uber\" \"rgb opacity\" [1 1 1]\n" + triangle).any);
+}
+
+// The scene the distributed test renders on several ranks (cutouts_v4): its
+// sheet and its instanced leaves are stochastic cut-outs for every ray.
+TEST(PbrtParser, TheStochasticCutOutSceneHasItsCutOuts) {
+  const Loaded loaded = load(corpus("cutouts_v4.pbrt"));
+  EXPECT_TRUE(loaded.warnings.empty()) << loaded.warnings.front();
+  const Scene& scene = loaded.scene;
+  int sheets = 0, leaves = 0;
+  for (const Material& m : scene.materials) {
+    if (m.alphaTexture == kNoTexture) continue;
+    EXPECT_EQ(m.alphaTest, AlphaTest::Stochastic);
+    EXPECT_EQ(m.alphaRays, AlphaRays::All);
+    (scene.textures.at(size_t(m.alphaTexture)).isSolid() ? leaves : sheets)++;
+  }
+  EXPECT_EQ(sheets, 1);
+  EXPECT_EQ(leaves, 1);
+  EXPECT_EQ(scene.instances.size(), 6u);  // light, ground, sheet, three leaves
+}
+
 TEST(PbrtParser, DotsAreBakedAsPbrtV3Draws) {
   const Scene scene = fromText(
       "WorldBegin\nTexture \"d\" \"color\" \"dots\" \"rgb inside\" [1 0 0] \"rgb outside\" [0 0 1] "
@@ -1303,8 +1407,8 @@ const std::vector<BadPbrt> kBadPbrt = {
 INSTANTIATE_TEST_SUITE_P(Corpus, PbrtCorpusError, testing::ValuesIn(kBadPbrt));
 
 TEST(PbrtParser, EveryCorpusFileIsCovered) {
-  std::set<std::string> tested = {"features_v3.pbrt", "features_v4.pbrt", "imported.pbrt",
-                                  "include_loop_b.pbrt", "mismatched_end.pbrt"};
+  std::set<std::string> tested = {"features_v3.pbrt", "features_v4.pbrt",    "cutouts_v4.pbrt",
+                                  "imported.pbrt",    "include_loop_b.pbrt", "mismatched_end.pbrt"};
   for (const BadPbrt& b : kBadPbrt) tested.insert(b.file);
   for (const auto& entry : fs::directory_iterator(kCorpus))
     if (entry.path().extension() == ".pbrt") {
