@@ -945,6 +945,32 @@ TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
   EXPECT_EQ(substrate.baseColor, Vec3f(0.5f));
 }
 
+// Rough glass as each pbrt remaps it: v3's polynomial, v4's square root,
+// none with remaproughness false; u and v combined as sqrt(alpha_u alpha_v);
+// Ferry's roughness is sqrt(alpha).
+TEST(PbrtParser, RoughGlassFollowsEachVersionsRemapping) {
+  auto glass = [](const std::string& header, const std::string& material) {
+    const Scene scene = fromText(header + "WorldBegin\n" + material +
+                                 "\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] "
+                                 "\"integer indices\" [0 1 2]\nWorldEnd\n");
+    const auto* d =
+        modelAs<DielectricModel>(scene.materials.at(size_t(scene.meshes.at(0).material)));
+    EXPECT_NE(d, nullptr);
+    return d ? d->roughness : -1.0f;
+  };
+  const float v3Alpha =
+      1.62142f + 0.819955f * std::log(0.1f) + 0.1734f * std::pow(std::log(0.1f), 2.0f) +
+      0.0171201f * std::pow(std::log(0.1f), 3.0f) + 0.000640711f * std::pow(std::log(0.1f), 4.0f);
+  EXPECT_NEAR(glass("Film \"image\"\n", "Material \"glass\" \"float roughness\" 0.1"),
+              std::sqrt(v3Alpha), 1e-5f);
+  EXPECT_NEAR(glass("Film \"rgb\"\n", "Material \"dielectric\" \"float roughness\" 0.1"),
+              std::sqrt(std::sqrt(0.1f)), 1e-6f);
+  EXPECT_NEAR(glass("Film \"rgb\"\n",
+                    "Material \"dielectric\" \"float uroughness\" 0.04 \"float vroughness\" 0.16 "
+                    "\"bool remaproughness\" false"),
+              std::sqrt(std::sqrt(0.04f * 0.16f)), 1e-6f);
+}
+
 TEST(PbrtParser, SolidTexturesAreEvaluatedInTheirSpace) {
   const Scene scene = fromText(
       "WorldBegin\nTransformBegin\nTranslate 0 2 0\nTexture \"m\" \"color\" \"marble\" \"float "
