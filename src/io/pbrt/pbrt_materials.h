@@ -48,7 +48,6 @@ struct PbrtAlpha {
   int32_t texture = kNoTexture;
   AlphaTest test = AlphaTest::Below;
   AlphaRays rays = AlphaRays::All;
-  auto operator<=>(const PbrtAlpha&) const = default;
 };
 
 class PbrtMaterials {
