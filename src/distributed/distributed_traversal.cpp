@@ -98,58 +98,129 @@ int DistributedTraversal<Path>::primaryOwner(uint32_t pixel, const TraceRay& ray
 
 template <typename Path>
 void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
-                                               const CameraRayOf& cameraRay,
+                                               const CameraRays& cameraRays,
                                                std::vector<uint32_t>& pixels, FrameStats& stats) {
-  const int rank = comm_.rank();
+  // Each pixel is decided by the rank it is dealt to (pixel % ranks) and sent
+  // to its owner as a 4-byte pixel id.
   const uint32_t ranks = uint32_t(comm_.size());
-  // Each pixel is decided once, by the rank it is dealt to (pixel % ranks),
-  // and sent to its owner as a 4-byte pixel id: one proxy query per camera
-  // path in all, instead of one on every rank (the owner is the same either
-  // way, so the image and every counter but the queries are unchanged).
-  const uint32_t firstDealt = first + (uint32_t(rank) + ranks - first % ranks) % ranks;
-  const size_t dealt = firstDealt < last ? (last - firstDealt + ranks - 1) / ranks : 0;
-  auto pixelOf = [&](size_t k) { return firstDealt + uint32_t(k) * ranks; };
+  const uint32_t firstDealt = first + (uint32_t(comm_.rank()) + ranks - first % ranks) % ranks;
+  std::vector<uint32_t> dealt;
+  for (uint32_t pixel = firstDealt; pixel < last; pixel += ranks) dealt.push_back(pixel);
   if (mode_ != ForwardingMode::Proxies) {
     // Ring and broadcast have no proxies to guide them: every rank keeps its deal.
-    pixels.resize(dealt);
-    for (size_t k = 0; k < dealt; ++k) pixels[k] = pixelOf(k);
+    pixels = std::move(dealt);
     return;
   }
-  std::vector<int32_t> owner(dealt);
-  std::atomic<uint64_t> queries{0};
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, dealt, 1024), [&](const auto& range) {
-    uint64_t local = 0;
-    for (size_t k = range.begin(); k != range.end(); ++k) {
-      uint32_t q = 0;
-      owner[k] = primaryOwner(pixelOf(k), cameraRay(pixelOf(k)), q);
-      local += q;
+  auto sampleOwners = [&](const std::vector<uint32_t>& of) {
+    return owners(of, stats, [&](uint32_t pixel, uint32_t& queries, uint32_t& closest) {
+      closest = 1;
+      return primaryOwner(pixel, cameraRays.sample(pixel), queries);
+    });
+  };
+  if (!cameraRays.through) {  // a lens: every sample decided anew
+    pixels = sendToOwners(dealt, sampleOwners(dealt), stats);
+    return;
+  }
+  // A pinhole: a pixel whose corners and centre have one owner keeps it for
+  // every sample of this view; the others are decided sample by sample.
+  // Kept per pixel range (the viewer renders a frame in slices), for one
+  // view at a time; every rank keeps and drops the same ones.
+  if (!viewOwnership_.empty() && (viewOwnership_.front().view != cameraRays.view ||
+                                  viewOwnership_.size() >= kMaxOwnershipRanges))
+    viewOwnership_.clear();
+  auto known = std::find_if(viewOwnership_.begin(), viewOwnership_.end(),
+                            [&](const auto& v) { return v.first == first && v.last == last; });
+  if (known == viewOwnership_.end()) {
+    known = viewOwnership_.insert(viewOwnership_.end(),
+                                  ViewOwnership{cameraRays.view, first, last, {}, {}});
+    ViewOwnership& view = *known;
+    constexpr float kCorner[5][2] = {{0.5f, 0.5f}, {0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    auto ownerOfCorners = [&](uint32_t pixel, uint32_t& queries, uint32_t& closest) {
+      int32_t found = -1;
+      bool varies = false;
+      for (const auto& [dx, dy] : kCorner) {  // all five, so the counts are exact
+        uint32_t q = 0;
+        const int o = primaryOwner(pixel, cameraRays.through(pixel, dx, dy), q);
+        queries += q;
+        ++closest;
+        varies |= found >= 0 && o != found;
+        found = o;
+      }
+      return varies ? kVariesBySample : found;
+    };
+    const std::vector<int32_t> owner = owners(dealt, stats, ownerOfCorners);
+    std::vector<uint32_t> fixed;
+    std::vector<int32_t> fixedOwner;
+    for (size_t k = 0; k < dealt.size(); ++k) {
+      if (owner[k] == kVariesBySample) {
+        view.varying.push_back(dealt[k]);
+      } else {
+        fixed.push_back(dealt[k]);
+        fixedOwner.push_back(owner[k]);
+      }
     }
-    queries += local;
+    view.fixed = sendToOwners(fixed, fixedOwner, stats);
+  }
+  const ViewOwnership& view = *known;
+  const std::vector<uint32_t> varying =
+      sendToOwners(view.varying, sampleOwners(view.varying), stats);
+  pixels.resize(view.fixed.size() + varying.size());
+  std::merge(view.fixed.begin(), view.fixed.end(), varying.begin(), varying.end(), pixels.begin());
+}
+
+template <typename Path>
+template <typename OwnerOf>
+std::vector<int32_t> DistributedTraversal<Path>::owners(const std::vector<uint32_t>& pixels,
+                                                        FrameStats& stats,
+                                                        const OwnerOf& ownerOf) const {
+  std::vector<int32_t> owner(pixels.size());
+  std::atomic<uint64_t> queries{0}, closest{0};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels.size(), 1024), [&](const auto& range) {
+    uint64_t localQueries = 0, localClosest = 0;
+    for (size_t k = range.begin(); k != range.end(); ++k) {
+      uint32_t q = 0, c = 0;
+      owner[k] = ownerOf(pixels[k], q, c);
+      localQueries += q;
+      localClosest += c;
+    }
+    queries += localQueries;
+    closest += localClosest;
   });
   stats.proxyQueries += queries;
-  stats.primaryQueries += dealt;
-  stats.replicaQueries += queries - dealt;
+  stats.primaryQueries += closest;
+  stats.replicaQueries += queries - closest;
+  return owner;
+}
+
+template <typename Path>
+std::vector<uint32_t> DistributedTraversal<Path>::sendToOwners(const std::vector<uint32_t>& pixels,
+                                                               const std::vector<int32_t>& owner,
+                                                               FrameStats& stats) const {
+  const uint32_t ranks = uint32_t(comm_.size());
   // Pixel ids by owner, each owner's in increasing order.
   std::vector<int> counts(ranks, 0), offsets(ranks, 0);
   for (int32_t o : owner) ++counts[size_t(o)];
   for (uint32_t r = 1; r < ranks; ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
-  std::vector<uint32_t> send(dealt);
+  std::vector<uint32_t> send(pixels.size());
   std::vector<int> cursor = offsets;
-  for (size_t k = 0; k < dealt; ++k) send[size_t(cursor[size_t(owner[k])]++)] = pixelOf(k);
+  for (size_t k = 0; k < pixels.size(); ++k) send[size_t(cursor[size_t(owner[k])]++)] = pixels[k];
   std::vector<int> receiveCounts = comm_.exchangeCounts(counts);
   std::vector<int> receiveOffsets(ranks, 0);
   for (uint32_t r = 1; r < ranks; ++r)
     receiveOffsets[r] = receiveOffsets[r - 1] + receiveCounts[r - 1];
-  pixels.resize(size_t(receiveOffsets[ranks - 1]) + size_t(receiveCounts[ranks - 1]));
+  std::vector<uint32_t> received(size_t(receiveOffsets[ranks - 1]) +
+                                 size_t(receiveCounts[ranks - 1]));
   auto toBytes = [](std::vector<int> v) {
     for (int& x : v) x *= int(sizeof(uint32_t));
     return v;
   };
-  comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), pixels.data(),
+  comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), received.data(),
                       toBytes(receiveCounts), toBytes(receiveOffsets));
-  stats.primaryBytesSent += (dealt - size_t(counts[size_t(rank)])) * sizeof(uint32_t);
+  stats.primaryBytesSent +=
+      (pixels.size() - size_t(counts[size_t(comm_.rank())])) * sizeof(uint32_t);
   // Each source's ids are increasing; the queue wants them all in pixel order.
-  std::sort(pixels.begin(), pixels.end());
+  std::sort(received.begin(), received.end());
+  return received;
 }
 
 template <typename Path>

@@ -50,7 +50,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   bool runsSamples() const override { return exchange_ == ExchangeMode::Overlapped; }
   void runSample(uint32_t sampleIndex, uint32_t first, uint32_t last, SampleShading<Path>& shading,
                  FrameStats& stats) override;
-  void primaryPixels(uint32_t first, uint32_t last, const CameraRayOf& cameraRay,
+  void primaryPixels(uint32_t first, uint32_t last, const CameraRays& cameraRays,
                      std::vector<uint32_t>& pixels, FrameStats& stats) override;
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override;
@@ -75,6 +75,16 @@ class DistributedTraversal final : public RayTraversal<Path> {
   // (of a replicated one, the owner that reaches farthest); `queries`: the
   // proxy queries it took.
   int primaryOwner(uint32_t pixel, const TraceRay& ray, uint32_t& queries) const;
+  // ownerOf(pixel, queries, closest) for each of `pixels`, in parallel;
+  // counts the queries (`closest` of them closest-proxy ones, the rest
+  // weighing replicas).
+  template <typename OwnerOf>
+  std::vector<int32_t> owners(const std::vector<uint32_t>& pixels, FrameStats& stats,
+                              const OwnerOf& ownerOf) const;
+  // Sends each of `pixels` to rank owner[i] (collective); returns the pixels
+  // this rank was sent, in increasing order.
+  std::vector<uint32_t> sendToOwners(const std::vector<uint32_t>& pixels,
+                                     const std::vector<int32_t>& owner, FrameStats& stats) const;
   // Both take the wavefront as it travels (both kinds in one queue) and add
   // the rays left here to shade to `ready`, by kind (readyHits: per path).
   void traverseForwarding(PathQueue<Path> moving, RayQueues<Path>& ready,
@@ -110,6 +120,17 @@ class DistributedTraversal final : public RayTraversal<Path> {
   ExchangeMode exchange_;
   uint32_t chunkPixels_;
   const ProxyBvh& proxies_;
+  // Camera-path owners for a pinhole view and pixel range: the pixels this
+  // rank starts in every sample, and those dealt to it that are decided
+  // sample by sample (their corners and centre have different owners).
+  struct ViewOwnership {
+    uint64_t view = 0;
+    uint32_t first = 0, last = 0;
+    std::vector<uint32_t> fixed, varying;
+  };
+  static constexpr int32_t kVariesBySample = -1;
+  static constexpr size_t kMaxOwnershipRanges = 256;
+  std::vector<ViewOwnership> viewOwnership_;  // the current view's, per pixel range
   std::vector<uint64_t>
       instanceOwners_;  // mask layouts: owner mask per instance (empty for replay)
   // Overlapped: rays of a later sample that arrived before this rank saw the

@@ -392,6 +392,83 @@ class FailingExchange final : public Communicator {
   mutable int calls_ = 0;
 };
 
+// A pinhole view's camera-path owners are decided once: five rays a pixel
+// in the first frame, then only pixels whose five owners differ, sample by
+// sample. A renderer for another view on the same traversal decides anew,
+// and both views' images are the one-rank images; a frame rendered in
+// slices keeps each slice's owners.
+TEST(DistributedInProcessOwnership, DecidedOncePerViewAndAnewForANewView) {
+  tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);
+  const Scene loaded = loadScene("builtin:cornell");
+  const LightSampler lights(loaded);
+  RenderSettings first = settingsFor(kCornell);
+  RenderSettings moved = first;
+  moved.camera = loaded.view("");
+  moved.camera->from = moved.camera->from + Vec3f(0.3f, -0.2f, 0.1f);
+  const uint32_t pixels = uint32_t(first.width * first.height);
+  const uint32_t spp = uint32_t(first.samplesPerPixel);
+
+  // The one-rank images of both views.
+  std::vector<std::vector<Vec3f>> reference;
+  for (const RenderSettings& s : {first, moved}) {
+    PartitionedScene one = partitioned(loaded, 1, "round-robin", s.seed);
+    runRanks(1, [&](const Communicator& comm) {
+      auto geometry = buildGeometry(one.scene, one.partition.instancesOf(0));
+      reference.push_back(renderFrame<Path8>(comm, one.scene, *geometry, lights, one.partition,
+                                             ForwardingMode::Proxies, s)
+                              .image);
+    });
+  }
+
+  const PartitionedScene shared = partitioned(loaded, 2, "best", first.seed);
+  for (ExchangeMode exchange : {ExchangeMode::Bulk, ExchangeMode::Overlapped}) {
+    SCOPED_TRACE(toString(exchange));
+    runRanks(2, [&](const Communicator& comm) {
+      Scene mine = shared.scene;
+      const std::vector<int32_t> owned = shared.partition.instancesOf(comm.rank());
+      mine.releaseAllBut(owned);
+      auto geometry = buildGeometry(mine, owned);
+      ProxyBvh proxies(shared.partition.proxies, comm.rank(), shared.partition.proxyShapes,
+                       shared.partition.proxyPlacements);
+      DistributedTraversal<Path8> traversal(comm, *geometry, shared.partition, proxies,
+                                            ForwardingMode::Proxies, exchange);
+      for (size_t v = 0; v < 2; ++v) {
+        const RenderSettings& s = v == 0 ? first : moved;
+        WavefrontRenderer<Path8> renderer(mine, *geometry, lights, traversal, s);
+        std::vector<uint64_t> queries;  // per frame, summed over ranks
+        FrameBuffer firstFrame(s.width, s.height), later(s.width, s.height);
+        for (int frame = 0; frame < 3; ++frame)
+          queries.push_back(comm.sum(
+              renderer.renderFrame(frame, frame == 0 ? firstFrame : later).primaryQueries));
+        uint64_t bytes = 0;
+        const std::vector<Vec3f> image =
+            compositeLinear(comm, firstFrame, 1.0f / float(spp), bytes);
+        if (!comm.isRoot()) continue;
+        SCOPED_TRACE(v == 0 ? "first view" : "moved view");
+        const uint64_t varying = queries[1];
+        EXPECT_EQ(queries[0], 5 * pixels + varying);
+        EXPECT_EQ(queries[2], varying);
+        EXPECT_GT(varying, 0u) << "no pixel has two owners: the test shows nothing";
+        EXPECT_LT(varying, pixels * spp / 4);
+        EXPECT_LE(pixelsBeyondTolerance(reference[v], image, 0, 0), int(0.002 * pixels));
+      }
+      // The viewer renders frames in slices: each slice's owners are kept.
+      WavefrontRenderer<Path8> renderer(mine, *geometry, lights, traversal, moved);
+      FrameBuffer frameBuffer(moved.width, moved.height);
+      std::vector<uint64_t> queries;
+      for (int frame = 0; frame < 2; ++frame) {
+        uint64_t q = 0;
+        for (uint32_t slice = 0; slice < 3; ++slice)
+          q += renderer
+                   .renderPixels(frame, pixels * slice / 3, pixels * (slice + 1) / 3, frameBuffer)
+                   .primaryQueries;
+        queries.push_back(comm.sum(q));
+      }
+      if (comm.isRoot()) EXPECT_EQ(queries[0], 5 * pixels + queries[1]) << "in slices";
+    });
+  }
+}
+
 // Rank 1 fails in the exchange stage in the middle of a render and calls
 // abortAll, as the `ferry` command does with a render-time error; every rank
 // ends, soon, with rank 1's message.

@@ -115,8 +115,7 @@ class DistributedTraversal<Path>::OverlappedSample {
   // Which camera paths are this rank's (proxy-guided, one collective).
   void findOwnCameraPaths() {
     auto start = Clock::now();
-    traversal_.primaryPixels(
-        first_, last_, [&](uint32_t pixel) { return shading_.cameraRay(pixel); }, mine_, stats_);
+    traversal_.primaryPixels(first_, last_, shading_.cameraRays(), mine_, stats_);
     stats_.times.generate += secondsSince(start);
   }
 

@@ -21,8 +21,16 @@
 
 namespace ferry {
 
-// The camera ray of a pixel for the current sample.
-using CameraRayOf = std::function<TraceRay(uint32_t pixel)>;
+// The camera rays proxy-guided ownership asks about (primaryPixels).
+struct CameraRays {
+  // `pixel`'s camera ray for the current sample, as its path stores it.
+  std::function<TraceRay(uint32_t pixel)> sample;
+  // A pinhole camera's ray through the point (dx, dy) in [0, 1]^2 of
+  // `pixel`, where every sample's ray lies; empty for a lens camera. The
+  // same function for every call with the same `view`.
+  std::function<TraceRay(uint32_t pixel, float dx, float dy)> through;
+  uint64_t view = 0;  // names the camera and film window `through` stands for
+};
 
 // What the renderer does for a traversal that runs whole samples itself
 // (RayTraversal::runsSamples: the overlapped distributed exchange): make
@@ -33,8 +41,8 @@ template <typename Path>
 class SampleShading {
  public:
   virtual ~SampleShading() = default;
-  // The camera ray of `pixel` for this sample, as its path stores it.
-  virtual TraceRay cameraRay(uint32_t pixel) const = 0;
+  // The camera rays of this sample.
+  virtual const CameraRays& cameraRays() const = 0;
   // Appends the camera paths of `pixels` to `out`, in that order, and with
   // light paths (render/path_shading.h) theirs after them: any number.
   virtual void cameraPaths(std::span<const uint32_t> pixels, PathQueue<Path>& out,
@@ -63,12 +71,13 @@ class RayTraversal {
   }
   // Proxy-guided primary rays: sets `pixels` to the pixels of [first, last)
   // whose camera path this rank generates for the current sample, in
-  // increasing order; `cameraRay(pixel)` is the pixel's camera ray as the
-  // path stores it. Collective when distributed (every rank calls it with
-  // the same range). Default: every pixel is this rank's.
-  virtual void primaryPixels(uint32_t first, uint32_t last, const CameraRayOf& cameraRay,
+  // increasing order. Any rank may start any camera path (the image is the
+  // same); the owner of what the ray meets first saves forwards. Collective
+  // when distributed (every rank calls it with the same range and rays).
+  // Default: every pixel is this rank's.
+  virtual void primaryPixels(uint32_t first, uint32_t last, const CameraRays& cameraRays,
                              std::vector<uint32_t>& pixels, FrameStats& stats) {
-    (void)cameraRay;
+    (void)cameraRays;
     (void)stats;
     pixels.resize(last - first);
     for (uint32_t p = first; p != last; ++p) pixels[p - first] = p;

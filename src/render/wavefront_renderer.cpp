@@ -11,6 +11,7 @@
 
 #include "core/clock.h"
 #include "core/error.h"
+#include "core/hash64.h"
 #include "core/random.h"
 #include "path/path.h"
 #include "scene/scene.h"
@@ -40,6 +41,29 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
   if (uint64_t(window_.width) * uint64_t(window_.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", window_.width,
                                  window_.height, kMaxPixels));
+  // The pinhole rays through the film are fixed by the origin, the film
+  // corners' directions and the window: their bits name the view.
+  const float x0 = float(window_.x0), y0 = float(window_.y0);
+  const Vec3f key[] = {camera_.origin(), camera_.direction(x0, y0),
+                       camera_.direction(x0 + float(window_.width), y0),
+                       camera_.direction(x0, y0 + float(window_.height))};
+  const int sizes[] = {window_.x0, window_.y0, window_.width, window_.height};
+  viewKey_ = hash64(sizes, sizeof sizes, hash64(key, sizeof key));
+}
+
+template <typename Path>
+CameraRays WavefrontRenderer<Path>::cameraRays(uint32_t sampleIndex) const {
+  CameraRays rays;
+  rays.sample = [this, sampleIndex](uint32_t pixel) { return cameraTraceRay(sampleIndex, pixel); };
+  if (!camera_.hasLens()) {
+    rays.through = [this](uint32_t pixel, float dx, float dy) {
+      const float x = float(pixel % width() + uint32_t(window_.x0)) + dx;
+      const float y = float(pixel / width() + uint32_t(window_.y0)) + dy;
+      return TraceRay{camera_.origin(), camera_.direction(x, y), 0, kInfinity};
+    };
+    rays.view = viewKey_;
+  }
+  return rays;
 }
 
 template <typename Path>
@@ -203,11 +227,12 @@ template <typename Path>
 class WavefrontRenderer<Path>::SampleStages final : public SampleShading<Path> {
  public:
   SampleStages(WavefrontRenderer& renderer, uint32_t sampleIndex, FrameBuffer& frameBuffer)
-      : renderer_(renderer), sampleIndex_(sampleIndex), frameBuffer_(frameBuffer) {}
+      : renderer_(renderer),
+        sampleIndex_(sampleIndex),
+        frameBuffer_(frameBuffer),
+        cameraRays_(renderer.cameraRays(sampleIndex)) {}
 
-  TraceRay cameraRay(uint32_t pixel) const override {
-    return renderer_.cameraTraceRay(sampleIndex_, pixel);
-  }
+  const CameraRays& cameraRays() const override { return cameraRays_; }
   void cameraPaths(std::span<const uint32_t> pixels, PathQueue<Path>& out,
                    FrameStats& stats) override {
     auto start = Clock::now();
@@ -233,6 +258,7 @@ class WavefrontRenderer<Path>::SampleStages final : public SampleShading<Path> {
   WavefrontRenderer& renderer_;
   uint32_t sampleIndex_;
   FrameBuffer& frameBuffer_;
+  CameraRays cameraRays_;
 };
 
 template <typename Path>
@@ -274,9 +300,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     // Many ranks: the traversal says which pixels' paths are this rank's
     // (proxy-guided, one collective), then their camera rays go into the
     // queue in pixel order.
-    traversal_.primaryPixels(
-        first, last, [&](uint32_t pixel) { return cameraTraceRay(sampleIndex, pixel); },
-        ws.primaryPixels, stats);
+    traversal_.primaryPixels(first, last, cameraRays(sampleIndex), ws.primaryPixels, stats);
     const std::vector<uint32_t>& mine = ws.primaryPixels;
     rays.resize(mine.size());
     makeCameraPaths(sampleIndex, mine, rays.data());

@@ -138,6 +138,8 @@ class WavefrontRenderer {
   uint32_t pixelCount() const { return uint32_t(window_.width) * uint32_t(window_.height); }
   // The camera ray of `pixel`'s path, as the proxy-guided ownership asks it.
   TraceRay cameraTraceRay(uint32_t sampleIndex, uint32_t pixel) const;
+  // Sample `sampleIndex`'s camera rays, and this view's, for primaryPixels.
+  CameraRays cameraRays(uint32_t sampleIndex) const;
   // The camera paths of `pixels` into out[0, pixels.size()), in parallel.
   void makeCameraPaths(uint32_t sampleIndex, std::span<const uint32_t> pixels, Path* out) const;
   // With light paths: the light paths of `pixels` (one each, same index)
@@ -177,6 +179,7 @@ class WavefrontRenderer {
   RenderSettings settings_;
   FilmWindow window_;  // the part of the film the image is
   Camera camera_;
+  uint64_t viewKey_ = 0;  // CameraRays::view of this camera and window
   PathShading<Path> shading_;
   Workspace workspace_;  // many ranks: the one whole-image wavefront
   tbb::enumerable_thread_specific<Workspace> chunkWorkspaces_;  // one rank: one per thread
