@@ -117,23 +117,30 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
       return primaryOwner(pixel, cameraRays.sample(pixel), queries);
     });
   };
-  if (!cameraRays.through) {  // a lens: every sample decided anew
+  // A pinhole: a pixel whose corners and centre have one owner keeps it for
+  // every sample of this view from its second on; the others, a lens's
+  // pixels and a view's first sample (a camera that moves every frame pays
+  // nothing more) are decided sample by sample. Kept per pixel range (the
+  // viewer renders a frame in slices), for one view at a time; every rank
+  // keeps and drops the same ones.
+  ViewOwnership* view = nullptr;
+  if (cameraRays.through) {
+    if (!viewOwnership_.empty() && (viewOwnership_.front().view != cameraRays.view ||
+                                    viewOwnership_.size() >= kMaxOwnershipRanges))
+      viewOwnership_.clear();
+    auto known = std::find_if(viewOwnership_.begin(), viewOwnership_.end(),
+                              [&](const auto& v) { return v.first == first && v.last == last; });
+    if (known == viewOwnership_.end())
+      known = viewOwnership_.insert(known, ViewOwnership{cameraRays.view, first, last});
+    view = &*known;
+  }
+  if (view == nullptr || !view->seen) {
+    if (view) view->seen = true;
     pixels = sendToOwners(dealt, sampleOwners(dealt), stats);
     return;
   }
-  // A pinhole: a pixel whose corners and centre have one owner keeps it for
-  // every sample of this view; the others are decided sample by sample.
-  // Kept per pixel range (the viewer renders a frame in slices), for one
-  // view at a time; every rank keeps and drops the same ones.
-  if (!viewOwnership_.empty() && (viewOwnership_.front().view != cameraRays.view ||
-                                  viewOwnership_.size() >= kMaxOwnershipRanges))
-    viewOwnership_.clear();
-  auto known = std::find_if(viewOwnership_.begin(), viewOwnership_.end(),
-                            [&](const auto& v) { return v.first == first && v.last == last; });
-  if (known == viewOwnership_.end()) {
-    known = viewOwnership_.insert(viewOwnership_.end(),
-                                  ViewOwnership{cameraRays.view, first, last, {}, {}});
-    ViewOwnership& view = *known;
+  if (!view->decided) {
+    view->decided = true;
     constexpr float kCorner[5][2] = {{0.5f, 0.5f}, {0, 0}, {1, 0}, {0, 1}, {1, 1}};
     auto ownerOfCorners = [&](uint32_t pixel, uint32_t& queries, uint32_t& closest) {
       int32_t found = -1;
@@ -153,19 +160,19 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
     std::vector<int32_t> fixedOwner;
     for (size_t k = 0; k < dealt.size(); ++k) {
       if (owner[k] == kVariesBySample) {
-        view.varying.push_back(dealt[k]);
+        view->varying.push_back(dealt[k]);
       } else {
         fixed.push_back(dealt[k]);
         fixedOwner.push_back(owner[k]);
       }
     }
-    view.fixed = sendToOwners(fixed, fixedOwner, stats);
+    view->fixed = sendToOwners(fixed, fixedOwner, stats);
   }
-  const ViewOwnership& view = *known;
   const std::vector<uint32_t> varying =
-      sendToOwners(view.varying, sampleOwners(view.varying), stats);
-  pixels.resize(view.fixed.size() + varying.size());
-  std::merge(view.fixed.begin(), view.fixed.end(), varying.begin(), varying.end(), pixels.begin());
+      sendToOwners(view->varying, sampleOwners(view->varying), stats);
+  pixels.resize(view->fixed.size() + varying.size());
+  std::merge(view->fixed.begin(), view->fixed.end(), varying.begin(), varying.end(),
+             pixels.begin());
 }
 
 template <typename Path>

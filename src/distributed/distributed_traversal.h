@@ -120,12 +120,14 @@ class DistributedTraversal final : public RayTraversal<Path> {
   ExchangeMode exchange_;
   uint32_t chunkPixels_;
   const ProxyBvh& proxies_;
-  // Camera-path owners for a pinhole view and pixel range: the pixels this
-  // rank starts in every sample, and those dealt to it that are decided
-  // sample by sample (their corners and centre have different owners).
+  // Camera-path owners for a pinhole view and pixel range: whether a sample
+  // of it was decided pixel by pixel, and once decided, the pixels this rank
+  // starts in every sample and those dealt to it that are decided sample by
+  // sample (their corners and centre have different owners).
   struct ViewOwnership {
     uint64_t view = 0;
     uint32_t first = 0, last = 0;
+    bool seen = false, decided = false;
     std::vector<uint32_t> fixed, varying;
   };
   static constexpr int32_t kVariesBySample = -1;

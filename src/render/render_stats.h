@@ -72,8 +72,9 @@ struct FrameStats {
   uint64_t proxyQueries = 0;     // proxy-BVH queries: camera-ray ownership and forwarding decisions
   uint64_t replayQueries = 0;    // replay layout: proxy queries spent recomputing visited sets
   uint64_t primaryQueries = 0;   // of proxyQueries: deciding which rank generates a camera path
-                                 // (a closest proxy: five per pixel once per view, then one per
-                                 // camera path of pixels whose corners' owners differ)
+                                 // (a closest proxy: one per camera path in a view's first
+                                 // sample, five per pixel once in its second, then one per camera
+                                 // path of pixels whose corners' owners differ)
   uint64_t replicaQueries = 0;   // of proxyQueries: weighing a replicated proxy's owners (one per
                                  // owner; distributed/forwarding.h, reachingOwners)
   uint64_t primaryBytesSent = 0;  // pixel ids sent to the ranks that generate their camera paths
