@@ -12,6 +12,8 @@
 #   3. memory per rank (estimated, Embree retained, resident), from --stats;
 #   CPU seconds per frame summed over ranks ("cpu_seconds"), against 1 rank:
 #   the work that distribution adds, apart from waiting and time-slicing.
+# Data groups, stage shares, queries per camera path and what time-slicing
+# alone costs (N ranks in N groups): bench/data_groups.sh.
 # Every mpirun gets --bind-to none: Open MPI binds each rank to one core when
 # it starts at most two, which left the 1-rank baseline's two threads on one
 # core (0.51 s/frame instead of 0.28 on the island: every ratio measured
