@@ -467,8 +467,9 @@ TEST(DistributedInProcessOwnership, DecidedOncePerViewAndAnewForANewView) {
                    .primaryQueries;
         queries.push_back(comm.sum(q));
       }
-      if (comm.isRoot())
+      if (comm.isRoot()) {
         EXPECT_EQ(queries[0], pixels + 5 * pixels + (spp - 1) * queries[1] / spp) << "in slices";
+      }
     });
   }
 }

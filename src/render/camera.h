@@ -51,7 +51,9 @@ class Camera {
   // callers add the window's integer offset before the jitter, so that a
   // crop computes the very rays of the whole image). Inline, with the
   // pixel-to-plane scales precomputed: it runs once per camera ray.
-  Vec3f direction(float x, float y) const { return normalize(planePoint(x, y)); }
+  [[gnu::always_inline]] Vec3f direction(float x, float y) const {
+    return normalize(planePoint(x, y));
+  }
   // Inverse: the film position a world direction projects to; false if behind.
   bool project(Vec3f direction, float& x, float& y) const;
 
@@ -90,7 +92,7 @@ class Camera {
   float lensRadius_ = 0, focalDistance_ = 1;
 
   // The film point (x, y) on the image plane at distance 1 ahead, from the eye.
-  Vec3f planePoint(float x, float y) const {
+  [[gnu::always_inline]] Vec3f planePoint(float x, float y) const {
     const float sx = x * xScale_ - tanHalfX_;
     const float sy = tanHalfY_ - y * yScale_;
     return forward_ + right_ * sx + up_ * sy;

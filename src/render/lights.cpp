@@ -47,11 +47,19 @@ uint64_t cornersKey(std::array<Vec3f, 3> corners) {
 
 }  // namespace
 
+namespace {
+// (2 sin(r / 2))^2: the squared chord a cone of half-angle r subtends on the unit sphere.
+float chordSquared(float r) {
+  const float chord = 2 * std::sin(0.5f * r);
+  return chord * chord;
+}
+}  // namespace
+
 LightSampler::LightSampler(const Scene& scene, LightChoice choice)
     : suns_(scene.suns), environment_(scene.environment), choice_(choice) {
   for (const SunLight& sun : suns_)
     sunConstants_.push_back({sunRadiance(sun), sunConePdf(sun), oneMinusCos(sun.angularRadius),
-                             2 * std::sin(0.5f * sun.angularRadius), luminance(sun.irradiance),
+                             chordSquared(sun.angularRadius), luminance(sun.irradiance),
                              std::sin(std::min(sun.angularRadius, 0.5f * kPi)),
                              Frame(sun.direction)});
   if (environment_.image) {
@@ -166,15 +174,6 @@ Vec3f LightSampler::environmentRadiance(Vec3f d) const {
   Vec2f uv = directionToUv(d);
   // HdrImage rows go top (theta = 0) to bottom; its sampler takes v = 0 at the bottom.
   return environment_.image->sampleBilinear({uv.x, 1 - uv.y}) * environment_.color;
-}
-
-Vec3f LightSampler::background(Vec3f d) const {
-  Vec3f l = environmentRadiance(d);
-  for (size_t i = 0; i < suns_.size(); ++i)
-    // |d - s| <= 2 sin(r / 2) is the cone test without 1 - cos cancellation.
-    if (length(d - suns_[i].direction) <= sunConstants_[i].chordRadius)
-      l += sunConstants_[i].radiance;
-  return l;
 }
 
 bool LightSampler::sampleEnvironment(const Frame& frame, bool twoSided, Vec2f u,

@@ -77,7 +77,16 @@ class LightSampler {
 
   // Radiance arriving along `direction` from infinitely far away: environment
   // plus any sun whose disk `direction` falls in.
-  Vec3f background(Vec3f direction) const;
+  // (Inline: every escaped path asks, and a constant sky is the common case.)
+  Vec3f background(Vec3f direction) const {
+    Vec3f l = environment_.image ? environmentRadiance(direction) : environment_.color;
+    for (size_t i = 0; i < suns_.size(); ++i)
+      // |d - s|^2 <= (2 sin(r / 2))^2 is the cone test without 1 - cos cancellation.
+      if (const Vec3f v = direction - suns_[i].direction;
+          dot(v, v) <= sunConstants_[i].chordRadiusSquared)
+        l += sunConstants_[i].radiance;
+    return l;
+  }
 
   // For MIS. The emissive triangle with these world-space corners (in any
   // order; as computed by Affine3f::transformPoint from the mesh and its
@@ -149,10 +158,10 @@ class LightSampler {
     Vec3f radiance;
     float conePdf;
     float oneMinusCosRadius;
-    float chordRadius;      // 2 sin(r / 2): the cone test on |d - s|
-    float selectionWeight;  // luminance(irradiance)
-    float sinRadius;        // of the cone: how far below a horizon part of the disk still shows
-    Frame frame;            // Frame(direction), for sampling the cone
+    float chordRadiusSquared;  // (2 sin(r / 2))^2: the cone test on |d - s|^2
+    float selectionWeight;     // luminance(irradiance)
+    float sinRadius;           // of the cone: how far below a horizon part of the disk still shows
+    Frame frame;               // Frame(direction), for sampling the cone
   };
   std::vector<SunConstants> sunConstants_;
   EnvironmentLight environment_;

@@ -261,7 +261,7 @@ template <typename Path>
     const Path& path, FrameBuffer& frameBuffer) const {
   Vec3f l;
   if (path.has(kPathAfterSpecular) || strategy_ == LightStrategy::BsdfSamples) {
-    l = path.weight() * lights_.background(normalize(path.dir()));
+    l = path.weight() * lights_.background(path.dir());
   } else if (strategy_ == LightStrategy::Mis && lights_.environmentTakesPartInMis()) {
     const Vec3f d = path.dir();
     const float weight = misWeight(path.bsdfPdf(), lights_.environmentPdf(path.origin, d));
@@ -279,7 +279,7 @@ template <typename Path>
   return PathVertex{path.pixel(),
                     bounce,
                     path.weight(),
-                    normalize(-path.dir()),
+                    -path.dir(),  // decoded directions are unit
                     path.has(kPathAfterSpecular),
                     path.origin,
                     path.bsdfPdf(),
@@ -599,7 +599,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
     const Path& path, Vec3f position, float g, int32_t medium, uint32_t sampleIndex,
     uint32_t bounce, Path& continuation, Path& shadowRay) const {
   if (bounce >= maxDepth_) return {};
-  const Vec3f wo = normalize(-path.dir());
+  const Vec3f wo = -path.dir();
   const RandomKey key{randomPixel(path.pixel()), sampleIndex, bounce, seed_};
   const RandomStream random(key);
   const Vec3f throughput = path.weight();

@@ -174,8 +174,10 @@ void concatenateBlocks(const PathQueue<Path>& staging, size_t stride,
 }  // namespace
 
 template <typename Path>
-void WavefrontRenderer<Path>::makeCameraPath(uint32_t sampleIndex, uint32_t pixel, uint32_t px,
-                                             uint32_t py, Path& path) const {
+[[gnu::always_inline]] inline void WavefrontRenderer<Path>::makeCameraPath(uint32_t sampleIndex,
+                                                                           uint32_t pixel,
+                                                                           uint32_t px, uint32_t py,
+                                                                           Path& path) const {
   RandomStream random(RandomKey{shading_.randomPixel(pixel), sampleIndex, 0, settings_.seed});
   // The film's pixel (a crop's image is offset in it), then the jitter.
   float x = float(px + uint32_t(window_.x0)) + random(RandomDim::PixelJitterX);
