@@ -54,6 +54,14 @@ class Camera {
   [[gnu::always_inline]] Vec3f direction(float x, float y) const {
     return normalize(planePoint(x, y));
   }
+  // The film point (x, y) on the image plane at distance 1 ahead, from the
+  // eye: direction(x, y) before it is normalized (for a caller that
+  // normalizes anyway, as a path's direction encoding does).
+  [[gnu::always_inline]] Vec3f planePoint(float x, float y) const {
+    const float sx = x * xScale_ - tanHalfX_;
+    const float sy = tanHalfY_ - y * yScale_;
+    return forward_ + right_ * sx + up_ * sy;
+  }
   // Inverse: the film position a world direction projects to; false if behind.
   bool project(Vec3f direction, float& x, float& y) const;
 
@@ -90,13 +98,6 @@ class Camera {
   int x0_ = 0, y0_ = 0;                // the window's corner in the film
   int width_ = 1, height_ = 1;         // the image
   float lensRadius_ = 0, focalDistance_ = 1;
-
-  // The film point (x, y) on the image plane at distance 1 ahead, from the eye.
-  [[gnu::always_inline]] Vec3f planePoint(float x, float y) const {
-    const float sx = x * xScale_ - tanHalfX_;
-    const float sy = tanHalfY_ - y * yScale_;
-    return forward_ + right_ * sx + up_ * sy;
-  }
 };
 
 }  // namespace ferry

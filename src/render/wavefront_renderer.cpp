@@ -186,7 +186,7 @@ template <typename Path>
   if (camera_.hasLens())
     camera_.ray(x, y, {random(RandomDim::LensU), random(RandomDim::LensV)}, origin, direction);
   else
-    direction = camera_.direction(x, y);
+    direction = camera_.planePoint(x, y);  // makeRay's encoding normalizes it
   makeRay(path, origin, direction, kInfinity, Vec3f(1), pixel, kPathAfterSpecular);
   if (shading_.cameraMedium() != kNoMedium) setPathMedium(path, shading_.cameraMedium());
 }
