@@ -542,20 +542,16 @@ void ProxyBvh::search(int32_t rootA, int32_t rootB, Vec3f origin, Vec3f directio
       sub[j] = entry;
     }
   };
-  {
-    Entry sub[2 * kWidth];
-    int count = 0;
-    for (int32_t root : {rootA, rootB})
-      if (root >= 0) expand(root, sub, count);
-    for (int j = 0; j < count; ++j) stack[top++] = sub[j];
-  }
+  // Children are sorted straight onto the stack (copying them there from a
+  // small array became a libc memmove call per node).
+  for (int32_t root : {rootA, rootB})
+    if (root >= 0) expand(root, stack, top);
   while (top > 0) {
     const Entry e = stack[--top];
     if (!mayImprove(e.t, e.minIndex)) continue;
-    Entry sub[kWidth];
     int count = 0;
-    expand(e.node, sub, count);
-    for (int j = 0; j < count; ++j) stack[top++] = sub[j];
+    expand(e.node, stack + top, count);
+    top += count;
   }
 }
 
