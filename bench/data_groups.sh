@@ -52,7 +52,7 @@ for round in $(seq "$ROUNDS"); do
 done
 for build in $builds; do
   for config in $CONFIGS; do
-    cmp -s "$work/this.1x1.pfm" "$work/$build.$config.pfm" \
+    cmp -s "$work/$build.1x1.pfm" "$work/$build.$config.pfm" \
       || { echo "FAIL: $build $config: not the 1-rank image"; exit 1; }
   done
 done
