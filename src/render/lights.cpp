@@ -31,6 +31,12 @@ float sunConePdf(const SunLight& sun) {
   return 1.0f / (2 * kPi * oneMinusCos(sun.angularRadius));
 }
 
+// (2 sin(r / 2))^2: the squared chord a cone of half-angle r subtends on the unit sphere.
+float chordSquared(float r) {
+  const float chord = 2 * std::sin(0.5f * r);
+  return chord * chord;
+}
+
 // emitterIndex's key: the corners' bits, sorted (a mesh may start a triangle
 // at any corner), -0 counted as +0 (placing by the identity transform, as
 // the light scene does, turns -0 into +0).
@@ -45,14 +51,6 @@ uint64_t cornersKey(std::array<Vec3f, 3> corners) {
   return hash64(bits.data(), sizeof(bits));
 }
 
-}  // namespace
-
-namespace {
-// (2 sin(r / 2))^2: the squared chord a cone of half-angle r subtends on the unit sphere.
-float chordSquared(float r) {
-  const float chord = 2 * std::sin(0.5f * r);
-  return chord * chord;
-}
 }  // namespace
 
 LightSampler::LightSampler(const Scene& scene, LightChoice choice)
