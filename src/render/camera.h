@@ -49,14 +49,15 @@ class Camera {
   // Unit direction through the point (x, y) of the film, in pixels, y down
   // (with a crop window, the image's pixel (px, py) is at px + x0, py + y0;
   // callers add the window's integer offset before the jitter, so that a
-  // crop computes the very rays of the whole image). Inline, with the
-  // pixel-to-plane scales precomputed: it runs once per camera ray.
+  // crop computes the very rays of the whole image).
   [[gnu::always_inline]] Vec3f direction(float x, float y) const {
     return normalize(planePoint(x, y));
   }
   // The film point (x, y) on the image plane at distance 1 ahead, from the
   // eye: direction(x, y) before it is normalized (for a caller that
-  // normalizes anyway, as a path's direction encoding does).
+  // normalizes anyway, as a path's direction encoding does: a pinhole camera
+  // path). Inline, with the pixel-to-plane scales precomputed: it runs once
+  // per camera ray.
   [[gnu::always_inline]] Vec3f planePoint(float x, float y) const {
     const float sx = x * xScale_ - tanHalfX_;
     const float sy = tanHalfY_ - y * yScale_;

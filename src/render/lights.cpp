@@ -167,8 +167,7 @@ Vec3f LightSampler::uvToDirection(Vec2f uv) const {
   return {s * std::cos(phi), std::cos(theta), s * std::sin(phi)};
 }
 
-Vec3f LightSampler::environmentRadiance(Vec3f d) const {
-  if (!environment_.image) return environment_.color;
+Vec3f LightSampler::environmentMapRadiance(Vec3f d) const {
   Vec2f uv = directionToUv(d);
   // HdrImage rows go top (theta = 0) to bottom; its sampler takes v = 0 at the bottom.
   return environment_.image->sampleBilinear({uv.x, 1 - uv.y}) * environment_.color;

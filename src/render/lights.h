@@ -79,7 +79,7 @@ class LightSampler {
   // plus any sun whose disk `direction` falls in.
   // (Inline: every escaped path asks, and a constant sky is the common case.)
   Vec3f background(Vec3f direction) const {
-    Vec3f l = environment_.image ? environmentRadiance(direction) : environment_.color;
+    Vec3f l = environmentRadiance(direction);
     for (size_t i = 0; i < suns_.size(); ++i)
       // |d - s|^2 <= (2 sin(r / 2))^2 is the cone test without 1 - cos cancellation.
       if (const Vec3f v = direction - suns_[i].direction;
@@ -136,7 +136,10 @@ class LightSampler {
     std::vector<uint32_t> triangles;
   };
 
-  Vec3f environmentRadiance(Vec3f direction) const;
+  Vec3f environmentRadiance(Vec3f direction) const {
+    return environment_.image ? environmentMapRadiance(direction) : environment_.color;
+  }
+  Vec3f environmentMapRadiance(Vec3f direction) const;  // environment_.image set
   // Each candidate's selection weight as seen from `p`, in order, until
   // visit(index, weight) returns true.
   template <typename Visit>
