@@ -1,10 +1,16 @@
 // Counter-based random numbers: every value is a pure function of
 // (pixel, sample, bounce, dimension, seed). No generator state is carried by a
 // path, so the image cannot depend on thread count, rank count, partitioner or
-// the order in which paths are processed.
+// the order in which paths are processed. A path vertex's numbers come from
+// RandomStream, independent or Sobol' (SamplerKind); the other uses
+// (random01) are independent.
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <string_view>
+
+#include "core/sobol.h"
 
 namespace ferry {
 
@@ -86,16 +92,54 @@ inline float random01(const RandomKey& key, RandomDim dim) {
   return random01FromBits(randomBits(key, static_cast<uint32_t>(dim)));
 }
 
-// The numbers of one key, hashed once: stream(dim) == random01(key, dim).
+// How a path vertex's numbers are drawn (--sampler): Sobol' points, a fresh
+// 2D sequence for each pair of numbers (core/sobol.h; pbrt-v4's paddedsobol),
+// whose stratification lowers the error at equal samples; or independent
+// hashes of the key (pbrt's independent sampler).
+enum class SamplerKind : uint8_t { Sobol, Independent };
+
+inline const char* samplerName(SamplerKind kind) {
+  return kind == SamplerKind::Sobol ? "sobol" : "independent";
+}
+inline std::optional<SamplerKind> samplerNamed(std::string_view name) {
+  if (name == "sobol") return SamplerKind::Sobol;
+  if (name == "independent") return SamplerKind::Independent;
+  return std::nullopt;
+}
+
+// The numbers of one key. Independent: the key hashed once, each dimension
+// with one more mix (stream(dim) == random01(key, dim)). Sobol': sample
+// `key.sample` of the sequences (pixel, bounce, seed) and the dimension's
+// pair key; the pairs are (PixelJitterX, Y), (LightSampleU, V), (BsdfU, V),
+// (LensU, V), and each other dimension is the first number of its own pair.
 class RandomStream {
  public:
-  explicit RandomStream(const RandomKey& key) : keyHash_(randomKeyHash(key)) {}
+  explicit RandomStream(const RandomKey& key, SamplerKind kind = SamplerKind::Independent)
+      : sobol_(kind == SamplerKind::Sobol) {
+    if (sobol_) {
+      keyHash_ = randomKeyHash(RandomKey{key.pixel, 0, key.bounce, key.seed});
+      reversedSample_ = reverseBits(key.sample);
+    } else {
+      keyHash_ = randomKeyHash(key);
+    }
+  }
   float operator()(RandomDim dim) const {
-    return random01FromBits(randomBitsFromKeyHash(keyHash_, static_cast<uint32_t>(dim)));
+    const uint32_t d = static_cast<uint32_t>(dim);
+    if (!sobol_) return random01FromBits(randomBitsFromKeyHash(keyHash_, d));
+    const int second = kSecondOfPair[d];
+    const uint32_t seed = randomBitsFromKeyHash(keyHash_, d - uint32_t(second));
+    const uint32_t shift = hashMix(seed ^ (0x68e31da4u + uint32_t(second)));
+    return random01FromBits(sobolComponent(reversedSample_, seed, shift, second));
   }
 
  private:
-  uint32_t keyHash_;
+  // 1 for the second number of a pair (its pair key is the dimension before).
+  static constexpr uint8_t kSecondOfPair[uint32_t(RandomDim::Count)] = {0, 1, 0, 0, 1, 0, 0,
+                                                                        1, 0, 0, 0, 0, 1};
+  static_assert(uint32_t(RandomDim::Count) == 13, "pair each new dimension in kSecondOfPair");
+  uint32_t keyHash_ = 0;
+  uint32_t reversedSample_ = 0;
+  bool sobol_;
 };
 
 }  // namespace ferry

@@ -117,6 +117,10 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--transmittance {}: expected ratio or delta", o.transmittance));
   s.render.transmittance =
       o.transmittance == "ratio" ? TransmittanceEstimator::Ratio : TransmittanceEstimator::Delta;
+  const std::optional<SamplerKind> sampler = samplerNamed(o.sampler);
+  if (!sampler)
+    throw InputError(fmt::format("--sampler {}: expected sobol or independent", o.sampler));
+  s.render.sampler = *sampler;
   if (!(o.volumeOpacity > 0) || !std::isfinite(o.volumeOpacity))
     throw InputError(
         fmt::format("--volume-opacity {}: expected a positive scale", o.volumeOpacity));
@@ -202,6 +206,12 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
       ->add_option("--transmittance", o.transmittance,
                    "How shadow rays through participating media estimate transmittance: ratio\n"
                    "(ratio tracking) or delta (delta tracking: 0 or 1, a baseline to compare)")
+      ->capture_default_str();
+  command
+      ->add_option("--sampler", o.sampler,
+                   "How a path's random numbers are drawn: sobol (a Sobol' sequence per pair\n"
+                   "of numbers, shuffled and shifted per pixel: less noise at equal samples) or\n"
+                   "independent (independent hashes)")
       ->capture_default_str();
   command
       ->add_option("--volume-opacity", o.volumeOpacity,

@@ -43,12 +43,13 @@ template <typename Path>
 PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth,
                                uint32_t seed, LightStrategy strategy, const Camera* lightPathCamera,
                                const FilmWindow* window, TransmittanceEstimator transmittance,
-                               MisHeuristic heuristic)
+                               MisHeuristic heuristic, SamplerKind sampler)
     : scene_(scene),
       lights_(lights),
       surfaces_(scene),
       maxDepth_(maxDepth),
       seed_(seed),
+      sampler_(sampler),
       strategy_(strategy),
       heuristic_(heuristic),
       transmittance_(transmittance) {
@@ -118,7 +119,8 @@ template <typename Path>
 
 template <typename Path>
 bool PathShading<Path>::emission(uint32_t index, uint32_t sampleIndex, EmissionSample& out) const {
-  const RandomStream random(RandomKey{randomPixel(index), sampleIndex, kLightPathKey, seed_});
+  const RandomStream random(RandomKey{randomPixel(index), sampleIndex, kLightPathKey, seed_},
+                            sampler_);
   return lights_.sampleEmission(random(RandomDim::LightSelect),
                                 {random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)},
                                 {random(RandomDim::BsdfU), random(RandomDim::BsdfV)}, out);
@@ -348,7 +350,8 @@ Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u,
 template <typename Path>
 [[gnu::always_inline]] inline VertexScattering PathShading<Path>::shadingFrame(
     const PathVertex& vertex, uint32_t sampleIndex, uint32_t keyBounce) const {
-  const RandomStream random(RandomKey{randomPixel(vertex.pixel), sampleIndex, keyBounce, seed_});
+  const RandomStream random(RandomKey{randomPixel(vertex.pixel), sampleIndex, keyBounce, seed_},
+                            sampler_);
   const SurfacePoint& surface = vertex.surface;
   const Material* chosen = surface.material;
   const Bsdf bsdf = chosen->mixedWith < 0
@@ -601,7 +604,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
   if (bounce >= maxDepth_) return {};
   const Vec3f wo = -path.dir();
   const RandomKey key{randomPixel(path.pixel()), sampleIndex, bounce, seed_};
-  const RandomStream random(key);
+  const RandomStream random(key, sampler_);
   const Vec3f throughput = path.weight();
   Spawned spawned;
   if (strategy_ != LightStrategy::BsdfSamples) {

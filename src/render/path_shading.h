@@ -127,11 +127,13 @@ class PathShading {
   // `transmittance`: how shadow rays through media estimate it. A scene with
   // participating media takes no light paths (its camera paths carry their
   // medium where light paths keep a ratio: path/path.h, pathMedium).
+  // `sampler`: how a vertex's random numbers are drawn (core/random.h).
   PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed,
               LightStrategy strategy = LightStrategy::Mis, const Camera* lightPathCamera = nullptr,
               const FilmWindow* window = nullptr,
               TransmittanceEstimator transmittance = TransmittanceEstimator::Ratio,
-              MisHeuristic heuristic = MisHeuristic::Power);
+              MisHeuristic heuristic = MisHeuristic::Power,
+              SamplerKind sampler = SamplerKind::Sobol);
 
   // The pixel index random numbers of image pixel `pixel` are keyed by:
   // its index in the whole film.
@@ -226,6 +228,7 @@ class PathShading {
   SurfaceTable surfaces_;  // for reconstructSurface
   uint32_t maxDepth_;
   uint32_t seed_;
+  SamplerKind sampler_;
   LightStrategy strategy_;
   MisHeuristic heuristic_;
   // A density ratio raised to the heuristic's beta (the weights below sum these).

@@ -37,7 +37,7 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
       camera_(settings.cameraIn(scene), window_),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
                settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr, &window_,
-               settings.transmittance, settings.misHeuristic) {
+               settings.transmittance, settings.misHeuristic, settings.sampler) {
   if (uint64_t(window_.width) * uint64_t(window_.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", window_.width,
                                  window_.height, kMaxPixels));
@@ -178,7 +178,8 @@ template <typename Path>
                                                                            uint32_t pixel,
                                                                            uint32_t px, uint32_t py,
                                                                            Path& path) const {
-  RandomStream random(RandomKey{shading_.randomPixel(pixel), sampleIndex, 0, settings_.seed});
+  RandomStream random(RandomKey{shading_.randomPixel(pixel), sampleIndex, 0, settings_.seed},
+                      settings_.sampler);
   // The film's pixel (a crop's image is offset in it), then the jitter.
   float x = float(px + uint32_t(window_.x0)) + random(RandomDim::PixelJitterX);
   float y = float(py + uint32_t(window_.y0)) + random(RandomDim::PixelJitterY);

@@ -46,6 +46,8 @@ struct RenderSettings {
   int frames = 1;
   int maxDepth = 5;  // scattering events; 1 = direct lighting only
   uint32_t seed = 1;
+  // How a path vertex's random numbers are drawn (--sampler, core/random.h).
+  SamplerKind sampler = SamplerKind::Sobol;
   std::string view;  // empty: the scene's first view
   // A camera given outright (--look-from/--look-at, the viewer): used instead of `view`.
   std::optional<CameraView> camera;

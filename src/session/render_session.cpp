@@ -310,6 +310,9 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
            ? std::string("; light-choice=") + lightChoiceName(r.lightChoice)
            : std::string()) +
       (r.transmittance == TransmittanceEstimator::Delta ? "; transmittance=delta" : "") +
+      // Checkpoints from before --sampler drew independent numbers and name no sampler.
+      (r.sampler != SamplerKind::Independent ? std::string("; sampler=") + samplerName(r.sampler)
+                                             : std::string()) +
       (r.volumeLook.opacity != 1 ? fmt::format("; volume-opacity={}", r.volumeLook.opacity)
                                  : std::string()) +
       (r.volumeLook.colorMap.empty() ? std::string() : "; color-map=" + r.volumeLook.colorMap) +

@@ -46,6 +46,7 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                    {"mis_heuristic", misHeuristicName(r.misHeuristic)},
                    {"light_choice", lightChoiceName(r.lightChoice)},
                    {"seed", r.seed},
+                   {"sampler", samplerName(r.sampler)},
                    {"view", r.view},
                    {"threads", s.threads},
                    {"ranks", ranks},

@@ -898,8 +898,14 @@ class Parser {
                                  type)
                    : fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type)) +
                   (scene_.integratorMaxDepth ? "; its \"maxdepth\" is the default max-depth" : ""));
-    } else if (name == "Sampler" || name == "SurfaceIntegrator" || name == "VolumeIntegrator" ||
-               name == "PixelFilter" || name == "Accelerator" || name == "Renderer") {
+    } else if (name == "Sampler") {
+      std::string type = string(in, n);
+      skipped(name, params(in), where,
+              fmt::format("\"{}\": Ferry's sampler and samples per pixel are render settings "
+                          "(Sobol' by default)",
+                          type));
+    } else if (name == "SurfaceIntegrator" || name == "VolumeIntegrator" || name == "PixelFilter" ||
+               name == "Accelerator" || name == "Renderer") {
       std::string type = string(in, n);
       skipped(name, params(in), where,
               fmt::format("\"{}\": Ferry's wavefront path tracer chooses its own", type));
