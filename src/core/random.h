@@ -114,7 +114,8 @@ inline std::optional<SamplerKind> samplerNamed(std::string_view name) {
 // (LensU, V), and each other dimension is the first number of its own pair.
 class RandomStream {
  public:
-  explicit RandomStream(const RandomKey& key, SamplerKind kind = SamplerKind::Independent)
+  [[gnu::always_inline]] explicit RandomStream(const RandomKey& key,
+                                               SamplerKind kind = SamplerKind::Independent)
       : sobol_(kind == SamplerKind::Sobol) {
     if (sobol_) {
       keyHash_ = randomKeyHash(RandomKey{key.pixel, 0, key.bounce, key.seed});
@@ -123,13 +124,13 @@ class RandomStream {
       keyHash_ = randomKeyHash(key);
     }
   }
-  float operator()(RandomDim dim) const {
+  [[gnu::always_inline]] float operator()(RandomDim dim) const {
     const uint32_t d = static_cast<uint32_t>(dim);
     if (!sobol_) return random01FromBits(randomBitsFromKeyHash(keyHash_, d));
-    const int second = kSecondOfPair[d];
-    const uint32_t seed = randomBitsFromKeyHash(keyHash_, d - uint32_t(second));
-    const uint32_t shift = hashMix(seed ^ (0x68e31da4u + uint32_t(second)));
-    return random01FromBits(sobolComponent(reversedSample_, seed, shift, second));
+    const uint32_t second = kSecondOfPair[d];
+    const uint32_t seed = randomBitsFromKeyHash(keyHash_, d - second);
+    if (!second) return random01FromBits(sobolFirst(reversedSample_, seed));
+    return random01FromBits(sobolSecond(reversedSample_, seed, hashMix(seed ^ 0x68e31da4u)));
   }
 
  private:

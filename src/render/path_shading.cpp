@@ -9,8 +9,9 @@
 namespace ferry {
 namespace {
 
-// Paths whose bounce reaches this start playing Russian roulette.
-constexpr uint32_t kRouletteStartBounce = 3;
+// Paths whose bounce reaches this start playing Russian roulette: the
+// continuation from a path's second vertex on (pbrt-v4's rule).
+constexpr uint32_t kRouletteStartBounce = 2;
 
 // The least cosine between the viewer and a shading normal (shadingFrame).
 constexpr float kMinShadingCosine = 0.02f;

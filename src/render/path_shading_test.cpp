@@ -154,7 +154,7 @@ TEST(PathShading, TheDepthLimitStopsAVertexAfterItsEmission) {
   const Path8 floor = s.path({0.5f, 2, 0.5f}, {-0.2f, -1, 0.1f}, Vec3f(1), 0, hit);
   const auto r = s.shade(floor, hit, kMaxDepth);
   EXPECT_FALSE(r.spawned.continuation || r.spawned.shadowRay);
-  EXPECT_TRUE(s.shade(floor, hit, 1).spawned.continuation);
+  EXPECT_TRUE(s.shade(floor, hit, 0).spawned.continuation);  // (0: before roulette)
 
   const Path8 panel = s.path({0, 1, 0}, {0.1f, 1, 0.1f}, Vec3f(1), kPathAfterSpecular, hit);
   expectNear(s.shade(panel, hit, kMaxDepth).pixel, s.emission);
@@ -166,7 +166,7 @@ TEST(PathShading, DeltaVertexContinuesAfterSpecularWithoutALightSample) {
   const Vec3f d = normalize(Vec3f{1, 0.1f, 0.2f});
   const Path8 p = s.path({0, 1, 0}, d, Vec3f(1), 0, hit);
   ASSERT_TRUE(hit.valid());
-  const auto r = s.shade(p, hit, 1);
+  const auto r = s.shade(p, hit, 0);  // (0: before roulette)
   ASSERT_TRUE(r.spawned.continuation);
   EXPECT_FALSE(r.spawned.shadowRay);
   EXPECT_EQ(r.continuation.flags(), uint32_t(kPathAfterSpecular));
@@ -181,7 +181,7 @@ TEST(PathShading, OpaqueSurfacesAreShadedOnTheSideThePathArrivesFrom) {
   TraceHit hit;
   const Path8 p = s.path({0.5f, -2, 0.5f}, {0.2f, 1, -0.1f}, Vec3f(1), 0, hit);
   ASSERT_TRUE(hit.valid());
-  const auto r = s.shade(p, hit, 1);
+  const auto r = s.shade(p, hit, 0);  // (0: before roulette)
   ASSERT_TRUE(r.spawned.continuation);
   EXPECT_LT(r.continuation.dir().y, 0);
   EXPECT_LT(r.continuation.origin.y, 0);
