@@ -3,10 +3,10 @@
 // Sobol', as pbrt-v4's paddedsobol sampler). Each pair's sequence is the
 // Sobol' sequence with its sample order shuffled by a nested uniform (Owen)
 // scramble of the index (Burley, "Practical Hash-based Owen Scrambling",
-// JCGT 2020) and its values moved by a random digital shift (XOR), both keyed
-// by the pair's seed. So the first 2^k samples of any pair form a (0, k, 2)-net
-// (every 2^-i by 2^-(k-i) box holds one point), each number is uniform on
-// its own, and different seeds give unrelated sequences.
+// JCGT 2020) and its second component moved by a random digital shift (XOR),
+// both keyed by the pair's seed. So any 2^k samples from a multiple of 2^k
+// form a (0, k, 2)-net (every 2^-i by 2^-(k-i) box holds one point), each
+// point is uniform in the square, and different seeds give unrelated sequences.
 #pragma once
 
 #include <array>
@@ -56,14 +56,17 @@ constexpr std::array<uint32_t, 1024> secondDimensionTable() {
 inline constexpr std::array<uint32_t, 1024> kSecondDimension = secondDimensionTable();
 }  // namespace sobol_detail
 
-// Component 0 or 1 of sample `index`'s point of the 2D sequence `seed`
-// shuffles, as a 32-bit fraction; `reversedIndex` is reverseBits(index) and
-// `shift` the component's digital shift (uniform, unrelated to the seed).
-[[gnu::always_inline]] inline uint32_t sobolComponent(uint32_t reversedIndex, uint32_t seed,
-                                                      uint32_t shift, int component) {
-  // The shuffled index is reverseBits(z); its first Sobol' dimension is z.
+// Sample `index`'s point of the 2D sequence `seed` shuffles, as 32-bit
+// fractions, from reversedIndex = reverseBits(index). The first component is
+// uniform over seeds as it is; the second needs a uniform digital shift
+// `shift`, unrelated to the seed, to make the point uniform in the square.
+[[gnu::always_inline]] inline uint32_t sobolFirst(uint32_t reversedIndex, uint32_t seed) {
+  // The shuffled index is reverseBits(z), whose first Sobol' dimension is z.
+  return owenScrambleReversed(reversedIndex, seed);
+}
+[[gnu::always_inline]] inline uint32_t sobolSecond(uint32_t reversedIndex, uint32_t seed,
+                                                   uint32_t shift) {
   const uint32_t z = owenScrambleReversed(reversedIndex, seed);
-  if (component == 0) return z ^ shift;
   const auto& t = sobol_detail::kSecondDimension;
   return t[z & 255] ^ t[256 + ((z >> 8) & 255)] ^ t[512 + ((z >> 16) & 255)] ^ t[768 + (z >> 24)] ^
          shift;
