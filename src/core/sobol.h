@@ -66,7 +66,7 @@ inline constexpr std::array<uint32_t, 1024> kSecondDimension = secondDimensionTa
 }
 [[gnu::always_inline]] inline uint32_t sobolSecond(uint32_t reversedIndex, uint32_t seed,
                                                    uint32_t shift) {
-  const uint32_t z = owenScrambleReversed(reversedIndex, seed);
+  const uint32_t z = sobolFirst(reversedIndex, seed);  // the shuffled index, reversed
   const auto& t = sobol_detail::kSecondDimension;
   return t[z & 255] ^ t[256 + ((z >> 8) & 255)] ^ t[512 + ((z >> 16) & 255)] ^ t[768 + (z >> 24)] ^
          shift;
