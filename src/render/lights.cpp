@@ -146,6 +146,15 @@ LightSampler::LightSampler(const Scene& scene, LightChoice choice)
       groups_.push_back(std::move(g));
     }
   }
+  // Without emissive triangles every candidate's weight is the same
+  // everywhere: sum them once, in selectionTotal's order.
+  if (triangles_.empty()) {
+    distantOnlyTotal_ = 0;
+    forEachCandidate(Vec3f(0), [&](int, float w) {
+      if (w > 0) distantOnlyTotal_ += w;
+      return false;
+    });
+  }
 }
 
 bool LightSampler::empty() const {
@@ -277,6 +286,7 @@ void LightSampler::forEachCandidate(Vec3f p, Visit&& visit) const {
 }
 
 float LightSampler::selectionTotal(Vec3f p) const {
+  if (distantOnlyTotal_ >= 0) return distantOnlyTotal_;
   float total = 0;
   forEachCandidate(p, [&](int, float w) {
     if (w > 0) total += w;

@@ -174,6 +174,9 @@ class LightSampler {
   // constant environment (when it is one), and their summed weight.
   bool constantEnvironmentSelected_ = false;
   float distantWeight_ = 0;
+  // selectionTotal's answer when no emissive triangle makes it depend on
+  // the point (no triangles), else -1.
+  float distantOnlyTotal_ = -1;
   LightChoice choice_ = LightChoice::Near;
   float trianglePower_ = 0;  // the sum of triangles_' power (LightChoice::Power)
   std::vector<EmissiveTriangle> triangles_;

@@ -187,7 +187,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
                            : camera_->origin();
     const Vec3f toCamera = lens - position;
     const bool front = dot(toCamera, ng) > 0;
-    const Vec3f origin = offsetRayOrigin(position, front ? ng : -ng);
+    const Vec3f origin = front ? scattering.originAbove : offsetRayOrigin(position, -ng);
     uint32_t pixel;
     if ((bsdf.transmits() || front) && camera_->pixelOf(origin, lens, pixel)) {
       const float dist2 = dot(toCamera, toCamera);
@@ -251,7 +251,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
   float next = ratio * misPow(forward / cosIn) * misPow(cosOut / reverse);
   if (!bs.delta) next *= withLightSample(forward);
   if (!std::isfinite(next)) return spawned;
-  const Vec3f origin = offsetRayOrigin(position, dot(wi, ng) > 0 ? ng : -ng);
+  const Vec3f origin = scattering.originTowards(position, wi);
   makeRay(continuation, origin, wi, kInfinity, weight, vertex.pixel, kPathLight, 0, next);
   spawned.continuation = true;
   return spawned;
@@ -381,7 +381,8 @@ template <typename Path>
     }
   }
   const Frame frame(ns);
-  return VertexScattering{bsdf, ng, frame, frame.toLocal(vertex.wo), random};
+  return VertexScattering{
+      bsdf, ng, frame, frame.toLocal(vertex.wo), random, offsetRayOrigin(surface.position, ng)};
 }
 
 // The continuation is written in place (no copy of a half-written path
@@ -401,7 +402,7 @@ template <typename Path>
   if (!scattering.bsdf.transmits() && dot(wi, ng) <= 0) return false;
   Vec3f weight = vertex.throughput * bs.weight;
   if (!survivesRoulette(vertex, scattering, weight) || !usable(weight)) return false;
-  const Vec3f origin = offsetRayOrigin(vertex.surface.position, dot(wi, ng) > 0 ? ng : -ng);
+  const Vec3f origin = scattering.originTowards(vertex.surface.position, wi);
   // With light paths: the ratio times this vertex's reverse density (none at
   // the first: the camera is not sampled), its cosine towards the next
   // vertex, over the density stored for it (delta lobes: 1 both ways).
@@ -469,7 +470,7 @@ template <typename Path>
   const Vec3f ng = scattering.ng;
   const bool sameSide = bsdf.transmits() || dot(ls.direction, ng) > 0;
   if (!sameSide || !usable(contribution)) return false;
-  const Vec3f origin = offsetRayOrigin(position, dot(ls.direction, ng) > 0 ? ng : -ng);
+  const Vec3f origin = scattering.originTowards(position, ls.direction);
   const Vec3f stored =
       makeRay(shadowRay, origin, ls.direction, kInfinity, contribution, vertex.pixel, kPathShadow);
   if (std::isfinite(ls.distance)) shadowRay.tmax = shadowRayTmax(position, origin, stored, ls);
