@@ -113,11 +113,14 @@ inline Vec3f transformNormalByInverse(const Affine3f& inv, Vec3f n) {
 // The one computation behind both reconstructSurface overloads.
 inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, const Affine3f& inv,
                               const SurfaceTable::MeshArrays& mesh, const TraceHit& hit) {
-  if (mesh.shape) [[unlikely]]
-    return shapeSurfaceAt(scene, transform, inv, *mesh.shape, *mesh.material, hit);
+  // Every return returns `s`, so it is built in the caller's slot, not copied.
+  SurfacePoint s;
+  if (mesh.shape) [[unlikely]] {
+    s = shapeSurfaceAt(scene, transform, inv, *mesh.shape, *mesh.material, hit);
+    return s;
+  }
   const Vec3i& tri = mesh.indices[hit.primitive];
   float w = 1 - hit.u - hit.v;
-  SurfacePoint s;
   Vec3f p0 = mesh.positions[tri.x], p1 = mesh.positions[tri.y], p2 = mesh.positions[tri.z];
   // The object-space barycentric point is more precise than origin + t * dir
   // far from the camera.
