@@ -123,6 +123,7 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
   // nothing more) are decided sample by sample. Kept per pixel range (the
   // viewer renders a frame in slices), for one view at a time; every rank
   // keeps and drops the same ones.
+  sampleView_ = nullptr;
   ViewOwnership* view = nullptr;
   if (cameraRays.through) {
     if (!viewOwnership_.empty() && (viewOwnership_.front().view != cameraRays.view ||
@@ -167,12 +168,39 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
       }
     }
     view->fixed = sendToOwners(fixed, fixedOwner, stats);
+    computeClearance(*view, cameraRays);
   }
+  sampleView_ = view;
   const std::vector<uint32_t> varying =
       sendToOwners(view->varying, sampleOwners(view->varying), stats);
   pixels.resize(view->fixed.size() + varying.size());
   std::merge(view->fixed.begin(), view->fixed.end(), varying.begin(), varying.end(),
              pixels.begin());
+}
+
+template <typename Path>
+void DistributedTraversal<Path>::computeClearance(ViewOwnership& view,
+                                                  const CameraRays& cameraRays) const {
+  view.clearance.assign(view.last - view.first, 0.0f);
+  if constexpr (Path::kReplay) return;  // (decisions there take the visited set, not the mask)
+  const RankMask self = RankMask(1) << comm_.rank();
+  if (comm_.rank() >= int(8 * sizeof(RankMask))) return;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, view.fixed.size(), 256), [&](const auto& range) {
+    for (size_t k = range.begin(); k != range.end(); ++k) {
+      const uint32_t pixel = view.fixed[k];
+      const TraceRay r00 = cameraRays.through(pixel, 0, 0);
+      const std::array<Vec3f, 4> corners{r00.direction, cameraRays.through(pixel, 1, 0).direction,
+                                         cameraRays.through(pixel, 1, 1).direction,
+                                         cameraRays.through(pixel, 0, 1).direction};
+      const float c = proxies_.coneClearance(r00.origin, corners, self);
+      // Less a margin for the rounding of the query's entry distances, which
+      // are computed from coordinates as large as the eye's.
+      const Vec3f e = r00.origin;
+      const float scale = std::max({std::abs(e.x), std::abs(e.y), std::abs(e.z), 1.0f});
+      view.clearance[pixel - view.first] =
+          std::isinf(c) ? c : std::max(0.0f, c * (1 - 1e-4f) - 1e-4f * scale);
+    }
+  });
 }
 
 template <typename Path>
@@ -396,16 +424,29 @@ void DistributedTraversal<Path>::traverseForwarding(PathQueue<Path> moving, RayQ
 
 template <typename Path>
 void DistributedTraversal<Path>::decide(PathQueue<Path>& rays, const std::vector<RankSet>& visited,
-                                        std::vector<int>& destination, FrameStats& stats) const {
+                                        std::vector<int>& destination, FrameStats& stats,
+                                        const ViewOwnership* cameraClearance) const {
   const int rank = comm_.rank();
   const int ranks = comm_.size();
   destination.resize(rays.size());
-  std::atomic<uint64_t> proxyQueries{0}, replicaQueries{0};
+  std::atomic<uint64_t> proxyQueries{0}, replicaQueries{0}, skippedQueries{0};
+  if (mode_ != ForwardingMode::Proxies || Path::kReplay) cameraClearance = nullptr;
+  // A camera ray (not a light path's first ray) that hit here nearer than its
+  // pixel's clearance: no other rank's proxy is entered before its hit.
+  auto clear = [&](const Path& ray) {
+    if (!cameraClearance || ray.isShadow() || ray.has(kPathLight)) return false;
+    const uint32_t pixel = ray.pixel();
+    const ViewOwnership& v = *cameraClearance;
+    return pixel >= v.first && pixel < v.last && ray.tmax <= v.clearance[pixel - v.first];
+  };
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const auto& range) {
-    uint64_t queries = 0, replica = 0;
+    uint64_t queries = 0, replica = 0, skipped = 0;
     for (size_t i = range.begin(); i != range.end(); ++i) {
       ForwardDecision d;
-      if (mode_ == ForwardingMode::Ring)
+      if (clear(rays[i])) {
+        d = finishTraversal(rays[i], rank);
+        ++skipped;
+      } else if (mode_ == ForwardingMode::Ring)
         d = forwardByRing(rays[i], rank, ranks);
       else if constexpr (Path::kReplay)
         d = forwardByProxies(proxies_, rays[i], rank, visited[i]);
@@ -417,9 +458,11 @@ void DistributedTraversal<Path>::decide(PathQueue<Path>& rays, const std::vector
     }
     proxyQueries += queries;
     replicaQueries += replica;
+    skippedQueries += skipped;
   });
   stats.proxyQueries += proxyQueries;
   stats.replicaQueries += replicaQueries;
+  stats.skippedQueries += skippedQueries;
 }
 
 template <typename Path>

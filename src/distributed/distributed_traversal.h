@@ -71,6 +71,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   uint64_t received() const { return received_; }
 
  private:
+  struct ViewOwnership;
   // The rank whose camera path `pixel` is: the owner of the closest proxy
   // (of a replicated one, the owner that reaches farthest); `queries`: the
   // proxy queries it took.
@@ -100,8 +101,12 @@ class DistributedTraversal final : public RayTraversal<Path> {
   // Each ray's next step after its trace here (decisionToDestination's
   // values), into `destination`; `visited` (replay layout, proxies): each
   // ray's visited set. Counts proxy queries.
+  // `cameraClearance`: for a batch of a sample's camera paths traced where
+  // they were made, sampleView_ (camera rays nearer than their pixel's
+  // clearance are decided without a query).
   void decide(PathQueue<Path>& rays, const std::vector<RankSet>& visited,
-              std::vector<int>& destination, FrameStats& stats) const;
+              std::vector<int>& destination, FrameStats& stats,
+              const ViewOwnership* cameraClearance = nullptr) const;
   // With `hits`: resized to rays.size(), the hits that set a ray's tmax here.
   void trace(PathQueue<Path>& rays, FrameStats& stats, std::vector<TraceHit>* hits = nullptr);
   // trace() for rays that arrived to be traversed here, counting in
@@ -124,15 +129,25 @@ class DistributedTraversal final : public RayTraversal<Path> {
   // of it was decided pixel by pixel, and once decided, the pixels this rank
   // starts in every sample and those dealt to it that are decided sample by
   // sample (their corners and centre have different owners).
+  // Once decided, `clearance[pixel - first]` for each fixed pixel: how far
+  // its camera rays may hit here before another rank's proxy could be nearer
+  // (ProxyBvh::coneClearance less a rounding margin; 0 for other pixels), so
+  // that the forwarding decision after the camera ray's trace needs no query.
   struct ViewOwnership {
     uint64_t view = 0;
     uint32_t first = 0, last = 0;
     bool seen = false, decided = false;
     std::vector<uint32_t> fixed, varying;
+    std::vector<float> clearance;
   };
+  // The clearance of this rank's fixed pixels of `view`, into view.clearance.
+  void computeClearance(ViewOwnership& view, const CameraRays& cameraRays) const;
   static constexpr int32_t kVariesBySample = -1;
   static constexpr size_t kMaxOwnershipRanges = 256;
   std::vector<ViewOwnership> viewOwnership_;  // the current view's, per pixel range
+  // The view and range of the sample primaryPixels last decided, when its
+  // pixels were fixed (its clearance applies to the sample's camera rays).
+  const ViewOwnership* sampleView_ = nullptr;
   std::vector<uint64_t>
       instanceOwners_;  // mask layouts: owner mask per instance (empty for replay)
   // Overlapped: rays of a later sample that arrived before this rank saw the

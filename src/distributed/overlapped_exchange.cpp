@@ -220,7 +220,7 @@ class DistributedTraversal<Path>::OverlappedSample {
     else
       traversal_.traceArrivals(batch_, batchHits_, stats_.perBounce[bounce], stats_);
     auto start = Clock::now();
-    routeBatch(b);
+    routeBatch(b, bounce == 0 && madeHere ? traversal_.sampleView_ : nullptr);
     sendOutbox(bounce);
     stats_.times.exchange += secondsSince(start);
   }
@@ -238,8 +238,10 @@ class DistributedTraversal<Path>::OverlappedSample {
 
   // Each traced ray's next step: kept to shade in `b`, dropped (an occluded
   // shadow ray: it ends here), or into the outbox of the rank it goes to.
-  void routeBatch(BounceRays<Path>& b) {
-    traversal_.decide(batch_, visited_, destination_, stats_);
+  // `cameraClearance`: a batch of this sample's camera paths, made here.
+  void routeBatch(BounceRays<Path>& b,
+                  const typename DistributedTraversal<Path>::ViewOwnership* cameraClearance) {
+    traversal_.decide(batch_, visited_, destination_, stats_, cameraClearance);
     for (size_t i = 0; i < batch_.size(); ++i) {
       const int d = destination_[i];
       if (d == kShadeHere)

@@ -427,6 +427,71 @@ float ProxyBvh::enterInstanced(const Instanced& p, Vec3f origin, Vec3f direction
   return first;
 }
 
+float ProxyBvh::coneClearance(Vec3f eye, const std::array<Vec3f, 4>& corners,
+                              RankMask excluded) const {
+  if (!narrow()) return 0;
+  // Planes through the eye, normals inwards: the cone's four sides, and the
+  // plane across its axis (its directions are within 90 degrees of the axis).
+  const Vec3f axis = corners[0] + corners[1] + corners[2] + corners[3];
+  Vec3f normal[5];
+  normal[4] = normalize(axis);
+  for (int i = 0; i < 4; ++i) {
+    if (!(dot(corners[size_t(i)], normal[4]) > 0)) return 0;  // not a narrow cone: no bound
+    Vec3f n = cross(corners[size_t(i)], corners[size_t((i + 1) % 4)]);
+    const float len = length(n);
+    if (!(len > 0) || !std::isfinite(len)) return 0;  // a degenerate cone: no bound
+    n = n * (1 / len);
+    normal[i] = dot(n, axis) < 0 ? -n : n;
+  }
+  // Whether `box` may meet the widened cone: some corner of it is inside
+  // every side, by the margin's angle (its sine) times the corner's distance.
+  auto meetsCone = [&](Vec3f lo, Vec3f hi) {
+    const Vec3f a = lo - eye, b = hi - eye;
+    const Vec3f far{std::max(std::abs(a.x), std::abs(b.x)), std::max(std::abs(a.y), std::abs(b.y)),
+                    std::max(std::abs(a.z), std::abs(b.z))};
+    const float slack = kConeMargin * length(far);
+    for (const Vec3f& n : normal) {
+      const float most = std::max(n.x * a.x, n.x * b.x) + std::max(n.y * a.y, n.y * b.y) +
+                         std::max(n.z * a.z, n.z * b.z);
+      if (most < -slack) return false;
+    }
+    return true;
+  };
+  // Distance from the eye to a box: a unit ray enters it no nearer.
+  auto distanceTo = [&](Vec3f lo, Vec3f hi) {
+    const Vec3f d{std::max({lo.x - eye.x, 0.0f, eye.x - hi.x}),
+                  std::max({lo.y - eye.y, 0.0f, eye.y - hi.y}),
+                  std::max({lo.z - eye.z, 0.0f, eye.z - hi.z})};
+    return length(d);
+  };
+  bool ownSearched = ownRoot_ >= 0 && !((excluded >> ownRank_) & 1u);
+  float best = kInfinity;
+  int32_t stack[(kMaxSahDepth + 34) * kWidth + kWidth];  // as search()'s
+  int top = 0;
+  for (int32_t root : {sharedRoot_, ownSearched ? ownRoot_ : -1})
+    if (root >= 0) stack[top++] = root;
+  while (top > 0) {
+    const Node& node = nodes_[size_t(stack[--top])];
+    for (int k = 0; k < kWidth; ++k) {
+      const bool proxy = (node.proxySlots >> k) & 1u;
+      const bool eligible =
+          proxy ? (node.owners[k] & excluded) == 0 : (node.owners[k] & ~excluded) != 0;
+      if (!eligible) continue;
+      const Vec3f lo{node.lower[0][k], node.lower[1][k], node.lower[2][k]};
+      const Vec3f hi{node.upper[0][k], node.upper[1][k], node.upper[2][k]};
+      if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) continue;  // never entered
+      const float d = distanceTo(lo, hi);
+      if (!(d < best) || !meetsCone(lo, hi)) continue;
+      // (An instanced proxy's slot holds its boxes' world box: a lower bound too.)
+      if (proxy)
+        best = d;
+      else
+        stack[top++] = node.child[k];
+    }
+  }
+  return best;
+}
+
 ProxyBvh::Hit ProxyBvh::closest(Vec3f origin, Vec3f direction, float tmax,
                                 RankMask excluded) const {
   if (narrow()) return closestImpl(origin, direction, tmax, MaskExclusion{excluded});

@@ -4,6 +4,7 @@
 // proxy index, so every rank answers identically.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -49,6 +50,19 @@ class ProxyBvh {
   Hit closest(Vec3f origin, Vec3f direction, float tmax, const RankSet& excluded) const;
   // True when every owner is below rank 64 (the RankMask query is exact).
   bool narrow() const { return narrow_; }
+
+  // A lower bound on where any ray from `eye` whose direction lies in the
+  // cone spanned by `corners` (four directions, in order around it, as a
+  // pixel's corners are; widened by kConeMargin radians) enters a proxy whose
+  // owners do not intersect `excluded`: closest(eye, d, tmax, excluded) finds
+  // nothing for such a unit d and a tmax at most this. Infinity when no such
+  // proxy meets the cone; 0 (no bound) when the tree is not narrow. What
+  // lets a camera ray's forwarding decision go without a query
+  // (docs/data-parallel.md, "Camera rays that need no query").
+  float coneClearance(Vec3f eye, const std::array<Vec3f, 4>& corners, RankMask excluded) const;
+  // The cone's widening: a few times the direction error of a path's stored
+  // (octahedral) direction, so that a stored camera ray stays inside.
+  static constexpr float kConeMargin = 2e-4f;
 
   // Proxies given, with those of empty boxes (never entered).
   size_t proxyCount() const { return proxyCount_; }

@@ -426,4 +426,71 @@ TEST(ProxyBvh, InstancedProxiesAreEnteredWhereTheirObjectSpaceBoxesAre) {
   }
 }
 
+// A pixel's cone: no ray from the eye inside it (or within the margin of
+// it) enters a proxy of another rank before the cone's clearance, and the
+// clearance is where the nearest such proxy's box is, not a trivial 0.
+TEST(ProxyBvh, ConeClearanceBoundsEveryRayOfTheCone) {
+  int bounded = 0, cones = 0;
+  for (int ranks : {2, 4, 8}) {
+    for (int own : {-1, 1}) {
+      std::vector<Proxy> proxies = randomProxies(300, ranks, uint32_t(ranks) * 77 + 5);
+      ProxyBvh bvh(proxies, own);
+      for (uint32_t k = 0; k < 300; ++k) {
+        const Vec3f eye = Vec3f(uniform(k, 20), uniform(k, 21), uniform(k, 22)) * 14.0f - Vec3f(2);
+        const Vec3f axis =
+            normalize(Vec3f(uniform(k, 23), uniform(k, 24), uniform(k, 25)) - Vec3f(0.5f));
+        const Frame frame(axis);
+        const float halfAngle = 0.001f + 0.1f * uniform(k, 26);
+        const float s = std::tan(halfAngle);
+        const std::array<Vec3f, 4> corners{frame.toWorld({-s, -s, 1}), frame.toWorld({s, -s, 1}),
+                                           frame.toWorld({s, s, 1}), frame.toWorld({-s, s, 1})};
+        const int rank = int(uniform(k, 27) * ranks);
+        const RankMask excluded = RankMask(1) << rank;
+        const float clearance = bvh.coneClearance(eye, corners, excluded);
+        ++cones;
+        if (clearance > 0) ++bounded;
+        for (uint32_t j = 0; j < 64; ++j) {
+          // Inside the cone, or just outside by up to half the margin.
+          const float reach = 1 + (j % 4 == 0 ? ProxyBvh::kConeMargin * 0.5f / s : 0.0f);
+          const float a = (2 * uniform(k * 64 + j, 28) - 1) * reach;
+          const float b = (2 * uniform(k * 64 + j, 29) - 1) * reach;
+          const Vec3f d = normalize(frame.toWorld({a * s, b * s, 1}));
+          const ProxyBvh::Hit hit = bruteForce(proxies, eye, d, kInfinity, RankSet::single(rank));
+          ASSERT_GE(hit.tEnter, clearance * (1 - 1e-5f))
+              << "cone " << k << " ray " << j << " ranks " << ranks;
+        }
+      }
+    }
+  }
+  // Random eyes often stand inside another rank's box (clearance 0).
+  EXPECT_GT(bounded, cones / 4);
+}
+
+TEST(ProxyBvh, ConeClearanceIsTheNearestOtherRanksBoxInTheCone) {
+  auto box = [](Vec3f lo, Vec3f hi) {
+    Box3f b;
+    b.extend(lo);
+    b.extend(hi);
+    return b;
+  };
+  // Eye at the origin, looking down -z through a cone of about 0.01 rad.
+  const std::vector<Proxy> proxies{
+      {box({-1, -1, -9}, {1, 1, -8}), RankSet::single(1)},  // ahead at 8: rank 1
+      {box({-1, -1, -3}, {1, 1, -2}), RankSet::single(0)},  // ahead at 2: this rank's
+      {box({3, -1, -5}, {4, 1, -4}), RankSet::single(2)},   // nearer, outside the cone
+      {box({-1, -1, 20}, {1, 1, 21}), RankSet::single(3)},  // behind the eye
+  };
+  const float s = 0.005f;
+  const std::array<Vec3f, 4> corners{Vec3f(-s, -s, -1), Vec3f(s, -s, -1), Vec3f(s, s, -1),
+                                     Vec3f(-s, s, -1)};
+  for (int own : {-1, 0}) {
+    ProxyBvh bvh(proxies, own);
+    EXPECT_EQ(bvh.coneClearance(Vec3f(0), corners, RankMask(1) << 0), 8.0f);
+    // Excluding rank 1 too leaves nothing in the cone.
+    EXPECT_EQ(bvh.coneClearance(Vec3f(0), corners, 0b11), kInfinity);
+    // Another rank's view: this rank's box at 2 is the nearest.
+    EXPECT_EQ(bvh.coneClearance(Vec3f(0), corners, RankMask(1) << 3), 2.0f);
+  }
+}
+
 }  // namespace ferry

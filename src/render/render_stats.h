@@ -77,6 +77,8 @@ struct FrameStats {
                                  // path of pixels whose corners' owners differ)
   uint64_t replicaQueries = 0;   // of proxyQueries: weighing a replicated proxy's owners (one per
                                  // owner; distributed/forwarding.h, reachingOwners)
+  uint64_t skippedQueries = 0;   // forwarding decisions made without a query: camera rays that
+                                 // hit nearer than any other rank's proxy in their pixel
   uint64_t primaryBytesSent = 0;  // pixel ids sent to the ranks that generate their camera paths
   uint64_t terminationWaves = 0;  // overlapped exchange: non-blocking sums until a sample ended
   // Tracking through participating media (media/tracking.h): collisions that
@@ -124,6 +126,7 @@ inline constexpr StatsField<FrameStats, uint64_t> kFrameCounters[] = {
     {"traces", "replay_queries", &FrameStats::replayQueries},
     {"traces", "primary_queries", &FrameStats::primaryQueries},
     {"traces", "replica_queries", &FrameStats::replicaQueries},
+    {"traces", "skipped_queries", &FrameStats::skippedQueries},
     {nullptr, "primary_bytes_sent", &FrameStats::primaryBytesSent},
     {nullptr, "termination_waves", &FrameStats::terminationWaves},
     {"media", "real_collisions", &FrameStats::mediumRealCollisions},

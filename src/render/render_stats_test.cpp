@@ -71,10 +71,10 @@ TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
                                    "primary_bytes_sent", "termination_waves", "media"}));
   EXPECT_EQ(keysOf(j.at("media")),
             (std::set<std::string>{"real_collisions", "null_collisions", "majorant_cells"}));
-  EXPECT_EQ(
-      keysOf(j.at("traces")),
-      (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses", "proxy_queries",
-                             "replay_queries", "primary_queries", "replica_queries", "total"}));
+  EXPECT_EQ(keysOf(j.at("traces")),
+            (std::set<std::string>{"closest", "occlusion", "retrace", "retrace_misses",
+                                   "proxy_queries", "replay_queries", "primary_queries",
+                                   "replica_queries", "skipped_queries", "total"}));
   const std::set<std::string> exchange = {"rays_forwarded",
                                           "shadow_rays_forwarded",
                                           "forwarded_to_shade",
