@@ -9,7 +9,7 @@
 # each group's share of what N ranks spend beyond the 1-rank frame.
 #
 #   bash bench/distribution_profile.sh [FERRY]       (default build/ferry; needs perf)
-#   SCENE='builtin:island' PARTITION=best RANKS="4 8" SIZE=640x360 FRAMES=12 CORES=$(nproc) \
+#   SCENE='builtin:island' PARTITION=best RANKS="4 8" SIZE=640x360 SPP=1 FRAMES=12 CORES=$(nproc) \
 #     bash bench/distribution_profile.sh build/ferry
 # The 1-rank run has --threads CORES, N ranks --threads max(1, CORES / N), as
 # bench/distribution_cost.sh; Open MPI yields when idle (the same settings).
@@ -23,6 +23,7 @@ RANKS=${RANKS:-4 8}
 SIZE=${SIZE:-640x360}
 FRAMES=${FRAMES:-12}
 CORES=${CORES:-$(nproc)}
+SPP=${SPP:-1}
 command -v perf > /dev/null || {
   echo "distribution_profile: needs perf (Debian: linux-perf)" >&2
   exit 1
@@ -39,7 +40,7 @@ trap 'rm -rf "$work"' EXIT
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs);" \
   "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
-echo "scene $SCENE, partition $PARTITION, $SIZE, 1 spp, $FRAMES frames against 1, $CORES cores"
+echo "scene $SCENE, partition $PARTITION, $SIZE, $SPP spp, $FRAMES frames against 1, $CORES cores"
 
 # profile N FRAMES: perf data of one render from N-rank parts.
 profile() {
@@ -47,7 +48,7 @@ profile() {
   [ "$threads" -ge 1 ] || threads=1
   perf record -q -F 999 -o "$work/perf-$n-$frames.data" -- \
     mpirun --oversubscribe --bind-to none -np "$n" "$ferry" render "$work/parts-$n" --size "$SIZE" \
-    --spp 1 --frames "$frames" --threads "$threads" -q -o "$work/out.pfm" > /dev/null 2>&1
+    --spp "$SPP" --frames "$frames" --threads "$threads" -q -o "$work/out.pfm" > /dev/null 2>&1
 }
 for n in 1 $RANKS; do
   "$ferry" partition "$SCENE" --ranks "$n" --partitioner "$PARTITION" -o "$work/parts-$n" -q
