@@ -183,8 +183,8 @@ void DistributedTraversal<Path>::computeClearance(ViewOwnership& view,
                                                   const CameraRays& cameraRays) const {
   view.clearance.assign(view.last - view.first, 0.0f);
   if constexpr (Path::kReplay) return;  // (decisions there take the visited set, not the mask)
+  if (comm_.rank() >= int(8 * sizeof(RankMask))) return;  // (mask layouts have no such rank)
   const RankMask self = RankMask(1) << comm_.rank();
-  if (comm_.rank() >= int(8 * sizeof(RankMask))) return;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, view.fixed.size(), 256), [&](const auto& range) {
     for (size_t k = range.begin(); k != range.end(); ++k) {
       const uint32_t pixel = view.fixed[k];
