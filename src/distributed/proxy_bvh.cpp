@@ -459,10 +459,7 @@ float ProxyBvh::coneClearance(Vec3f eye, const std::array<Vec3f, 4>& corners,
   };
   // Distance from the eye to a box: a unit ray enters it no nearer.
   auto distanceTo = [&](Vec3f lo, Vec3f hi) {
-    const Vec3f d{std::max({lo.x - eye.x, 0.0f, eye.x - hi.x}),
-                  std::max({lo.y - eye.y, 0.0f, eye.y - hi.y}),
-                  std::max({lo.z - eye.z, 0.0f, eye.z - hi.z})};
-    return length(d);
+    return length(max(max(lo - eye, eye - hi), Vec3f(0)));
   };
   bool ownSearched = ownRoot_ >= 0 && !((excluded >> ownRank_) & 1u);
   float best = kInfinity;

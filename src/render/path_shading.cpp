@@ -187,7 +187,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
                            : camera_->origin();
     const Vec3f toCamera = lens - position;
     const bool front = dot(toCamera, ng) > 0;
-    const Vec3f origin = front ? scattering.originAbove : offsetRayOrigin(position, -ng);
+    const Vec3f origin = scattering.originTowards(position, toCamera);
     uint32_t pixel;
     if ((bsdf.transmits() || front) && camera_->pixelOf(origin, lens, pixel)) {
       const float dist2 = dot(toCamera, toCamera);
