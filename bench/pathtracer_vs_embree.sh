@@ -36,7 +36,8 @@
 #            The file has no emitter (its light quad is commented out), so both
 #            renderers get Ferry's default OBJ lights: a sun from
 #            normalize(0.4, 1, 0.6) with irradiance 3 and a constant sky of 0.5.
-#   bunny    ../shared/scenes/stanford-bunny/bun_zipper.ply (69,451 triangles)
+#   bunny    ../shared/scenes/stanford-bunny/bun_zipper.ply (69,451 triangles; skipped
+#            when absent, or SHARED_SCENES=dir names the folder of shared scenes)
 #            converted to OBJ by bench/ply_to_obj.py, same camera rule and lights.
 # Embree gets the same camera (--vp/--vi/--vu/--fov 45 --righthanded) and the
 # lights as --directionallight (direction of travel) and --ambientlight.
@@ -110,7 +111,16 @@ trap 'rm -rf "$work"' EXIT
 cp /usr/share/doc/embree3/models/cornell_box.mtl "$work/"
 awk '$1 == "v" { printf "v %s %s %s\n", -$2, $3, -$4; next } { print }' \
   /usr/share/doc/embree3/models/cornell_box.obj > "$work/cornell.obj"
-python3 "$here/ply_to_obj.py" "$shared/stanford-bunny/bun_zipper.ply" "$work/bunny.obj" 2> /dev/null
+# The bunny is one of the shared scenes beside the source tree; without them
+# (a clone elsewhere) the Cornell box runs alone.
+scenes="cornell bunny"
+if [ -f "$shared/stanford-bunny/bun_zipper.ply" ]; then
+  python3 "$here/ply_to_obj.py" "$shared/stanford-bunny/bun_zipper.ply" "$work/bunny.obj" 2> /dev/null
+else
+  echo "bunny: skipped (no $shared/stanford-bunny/bun_zipper.ply; SHARED_SCENES names another folder)"
+  scenes=cornell
+  : > "$work/bunny.obj"
+fi
 # The equal-error scenes: every Kd a quarter (below Embree's output clamp).
 awk '$1 == "Kd" { printf "Kd %g %g %g\n", $2 / 4, $3 / 4, $4 / 4; next } { print }' \
   "$work/cornell_box.mtl" > "$work/cornell_dim.mtl"
@@ -136,7 +146,7 @@ def filtered_mean(values):
     return sum(v[len(v) // 4:]) / len(v[len(v) // 4:])
 '
 
-for scene in cornell bunny; do
+for scene in $scenes; do
   obj="$work/$scene.obj"
   # Ferry's default OBJ view (src/io/obj/obj_loader.cpp): at the bounds centre, from +z, fovY 45.
   read -r vp vi <<< "$("$ferry" info "$obj" --json | python3 -c '
