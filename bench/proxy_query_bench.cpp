@@ -17,10 +17,14 @@
 // Each benchmark checks that every tree answers every query identically. A
 // third tree, `OwnApart`, is the one rank r builds (ProxyBvh with its own
 // proxies apart): for the ray sets with rank r excluded it never enters them.
+// `EmbreeFaces` and `EmbreeFacesApart` ask Embree instead: the same boxes as
+// triangles (issue 46's question, whether the query is cheaper folded into
+// the local trace); they print how many answers differ and what Embree holds.
 //
 //   build/bench/proxy_query_bench                      (ratios printed at the end)
 //   build/bench/proxy_query_bench --benchmark_repetitions=5
 #include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
 
 #include <algorithm>
 #include <bit>
@@ -204,6 +208,107 @@ class BaselineProxyBvh {
   std::vector<Node> nodes_;
 };
 
+// The same boxes as Embree triangles (12 a box), for issue 46's question:
+// is the proxy query cheaper inside Embree's traversal, folded into the
+// local trace? An intersection filter rejects the faces of boxes whose
+// owners the ray has visited; the closest accepted face answers, entered at
+// its distance, or at 0 when the origin lies inside its box (a back face).
+// That is not always the tree's answer: a ray starting inside a box whose
+// exit lies beyond tmax does not see it at all, and a nearer front face
+// wins over the box around the origin. Both are counted (`differs`).
+class EmbreeFaces {
+ public:
+  // With ownRank >= 0 the boxes that rank alone owns are left out, as
+  // ProxyBvh keeps them apart for that rank's queries.
+  explicit EmbreeFaces(const std::vector<Proxy>& proxies, int ownRank = -1) {
+    device_ = rtcNewDevice(nullptr);
+    rtcSetDeviceMemoryMonitorFunction(
+        device_,
+        [](void* self, ssize_t bytes, bool) {
+          static_cast<EmbreeFaces*>(self)->bytes_ += bytes;
+          return true;
+        },
+        this);
+    for (const Proxy& p : proxies)
+      if (ownRank < 0 || p.owners.mask() != (RankMask(1) << ownRank)) proxies_.push_back(p);
+    for (const Proxy& p : proxies_) masks_.push_back(p.owners.mask());
+    scene_ = rtcNewScene(device_);
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v =
+        static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                    3 * sizeof(float), 8 * proxies_.size() + 1));
+    auto* t = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), 12 * proxies_.size()));
+    // Corner k has x from bit 0, y from bit 1, z from bit 2; two triangles a face.
+    static const uint32_t kFaces[12][3] = {{0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3},
+                                           {0, 4, 5}, {0, 5, 1}, {2, 3, 7}, {2, 7, 6},
+                                           {0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}};
+    for (size_t b = 0; b < proxies_.size(); ++b) {
+      const Box3f& box = proxies_[b].bounds;
+      for (uint32_t k = 0; k < 8; ++k) {
+        v[3 * (8 * b + k) + 0] = (k & 1) ? box.upper.x : box.lower.x;
+        v[3 * (8 * b + k) + 1] = (k & 2) ? box.upper.y : box.lower.y;
+        v[3 * (8 * b + k) + 2] = (k & 4) ? box.upper.z : box.lower.z;
+      }
+      for (int f = 0; f < 12; ++f)
+        for (int i = 0; i < 3; ++i)
+          t[3 * (12 * b + size_t(f)) + size_t(i)] = uint32_t(8 * b) + kFaces[f][i];
+    }
+    rtcSetGeometryUserData(g, this);
+    rtcSetGeometryIntersectFilterFunction(g, &EmbreeFaces::filter);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene_, g);
+    rtcReleaseGeometry(g);
+    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+    rtcCommitScene(scene_);
+  }
+  ~EmbreeFaces() {
+    rtcReleaseScene(scene_);
+    rtcReleaseDevice(device_);
+  }
+  ProxyBvh::Hit closest(Vec3f origin, Vec3f direction, float tmax, RankMask excluded) const {
+    Context context;
+    rtcInitIntersectContext(&context.embree);
+    context.excluded = excluded;
+    RTCRayHit rh;
+    rh.ray.org_x = origin.x, rh.ray.org_y = origin.y, rh.ray.org_z = origin.z, rh.ray.tnear = 0;
+    rh.ray.dir_x = direction.x, rh.ray.dir_y = direction.y, rh.ray.dir_z = direction.z;
+    rh.ray.time = 0, rh.ray.tfar = tmax, rh.ray.mask = ~0u, rh.ray.id = 0, rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &context.embree, &rh);
+    ProxyBvh::Hit hit;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+    hit.proxy = int32_t(rh.hit.primID / 12);
+    const Box3f& box = proxies_[size_t(hit.proxy)].bounds;
+    const bool inside = origin.x >= box.lower.x && origin.x <= box.upper.x &&
+                        origin.y >= box.lower.y && origin.y <= box.upper.y &&
+                        origin.z >= box.lower.z && origin.z <= box.upper.z;
+    hit.tEnter = inside ? 0.0f : rh.ray.tfar;
+    return hit;
+  }
+  size_t bytes() const { return bytes_; }
+
+ private:
+  struct Context {
+    RTCIntersectContext embree;  // first: Embree hands the filter this pointer
+    RankMask excluded = 0;
+  };
+  static void filter(const RTCFilterFunctionNArguments* args) {
+    const auto* self = static_cast<const EmbreeFaces*>(args->geometryUserPtr);
+    const auto* context = reinterpret_cast<const Context*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i) {
+      if (args->valid[i] == 0) continue;
+      const uint32_t prim = RTCHitN_primID(args->hit, args->N, i);
+      if (self->masks_[prim / 12] & context->excluded) args->valid[i] = 0;
+    }
+  }
+  std::vector<Proxy> proxies_;
+  std::vector<RankMask> masks_;
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  ssize_t bytes_ = 0;  // what Embree holds (its memory monitor)
+};
+
 // The image whose camera rays are queried (one per pixel centre).
 constexpr int kWidth = 640, kHeight = 360;
 
@@ -233,6 +338,8 @@ struct Case {
   int ownRank = 0;  // r
   RankMask excluded(int set) const { return set == 0 ? 0 : RankMask(1) << ownRank; }
   std::unique_ptr<BaselineProxyBvh> baseline;
+  std::unique_ptr<EmbreeFaces> faces;
+  std::unique_ptr<EmbreeFaces> facesApart;  // without rank r's own-only boxes
   std::vector<std::unique_ptr<ProxyBvh>>
       splitOf;  // every rank's own proxies in a tree of their own
   const ProxyBvh& split() const { return *splitOf[size_t(ownRank)]; }  // rank r's
@@ -296,6 +403,30 @@ const Case& islandCase(int tiles) {
   for (int rank = 0; rank < 8; ++rank)
     c.splitOf.push_back(std::make_unique<ProxyBvh>(c.proxies, rank));
   c.baseline = std::make_unique<BaselineProxyBvh>(c.proxies);
+  c.faces = std::make_unique<EmbreeFaces>(c.proxies);
+  c.facesApart = std::make_unique<EmbreeFaces>(c.proxies, c.ownRank);
+  std::fprintf(stderr,
+               "proxy_query_bench: Embree faces hold %.1f MiB (rank r's: %.1f MiB), ProxyBvh "
+               "%.1f MiB (rank r's: %.1f MiB)\n",
+               double(c.faces->bytes()) / 1048576, double(c.facesApart->bytes()) / 1048576,
+               double(c.tree->bytes()) / 1048576, double(c.split().bytes()) / 1048576);
+  for (int set = 0; set < kRaySets; ++set) {
+    size_t differs = 0, missed = 0;
+    const EmbreeFaces& faces = set == 0 ? *c.faces : *c.facesApart;
+    for (const Ray& r : c.rays[set]) {
+      const ProxyBvh::Hit a = c.tree->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      const ProxyBvh::Hit f = faces.closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      if (a.found() != f.found())
+        ++missed;
+      else if (a.found() && std::abs(a.tEnter - f.tEnter) > 1e-4f * std::max(1.0f, a.tEnter))
+        ++differs;
+    }
+    std::fprintf(stderr,
+                 "proxy_query_bench: Embree faces, set %d: %zu of %zu rays found/not found "
+                 "otherwise than the tree, %zu entered elsewhere\n",
+                 set, missed, c.rays[set].size(), differs);
+  }
+
   for (int set = 0; set < kRaySets; ++set)
     for (const Ray& r : c.rays[set]) {
       ProxyBvh::Hit a = c.tree->closest(r.origin, r.direction, r.tmax, c.excluded(set));
@@ -320,7 +451,7 @@ const Case& islandCase(int tiles) {
 
 // The trees measured: the baseline, ProxyBvh, and ProxyBvh with rank r's own
 // proxies apart (what rank r builds: its decisions exclude rank r).
-enum class Tree { Baseline, Wide, Split };
+enum class Tree { Baseline, Wide, Split, Faces, FacesApart };
 
 template <Tree kTree>
 void BM_Query(benchmark::State& state) {
@@ -330,10 +461,17 @@ void BM_Query(benchmark::State& state) {
   int64_t found = 0;
   for (auto _ : state) {
     for (const Ray& r : rays) {
-      ProxyBvh::Hit h = kTree == Tree::Baseline
-                            ? c.baseline->closest(r.origin, r.direction, r.tmax, c.excluded(set))
-                            : (kTree == Tree::Wide ? *c.tree : c.split())
-                                  .closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      ProxyBvh::Hit h;
+      if constexpr (kTree == Tree::Baseline)
+        h = c.baseline->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      else if constexpr (kTree == Tree::Faces)
+        h = c.faces->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      else if constexpr (kTree == Tree::FacesApart)
+        h = (set == 0 ? c.faces : c.facesApart)
+                ->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      else
+        h = (kTree == Tree::Wide ? *c.tree : c.split())
+                .closest(r.origin, r.direction, r.tmax, c.excluded(set));
       found += h.found();
     }
   }
@@ -353,6 +491,8 @@ void everyCase(benchmark::internal::Benchmark* b) {
 BENCHMARK_TEMPLATE(BM_Query, Tree::Baseline)->Name("Baseline")->Apply(everyCase);
 BENCHMARK_TEMPLATE(BM_Query, Tree::Wide)->Name("ProxyBvh")->Apply(everyCase);
 BENCHMARK_TEMPLATE(BM_Query, Tree::Split)->Name("OwnApart")->Apply(everyCase);
+BENCHMARK_TEMPLATE(BM_Query, Tree::Faces)->Name("EmbreeFaces")->Apply(everyCase);
+BENCHMARK_TEMPLATE(BM_Query, Tree::FacesApart)->Name("EmbreeFacesApart")->Apply(everyCase);
 
 // The same ray set on every rank of the 8, each excluding itself (set 0:
 // nothing), with one tree (ProxyBvh) or each rank's split tree: the average
@@ -416,6 +556,14 @@ class RatioReporter : public benchmark::ConsoleReporter {
           args.c_str(), base, wide, split, wide > 0 ? base / wide : 0.0,
           split > 0 ? wide / split : 0.0);
     }
+    std::printf(
+        "\nThe same boxes as Embree triangles (issue 46: the query folded into the local "
+        "trace?); OwnApart, EmbreeFacesApart (rank r's own-only boxes left out):\n");
+    for (const auto& [args, trees] : perQuery_)
+      if (trees.count("OwnApart") && trees.count("EmbreeFacesApart"))
+        std::printf("  %-8s %.3f us  %.3f us   Embree %.2fx as fast\n", args.c_str(),
+                    trees.at("OwnApart"), trees.at("EmbreeFacesApart"),
+                    trees.at("OwnApart") / trees.at("EmbreeFacesApart"));
     std::printf(
         "\nEvery rank of the 8, each excluding itself (set 0: nothing); ProxyBvh, OwnApart:\n");
     for (const auto& [args, trees] : perQuery_)
