@@ -8,6 +8,10 @@
 #include <limits>
 #include <type_traits>
 
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+
 namespace ferry {
 namespace {
 constexpr int kLeafSize = 4;
@@ -363,10 +367,18 @@ inline Floats splat(float x) {
   for (int k = 0; k < kWidth; ++k) v[k] = x;
   return v;
 }
+// Bit k set where lane k of a comparison's result is true (all ones).
 inline uint32_t bits(Ints m) {
+#if defined(__AVX__)
+  static_assert(kWidth == 8);
+  __m256 v;
+  std::memcpy(&v, &m, sizeof v);
+  return uint32_t(_mm256_movemask_ps(v));
+#else
   uint32_t out = 0;
   for (int k = 0; k < kWidth; ++k) out |= uint32_t(m[k] != 0) << k;
   return out;
+#endif
 }
 
 // The slots of a node (its boxes lower[axis][slot], upper[axis][slot]) the
