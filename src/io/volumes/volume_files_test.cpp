@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -122,6 +123,44 @@ TEST(VdbFile, WrittenGridsReadBackWhereTheyWerePut) {
   EXPECT_NE(errorOf([&] { writeVdbFile(path, {density}); }).find("cannot write the grids"),
             std::string::npos);
   fs::remove(path);
+}
+
+// The dense copy holds every voxel of the active box, x fastest: the
+// stored values where voxels were set, the background elsewhere, across
+// several of OpenVDB's leaf (8^3) and internal nodes.
+TEST(VdbFile, DenseCopyHoldsEveryVoxelOfTheActiveBox) {
+  const std::string path =
+      (fs::temp_directory_path() / ("ferry-vdb-dense-" + std::to_string(getpid()) + ".vdb"))
+          .string();
+  VdbGridToWrite g;
+  g.name = "density";
+  g.background = 0.25f;
+  std::map<std::array<int32_t, 3>, float> set;
+  for (int i = 0; i < 200; ++i) {
+    const std::array<int32_t, 3> c{-20 + (i * 37) % 61, -9 + (i * 11) % 23, 5 + (i * 7) % 150};
+    set[c] = float(i % 17) * 0.5f;
+  }
+  for (const auto& [c, v] : set) g.voxels.emplace_back(c, v);
+  writeVdbFile(path, {g});
+  const VdbDensity d = readVdbDensity(path);
+  fs::remove(path);
+  ASSERT_TRUE(d.grid);
+  std::array<int32_t, 3> lo = set.begin()->first, hi = lo;
+  for (const auto& [c, v] : set)
+    for (int a = 0; a < 3; ++a)
+      lo[size_t(a)] = std::min(lo[size_t(a)], c[size_t(a)]),
+      hi[size_t(a)] = std::max(hi[size_t(a)], c[size_t(a)]);
+  ASSERT_EQ(d.grid->nx(), hi[0] - lo[0] + 1);
+  ASSERT_EQ(d.grid->ny(), hi[1] - lo[1] + 1);
+  ASSERT_EQ(d.grid->nz(), hi[2] - lo[2] + 1);
+  size_t wrong = 0, i = 0;
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int x = lo[0]; x <= hi[0]; ++x, ++i) {
+        const auto it = set.find({x, y, z});
+        wrong += d.grid->values()[i] != (it == set.end() ? g.background : it->second);
+      }
+  EXPECT_EQ(wrong, 0u);
 }
 
 TEST(VdbFile, PbrtNanovdbMediaReadTheSameGridFromVdb) {
