@@ -280,10 +280,7 @@ class EmbreeFaces {
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
     hit.proxy = int32_t(rh.hit.primID / 12);
     const Box3f& box = proxies_[size_t(hit.proxy)].bounds;
-    const bool inside = origin.x >= box.lower.x && origin.x <= box.upper.x &&
-                        origin.y >= box.lower.y && origin.y <= box.upper.y &&
-                        origin.z >= box.lower.z && origin.z <= box.upper.z;
-    hit.tEnter = inside ? 0.0f : rh.ray.tfar;
+    hit.tEnter = box.contains(Box3f{origin, origin}) ? 0.0f : rh.ray.tfar;
     return hit;
   }
   size_t bytes() const { return bytes_; }
@@ -340,6 +337,8 @@ struct Case {
   std::unique_ptr<BaselineProxyBvh> baseline;
   std::unique_ptr<EmbreeFaces> faces;
   std::unique_ptr<EmbreeFaces> facesApart;  // without rank r's own-only boxes
+  // What rank r would ask for ray set `set` (set 0 excludes nothing: every box).
+  const EmbreeFaces& facesFor(int set) const { return set == 0 ? *faces : *facesApart; }
   std::vector<std::unique_ptr<ProxyBvh>>
       splitOf;  // every rank's own proxies in a tree of their own
   const ProxyBvh& split() const { return *splitOf[size_t(ownRank)]; }  // rank r's
@@ -412,7 +411,7 @@ const Case& islandCase(int tiles) {
                double(c.tree->bytes()) / 1048576, double(c.split().bytes()) / 1048576);
   for (int set = 0; set < kRaySets; ++set) {
     size_t differs = 0, missed = 0;
-    const EmbreeFaces& faces = set == 0 ? *c.faces : *c.facesApart;
+    const EmbreeFaces& faces = c.facesFor(set);
     for (const Ray& r : c.rays[set]) {
       const ProxyBvh::Hit a = c.tree->closest(r.origin, r.direction, r.tmax, c.excluded(set));
       const ProxyBvh::Hit f = faces.closest(r.origin, r.direction, r.tmax, c.excluded(set));
@@ -467,8 +466,7 @@ void BM_Query(benchmark::State& state) {
       else if constexpr (kTree == Tree::Faces)
         h = c.faces->closest(r.origin, r.direction, r.tmax, c.excluded(set));
       else if constexpr (kTree == Tree::FacesApart)
-        h = (set == 0 ? c.faces : c.facesApart)
-                ->closest(r.origin, r.direction, r.tmax, c.excluded(set));
+        h = c.facesFor(set).closest(r.origin, r.direction, r.tmax, c.excluded(set));
       else
         h = (kTree == Tree::Wide ? *c.tree : c.split())
                 .closest(r.origin, r.direction, r.tmax, c.excluded(set));
