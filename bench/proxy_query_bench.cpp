@@ -332,6 +332,10 @@ struct Case {
   std::vector<Proxy> proxies;
   std::vector<Ray> rays[kRaySets];
   std::unique_ptr<ProxyBvh> tree;
+  // What rank r builds in the renderer (tiles 1 only): its own proxies apart,
+  // and instanced proxies entered where their shapes' boxes are, not at
+  // their world boxes (so its answers differ from the flattened trees').
+  std::unique_ptr<ProxyBvh> instanced;
   int ownRank = 0;  // r
   RankMask excluded(int set) const { return set == 0 ? 0 : RankMask(1) << ownRank; }
   std::unique_ptr<BaselineProxyBvh> baseline;
@@ -356,6 +360,7 @@ const Case& islandCase(int tiles) {
   PartitionerOptions options;
   options.partitioner = &bestPartitioner();
   Partition partition = partitionScene(scene, 8, options);
+  const std::vector<Proxy> unflattened = partition.proxies;
   Box3f extent;
   for (const Proxy& p : partition.proxies) extent.extend(p.bounds);
   const Vec3f pitch = extent.upper - extent.lower;
@@ -401,6 +406,9 @@ const Case& islandCase(int tiles) {
   }
   for (int rank = 0; rank < 8; ++rank)
     c.splitOf.push_back(std::make_unique<ProxyBvh>(c.proxies, rank));
+  if (tiles == 1)
+    c.instanced = std::make_unique<ProxyBvh>(unflattened, c.ownRank, partition.proxyShapes,
+                                             partition.proxyPlacements);
   c.baseline = std::make_unique<BaselineProxyBvh>(c.proxies);
   c.faces = std::make_unique<EmbreeFaces>(c.proxies);
   c.facesApart = std::make_unique<EmbreeFaces>(c.proxies, c.ownRank);
@@ -448,15 +456,20 @@ const Case& islandCase(int tiles) {
   return c;
 }
 
-// The trees measured: the baseline, ProxyBvh, and ProxyBvh with rank r's own
-// proxies apart (what rank r builds: its decisions exclude rank r).
-enum class Tree { Baseline, Wide, Split, Faces, FacesApart };
+// The trees measured: the baseline, ProxyBvh, ProxyBvh with rank r's own
+// proxies apart (what rank r builds: its decisions exclude rank r), the
+// boxes as Embree triangles, and rank r's tree with instanced proxies.
+enum class Tree { Baseline, Wide, Split, Faces, FacesApart, Instanced };
 
 template <Tree kTree>
 void BM_Query(benchmark::State& state) {
   const Case& c = islandCase(int(state.range(0)));
   const int set = int(state.range(1));
   const std::vector<Ray>& rays = c.rays[set];
+  if (kTree == Tree::Instanced && !c.instanced) {
+    state.SkipWithError("instanced proxies: one tile only");
+    return;
+  }
   int64_t found = 0;
   for (auto _ : state) {
     for (const Ray& r : rays) {
@@ -467,6 +480,8 @@ void BM_Query(benchmark::State& state) {
         h = c.faces->closest(r.origin, r.direction, r.tmax, c.excluded(set));
       else if constexpr (kTree == Tree::FacesApart)
         h = c.facesFor(set).closest(r.origin, r.direction, r.tmax, c.excluded(set));
+      else if constexpr (kTree == Tree::Instanced)
+        h = c.instanced->closest(r.origin, r.direction, r.tmax, c.excluded(set));
       else
         h = (kTree == Tree::Wide ? *c.tree : c.split())
                 .closest(r.origin, r.direction, r.tmax, c.excluded(set));
@@ -491,6 +506,13 @@ BENCHMARK_TEMPLATE(BM_Query, Tree::Wide)->Name("ProxyBvh")->Apply(everyCase);
 BENCHMARK_TEMPLATE(BM_Query, Tree::Split)->Name("OwnApart")->Apply(everyCase);
 BENCHMARK_TEMPLATE(BM_Query, Tree::Faces)->Name("EmbreeFaces")->Apply(everyCase);
 BENCHMARK_TEMPLATE(BM_Query, Tree::FacesApart)->Name("EmbreeFacesApart")->Apply(everyCase);
+BENCHMARK_TEMPLATE(BM_Query, Tree::Instanced)
+    ->Name("Instanced")
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Args({1, 3})
+    ->Unit(benchmark::kMillisecond);
 
 // The same ray set on every rank of the 8, each excluding itself (set 0:
 // nothing), with one tree (ProxyBvh) or each rank's split tree: the average
@@ -562,6 +584,14 @@ class RatioReporter : public benchmark::ConsoleReporter {
         std::printf("  %-8s %.3f us  %.3f us   Embree %.2fx as fast\n", args.c_str(),
                     trees.at("OwnApart"), trees.at("EmbreeFacesApart"),
                     trees.at("OwnApart") / trees.at("EmbreeFacesApart"));
+    std::printf(
+        "\nRank r's tree as the renderer builds it (instanced proxies entered at their shapes' "
+        "boxes); OwnApart, Instanced:\n");
+    for (const auto& [args, trees] : perQuery_)
+      if (trees.count("OwnApart") && trees.count("Instanced"))
+        std::printf("  %-8s %.3f us  %.3f us   Instanced %.2fx the time\n", args.c_str(),
+                    trees.at("OwnApart"), trees.at("Instanced"),
+                    trees.at("Instanced") / trees.at("OwnApart"));
     std::printf(
         "\nEvery rank of the 8, each excluding itself (set 0: nothing); ProxyBvh, OwnApart:\n");
     for (const auto& [args, trees] : perQuery_)
