@@ -360,7 +360,6 @@ const Case& islandCase(int tiles) {
   PartitionerOptions options;
   options.partitioner = &bestPartitioner();
   Partition partition = partitionScene(scene, 8, options);
-  const std::vector<Proxy> unflattened = partition.proxies;
   Box3f extent;
   for (const Proxy& p : partition.proxies) extent.extend(p.bounds);
   const Vec3f pitch = extent.upper - extent.lower;
@@ -406,9 +405,10 @@ const Case& islandCase(int tiles) {
   }
   for (int rank = 0; rank < 8; ++rank)
     c.splitOf.push_back(std::make_unique<ProxyBvh>(c.proxies, rank));
-  if (tiles == 1)
-    c.instanced = std::make_unique<ProxyBvh>(unflattened, c.ownRank, partition.proxyShapes,
-                                             partition.proxyPlacements);
+  if (tiles == 1)  // (the tiles above are copies: partition.proxies still has its shapes)
+    c.instanced = std::make_unique<ProxyBvh>(std::move(partition.proxies), c.ownRank,
+                                             std::move(partition.proxyShapes),
+                                             std::move(partition.proxyPlacements));
   c.baseline = std::make_unique<BaselineProxyBvh>(c.proxies);
   c.faces = std::make_unique<EmbreeFaces>(c.proxies);
   c.facesApart = std::make_unique<EmbreeFaces>(c.proxies, c.ownRank);
