@@ -10,6 +10,7 @@
 #include "material/models/diffuse_transmission.h"
 #include "material/models/fourier.h"
 #include "material/models/fresnel_blend.h"
+#include "material/models/layered.h"
 
 namespace ferry {
 namespace {
@@ -28,6 +29,10 @@ Registry<MaterialModelKind>& registry() {
            CoatedDiffuseModel::read},
           {"coated-conductor", "a GGX conductor under a layered coat (pbrt's coatedconductor)",
            CoatedConductorModel::read},
+          {"layered",
+           "a diffuse or conductor base under a dielectric interface, a random walk between "
+           "them (pbrt-v4's coateddiffuse, coatedconductor)",
+           LayeredModel::read},
           {"fresnel-blend", "Ashikhmin-Shirley's FresnelBlend (pbrt-v3's substrate)",
            FresnelBlendModel::read},
           {"diffuse-transmission", "a thin diffuse sheet (pbrt's translucent, diffusetransmission)",

@@ -20,6 +20,7 @@
 #include "material/models/diffuse_transmission.h"
 #include "material/models/fourier.h"
 #include "material/models/fresnel_blend.h"
+#include "material/models/layered.h"
 
 namespace ferry {
 namespace {
@@ -916,12 +917,17 @@ struct PbrtMaterials::Impl {
   }
 
   // Ferry roughness from pbrt's roughness, uroughness/vroughness and remaproughness.
-  float roughness(const PbrtParams& params, const std::string& prefix, float fallback, bool v3) {
+  // `zeroIsSmooth`: roughness 0 in both directions is a smooth (specular)
+  // surface before any remapping, as pbrt-v3's glass tests it; pbrt-v3's other
+  // models remap 0 to a small alpha (about 0.05).
+  float roughness(const PbrtParams& params, const std::string& prefix, float fallback, bool v3,
+                  bool zeroIsSmooth = false) {
     float u, v;
     std::string un = prefix + "uroughness", vn = prefix + "vroughness", rn = prefix + "roughness";
     float r = scalar(params, rn.c_str(), fallback);
     u = scalar(params, un.c_str(), r);
     v = scalar(params, vn.c_str(), r);
+    if (zeroIsSmooth && u == 0 && v == 0) return 0;
     bool remap = params.getBool("remaproughness", true);
     auto alpha = [&](float x) {
       x = std::max(x, 0.0f);
@@ -930,6 +936,28 @@ struct PbrtMaterials::Impl {
     };
     float a = std::sqrt(alpha(u) * alpha(v));
     return std::clamp(std::sqrt(a), 0.0f, 1.0f);
+  }
+
+  // pbrt-v4's layered parameters: the interface's width (`interfacePrefix`),
+  // the conductor base's (`conductorPrefix`, empty for a diffuse base), the
+  // slab (thickness, albedo, g) and the walk (maxdepth, nsamples).
+  std::shared_ptr<LayeredModel> layeredModel(const PbrtParams& p,
+                                             const std::string& interfacePrefix,
+                                             const std::string& conductorPrefix) {
+    auto layered = std::make_shared<LayeredModel>();
+    const float r = roughness(p, interfacePrefix, 0.0f, false);
+    layered->alpha = r * r;
+    if (!conductorPrefix.empty()) {
+      const float base = roughness(p, conductorPrefix, 0.0f, false);
+      layered->conductorBase = true;
+      layered->baseAlpha = base * base;
+    }
+    layered->thickness = std::max(scalar(p, "thickness", 0.01f), 0.0f);
+    layered->albedo = max(untexturedColor(p, "albedo", Vec3f(0)), Vec3f(0));
+    layered->g = std::clamp(scalar(p, "g", 0.0f), -0.99f, 0.99f);
+    layered->maxDepth = std::clamp(p.getInt("maxdepth", 10), 1, 1000);
+    layered->samples = std::clamp(p.getInt("nsamples", 1), 1, 1000);
+    return layered;
   }
 
   float iorOf(const PbrtParams& params, float fallback) {
@@ -1111,19 +1139,12 @@ struct PbrtMaterials::Impl {
       substrate->roughness = roughness(p, "", 0.1f, true);
       m.model = substrate;
     } else if (type == "coateddiffuse") {
-      // pbrt-v4: a diffuse base under a dielectric interface, simulated by
-      // a random walk between the layers; Ferry's layered coat counts the
-      // refraction in and out (1 - F each way) but not the light the
-      // interface reflects back down (a little darker than pbrt-v4 for
-      // bright bases).
+      // pbrt-v4: a diffuse base under a dielectric interface, a random walk
+      // between them (material/models/layered.h).
       setColor(color(p, {"reflectance"}, Vec3f(0.5f)));
-      auto coated = std::make_shared<CoatedDiffuseModel>();
-      coated->specular = Vec3f(1);
-      coated->eta = std::max(iorOf(p, 1.5f), 1.01f);
-      coated->roughness = roughness(p, "", 0.0f, false);
-      coated->layered = true;
-      m.model = coated;
-      consume(p, {"thickness", "albedo", "g", "maxdepth", "nsamples"});
+      auto layered = layeredModel(p, "", "");
+      layered->eta = std::max(iorOf(p, 1.5f), 1.01f);
+      m.model = layered;
     } else if (type == "conductor" || type == "metal" || type == "coatedconductor") {
       std::string prefix = type == "coatedconductor" ? "conductor." : "";
       std::string reflectance = prefix + "reflectance";
@@ -1134,22 +1155,18 @@ struct PbrtMaterials::Impl {
       }
       const float baseRoughness = roughness(p, prefix, type == "metal" ? 0.01f : 0.0f, v3);
       if (type == "coatedconductor") {
-        // pbrt-v4: the conductor under a dielectric interface (a random walk
-        // between them); Ferry's layered coat, as for coateddiffuse.
-        auto coated = std::make_shared<CoatedConductorModel>();
-        coated->baseRoughness = baseRoughness;
-        coated->specular = Vec3f(1);
-        coated->roughness = roughness(p, "interface.", 0.0f, false);
-        coated->eta = 1.5f;
+        // pbrt-v4: the conductor under a dielectric interface, a random walk
+        // between them (material/models/layered.h).
+        auto layered = layeredModel(p, "interface.", "conductor.");
+        layered->eta = 1.5f;
         if (const PbrtParam* eta = p.find("interface.eta")) {
           if (eta->type == "spectrum")
-            coated->eta = spectrumOf(*eta).at(550);
+            layered->eta = spectrumOf(*eta).at(550);
           else
-            coated->eta = p.getFloat("interface.eta", 1.5f);
+            layered->eta = p.getFloat("interface.eta", 1.5f);
         }
-        coated->eta = std::max(coated->eta, 1.01f);
-        consume(p, {"thickness", "albedo", "g", "maxdepth", "nsamples"});
-        m.model = coated;
+        layered->eta = std::max(layered->eta, 1.01f);
+        m.model = layered;
       } else {
         m.model = std::make_shared<ConductorModel>(baseRoughness);
       }
@@ -1160,7 +1177,7 @@ struct PbrtMaterials::Impl {
       m.baseColor = Vec3f(1);
       if (type == "glass") setColor(color(p, {"Kt"}, Vec3f(1)));
       float ior = iorOf(p, 1.5f);
-      const float rough = roughness(p, "", 0.0f, v3);
+      const float rough = roughness(p, "", 0.0f, v3, /*zeroIsSmooth=*/type == "glass");
       if (type == "thindielectric") ior = 1.01f;
       if (!(ior >= 1)) ior = std::max(1.0f / std::max(ior, 1e-3f), 1.01f);
       m.model = std::make_shared<DielectricModel>(ior, rough);

@@ -21,6 +21,7 @@
 #include "material/models/diffuse.h"
 #include "material/models/diffuse_transmission.h"
 #include "material/models/fresnel_blend.h"
+#include "material/models/layered.h"
 
 namespace ferry {
 namespace {
@@ -916,27 +917,41 @@ TEST(PbrtParser, CoatsAndOrenNayarFollowPbrt) {
   EXPECT_LT(fresnelDielectric(1, modelAs<CoatedDiffuseModel>(clear)->eta), 1e-4f);
   const Material seeThrough = only("Material \"uber\" \"rgb opacity\" [0.4 0.4 0.4]");
   EXPECT_NE(seeThrough.alphaTexture, kNoTexture);
-  // v4 coateddiffuse: a layered coat of the interface's eta.
+  // v4 coateddiffuse: pbrt-v4's layered walk under an interface of that eta
+  // and alpha (v4: alpha = sqrt(roughness)), its slab and walk parameters.
   const Material coated = only(
       "Material \"coateddiffuse\" \"rgb reflectance\" [0.7 0.6 0.5] \"float roughness\" 0.04 "
-      "\"float eta\" 1.4");
+      "\"float eta\" 1.4 \"float thickness\" 0.2 \"rgb albedo\" [0.5 0.5 0.5] \"float g\" 0.3 "
+      "\"integer maxdepth\" 7 \"integer nsamples\" 2");
   EXPECT_EQ(coated.baseColor, Vec3f(0.7f, 0.6f, 0.5f));
-  const auto* coat = modelAs<CoatedDiffuseModel>(coated);
+  const auto* coat = modelAs<LayeredModel>(coated);
   ASSERT_NE(coat, nullptr);
-  EXPECT_EQ(coat->specular, Vec3f(1));
+  EXPECT_FALSE(coat->conductorBase);
   EXPECT_FLOAT_EQ(coat->eta, 1.4f);
-  EXPECT_FLOAT_EQ(coat->roughness, std::sqrt(std::sqrt(0.04f)));  // v4: alpha = sqrt(r)
-  EXPECT_TRUE(coat->layered);
-  // v4 coatedconductor: the conductor under a layered coat of the interface's eta.
+  EXPECT_NEAR(coat->alpha, 0.2f, 1e-6f);
+  EXPECT_FLOAT_EQ(coat->thickness, 0.2f);
+  EXPECT_EQ(coat->albedo, Vec3f(0.5f));
+  EXPECT_FLOAT_EQ(coat->g, 0.3f);
+  EXPECT_EQ(coat->maxDepth, 7);
+  EXPECT_EQ(coat->samples, 2);
+  // Its defaults: a smooth interface of 1.5, a thin clear slab, 10 deep.
+  const auto* plainCoat = modelAs<LayeredModel>(only("Material \"coateddiffuse\""));
+  ASSERT_NE(plainCoat, nullptr);
+  EXPECT_EQ(plainCoat->alpha, 0.0f);
+  EXPECT_FLOAT_EQ(plainCoat->eta, 1.5f);
+  EXPECT_FLOAT_EQ(plainCoat->thickness, 0.01f);
+  EXPECT_EQ(plainCoat->albedo, Vec3f(0));
+  EXPECT_EQ(plainCoat->maxDepth, 10);
+  // v4 coatedconductor: the conductor base under the interface.
   const Material coatedMetal = only(
       "Material \"coatedconductor\" \"float interface.eta\" 1.6 \"float "
       "interface.roughness\" 0.09 \"float conductor.roughness\" 0.25");
-  const auto* metal = modelAs<CoatedConductorModel>(coatedMetal);
+  const auto* metal = modelAs<LayeredModel>(coatedMetal);
   ASSERT_NE(metal, nullptr);
-  EXPECT_EQ(metal->specular, Vec3f(1));
+  EXPECT_TRUE(metal->conductorBase);
   EXPECT_FLOAT_EQ(metal->eta, 1.6f);
-  EXPECT_NEAR(metal->roughness * metal->roughness, 0.3f, 1e-5f);
-  EXPECT_NEAR(metal->baseRoughness * metal->baseRoughness, 0.5f, 1e-5f);
+  EXPECT_NEAR(metal->alpha, 0.3f, 1e-5f);
+  EXPECT_NEAR(metal->baseAlpha, 0.5f, 1e-5f);
   // substrate: Ashikhmin-Shirley, Ks the coat's reflectance at normal incidence.
   const Material substrate = only("Material \"substrate\" \"rgb Ks\" [0.04 0.05 0.06]");
   const auto* blend = modelAs<FresnelBlendModel>(substrate);
@@ -969,6 +984,37 @@ TEST(PbrtParser, RoughGlassFollowsEachVersionsRemapping) {
                     "Material \"dielectric\" \"float uroughness\" 0.04 \"float vroughness\" 0.16 "
                     "\"bool remaproughness\" false"),
               std::sqrt(std::sqrt(0.04f * 0.16f)), 1e-6f);
+}
+
+// pbrt-v3's glass is smooth when uroughness and vroughness are both 0,
+// tested before any remapping (its default); its other models remap 0 to a
+// small width. A regression: 0 was remapped to alpha 0.047, rough glass.
+TEST(PbrtParser, V3GlassWithoutRoughnessIsSmooth) {
+  auto model = [](const std::string& material) {
+    const Scene scene = fromText("Film \"image\"\nWorldBegin\n" + material +
+                                 "\nShape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0] "
+                                 "\"integer indices\" [0 1 2]\nWorldEnd\n");
+    return scene.materials.at(size_t(scene.meshes.at(0).material));
+  };
+  const Material plain = model("Material \"glass\" \"float index\" 1.5");
+  const auto* glass = modelAs<DielectricModel>(plain);
+  ASSERT_NE(glass, nullptr);
+  EXPECT_EQ(glass->roughness, 0.0f);
+  const Material zeros = model("Material \"glass\" \"float uroughness\" 0 \"float vroughness\" 0");
+  const auto* zero = modelAs<DielectricModel>(zeros);
+  ASSERT_NE(zero, nullptr);
+  EXPECT_EQ(zero->roughness, 0.0f);
+  // One direction rough: remapped, not smooth.
+  const Material oneRough =
+      model("Material \"glass\" \"float uroughness\" 0 \"float vroughness\" 0.1");
+  const auto* half = modelAs<DielectricModel>(oneRough);
+  ASSERT_NE(half, nullptr);
+  EXPECT_GT(half->roughness, 0.0f);
+  // v3 metal remaps 0 (no smooth test in pbrt-v3's MetalMaterial).
+  const Material metalMaterial = model("Material \"metal\" \"float roughness\" 0");
+  const auto* metal = modelAs<ConductorModel>(metalMaterial);
+  ASSERT_NE(metal, nullptr);
+  EXPECT_GT(metal->roughness, 0.1f);
 }
 
 TEST(PbrtParser, SolidTexturesAreEvaluatedInTheirSpace) {
