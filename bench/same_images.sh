@@ -74,7 +74,7 @@ if diff -rq "$work/parts-old" "$work/parts-new" >/dev/null; then
 else
   echo "  island part directory: DIFFERENT files"
   { diff -rq "$work/parts-old" "$work/parts-new" || true; } | head -5 | sed 's/^/    /'
-  echo "    (expected when the part format changed: src/io/parts/part_file.h lists its versions)"
+  echo "    (expected when the part format changed: docs/partitioning.md lists its versions)"
 fi
 if cmp -s "$work/parts-old.pfm" "$work/parts-new.pfm"; then
   same=$((same + 1))
