@@ -14,6 +14,7 @@ packages=(
   libopenvdb-dev                  # .vdb volumes (io/volumes/vdb_file.cpp)
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format                    # tests/format_test.sh keeps the tree clean under .clang-format
+  libxxhash-dev                   # XXH64 digests of part files and checkpoints (core/hash64)
   clang libclang-rt-14-dev        # scripts/fuzz.sh: libFuzzer with ASan and UBSan (docs/fuzzing.md)
   libcpp-httplib-dev              # ferry view: the HTTP server on rank 0
   chromium chromium-driver        # tests/viewer_test.sh: the viewer page in a headless browser

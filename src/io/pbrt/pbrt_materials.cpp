@@ -916,17 +916,24 @@ struct PbrtMaterials::Impl {
     return average(colorValue(*p, SpectrumUse::Reflectance));
   }
 
+  // Which roughness parameters a pbrt model reads: "roughness" with
+  // uroughness/vroughness overriding it (pbrt-v4's, v3's metal and uber),
+  // only uroughness/vroughness (v3's glass and substrate) or only
+  // "roughness" (v3's plastic and translucent). The others are left unread,
+  // so they are reported as unused.
+  enum class RoughnessNames { Both, UV, Scalar };
+
   // Ferry roughness from pbrt's roughness, uroughness/vroughness and remaproughness.
   // `zeroIsSmooth`: roughness 0 in both directions is a smooth (specular)
   // surface before any remapping, as pbrt-v3's glass tests it; pbrt-v3's other
   // models remap 0 to a small alpha (about 0.05).
   float roughness(const PbrtParams& params, const std::string& prefix, float fallback, bool v3,
-                  bool zeroIsSmooth = false) {
-    float u, v;
+                  bool zeroIsSmooth = false, RoughnessNames names = RoughnessNames::Both) {
     std::string un = prefix + "uroughness", vn = prefix + "vroughness", rn = prefix + "roughness";
-    float r = scalar(params, rn.c_str(), fallback);
-    u = scalar(params, un.c_str(), r);
-    v = scalar(params, vn.c_str(), r);
+    const float r =
+        names == RoughnessNames::UV ? fallback : scalar(params, rn.c_str(), fallback);
+    const float u = names == RoughnessNames::Scalar ? r : scalar(params, un.c_str(), r);
+    const float v = names == RoughnessNames::Scalar ? r : scalar(params, vn.c_str(), r);
     if (zeroIsSmooth && u == 0 && v == 0) return 0;
     bool remap = params.getBool("remaproughness", true);
     auto alpha = [&](float x) {
@@ -1127,7 +1134,7 @@ struct PbrtMaterials::Impl {
       setColor(color(p, {"Kd"}, Vec3f(0.25f)));
       auto plastic = std::make_shared<CoatedDiffuseModel>();
       plastic->specular = untexturedColor(p, "Ks", Vec3f(0.25f));
-      plastic->roughness = roughness(p, "", 0.1f, true);
+      plastic->roughness = roughness(p, "", 0.1f, true, false, RoughnessNames::Scalar);
       plastic->eta = 1 / 1.5f;
       plastic->layered = false;
       m.model = plastic;
@@ -1136,7 +1143,7 @@ struct PbrtMaterials::Impl {
       setColor(color(p, {"Kd"}, Vec3f(0.5f)));
       auto substrate = std::make_shared<FresnelBlendModel>();
       substrate->specular = untexturedColor(p, "Ks", Vec3f(0.5f));
-      substrate->roughness = roughness(p, "", 0.1f, true);
+      substrate->roughness = roughness(p, "", 0.1f, true, false, RoughnessNames::UV);
       m.model = substrate;
     } else if (type == "coateddiffuse") {
       // pbrt-v4: a diffuse base under a dielectric interface, a random walk
@@ -1177,7 +1184,9 @@ struct PbrtMaterials::Impl {
       m.baseColor = Vec3f(1);
       if (type == "glass") setColor(color(p, {"Kt"}, Vec3f(1)));
       float ior = iorOf(p, 1.5f);
-      const float rough = roughness(p, "", 0.0f, v3, /*zeroIsSmooth=*/type == "glass");
+      const float rough =
+          type == "glass" ? roughness(p, "", 0.0f, true, /*zeroIsSmooth=*/true, RoughnessNames::UV)
+                          : roughness(p, "", 0.0f, v3);
       if (type == "thindielectric") ior = 1.01f;
       if (!(ior >= 1)) ior = std::max(1.0f / std::max(ior, 1e-3f), 1.01f);
       m.model = std::make_shared<DielectricModel>(ior, rough);
