@@ -274,8 +274,13 @@ TEST(RealScenes, FilmGivesSizeAndOutputWhenTheCommandLineDoesNot) {
 TEST(RealScenes, IntegratorMaxDepthIsTheDefaultDepth) {
   fs::path dir = fs::temp_directory_path() / ("ferry_depth_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  // features_v4.pbrt: Integrator "bdpt" "integer maxdepth" 7.
-  fs::path scene = fs::path(FERRY_SOURCE_DIR) / "tests" / "corpus" / "pbrt" / "features_v4.pbrt";
+  // Integrator "bdpt" "integer maxdepth" 7, and an area light for light
+  // paths to leave (they start at emissive shapes, not at point lights).
+  fs::path scene = dir / "bdpt.pbrt";
+  std::ofstream(scene) << "Integrator \"bdpt\" \"integer maxdepth\" 7\nCamera \"perspective\"\n"
+                          "Film \"rgb\"\nWorldBegin\nShape \"sphere\" \"float radius\" 0.5\n"
+                          "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
+                          "Translate 0 3 5\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n";
   auto maxDepth = [&](const std::string& stats) {
     std::ifstream in(dir / stats);
     return nlohmann::json::parse(in).at("settings").at("max_depth").get<int>();

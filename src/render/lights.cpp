@@ -54,7 +54,10 @@ uint64_t cornersKey(std::array<Vec3f, 3> corners) {
 }  // namespace
 
 LightSampler::LightSampler(const Scene& scene, LightChoice choice)
-    : suns_(scene.suns), environment_(scene.environment), choice_(choice) {
+    : suns_(scene.suns),
+      points_(scene.pointLights),
+      environment_(scene.environment),
+      choice_(choice) {
   for (const SunLight& sun : suns_)
     sunConstants_.push_back({sunRadiance(sun), sunConePdf(sun), oneMinusCos(sun.angularRadius),
                              chordSquared(sun.angularRadius), luminance(sun.irradiance),
@@ -148,7 +151,7 @@ LightSampler::LightSampler(const Scene& scene, LightChoice choice)
   }
   // Without emissive triangles every candidate's weight is the same
   // everywhere: sum them once, in selectionTotal's order.
-  if (triangles_.empty()) {
+  if (triangles_.empty() && points_.empty()) {
     distantOnlyTotal_ = 0;
     forEachCandidate(Vec3f(0), [&](int, float w) {
       if (w > 0) distantOnlyTotal_ += w;
@@ -158,7 +161,7 @@ LightSampler::LightSampler(const Scene& scene, LightChoice choice)
 }
 
 bool LightSampler::empty() const {
-  return suns_.empty() && environment_.isBlack() && triangles_.empty();
+  return suns_.empty() && environment_.isBlack() && triangles_.empty() && points_.empty();
 }
 
 Vec2f LightSampler::directionToUv(Vec3f d) const {
@@ -254,6 +257,15 @@ float LightSampler::groupWeight(size_t group, Vec3f p) const {
   return g.power / std::max(dot(d, d), g.bounds.surfaceArea() * 0.25f);
 }
 
+// A point light: its intensity towards p over the squared distance (the
+// irradiance it gives p), zero outside a spot's cone.
+float LightSampler::pointWeight(const PointLight& l, Vec3f p) const {
+  const Vec3f d = p - l.position;
+  const float d2 = dot(d, d);
+  if (!(d2 > 0)) return 0;
+  return luminance(l.intensity) * l.falloffTowards(d * (1 / std::sqrt(d2))) / d2;
+}
+
 // LightChoice::Power: the emitters' share as Near gives it at p, split by
 // power alone: each triangle's weight is its power times this.
 float LightSampler::emittersPerPower(Vec3f p) const {
@@ -283,6 +295,8 @@ void LightSampler::forEachCandidate(Vec3f p, Visit&& visit) const {
     for (size_t g = 0; g < groups_.size(); ++g)
       if (visit(next++, byPower ? groups_[g].power * perPower : groupWeight(g, p))) return;
   }
+  for (const PointLight& l : points_)
+    if (visit(next++, pointWeight(l, p))) return;
 }
 
 float LightSampler::selectionTotal(Vec3f p) const {
@@ -365,6 +379,22 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
     out.pdf *= selection;
     out.mis = environmentTakesPartInMis();
     return true;
+  }
+  const int pointBase = triangleBase + int(groups_.empty() ? triangles_.size() : groups_.size());
+  if (chosen >= pointBase) {
+    // A delta light: its direction and distance are the sample.
+    const PointLight& l = points_[size_t(chosen - pointBase)];
+    const Vec3f toLight = l.position - p;
+    const float d2 = dot(toLight, toLight);
+    if (!(d2 > 0)) return false;
+    out.distance = std::sqrt(d2);
+    out.direction = toLight * (1 / out.distance);
+    out.normal = Vec3f(0);
+    out.radiance = l.intensity * (l.falloffTowards(-out.direction) / d2);
+    out.pdf = selection;
+    out.mis = false;
+    out.emitter = kNotAnEmitter;
+    return maxComponent(out.radiance) > 0;
   }
   out.mis = true;
   int index = chosen - triangleBase;

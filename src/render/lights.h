@@ -147,6 +147,7 @@ class LightSampler {
   float selectionTotal(Vec3f p) const;
   float triangleWeight(const EmissiveTriangle& t, Vec3f p) const;
   float groupWeight(size_t group, Vec3f p) const;
+  float pointWeight(const PointLight& l, Vec3f p) const;
   float emittersPerPower(Vec3f p) const;
   Vec2f directionToUv(Vec3f d) const;
   Vec3f uvToDirection(Vec2f uv) const;
@@ -155,6 +156,7 @@ class LightSampler {
   bool sampleTriangle(const EmissiveTriangle& t, Vec3f p, Vec2f u, LightSample& out) const;
 
   std::vector<SunLight> suns_;
+  std::vector<PointLight> points_;  // chosen after the emitters, never found by BSDF samples
   // Per sun, what sampling and background() need, computed once (same values
   // as computing them per call).
   struct SunConstants {
@@ -174,8 +176,8 @@ class LightSampler {
   // constant environment (when it is one), and their summed weight.
   bool constantEnvironmentSelected_ = false;
   float distantWeight_ = 0;
-  // selectionTotal's answer when no emissive triangle makes it depend on
-  // the point (no triangles), else -1.
+  // selectionTotal's answer when no emissive triangle or point light makes it
+  // depend on the point, else -1.
   float distantOnlyTotal_ = -1;
   LightChoice choice_ = LightChoice::Near;
   float trianglePower_ = 0;  // the sum of triangles_' power (LightChoice::Power)

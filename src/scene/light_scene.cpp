@@ -6,6 +6,7 @@ Scene lightScene(const Scene& scene) {
   Scene out;
   out.name = scene.name + " (lights)";
   out.suns = scene.suns;
+  out.pointLights = scene.pointLights;
   out.environment = scene.environment;
   std::vector<int32_t> materialOf(scene.materials.size(), -1);
   std::vector<std::vector<int32_t>> emissiveMeshesPerObject(scene.objects.size());

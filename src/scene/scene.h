@@ -169,6 +169,33 @@ struct SunLight {
   float angularRadius = 0.00465f;  // radians (the real sun: 0.27 degrees)
 };
 
+// A point or spot light: a delta light at `position` (pbrt's point and spot
+// lights). Seen from a point at distance d along unit w leaving the light, it
+// gives intensity * falloff(w) / d^2; only light samples find it.
+struct PointLight {
+  enum class Falloff : uint8_t {
+    None,        // a point light, the same in every direction
+    Quartic,     // pbrt-v3's spot: ((cos - cosTotal) / (cosStart - cosTotal))^4
+    SmoothStep,  // pbrt-v4's spot: smoothstep(cosTotal, cosStart, cos)
+  };
+  Vec3f position{0};
+  Vec3f intensity{1};          // W/sr
+  Vec3f direction{0, 0, 1};    // a spot's axis (unit)
+  float cosTotalWidth = -1;    // a spot's edge: nothing beyond
+  float cosFalloffStart = -1;  // a spot's full intensity within
+  Falloff falloff = Falloff::None;
+
+  // Of the intensity, the share leaving along unit `w`.
+  float falloffTowards(Vec3f w) const {
+    if (falloff == Falloff::None) return 1;
+    const float c = dot(w, direction);
+    if (c < cosTotalWidth) return 0;
+    if (c >= cosFalloffStart) return 1;
+    const float t = (c - cosTotalWidth) / (cosFalloffStart - cosTotalWidth);
+    return falloff == Falloff::Quartic ? (t * t) * (t * t) : t * t * (3 - 2 * t);
+  }
+};
+
 // Environment: constant colour, or an equirectangular image (y up) scaled by colour.
 struct EnvironmentLight {
   Vec3f color{0, 0, 0};
@@ -226,6 +253,7 @@ struct Scene {
   // copies of the scene may name one. Released ones are null.
   std::vector<std::shared_ptr<const FourierBsdfTable>> bsdfTables;
   std::vector<SunLight> suns;
+  std::vector<PointLight> pointLights;
   EnvironmentLight environment;
   std::vector<CameraView> views;  // views[0] is the default
   // Participating media (media/medium.h), the surfaces that only bound them,

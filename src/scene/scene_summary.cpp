@@ -45,6 +45,7 @@ SceneSummary summarize(const Scene& scene) {
   }
   for (const auto& table : scene.bsdfTables) s.memory += bsdfTableCost(*table);
   s.suns = scene.suns.size();
+  s.pointLights = scene.pointLights.size();
   s.environments = scene.environment.isBlack() ? 0 : 1;
   s.views = scene.views.size();
   for (const ferry::Medium& m : scene.media) {
@@ -186,6 +187,8 @@ nlohmann::json SceneSummary::toJson() const {
                  {"environments", environments},
                  {"emissive_meshes", emissiveMeshes},
                  {"emissive_triangles", emissiveTriangles}};
+  // (Only when there are any: older summaries, in checkpoints, have none.)
+  if (pointLights > 0) j["lights"]["point_lights"] = pointLights;
   j["views"] = views;
   // (Only when there are media: the summary is part of a checkpoint's scene
   // identity, which scenes without media keep as it was.)
@@ -230,9 +233,10 @@ std::string SceneSummary::toText() const {
   row("instances", formatCount(instances));
   row("instanced triangles", formatCount(instancedTriangles));
   row("textures", fmt::format("{} ({} texels)", textures, formatCount(texels)));
-  row("lights",
-      fmt::format("{} ({} sun, {} environment, {} emissive meshes / {} triangles)", lights(), suns,
-                  environments, emissiveMeshes, formatCount(emissiveTriangles)));
+  row("lights", fmt::format("{} ({} sun, {} point or spot, {} environment, {} emissive meshes / {} "
+                            "triangles)",
+                            lights(), suns, pointLights, environments, emissiveMeshes,
+                            formatCount(emissiveTriangles)));
   row("views", fmt::format("{}", views));
   if (!media.empty() || mediumBoundaries > 0) {
     row("media", fmt::format("{} ({} boundary meshes / {} triangles)", media.size(),

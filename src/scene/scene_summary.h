@@ -30,6 +30,7 @@ struct SceneSummary {
   uint64_t textures = 0;
   uint64_t texels = 0;
   uint64_t suns = 0;
+  uint64_t pointLights = 0;   // point and spot lights
   uint64_t environments = 0;  // 0 or 1
   uint64_t emissiveMeshes = 0;
   uint64_t emissiveTriangles = 0;
@@ -50,7 +51,7 @@ struct SceneSummary {
   Box3f bounds;
   MemoryCost memory;
 
-  uint64_t lights() const { return suns + environments + emissiveMeshes; }
+  uint64_t lights() const { return suns + pointLights + environments + emissiveMeshes; }
   nlohmann::json toJson() const;
   std::string toText() const;  // the human-readable table `ferry info` prints
 };

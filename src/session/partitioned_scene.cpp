@@ -165,6 +165,7 @@ PartitionedScene distributedPiece(Scene piece, const Communicator& comm) {
   out.partition.instanceOwners.assign(piece.instances.size(), RankSet::single(rank));
   out.lights.name = piece.name + " (lights)";
   out.lights.suns = piece.suns;
+  out.lights.pointLights = piece.pointLights;
   out.lights.environment = piece.environment;
   for (int r = 0; r < ranks; ++r) {
     SharedData shared = r == rank ? std::move(mine) : sharedFromBytes(pieces[size_t(r)], rank, r);

@@ -194,6 +194,7 @@ SceneSummary summaryFromJson(const nlohmann::json& j) {
   if (j.contains("lights")) {
     const auto& l = j["lights"];
     s.suns = count(l, "suns");
+    if (l.contains("point_lights")) s.pointLights = count(l, "point_lights");
     s.environments = count(l, "environments");
     s.emissiveMeshes = count(l, "emissive_meshes");
     s.emissiveTriangles = count(l, "emissive_triangles");

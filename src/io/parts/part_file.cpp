@@ -338,6 +338,15 @@ void writeLights(FileWriter& w, const Scene& lights) {
     w.pod(int32_t(env.image->height));
     w.array(env.image->pixels);
   }
+  w.pod(uint64_t(lights.pointLights.size()));
+  for (const PointLight& l : lights.pointLights) {
+    w.pod(l.position);
+    w.pod(l.intensity);
+    w.pod(l.direction);
+    w.pod(l.cosTotalWidth);
+    w.pod(l.cosFalloffStart);
+    w.pod(uint8_t(l.falloff));
+  }
 }
 
 // ------------------------------------------------------------------ reading
@@ -783,6 +792,22 @@ void readLights(FileReader& r, Scene& lights) {
         image->pixels.size() != size_t(image->width) * size_t(image->height))
       r.fail("environment image size mismatch");
     lights.environment.image = std::move(image);
+  }
+  if (r.version() < 13) return;  // older: point and spot lights were emissive meshes
+  for (uint64_t n = r.count(45); n > 0; --n) {
+    PointLight l;
+    l.position = r.pod<Vec3f>();
+    l.intensity = r.pod<Vec3f>();
+    l.direction = r.pod<Vec3f>();
+    l.cosTotalWidth = r.pod<float>();
+    l.cosFalloffStart = r.pod<float>();
+    const uint8_t falloff = r.pod<uint8_t>();
+    if (falloff > uint8_t(PointLight::Falloff::SmoothStep))
+      r.fail(fmt::format("point light falloff {} is not 0, 1 or 2", falloff));
+    l.falloff = PointLight::Falloff(falloff);
+    if (!isFinite(l.position) || !isFinite(l.intensity) || !isFinite(l.direction))
+      r.fail("a point light is not finite");
+    lights.pointLights.push_back(l);
   }
 }
 

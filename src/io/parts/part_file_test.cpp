@@ -310,6 +310,33 @@ TEST(PartFiles, EveryRankRoundTripsExactly) {
   }
 }
 
+// Point and spot lights (format 13) come back as they were written.
+TEST(PartFiles, PointLightsSurviveTheTrip) {
+  TempDir dir;
+  Scene scene = island();
+  PointLight spot;
+  spot.position = {1, 2, 3};
+  spot.intensity = {4, 5, 6};
+  spot.direction = normalize(Vec3f(0, -1, 1));
+  spot.cosTotalWidth = 0.8f;
+  spot.cosFalloffStart = 0.9f;
+  spot.falloff = PointLight::Falloff::Quartic;
+  scene.pointLights = {PointLight{}, spot};
+  PartDirectoryInfo info;
+  writePartDirectory(dir.path.string(), scene, roundRobinPartition(scene, 2), lightScene(scene),
+                     info);
+  const RankPart part = loadRankPart(dir.path.string(), 1, 2);
+  ASSERT_EQ(part.lights.pointLights.size(), 2u);
+  const PointLight& back = part.lights.pointLights[1];
+  EXPECT_EQ(back.position, spot.position);
+  EXPECT_EQ(back.intensity, spot.intensity);
+  EXPECT_EQ(back.direction, spot.direction);
+  EXPECT_EQ(back.cosTotalWidth, spot.cosTotalWidth);
+  EXPECT_EQ(back.cosFalloffStart, spot.cosFalloffStart);
+  EXPECT_EQ(back.falloff, spot.falloff);
+  EXPECT_EQ(part.lights.pointLights[0].falloff, PointLight::Falloff::None);
+}
+
 TEST(PartFiles, OneRankHoldsTheWholeSceneBitForBit) {
   TempDir dir;
   Scene scene = island();

@@ -930,8 +930,7 @@ struct PbrtMaterials::Impl {
   float roughness(const PbrtParams& params, const std::string& prefix, float fallback, bool v3,
                   bool zeroIsSmooth = false, RoughnessNames names = RoughnessNames::Both) {
     std::string un = prefix + "uroughness", vn = prefix + "vroughness", rn = prefix + "roughness";
-    const float r =
-        names == RoughnessNames::UV ? fallback : scalar(params, rn.c_str(), fallback);
+    const float r = names == RoughnessNames::UV ? fallback : scalar(params, rn.c_str(), fallback);
     const float u = names == RoughnessNames::Scalar ? r : scalar(params, un.c_str(), r);
     const float v = names == RoughnessNames::Scalar ? r : scalar(params, vn.c_str(), r);
     if (zeroIsSmooth && u == 0 && v == 0) return 0;

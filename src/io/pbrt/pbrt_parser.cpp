@@ -17,7 +17,6 @@
 
 #include "core/error.h"
 #include "io/images/image_io.h"
-#include "io/light_emitters.h"
 #include "io/pbrt/pbrt_materials.h"
 #include "io/pbrt/pbrt_params.h"
 #include "io/pbrt/pbrt_spectra.h"
@@ -137,13 +136,6 @@ struct InfiniteLight {
   SourceLocation where;
 };
 
-struct PointEmitter {
-  Vec3f position, direction;
-  Vec3f intensity;
-  float coneDegrees = 180;  // 180: a point light
-  SourceLocation where;
-};
-
 class Parser {
  public:
   // Which pbrt wrote the file, from the first directive only one of them
@@ -221,7 +213,7 @@ class Parser {
 
   Scene finish(const std::string& name) {
     scene_.name = name;
-    makePointEmitters();
+    setSpotFalloff();
     makeEnvironment();
     makeCamera();
     if (scene_.meshes.empty() && scene_.suns.empty())
@@ -1127,41 +1119,41 @@ class Parser {
                                                     "image is ignored; first at {})",
                                                     what, where.toString()));
       }
-      PointEmitter e;
-      e.where = where;
-      e.intensity =
+      PointLight light;
+      light.intensity =
           materials_.constantColor(p, "I", Vec3f(1), SpectrumUse::Illuminant) * lightScale(p);
       // pbrt-v4's "float power" (watts; absent or <= 0: not used): the
       // intensity is scaled by power / k_e, k_e the solid angle a unit
       // intensity fills (pbrt-v4's PointLight and SpotLight::Create).
       const float power = p.getFloat("power", -1);
       Vec3f from = p.getPoint3("from").value_or(Vec3f(0, 0, 0));
-      e.position = state_.ctm.transformPoint(from);
+      light.position = state_.ctm.transformPoint(from);
       if (type == "spot") {
         Vec3f to = p.getPoint3("to").value_or(Vec3f(0, 0, 1));
         Vec3f d = state_.ctm.transformVector(to - from);
         if (!(length(d) > 0)) fail(where, "spot light: from and to are the same point");
-        e.direction = normalize(d);
-        const float cone = p.getFloat("coneangle", 30);
-        e.coneDegrees = std::clamp(cone, 0.5f, 90.0f);
-        // The tube's opening makes its own soft edge; the delta counts in the power.
-        const float delta = p.getFloat("conedeltaangle", 5);
-        if (power > 0) {
-          const float cosEnd = std::cos(cone * kPi / 180);
-          const float cosStart = std::cos((cone - delta) * kPi / 180);
-          e.intensity *= power / (2 * kPi * ((1 - cosStart) + (cosStart - cosEnd) / 2));
-        }
-      } else {
+        light.direction = normalize(d);
+        const float cone = std::clamp(p.getFloat("coneangle", 30), 0.0f, 180.0f);
+        const float delta = std::clamp(p.getFloat("conedeltaangle", 5), 0.0f, cone);
+        light.cosTotalWidth = std::cos(cone * kPi / 180);
+        light.cosFalloffStart = std::cos((cone - delta) * kPi / 180);
+        // Quartic or smoothstep: which pbrt wrote the file (finish()).
+        light.falloff = PointLight::Falloff::SmoothStep;
+        if (power > 0)
+          light.intensity *=
+              power /
+              (2 * kPi *
+               ((1 - light.cosFalloffStart) + (light.cosFalloffStart - light.cosTotalWidth) / 2));
+      } else if (power > 0 && type == "point") {
         // v3 point lights place themselves with the CTM too (from is in light space).
-        e.direction = Vec3f(0, 0, 1);
-        if (power > 0 && type == "point") e.intensity *= power / (4 * kPi);
+        light.intensity *= power / (4 * kPi);
       }
       if (power > 0 && (type == "goniometric" || type == "projection"))
         warnings_.once("light power|" + type,
                        fmt::format("{}: \"float power\" ignored (its image is; first at {})", what,
                                    where.toString()));
-      if (!isFinite(e.position)) fail(where, "light position is not finite");
-      pointEmitters_.push_back(e);
+      if (!isFinite(light.position)) fail(where, "light position is not finite");
+      if (maxComponent(light.intensity) > 0) scene_.pointLights.push_back(light);
     } else {
       p.markAllUsed();
       warnings_.once(
@@ -1717,19 +1709,11 @@ class Parser {
 
   // ----------------------------------------------------------------- finish
 
-  void makePointEmitters() {
-    if (pointEmitters_.empty()) return;
-    Box3f bounds = scene_.worldBounds();
-    for (const PointEmitter& e : pointEmitters_) bounds.extend(e.position);
-    const float radius = pointLightRadius(bounds);
-    for (const PointEmitter& e : pointEmitters_) {
-      if (maxComponent(e.intensity) <= 0) continue;
-      if (e.coneDegrees >= 180)
-        addPointLightEmitter(scene_, e.position, e.intensity, radius, "point light");
-      else
-        addSpotLightEmitter(scene_, e.position, e.direction, e.intensity, e.coneDegrees, radius,
-                            "spot light");
-    }
+  // pbrt-v3's spots fall off as a quartic, pbrt-v4's as a smoothstep.
+  void setSpotFalloff() {
+    if (dialect_ != Dialect::V3) return;
+    for (PointLight& l : scene_.pointLights)
+      if (l.falloff == PointLight::Falloff::SmoothStep) l.falloff = PointLight::Falloff::Quartic;
   }
 
   void makeEnvironment() {
@@ -1902,7 +1886,6 @@ class Parser {
   std::optional<CameraDefinition> camera_;
   int filmWidth_ = 1280, filmHeight_ = 720;
   std::vector<InfiniteLight> infiniteLights_;
-  std::vector<PointEmitter> pointEmitters_;
 };
 
 }  // namespace

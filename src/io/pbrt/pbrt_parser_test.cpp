@@ -151,13 +151,10 @@ TEST_F(PbrtV3Features, Lights) {
   EXPECT_GT(sun.irradiance.x, sun.irradiance.z);
   EXPECT_GT(luminance(sun.irradiance), 1.0f);
   EXPECT_LT(luminance(sun.irradiance), 3.0f);
-  // The point light is a small emitting sphere at (1, 2, 3).
-  auto lamp = meshesOf(scene(), "point light");
-  ASSERT_EQ(lamp.size(), 1u);
-  auto inst = instancesOf(scene(), objectOfMesh(scene(), lamp[0]));
-  ASSERT_EQ(inst.size(), 1u);
-  EXPECT_EQ(inst[0]->transform.t, Vec3f(1, 2, 3));
-  EXPECT_LT(length(lamp[0]->bounds().size()), 0.2f);
+  // The point light: a delta light at (1, 2, 3).
+  ASSERT_EQ(scene().pointLights.size(), 1u);
+  EXPECT_EQ(scene().pointLights[0].position, Vec3f(1, 2, 3));
+  EXPECT_EQ(scene().pointLights[0].falloff, PointLight::Falloff::None);
   // The area light's quad emits L.
   bool area = false;
   for (const Material& m : scene().materials)
@@ -258,8 +255,8 @@ TEST_F(PbrtV3Features, InstancingStaysInstancing) {
 }
 
 TEST_F(PbrtV3Features, ShapesAndCounts) {
-  EXPECT_EQ(scene().objects.size(), 10u);
-  EXPECT_EQ(scene().instances.size(), 13u);
+  EXPECT_EQ(scene().objects.size(), 9u);
+  EXPECT_EQ(scene().instances.size(), 12u);
   // Both curves share one mesh: 6 + 3 linear pieces of 3-sided tubes.
   auto curves = meshesOf(scene(), "mirror-ish uber");
   ASSERT_EQ(curves.size(), 1u);
@@ -430,7 +427,8 @@ TEST_F(PbrtV4Features, Materials) {
   EXPECT_NEAR(sheet->ior, 1.01f, 1e-6);
   EXPECT_EQ(material(scene(), "coated").baseColor, Vec3f(0.1f, 0.5f, 0.1f));
   const Material& copper = material(scene(), "car");
-  EXPECT_NE(modelAs<CoatedConductorModel>(copper), nullptr);
+  ASSERT_NE(modelAs<LayeredModel>(copper), nullptr);
+  EXPECT_TRUE(modelAs<LayeredModel>(copper)->conductorBase);
   EXPECT_GT(copper.baseColor.x, copper.baseColor.y);
   EXPECT_GT(copper.baseColor.y, copper.baseColor.z);
   // diffusetransmission: reflectance and transmittance kept apart.
@@ -444,9 +442,9 @@ TEST_F(PbrtV4Features, Materials) {
   EXPECT_EQ(scene().textures[size_t(portal.alphaTexture)].sampleAlpha({0.5f, 0.5f}), 0.0f);
   // A mix shades with the second material with probability "amount" (v4).
   const Material& mostly = material(scene(), "mostly gold");
-  const auto* mostlyModel = modelAs<CoatedDiffuseModel>(mostly);  // the first: coateddiffuse
+  const auto* mostlyModel = modelAs<LayeredModel>(mostly);  // the first: coateddiffuse
   ASSERT_NE(mostlyModel, nullptr);
-  EXPECT_TRUE(mostlyModel->layered);
+  EXPECT_FALSE(mostlyModel->conductorBase);
   ASSERT_GE(mostly.mixedWith, 0);
   EXPECT_FLOAT_EQ(mostly.mixAmount, 0.75f);
   EXPECT_NE(modelAs<ConductorModel>(scene().materials.at(size_t(mostly.mixedWith))),
@@ -479,10 +477,14 @@ TEST_F(PbrtV4Features, ShapesLightsAttributesAndImport) {
   EXPECT_NEAR(sphere.center().y, 0, 1e-4);
   // Blackbody 6500 K at luminance 1, times scale 1.5.
   EXPECT_NEAR(luminance(scene().environment.color), 1.5f, 0.05f);
-  // The spot: an emitting disk in a black tube.
-  auto spot = meshesOf(scene(), "spot light");
-  ASSERT_EQ(spot.size(), 1u);
-  EXPECT_EQ(scene().objects[size_t(objectOfMesh(scene(), spot[0]))].meshes.size(), 3u);
+  // The spot: a delta light with pbrt-v4's smoothstep falloff.
+  ASSERT_EQ(scene().pointLights.size(), 1u);
+  const PointLight& spot = scene().pointLights[0];
+  EXPECT_EQ(spot.falloff, PointLight::Falloff::SmoothStep);
+  EXPECT_EQ(spot.position, Vec3f(0, 4, 0));
+  EXPECT_NEAR(spot.direction.y, -1, 1e-6);
+  EXPECT_EQ(spot.falloffTowards(Vec3f(0, -1, 0)), 1.0f);
+  EXPECT_EQ(spot.falloffTowards(Vec3f(0, 1, 0)), 0.0f);
 }
 
 // ------------------------------------------------------------------ details
@@ -497,18 +499,42 @@ Vec3f brightestEmission(const Scene& s) {
 }
 
 TEST(PbrtParser, V4PointAndSpotPowerScaleTheIntensity) {
-  auto emission = [](const std::string& light) {
-    return brightestEmission(fromText("WorldBegin\nShape \"sphere\"\n" + light + "\n"));
+  auto intensity = [](const std::string& light) {
+    const Scene s = fromText("WorldBegin\nShape \"sphere\"\n" + light + "\n");
+    EXPECT_EQ(s.pointLights.size(), 1u);
+    return s.pointLights.empty() ? Vec3f(0) : s.pointLights[0].intensity;
   };
-  const Vec3f point = emission(R"(LightSource "point" "rgb I" [ 1 1 1 ])");
-  const Vec3f pointPower = emission(R"(LightSource "point" "rgb I" [ 1 1 1 ] "float power" 100)");
+  const Vec3f point = intensity(R"(LightSource "point" "rgb I" [ 1 1 1 ])");
+  const Vec3f pointPower = intensity(R"(LightSource "point" "rgb I" [ 1 1 1 ] "float power" 100)");
   EXPECT_NEAR(pointPower.y / point.y, 100 / (4 * kPi), 1e-3);
   const std::string spot = R"(LightSource "spot" "rgb I" [ 1 1 1 ] "float coneangle" 20 )";
-  const Vec3f spotPlain = emission(spot);
-  const Vec3f spotPower = emission(spot + R"("float conedeltaangle" 5 "float power" 100)");
+  const Vec3f spotPlain = intensity(spot);
+  const Vec3f spotPower = intensity(spot + R"("float conedeltaangle" 5 "float power" 100)");
   const float cosEnd = std::cos(20 * kPi / 180), cosStart = std::cos(15 * kPi / 180);
   EXPECT_NEAR(spotPower.y / spotPlain.y,
               100 / (2 * kPi * ((1 - cosStart) + (cosStart - cosEnd) / 2)), 1e-2);
+}
+
+// pbrt-v3's spot falls off as a quartic between the cone's edge and
+// coneangle - conedeltaangle, pbrt-v4's as a smoothstep.
+TEST(PbrtParser, SpotFalloffFollowsEachVersion) {
+  auto spot = [](const std::string& film) {
+    const Scene s = fromText(film +
+                             "WorldBegin\nLightSource \"spot\" \"point from\" [0 0 0] "
+                             "\"point to\" [0 0 1] \"float coneangle\" 30 \"float "
+                             "conedeltaangle\" 10\nShape \"sphere\"\n");
+    EXPECT_EQ(s.pointLights.size(), 1u);
+    return s.pointLights.empty() ? PointLight{} : s.pointLights[0];
+  };
+  const PointLight v3 = spot("Film \"image\"\n"), v4 = spot("Film \"rgb\"\n");
+  EXPECT_EQ(v3.falloff, PointLight::Falloff::Quartic);
+  EXPECT_EQ(v4.falloff, PointLight::Falloff::SmoothStep);
+  const float c = 0.5f * (std::cos(20 * kPi / 180) + std::cos(30 * kPi / 180));
+  const Vec3f w(std::sqrt(1 - c * c), 0, c);  // halfway through the falloff
+  EXPECT_NEAR(v3.falloffTowards(w), 0.0625f, 1e-4f);
+  EXPECT_NEAR(v4.falloffTowards(w), 0.5f, 1e-4f);
+  EXPECT_EQ(v3.falloffTowards({0, 0, 1}), 1.0f);
+  EXPECT_EQ(v3.falloffTowards({0, 1, 0}), 0.0f);
 }
 
 TEST(PbrtParser, V4AreaPowerIsPerPbrtShape) {
