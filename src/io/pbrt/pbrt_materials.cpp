@@ -978,7 +978,8 @@ struct PbrtMaterials::Impl {
     return fallback;
   }
 
-  Vec3f conductorColor(const PbrtParams& params, const std::string& prefix) {
+  // `outside`: the index of the medium the conductor is under (a coat's).
+  Vec3f conductorColor(const PbrtParams& params, const std::string& prefix, float outside = 1) {
     std::string etaName = prefix + "eta", kName = prefix + "k";
     const PbrtParam* eta = params.find(etaName);
     const PbrtParam* k = params.find(kName);
@@ -997,10 +998,10 @@ struct PbrtMaterials::Impl {
     if (spectral) {
       SampledSpectrum se = eta ? spectrumOf(*eta) : *namedSpectrum("metal-Cu-eta");
       SampledSpectrum sk = k ? spectrumOf(*k) : *namedSpectrum("metal-Cu-k");
-      return conductorReflectance(se, sk);
+      return conductorReflectance(se, sk, outside);
     }
-    Vec3f e = eta ? perChannel(*eta) : Vec3f(0.2f, 0.92f, 1.1f);
-    Vec3f kk = k ? perChannel(*k) : Vec3f(3.9f, 2.45f, 2.14f);
+    Vec3f e = (eta ? perChannel(*eta) : Vec3f(0.2f, 0.92f, 1.1f)) / outside;
+    Vec3f kk = (k ? perChannel(*k) : Vec3f(3.9f, 2.45f, 2.14f)) / outside;
     Vec3f f0;
     for (int c = 0; c < 3; ++c)
       f0[c] = ((e[c] - 1) * (e[c] - 1) + kk[c] * kk[c]) / ((e[c] + 1) * (e[c] + 1) + kk[c] * kk[c]);
@@ -1151,31 +1152,33 @@ struct PbrtMaterials::Impl {
       auto layered = layeredModel(p, "", "");
       layered->eta = std::max(iorOf(p, 1.5f), 1.01f);
       m.model = layered;
-    } else if (type == "conductor" || type == "metal" || type == "coatedconductor") {
-      std::string prefix = type == "coatedconductor" ? "conductor." : "";
-      std::string reflectance = prefix + "reflectance";
-      if (p.has(reflectance)) {
-        setColor(color(p, {reflectance.c_str()}, Vec3f(1)));
+    } else if (type == "conductor" || type == "metal") {
+      if (p.has("reflectance")) {
+        setColor(color(p, {"reflectance"}, Vec3f(1)));
       } else {
-        m.baseColor = conductorColor(p, prefix);
+        m.baseColor = conductorColor(p, "");
       }
-      const float baseRoughness = roughness(p, prefix, type == "metal" ? 0.01f : 0.0f, v3);
-      if (type == "coatedconductor") {
-        // pbrt-v4: the conductor under a dielectric interface, a random walk
-        // between them (material/models/layered.h).
-        auto layered = layeredModel(p, "interface.", "conductor.");
-        layered->eta = 1.5f;
-        if (const PbrtParam* eta = p.find("interface.eta")) {
-          if (eta->type == "spectrum")
-            layered->eta = spectrumOf(*eta).at(550);
-          else
-            layered->eta = p.getFloat("interface.eta", 1.5f);
-        }
-        layered->eta = std::max(layered->eta, 1.01f);
-        m.model = layered;
+      const float baseRoughness = roughness(p, "", type == "metal" ? 0.01f : 0.0f, v3);
+      m.model = std::make_shared<ConductorModel>(baseRoughness);
+    } else if (type == "coatedconductor") {
+      // pbrt-v4: the conductor under a dielectric interface, a random walk
+      // between them (material/models/layered.h). The conductor is seen from
+      // inside the coat: its eta and k relative to the coat's index.
+      auto layered = layeredModel(p, "interface.", "conductor.");
+      layered->eta = 1.5f;
+      if (const PbrtParam* eta = p.find("interface.eta")) {
+        if (eta->type == "spectrum")
+          layered->eta = spectrumOf(*eta).at(550);
+        else
+          layered->eta = p.getFloat("interface.eta", 1.5f);
+      }
+      layered->eta = std::max(layered->eta, 1.01f);
+      if (p.has("reflectance")) {
+        setColor(color(p, {"reflectance"}, Vec3f(1)));
       } else {
-        m.model = std::make_shared<ConductorModel>(baseRoughness);
+        m.baseColor = conductorColor(p, "conductor.", layered->eta);
       }
+      m.model = layered;
     } else if (type == "mirror") {
       setColor(color(p, {"Kr"}, Vec3f(0.9f)));
       m.model = std::make_shared<ConductorModel>(0.0f);

@@ -127,9 +127,9 @@ SampledSpectrum blackbodySpectrum(float kelvin) {
   return s;
 }
 
-Vec3f conductorReflectance(const SampledSpectrum& eta, const SampledSpectrum& k) {
+Vec3f conductorReflectance(const SampledSpectrum& eta, const SampledSpectrum& k, float outside) {
   auto f0 = [&](float l) {
-    double n = eta.at(l), kk = k.at(l);
+    double n = eta.at(l) / outside, kk = k.at(l) / outside;
     return ((n - 1) * (n - 1) + kk * kk) / ((n + 1) * (n + 1) + kk * kk);
   };
   Vec3f rgb = xyzToLinearSrgb(integrateXyz(f0)) / whiteRgb();

@@ -54,7 +54,9 @@ SampledSpectrum blackbodySpectrum(float kelvin);
 
 // The reflectance at normal incidence of a conductor with complex index
 // eta + i k, per wavelength, then to RGB as a reflectance.
-Vec3f conductorReflectance(const SampledSpectrum& eta, const SampledSpectrum& k);
+// `outside`: the index of what the conductor is seen from (1: air; a coat's
+// index under pbrt-v4's coatedconductor, which divides eta and k by it).
+Vec3f conductorReflectance(const SampledSpectrum& eta, const SampledSpectrum& k, float outside = 1);
 
 // An .spd file: "lambda value" pairs, whitespace separated, '#' comments.
 // Throws InputError at file:line for anything else, an odd count or

@@ -295,7 +295,7 @@ Vec3f LayeredLobe::eval(Vec3f wo, Vec3f wi) const {
           if (z < thickness && w.z > 0 && !top.smooth()) {
             const float exit = top.f(-w, wi, true);
             if (exit > 0) {
-              const float weight = powerHeuristic(phase, top.pdf(-w, wi, kTransmission));
+              const float weight = powerHeuristic(phase, top.pdf(wi, -w, kTransmission));
               f += beta * (slabTransmittance(zp - thickness, w) * exit * weight);
             }
           }
@@ -323,10 +323,13 @@ Vec3f LayeredLobe::eval(Vec3f wo, Vec3f wi) const {
       beta = beta * bs.value() * (std::abs(bs.wi.z) / bs.pdf);
       w = bs.wi;
       if (!top.smooth()) {
+        // Out along the sampled direction, weighed against the virtual light
+        // by the density with which sampling from wi finds that direction
+        // (pbrt-v4 takes the reverse density, which biases eval() upwards).
         const float exit = top.f(-w, wi, true);
         if (exit > 0) {
           const float weight =
-              bottom.specular() ? 1 : powerHeuristic(bs.pdf, top.pdf(-w, wi, kTransmission));
+              bottom.specular() ? 1 : powerHeuristic(bs.pdf, top.pdf(wi, -w, kTransmission));
           f += beta * (slabTransmittance(thickness, bs.wi) * exit * weight);
         }
       }
