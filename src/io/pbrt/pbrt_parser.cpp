@@ -1215,7 +1215,7 @@ class Parser {
     const std::string what = fmt::format("Shape \"{}\"", type);
     if (!currentObject_) checkInvertible(where);
     try {
-      if (type == "curves") {
+      if (type == "curve") {
         curves(p, where);
         reportUnused(p, what);
         return;
@@ -1411,7 +1411,7 @@ class Parser {
     if (state_.areaLight && state_.areaLight->power)
       warnings_.once("area power|curves",
                      fmt::format("AreaLightSource \"float power\" is not applied to Shape "
-                                 "\"curves\" (its radiance is used as given; first at {})",
+                                 "\"curve\" (its radiance is used as given; first at {})",
                                  where.toString()));
     CurveDescription c;
     const PbrtParam* P = p.getArray("P", {"point3"});

@@ -822,7 +822,7 @@ TEST(PbrtParser, WarningsAreDeduplicated) {
 TEST(PbrtParser, ObjectsOfManyCurvesShareOneMesh) {
   std::string text = "WorldBegin\nObjectBegin \"hair\"\n";
   for (int i = 0; i < 50; ++i)
-    text += "Shape \"curves\" \"point3 P\" [ 0 0 " + std::to_string(i) +
+    text += "Shape \"curve\" \"point3 P\" [ 0 0 " + std::to_string(i) +
             " 1 0 0 2 1 0 3 1 1 ] \"float width\" 0.01\n";
   text += "ObjectEnd\nObjectInstance \"hair\"\nTranslate 1 0 0\nObjectInstance \"hair\"\n";
   Scene s = fromText(text);
