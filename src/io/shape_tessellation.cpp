@@ -131,6 +131,67 @@ Mesh tessellateCylinder(float radius, float zMin, float zMax, float phiMaxDegree
   return m;
 }
 
+namespace {
+
+// A surface of revolution: profile(v) for v in [0, 1] swept by phi in
+// [0, phiMax] around z, `rows` steps along the profile. Normals are
+// cross(dp/du, dp/dv), by central differences of the profile.
+template <typename Profile>
+Mesh revolved(float phiMax, int segments, int rows, Profile&& profile) {
+  Mesh m;
+  if (!(phiMax > 0)) return m;
+  const int cols = segmentsFor(phiMax, segments);
+  for (int r = 0; r <= rows; ++r) {
+    const float v = float(r) / rows;
+    const float h = 1e-3f;
+    const Vec3f p = profile(v);
+    const Vec3f dv = profile(std::min(v + h, 1.0f)) - profile(std::max(v - h, 0.0f));
+    for (int c = 0; c <= cols; ++c) {
+      const float u = float(c) / cols;
+      const float cs = std::cos(u * phiMax), sn = std::sin(u * phiMax);
+      auto rotate = [&](Vec3f q) { return Vec3f(cs * q.x - sn * q.y, sn * q.x + cs * q.y, q.z); };
+      const Vec3f position = rotate(p);
+      const Vec3f dpdu(-position.y, position.x, 0);
+      Vec3f n = cross(dpdu, rotate(dv));
+      if (!(dot(n, n) > 0)) n = cross(rotate(Vec3f(-p.y, p.x, 0) + Vec3f(0, 1e-6f, 0)), rotate(dv));
+      m.positions.push_back(position);
+      m.normals.push_back(dot(n, n) > 0 ? normalize(n) : Vec3f(0, 0, 1));
+      m.uvs.push_back({u, v});
+    }
+  }
+  gridTriangles(m, rows, cols);
+  return m;
+}
+
+}  // namespace
+
+Mesh tessellateCone(float radius, float height, float phiMaxDegrees, int segments) {
+  checkFinite(radius, "cone radius");
+  checkFinite(height, "cone height");
+  if (!(radius > 0) || height == 0) return Mesh{};
+  return revolved(clampedPhiMax(phiMaxDegrees), segments, 8,
+                  [&](float v) { return Vec3f((1 - v) * radius, 0, v * height); });
+}
+
+Mesh tessellateParaboloid(float radius, float zMin, float zMax, float phiMaxDegrees, int segments) {
+  checkFinite(radius, "paraboloid radius");
+  checkFinite(zMin, "paraboloid zmin");
+  checkFinite(zMax, "paraboloid zmax");
+  const float lo = std::min(zMin, zMax), hi = std::max(zMin, zMax);
+  if (!(radius > 0) || !(hi > 0) || lo == hi) return Mesh{};
+  const float k = hi / (radius * radius);
+  return revolved(clampedPhiMax(phiMaxDegrees), segments, 16, [&](float v) {
+    const float z = std::max(lo + v * (hi - lo), 0.0f);
+    return Vec3f(std::sqrt(z / k), 0, z);
+  });
+}
+
+Mesh tessellateHyperboloid(Vec3f p1, Vec3f p2, float phiMaxDegrees, int segments) {
+  if (!isFinite(p1) || !isFinite(p2)) throw InputError("hyperboloid p1 or p2 is not finite");
+  return revolved(clampedPhiMax(phiMaxDegrees), segments, 8,
+                  [&](float v) { return p1 * (1 - v) + p2 * v; });
+}
+
 Mesh tessellateHeightfield(int nu, int nv, const std::vector<float>& heights) {
   if (nu < 2 || nv < 2)
     throw InputError(fmt::format("heightfield needs nu, nv >= 2, found {} x {}", nu, nv));

@@ -26,6 +26,17 @@ Mesh tessellateDisk(float height, float radius, float innerRadius, float phiMaxD
 // An open cylinder around z from zMin to zMax.
 Mesh tessellateCylinder(float radius, float zMin, float zMax, float phiMaxDegrees,
                         int segments = kQuadricSegments);
+// pbrt-v3's cone: radius at z = 0 narrowing to a point at z = height.
+Mesh tessellateCone(float radius, float height, float phiMaxDegrees,
+                    int segments = kQuadricSegments);
+// pbrt-v3's paraboloid: z = zMax (x^2 + y^2) / radius^2, between zMin and zMax.
+Mesh tessellateParaboloid(float radius, float zMin, float zMax, float phiMaxDegrees,
+                          int segments = kQuadricSegments);
+// pbrt-v3's hyperboloid: the segment from p1 to p2 swept around z.
+Mesh tessellateHyperboloid(Vec3f p1, Vec3f p2, float phiMaxDegrees,
+                           int segments = kQuadricSegments);
+// (All three: uv = (phi / phiMax, v along the profile), normals as pbrt's,
+// cross(dp/du, dp/dv).)
 // pbrt-v3's heightfield: nu x nv heights over the unit square.
 Mesh tessellateHeightfield(int nu, int nv, const std::vector<float>& heights);
 

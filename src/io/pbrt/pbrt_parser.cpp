@@ -1278,6 +1278,16 @@ class Parser {
           mesh = tessellateCylinder(r, zMin, zMax, phiMaxDegrees);
           shapeArea = std::abs(zMax - zMin) * std::abs(r) * phiMax;
         }
+      } else if (type == "cone") {
+        mesh = tessellateCone(p.getFloat("radius", 1), p.getFloat("height", 1),
+                              p.getFloat("phimax", 360));
+      } else if (type == "paraboloid") {
+        mesh = tessellateParaboloid(p.getFloat("radius", 1), p.getFloat("zmin", 0),
+                                    p.getFloat("zmax", 1), p.getFloat("phimax", 360));
+      } else if (type == "hyperboloid") {
+        mesh = tessellateHyperboloid(p.getPoint3("p1").value_or(Vec3f(0, 0, 0)),
+                                     p.getPoint3("p2").value_or(Vec3f(1, 1, 1)),
+                                     p.getFloat("phimax", 360));
       } else if (type == "heightfield") {
         const PbrtParam* pz = p.getArray("Pz", {"float"});
         if (!pz) fail(where, "heightfield needs \"float Pz\"");
