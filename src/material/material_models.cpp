@@ -11,6 +11,7 @@
 #include "material/models/fourier.h"
 #include "material/models/fresnel_blend.h"
 #include "material/models/layered.h"
+#include "material/models/thin_dielectric.h"
 
 namespace ferry {
 namespace {
@@ -29,6 +30,10 @@ Registry<MaterialModelKind>& registry() {
            CoatedDiffuseModel::read},
           {"coated-conductor", "a GGX conductor under a layered coat (pbrt's coatedconductor)",
            CoatedConductorModel::read},
+          {"thin-dielectric",
+           "a thin sheet: mirror reflection of both faces, the rest straight through (pbrt-v4's "
+           "thindielectric)",
+           ThinDielectricModel::read},
           {"layered",
            "a diffuse or conductor base under a dielectric interface, a random walk between "
            "them (pbrt-v4's coateddiffuse, coatedconductor)",

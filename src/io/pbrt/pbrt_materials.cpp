@@ -21,6 +21,7 @@
 #include "material/models/fourier.h"
 #include "material/models/fresnel_blend.h"
 #include "material/models/layered.h"
+#include "material/models/thin_dielectric.h"
 
 namespace ferry {
 namespace {
@@ -464,6 +465,10 @@ struct PbrtMaterials::Impl {
 
   WrapMode wrapOf(const PbrtTextureDefinition& t) {
     std::string wrap = t.params.getString("wrap", "repeat");
+    if (wrap == "black")
+      warnings.once("wrap|black", fmt::format("texture wrap mode \"black\": an image used directly "
+                                              "clamps at its edges instead (first at {})",
+                                              t.where.toString()));
     if (wrap == "clamp" || wrap == "black") return WrapMode::Clamp;
     if (wrap != "repeat")
       warnings.once("wrap|" + wrap, fmt::format("texture wrap mode \"{}\" is not supported; "
@@ -913,7 +918,12 @@ struct PbrtMaterials::Impl {
     if (!p) return fallback;
     if (p->type == "texture") return averageTexture(*p, true);
     if (p->type == "float" || p->type == "integer") return params.getFloat(name, fallback);
-    return average(colorValue(*p, SpectrumUse::Reflectance));
+    const Vec3f c = colorValue(*p, SpectrumUse::Reflectance);
+    if (!(c.x == c.y && c.y == c.z))
+      warnings.once("grey|" + std::string(name),
+                    fmt::format("{}: a colour where Ferry takes one number: its average is used",
+                                p->declaration()));
+    return average(c);
   }
 
   // Which roughness parameters a pbrt model reads: "roughness" with
@@ -1186,12 +1196,15 @@ struct PbrtMaterials::Impl {
       m.baseColor = Vec3f(1);
       if (type == "glass") setColor(color(p, {"Kt"}, Vec3f(1)));
       float ior = iorOf(p, 1.5f);
-      const float rough =
-          type == "glass" ? roughness(p, "", 0.0f, true, /*zeroIsSmooth=*/true, RoughnessNames::UV)
-                          : roughness(p, "", 0.0f, v3);
-      if (type == "thindielectric") ior = 1.01f;
       if (!(ior >= 1)) ior = std::max(1.0f / std::max(ior, 1e-3f), 1.01f);
-      m.model = std::make_shared<DielectricModel>(ior, rough);
+      if (type == "thindielectric") {
+        m.model = std::make_shared<ThinDielectricModel>(ior);
+      } else {
+        const float rough = type == "glass" ? roughness(p, "", 0.0f, true, /*zeroIsSmooth=*/true,
+                                                        RoughnessNames::UV)
+                                            : roughness(p, "", 0.0f, v3);
+        m.model = std::make_shared<DielectricModel>(ior, rough);
+      }
     } else if (type == "uber") {
       // pbrt-v3: Kd (Lambertian) + Ks (Trowbridge-Reitz, FresnelDielectric(1,
       // eta)) + Kr (mirror) + Kt (window), with opacity.
@@ -1202,13 +1215,21 @@ struct PbrtMaterials::Impl {
       float rough = roughness(p, "", 0.1f, true);
       float ior = iorOf(p, 1.5f);
       Color opacity = color(p, {"opacity"}, Vec3f(1));
+      // Ferry's uber is one of its lobes: the window when Kt reaches 0.5, else
+      // the mirror when Kr outweighs Kd, else Kd under the Ks coat. What that
+      // leaves out is said once.
       if (maxComponent(kt.value) >= 0.5f) {
         setColor(kt);
         m.model = std::make_shared<DielectricModel>(std::max(ior, 1.01f), rough);
+        if (maxComponent(kd.value) > 0 || maxComponent(ks) > 0 || maxComponent(kr.value) > 0)
+          layerWarning(type, def.where, "Kd, Ks and Kr beside a Kt of 0.5 or more");
       } else if (maxComponent(kr.value) > maxComponent(kd.value)) {
         setColor(kr);
         m.model = std::make_shared<ConductorModel>(0.0f);
+        if (maxComponent(kd.value) > 0 || maxComponent(ks) > 0 || maxComponent(kt.value) > 0)
+          layerWarning(type, def.where, "Kd, Ks and Kt beside a Kr that outweighs Kd");
       } else {
+        if (maxComponent(kt.value) > 0) layerWarning(type, def.where, "a Kt below 0.5");
         setColor(kd);
         auto coated = std::make_shared<CoatedDiffuseModel>();
         coated->specular = ks;
@@ -1224,6 +1245,7 @@ struct PbrtMaterials::Impl {
       if (opacity.texture == kNoTexture && average(opacity.value) < 1)
         look.alpha = {alphaConstant(std::max(average(opacity.value), 0.0f)), AlphaTest::Stochastic,
                       AlphaRays::NotShadowRays};
+      if (opacity.texture != kNoTexture) layerWarning(type, def.where, "a textured opacity");
     } else if (type == "disney") {
       setColor(color(p, {"color"}, Vec3f(0.5f)));
       MetallicRoughness surface;

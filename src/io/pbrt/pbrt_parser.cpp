@@ -965,6 +965,15 @@ class Parser {
   void film(const std::string& type, const PbrtParams& p, const SourceLocation& where) {
     if (type == "image") noteDialect(Dialect::V3);
     if (type == "rgb" || type == "gbuffer" || type == "spectral") noteDialect(Dialect::V4);
+    if (type != "image" && type != "rgb" && type != "gbuffer" && type != "spectral")
+      fail(where,
+           fmt::format("Film \"{}\" is not a pbrt film (image, rgb, gbuffer, spectral)", type));
+    if (type == "gbuffer" || type == "spectral")
+      warnings_.once(
+          "film|" + type,
+          fmt::format("Film \"{}\": written as an RGB image, without its {} (at {})", type,
+                      type == "gbuffer" ? "geometry channels" : "spectral channels",
+                      where.toString()));
     int w = p.getInt("xresolution", 1280), h = p.getInt("yresolution", 720);
     if (w < 1 || h < 1 || w > kMaxFilmSide || h > kMaxFilmSide)
       fail(where, fmt::format("Film: resolution {} x {} must be between 1 and {} per side", w, h,
