@@ -12,6 +12,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libopenexr-dev
   libopenvdb-dev                  # .vdb volumes (io/volumes/vdb_file.cpp)
+  libnanovdb-dev zlib1g-dev       # .nvdb volumes (io/volumes/nanovdb_file.cpp)
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format                    # tests/format_test.sh keeps the tree clean under .clang-format
   libxxhash-dev                   # XXH64 digests of part files and checkpoints (core/hash64)

@@ -133,6 +133,7 @@ void expectSameSummary(const SceneSummary& described, const SceneSummary& made) 
   EXPECT_EQ(described.memory.texels, made.memory.texels);
   EXPECT_EQ(described.memory.instances, made.memory.instances);
   EXPECT_EQ(described.memory.accel, made.memory.accel);
+  EXPECT_EQ(described.memory.media, made.memory.media);
   EXPECT_EQ(described.memory.total(), made.memory.total());
   ASSERT_FALSE(described.bounds.empty());
   ASSERT_FALSE(made.bounds.empty());
@@ -334,6 +335,13 @@ TEST(BuiltinVolume, IsAGridMediumOfTheSizeAskedInItsBox) {
   }
   // The same seed, the same densities.
   EXPECT_EQ(generateBuiltin(params).media[0].density->values(), cloud.density->values());
+  // The memory model counts the volume, on every rank (a rank that owns no
+  // instance still holds it), and the plan says so before it is made.
+  const SceneSummary made = summarize(scene);
+  EXPECT_GE(made.memory.media, uint64_t(12 * 12 * 12) * sizeof(float) + sizeof(Medium));
+  EXPECT_EQ(made.memory.media, cloud.bytes() + meshCost(box).total());
+  EXPECT_EQ(ownedMemory(scene, {}).media, made.memory.media);
+  EXPECT_EQ(described.memory.media, made.memory.media);
 }
 
 TEST(BuiltinVolume, SizeBelongsToTheVolumeAlone) {

@@ -104,6 +104,8 @@ SceneSummary describePlan(const ScenePlan& plan) {
   s.environments = plan.environmentImage || maxComponent(plan.environmentColor) > 0 ? 1 : 0;
   s.views = plan.views.size();
   s.media = plan.mediaSummary;
+  for (const SceneSummary::Medium& m : plan.mediaSummary) s.memory.media += m.bytes;
+  s.memory.media += plan.boundaryBytes;
   s.mediumBoundaries = plan.mediumBoundaries;
   s.boundaryTriangles = plan.boundaryTriangles;
   s.bounds = plan.bounds;

@@ -66,6 +66,7 @@ struct ScenePlan {
   // and what makes them and their boundaries into the scene (optional).
   std::vector<SceneSummary::Medium> mediaSummary;
   uint64_t mediumBoundaries = 0, boundaryTriangles = 0;
+  uint64_t boundaryBytes = 0;  // the boundary meshes' MemoryCost (with their BVH)
   std::function<void(Scene&)> makeMedia;
   // The world bounds of everything the plan makes. Each generator guarantees
   // by construction that its content spans exactly this box (some vertex

@@ -55,7 +55,11 @@ ScenePlan planVolume(int size, uint32_t seed) {
   SceneSummary::Medium summary;
   summary.name = "cloud";
   summary.kind = fmt::format("grid {}x{}x{}", size, size, size);
-  summary.bytes = samples * sizeof(float);
+  // As Medium::bytes() counts a grid medium: its density, and its majorant
+  // grid of one cell a voxel up to kMajorantCells a side.
+  const size_t cells = size_t(std::min(size, kMajorantCells));
+  summary.bytes = sizeof(Medium) + samples * sizeof(float) +
+                  cells * cells * cells * (sizeof(float) + sizeof(Vec3f));
   summary.minDensity = 0;  // the plan's bounds; the grid made holds values within them
   summary.maxDensity = 1;
   summary.sigmaA = kSigmaA;
@@ -64,6 +68,7 @@ ScenePlan planVolume(int size, uint32_t seed) {
   plan.mediaSummary.push_back(summary);
   plan.mediumBoundaries = 1;
   plan.boundaryTriangles = 12;
+  plan.boundaryBytes = meshCost(boxMesh(Box3f{{-1, -1, -1}, {1, 1, 1}}, "volume box")).total();
   plan.makeMedia = [size, seed, samples](Scene& scene) {
     std::vector<float> values(samples);
     const size_t n = size_t(size);

@@ -48,14 +48,11 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
   } else if (ext == ".vdb") {
     scene = loadVdbScene(spec);
   } else if (ext == ".nvdb") {
-    throw InputError(
-        fmt::format("{}: .nvdb files need NanoVDB, which Debian does not package; "
-                    "convert the grid to an OpenVDB .vdb file",
-                    spec));
+    scene = loadNanoVdbScene(spec);
   } else {
     throw InputError(
         fmt::format("{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
-                    ".vdb, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
+                    ".vdb, .nvdb, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
                     spec, ext));
   }
   scene.validate();

@@ -16,6 +16,7 @@ MemoryCost& MemoryCost::operator+=(const MemoryCost& o) {
   instances += o.instances;
   accel += o.accel;
   shapes += o.shapes;
+  media += o.media;
   return *this;
 }
 
@@ -29,6 +30,7 @@ MemoryCost MemoryCost::scaled(uint64_t times) const {
   c.instances *= times;
   c.accel *= times;
   c.shapes *= times;
+  c.media *= times;
   return c;
 }
 
@@ -81,6 +83,13 @@ MemoryCost geometryCost(const Geometry& geometry) {
   c.accel = static_cast<uint64_t>(double(geometry.shape->primitiveCount()) *
                                       MemoryModel::kAccelBytesPerTriangle +
                                   MemoryModel::kAccelBytesPerMesh);
+  return c;
+}
+
+MemoryCost mediaCost(const Scene& scene) {
+  MemoryCost c;
+  for (const Medium& m : scene.media) c.media += m.bytes();
+  for (const MediumBoundary& b : scene.mediumBoundaries) c.media += meshCost(b.mesh).total();
   return c;
 }
 

@@ -22,10 +22,12 @@ struct MemoryCost {
   uint64_t shapes = 0;     // what geometries of other kinds hold (Shape::bytes)
   uint64_t instances = 0;  // instance records (transform, ids) and their Embree instance geometry
   uint64_t accel = 0;      // estimated BVH bytes (bottom level per object, top level per instance)
+  uint64_t media = 0;      // participating media (grids, majorants) and their boundary meshes,
+                           // which every rank holds whole
 
   // The mesh arrays alone (what a mesh store keeps out of memory).
   uint64_t meshArrays() const { return vertices + normals + uvs + indices; }
-  uint64_t total() const { return meshArrays() + texels + shapes + instances + accel; }
+  uint64_t total() const { return meshArrays() + texels + shapes + instances + accel + media; }
   MemoryCost& operator+=(const MemoryCost& o);
   MemoryCost scaled(uint64_t times) const;
 };
@@ -64,5 +66,9 @@ MemoryCost instanceCost(uint64_t instanceCount);
 // triangles, per primitive (not calibrated: Embree builds it over the
 // primitives' boxes). A released one costs nothing.
 MemoryCost geometryCost(const Geometry& geometry);
+// The scene's media and medium boundaries (the boundaries' triangles as a
+// mesh's, with their BVH).
+struct Scene;
+MemoryCost mediaCost(const Scene& scene);
 
 }  // namespace ferry

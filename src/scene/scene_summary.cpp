@@ -44,6 +44,7 @@ SceneSummary summarize(const Scene& scene) {
     s.memory += textureCost(t);
   }
   for (const auto& table : scene.bsdfTables) s.memory += bsdfTableCost(*table);
+  s.memory += mediaCost(scene);
   s.suns = scene.suns.size();
   s.pointLights = scene.pointLights.size();
   s.environments = scene.environment.isBlack() ? 0 : 1;
@@ -88,7 +89,9 @@ MemoryCost ownedMemory(const Scene& scene, const std::vector<int32_t>& instances
       geometry(scene.geometries.size(), 0), texture(scene.textures.size(), 0),
       table(scene.bsdfTables.size(), 0);
   for (int32_t i : instances) object[scene.instances[i].object] = 1;
+  // Every rank holds the media whole.
   MemoryCost cost = instanceCost(instances.size());
+  cost += mediaCost(scene);
   for (size_t o = 0; o < object.size(); ++o)
     if (object[o]) {
       for (int32_t m : scene.objects[o].meshes) mesh[m] = 1;
@@ -214,6 +217,8 @@ nlohmann::json SceneSummary::toJson() const {
                        {"indices", memory.indices},     {"texels", memory.texels},
                        {"instances", memory.instances}, {"accel", memory.accel},
                        {"shapes", memory.shapes}};
+  // (Only with media: older summaries, in checkpoints, have no such field.)
+  if (memory.media > 0) j["memory_bytes"]["media"] = memory.media;
   return j;
 }
 
@@ -260,6 +265,7 @@ std::string SceneSummary::toText() const {
   row("  indices", formatBytes(memory.indices));
   row("  texels", formatBytes(memory.texels));
   if (memory.shapes > 0) row("  shapes", formatBytes(memory.shapes));
+  if (memory.media > 0) row("  media (every rank)", formatBytes(memory.media));
   row("  instances", formatBytes(memory.instances));
   row("  acceleration", formatBytes(memory.accel));
   return out;

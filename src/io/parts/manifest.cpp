@@ -215,6 +215,8 @@ SceneSummary summaryFromJson(const nlohmann::json& j) {
     s.memory.texels = count(m, "texels");
     s.memory.instances = count(m, "instances");
     s.memory.accel = count(m, "accel");
+    if (m.contains("media")) s.memory.media = count(m, "media");
+    if (m.contains("shapes")) s.memory.shapes = count(m, "shapes");
   }
   return s;
 }

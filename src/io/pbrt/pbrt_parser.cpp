@@ -737,9 +737,8 @@ class Parser {
     if (type == "nanovdb") {
       const std::string file = p.getString("filename", "");
       if (file.empty()) fail(where, fmt::format("{} needs \"string filename\"", what));
-      if (!file.ends_with(".vdb"))
-        fail(where, fmt::format("{}: \"{}\": .nvdb files need NanoVDB, which Debian does not "
-                                "package; convert the grid to an OpenVDB .vdb file",
+      if (!file.ends_with(".vdb") && !file.ends_with(".nvdb"))
+        fail(where, fmt::format("{}: \"{}\": a NanoVDB (.nvdb) or OpenVDB (.vdb) file expected",
                                 what, file));
     }
     if (type != "homogeneous" && type != "heterogeneous" && type != "uniformgrid" &&
@@ -802,11 +801,13 @@ class Parser {
                                   what));
         m = cloudMedium(name, sigmaA, sigmaS, g, cloud, state_.ctm);
       } else if (type == "nanovdb") {
-        // The same grids as an OpenVDB file: "density", and "temperature" if there.
+        // Its grids, from a .nvdb file or the same as an OpenVDB file:
+        // "density", and "temperature" if there.
         const std::string path = resolve(p.getString("filename", ""), where, "volume file");
         VdbDensity vdb, kelvin;
         try {
-          std::tie(vdb, kelvin) = readVdbDensityAndTemperature(path);
+          std::tie(vdb, kelvin) = path.ends_with(".nvdb") ? readNanoVdbDensityAndTemperature(path)
+                                                          : readVdbDensityAndTemperature(path);
         } catch (const InputError& e) {
           fail(where, fmt::format("{}: {}", what, e.what()));
         }

@@ -22,6 +22,7 @@
 #include "material/models/diffuse_transmission.h"
 #include "material/models/fresnel_blend.h"
 #include "material/models/layered.h"
+#include "material/models/thin_dielectric.h"
 
 namespace ferry {
 namespace {
@@ -422,9 +423,9 @@ TEST_F(PbrtV4Features, Materials) {
   const auto* bk7 = modelAs<DielectricModel>(material(scene(), "bk7"));
   ASSERT_NE(bk7, nullptr);
   EXPECT_NEAR(bk7->ior, 1.5185f, 1e-3);
-  const auto* sheet = modelAs<DielectricModel>(material(scene(), "sheet"));
+  const auto* sheet = modelAs<ThinDielectricModel>(material(scene(), "sheet"));
   ASSERT_NE(sheet, nullptr);
-  EXPECT_NEAR(sheet->ior, 1.01f, 1e-6);
+  EXPECT_NEAR(sheet->ior, 1.5f, 1e-6);  // pbrt-v4's default eta
   EXPECT_EQ(material(scene(), "coated").baseColor, Vec3f(0.1f, 0.5f, 0.1f));
   const Material& copper = material(scene(), "car");
   ASSERT_NE(modelAs<LayeredModel>(copper), nullptr);
@@ -1491,7 +1492,7 @@ const std::vector<BadPbrt> kBadPbrt = {
     {"medium_negative_density.pbrt", "medium_negative_density.pbrt", 3, 3,
      "density sample 1 (x 1, y 0, z 0) is -1"},
     {"medium_undefined.pbrt", "medium_undefined.pbrt", 2, 1, "no medium named \"fog\""},
-    {"medium_nanovdb.pbrt", "medium_nanovdb.pbrt", 1, 1, ".nvdb files need NanoVDB"},
+    {"medium_nanovdb.pbrt", "medium_nanovdb.pbrt", 1, 1, "volume file \"cloud.nvdb\" not found"},
     {"medium_bad_g.pbrt", "medium_bad_g.pbrt", 2, 1, "\"g\" 1.5 must be in (-1, 1)"},
     {"medium_rgbgrid_count.pbrt", "medium_rgbgrid_count.pbrt", 3, 3,
      "3 values for 3 x nx * ny * nz = 2 x 1 x 1 = 6"},

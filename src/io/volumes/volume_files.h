@@ -66,6 +66,26 @@ void writeVdbFile(const std::string& path, const std::vector<VdbGridToWrite>& gr
 // unit of density and world length, g 0), framed and lit by default.
 Scene loadVdbScene(const std::string& path);
 
+// ------------------------------------------------------------------ NanoVDB
+
+// A .nvdb file's (pbrt-v4's nanovdb medium) float grids "density" (required)
+// and "temperature" (none if the file has none), read as readVdbDensity reads
+// a .vdb file's, with the same errors naming the file.
+std::pair<VdbDensity, VdbDensity> readNanoVdbDensityAndTemperature(
+    const std::string& path, uint64_t maxVoxels = kMaxVdbVoxels);
+// One float grid to write (tests): dims[0] x dims[1] x dims[2] values, x
+// fastest, the first at index `origin`, zeros left inactive.
+struct NanoVdbGridToWrite {
+  std::string name;
+  std::array<int, 3> dims{};
+  std::array<int, 3> origin{};
+  float voxelSize = 1;
+  std::vector<float> values;
+};
+void writeNanoVdbFile(const std::string& path, const std::vector<NanoVdbGridToWrite>& grids);
+// `ferry render cloud.nvdb`: as loadVdbScene.
+Scene loadNanoVdbScene(const std::string& path);
+
 // --------------------------------------------------------------- raw grids
 
 bool isRawVolumeSpec(const std::string& spec);  // starts with "raw:"

@@ -190,6 +190,51 @@ TEST(VdbFile, PbrtNanovdbMediaEmitByTheirTemperatureGrid) {
   EXPECT_NEAR(e.x / e.z, 1.1, 0.15) << e.x << " " << e.y << " " << e.z;
 }
 
+// A .nvdb file written by NanoVDB reads back voxel for voxel, over its
+// active box, each voxel a cell centred on its index; pbrt's nanovdb medium
+// and `ferry render x.nvdb` read it; a file without "density" names itself.
+TEST(NanoVdbFile, ReadsBackWhatWasWritten) {
+  const std::string path =
+      (fs::temp_directory_path() / ("ferry-nvdb-" + std::to_string(getpid()) + ".nvdb")).string();
+  NanoVdbGridToWrite density{"density", {4, 3, 2}, {10, -2, 5}, 0.5f, {}};
+  for (int i = 0; i < 24; ++i) density.values.push_back(float(i + 1) * 0.25f);
+  NanoVdbGridToWrite kelvin{"temperature", {2, 2, 2}, {0, 0, 0}, 0.5f, std::vector<float>(8, 3000)};
+  writeNanoVdbFile(path, {density, kelvin});
+  const auto [d, t] = readNanoVdbDensityAndTemperature(path);
+  ASSERT_TRUE(d.grid);
+  EXPECT_EQ(d.grid->nx(), 4);
+  EXPECT_EQ(d.grid->ny(), 3);
+  EXPECT_EQ(d.grid->nz(), 2);
+  EXPECT_EQ(d.grid->values(), density.values);
+  EXPECT_NEAR(d.box.lower.x, (10 - 0.5f) * 0.5f, 1e-5f);
+  EXPECT_NEAR(d.box.upper.y, (-2 + 3 - 0.5f) * 0.5f, 1e-5f);
+  EXPECT_NEAR(d.box.upper.z, (5 + 2 - 0.5f) * 0.5f, 1e-5f);
+  ASSERT_TRUE(t.grid);
+  EXPECT_EQ(t.grid->values(), kelvin.values);
+  const std::string text =
+      "MakeNamedMedium \"fire\" \"string type\" \"nanovdb\" "
+      "\"string filename\" \"" +
+      path + "\"\nWorldBegin\n";
+  const Scene s = loadPbrtFromString(text, "fire.pbrt", kCorpus.string());
+  ASSERT_EQ(s.media.size(), 1u);
+  EXPECT_EQ(s.media[0].density->values(), density.values);
+  EXPECT_TRUE(s.media[0].temperature);
+  const Scene rendered = loadScene(path);
+  ASSERT_EQ(rendered.media.size(), 1u);
+  writeNanoVdbFile(path, {kelvin});
+  try {
+    readNanoVdbDensityAndTemperature(path);
+    ADD_FAILURE() << "a file without a density grid was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("density"), std::string::npos) << e.what();
+  }
+  std::ofstream(path, std::ios::trunc) << "not a grid";
+  EXPECT_THROW(readNanoVdbDensityAndTemperature(path), InputError);
+  fs::remove(path);
+  EXPECT_THROW(readNanoVdbDensityAndTemperature(path), InputError);
+}
+
 class RawFile {
  public:
   explicit RawFile(const std::vector<unsigned char>& bytes)
