@@ -85,18 +85,32 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   // Light paths add to any pixel from any thread.
   if (shading_.lightPaths()) frameBuffer.setAtomicAdds(true);
   frameBuffer.setSampleClamp(settings_.sampleClamp);
+  const uint32_t spp = uint32_t(settings_.samplesPerPixel), groups = settings_.dataGroups;
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
-    if (sampleIndex % settings_.dataGroups != settings_.dataGroup) continue;  // another group's
+    uint32_t first = firstPixel, last = lastPixel;
+    if (groups > 1 && spp >= groups) {
+      if (sampleIndex % groups != settings_.dataGroup) continue;  // another group's
+    } else if (groups > 1) {
+      // Fewer samples a frame than groups: the groups g = s (mod spp) take
+      // sample s, each a slice of its pixels (every pixel sample once over
+      // the groups, and the frame buffers sum exactly: the same image).
+      const uint32_t slot = uint32_t(s), group = settings_.dataGroup;
+      if (group % spp != slot) continue;
+      const uint32_t takers = (groups - slot + spp - 1) / spp, j = group / spp;
+      const uint64_t n = lastPixel - firstPixel;
+      first = firstPixel + uint32_t(n * j / takers);
+      last = firstPixel + uint32_t(n * (j + 1) / takers);
+    }
     if (traversal_.runsSamples()) {
       // The traversal runs the sample (the overlapped distributed exchange):
       // it calls back for camera paths and shading as rays become ready.
       SampleStages stages(*this, sampleIndex, frameBuffer);
-      traversal_.runSample(sampleIndex, firstPixel, lastPixel, stages, stats);
+      traversal_.runSample(sampleIndex, first, last, stages, stats);
     } else if (!chunked()) {
       // Many ranks: the whole image in one wavefront (each bounce is a
       // collective exchange), every stage parallel inside the rank.
-      runWavefront(sampleIndex, firstPixel, lastPixel, workspace_, frameBuffer, stats);
+      runWavefront(sampleIndex, first, last, workspace_, frameBuffer, stats);
     } else {
       // One rank: chunks of pixels, each taken from camera ray to last bounce
       // by one thread, so that its queues (paths, kept hits, spawned rays:
@@ -107,15 +121,14 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
       // buffer in the same order: the image does not depend on the chunks.
       // (Stage times are then summed over the threads.)
       const uint32_t chunk = std::max(1u, settings_.chunkPixels);
-      const uint32_t chunks = (lastPixel - firstPixel + chunk - 1) / chunk;
+      const uint32_t chunks = (last - first + chunk - 1) / chunk;
       tbb::enumerable_thread_specific<FrameStats> chunkStats;
       tbb::parallel_for(tbb::blocked_range<uint32_t>(0, chunks, 1), [&](const auto& range) {
         for (uint32_t c = range.begin(); c != range.end(); ++c) {
           // Isolated: while its stages wait, this thread takes no other chunk,
           // which would reuse its workspace.
           tbb::this_task_arena::isolate([&] {
-            runWavefront(sampleIndex, firstPixel + c * chunk,
-                         std::min(lastPixel, firstPixel + (c + 1) * chunk),
+            runWavefront(sampleIndex, first + c * chunk, std::min(last, first + (c + 1) * chunk),
                          chunkWorkspaces_.local(), frameBuffer, chunkStats.local());
           });
         }

@@ -86,7 +86,8 @@ struct RenderSettings {
   uint32_t chunkPixels = 8192;
   ToneMapping toneMapping;
   // Data groups (the session sets them): this rank renders only the samples
-  // whose index modulo dataGroups is dataGroup; the groups' frame buffers
+  // whose index modulo dataGroups is dataGroup (with fewer samples a frame
+  // than groups, the groups that take a sample split its pixels); the groups' frame buffers
   // add up to the image.
   uint32_t dataGroups = 1;
   uint32_t dataGroup = 0;

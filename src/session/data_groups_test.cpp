@@ -1,5 +1,6 @@
 // Data groups (SessionSettings::dataGroups): the ranks split into groups
-// that each hold the whole scene and render every G-th sample; the image is
+// that each hold the whole scene and render every G-th sample (or, with fewer
+// samples a frame than groups, a slice of a sample's pixels); the image is
 // the one-rank image bit for bit, with surfaces and with volume bricks, on
 // both exchanges; a rank count the groups do not divide is refused.
 #include <gtest/gtest.h>
@@ -44,6 +45,33 @@ TEST(DataGroups, TheImageIsTheOneRankImage) {
     s.partitioner = &bestPartitioner();
     EXPECT_TRUE(render(scene, s, c.ranks) == one)
         << c.ranks << " ranks in " << c.groups << " groups";
+  }
+}
+
+// With fewer samples a frame than groups (the viewer's one sample a frame),
+// the groups that take a sample split its pixels: still the one-rank image,
+// and no group idles.
+TEST(DataGroups, FewerSamplesThanGroupsSplitThePixels) {
+  const Scene scene = loadScene("builtin:cornell");
+  for (int spp : {1, 2}) {
+    SessionSettings base = small();
+    base.render.samplesPerPixel = spp;
+    base.render.frames = 2;
+    const std::vector<Vec3f> one = render(scene, base, 1);
+    ASSERT_FALSE(one.empty());
+    struct Case {
+      int ranks, groups;
+      ExchangeMode exchange;
+    };
+    for (const Case& c : {Case{2, 2, ExchangeMode::Auto}, Case{4, 2, ExchangeMode::Bulk},
+                          Case{3, 3, ExchangeMode::Auto}, Case{8, 4, ExchangeMode::Auto}}) {
+      SessionSettings s = base;
+      s.dataGroups = c.groups;
+      s.exchange = c.exchange;
+      s.partitioner = &bestPartitioner();
+      EXPECT_TRUE(render(scene, s, c.ranks) == one)
+          << spp << " spp, " << c.ranks << " ranks in " << c.groups << " groups";
+    }
   }
 }
 
