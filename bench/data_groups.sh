@@ -8,8 +8,8 @@
 # (groups of one rank: image parallel, no forwards, every rank the whole
 # scene) is what time-slicing N processes on the cores costs by itself.
 # Configurations alternate over ROUNDS; a frame's time is the slowest rank's,
-# the median over frames and rounds. SPP is at least the largest group
-# count, so that every group has samples to render. With BASELINE=old/ferry
+# the median over frames and rounds. With fewer samples a frame than groups
+# (SPP=1: the viewer's frames) the groups split a sample's pixels. With BASELINE=old/ferry
 # the same configurations of another build run in the same rounds, and the
 # table gives this build's frame time against it.
 #
