@@ -76,21 +76,29 @@ struct Interface {
 
   bool smooth() const { return alpha < kSmoothAlpha; }
 
-  float f(Vec3f wo, Vec3f wi, bool radiance) const {
-    if (smooth()) return 0;
+  // The microfacet normal that takes wo to wi (the generalized half vector,
+  // towards +z) and the relative index along the way (1 for a reflection);
+  // false where none does (grazing, or a back-facing microfacet).
+  bool halfVector(Vec3f wo, Vec3f wi, Vec3f& m, float& etap) const {
     const float cosO = wo.z, cosI = wi.z;
-    if (cosO == 0 || cosI == 0) return 0;
-    const bool reflect = cosO * cosI > 0;
-    const float etap = reflect ? 1 : (cosO > 0 ? eta : 1 / eta);
-    Vec3f m = wi * etap + wo;
-    if (dot(m, m) == 0) return 0;
+    if (cosO == 0 || cosI == 0) return false;
+    etap = cosO * cosI > 0 ? 1 : (cosO > 0 ? eta : 1 / eta);
+    m = wi * etap + wo;
+    if (dot(m, m) == 0) return false;
     m = normalize(m);
     if (m.z < 0) m = -m;
-    if (dot(m, wi) * cosI < 0 || dot(m, wo) * cosO < 0) return 0;
+    return !(dot(m, wi) * cosI < 0 || dot(m, wo) * cosO < 0);
+  }
+
+  float f(Vec3f wo, Vec3f wi, bool radiance) const {
+    Vec3f m;
+    float etap;
+    if (smooth() || !halfVector(wo, wi, m, etap)) return 0;
     const float fr = fresnel(dot(wo, m), eta);
-    if (reflect) return ggxD(m, alpha) * ggxG2(wo, wi, alpha) * fr / std::abs(4 * cosI * cosO);
+    if (wo.z * wi.z > 0)
+      return ggxD(m, alpha) * ggxG2(wo, wi, alpha) * fr / std::abs(4 * wi.z * wo.z);
     const float s = dot(wi, m) + dot(wo, m) / etap;
-    const float denom = s * s * cosI * cosO;
+    const float denom = s * s * wi.z * wo.z;
     float ft = ggxD(m, alpha) * (1 - fr) * ggxG2(wo, wi, alpha) *
                std::abs(dot(wi, m) * dot(wo, m) / denom);
     if (radiance) ft /= etap * etap;
@@ -98,20 +106,14 @@ struct Interface {
   }
 
   float pdf(Vec3f wo, Vec3f wi, uint8_t sides) const {
-    if (smooth()) return 0;
-    const float cosO = wo.z, cosI = wi.z;
-    if (cosO == 0 || cosI == 0) return 0;
-    const bool reflect = cosO * cosI > 0;
-    const float etap = reflect ? 1 : (cosO > 0 ? eta : 1 / eta);
-    Vec3f m = wi * etap + wo;
-    if (dot(m, m) == 0) return 0;
-    m = normalize(m);
-    if (m.z < 0) m = -m;
-    if (dot(m, wi) * cosI < 0 || dot(m, wo) * cosO < 0) return 0;
+    Vec3f m;
+    float etap;
+    if (smooth() || !halfVector(wo, wi, m, etap)) return 0;
     const float r = fresnel(dot(wo, m), eta);
     const float pr = sides & kReflection ? r : 0, pt = sides & kTransmission ? 1 - r : 0;
     if (pr == 0 && pt == 0) return 0;
-    if (reflect) return visibleDensity(wo, m, alpha) / (4 * std::abs(dot(wo, m))) * pr / (pr + pt);
+    if (wo.z * wi.z > 0)
+      return visibleDensity(wo, m, alpha) / (4 * std::abs(dot(wo, m))) * pr / (pr + pt);
     const float s = dot(wi, m) + dot(wo, m) / etap;
     return visibleDensity(wo, m, alpha) * std::abs(dot(wi, m)) / (s * s) * pt / (pr + pt);
   }
