@@ -55,11 +55,7 @@ ScenePlan planVolume(int size, uint32_t seed) {
   SceneSummary::Medium summary;
   summary.name = "cloud";
   summary.kind = fmt::format("grid {}x{}x{}", size, size, size);
-  // As Medium::bytes() counts a grid medium: its density, and its majorant
-  // grid of one cell a voxel up to kMajorantCells a side.
-  const size_t cells = size_t(std::min(size, kMajorantCells));
-  summary.bytes = sizeof(Medium) + samples * sizeof(float) +
-                  cells * cells * cells * (sizeof(float) + sizeof(Vec3f));
+  summary.bytes = gridMediumBytes(size, size, size);
   summary.minDensity = 0;  // the plan's bounds; the grid made holds values within them
   summary.maxDensity = 1;
   summary.sigmaA = kSigmaA;

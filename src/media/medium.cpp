@@ -67,6 +67,14 @@ Affine3f unitFromBox(const Box3f& box) {
 
 }  // namespace
 
+namespace {
+
+size_t majorantBytes(size_t cx, size_t cy, size_t cz) {
+  return cx * cy * cz * (sizeof(float) + sizeof(Vec3f));
+}
+
+}  // namespace
+
 size_t Medium::bytes() const {
   size_t b = sizeof(Medium);
   if (density) b += density->bytes();
@@ -74,9 +82,16 @@ size_t Medium::bytes() const {
   if (emissionScale) b += emissionScale->bytes();
   if (temperature) b += temperature->kelvin->bytes() + temperature->table.size() * sizeof(Vec3f);
   if (majorants)
-    b += size_t(majorants->cells(0)) * size_t(majorants->cells(1)) * size_t(majorants->cells(2)) *
-         (sizeof(float) + sizeof(Vec3f));
+    b += majorantBytes(size_t(majorants->cells(0)), size_t(majorants->cells(1)),
+                       size_t(majorants->cells(2)));
   return b;
+}
+
+size_t gridMediumBytes(int nx, int ny, int nz) {
+  // The majorant grid: one cell a voxel, at most kMajorantCells a side.
+  auto cells = [](int n) { return size_t(std::clamp(n, 1, kMajorantCells)); };
+  return sizeof(Medium) + size_t(nx) * size_t(ny) * size_t(nz) * sizeof(float) +
+         majorantBytes(cells(nx), cells(ny), cells(nz));
 }
 
 Medium gridMedium(std::string name, Vec3f sigmaA, Vec3f sigmaS, float g,

@@ -127,6 +127,10 @@ struct Medium {
   size_t bytes() const;
 };
 
+// The bytes gridMedium's result holds for an nx x ny x nz density (its
+// Medium::bytes(), known before the grid is made).
+size_t gridMediumBytes(int nx, int ny, int nz);
+
 // A grid medium: the density over `box` (in the medium's space, which
 // `worldFromMedium` places; pbrt's p0 and p1 under the CTM at MakeNamedMedium).
 Medium gridMedium(std::string name, Vec3f sigmaA, Vec3f sigmaS, float g,
