@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "builtin/cornell.h"
+#include "builtin/fur.h"
 #include "builtin/furnace.h"
 #include "builtin/island.h"
 #include "builtin/landscape.h"
@@ -21,12 +22,13 @@ namespace {
 constexpr std::string_view kPrefix = "builtin:";
 constexpr const char* kAcceptedKeys =
     "scale (a positive number), seed (an integer 0..4294967295), size (builtin:volume: samples a "
-    "side)";
+    "side), strands (builtin:fur: hair strands)";
 
 struct BuiltinEntry {
   const char* name;
   builtin::ScenePlan (*plan)(const BuiltinParams& params);
-  bool hasSize = false;  // takes `size` (and not `scale`)
+  bool hasSize = false;     // takes `size` (and not `scale`)
+  bool hasStrands = false;  // takes `strands` (and not `scale`)
 };
 
 // The order is the order `builtinNames()` lists them in.
@@ -40,6 +42,11 @@ constexpr BuiltinEntry kBuiltins[] = {
        return builtin::planVolume(p.size.value_or(builtin::kDefaultVolumeSize), p.seed);
      },
      true},
+    {"fur",
+     [](const BuiltinParams& p) {
+       return builtin::planFur(p.strands.value_or(builtin::kDefaultFurStrands), p.seed);
+     },
+     false, true},
 };
 
 std::string namesList() {
@@ -66,6 +73,8 @@ builtin::ScenePlan planFor(const BuiltinParams& params) {
   checkScale(params.scale, what);
   if (params.size && !entry.hasSize)
     throw InputError(fmt::format("{} has no size (builtin:volume has; use scale)", what));
+  if (params.strands && !entry.hasStrands)
+    throw InputError(fmt::format("{} has no strands (builtin:fur has)", what));
   return entry.plan(params);
 }
 
@@ -132,6 +141,14 @@ BuiltinParams parseBuiltinSpec(const std::string& spec) {
         throw InputError(
             fmt::format("bad size '{}' in '{}': expected an integer 2..4096", value, spec));
       params.size = int(size);
+    } else if (key == "strands") {
+      uint64_t strands = 0;
+      const char* end = value.data() + value.size();
+      auto [ptr, ec] = std::from_chars(value.data(), end, strands);
+      if (value.empty() || ec != std::errc() || ptr != end || strands < 1 || strands > 100'000'000)
+        throw InputError(
+            fmt::format("bad strands '{}' in '{}': expected an integer 1..100000000", value, spec));
+      params.strands = strands;
     } else {
       throw InputError(
           fmt::format("unknown parameter '{}' in '{}' (accepted: {})", key, spec, kAcceptedKeys));

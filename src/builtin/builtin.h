@@ -17,10 +17,11 @@
 namespace ferry {
 
 struct BuiltinParams {
-  std::string name;    // "island", "landscape", "cornell", "furnace"
+  std::string name;    // "island", "landscape", "cornell", "furnace", "volume", "fur"
   double scale = 1.0;  // grows the scene; meaning per built-in (see its header)
   uint32_t seed = 1;
-  std::optional<int> size;  // builtin:volume: samples a side
+  std::optional<int> size;          // builtin:volume: samples a side
+  std::optional<uint64_t> strands;  // builtin:fur: hair strands
 };
 
 bool isBuiltinSpec(const std::string& spec);  // starts with "builtin:"

@@ -60,6 +60,19 @@ TEST(BuiltinSpec, ParsesNameScaleAndSeed) {
 
   p = parseBuiltinSpec("builtin:furnace?");
   EXPECT_EQ(p.name, "furnace");
+
+  p = parseBuiltinSpec("builtin:fur?strands=1000000");
+  EXPECT_EQ(p.strands, 1000000u);
+  expectThrowMessage("builtin:fur?strands=0");
+  expectThrowMessage("builtin:fur?strands=x");
+  EXPECT_THROW(describeBuiltin(parseBuiltinSpec("builtin:cornell?strands=5")), InputError);
+}
+
+TEST(BuiltinSpec, FurHasItsStrandsAsCurveSegments) {
+  const SceneSummary s = describeBuiltin(parseBuiltinSpec("builtin:fur?strands=1000000"));
+  EXPECT_EQ(s.geometries, 1u);
+  EXPECT_EQ(s.shapePrimitives, 4000000u);  // 4 segments a strand
+  EXPECT_EQ(s.memory.shapes, 4000000u * 64u);
 }
 
 TEST(BuiltinSpec, UnknownNameListsTheBuiltins) {
@@ -95,9 +108,9 @@ TEST(BuiltinSpec, RejectsBadSeeds) {
   expectThrowMessage("builtin:island?seed=1&seed=2");
 }
 
-TEST(BuiltinSpec, NamesAreTheFiveBuiltins) {
-  EXPECT_EQ(builtinNames(),
-            (std::vector<std::string>{"island", "landscape", "cornell", "furnace", "volume"}));
+TEST(BuiltinSpec, NamesAreTheSixBuiltins) {
+  EXPECT_EQ(builtinNames(), (std::vector<std::string>{"island", "landscape", "cornell", "furnace",
+                                                      "volume", "fur"}));
 }
 
 TEST(BuiltinSpec, GenerateRejectsBadParams) {
@@ -197,9 +210,11 @@ TEST_P(EveryBuiltin, EveryObjectIsInstancedAndNonEmpty) {
   std::vector<uint32_t> counts = scene.instanceCountPerObject();
   for (size_t o = 0; o < scene.objects.size(); ++o) {
     EXPECT_GE(counts[o], 1u) << scene.objects[o].name;
-    uint64_t triangles = 0;
-    for (int32_t m : scene.objects[o].meshes) triangles += scene.meshes[m].triangleCount();
-    EXPECT_GT(triangles, 0u) << scene.objects[o].name;
+    uint64_t primitives = 0;
+    for (int32_t m : scene.objects[o].meshes) primitives += scene.meshes[m].triangleCount();
+    for (int32_t g : scene.objects[o].geometries)
+      primitives += scene.geometries[g].shape->primitiveCount();
+    EXPECT_GT(primitives, 0u) << scene.objects[o].name;
   }
 }
 
@@ -208,7 +223,8 @@ INSTANTIATE_TEST_SUITE_P(Builtin, EveryBuiltin,
                                            "builtin:landscape",
                                            "builtin:landscape?scale=0.2&seed=5", "builtin:cornell",
                                            "builtin:cornell?scale=3", "builtin:furnace",
-                                           "builtin:furnace?scale=0.3"),
+                                           "builtin:furnace?scale=0.3",
+                                           "builtin:fur?strands=300&seed=2"),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string name = info.param.substr(8);
                            for (char& c : name)

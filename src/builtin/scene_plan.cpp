@@ -88,10 +88,16 @@ SceneSummary describePlan(const ScenePlan& plan) {
       s.emissiveTriangles += m.counts.triangles;
     }
   }
-  s.objects = plan.objects.size();
+  s.objects = plan.objects.size() + plan.shapes.size();
   for (const InstanceBatch& b : plan.batches) {
     s.instances += b.count;
     s.instancedTriangles += b.count * plan.objectCounts(b.object).triangles;
+  }
+  s.instances += plan.shapes.size();
+  for (const ShapeRecipe& r : plan.shapes) {
+    ++s.geometries;
+    s.shapePrimitives += r.primitives;
+    s.memory += shapeCost(r.primitives, r.bytes);
   }
   s.memory += instanceCost(s.instances);
   s.textures = plan.textures.size();
@@ -175,6 +181,17 @@ Scene materializePlan(const ScenePlan& plan, std::shared_ptr<MeshStore> store) {
                           scene.instances[offset + i] = {b.object, b.transform(i)};
                       });
     offset += b.count;
+  }
+
+  for (const ShapeRecipe& r : plan.shapes) {
+    std::shared_ptr<const Shape> shape = r.build();
+    if (!shape || shape->primitiveCount() != r.primitives || shape->bytes() != r.bytes)
+      throw InternalError(
+          fmt::format("shape '{}' came out with {} primitives / {} bytes, planned "
+                      "{} / {}",
+                      r.name, shape ? shape->primitiveCount() : 0, shape ? shape->bytes() : 0,
+                      r.primitives, r.bytes));
+    scene.addSingleInstanceGeometry({r.name, r.material, std::move(shape)});
   }
 
   scene.suns = plan.suns;

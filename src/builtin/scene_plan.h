@@ -43,6 +43,17 @@ struct ObjectRecipe {
   std::vector<int32_t> meshes;
 };
 
+// A geometry of another kind than a triangle mesh (scene/shape.h), its own
+// object placed once with the identity transform. `build` must make a shape
+// of exactly `primitives` primitives and `bytes` bytes (Shape::bytes()).
+struct ShapeRecipe {
+  std::string name;
+  int32_t material = 0;
+  uint64_t primitives = 0;
+  uint64_t bytes = 0;
+  std::function<std::shared_ptr<const Shape>()> build;
+};
+
 // `count` instances of one object; `transform(i)` places instance i and must
 // be a pure function of i, so instances can be made in any order or in parallel.
 struct InstanceBatch {
@@ -58,6 +69,7 @@ struct ScenePlan {
   std::vector<MeshRecipe> meshes;
   std::vector<ObjectRecipe> objects;
   std::vector<InstanceBatch> batches;
+  std::vector<ShapeRecipe> shapes;  // after the objects and instances above
   std::vector<SunLight> suns;
   Vec3f environmentColor{0, 0, 0};
   std::function<std::shared_ptr<const HdrImage>()> environmentImage;  // optional

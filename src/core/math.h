@@ -308,6 +308,15 @@ struct Frame {
     s = {1 + sign * n.x * n.x * a, sign * b, -sign * n.x};
     t = {b, sign + n.y * n.y * a, -n.y};
   }
+  // About `normal` with s along `tangent` made perpendicular to it (any
+  // perpendicular when the tangent is parallel to the normal or zero).
+  Frame(Vec3f normal, Vec3f tangent) : Frame(normal) {
+    const Vec3f along = tangent - n * dot(n, tangent);
+    const float len = std::sqrt(dot(along, along));
+    if (!(len > 1e-12f) || !std::isfinite(len)) return;
+    s = along * (1 / len);
+    t = cross(n, s);
+  }
   [[gnu::always_inline]] Vec3f toLocal(Vec3f v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
   [[gnu::always_inline]] Vec3f toWorld(Vec3f v) const { return s * v.x + t * v.y + n * v.z; }
 };

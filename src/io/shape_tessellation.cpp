@@ -37,11 +37,6 @@ void gridTriangles(Mesh& m, int rows, int cols, int32_t first = 0) {
     }
 }
 
-Vec3f anyPerpendicular(Vec3f t) {
-  Vec3f axis = std::abs(t.x) < 0.9f ? Vec3f(1, 0, 0) : Vec3f(0, 1, 0);
-  return normalize(cross(t, axis));
-}
-
 }  // namespace
 
 Mesh tessellateSphere(float radius, float zMin, float zMax, float phiMaxDegrees, int segments) {
@@ -435,29 +430,30 @@ int curveSegmentCount(const CurveDescription& c) {
   return segments;
 }
 
-void appendCurve(const CurveDescription& c, Mesh& mesh) {
-  const int segments = curveSegmentCount(c);
+void appendCurveSegments(const CurveDescription& c, std::vector<CurveSegment>& segments,
+                         std::vector<CurveNormals>& normals) {
+  const int count = curveSegmentCount(c);
   for (const Vec3f& p : c.points)
     if (!isFinite(p)) throw InputError("curve control point is not finite");
   if (!std::isfinite(c.width0) || !std::isfinite(c.width1) || c.width0 < 0 || c.width1 < 0)
     throw InputError("curve width must be finite and not negative");
-  if (c.type == CurveType::Ribbon && c.normals.size() != size_t(segments) + 1)
+  if (c.type == CurveType::Ribbon && c.normals.size() != size_t(count) + 1)
     throw InputError(fmt::format("a ribbon curve with {} segments needs {} normals, found {}",
-                                 segments, segments + 1, c.normals.size()));
-  const int pieces = std::max(1, c.linearPerSegment);
-
-  // Bezier control points of each segment.
-  auto bezierOf = [&](int s, Vec3f out[4]) {
+                                 count, count + 1, c.normals.size()));
+  if (c.splitDepth < 0 || c.splitDepth > 10)
+    throw InputError(fmt::format("curve splitdepth {} is not in [0, 10]", c.splitDepth));
+  for (int s = 0; s < count; ++s) {
     const Vec3f* p =
         c.basis == CurveBasis::Bezier ? &c.points[size_t(s * c.degree)] : &c.points[size_t(s)];
+    std::array<Vec3f, 4> b;
     if (c.degree == 3) {
       if (c.basis == CurveBasis::Bezier) {
-        for (int k = 0; k < 4; ++k) out[k] = p[k];
+        for (int k = 0; k < 4; ++k) b[k] = p[k];
       } else {
-        out[0] = (p[0] + p[1] * 4.0f + p[2]) * (1.0f / 6.0f);
-        out[1] = (p[1] * 2.0f + p[2]) * (1.0f / 3.0f);
-        out[2] = (p[1] + p[2] * 2.0f) * (1.0f / 3.0f);
-        out[3] = (p[1] + p[2] * 4.0f + p[3]) * (1.0f / 6.0f);
+        b[0] = (p[0] + p[1] * 4.0f + p[2]) * (1.0f / 6.0f);
+        b[1] = (p[1] * 2.0f + p[2]) * (1.0f / 3.0f);
+        b[2] = (p[1] + p[2] * 2.0f) * (1.0f / 3.0f);
+        b[3] = (p[1] + p[2] * 4.0f + p[3]) * (1.0f / 6.0f);
       }
     } else {
       Vec3f q0, q1, q2;
@@ -467,93 +463,22 @@ void appendCurve(const CurveDescription& c, Mesh& mesh) {
         q0 = (p[0] + p[1]) * 0.5f, q1 = p[1], q2 = (p[1] + p[2]) * 0.5f;
       }
       // Degree elevation to a cubic.
-      out[0] = q0;
-      out[1] = q0 * (1.0f / 3.0f) + q1 * (2.0f / 3.0f);
-      out[2] = q1 * (2.0f / 3.0f) + q2 * (1.0f / 3.0f);
-      out[3] = q2;
+      b = {q0, q0 * (1.0f / 3.0f) + q1 * (2.0f / 3.0f), q1 * (2.0f / 3.0f) + q2 * (1.0f / 3.0f),
+           q2};
     }
-  };
-
-  struct Sample {
-    Vec3f p, tangent, normal;
-    float width;
-  };
-  std::vector<Sample> samples;
-  samples.reserve(size_t(segments * pieces + 1));
-  for (int s = 0; s < segments; ++s) {
-    Vec3f b[4];
-    bezierOf(s, b);
-    for (int k = (s == 0 ? 0 : 1); k <= pieces; ++k) {
-      float t = float(k) / pieces, u = 1 - t;
-      Vec3f p =
-          b[0] * (u * u * u) + b[1] * (3 * u * u * t) + b[2] * (3 * u * t * t) + b[3] * (t * t * t);
-      Vec3f d =
-          (b[1] - b[0]) * (3 * u * u) + (b[2] - b[1]) * (6 * u * t) + (b[3] - b[2]) * (3 * t * t);
-      if (!(length(d) > 0)) d = b[3] - b[0];
-      float global = (float(s) + t) / float(segments);
-      Vec3f n(0);
-      if (c.type == CurveType::Ribbon) {
-        Vec3f n0 = c.normals[size_t(s)], n1 = c.normals[size_t(s + 1)];
-        n = n0 * (1 - t) + n1 * t;
-      }
-      samples.push_back({p, d, n, c.width0 * (1 - global) + c.width1 * global});
-    }
-  }
-  // Tangents of zero length (coincident points) borrow a neighbour's.
-  for (size_t i = 0; i < samples.size(); ++i) {
-    if (length(samples[i].tangent) > 0) {
-      samples[i].tangent = normalize(samples[i].tangent);
+    // pbrt: each segment its own curve, with the widths where it lies.
+    const float t0 = float(s) / float(count), t1 = float(s + 1) / float(count);
+    const float w0 = c.width0 * (1 - t0) + c.width1 * t0;
+    const float w1 = c.width0 * (1 - t1) + c.width1 * t1;
+    if (c.type == CurveType::Ribbon) {
+      const CurveNormals n{c.normals[size_t(s)], c.normals[size_t(s + 1)]};
+      if (!(length(n[0]) > 0) || !(length(n[1]) > 0) || !isFinite(n[0]) || !isFinite(n[1]))
+        throw InputError("a ribbon curve's normal is zero or not finite");
+      appendCurveSegments(b, w0, w1, &n, c.splitDepth, segments, &normals);
     } else {
-      Vec3f d = i + 1 < samples.size() ? samples[i + 1].p - samples[i].p
-                                       : (i > 0 ? samples[i].p - samples[i - 1].p : Vec3f(0, 0, 1));
-      samples[i].tangent = length(d) > 0 ? normalize(d) : Vec3f(0, 0, 1);
+      appendCurveSegments(b, w0, w1, nullptr, c.splitDepth, segments, nullptr);
     }
   }
-
-  const int32_t first = int32_t(mesh.positions.size());
-  if (c.type == CurveType::Ribbon) {
-    for (const Sample& s : samples) {
-      Vec3f n = length(s.normal) > 0 ? normalize(s.normal) : anyPerpendicular(s.tangent);
-      Vec3f side = cross(n, s.tangent);
-      side = length(side) > 0 ? normalize(side) : anyPerpendicular(s.tangent);
-      n = normalize(cross(s.tangent, side));
-      for (int k = 0; k < 2; ++k) {
-        mesh.positions.push_back(s.p + side * (k == 0 ? -0.5f : 0.5f) * s.width);
-        mesh.normals.push_back(n);
-      }
-    }
-    for (size_t i = 0; i + 1 < samples.size(); ++i) {
-      int32_t a = first + int32_t(2 * i), b = a + 1, d = a + 2, e = a + 3;
-      mesh.indices.push_back({a, b, e});
-      mesh.indices.push_back({a, e, d});
-    }
-    return;
-  }
-  // A three-sided tube; its projected width ranges over 1.5 to 1.73 times
-  // the circumradius, so R = 0.6 w matches the curve's width on average.
-  constexpr int kSides = 3;
-  Vec3f frame = anyPerpendicular(samples[0].tangent);
-  for (const Sample& s : samples) {
-    // Parallel transport keeps the tube from twisting.
-    Vec3f projected = frame - s.tangent * dot(frame, s.tangent);
-    frame = length(projected) > 1e-6f ? normalize(projected) : anyPerpendicular(s.tangent);
-    Vec3f other = cross(s.tangent, frame);
-    float radius = 0.6f * s.width;
-    for (int k = 0; k < kSides; ++k) {
-      float a = 2 * kPi * float(k) / kSides;
-      Vec3f dir = frame * std::cos(a) + other * std::sin(a);
-      mesh.positions.push_back(s.p + dir * radius);
-      mesh.normals.push_back(dir);
-    }
-  }
-  for (size_t i = 0; i + 1 < samples.size(); ++i)
-    for (int k = 0; k < kSides; ++k) {
-      int32_t a = first + int32_t(i * kSides + k),
-              b = first + int32_t(i * kSides + (k + 1) % kSides);
-      int32_t d = a + kSides, e = b + kSides;
-      mesh.indices.push_back({a, b, e});
-      mesh.indices.push_back({a, e, d});
-    }
 }
 
 void computeVertexNormals(Mesh& m) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "scene/scene.h"
+#include "shapes/curves.h"
 
 namespace ferry {
 
@@ -54,14 +55,12 @@ Mesh tessellateBilinearPatches(const std::vector<Vec3f>& positions,
 Mesh loopSubdivide(const std::vector<Vec3f>& positions, const std::vector<Vec3i>& triangles,
                    int levels, uint64_t maxTriangles = uint64_t(1) << 26);
 
-// pbrt's curves: cubic or quadratic, Bezier or uniform B-spline control
-// points. Each curve segment becomes `linearPerSegment` straight pieces (3,
-// as the paper did for the island). Flat and cylinder curves become open
-// three-sided tubes whose width matches the curve's on average (pbrt turns
-// flat curves towards each ray; triangles cannot); ribbons become strips
-// turned by the given normals (one per segment end).
+// pbrt's curves: cubic or quadratic, Bézier or uniform B-spline control
+// points, as cubic Bézier segments (shapes/curves.h): each segment of the
+// curve is cut into 2^splitDepth pieces as pbrt cuts it, with the curve's
+// widths interpolated along it and, for ribbons, the normals given at its
+// ends (one per segment end).
 enum class CurveBasis { Bezier, BSpline };
-enum class CurveType { Flat, Cylinder, Ribbon };
 struct CurveDescription {
   std::vector<Vec3f> points;
   int degree = 3;
@@ -69,11 +68,12 @@ struct CurveDescription {
   CurveType type = CurveType::Flat;
   float width0 = 1, width1 = 1;
   std::vector<Vec3f> normals;  // ribbons only: segments + 1
-  int linearPerSegment = 3;
+  int splitDepth = 3;          // pbrt's default
 };
-// Appends the curve to `mesh` (many curves share a mesh: one Embree geometry
-// per curve would cost far more than the curve).
-void appendCurve(const CurveDescription& curve, Mesh& mesh);
+// Appends the curve's pieces; InputError if its points, widths or normals
+// are not usable. `normals` receives a ribbon's normal pairs.
+void appendCurveSegments(const CurveDescription& curve, std::vector<CurveSegment>& segments,
+                         std::vector<CurveNormals>& normals);
 // Segments the control points make; InputError if the count does not fit the basis and degree.
 int curveSegmentCount(const CurveDescription& curve);
 

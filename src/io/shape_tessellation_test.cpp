@@ -86,18 +86,26 @@ TEST(ShapeTessellation, BilinearPatches) {
   EXPECT_THROW(tessellateBilinearPatches(flat, {0, 1, 2, 7}, {}, {}), InputError);
 }
 
-TEST(ShapeTessellation, CurvesBecomeTubesAndRibbons) {
+TEST(ShapeTessellation, CurvesBecomePbrtsBezierPieces) {
   CurveDescription c;
   c.points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
-  c.width0 = c.width1 = 0.1f;
-  Mesh tube;
-  appendCurve(c, tube);
-  EXPECT_EQ(tube.triangleCount(), 3u * 6u);  // 3 pieces, 3 sides, 2 triangles each
-  EXPECT_EQ(tube.vertexCount(), 4u * 3u);
-  for (const Vec3f& p : tube.positions) EXPECT_NEAR(std::hypot(p.y, p.z), 0.06f, 1e-5);
-  // A second curve appends to the same mesh.
-  appendCurve(c, tube);
-  EXPECT_EQ(tube.triangleCount(), 36u);
+  c.width0 = 0.1f;
+  c.width1 = 0.3f;
+  std::vector<CurveSegment> segments;
+  std::vector<CurveNormals> normals;
+  appendCurveSegments(c, segments, normals);
+  ASSERT_EQ(segments.size(), 8u);  // pbrt's splitdepth 3
+  EXPECT_TRUE(normals.empty());
+  // The pieces join end to end; the widths are interpolated along the curve.
+  for (size_t k = 0; k < segments.size(); ++k) {
+    EXPECT_NEAR(segments[k].points[0].x, 3.0f * float(k) / 8, 1e-5);
+    EXPECT_NEAR(segments[k].points[3].x, 3.0f * float(k + 1) / 8, 1e-5);
+    EXPECT_NEAR(segments[k].width0, 0.1f + 0.2f * float(k) / 8, 1e-6);
+    EXPECT_FLOAT_EQ(segments[k].u0, float(k) / 8);
+  }
+  // A second curve appends.
+  appendCurveSegments(c, segments, normals);
+  EXPECT_EQ(segments.size(), 16u);
 
   CurveDescription spline = c;
   spline.basis = CurveBasis::BSpline;
@@ -105,16 +113,17 @@ TEST(ShapeTessellation, CurvesBecomeTubesAndRibbons) {
   EXPECT_EQ(curveSegmentCount(spline), 2);
   CurveDescription ribbon = c;
   ribbon.type = CurveType::Ribbon;
-  ribbon.normals = {{0, 0, 1}, {0, 0, 1}};
-  Mesh r;
-  appendCurve(ribbon, r);
-  EXPECT_EQ(r.triangleCount(), 6u);
-  EXPECT_NEAR(meshArea(r), 3 * 0.1f, 1e-5);
+  ribbon.splitDepth = 0;
+  ribbon.normals = {{0, 0, 1}, {0, 1, 0}};
+  std::vector<CurveSegment> r;
+  appendCurveSegments(ribbon, r, normals);
+  ASSERT_EQ(r.size(), 1u);
+  ASSERT_EQ(normals.size(), 1u);
+  EXPECT_EQ(normals[0][1], Vec3f(0, 1, 0));
   ribbon.normals.pop_back();
-  Mesh bad;
-  EXPECT_THROW(appendCurve(ribbon, bad), InputError);
+  EXPECT_THROW(appendCurveSegments(ribbon, r, normals), InputError);
   c.points.pop_back();
-  EXPECT_THROW(appendCurve(c, bad), InputError);
+  EXPECT_THROW(appendCurveSegments(c, r, normals), InputError);
   c.degree = 5;
   EXPECT_THROW(curveSegmentCount(c), InputError);
 }

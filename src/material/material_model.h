@@ -64,6 +64,11 @@ class MaterialModel {
   // The Bsdf at a shading point whose colour (the material's base colour
   // times its texture there) is `color`.
   virtual Bsdf bsdf(Vec3f color, const MaterialResources& resources) const = 0;
+  // The same at surface coordinates `uv` (the hit's: a fibre's v runs across
+  // it), for models that read where on the surface they are.
+  virtual Bsdf bsdfAt(Vec3f color, Vec2f /*uv*/, const MaterialResources& resources) const {
+    return bsdf(color, resources);
+  }
   // The tabulated BSDF it reads (MaterialResources::bsdfTables), if any.
   virtual int32_t bsdfTable() const { return kNoBsdfTable; }
   virtual void write(MaterialRecordWriter& record) const = 0;

@@ -10,6 +10,7 @@
 #include "material/models/diffuse_transmission.h"
 #include "material/models/fourier.h"
 #include "material/models/fresnel_blend.h"
+#include "material/models/hair.h"
 #include "material/models/layered.h"
 #include "material/models/thin_dielectric.h"
 
@@ -42,6 +43,7 @@ Registry<MaterialModelKind>& registry() {
            FresnelBlendModel::read},
           {"diffuse-transmission", "a thin diffuse sheet (pbrt's translucent, diffusetransmission)",
            DiffuseTransmissionModel::read},
+          {"hair", "a fibre: Chiang et al.'s R, TT, TRT lobes (pbrt's hair)", HairModel::read},
           {"fourier", "a tabulated BSDF, pbrt-v3's fourier material (.bsdf files)",
            FourierModel::read},
       });

@@ -287,7 +287,7 @@ template <typename Path>
                     path.origin,
                     path.bsdfPdf(),
                     path.lightRatio,
-                    reconstructSurface(scene_, surfaces_, hit)};
+                    reconstructSurface(scene_, surfaces_, hit, path.dir())};
 }
 
 // Emission counts in full after a delta vertex, and MIS-weighted against the
@@ -345,7 +345,7 @@ Bsdf PathShading<Path>::mixedBsdf(const SurfacePoint& surface, float u,
                           ? surface.baseColor
                           : materialBaseColor(scene_, *material, surface.uv, surface.position);
   chosen = material;
-  return material->model->bsdf(color, scene_.materialResources());
+  return material->model->bsdfAt(color, surface.uv, scene_.materialResources());
 }
 
 template <typename Path>
@@ -355,9 +355,10 @@ template <typename Path>
                             sampler_);
   const SurfacePoint& surface = vertex.surface;
   const Material* chosen = surface.material;
-  const Bsdf bsdf = chosen->mixedWith < 0
-                        ? chosen->model->bsdf(surface.baseColor, scene_.materialResources())
-                        : mixedBsdf(surface, random(RandomDim::MaterialSelect), chosen);
+  const Bsdf bsdf =
+      chosen->mixedWith < 0
+          ? chosen->model->bsdfAt(surface.baseColor, surface.uv, scene_.materialResources())
+          : mixedBsdf(surface, random(RandomDim::MaterialSelect), chosen);
   Vec3f ng = surface.geometricNormal, ns = surface.shadingNormal;
   // The mix picked another material: the normal is bent by its map (or by
   // none), not by the first material's.
@@ -380,9 +381,14 @@ template <typename Path>
       ns = normalize(ns + ng * ((kMinShadingCosine - facing) / geometric));
     }
   }
-  const Frame frame(ns);
-  return VertexScattering{
-      bsdf, ng, frame, frame.toLocal(vertex.wo), random, offsetRayOrigin(surface.position, ng)};
+  const Frame frame = surface.hasTangent ? Frame(ns, surface.dpdu) : Frame(ns);
+  return VertexScattering{bsdf,
+                          ng,
+                          frame,
+                          frame.toLocal(vertex.wo),
+                          random,
+                          offsetRayOrigin(surface.position + ng * surface.originOffset, ng),
+                          surface.originOffset};
 }
 
 // The continuation is written in place (no copy of a half-written path

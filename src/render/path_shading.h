@@ -62,10 +62,11 @@ struct VertexScattering {
   Frame frame;          // about the shading normal, turned with ng
   Vec3f woLocal;        // wo in `frame`
   RandomStream random;  // this vertex's numbers: (pixel, sample, bounce, seed)
-  Vec3f originAbove;    // offsetRayOrigin(position, ng): where rays leaving on ng's side start
+  Vec3f originAbove;    // where rays leaving on ng's side start (offsetRayOrigin)
+  float originOffset;   // SurfacePoint::originOffset
   // Where a ray leaving in direction `d` starts: off the surface on d's side of ng.
   Vec3f originTowards(Vec3f position, Vec3f d) const {
-    return dot(d, ng) > 0 ? originAbove : offsetRayOrigin(position, -ng);
+    return dot(d, ng) > 0 ? originAbove : offsetRayOrigin(position - ng * originOffset, -ng);
   }
 };
 

@@ -91,8 +91,10 @@ Vec3f bentNormal(const Scene& scene, const Material& material, const SurfacePoin
 }
 
 SurfacePoint shapeSurfaceAt(const Scene& scene, const Affine3f& transform, const Affine3f& inv,
-                            const Shape& shape, const Material& material, const TraceHit& hit) {
-  const ShapeSurface local = shape.surface(hit.primitive, {hit.u, hit.v});
+                            const Shape& shape, const Material& material, const TraceHit& hit,
+                            Vec3f direction) {
+  const ShapeSurface local =
+      shape.surface(hit.primitive, {hit.u, hit.v}, inv.transformVector(direction));
   SurfacePoint s;
   s.position = transform.transformPoint(local.position);
   const Vec3f ng = normalize(transformNormalByInverse(inv, local.geometricNormal));
@@ -104,6 +106,12 @@ SurfacePoint shapeSurfaceAt(const Scene& scene, const Affine3f& transform, const
   s.uv = local.uv;
   s.material = &material;
   s.baseColor = materialBaseColor(scene, material, s.uv, s.position);
+  if (local.tangent.x != 0 || local.tangent.y != 0 || local.tangent.z != 0) {
+    s.hasTangent = true;
+    s.dpdu = transform.transformVector(local.tangent);
+  }
+  if (local.originOffset > 0)
+    s.originOffset = local.originOffset * length(transform.transformVector(local.geometricNormal));
   return s;
 }
 

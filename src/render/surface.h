@@ -25,6 +25,12 @@ struct SurfacePoint {
   // dp/dv, so that the material the mix picks bends the normal by its own
   // map (bentNormal); hasDerivatives false otherwise.
   bool hasDerivatives = false;
+  // On a fibre (a curve): dpdu holds its tangent, and shading turns its
+  // frame about the normal to follow it (hair models read it).
+  bool hasTangent = false;
+  // How far beyond offsetRayOrigin's few ulps rays leaving here start, along
+  // the normal (ShapeSurface::originOffset, world units); 0 on triangles.
+  float originOffset = 0;
   Vec3f smoothNormal, dpdu, dpdv;
 };
 
@@ -33,8 +39,11 @@ struct SurfacePoint {
 // (Inline, as offsetRayOrigin: both run at every path vertex, and inlined
 // the compiler interleaves their loads and square roots with the shading
 // around them.)
+// `direction`: the world-space direction of the ray that hit (a shape that
+// faces the ray reads it; zero: none known).
 SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
-                                const std::vector<Affine3f>* inverses = nullptr);
+                                const std::vector<Affine3f>* inverses = nullptr,
+                                Vec3f direction = Vec3f(0));
 std::vector<Affine3f> instanceInverses(const Scene& scene);
 
 // What reconstructSurface reads for a hit, gathered once per render (the
@@ -57,7 +66,8 @@ struct SurfaceTable {
   std::vector<MeshArrays> meshes;
   explicit SurfaceTable(const Scene& scene);
 };
-SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table, const TraceHit& hit);
+SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table, const TraceHit& hit,
+                                Vec3f direction = Vec3f(0));
 
 // A material's base colour at a shading point: its colour times its
 // texture there (an image at uv, a solid texture at p).
@@ -90,7 +100,8 @@ Vec3f bentNormal(const Scene& scene, const Material& material, const SurfacePoin
 // whose material has no bump or normal map (Scene::validate). Out of line:
 // triangles are the common case.
 SurfacePoint shapeSurfaceAt(const Scene& scene, const Affine3f& transform, const Affine3f& inv,
-                            const Shape& shape, const Material& material, const TraceHit& hit);
+                            const Shape& shape, const Material& material, const TraceHit& hit,
+                            Vec3f direction);
 
 // The hit triangle's corners in world space, each as Affine3f::transformPoint
 // places it (what the light sampler keys emitters by: LightSampler::emitterIndex).
@@ -112,11 +123,12 @@ inline Vec3f transformNormalByInverse(const Affine3f& inv, Vec3f n) {
 
 // The one computation behind both reconstructSurface overloads.
 inline SurfacePoint surfaceAt(const Scene& scene, const Affine3f& transform, const Affine3f& inv,
-                              const SurfaceTable::MeshArrays& mesh, const TraceHit& hit) {
+                              const SurfaceTable::MeshArrays& mesh, const TraceHit& hit,
+                              Vec3f direction) {
   // Every return returns `s`, so it is built in the caller's slot, not copied.
   SurfacePoint s;
   if (mesh.shape) [[unlikely]] {
-    s = shapeSurfaceAt(scene, transform, inv, *mesh.shape, *mesh.material, hit);
+    s = shapeSurfaceAt(scene, transform, inv, *mesh.shape, *mesh.material, hit, direction);
     return s;
   }
   const Vec3i& tri = mesh.indices[hit.primitive];
@@ -164,7 +176,7 @@ inline SurfaceTable::MeshArrays geometryArrays(const Scene& scene, const Geometr
 }
 
 inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
-                                       const std::vector<Affine3f>* inverses) {
+                                       const std::vector<Affine3f>* inverses, Vec3f direction) {
   const Instance& inst = scene.instances[hit.instance];
   const Affine3f inv = inverses ? (*inverses)[hit.instance] : inst.transform.inverse();
   const Object& object = scene.objects[inst.object];
@@ -173,13 +185,14 @@ inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
       slot < object.meshes.size()
           ? meshArrays(scene, scene.meshes[object.meshes[slot]])
           : geometryArrays(scene, scene.geometries[object.geometries[slot - object.meshes.size()]]);
-  return surfaceAt(scene, inst.transform, inv, arrays, hit);
+  return surfaceAt(scene, inst.transform, inv, arrays, hit, direction);
 }
 
 inline SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table,
-                                       const TraceHit& hit) {
+                                       const TraceHit& hit, Vec3f direction) {
   return surfaceAt(scene, scene.instances[hit.instance].transform, table.inverses[hit.instance],
-                   table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)], hit);
+                   table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)], hit,
+                   direction);
 }
 
 inline std::array<Vec3f, 3> worldCorners(const Scene& scene, const SurfaceTable& table,

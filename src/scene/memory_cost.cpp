@@ -77,11 +77,14 @@ MemoryCost instanceCost(uint64_t instanceCount) {
 }
 
 MemoryCost geometryCost(const Geometry& geometry) {
+  if (!geometry.shape) return {};
+  return shapeCost(geometry.shape->primitiveCount(), geometry.shape->bytes());
+}
+
+MemoryCost shapeCost(uint64_t primitives, uint64_t bytes) {
   MemoryCost c;
-  if (!geometry.shape) return c;
-  c.shapes = geometry.shape->bytes();
-  c.accel = static_cast<uint64_t>(double(geometry.shape->primitiveCount()) *
-                                      MemoryModel::kAccelBytesPerTriangle +
+  c.shapes = bytes;
+  c.accel = static_cast<uint64_t>(double(primitives) * MemoryModel::kAccelBytesPerTriangle +
                                   MemoryModel::kAccelBytesPerMesh);
   return c;
 }

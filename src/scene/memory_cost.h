@@ -66,6 +66,8 @@ MemoryCost instanceCost(uint64_t instanceCount);
 // triangles, per primitive (not calibrated: Embree builds it over the
 // primitives' boxes). A released one costs nothing.
 MemoryCost geometryCost(const Geometry& geometry);
+// A geometry of `primitives` primitives whose shape holds `bytes` (with its BVH).
+MemoryCost shapeCost(uint64_t primitives, uint64_t bytes);
 // The scene's media and medium boundaries (the boundaries' triangles as a
 // mesh's, with their BVH).
 struct Scene;

@@ -1,5 +1,5 @@
-// A kind of geometry other than a triangle mesh (spheres; curves could
-// follow): what the scene holds (Scene::geometries), the partitioners weigh
+// A kind of geometry other than a triangle mesh (spheres, curves, volume
+// bricks): what the scene holds (Scene::geometries), the partitioners weigh
 // and place, the proxies bound, a TraceBackend intersects, shading rebuilds
 // and part files store. Triangle meshes stay Scene::meshes, the kind every
 // stage is tuned for. Each kind registers a reader by its name
@@ -8,6 +8,8 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -35,6 +37,10 @@ struct ShapeSurface {
   Vec3f geometricNormal;  // unit, outwards
   Vec3f shadingNormal;    // unit, on the geometric normal's side
   Vec2f uv;               // texture coordinates
+  Vec3f tangent;          // dp/du where the kind has one (curves: along the fibre); else 0
+  // How far rays leaving the point start from it along the normal, beyond
+  // the usual few ulps: a fibre's crossing is approximate within its width.
+  float originOffset = 0;
 };
 
 class Shape {
@@ -59,6 +65,17 @@ class Shape {
     return intersect(primitive, origin, direction, tnear, tfar, t, uv);
   }
   virtual ShapeSurface surface(uint32_t primitive, Vec2f uv) const = 0;
+  // The same, seen along `direction` (object space, the ray that hit it):
+  // for kinds whose surface faces the ray (flat curves).
+  virtual ShapeSurface surface(uint32_t primitive, Vec2f uv, Vec3f /*direction*/) const {
+    return surface(primitive, uv);
+  }
+  // A shape of the listed primitives only (in that order), each crossed
+  // exactly as here; null when the kind cannot be cut (partitioning then
+  // keeps it whole).
+  virtual std::shared_ptr<const Shape> subset(std::span<const uint32_t> /*primitives*/) const {
+    return nullptr;
+  }
   // A volume (shapes/volume_brick.h) is crossed where a ray collides in its
   // medium; shading scatters there instead of reading a surface: the
   // scattering albedo at `point` (the shape's space) and the phase

@@ -1,6 +1,7 @@
 #include "shapes/shape_kinds.h"
 
 #include "core/registry.h"
+#include "shapes/curves.h"
 #include "shapes/spheres.h"
 #include "shapes/volume_brick.h"
 
@@ -11,6 +12,10 @@ Registry<ShapeKind>& registry() {
   static Registry<ShapeKind> all(
       "geometry kind",
       {
+          {"curves",
+           "cubic Bézier curve segments with a width at each end, flat, cylinder or ribbon (fur, "
+           "hair, grass)",
+           Curves::read},
           {"spheres", "analytic spheres, a centre and a radius each (particles, atoms)",
            Spheres::read},
           {"volume-brick",

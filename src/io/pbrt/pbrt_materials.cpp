@@ -20,6 +20,7 @@
 #include "material/models/diffuse_transmission.h"
 #include "material/models/fourier.h"
 #include "material/models/fresnel_blend.h"
+#include "material/models/hair.h"
 #include "material/models/layered.h"
 #include "material/models/thin_dielectric.h"
 
@@ -1283,6 +1284,35 @@ struct PbrtMaterials::Impl {
       m.mixedWith = mixTarget(named.at(second), depth + 1);
       m.mixAmount = wb;
       look.alpha = wb > 0.5f ? b.alpha : a.alpha;
+    } else if (type == "hair") {
+      // pbrt-v3 and v4: sigma_a, else a colour (v3 "color", v4
+      // "reflectance"), else melanin (eumelanin 1.3 when nothing is given).
+      auto hair = std::make_shared<HairModel>();
+      hair->eta = scalar(p, "eta", 1.55f);
+      hair->betaM = scalar(p, "beta_m", 0.3f);
+      hair->betaN = scalar(p, "beta_n", 0.3f);
+      hair->alphaDegrees = scalar(p, "alpha", 2.0f);
+      const char* colorName = p.find("color") ? "color" : "reflectance";
+      auto ignored = [&](std::initializer_list<const char*> names, const char* because) {
+        for (const char* name : names)
+          if (const PbrtParam* q = p.find(name))
+            warnings.once("hair|" + std::string(name),
+                          fmt::format("{}: ignored since \"{}\" is given (as pbrt does)",
+                                      q->declaration(), because));
+      };
+      if (p.find("sigma_a")) {
+        hair->absorption = HairModel::Absorption::SigmaA;
+        hair->sigmaA = untexturedColor(p, "sigma_a", Vec3f(0));
+        ignored({"color", "reflectance", "eumelanin", "pheomelanin"}, "sigma_a");
+      } else if (p.find(colorName)) {
+        hair->absorption = HairModel::Absorption::Color;
+        setColor(color(p, {colorName}, Vec3f(0.5f)));
+        ignored({"eumelanin", "pheomelanin"}, colorName);
+      } else if (p.find("eumelanin") || p.find("pheomelanin")) {
+        hair->eumelanin = scalar(p, "eumelanin", 0);
+        hair->pheomelanin = scalar(p, "pheomelanin", 0);
+      }
+      m.model = hair;
     } else if (type == "fourier" && fourierTable(p, def, m)) {
       // (m's model reads the table; a file that is not there falls through to
       // the grey diffuse below, with a warning naming it.)

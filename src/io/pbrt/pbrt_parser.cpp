@@ -213,10 +213,11 @@ class Parser {
 
   Scene finish(const std::string& name) {
     scene_.name = name;
+    flushCurves();
     setSpotFalloff();
     makeEnvironment();
     makeCamera();
-    if (scene_.meshes.empty() && scene_.suns.empty())
+    if (scene_.meshes.empty() && scene_.geometries.empty() && scene_.suns.empty())
       warnings_.once("empty", fmt::format("{}: the scene has no shapes", name));
     return std::move(scene_);
   }
@@ -1057,18 +1058,18 @@ class Parser {
     scene_.objects.push_back(std::move(o));
     currentObject_ = int32_t(scene_.objects.size() - 1);
     objects_[name] = *currentObject_;
-    curveBatch_.reset();
+    flushCurves();
   }
 
   void objectEnd(const SourceLocation& where) {
     if (!currentObject_) fail(where, "ObjectEnd without ObjectBegin");
     popBlock(BlockKind::Object, where);
-    if (scene_.objects[size_t(*currentObject_)].meshes.empty())
+    flushCurves();
+    if (scene_.objects[size_t(*currentObject_)].slots() == 0)
       warnings_.once("empty object|" + scene_.objects[size_t(*currentObject_)].name,
                      fmt::format("{}: object \"{}\" has no shapes", where.toString(),
                                  scene_.objects[size_t(*currentObject_)].name));
     currentObject_.reset();
-    curveBatch_.reset();
   }
 
   void objectInstance(const std::string& name, const SourceLocation& where) {
@@ -1077,7 +1078,7 @@ class Parser {
     auto it = objects_.find(name);
     if (it == objects_.end())
       fail(where, fmt::format("ObjectInstance: no object named \"{}\"", name));
-    if (scene_.objects[size_t(it->second)].meshes.empty()) return;
+    if (scene_.objects[size_t(it->second)].slots() == 0) return;
     checkInvertible(where);
     scene_.instances.push_back({it->second, state_.ctm});
   }
@@ -1230,7 +1231,7 @@ class Parser {
         reportUnused(p, what);
         return;
       }
-      curveBatch_.reset();
+      flushCurves();
       Mesh mesh;
       std::string plyPath;
       // pbrt-v4's area light "power" is per pbrt shape: the area of one (an
@@ -1446,60 +1447,65 @@ class Parser {
     else
       fail(where, fmt::format("curves: unknown basis \"{}\" (bezier, bspline)", basis));
     std::string type = p.getString("type", "flat");
-    if (type == "flat")
-      c.type = CurveType::Flat;
-    else if (type == "cylinder")
-      c.type = CurveType::Cylinder;
-    else if (type == "ribbon")
-      c.type = CurveType::Ribbon;
-    else
+    if (!parseCurveType(type, c.type))
       fail(where, fmt::format("curves: unknown type \"{}\" (flat, cylinder, ribbon)", type));
     float width = p.getFloat("width", 1);
     c.width0 = p.getFloat("width0", width);
     c.width1 = p.getFloat("width1", width);
     c.normals = points(p.getArray("N", {"normal"}));
-    if (p.has("splitdepth")) {
-      p.find("splitdepth");
-      warnings_.once("splitdepth",
-                     fmt::format("curves: splitdepth ignored: curves become {} linear "
-                                 "pieces per segment (first at {})",
-                                 c.linearPerSegment, where.toString()));
-    }
+    c.splitDepth = p.getInt("splitdepth", 3);
     const PbrtAlpha alpha = materials_.shapeAlpha(p, dialect_ == Dialect::V3);
     const int32_t material = materials_.materialFor(
         state_.material, state_.areaLight ? state_.areaLight->radiance : Vec3f(0), alpha,
         !state_.areaLight || state_.areaLight->twoSided, lightSampledOnBackSide(where));
-    // Consecutive curves with the same material and transform share a mesh.
-    bool reuse = curveBatch_ && curveBatch_->material == material &&
-                 curveBatch_->object == currentObject_.value_or(-1) &&
-                 sameTransform(curveBatch_->ctm, state_.ctm) &&
-                 scene_.meshes[size_t(curveBatch_->mesh)].indices.size() < (size_t(1) << 24);
-    if (reuse) {
-      Mesh& mesh = scene_.meshes[size_t(curveBatch_->mesh)];
-      if (currentObject_) {
-        Mesh piece;
-        appendCurve(c, piece);
-        bake(piece, state_.ctm);
-        appendMesh(mesh, piece);
-      } else {
-        appendCurve(c, mesh);
-      }
-      return;
+    // Consecutive curves with the same material, type and transform share a shape.
+    const bool reuse = curveBatch_ && curveBatch_->material == material &&
+                       curveBatch_->object == currentObject_.value_or(-1) &&
+                       curveBatch_->type == c.type && sameTransform(curveBatch_->ctm, state_.ctm) &&
+                       curveBatch_->segments.size() < (size_t(1) << 24);
+    if (!reuse) {
+      flushCurves();
+      curveBatch_ = CurveBatch{material, currentObject_.value_or(-1), c.type, state_.ctm, {}, {}};
     }
-    Mesh mesh;
-    appendCurve(c, mesh);
-    mesh.name = "curves";
-    mesh.material = material;
-    int32_t index = addMesh(std::move(mesh));
-    curveBatch_ = CurveBatch{index, material, currentObject_.value_or(-1), state_.ctm};
+    if (currentObject_ && !sameTransform(state_.ctm, Affine3f::identity())) {
+      // In an object, the transform is baked: points and normals moved,
+      // widths scaled by the transform's mean scale.
+      const float scale = std::cbrt(std::abs(state_.ctm.determinant()));
+      for (Vec3f& q : c.points) q = state_.ctm.transformPoint(q);
+      for (Vec3f& n : c.normals) n = state_.ctm.transformNormal(n);
+      c.width0 *= scale;
+      c.width1 *= scale;
+    }
+    try {
+      appendCurveSegments(c, curveBatch_->segments, curveBatch_->normals);
+    } catch (const InputError& e) {
+      fail(where, e.what());
+    }
   }
 
-  static void appendMesh(Mesh& into, const Mesh& piece) {
-    int32_t base = int32_t(into.positions.size());
-    into.positions.insert(into.positions.end(), piece.positions.begin(), piece.positions.end());
-    into.normals.insert(into.normals.end(), piece.normals.begin(), piece.normals.end());
-    for (const Vec3i& t : piece.indices)
-      into.indices.push_back({t.x + base, t.y + base, t.z + base});
+  // The curves gathered so far become one geometry (one object with one
+  // instance at the top level; the current object's otherwise).
+  void flushCurves() {
+    if (!curveBatch_) return;
+    CurveBatch batch = std::move(*curveBatch_);
+    curveBatch_.reset();
+    if (batch.segments.empty()) return;
+    Geometry g;
+    g.name = "curves";
+    g.material = batch.material;
+    g.shape =
+        std::make_shared<Curves>(batch.type, std::move(batch.segments), std::move(batch.normals));
+    scene_.geometries.push_back(std::move(g));
+    const auto index = int32_t(scene_.geometries.size() - 1);
+    if (batch.object >= 0) {
+      scene_.objects[size_t(batch.object)].geometries.push_back(index);
+      return;
+    }
+    Object o;
+    o.name = "curves";
+    o.geometries.push_back(index);
+    scene_.objects.push_back(std::move(o));
+    scene_.instances.push_back({int32_t(scene_.objects.size() - 1), batch.ctm});
   }
 
   static void bake(Mesh& mesh, const Affine3f& t) {
@@ -1646,7 +1652,6 @@ class Parser {
   void storeFinishedMeshes() {
     if (!options_.meshStore) return;
     for (; storedUpTo_ < scene_.meshes.size(); ++storedUpTo_) {
-      if (curveBatch_ && size_t(curveBatch_->mesh) == storedUpTo_) break;
       options_.meshStore->store(scene_.meshes[storedUpTo_]);
     }
   }
@@ -1898,8 +1903,11 @@ class Parser {
   std::map<std::tuple<std::string, int32_t, int, int32_t, int32_t>, int32_t> topLevelPly_;
   std::map<std::string, int32_t> objectPly_;
   struct CurveBatch {
-    int32_t mesh, material, object;
+    int32_t material, object;
+    CurveType type;
     Affine3f ctm;
+    std::vector<CurveSegment> segments;
+    std::vector<CurveNormals> normals;
   };
   std::optional<CurveBatch> curveBatch_;
   size_t storedUpTo_ = 0;  // meshes below this index went to options_.meshStore

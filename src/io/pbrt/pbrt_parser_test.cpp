@@ -1,4 +1,5 @@
 #include "io/pbrt/pbrt_parser.h"
+#include "shapes/curves.h"
 
 #include <unistd.h>
 
@@ -256,15 +257,27 @@ TEST_F(PbrtV3Features, InstancingStaysInstancing) {
 }
 
 TEST_F(PbrtV3Features, ShapesAndCounts) {
-  EXPECT_EQ(scene().objects.size(), 9u);
-  EXPECT_EQ(scene().instances.size(), 12u);
-  // Both curves share one mesh: 6 + 3 linear pieces of 3-sided tubes.
-  auto curves = meshesOf(scene(), "mirror-ish uber");
-  ASSERT_EQ(curves.size(), 1u);
-  EXPECT_EQ(curves[0]->triangleCount(), (6u + 3u) * 6u);
-  EXPECT_EQ(curves[0]->vertexCount(), (7u + 4u) * 3u);
+  EXPECT_EQ(scene().objects.size(), 10u);
+  EXPECT_EQ(scene().instances.size(), 13u);
+  // Each curve type its own curves geometry: 2 cylinder segments and 1 flat,
+  // 8 pieces each (pbrt's splitdepth 3).
+  std::vector<const Curves*> curves;
+  std::vector<int32_t> curvesObjects;
+  for (size_t o = 0; o < scene().objects.size(); ++o)
+    for (int32_t g : scene().objects[o].geometries)
+      if (auto c = dynamic_cast<const Curves*>(scene().geometries[size_t(g)].shape.get())) {
+        curves.push_back(c);
+        curvesObjects.push_back(int32_t(o));
+        EXPECT_EQ(scene().materials[size_t(scene().geometries[size_t(g)].material)].name,
+                  "mirror-ish uber");
+      }
+  ASSERT_EQ(curves.size(), 2u);
+  EXPECT_EQ(curves[0]->type(), CurveType::Cylinder);
+  EXPECT_EQ(curves[0]->primitiveCount(), 2u * 8u);
+  EXPECT_EQ(curves[1]->type(), CurveType::Flat);
+  EXPECT_EQ(curves[1]->primitiveCount(), 8u);
   // CoordSysTransform "here" went back to the world transform.
-  auto inst = instancesOf(scene(), objectOfMesh(scene(), curves[0]));
+  auto inst = instancesOf(scene(), curvesObjects[0]);
   ASSERT_EQ(inst.size(), 1u);
   EXPECT_EQ(inst[0]->transform.t, Vec3f(0, 0, 0));
   // The sphere, tessellated: area near 4 pi r^2.
@@ -466,7 +479,16 @@ TEST_F(PbrtV4Features, ShapesLightsAttributesAndImport) {
   // A curved bilinear patch is sampled 8 x 8; a flat one is two triangles.
   EXPECT_EQ(meshesOf(scene(), "bk7").at(0)->triangleCount(), 128u);
   EXPECT_EQ(meshesOf(scene(), "sheet").at(0)->triangleCount(), 2u);
-  EXPECT_EQ(meshesOf(scene(), "mostly gold").at(0)->triangleCount(), 6u);  // a ribbon
+  // A ribbon: one curves geometry of 8 pieces (pbrt's splitdepth 3).
+  size_t ribbons = 0;
+  for (const Geometry& g : scene().geometries)
+    if (auto c = dynamic_cast<const Curves*>(g.shape.get())) {
+      EXPECT_EQ(scene().materials[size_t(g.material)].name, "mostly gold");
+      EXPECT_EQ(c->type(), CurveType::Ribbon);
+      EXPECT_EQ(c->primitiveCount(), 8u);
+      ++ribbons;
+    }
+  EXPECT_EQ(ribbons, 1u);
   // Import: its triangle is there, its Translate did not leak out.
   auto diffuse = meshesOf(scene(), "diffuse");
   ASSERT_EQ(diffuse.size(), 2u);
@@ -820,7 +842,7 @@ TEST(PbrtParser, WarningsAreDeduplicated) {
   EXPECT_EQ(count, 1);
 }
 
-TEST(PbrtParser, ObjectsOfManyCurvesShareOneMesh) {
+TEST(PbrtParser, ObjectsOfManyCurvesShareOneGeometry) {
   std::string text = "WorldBegin\nObjectBegin \"hair\"\n";
   for (int i = 0; i < 50; ++i)
     text += "Shape \"curve\" \"point3 P\" [ 0 0 " + std::to_string(i) +
@@ -828,8 +850,8 @@ TEST(PbrtParser, ObjectsOfManyCurvesShareOneMesh) {
   text += "ObjectEnd\nObjectInstance \"hair\"\nTranslate 1 0 0\nObjectInstance \"hair\"\n";
   Scene s = fromText(text);
   ASSERT_EQ(s.objects.size(), 1u);
-  ASSERT_EQ(s.objects[0].meshes.size(), 1u);
-  EXPECT_EQ(s.meshes[0].triangleCount(), 50u * 3u * 6u);
+  ASSERT_EQ(s.objects[0].geometries.size(), 1u);
+  EXPECT_EQ(s.geometries[0].shape->primitiveCount(), 50u * 8u);
   EXPECT_EQ(s.instances.size(), 2u);
 }
 

@@ -1,0 +1,363 @@
+#include "shapes/curves.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace ferry {
+
+bool parseCurveType(std::string_view name, CurveType& type) {
+  if (name == "flat")
+    type = CurveType::Flat;
+  else if (name == "cylinder")
+    type = CurveType::Cylinder;
+  else if (name == "ribbon")
+    type = CurveType::Ribbon;
+  else
+    return false;
+  return true;
+}
+
+std::string_view curveTypeName(CurveType type) {
+  switch (type) {
+    case CurveType::Flat:
+      return "flat";
+    case CurveType::Cylinder:
+      return "cylinder";
+    case CurveType::Ribbon:
+      return "ribbon";
+  }
+  return "?";
+}
+
+namespace {
+
+using Points = std::array<Vec3f, 4>;
+
+Vec3f lerp(float t, Vec3f a, Vec3f b) {
+  return a * (1 - t) + b * t;
+}
+float lerp(float t, float a, float b) {
+  return (1 - t) * a + t * b;
+}
+
+// The cubic's blossom p(a, b, c): p(u, u, u) is the point at u, and the
+// blossoms of (u0,u0,u0), (u0,u0,u1), (u0,u1,u1), (u1,u1,u1) are the control
+// points of the piece [u0, u1].
+Vec3f blossom(const Points& p, float a, float b, float c) {
+  const Vec3f p0 = lerp(a, p[0], p[1]), p1 = lerp(a, p[1], p[2]), p2 = lerp(a, p[2], p[3]);
+  const Vec3f q0 = lerp(b, p0, p1), q1 = lerp(b, p1, p2);
+  return lerp(c, q0, q1);
+}
+
+// De Casteljau at t: the point, and in `derivative` dp/dt.
+Vec3f evaluate(const Points& p, float t, Vec3f& derivative) {
+  const Vec3f a0 = lerp(t, p[0], p[1]), a1 = lerp(t, p[1], p[2]), a2 = lerp(t, p[2], p[3]);
+  const Vec3f b0 = lerp(t, a0, a1), b1 = lerp(t, a1, a2);
+  const Vec3f d = b1 - b0;
+  derivative = dot(d, d) > 0 ? d * 3.0f : p[3] - p[0];
+  return lerp(t, b0, b1);
+}
+
+// The halves [0, 1/2] and [1/2, 1], sharing out[3].
+void subdivide(const Points& p, std::array<Vec3f, 7>& out) {
+  out[0] = p[0];
+  out[1] = (p[0] + p[1]) * 0.5f;
+  out[2] = (p[0] + p[1] * 2.0f + p[2]) * 0.25f;
+  out[3] = (p[0] + p[1] * 3.0f + p[2] * 3.0f + p[3]) * 0.125f;
+  out[4] = (p[1] + p[2] * 2.0f + p[3]) * 0.25f;
+  out[5] = (p[2] + p[3]) * 0.5f;
+  out[6] = p[3];
+}
+
+// A ribbon's normal at t between its ends' normals: spherical interpolation.
+Vec3f slerpNormal(const CurveNormals& n, float t) {
+  const float c = std::clamp(dot(n[0], n[1]), -1.0f, 1.0f);
+  const float angle = std::acos(c);
+  const float s = std::sin(angle);
+  if (!(s > 1e-6f)) return normalize(lerp(t, n[0], n[1]));
+  return n[0] * (std::sin((1 - t) * angle) / s) + n[1] * (std::sin(t * angle) / s);
+}
+
+// floor-ish log2 as pbrt rounds it (0 below 1).
+int log2Rounded(float v) {
+  if (v < 1) return 0;
+  const uint32_t bits = std::bit_cast<uint32_t>(v);
+  return int(bits >> 23) - 127 + ((bits & (1u << 22)) ? 1 : 0);
+}
+
+float maxOf(float a, float b, float c, float d) {
+  return std::max(std::max(a, b), std::max(c, d));
+}
+float minOf(float a, float b, float c, float d) {
+  return std::min(std::min(a, b), std::min(c, d));
+}
+
+// One ray against one segment, in the ray's space (the ray along +z from the
+// origin, z in the object's units): pbrt's recursive test, which halves the
+// segment `depth` times and tests the pieces that overlap the ray as lines.
+// Keeps the nearest crossing: `zMax` shrinks to it.
+struct Crossing {
+  const CurveSegment* segment;
+  const CurveNormals* normals;  // ribbons
+  Vec3f direction;              // the object-space ray direction (ribbons' width)
+  float rayLength;
+  float zMin;
+  float zMax;
+  bool found = false;
+  float z = 0, u = 0, v = 0;  // u local to the segment
+
+  float widthAt(float t) const { return lerp(t, segment->width0, segment->width1); }
+
+  void test(const Points& cp, float t0, float t1, int depth) {
+    if (depth > 0) {
+      std::array<Vec3f, 7> split;
+      subdivide(cp, split);
+      const float t[3] = {t0, (t0 + t1) * 0.5f, t1};
+      for (int half = 0; half < 2; ++half) {
+        const Points piece{split[3 * half], split[3 * half + 1], split[3 * half + 2],
+                           split[3 * half + 3]};
+        const float w = 0.5f * std::max(widthAt(t[half]), widthAt(t[half + 1]));
+        if (maxOf(piece[0].y, piece[1].y, piece[2].y, piece[3].y) + w < 0 ||
+            minOf(piece[0].y, piece[1].y, piece[2].y, piece[3].y) - w > 0)
+          continue;
+        if (maxOf(piece[0].x, piece[1].x, piece[2].x, piece[3].x) + w < 0 ||
+            minOf(piece[0].x, piece[1].x, piece[2].x, piece[3].x) - w > 0)
+          continue;
+        if (maxOf(piece[0].z, piece[1].z, piece[2].z, piece[3].z) + w < zMin ||
+            minOf(piece[0].z, piece[1].z, piece[2].z, piece[3].z) - w > zMax)
+          continue;
+        test(piece, t[half], t[half + 1], depth - 1);
+      }
+      return;
+    }
+    // The ray must pass between the planes perpendicular to the curve at
+    // its two ends.
+    if ((cp[1].y - cp[0].y) * -cp[0].y + cp[0].x * (cp[0].x - cp[1].x) < 0) return;
+    if ((cp[2].y - cp[3].y) * -cp[3].y + cp[3].x * (cp[3].x - cp[2].x) < 0) return;
+    // The nearest point to the ray on the piece taken as a line.
+    const Vec2f along{cp[3].x - cp[0].x, cp[3].y - cp[0].y};
+    const float denominator = along.x * along.x + along.y * along.y;
+    if (denominator == 0) return;
+    const float w = (-cp[0].x * along.x - cp[0].y * along.y) / denominator;
+    const float t = std::clamp(lerp(w, t0, t1), t0, t1);
+    float width = widthAt(t);
+    if (normals) width *= std::abs(dot(slerpNormal(*normals, t), direction)) / rayLength;
+    Vec3f tangent;
+    const Vec3f p = evaluate(cp, std::clamp(w, 0.0f, 1.0f), tangent);
+    const float distance2 = p.x * p.x + p.y * p.y;
+    if (!(distance2 <= width * width * 0.25f) || !(width > 0)) return;
+    if (!(p.z > zMin) || !(p.z < zMax)) return;
+    const float distance = std::sqrt(distance2);
+    const float side = tangent.x * -p.y + p.x * tangent.y;
+    found = true;
+    z = zMax = p.z;
+    u = t;
+    v = side > 0 ? 0.5f + distance / width : 0.5f - distance / width;
+  }
+};
+
+void checkFinite(Vec3f p, size_t segment, const char* what) {
+  if (!isFinite(p))
+    throw InputError(fmt::format("curves: segment {} has a {} ({}, {}, {}) that is not finite",
+                                 segment, what, p.x, p.y, p.z));
+}
+
+}  // namespace
+
+void appendCurveSegments(const Points& points, float width0, float width1,
+                         const CurveNormals* normals, int splitDepth,
+                         std::vector<CurveSegment>& out, std::vector<CurveNormals>* normalsOut) {
+  const int pieces = 1 << std::clamp(splitDepth, 0, 20);
+  for (int k = 0; k < pieces; ++k) {
+    const float u0 = float(k) / float(pieces), u1 = float(k + 1) / float(pieces);
+    CurveSegment s;
+    s.points = {blossom(points, u0, u0, u0), blossom(points, u0, u0, u1),
+                blossom(points, u0, u1, u1), blossom(points, u1, u1, u1)};
+    s.width0 = lerp(u0, width0, width1);
+    s.width1 = lerp(u1, width0, width1);
+    s.u0 = u0;
+    s.u1 = u1;
+    out.push_back(s);
+    if (normals && normalsOut) {
+      const CurveNormals n{normalize((*normals)[0]), normalize((*normals)[1])};
+      normalsOut->push_back({slerpNormal(n, u0), slerpNormal(n, u1)});
+    }
+  }
+}
+
+Curves::Curves(CurveType type, std::vector<CurveSegment> segments,
+               std::vector<CurveNormals> normals)
+    : type_(type), segments_(std::move(segments)), normals_(std::move(normals)) {
+  if (segments_.size() > UINT32_MAX)
+    throw InputError(fmt::format("curves: {} segments is more than 2^32 - 1", segments_.size()));
+  if (type_ == CurveType::Ribbon && normals_.size() != segments_.size())
+    throw InputError(fmt::format("curves: {} ribbon segments but {} normal pairs", segments_.size(),
+                                 normals_.size()));
+  if (type_ != CurveType::Ribbon && !normals_.empty())
+    throw InputError(fmt::format("curves: normals given for {} curves", curveTypeName(type_)));
+  for (size_t k = 0; k < segments_.size(); ++k) {
+    const CurveSegment& s = segments_[k];
+    for (const Vec3f& p : s.points) checkFinite(p, k, "control point");
+    if (!(s.width0 >= 0) || !(s.width1 >= 0) || !std::isfinite(s.width0) ||
+        !std::isfinite(s.width1) || !(s.width0 + s.width1 > 0))
+      throw InputError(
+          fmt::format("curves: segment {} has widths {} and {}", k, s.width0, s.width1));
+    if (!std::isfinite(s.u0) || !std::isfinite(s.u1))
+      throw InputError(fmt::format("curves: segment {} has u {} to {}", k, s.u0, s.u1));
+  }
+  for (size_t k = 0; k < normals_.size(); ++k)
+    for (Vec3f& n : normals_[k]) {
+      checkFinite(n, k, "normal");
+      const float len = length(n);
+      if (!(len > 0)) throw InputError(fmt::format("curves: segment {} has a zero normal", k));
+      n = n * (1 / len);
+    }
+}
+
+Box3f Curves::primitiveBounds(uint32_t primitive) const {
+  const CurveSegment& s = segments_[primitive];
+  Box3f b;
+  for (const Vec3f& p : s.points) b.extend(p);
+  const float r = 0.5f * std::max(s.width0, s.width1);
+  return {b.lower - Vec3f(r), b.upper + Vec3f(r)};
+}
+
+uint64_t Curves::bytes() const {
+  return segments_.capacity() * sizeof(CurveSegment) + normals_.capacity() * sizeof(CurveNormals);
+}
+
+bool Curves::intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
+                       float& t, Vec2f& uv) const {
+  const CurveSegment& s = segments_[primitive];
+  const float rayLength = length(direction);
+  if (!(rayLength > 0)) return false;
+  // The ray's space: z along the ray, y perpendicular to it and to the
+  // segment's chord (any perpendicular when they are parallel).
+  const Vec3f dir = direction * (1 / rayLength);
+  Vec3f up = cross(direction, s.points[3] - s.points[0]);
+  if (!(dot(up, up) > 0)) up = Frame(dir).s;
+  const Vec3f right = normalize(cross(normalize(up), dir));
+  const Vec3f newUp = cross(dir, right);
+  Points cp;
+  for (int k = 0; k < 4; ++k) {
+    const Vec3f q = s.points[k] - origin;
+    cp[k] = {dot(q, right), dot(q, newUp), dot(q, dir)};
+  }
+  const float zMin = tnear * rayLength;
+  const float zMax = std::min(tfar * rayLength, std::numeric_limits<float>::max());
+  // The segment's box against the ray's.
+  const float w = 0.5f * std::max(s.width0, s.width1);
+  if (maxOf(cp[0].x, cp[1].x, cp[2].x, cp[3].x) + w < 0 ||
+      minOf(cp[0].x, cp[1].x, cp[2].x, cp[3].x) - w > 0 ||
+      maxOf(cp[0].y, cp[1].y, cp[2].y, cp[3].y) + w < 0 ||
+      minOf(cp[0].y, cp[1].y, cp[2].y, cp[3].y) - w > 0 ||
+      maxOf(cp[0].z, cp[1].z, cp[2].z, cp[3].z) + w < zMin ||
+      minOf(cp[0].z, cp[1].z, cp[2].z, cp[3].z) - w > zMax)
+    return false;
+  // pbrt's refinement depth: enough halvings that each piece is straight to
+  // within a twentieth of the width.
+  float l0 = 0;
+  for (int i = 0; i < 2; ++i)
+    for (int c = 0; c < 3; ++c)
+      l0 = std::max(l0, std::abs(cp[i][c] - 2 * cp[i + 1][c] + cp[i + 2][c]));
+  const float eps = std::max(s.width0, s.width1) * 0.05f;
+  const int depth = std::clamp(log2Rounded(1.41421356237f * 6.0f * l0 / (8.0f * eps)) / 2, 0, 10);
+  Crossing crossing{&s,        type_ == CurveType::Ribbon ? &normals_[primitive] : nullptr,
+                    direction, rayLength,
+                    zMin,      zMax};
+  crossing.test(cp, 0, 1, depth);
+  if (!crossing.found) return false;
+  t = crossing.z / rayLength;
+  if (!(t > tnear && t < tfar)) return false;
+  uv = {lerp(crossing.u, s.u0, s.u1), crossing.v};
+  return true;
+}
+
+ShapeSurface Curves::surface(uint32_t primitive, Vec2f uv) const {
+  // No ray: seen from a direction perpendicular to the tangent.
+  const CurveSegment& s = segments_[primitive];
+  Vec3f tangent;
+  evaluate(s.points, 0.5f, tangent);
+  const Vec3f axis = dot(tangent, tangent) > 0 ? normalize(tangent) : Vec3f(0, 0, 1);
+  return surface(primitive, uv, Frame(axis).s);
+}
+
+ShapeSurface Curves::surface(uint32_t primitive, Vec2f uv, Vec3f direction) const {
+  const CurveSegment& s = segments_[primitive];
+  const float span = s.u1 - s.u0;
+  const float t = span != 0 ? std::clamp((uv.x - s.u0) / span, 0.0f, 1.0f) : 0.0f;
+  Vec3f derivative;
+  const Vec3f p = evaluate(s.points, t, derivative);
+  const Vec3f dpdu = span != 0 ? derivative * (1 / span) : derivative;
+  const float width = lerp(t, s.width0, s.width1);
+  const float dirLength = length(direction);
+  const Vec3f d = dirLength > 0 ? direction * (1 / dirLength) : Frame(normalize(dpdu)).s;
+  Vec3f across, dpdv;
+  if (type_ == CurveType::Ribbon) {
+    const Vec3f n = slerpNormal(normals_[primitive], t);
+    across = normalize(cross(n, dpdu));
+    dpdv = across * (width * std::abs(dot(n, d)));
+  } else {
+    // Facing the ray: across the ray and the tangent.
+    across = cross(d, dpdu);
+    const float len = length(across);
+    across = len > 0 ? across * (1 / len) : Frame(d).s;
+    dpdv = across * width;
+    if (type_ == CurveType::Cylinder) {
+      // Turned about the tangent, -90 to 90 degrees across the width: shaded as a tube.
+      const float theta = lerp(uv.y, -0.5f * kPi, 0.5f * kPi);
+      dpdv = Affine3f::rotate(dpdu, -theta).transformVector(dpdv);
+    }
+  }
+  Vec3f n = cross(dpdu, dpdv);
+  const float len = length(n);
+  n = len > 0 && std::isfinite(len) ? n * (1 / len) : -d;
+  ShapeSurface out;
+  out.position = p + across * ((uv.y - 0.5f) * width);
+  out.geometricNormal = n;
+  out.shadingNormal = n;
+  out.uv = uv;
+  out.tangent = dpdu;
+  out.originOffset = 2 * width;
+  return out;
+}
+
+std::shared_ptr<const Shape> Curves::subset(std::span<const uint32_t> primitives) const {
+  std::vector<CurveSegment> segments;
+  std::vector<CurveNormals> normals;
+  segments.reserve(primitives.size());
+  for (uint32_t p : primitives) {
+    segments.push_back(segments_.at(p));
+    if (type_ == CurveType::Ribbon) normals.push_back(normals_[p]);
+  }
+  return std::make_shared<Curves>(type_, std::move(segments), std::move(normals));
+}
+
+void Curves::write(RecordWriter& record) const {
+  record.pod(uint8_t(type_));
+  record.array<CurveSegment>(segments_);
+  record.array<CurveNormals>(normals_);
+}
+
+std::shared_ptr<const Shape> Curves::read(RecordReader& record) {
+  const auto type = record.pod<uint8_t>();
+  if (type > uint8_t(CurveType::Ribbon)) record.fail(fmt::format("curves: unknown type {}", type));
+  std::vector<CurveSegment> segments = record.array<CurveSegment>();
+  std::vector<CurveNormals> normals = record.array<CurveNormals>();
+  try {
+    return std::make_shared<Curves>(CurveType(type), std::move(segments), std::move(normals));
+  } catch (const InputError& e) {
+    record.fail(e.what());
+  }
+}
+
+std::string Curves::describe() const {
+  return fmt::format("{} {} curve segments", segments_.size(), curveTypeName(type_));
+}
+
+}  // namespace ferry

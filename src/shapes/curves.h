@@ -1,0 +1,73 @@
+// Curves (pbrt's "curve" shape; fur, hair, grass): cubic Bézier segments
+// with a width at each end, intersected as pbrt defines them. A `flat`
+// segment is a ribbon that always faces the ray; a `cylinder` segment is the
+// same ribbon shaded as a tube (its normal turned about the tangent across
+// the width); a `ribbon` segment is oriented by a normal at each end. The
+// hit's (u, v): u along the whole curve (pbrt's u), v across the width, 0 to
+// 1; surface() gives the tangent dp/du for hair shading.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "scene/shape.h"
+
+namespace ferry {
+
+enum class CurveType : uint8_t { Flat = 0, Cylinder = 1, Ribbon = 2 };
+// "flat", "cylinder", "ribbon"; false: none of them.
+bool parseCurveType(std::string_view name, CurveType& type);
+std::string_view curveTypeName(CurveType type);
+
+struct CurveSegment {
+  std::array<Vec3f, 4> points;   // Bézier control points
+  float width0 = 0, width1 = 0;  // at the segment's ends
+  float u0 = 0, u1 = 1;          // where it lies on its curve
+};
+// A ribbon segment's unit normals at its two ends.
+using CurveNormals = std::array<Vec3f, 2>;
+
+// The 2^splitDepth segments pbrt makes of one cubic Bézier curve (its
+// `splitdepth`), each with the curve's widths (and a ribbon's normals,
+// interpolated as pbrt does) where it lies. `normals` is null unless the
+// curve is a ribbon; then `normalsOut` receives one pair per segment.
+void appendCurveSegments(const std::array<Vec3f, 4>& points, float width0, float width1,
+                         const CurveNormals* normals, int splitDepth,
+                         std::vector<CurveSegment>& out, std::vector<CurveNormals>* normalsOut);
+
+class Curves final : public Shape {
+ public:
+  // Throws InputError when a point, width or normal is not finite, a width
+  // is negative or both ends' widths are 0, or a ribbon's normal is zero.
+  // Ribbons need one normal pair per segment; the other types none.
+  Curves(CurveType type, std::vector<CurveSegment> segments,
+         std::vector<CurveNormals> normals = {});
+
+  std::string_view kind() const override { return "curves"; }
+  uint32_t primitiveCount() const override { return uint32_t(segments_.size()); }
+  Box3f primitiveBounds(uint32_t primitive) const override;
+  uint64_t bytes() const override;
+  using Shape::intersect;
+  bool intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
+                 float& t, Vec2f& uv) const override;
+  ShapeSurface surface(uint32_t primitive, Vec2f uv) const override;
+  ShapeSurface surface(uint32_t primitive, Vec2f uv, Vec3f direction) const override;
+  std::shared_ptr<const Shape> subset(std::span<const uint32_t> primitives) const override;
+  void write(RecordWriter& record) const override;
+  std::string describe() const override;
+  static std::shared_ptr<const Shape> read(RecordReader& record);
+
+  CurveType type() const { return type_; }
+  const std::vector<CurveSegment>& segments() const { return segments_; }
+  const std::vector<CurveNormals>& normals() const { return normals_; }
+
+ private:
+  CurveType type_;
+  std::vector<CurveSegment> segments_;
+  std::vector<CurveNormals> normals_;
+};
+
+}  // namespace ferry
