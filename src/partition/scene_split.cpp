@@ -42,6 +42,33 @@ Mesh extractPiece(const Mesh& source, const std::vector<uint32_t>& triangles, in
   return m;
 }
 
+// About `want` spatially coherent pieces of the shape's primitives: the
+// primitives split at the median of their boxes' centres along the longest
+// axis, recursively; each piece lists its primitives in their original order.
+void splitPrimitives(const Shape& shape, std::vector<uint32_t> primitives,
+                     const std::vector<Vec3f>& centres, int want,
+                     std::vector<std::vector<uint32_t>>& out) {
+  if (want <= 1 || primitives.size() < 2) {
+    std::sort(primitives.begin(), primitives.end());
+    out.push_back(std::move(primitives));
+    return;
+  }
+  Box3f box;
+  for (uint32_t p : primitives) box.extend(centres[p]);
+  const int axis = box.longestAxis();
+  const int left = want / 2;
+  const size_t middle = primitives.size() * size_t(left) / size_t(want);
+  std::nth_element(primitives.begin(), primitives.begin() + std::ptrdiff_t(middle),
+                   primitives.end(), [&](uint32_t a, uint32_t b) {
+                     const float ca = centres[a][axis], cb = centres[b][axis];
+                     return ca < cb || (ca == cb && a < b);
+                   });
+  std::vector<uint32_t> low(primitives.begin(), primitives.begin() + std::ptrdiff_t(middle));
+  primitives.erase(primitives.begin(), primitives.begin() + std::ptrdiff_t(middle));
+  splitPrimitives(shape, std::move(low), centres, left, out);
+  splitPrimitives(shape, std::move(primitives), centres, want - left, out);
+}
+
 }  // namespace
 
 SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& options) {
@@ -88,9 +115,55 @@ SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& opt
     }
   }
 
+  // 1b. Cut the large geometries of other kinds whose shape can be cut
+  // (Shape::subset): gpieces[g] replaces geometry g as meshes' pieces do.
+  const size_t geometryCount = scene.geometries.size();
+  std::vector<std::vector<int32_t>> gpieces(geometryCount);
+  if (options.maxPieceBytes > 0) {
+    std::vector<uint8_t> placed(geometryCount, 0);
+    for (size_t o = 0; o < scene.objects.size(); ++o)
+      if (instanceCount[o] > 0)
+        for (int32_t g : scene.objects[o].geometries) placed[g] = 1;
+    for (size_t g = 0; g < geometryCount; ++g) {
+      const Shape* shape = scene.geometries[g].shape.get();
+      if (!placed[g] || !shape || shape->primitiveCount() < 2) continue;
+      const uint64_t cost = geometryCost(scene.geometries[g]).total();
+      if (cost <= options.maxPieceBytes) continue;
+      const int want = int(std::min<uint64_t>(
+          kMaxPiecesPerMesh, (cost + options.maxPieceBytes - 1) / options.maxPieceBytes));
+      std::vector<Vec3f> centres(shape->primitiveCount());
+      std::vector<uint32_t> all(shape->primitiveCount());
+      for (uint32_t p = 0; p < shape->primitiveCount(); ++p) {
+        centres[p] = shape->primitiveBounds(p).center();
+        all[p] = p;
+      }
+      std::vector<std::vector<uint32_t>> parts;
+      splitPrimitives(*shape, std::move(all), centres, want, parts);
+      std::vector<std::shared_ptr<const Shape>> made;
+      for (const auto& part : parts) {
+        made.push_back(shape->subset(part));
+        if (!made.back()) break;  // the kind cannot be cut
+      }
+      if (made.size() < 2 || !made.back()) continue;
+      const Geometry original = scene.geometries[g];
+      for (size_t k = 0; k < made.size(); ++k) {
+        Geometry piece{fmt::format("{}#{}", original.name, k), original.material, made[k]};
+        if (k == 0) {
+          scene.geometries[g] = std::move(piece);
+          gpieces[g].push_back(int32_t(g));
+        } else {
+          scene.geometries.push_back(std::move(piece));
+          gpieces[g].push_back(int32_t(scene.geometries.size() - 1));
+        }
+      }
+      ++report.meshesCut;
+      report.piecesMade += made.size();
+    }
+  }
+
   // 2. Objects: a broken object becomes one object per mesh; each piece of a
-  // cut mesh becomes its own object; the rest stays together in the original
-  // (with the geometries of other kinds, which are never cut).
+  // cut mesh or geometry becomes its own object; the rest stays together in
+  // the original (with the uncut geometries of other kinds).
   const size_t objectCount = scene.objects.size();
   std::vector<std::vector<int32_t>> replacement(objectCount);
   for (size_t o = 0; o < objectCount; ++o) {
@@ -98,28 +171,47 @@ SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& opt
                          scene.objects[o].meshes.size() > 1;
     bool anyCut = false;
     for (int32_t m : scene.objects[o].meshes) anyCut |= !pieces[m].empty();
+    for (int32_t g : scene.objects[o].geometries) anyCut |= !gpieces[g].empty();
     if (!breakIt && !anyCut) continue;
     if (breakIt) ++report.objectsBroken;
     const Object original = scene.objects[o];
-    std::vector<std::vector<int32_t>> groups;
-    std::vector<int32_t> together;
+    // Each group becomes an object: its meshes and its geometries.
+    struct Group {
+      std::vector<int32_t> meshes, geometries;
+    };
+    std::vector<Group> groups;
+    Group together;
     for (int32_t m : original.meshes) {
       if (!pieces[m].empty()) {
-        for (int32_t p : pieces[m]) groups.push_back({p});
+        for (int32_t p : pieces[m]) groups.push_back({{p}, {}});
       } else if (breakIt) {
-        groups.push_back({m});
+        groups.push_back({{m}, {}});
       } else {
-        together.push_back(m);
+        together.meshes.push_back(m);
       }
     }
-    if (!together.empty()) groups.insert(groups.begin(), together);
+    std::vector<Group> geometryGroups;
+    for (int32_t g : original.geometries) {
+      if (!gpieces[g].empty()) {
+        for (int32_t p : gpieces[g]) geometryGroups.push_back({{}, {p}});
+      } else {
+        together.geometries.push_back(g);  // uncut ones stay whole, together
+      }
+    }
+    if (!together.meshes.empty() || !together.geometries.empty())
+      groups.insert(groups.begin(), together);
+    groups.insert(groups.end(), geometryGroups.begin(), geometryGroups.end());
     for (size_t g = 0; g < groups.size(); ++g) {
       Object object;
-      object.name = groups[g].size() == 1 && groups.size() > 1
-                        ? fmt::format("{}/{}", original.name, scene.meshes[groups[g][0]].name)
+      const bool single = groups[g].meshes.size() + groups[g].geometries.size() == 1;
+      object.name = single && groups.size() > 1
+                        ? fmt::format("{}/{}", original.name,
+                                      groups[g].meshes.empty()
+                                          ? scene.geometries[size_t(groups[g].geometries[0])].name
+                                          : scene.meshes[size_t(groups[g].meshes[0])].name)
                         : original.name;
-      object.meshes = groups[g];
-      if (g == 0) object.geometries = original.geometries;  // other kinds stay whole, together
+      object.meshes = groups[g].meshes;
+      object.geometries = groups[g].geometries;
       if (g == 0) {
         scene.objects[o] = std::move(object);
         replacement[o].push_back(int32_t(o));
