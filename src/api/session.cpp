@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <optional>
 #include <set>
 
@@ -600,10 +599,7 @@ const Stats& Session::stats() const {
 }
 
 std::string aovFilePath(const std::string& path, const std::string& aov) {
-  const std::filesystem::path p(path);
-  std::filesystem::path side = p;
-  side.replace_filename(p.stem().string() + "." + aov + p.extension().string());
-  return side.string();
+  return sideFilePath(path, aov);
 }
 
 void writeImage(const std::string& path, const Image& image, float exposure) {

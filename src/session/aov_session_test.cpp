@@ -1,13 +1,16 @@
 // AOVs composited over ranks (render/aov.h, compositing/compositor.h): the
 // Cornell box's AOVs on 1 rank and on several in-process ranks, on both
 // exchanges, the replay layout, data groups and light paths, are the same
-// bit for bit, as its colour is; and the colour with AOVs is the colour
-// without.
+// bit for bit, as its colour is; the colour with AOVs is the colour
+// without; the file sink writes them.
 #include <gtest/gtest.h>
 
 #include "comm/in_process_communicator.h"
+#include "core/error.h"
+#include "io/images/image_io.h"
 #include "io/scene_loader.h"
 #include "partition/partitioner.h"
+#include "session/image_file_sink.h"
 #include "session/render_session.h"
 
 namespace ferry {
@@ -97,6 +100,36 @@ TEST(AovSession, TheColourIsTheColourWithoutAovs) {
     EXPECT_TRUE(b.aovs.empty());
     EXPECT_TRUE(b.aovValues.empty());
   }
+}
+
+// The file sink writes what the session composited: the albedo file beside
+// a .pfm holds the albedo channels, and a .png is refused.
+TEST(AovSession, TheFileSinkWritesTheAovsBesideAPfm) {
+  const Scene scene = loadScene("builtin:cornell");
+  SessionSettings s = small();
+  s.render.aovs = {Aov::Depth, Aov::Albedo};
+  const Rendered expected = render(scene, s, 1);
+  const std::string path = ::testing::TempDir() + "aov_sink.pfm";
+  runRanks(1, [&](const Communicator& comm) {
+    RenderSession session(scene, s, comm);
+    ImageFileSink sink(path);
+    session.run(sink);
+  });
+  const LinearImage albedo = readPfm(sideFilePath(path, "albedo"));
+  const LinearImage depth = readPfm(sideFilePath(path, "depth"));
+  ASSERT_EQ(albedo.rgb.size(), size_t(40 * 30));
+  for (size_t i = 0; i < albedo.rgb.size(); ++i) {
+    EXPECT_EQ(depth.rgb[i].x, expected.aovValues[4 * i]);
+    EXPECT_EQ(albedo.rgb[i].x, expected.aovValues[4 * i + 1]);
+    EXPECT_EQ(albedo.rgb[i].z, expected.aovValues[4 * i + 3]);
+  }
+  EXPECT_THROW(runRanks(1,
+                        [&](const Communicator& comm) {
+                          RenderSession session(scene, s, comm);
+                          ImageFileSink sink(::testing::TempDir() + "aov_sink.png");
+                          session.run(sink);
+                        }),
+               InputError);
 }
 
 }  // namespace

@@ -24,8 +24,9 @@ struct FrameImage {
   int height = 0;
   std::vector<Vec3f> linear;  // FrameSink::Pixels::Linear: average radiance, row 0 at the top
   std::vector<uint8_t> rgba;  // FrameSink::Pixels::ToneMapped: RGBA8 by the session's tone mapping
-  // Pixels::Linear with --aov: the AOVs' averages, aovChannelCount(aovs)
-  // floats a pixel (the AOVs in order, each its channels), row 0 at the top.
+  // With --aov: the AOVs, and with Pixels::Linear their averages,
+  // aovChannelCount(aovs) floats a pixel (the AOVs in order, each its
+  // channels), row 0 at the top.
   std::vector<Aov> aovs;
   std::vector<float> aovValues;
 };

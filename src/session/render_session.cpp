@@ -179,8 +179,9 @@ FrameStats sumOverRanks(const Communicator& comm, const FrameStats& mine) {
   return out;
 }
 
-// The sum of every rank's frame buffer times `scale`, as `pixels` asks (and
-// linear pixels with the AOVs the buffer has), on rank 0 (collective). Adds the bytes this rank
+// The sum of every rank's frame buffer times `scale`, as `pixels` asks, and
+// the AOVs the buffer has (their values with linear pixels only), on rank 0
+// (collective). Adds the bytes this rank
 // sent to `bytesSent`.
 FrameImage composite(const Communicator& comm, const FrameBuffer& frameBuffer, float scale,
                      FrameSink::Pixels pixels, const ToneMapping& toneMapping,
@@ -192,10 +193,9 @@ FrameImage composite(const Communicator& comm, const FrameBuffer& frameBuffer, f
     image.rgba = compositeToneMapped(comm, frameBuffer, scale, toneMapping, bytesSent);
   else
     image.linear = compositeLinear(comm, frameBuffer, scale, bytesSent);
-  if (pixels == FrameSink::Pixels::Linear && frameBuffer.hasAovs()) {
-    image.aovs = frameBuffer.aovs();
+  image.aovs = frameBuffer.aovs();
+  if (pixels == FrameSink::Pixels::Linear && frameBuffer.hasAovs())
     image.aovValues = compositeAovs(comm, frameBuffer, scale, bytesSent);
-  }
   return image;
 }
 

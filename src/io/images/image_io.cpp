@@ -346,6 +346,13 @@ void writeExr(const std::string& path, const LinearImage& image) {
   });
 }
 
+std::string sideFilePath(const std::string& path, const std::string& tag) {
+  const fs::path p(path);
+  fs::path side = p;
+  side.replace_filename(p.stem().string() + "." + tag + p.extension().string());
+  return side.string();
+}
+
 void writeExr(const std::string& path, const LinearImage& image,
               const std::vector<ImageChannel>& extra) {
   if (extra.empty()) return writeExr(path, image);

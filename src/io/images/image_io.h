@@ -52,6 +52,8 @@ void writePng(const std::string& path, int width, int height, const std::vector<
 std::string encodePng(int width, int height, const std::vector<uint8_t>& rgba);
 // Half-float RGB, ZIP compressed, rounded as core/half.h does (saturating at 65504).
 void writeExr(const std::string& path, const LinearImage& image);
+// A file beside `path` tagged `tag`: "out/a.pfm", "albedo" -> "out/a.albedo.pfm".
+std::string sideFilePath(const std::string& path, const std::string& tag);
 // A named channel of floats beside an image's colour, one a pixel, row 0 at
 // the top (the AOVs: render/aov.h).
 struct ImageChannel {
