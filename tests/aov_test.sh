@@ -3,8 +3,8 @@
 # ranks gives EXR files with the channels Albedo.R/G/B, Ns.X/Y/Z and Z, the
 # same bit for bit at both rank counts, and the same colour as without
 # --aov; a .pfm output gets the AOVs as files beside it (out.albedo.pfm ...),
-# the same on both rank counts; an unknown name and a .png output are refused
-# with a message.
+# the same on both rank counts; the stats name them; an unknown name and a
+# .png output are refused with a message.
 set -uo pipefail
 ferry=$1
 source_dir=$2
@@ -17,7 +17,10 @@ scene=builtin:cornell
 args="--size 40x30 --spp 4 --max-depth 3 -q --threads 1"
 aovs="--aov albedo,normal,depth"
 mpirun_bound 1 "$ferry" render $scene $args $aovs -o "$work/one.exr" || fail "1 rank, EXR"
-mpirun_bound 3 "$ferry" render $scene $args $aovs -o "$work/three.exr" || fail "3 ranks, EXR"
+mpirun_bound 3 "$ferry" render $scene $args $aovs -o "$work/three.exr" --stats "$work/three.json" \
+  || fail "3 ranks, EXR"
+/usr/bin/python3 -c 'import json, sys; assert json.load(open(sys.argv[1]))["settings"]["aov"] == "albedo,normal,depth"' \
+  "$work/three.json" || fail "the stats do not name the AOVs"
 "$ferry" render $scene $args -o "$work/plain.exr" || fail "no AOVs, EXR"
 /usr/bin/python3 - "$work/one.exr" "$work/three.exr" "$work/plain.exr" << 'PY' || fail "the EXR channels"
 import sys
