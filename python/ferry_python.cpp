@@ -79,6 +79,7 @@ Options options(std::optional<std::pair<int, int>> size, int spp, int maxDepth, 
 // A Session with Python's habits; `comm` an mpi4py communicator or None.
 struct PySession {
   std::unique_ptr<Session> session;
+  Image last;  // the last render's AOVs (its colour moved out), width and height
   PySession(const py::object& comm, const Options& o) {
     if (comm.is_none())
       session = std::make_unique<Session>(o);
@@ -288,12 +289,32 @@ PYBIND11_MODULE(ferry, m) {
               py::gil_scoped_release release;
               image = s.session->render(frames);
             }
+            s.last = Image{image.width, image.height, {}, std::move(image.aovs)};
             if (image.empty()) return py::none();
             return rgbOf(image);
           },
           py::arg("frames") = 1,
           "Renders (collective); an (H, W, 3) float32 array on rank 0 (every rank with "
           "image_on_every_rank), None elsewhere.")
+      .def(
+          "aov",
+          [](const PySession& s, const std::string& name) -> py::object {
+            const Aov* a = s.last.aov(name);
+            if (!a) {
+              std::string asked;
+              for (const Aov& b : s.last.aovs) asked += (asked.empty() ? "" : ", ") + b.name;
+              throw Error("aov \"" + name + "\": the last render wrote " +
+                          (asked.empty() ? std::string("none") : asked) +
+                          " (settings={\"aov\": \"albedo,normal,depth\"})");
+            }
+            if (a->values.empty()) return py::none();
+            py::array_t<float> out({s.last.height, s.last.width, a->channels()});
+            std::memcpy(out.mutable_data(), a->values.data(), a->values.size() * sizeof(float));
+            return out;
+          },
+          py::arg("name"),
+          "The last render's AOV `name` (settings={\"aov\": \"albedo,normal,depth\"}): an "
+          "(H, W, C) float32 array where the image is (C: 3, depth 1, uv 2), None elsewhere.")
       .def_property_readonly("stats", [](const PySession& s) {
         const Stats& st = s.session->stats();
         py::dict d = py::module_::import("json").attr("loads")(st.json);

@@ -132,12 +132,32 @@ struct Options {
   std::function<void(const Progress&)> progress;
 };
 
+// An AOV (arbitrary output variable) a render wrote beside the colour, when
+// asked with the setting {"aov", "albedo,normal,depth"}: a feature of the
+// surface each camera ray met first, averaged over the pixel's samples like
+// the colour (docs/guide.md, "AOVs": albedo, normal, geometric-normal,
+// depth, position, uv).
+struct Aov {
+  std::string name;                       // "albedo"
+  std::vector<std::string> channelNames;  // as in an EXR: "Albedo.R", "Albedo.G", "Albedo.B"
+  std::vector<float> values;              // channels() floats a pixel, row 0 at the top;
+                                          // empty where the image is (Image::empty())
+  int channels() const { return int(channelNames.size()); }
+};
+
 // Linear radiance, RGBA (alpha 1), row 0 at the top; empty off rank 0
-// unless Options::imageOnEveryRank.
+// unless Options::imageOnEveryRank. With AOVs, those too (in the order asked).
 struct Image {
   int width = 0, height = 0;
   std::vector<float> rgba;
+  std::vector<Aov> aovs;
   bool empty() const { return rgba.empty(); }
+  // The AOV named `name`, or null.
+  const Aov* aov(const std::string& name) const {
+    for (const Aov& a : aovs)
+      if (a.name == name) return &a;
+    return nullptr;
+  }
 };
 
 // What the last render() counted, summed over ranks.
@@ -214,7 +234,12 @@ class FERRY_API Session {
 
 // Writes `image` to `path`: .png (tone mapped as `ferry render` does, with
 // `exposure` in stops), .exr or .pfm (linear). Written whole or not at all.
+// Its AOVs go into an .exr as float channels (Albedo.R, ...), and beside a
+// .pfm as files (out.pfm: out.albedo.pfm; 1 or 3 channels, uv as u, v, 0);
+// a .png cannot hold them (an Error: clear image.aovs to write the colour).
 FERRY_API void writeImage(const std::string& path, const Image& image, float exposure = 0);
+// Where writeImage puts AOV `aov` of a .pfm `path`: "out.pfm" -> "out.albedo.pfm".
+FERRY_API std::string aovFilePath(const std::string& path, const std::string& aov);
 
 // One call: `scene` rendered on this process alone.
 FERRY_API Image render(const std::string& scene, const Options& options = {}, int frames = 1);

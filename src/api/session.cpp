@@ -24,6 +24,7 @@
 #include "media/volume_look.h"
 #include "mpi/mpi_communicator.h"
 #include "partition/partitioner.h"
+#include "render/aov.h"
 #include "render/frame_buffer.h"
 #include "session/partitioned_scene.h"
 #include "session/render_session.h"
@@ -40,6 +41,26 @@ ferry::Vec3f vec(const Vec3& v) {
   return {v[0], v[1], v[2]};
 }
 
+// A frame's AOVs, each its own array.
+std::vector<Aov> aovsOf(const FrameImage& frame) {
+  std::vector<Aov> out;
+  const size_t pixels = size_t(frame.width) * size_t(frame.height);
+  const size_t stride = size_t(aovChannelCount(frame.aovs));
+  size_t offset = 0;
+  for (ferry::Aov kind : frame.aovs) {
+    const AovSpec& spec = aovSpec(kind);
+    Aov& a = out.emplace_back();
+    a.name = spec.name;
+    for (int k = 0; k < spec.channels; ++k) a.channelNames.push_back(spec.channelNames[size_t(k)]);
+    a.values.resize(pixels * size_t(spec.channels));
+    for (size_t i = 0; i < pixels; ++i)
+      for (size_t k = 0; k < size_t(spec.channels); ++k)
+        a.values[i * size_t(spec.channels) + k] = frame.aovValues[i * stride + offset + k];
+    offset += size_t(spec.channels);
+  }
+  return out;
+}
+
 // The final image, linear, as rank 0's sink receives it.
 class ImageSink final : public FrameSink {
  public:
@@ -54,6 +75,7 @@ class ImageSink final : public FrameSink {
       std::memcpy(&image.rgba[4 * i], &frame.linear[i], 3 * sizeof(float));
       image.rgba[4 * i + 3] = 1;
     }
+    image.aovs = aovsOf(frame);
   }
   Image image;
 };
@@ -331,6 +353,23 @@ struct Session::Impl {
       sink.image.height = size[1];
       sink.image.rgba.resize(size_t(size[0]) * size[1] * 4);
       comm->broadcastBytes(std::as_writable_bytes(std::span(sink.image.rgba)));
+      // The AOVs the settings asked for (the same list on every rank).
+      FrameImage shape;
+      shape.width = size[0];
+      shape.height = size[1];
+      shape.aovs = session->settings().render.aovs;
+      if (!comm->isRoot()) {
+        shape.aovValues.resize(size_t(size[0]) * size_t(size[1]) *
+                               size_t(aovChannelCount(shape.aovs)));
+        sink.image.aovs = aovsOf(shape);
+      }
+      for (Aov& a : sink.image.aovs)
+        comm->broadcastBytes(std::as_writable_bytes(std::span(a.values)));
+    } else if (!comm->isRoot()) {
+      // No image here: the AOVs by name, without values.
+      FrameImage names;
+      names.aovs = session->settings().render.aovs;
+      sink.image.aovs = aovsOf(names);
     }
     return std::move(sink.image);
   }
@@ -559,6 +598,10 @@ const Stats& Session::stats() const {
   return impl_->stats;
 }
 
+std::string aovFilePath(const std::string& path, const std::string& aov) {
+  return sideFilePath(path, aov);
+}
+
 void writeImage(const std::string& path, const Image& image, float exposure) {
   if (image.empty() || image.rgba.size() != size_t(image.width) * image.height * 4)
     throw Error(fmt::format("{}: the image is empty or its size does not match", path));
@@ -569,12 +612,40 @@ void writeImage(const std::string& path, const Image& image, float exposure) {
     const std::optional<ImageFormat> format = imageFormatOf(path);
     if (!format)
       throw InputError(fmt::format("{}: unknown image format (use .png, .exr or .pfm)", path));
+    const size_t pixels = linear.size();
+    for (const Aov& a : image.aovs)
+      if (a.channels() < 1 || a.channels() > 3 || a.values.size() != pixels * size_t(a.channels()))
+        throw InputError(
+            fmt::format("{}: AOV \"{}\" does not match the image's size", path, a.name));
     if (*format == ImageFormat::Png) {
+      if (!image.aovs.empty())
+        throw InputError(fmt::format("{}: a PNG holds no AOVs (write .exr or .pfm)", path));
       ToneMapping toneMapping;
       toneMapping.exposure = exposure;
       writePng(path, image.width, image.height, toneMapToRgba8(linear, toneMapping));
+    } else if (*format == ImageFormat::Exr) {
+      // Each AOV channel a float channel of the same file.
+      std::vector<ImageChannel> channels;
+      for (const Aov& a : image.aovs)
+        for (size_t k = 0; k < size_t(a.channels()); ++k) {
+          ImageChannel& c = channels.emplace_back();
+          c.name = a.channelNames[k];
+          c.values.resize(pixels);
+          for (size_t i = 0; i < pixels; ++i) c.values[i] = a.values[i * size_t(a.channels()) + k];
+        }
+      writeExr(path, LinearImage{image.width, image.height, std::move(linear)}, channels);
     } else {
+      // PFM: the colour, and each AOV in a file beside it (out.pfm: out.albedo.pfm),
+      // grey or RGB (two channels padded with a zero third).
       ferry::writeImage(path, LinearImage{image.width, image.height, std::move(linear)});
+      for (const Aov& a : image.aovs) {
+        const int channels = a.channels() == 1 ? 1 : 3;
+        std::vector<float> values(pixels * size_t(channels), 0.0f);
+        for (size_t i = 0; i < pixels; ++i)
+          for (size_t k = 0; k < size_t(a.channels()); ++k)
+            values[i * size_t(channels) + k] = a.values[i * size_t(a.channels()) + k];
+        writePfm(aovFilePath(path, a.name), image.width, image.height, channels, values);
+      }
     }
   } catch (const std::exception& e) {
     throw Error(e.what());

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <mutex>
 
@@ -157,6 +158,61 @@ TEST(ApiSession, InProcessRanksRenderTheOneRankImage) {
       else
         EXPECT_TRUE(images[size_t(r)].empty()) << "rank " << r;
   }
+}
+
+// AOVs by name (the "aov" setting): each an array of its channels, the same
+// on 1 rank and 3 (on every rank with imageOnEveryRank, named but empty on
+// the others without), written into an .exr as channels and beside a .pfm
+// as files; the colour is the one without AOVs.
+TEST(ApiSession, AovsComeBackByNameTheSameOnAnyRankCount) {
+  api::Options o = smallOptions();
+  const api::Image plain = api::render("builtin:cornell", o, 1);
+  o.settings["aov"] = "albedo,normal,depth";
+  const api::Image alone = api::render("builtin:cornell", o, 1);
+  EXPECT_EQ(rgbOf(alone), rgbOf(plain));
+  ASSERT_EQ(alone.aovs.size(), 3u);
+  const api::Aov* albedo = alone.aov("albedo");
+  ASSERT_NE(albedo, nullptr);
+  EXPECT_EQ(albedo->channelNames, (std::vector<std::string>{"Albedo.R", "Albedo.G", "Albedo.B"}));
+  EXPECT_EQ(albedo->values.size(), size_t(48 * 36 * 3));
+  const api::Aov* depth = alone.aov("depth");
+  ASSERT_NE(depth, nullptr);
+  EXPECT_EQ(depth->channels(), 1);
+  EXPECT_EQ(depth->channelNames[0], "Z");
+  EXPECT_EQ(alone.aov("uv"), nullptr);
+  for (bool everyRank : {false, true}) {
+    o.imageOnEveryRank = everyRank;
+    std::mutex mutex;
+    std::vector<api::Image> images(3);
+    runRanks(3, [&](const Communicator& comm) {
+      api::Session session = sessionOn(comm, nullptr, o);
+      session.load("builtin:cornell");
+      api::Image image = session.render(1);
+      std::lock_guard lock(mutex);
+      images[size_t(comm.rank())] = std::move(image);
+    });
+    for (int r = 0; r < 3; ++r) {
+      const api::Image& image = images[size_t(r)];
+      ASSERT_EQ(image.aovs.size(), 3u) << "rank " << r;
+      for (size_t a = 0; a < 3; ++a) {
+        EXPECT_EQ(image.aovs[a].name, alone.aovs[a].name);
+        if (r == 0 || everyRank)
+          EXPECT_TRUE(image.aovs[a].values == alone.aovs[a].values)
+              << image.aovs[a].name << ", rank " << r;
+        else
+          EXPECT_TRUE(image.aovs[a].values.empty()) << "rank " << r;
+      }
+    }
+  }
+  const std::string dir = ::testing::TempDir();
+  api::writeImage(dir + "aovs.pfm", alone);
+  for (const char* name : {"albedo", "normal", "depth"})
+    EXPECT_TRUE(std::filesystem::exists(api::aovFilePath(dir + "aovs.pfm", name))) << name;
+  EXPECT_EQ(api::aovFilePath("out/a.b.pfm", "albedo"), "out/a.b.albedo.pfm");
+  api::writeImage(dir + "aovs.exr", alone);
+  EXPECT_THROW(api::writeImage(dir + "aovs.png", alone), api::Error);
+  o.settings["aov"] = "albedo,shadow";
+  EXPECT_THROW(api::render("builtin:cornell", o, 1), api::Error);
 }
 
 // Each rank hands over only its own instances of the cornell box (instance i

@@ -146,6 +146,11 @@ int runRender(const RenderOptions& o, const Communicator& comm) {
   try {
     session->prepare();  // collective; an error is thrown on every rank
     output = outputFile(o, session->filmFilename());
+    if (!o.aov.empty() && imageFormatOf(output) == ImageFormat::Png)
+      throw InputError(
+          fmt::format("--aov {} with -o {}: a PNG holds no AOVs; write .exr (AOVs as "
+                      "channels) or .pfm (AOVs as files beside it)",
+                      o.aov, output));
   } catch (const std::exception& e) {
     error = e.what();
   }

@@ -6,12 +6,13 @@ namespace ferry {
 namespace {
 
 // Direct send: returns this rank's slice of the sum of every rank's partial
-// buffer, exactly (fixed point, render/frame_buffer.h: the same whatever the
-// rank count), 3 values a pixel.
+// fixed-point sums `sums` (`values` a pixel: the colour's 3, or the AOVs'),
+// exactly (render/frame_buffer.h: the same whatever the rank count).
 std::vector<int64_t> sumOwnSliceFixed(const Communicator& comm, const FrameBuffer& partial,
+                                      const std::vector<int64_t>& sums, int values,
                                       uint64_t& bytesSent) {
   maybeInjectFailure("composite", comm.rank());
-  constexpr int kPixelBytes = 3 * int(sizeof(int64_t));
+  const int kPixelBytes = values * int(sizeof(int64_t));
   const int ranks = comm.size(), width = partial.width(), height = partial.height();
   std::vector<int> sendCounts(ranks), sendOffsets(ranks), receiveCounts(ranks),
       receiveOffsets(ranks);
@@ -26,10 +27,10 @@ std::vector<int64_t> sumOwnSliceFixed(const Communicator& comm, const FrameBuffe
     receiveCounts[r] = slicePixels * kPixelBytes;
     receiveOffsets[r] = r * slicePixels * kPixelBytes;
   }
-  const size_t sliceValues = size_t(slicePixels) * 3;
+  const size_t sliceValues = size_t(slicePixels) * size_t(values);
   std::vector<int64_t> pieces(sliceValues * size_t(ranks));
-  comm.exchangeBytes(partial.fixedSum().data(), sendCounts, sendOffsets, pieces.data(),
-                     receiveCounts, receiveOffsets);
+  comm.exchangeBytes(sums.data(), sendCounts, sendOffsets, pieces.data(), receiveCounts,
+                     receiveOffsets);
   for (int r = 0; r < ranks; ++r)
     if (r != comm.rank()) bytesSent += uint64_t(sendCounts[r]);
   std::vector<int64_t> total(sliceValues, 0);
@@ -41,7 +42,8 @@ std::vector<int64_t> sumOwnSliceFixed(const Communicator& comm, const FrameBuffe
 // The same slice as floats, times `scale`.
 std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& partial, float scale,
                                uint64_t& bytesSent) {
-  const std::vector<int64_t> total = sumOwnSliceFixed(comm, partial, bytesSent);
+  const std::vector<int64_t> total =
+      sumOwnSliceFixed(comm, partial, partial.fixedSum(), 3, bytesSent);
   std::vector<Vec3f> slice(total.size() / 3);
   for (size_t i = 0; i < slice.size(); ++i)
     slice[i] = Vec3f(FrameBuffer::toLinear(total[3 * i], scale),
@@ -50,7 +52,8 @@ std::vector<Vec3f> sumOwnSlice(const Communicator& comm, const FrameBuffer& part
   return slice;
 }
 
-// `elementsPerPixel`: 1 for Vec3f pixels, 3 for fixed-point sums, 4 for RGBA8 bytes.
+// `elementsPerPixel`: 1 for Vec3f pixels, 3 for fixed-point sums, 4 for RGBA8
+// bytes, the AOV channel count for AOV floats.
 template <typename T>
 std::vector<T> gatherSlices(const Communicator& comm, const std::vector<T>& slice, int width,
                             int height, int elementsPerPixel) {
@@ -83,9 +86,21 @@ std::vector<Vec3f> compositeLinear(const Communicator& comm, const FrameBuffer& 
 
 std::vector<int64_t> compositeFixed(const Communicator& comm, const FrameBuffer& partial,
                                     uint64_t& bytesSent) {
-  std::vector<int64_t> slice = sumOwnSliceFixed(comm, partial, bytesSent);
+  std::vector<int64_t> slice = sumOwnSliceFixed(comm, partial, partial.fixedSum(), 3, bytesSent);
   if (!comm.isRoot()) bytesSent += slice.size() * sizeof(int64_t);
   return gatherSlices(comm, slice, partial.width(), partial.height(), 3);
+}
+
+std::vector<float> compositeAovs(const Communicator& comm, const FrameBuffer& partial, float scale,
+                                 uint64_t& bytesSent) {
+  const int channels = partial.aovChannels();
+  if (channels == 0) return {};
+  const std::vector<int64_t> total =
+      sumOwnSliceFixed(comm, partial, partial.fixedAovSum(), channels, bytesSent);
+  std::vector<float> slice(total.size());
+  for (size_t i = 0; i < slice.size(); ++i) slice[i] = FrameBuffer::toLinear(total[i], scale);
+  if (!comm.isRoot()) bytesSent += slice.size() * sizeof(float);
+  return gatherSlices(comm, slice, partial.width(), partial.height(), channels);
 }
 
 std::vector<uint8_t> compositeToneMapped(const Communicator& comm, const FrameBuffer& partial,

@@ -25,7 +25,12 @@ std::vector<Vec3f> compositeLinear(const Communicator& comm, const FrameBuffer& 
 // empty elsewhere: what a checkpoint stores.
 std::vector<int64_t> compositeFixed(const Communicator& comm, const FrameBuffer& partial,
                                     uint64_t& bytesSent);
-// The same, tone mapped to RGBA8 on the slice owners before gathering.
+// The AOVs' averages (the sums of all ranks' FrameBuffer::fixedAovSum()
+// times `scale`, aovChannels() floats a pixel) on rank 0; empty elsewhere,
+// and everywhere when the buffer has no AOVs.
+std::vector<float> compositeAovs(const Communicator& comm, const FrameBuffer& partial, float scale,
+                                 uint64_t& bytesSent);
+// The colour, tone mapped to RGBA8 on the slice owners before gathering.
 std::vector<uint8_t> compositeToneMapped(const Communicator& comm, const FrameBuffer& partial,
                                          float scale, const ToneMapping& toneMapping,
                                          uint64_t& bytesSent);

@@ -15,6 +15,7 @@
 #include "io/images/image_io.h"
 #include "media/volume_look.h"
 #include "path/path.h"
+#include "render/aov.h"
 #include "render/camera.h"
 #include "session/image_file_sink.h"
 #include "session/render_session.h"
@@ -78,6 +79,11 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
       throw InputError(fmt::format("--checkpoint {}: directory '{}' does not exist", o.checkpoint,
                                    dir.string()));
   }
+  s.render.aovs = parseFlag("--aov", o.aov, parseAovList);
+  if (!s.render.aovs.empty() && !o.resume.empty())
+    throw InputError(fmt::format(
+        "--aov {} with --resume: a checkpoint holds the colour only; render again from the start",
+        o.aov));
   s.checkpoint = o.checkpoint;
   s.checkpointEvery = o.checkpointEvery;
   s.timeLimitSeconds = o.timeLimit;
@@ -323,6 +329,12 @@ void addRunOptions(CLI::App* command, RenderOptions& o) {
       "Continue the render a checkpoint holds (same scene, size, --spp, --max-depth, --seed\n"
       "and view; any rank count): frames after it up to --frames, with the image an\n"
       "uninterrupted render would give, bit for bit. May be the --checkpoint file itself.");
+  command->add_option(
+      "--aov", o.aov,
+      "Also write these features of the surface each camera ray meets first, averaged over\n"
+      "the pixel's samples like the colour (for denoisers): a comma list of albedo, normal,\n"
+      "geometric-normal, depth, position, uv. As channels of an .exr output (Albedo.R,\n"
+      "Ns.X, N.X, Z, P.X, u/v), or files beside a .pfm one (NAME.albedo.pfm); not for .png");
   command->add_option("--time-limit", o.timeLimit,
                       "Seconds: the frame that crosses it is the last (0: none); the image is\n"
                       "written as usual, with the frames done");

@@ -45,6 +45,9 @@ struct RenderOptions {
   std::string forwarding = "proxies";
   std::string exchange = "auto";
   std::string checkpoint, resume;
+  // --aov: first-surface features beside the colour, as a comma list of
+  // render/aov.h's names (empty: none).
+  std::string aov;
   int checkpointEvery = 10;
   double timeLimit = 0;
   uint32_t chunkPixels = 8192;
@@ -95,7 +98,8 @@ struct RenderOptions {
 // spread over ranks (not the output, frames or checkpoints).
 void addRenderingOptions(CLI::App* command, RenderOptions& options);
 // --checkpoint, --checkpoint-every, --resume and --time-limit: how a render
-// that runs for long is kept and continued (render's, and the library's).
+// that runs for long is kept and continued; --aov: what it writes beside the
+// colour (render's, and the library's; the viewer shows no AOVs).
 void addRunOptions(CLI::App* command, RenderOptions& options);
 // The flags, checked, as a session's settings: every mode parsed once.
 SessionSettings sessionSettings(const RenderOptions& options, const Communicator& comm);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 
 #include "scene/texture.h"
 
@@ -49,6 +50,44 @@ void FrameBuffer::finishSample(bool addHere) {
     }
   }
   std::fill(sampleSum_.begin(), sampleSum_.end(), 0);
+}
+
+void FrameBuffer::setAovs(const std::vector<Aov>& aovs) {
+  const int channels = aovChannelCount(aovs);
+  const size_t size = pixelCount() * size_t(channels);
+  if (aovs == aovs_ && aovSum_.size() == size) return;
+  aovs_ = aovs;
+  aovChannels_ = channels;
+  aovSum_.assign(size, 0);
+}
+
+void FrameBuffer::addAovs(uint32_t pixel, const SurfaceAovs& values) {
+  int64_t* s = &aovSum_[size_t(pixel) * size_t(aovChannels_)];
+  auto add = [&s](std::initializer_list<float> v) {
+    for (float x : v) *s++ += toFixedSigned(x);
+  };
+  for (Aov aov : aovs_) {
+    switch (aov) {
+      case Aov::Albedo:
+        add({values.albedo.x, values.albedo.y, values.albedo.z});
+        break;
+      case Aov::Normal:
+        add({values.shadingNormal.x, values.shadingNormal.y, values.shadingNormal.z});
+        break;
+      case Aov::GeometricNormal:
+        add({values.geometricNormal.x, values.geometricNormal.y, values.geometricNormal.z});
+        break;
+      case Aov::Depth:
+        add({values.depth});
+        break;
+      case Aov::Position:
+        add({values.position.x, values.position.y, values.position.z});
+        break;
+      case Aov::Uv:
+        add({values.uv.x, values.uv.y});
+        break;
+    }
+  }
 }
 
 std::vector<Vec3f> FrameBuffer::sum(double scale) const {

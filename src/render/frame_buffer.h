@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "render/aov.h"
 
 namespace ferry {
 
@@ -98,7 +99,33 @@ class FrameBuffer {
   std::vector<int64_t>& fixedSum() { return sum_; }
   // The sums as floats (times `scale`).
   std::vector<Vec3f> sum(double scale = 1) const;
-  void clear() { std::fill(sum_.begin(), sum_.end(), 0); }
+  void clear() {
+    std::fill(sum_.begin(), sum_.end(), 0);
+    std::fill(aovSum_.begin(), aovSum_.end(), 0);
+  }
+
+  // AOVs (render/aov.h). While `aovs` is not empty, addAovs() sums each
+  // camera sample's first-surface values per pixel: aovChannels() a pixel,
+  // pixel after pixel, in signed fixed point with the colour's resolution
+  // (exact sums in any order and over any ranks, as the colour's). Setting
+  // the same list again keeps the sums; another list starts them at zero.
+  void setAovs(const std::vector<Aov>& aovs);
+  const std::vector<Aov>& aovs() const { return aovs_; }
+  bool hasAovs() const { return !aovs_.empty(); }
+  int aovChannels() const { return aovChannels_; }
+  // One camera sample's values (not clamped by a SampleClamp); for one
+  // thread per pixel at a time.
+  void addAovs(uint32_t pixel, const SurfaceAovs& values);
+  const std::vector<int64_t>& fixedAovSum() const { return aovSum_; }
+  std::vector<int64_t>& fixedAovSum() { return aovSum_; }
+  // A signed value in fixed point: clamped to [-kMaxContribution,
+  // kMaxContribution]; NaN is 0.
+  static int64_t toFixedSigned(float v) {
+    if (!(v == v)) return 0;
+    v = std::clamp(v, -kMaxContribution, kMaxContribution);
+    const double scaled = double(v) * double(int64_t(1) << kFractionBits);
+    return int64_t(scaled < 0 ? scaled - 0.5 : scaled + 0.5);
+  }
 
  private:
   int width_, height_;
@@ -106,6 +133,9 @@ class FrameBuffer {
   bool atomicAdds_ = false;
   SampleClamp clamp_;
   std::vector<int64_t> sampleSum_;  // the current camera sample, while clamped
+  std::vector<Aov> aovs_;
+  int aovChannels_ = 0;
+  std::vector<int64_t> aovSum_;  // aovChannels_ a pixel
 };
 
 // Exposure (in stops), the ACES filmic curve (Narkowicz's fit), then sRGB.

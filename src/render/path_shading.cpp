@@ -87,8 +87,13 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
                                 shadowRay);
   const PathVertex vertex = surfaceVertex(path, hit, bounce);
   addEmission(vertex, hit, frameBuffer);
-  if (bounce >= maxDepth_) return {};
+  const bool aovs = bounce == 0 && frameBuffer.hasAovs();
+  if (bounce >= maxDepth_) {
+    if (aovs) addFirstSurfaceAovs(vertex, shadingFrame(vertex, sampleIndex, bounce), frameBuffer);
+    return {};
+  }
   const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
+  if (aovs) addFirstSurfaceAovs(vertex, scattering, frameBuffer);
   const float lightBase = camera_ ? cameraLightBase(vertex, scattering) : 0.0f;
   Spawned spawned;
   spawned.continuation = sampleContinuation(vertex, scattering, lightBase, continuation);
@@ -288,6 +293,31 @@ template <typename Path>
                     path.bsdfPdf(),
                     path.lightRatio,
                     reconstructSurface(scene_, surfaces_, hit, path.dir())};
+}
+
+// The AOVs of a camera path's first surface (render/aov.h). The albedo is
+// the weight of one BSDF sample drawn with the vertex's own numbers (f cos /
+// pdf: an unbiased estimate of the directional albedo, exact for diffuse and
+// smooth surfaces), clamped to [0, 1]; a sample that fails gives 0. Out of
+// line: only renders with AOVs come here.
+template <typename Path>
+[[gnu::noinline]] void PathShading<Path>::addFirstSurfaceAovs(const PathVertex& vertex,
+                                                              const VertexScattering& scattering,
+                                                              FrameBuffer& frameBuffer) const {
+  SurfaceAovs aovs;
+  const RandomStream& random = scattering.random;
+  BsdfSample bs;
+  const Vec2f u{random(RandomDim::BsdfU), random(RandomDim::BsdfV)};
+  if (scattering.bsdf.sample(scattering.woLocal, random(RandomDim::BsdfLobe), u, bs) &&
+      isFinite(bs.weight))
+    aovs.albedo = Vec3f(std::clamp(bs.weight.x, 0.0f, 1.0f), std::clamp(bs.weight.y, 0.0f, 1.0f),
+                        std::clamp(bs.weight.z, 0.0f, 1.0f));
+  aovs.shadingNormal = scattering.frame.n;
+  aovs.geometricNormal = scattering.ng;
+  aovs.depth = length(vertex.surface.position - vertex.from);
+  aovs.position = vertex.surface.position;
+  aovs.uv = vertex.surface.uv;
+  frameBuffer.addAovs(vertex.pixel, aovs);
 }
 
 // Emission counts in full after a delta vertex, and MIS-weighted against the
@@ -568,8 +598,13 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
                                 shadowRay);
   const PathVertex vertex = surfaceVertex(arrived, hit, bounce);
   addEmission(vertex, hit, frameBuffer);
-  if (bounce >= maxDepth_) return {};
+  const bool aovs = bounce == 0 && frameBuffer.hasAovs();
+  if (bounce >= maxDepth_) {
+    if (aovs) addFirstSurfaceAovs(vertex, shadingFrame(vertex, sampleIndex, bounce), frameBuffer);
+    return {};
+  }
   const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
+  if (aovs) addFirstSurfaceAovs(vertex, scattering, frameBuffer);
   const MediumInterface& sides = surfaceMedia(hit);
   auto leaving = [&](Vec3f direction) {
     return sides.isTransition() ? sides.along(direction, vertex.surface.geometricNormal) : f.medium;

@@ -188,6 +188,9 @@ class PathShading {
   inline PathVertex surfaceVertex(const Path& path, const TraceHit& hit, uint32_t bounce) const;
   inline void addEmission(const PathVertex& vertex, const TraceHit& hit,
                           FrameBuffer& frameBuffer) const;
+  // A camera path's first surface: its AOVs to the frame buffer (which has some).
+  void addFirstSurfaceAovs(const PathVertex& vertex, const VertexScattering& scattering,
+                           FrameBuffer& frameBuffer) const;
   // `keyBounce`: the random key's bounce (a light path's are offset).
   inline VertexScattering shadingFrame(const PathVertex& vertex, uint32_t sampleIndex,
                                        uint32_t keyBounce) const;

@@ -85,6 +85,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   // Light paths add to any pixel from any thread.
   if (shading_.lightPaths()) frameBuffer.setAtomicAdds(true);
   frameBuffer.setSampleClamp(settings_.sampleClamp);
+  frameBuffer.setAovs(settings_.aovs);
   const uint32_t spp = uint32_t(settings_.samplesPerPixel), groups = settings_.dataGroups;
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);

@@ -54,6 +54,9 @@ struct RenderSettings {
   // pbrt's film clamp of each camera sample (Film "maxsampleluminance",
   // "maxcomponentvalue"; --max-sample-luminance): render/frame_buffer.h.
   SampleClamp sampleClamp;
+  // --aov: the first-surface features summed beside the colour
+  // (render/aov.h); empty: none, and the frame buffer holds none.
+  std::vector<Aov> aovs;
   // --lens-radius, --focal-distance: the thin lens of whichever camera is used.
   std::optional<float> lensRadius, focalDistance;
   // The camera rendered: `camera`, else the scene's view `view`, with the lens set above.

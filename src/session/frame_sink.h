@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/math.h"
+#include "render/aov.h"
 
 namespace ferry {
 
@@ -23,6 +24,11 @@ struct FrameImage {
   int height = 0;
   std::vector<Vec3f> linear;  // FrameSink::Pixels::Linear: average radiance, row 0 at the top
   std::vector<uint8_t> rgba;  // FrameSink::Pixels::ToneMapped: RGBA8 by the session's tone mapping
+  // With --aov: the AOVs, and with Pixels::Linear their averages,
+  // aovChannelCount(aovs) floats a pixel (the AOVs in order, each its
+  // channels), row 0 at the top.
+  std::vector<Aov> aovs;
+  std::vector<float> aovValues;
 };
 
 class FrameSink {

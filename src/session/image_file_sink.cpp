@@ -28,16 +28,45 @@ FrameSink::Pixels ImageFileSink::pixels() const {
 
 void ImageFileSink::receive(const FrameImage& image) {
   if (!image.last) return;
+  if (format_ == ImageFormat::Png && !image.aovs.empty())
+    throw InputError(fmt::format("{}: a PNG holds no AOVs", path_));
+  // The AOVs' channels apart, one ImageChannel each (none without --aov).
+  const size_t pixels = size_t(image.width) * size_t(image.height);
+  const size_t stride = size_t(aovChannelCount(image.aovs));
+  std::vector<ImageChannel> channels;
+  for (Aov aov : image.aovs) {
+    const AovSpec& spec = aovSpec(aov);
+    for (int k = 0; k < spec.channels; ++k) {
+      ImageChannel& c = channels.emplace_back();
+      c.name = spec.channelNames[size_t(k)];
+      c.values.resize(pixels);
+      const size_t offset = channels.size() - 1;
+      for (size_t i = 0; i < pixels; ++i) c.values[i] = image.aovValues[i * stride + offset];
+    }
+  }
   switch (format_) {
     case ImageFormat::Png:
       writePng(path_, image.width, image.height, image.rgba);
       return;
     case ImageFormat::Exr:
-      writeExr(path_, {image.width, image.height, image.linear});
+      writeExr(path_, {image.width, image.height, image.linear}, channels);
       return;
-    case ImageFormat::Pfm:
+    case ImageFormat::Pfm: {
       writePfm(path_, {image.width, image.height, image.linear});
+      // Each AOV beside it, as the library writes them (api::writeImage).
+      size_t channel = 0;
+      for (Aov aov : image.aovs) {
+        const AovSpec& spec = aovSpec(aov);
+        const int stored = spec.channels == 1 ? 1 : 3;
+        std::vector<float> values(pixels * size_t(stored), 0.0f);
+        for (size_t i = 0; i < pixels; ++i)
+          for (size_t k = 0; k < size_t(spec.channels); ++k)
+            values[i * size_t(stored) + k] = channels[channel + k].values[i];
+        channel += size_t(spec.channels);
+        writePfm(sideFilePath(path_, spec.name), image.width, image.height, stored, values);
+      }
       return;
+    }
   }
 }
 

@@ -1,6 +1,8 @@
 // The first frame sink: the final image as a file, its format by the
 // extension (imageFormatOf: PNG tone mapped; EXR and PFM linear radiance),
-// written by rank 0 through a temporary file and a rename.
+// written by rank 0 through a temporary file and a rename. AOVs as the
+// library writes them: float channels of an EXR, files beside a PFM
+// (NAME.albedo.pfm); a PNG cannot hold them (InputError).
 #pragma once
 
 #include <string>

@@ -179,8 +179,10 @@ FrameStats sumOverRanks(const Communicator& comm, const FrameStats& mine) {
   return out;
 }
 
-// The sum of every rank's frame buffer times `scale`, as `pixels` asks, on
-// rank 0 (collective). Adds the bytes this rank sent to `bytesSent`.
+// The sum of every rank's frame buffer times `scale`, as `pixels` asks, and
+// the AOVs the buffer has (their values with linear pixels only), on rank 0
+// (collective). Adds the bytes this rank
+// sent to `bytesSent`.
 FrameImage composite(const Communicator& comm, const FrameBuffer& frameBuffer, float scale,
                      FrameSink::Pixels pixels, const ToneMapping& toneMapping,
                      uint64_t& bytesSent) {
@@ -191,6 +193,9 @@ FrameImage composite(const Communicator& comm, const FrameBuffer& frameBuffer, f
     image.rgba = compositeToneMapped(comm, frameBuffer, scale, toneMapping, bytesSent);
   else
     image.linear = compositeLinear(comm, frameBuffer, scale, bytesSent);
+  image.aovs = frameBuffer.aovs();
+  if (pixels == FrameSink::Pixels::Linear && frameBuffer.hasAovs())
+    image.aovValues = compositeAovs(comm, frameBuffer, scale, bytesSent);
   return image;
 }
 

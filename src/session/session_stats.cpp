@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "io/images/image_io.h"
+#include "render/aov.h"
 #include "scene/scene_summary.h"
 
 namespace ferry {
@@ -59,6 +60,7 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                    {"instancing", toString(s.instancing)},
                    {"partition", session.partitionerName()},
                    {"output", context.output},
+                   {"aov", aovListText(r.aovs)},
                    {"path_layout", report.pathLayout},
                    {"path_bytes", report.pathBytes}};
   j["render"] = report.stats.toJson();

@@ -125,6 +125,32 @@ def single(binary):
     if not np.isfinite(volume).all() or volume[12, 16].tolist() == volume[0, 0].tolist():
         fail("the volume is not in the image")
 
+    # AOVs by name: arrays like the colour, the albedo of the command's EXR channels.
+    a = ferry.Session(size=(64, 48), spp=4, seed=1, threads=1,
+                      settings={"aov": "albedo,normal,depth"})
+    a.load("builtin:cornell")
+    colour = a.render()
+    albedo, normal, depth = a.aov("albedo"), a.aov("normal"), a.aov("depth")
+    if albedo.shape != (48, 64, 3) or normal.shape != (48, 64, 3) or depth.shape != (48, 64, 1):
+        fail(f"aov shapes {albedo.shape} {normal.shape} {depth.shape}")
+    if not np.array_equal(colour, image):
+        fail("the colour with AOVs is not the colour without")
+    if not (albedo.min() >= 0 and albedo.max() <= 1 and (depth > 0).mean() > 0.5):
+        fail(f"albedo {albedo.min()}..{albedo.max()}, {(depth > 0).mean():.0%} of the pixels hit")
+    pfm = os.path.join(work, "aov.pfm")
+    subprocess.run([binary, "render", "builtin:cornell", "--size", "64x48", "--spp", "4",
+                    "--seed", "1", "-q", "--aov", "albedo", "-o", pfm], check=True)
+    if not np.array_equal(albedo, read_pfm(os.path.join(work, "aov.albedo.pfm"))):
+        fail("session.aov('albedo') differs from `ferry render --aov albedo`'s aov.albedo.pfm")
+    try:
+        a.aov("uv")
+        fail("aov('uv') not asked for, but no error")
+    except ferry.Error as e:
+        if "albedo, normal, depth" not in str(e):
+            fail(f"aov('uv'): {e!r} does not list the AOVs rendered")
+    print("  session.aov(): albedo, normal, depth as (H, W, C) arrays; the albedo is the "
+          "command's aov.albedo.pfm")
+
     # Errors are ferry.Error, with the reason.
     for call, expected in [
         (lambda: ferry.render("/nonexistent/scene.pbrt"), "/nonexistent/scene.pbrt"),

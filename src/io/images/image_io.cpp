@@ -14,7 +14,10 @@
 #include <memory>
 
 #include <ImfArray.h>
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfOutputFile.h>
 #include <ImfRgbaFile.h>
 #include <fmt/format.h>
 #include <stb/stb_image.h>
@@ -343,22 +346,83 @@ void writeExr(const std::string& path, const LinearImage& image) {
   });
 }
 
+std::string sideFilePath(const std::string& path, const std::string& tag) {
+  const fs::path p(path);
+  fs::path side = p;
+  side.replace_filename(p.stem().string() + "." + tag + p.extension().string());
+  return side.string();
+}
+
+void writeExr(const std::string& path, const LinearImage& image,
+              const std::vector<ImageChannel>& extra) {
+  if (extra.empty()) return writeExr(path, image);
+  checkImage("writeExr", image.width, image.height, image.rgb.size(), 1);
+  for (const ImageChannel& c : extra)
+    checkImage("writeExr", image.width, image.height, c.values.size(), 1);
+  // The colour as writeExr(path, image) rounds it, without alpha.
+  const size_t pixels = image.rgb.size();
+  std::vector<uint16_t> halves(pixels * 3);
+  for (size_t i = 0; i < pixels; ++i) {
+    halves[3 * i] = floatToHalf(image.rgb[i].x);
+    halves[3 * i + 1] = floatToHalf(image.rgb[i].y);
+    halves[3 * i + 2] = floatToHalf(image.rgb[i].z);
+  }
+  writeFileAtomically(path, [&](const std::string& temp) {
+    try {
+      Imf::Header header(image.width, image.height);
+      header.compression() = Imf::ZIP_COMPRESSION;
+      Imf::FrameBuffer frame;
+      const size_t halfRow = sizeof(uint16_t) * 3 * size_t(image.width);
+      const char* names[] = {"R", "G", "B"};
+      for (int k = 0; k < 3; ++k) {
+        header.channels().insert(names[k], Imf::Channel(Imf::HALF));
+        frame.insert(names[k], Imf::Slice(Imf::HALF, reinterpret_cast<char*>(halves.data() + k),
+                                          3 * sizeof(uint16_t), halfRow));
+      }
+      for (const ImageChannel& c : extra) {
+        header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
+        frame.insert(c.name,
+                     Imf::Slice(Imf::FLOAT,
+                                const_cast<char*>(reinterpret_cast<const char*>(c.values.data())),
+                                sizeof(float), sizeof(float) * size_t(image.width)));
+      }
+      Imf::OutputFile file(temp.c_str(), header);
+      file.setFrameBuffer(frame);
+      file.writePixels(image.height);
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw InputError(fmt::format("{}: cannot write EXR: {}", path, e.what()));
+    }
+  });
+}
+
 void writePfm(const std::string& path, const LinearImage& image) {
   checkImage("writePfm", image.width, image.height, image.rgb.size(), 1);
+  std::vector<float> values(image.rgb.size() * 3);
+  for (size_t i = 0; i < image.rgb.size(); ++i) {
+    values[3 * i] = image.rgb[i].x;
+    values[3 * i + 1] = image.rgb[i].y;
+    values[3 * i + 2] = image.rgb[i].z;
+  }
+  writePfm(path, image.width, image.height, 3, values);
+}
+
+void writePfm(const std::string& path, int width, int height, int channels,
+              const std::vector<float>& values) {
+  FERRY_CHECK(channels == 1 || channels == 3);
+  checkImage("writePfm", width, height, values.size(), size_t(channels));
   writeFileAtomically(path, [&](const std::string& temp) {
     std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(temp.c_str(), "wb"), &std::fclose);
     if (!file) throw InputError(fmt::format("{}: cannot write: {}", path, std::strerror(errno)));
     // Negative scale: little-endian samples. Rows go bottom to top.
-    std::string header = fmt::format("PF\n{} {}\n-1.0\n", image.width, image.height);
+    std::string header =
+        fmt::format("{}\n{} {}\n-1.0\n", channels == 3 ? "PF" : "Pf", width, height);
     bool ok = std::fwrite(header.data(), 1, header.size(), file.get()) == header.size();
-    std::vector<float> row(size_t(image.width) * 3);
-    for (int y = image.height - 1; ok && y >= 0; --y) {
-      for (int x = 0; x < image.width; ++x) {
-        const Vec3f& p = image.rgb[size_t(y) * size_t(image.width) + size_t(x)];
-        row[3 * size_t(x)] = p.x;
-        row[3 * size_t(x) + 1] = p.y;
-        row[3 * size_t(x) + 2] = p.z;
-      }
+    const size_t rowValues = size_t(width) * size_t(channels);
+    std::vector<float> row(rowValues);
+    for (int y = height - 1; ok && y >= 0; --y) {
+      std::copy_n(values.begin() + ptrdiff_t(size_t(y) * rowValues), rowValues, row.begin());
       if constexpr (std::endian::native == std::endian::big) {
         for (float& f : row) f = std::bit_cast<float>(byteSwap(std::bit_cast<uint32_t>(f)));
       }

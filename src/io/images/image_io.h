@@ -52,8 +52,24 @@ void writePng(const std::string& path, int width, int height, const std::vector<
 std::string encodePng(int width, int height, const std::vector<uint8_t>& rgba);
 // Half-float RGB, ZIP compressed, rounded as core/half.h does (saturating at 65504).
 void writeExr(const std::string& path, const LinearImage& image);
+// A file beside `path` tagged `tag`: "out/a.pfm", "albedo" -> "out/a.albedo.pfm".
+std::string sideFilePath(const std::string& path, const std::string& tag);
+// A named channel of floats beside an image's colour, one a pixel, row 0 at
+// the top (the AOVs: render/aov.h).
+struct ImageChannel {
+  std::string name;
+  std::vector<float> values;
+};
+// The colour as writeExr(path, image) rounds it (R, G, B; no alpha), and
+// `extra` as 32-bit float channels of the same file; with no extra channel,
+// exactly writeExr(path, image).
+void writeExr(const std::string& path, const LinearImage& image,
+              const std::vector<ImageChannel>& extra);
 // "PF", little-endian (scale -1), rows bottom to top as the format says.
 void writePfm(const std::string& path, const LinearImage& image);
+// The same for `channels` (1: "Pf", grey; 3: "PF") floats a pixel, row 0 at the top.
+void writePfm(const std::string& path, int width, int height, int channels,
+              const std::vector<float>& values);
 // "PF" (RGB) or "Pf" (grey, replicated to RGB), either byte order; the scale's
 // magnitude is ignored. The file size must match the header exactly (checked
 // before allocating). Values are returned as stored, non-finite ones included.
