@@ -127,8 +127,8 @@ Setup& setup() {
     RTCGeometry geom = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE);
     auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
         geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, s.segments * 4));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, 4, s.segments));
+    auto* indices = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, 4, s.segments));
     for (size_t k = 0; k < s.segments; ++k) {
       const CurveSegment& c = fur->segments()[k];
       for (int i = 0; i < 4; ++i) {
@@ -163,8 +163,7 @@ void traceAll(benchmark::State& state, Trace trace) {
                       });
   }
   state.SetItemsProcessed(int64_t(state.iterations() * s.rays.size()));
-  state.counters["hit_fraction"] =
-      double(hits.load()) / double(state.iterations() * s.rays.size());
+  state.counters["hit_fraction"] = double(hits.load()) / double(state.iterations() * s.rays.size());
 }
 
 void Curves_(benchmark::State& state) {
@@ -213,12 +212,13 @@ class Ratios : public benchmark::ConsoleReporter {
   void Finalize() override {
     ConsoleReporter::Finalize();
     if (rate_.count("Curves") && rate_.count("Triangles") && rate_.count("EmbreeCurves"))
-      std::printf("curves/triangles rays/s %.3f  curves/embree-curves rays/s %.3f  "
-                  "bytes per segment: curves %.1f, triangles %.1f, embree curves %.1f "
-                  "(curves/embree %.2f)\n",
-                  rate_["Curves"] / rate_["Triangles"], rate_["Curves"] / rate_["EmbreeCurves"],
-                  bytes_["Curves"], bytes_["Triangles"], bytes_["EmbreeCurves"],
-                  bytes_["Curves"] / bytes_["EmbreeCurves"]);
+      std::printf(
+          "curves/triangles rays/s %.3f  curves/embree-curves rays/s %.3f  "
+          "bytes per segment: curves %.1f, triangles %.1f, embree curves %.1f "
+          "(curves/embree %.2f)\n",
+          rate_["Curves"] / rate_["Triangles"], rate_["Curves"] / rate_["EmbreeCurves"],
+          bytes_["Curves"], bytes_["Triangles"], bytes_["EmbreeCurves"],
+          bytes_["Curves"] / bytes_["EmbreeCurves"]);
   }
 
  private:

@@ -229,6 +229,33 @@ PYBIND11_MODULE(ferry, m) {
           py::arg("uvs") = py::none(), py::arg("material") = 0, py::arg("name") = "",
           py::arg("copy") = false, "add_mesh, placed once, untransformed.")
       .def(
+          "place_curves",
+          [](PySession& s, const py::object& points, const py::object& indices,
+             const py::object& widths, const std::string& type, const py::object& normals,
+             int material, const std::string& name) {
+            std::vector<py::object> keep;
+            CurvesData d;
+            d.name = name;
+            d.points = span<float>(points, 3, "points", keep);
+            d.indices = span<uint32_t>(indices, 1, "indices", keep);
+            std::vector<float> one;
+            if (py::isinstance<py::float_>(widths) || py::isinstance<py::int_>(widths)) {
+              one.push_back(widths.cast<float>());
+              d.widths = one;
+            } else {
+              d.widths = span<float>(widths, 1, "widths", keep);
+            }
+            if (!normals.is_none()) d.normals = span<float>(normals, 3, "normals", keep);
+            d.type = type;
+            d.material = material;
+            s.session->placeCurves(d);
+          },
+          py::arg("points"), py::arg("indices"), py::arg("widths"), py::arg("type") = "flat",
+          py::arg("normals") = py::none(), py::arg("material") = 0, py::arg("name") = "",
+          "Curves placed once: points (N, 3) float32 control points, indices (M,) uint32 (a "
+          "cubic Bezier segment's first of 4 consecutive points), widths (N,) or one number; "
+          "type flat, cylinder or ribbon (normals (N, 3)). Copied.")
+      .def(
           "add_volume",
           [](PySession& s, const py::object& values, std::array<float, 3> lower,
              std::array<float, 3> upper, std::array<float, 3> sigmaA, std::array<float, 3> sigmaS,

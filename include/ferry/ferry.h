@@ -54,6 +54,23 @@ struct MeshData {
   bool readablePastEnd = false;
 };
 
+// Curves (fur, hair, grass; pbrt's "curve", Embree's curve geometries):
+// cubic Bézier segments, each the 4 consecutive control points from its
+// index (strands of k segments share end points: 3k + 1 points), with a
+// width at every control point (a segment's ends' widths are used) or one
+// width for all. type: "flat" (a ribbon facing the ray), "cylinder" (the
+// same, shaded as a tube) or "ribbon" (turned by a normal at each control
+// point, as the widths). Copied into Ferry's own layout.
+struct CurvesData {
+  std::string name;
+  std::span<const float> points;      // x, y, z per control point
+  std::span<const uint32_t> indices;  // a segment's first control point
+  std::span<const float> widths;      // one per control point, or a single one
+  std::span<const float> normals;     // ribbons: x, y, z per control point
+  std::string type = "flat";
+  int material = 0;
+};
+
 // A surface's material. type: "diffuse" (color), "conductor" (a metal: color
 // at normal incidence, roughness), "dielectric" (glass: ior, roughness,
 // color as tint), "principled" (glTF's metallic-roughness: color, metallic,
@@ -205,6 +222,8 @@ class FERRY_API Session {
   // A mesh placed once, untransformed (addMesh, addObject, addInstance).
   int placeMesh(const MeshData& mesh);
   void addVolume(const VolumeData& volume);
+  // Curves placed once, untransformed (their own object and instance).
+  void placeCurves(const CurvesData& curves);
   // Lights: a sun (towards it; irradiance in W/m^2) and a constant sky.
   void addSun(const Vec3& direction, const Vec3& irradiance);
   void setEnvironment(const Vec3& color);

@@ -29,6 +29,7 @@
 #include "session/partitioned_scene.h"
 #include "session/render_session.h"
 #include "session/session_stats.h"
+#include "shapes/curves.h"
 
 namespace ferry::api {
 
@@ -535,6 +536,57 @@ void Session::addVolume(const VolumeData& v) {
   scene.media.push_back(std::move(medium));
   scene.mediumBoundaries.push_back(
       {boxMesh(box, name + " box"), {int32_t(scene.media.size() - 1), kNoMedium}});
+}
+
+void Session::placeCurves(const CurvesData& c) {
+  ferry::Scene& scene = impl_->changing();
+  const std::string name =
+      c.name.empty() ? fmt::format("curves {}", scene.geometries.size()) : c.name;
+  CurveType type;
+  if (!parseCurveType(c.type, type))
+    throw Error(
+        fmt::format("curves \"{}\": type \"{}\": expected flat, cylinder or ribbon", name, c.type));
+  if (c.points.size() % 3 != 0)
+    throw Error(fmt::format("curves \"{}\": {} point coordinates are not x, y, z triples", name,
+                            c.points.size()));
+  const size_t count = c.points.size() / 3;
+  if (c.widths.size() != 1 && c.widths.size() != count)
+    throw Error(fmt::format("curves \"{}\": {} widths for {} control points (one each, or one)",
+                            name, c.widths.size(), count));
+  if (type == CurveType::Ribbon && c.normals.size() != c.points.size())
+    throw Error(fmt::format("curves \"{}\": a ribbon needs a normal per control point", name));
+  if (c.material < 0 || size_t(c.material) >= scene.materials.size())
+    throw Error(fmt::format("curves \"{}\": material {} (there are {})", name, c.material,
+                            scene.materials.size()));
+  auto point = [&](std::span<const float> a, size_t i) {
+    return ferry::Vec3f(a[3 * i], a[3 * i + 1], a[3 * i + 2]);
+  };
+  auto width = [&](size_t i) { return c.widths.size() == 1 ? c.widths[0] : c.widths[i]; };
+  std::vector<CurveSegment> segments;
+  std::vector<CurveNormals> normals;
+  segments.reserve(c.indices.size());
+  for (uint32_t first : c.indices) {
+    if (size_t(first) + 3 >= count)
+      throw Error(
+          fmt::format("curves \"{}\": segment at {} needs control points up to {} "
+                      "(there are {})",
+                      name, first, size_t(first) + 3, count));
+    CurveSegment s;
+    for (size_t k = 0; k < 4; ++k) s.points[k] = point(c.points, first + k);
+    s.width0 = width(first);
+    s.width1 = width(first + 3);
+    segments.push_back(s);
+    if (type == CurveType::Ribbon)
+      normals.push_back({point(c.normals, first), point(c.normals, first + 3)});
+  }
+  if (segments.empty()) throw Error(fmt::format("curves \"{}\": no segments", name));
+  std::shared_ptr<const Shape> shape;
+  try {
+    shape = std::make_shared<Curves>(type, std::move(segments), std::move(normals));
+  } catch (const std::exception& e) {
+    throw Error(fmt::format("curves \"{}\": {}", name, e.what()));
+  }
+  scene.addSingleInstanceGeometry({name, c.material, std::move(shape)});
 }
 
 void Session::addSun(const Vec3& direction, const Vec3& irradiance) {

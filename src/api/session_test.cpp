@@ -454,5 +454,80 @@ TEST(ApiSession, RendersAVolumeFromMemory) {
   EXPECT_GT(session.stats().raysTraced, 0u);
 }
 
+// Curves from memory (placeCurves): strands of Bezier segments appear in
+// the picture, the same on 1 and 3 ranks; bad arrays are errors naming them.
+TEST(ApiSession, RendersCurvesFromMemoryTheSameOnAnyRankCount) {
+  api::Options o = smallOptions();
+  auto scene = [](api::Session& session) {
+    // 20 strands of 2 segments (7 control points each) across the view.
+    std::vector<float> points;
+    std::vector<uint32_t> indices;
+    for (int s = 0; s < 20; ++s) {
+      const auto first = uint32_t(points.size() / 3);
+      for (int k = 0; k < 7; ++k) {
+        points.insert(points.end(), {-1.0f + 0.1f * float(s), -1.0f + float(k) / 3,
+                                     0.2f * std::sin(float(k + s))});
+      }
+      indices.push_back(first);
+      indices.push_back(first + 3);
+    }
+    api::MaterialData hair;
+    hair.color = {0.9f, 0.5f, 0.2f};
+    api::CurvesData curves;
+    curves.points = points;
+    curves.indices = indices;
+    const float width = 0.04f;
+    curves.widths = std::span<const float>(&width, 1);
+    curves.material = session.addMaterial(hair);
+    session.placeCurves(curves);
+    session.setEnvironment({0.5f, 0.5f, 0.5f});
+    api::Camera camera;
+    camera.from = {0, 0, 4};
+    session.setCamera(camera);
+  };
+  api::Session alone(o);
+  scene(alone);
+  const api::Image one = alone.render(1);
+  const size_t middle = size_t(18 * 48 + 24) * 4;
+  EXPECT_NE(one.rgba[middle], 0.5f);  // not the sky
+  std::mutex mutex;
+  api::Image three;
+  runRanks(3, [&](const Communicator& comm) {
+    api::Session session = sessionOn(comm, nullptr, o);
+    scene(session);
+    api::Image image = session.render(1);
+    std::lock_guard lock(mutex);
+    if (comm.rank() == 0) three = std::move(image);
+  });
+  EXPECT_EQ(rgbOf(three), rgbOf(one));
+
+  auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const api::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  api::Session bad(o);
+  const float points[12] = {0, 0, 0, 1, 0, 0, 2, 0, 0, 3, 0, 0};
+  const uint32_t beyond[1] = {1};
+  const float widths[2] = {0.1f, 0.1f};
+  api::CurvesData c;
+  c.name = "tuft";
+  c.points = points;
+  c.indices = beyond;
+  c.widths = widths;
+  EXPECT_NE(message([&] { bad.placeCurves(c); }).find("2 widths for 4 control points"),
+            std::string::npos);
+  c.widths = std::span<const float>(widths, 1);
+  EXPECT_NE(message([&] { bad.placeCurves(c); }).find("needs control points up to 4"),
+            std::string::npos);
+  const uint32_t first[1] = {0};
+  c.indices = first;
+  c.type = "hairy";
+  EXPECT_NE(message([&] { bad.placeCurves(c); }).find("type \"hairy\""), std::string::npos);
+}
+
 }  // namespace
 }  // namespace ferry

@@ -125,6 +125,25 @@ def single(binary):
     if not np.isfinite(volume).all() or volume[12, 16].tolist() == volume[0, 0].tolist():
         fail("the volume is not in the image")
 
+    # Curves from numpy: 12 strands of 2 Bezier segments across the view.
+    c = ferry.Session(size=(32, 24), spp=1, threads=1)
+    points = np.array([[-0.6 + 0.1 * s, -0.6 + 0.2 * k, 0.1 * np.sin(k + s)]
+                       for s in range(12) for k in range(7)], dtype=np.float32)
+    indices = np.array([7 * s + 3 * j for s in range(12) for j in range(2)], dtype=np.uint32)
+    c.place_curves(points, indices, widths=0.05, type="cylinder",
+                   material=c.add_material(color=(0.9, 0.4, 0.1)))
+    c.set_environment((0.5, 0.5, 0.5))
+    c.set_camera(look_from=(0, 0, 3), look_at=(0, 0, 0), fov=40)
+    fibres = c.render()
+    if not np.isfinite(fibres).all() or abs(fibres - 0.5).max() < 0.05:
+        fail("the curves are not in the image")
+    try:
+        c.place_curves(points, np.array([83], dtype=np.uint32), widths=0.05)
+        fail("a segment past the last control point was accepted")
+    except ferry.Error as e:
+        if "needs control points up to 86" not in str(e):
+            fail("place_curves: unexpected message: " + str(e))
+
     # AOVs by name: arrays like the colour, the albedo of the command's EXR channels.
     a = ferry.Session(size=(64, 48), spp=4, seed=1, threads=1,
                       settings={"aov": "albedo,normal,depth"})
