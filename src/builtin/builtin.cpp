@@ -12,6 +12,7 @@
 #include "builtin/furnace.h"
 #include "builtin/island.h"
 #include "builtin/landscape.h"
+#include "builtin/particles.h"
 #include "builtin/scene_plan.h"
 #include "builtin/volume.h"
 #include "core/error.h"
@@ -22,13 +23,14 @@ namespace {
 constexpr std::string_view kPrefix = "builtin:";
 constexpr const char* kAcceptedKeys =
     "scale (a positive number), seed (an integer 0..4294967295), size (builtin:volume: samples a "
-    "side), strands (builtin:fur: hair strands)";
+    "side), strands (builtin:fur: hair strands), count (builtin:particles: spheres)";
 
 struct BuiltinEntry {
   const char* name;
   builtin::ScenePlan (*plan)(const BuiltinParams& params);
   bool hasSize = false;     // takes `size` (and not `scale`)
   bool hasStrands = false;  // takes `strands` (and not `scale`)
+  bool hasCount = false;    // takes `count` (and not `scale`)
 };
 
 // The order is the order `builtinNames()` lists them in.
@@ -47,6 +49,11 @@ constexpr BuiltinEntry kBuiltins[] = {
        return builtin::planFur(p.strands.value_or(builtin::kDefaultFurStrands), p.seed);
      },
      false, true},
+    {"particles",
+     [](const BuiltinParams& p) {
+       return builtin::planParticles(p.count.value_or(builtin::kDefaultParticles), p.seed);
+     },
+     false, false, true},
 };
 
 std::string namesList() {
@@ -75,6 +82,8 @@ builtin::ScenePlan planFor(const BuiltinParams& params) {
     throw InputError(fmt::format("{} has no size (builtin:volume has; use scale)", what));
   if (params.strands && !entry.hasStrands)
     throw InputError(fmt::format("{} has no strands (builtin:fur has)", what));
+  if (params.count && !entry.hasCount)
+    throw InputError(fmt::format("{} has no count (builtin:particles has)", what));
   return entry.plan(params);
 }
 
@@ -141,14 +150,15 @@ BuiltinParams parseBuiltinSpec(const std::string& spec) {
         throw InputError(
             fmt::format("bad size '{}' in '{}': expected an integer 2..4096", value, spec));
       params.size = int(size);
-    } else if (key == "strands") {
-      uint64_t strands = 0;
+    } else if (key == "strands" || key == "count") {
+      uint64_t number = 0;
       const char* end = value.data() + value.size();
-      auto [ptr, ec] = std::from_chars(value.data(), end, strands);
-      if (value.empty() || ec != std::errc() || ptr != end || strands < 1 || strands > 100'000'000)
+      auto [ptr, ec] = std::from_chars(value.data(), end, number);
+      const uint64_t most = key == "strands" ? 100'000'000 : 1'000'000'000;
+      if (value.empty() || ec != std::errc() || ptr != end || number < 1 || number > most)
         throw InputError(
-            fmt::format("bad strands '{}' in '{}': expected an integer 1..100000000", value, spec));
-      params.strands = strands;
+            fmt::format("bad {} '{}' in '{}': expected an integer 1..{}", key, value, spec, most));
+      (key == "strands" ? params.strands : params.count) = number;
     } else {
       throw InputError(
           fmt::format("unknown parameter '{}' in '{}' (accepted: {})", key, spec, kAcceptedKeys));

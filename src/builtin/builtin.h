@@ -17,11 +17,12 @@
 namespace ferry {
 
 struct BuiltinParams {
-  std::string name;    // "island", "landscape", "cornell", "furnace", "volume", "fur"
+  std::string name;    // "island", "landscape", "cornell", "furnace", "volume", "fur", "particles"
   double scale = 1.0;  // grows the scene; meaning per built-in (see its header)
   uint32_t seed = 1;
   std::optional<int> size;          // builtin:volume: samples a side
   std::optional<uint64_t> strands;  // builtin:fur: hair strands
+  std::optional<uint64_t> count;    // builtin:particles: spheres
 };
 
 bool isBuiltinSpec(const std::string& spec);  // starts with "builtin:"

@@ -66,6 +66,8 @@ TEST(BuiltinSpec, ParsesNameScaleAndSeed) {
   expectThrowMessage("builtin:fur?strands=0");
   expectThrowMessage("builtin:fur?strands=x");
   EXPECT_THROW(describeBuiltin(parseBuiltinSpec("builtin:cornell?strands=5")), InputError);
+  EXPECT_EQ(parseBuiltinSpec("builtin:particles?count=10000000").count, 10000000u);
+  EXPECT_THROW(describeBuiltin(parseBuiltinSpec("builtin:fur?count=5")), InputError);
 }
 
 TEST(BuiltinSpec, FurHasItsStrandsAsCurveSegments) {
@@ -108,9 +110,9 @@ TEST(BuiltinSpec, RejectsBadSeeds) {
   expectThrowMessage("builtin:island?seed=1&seed=2");
 }
 
-TEST(BuiltinSpec, NamesAreTheSixBuiltins) {
+TEST(BuiltinSpec, NamesAreTheSevenBuiltins) {
   EXPECT_EQ(builtinNames(), (std::vector<std::string>{"island", "landscape", "cornell", "furnace",
-                                                      "volume", "fur"}));
+                                                      "volume", "fur", "particles"}));
 }
 
 TEST(BuiltinSpec, GenerateRejectsBadParams) {
@@ -218,19 +220,18 @@ TEST_P(EveryBuiltin, EveryObjectIsInstancedAndNonEmpty) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Builtin, EveryBuiltin,
-                         ::testing::Values("builtin:island", "builtin:island?scale=0.1&seed=3",
-                                           "builtin:landscape",
-                                           "builtin:landscape?scale=0.2&seed=5", "builtin:cornell",
-                                           "builtin:cornell?scale=3", "builtin:furnace",
-                                           "builtin:furnace?scale=0.3",
-                                           "builtin:fur?strands=300&seed=2"),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                           std::string name = info.param.substr(8);
-                           for (char& c : name)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Builtin, EveryBuiltin,
+    ::testing::Values("builtin:island", "builtin:island?scale=0.1&seed=3", "builtin:landscape",
+                      "builtin:landscape?scale=0.2&seed=5", "builtin:cornell",
+                      "builtin:cornell?scale=3", "builtin:furnace", "builtin:furnace?scale=0.3",
+                      "builtin:fur?strands=300&seed=2", "builtin:particles?count=500"),
+    [](const ::testing::TestParamInfo<std::string>& info) {
+      std::string name = info.param.substr(8);
+      for (char& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return name;
+    });
 
 bool sameMesh(const Mesh& a, const Mesh& b) {
   if (a.positions.size() != b.positions.size() || a.indices.size() != b.indices.size())

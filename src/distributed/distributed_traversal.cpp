@@ -239,7 +239,12 @@ std::vector<uint32_t> DistributedTraversal<Path>::sendToOwners(const std::vector
   std::vector<uint32_t> send(pixels.size());
   std::vector<int> cursor = offsets;
   for (size_t k = 0; k < pixels.size(); ++k) send[size_t(cursor[size_t(owner[k])]++)] = pixels[k];
+  // The counts' collective is where a rank waits for the slowest (stage
+  // "wait"); moving the ids is the exchange proper (stage "exchange").
+  auto start = Clock::now();
   std::vector<int> receiveCounts = comm_.exchangeCounts(counts);
+  stats.times.wait += secondsSince(start);
+  start = Clock::now();
   std::vector<int> receiveOffsets(ranks, 0);
   for (uint32_t r = 1; r < ranks; ++r)
     receiveOffsets[r] = receiveOffsets[r - 1] + receiveCounts[r - 1];
@@ -251,6 +256,7 @@ std::vector<uint32_t> DistributedTraversal<Path>::sendToOwners(const std::vector
   };
   comm_.exchangeBytes(send.data(), toBytes(counts), toBytes(offsets), received.data(),
                       toBytes(receiveCounts), toBytes(receiveOffsets));
+  stats.times.exchange += secondsSince(start);
   stats.primaryBytesSent +=
       (pixels.size() - size_t(counts[size_t(comm_.rank())])) * sizeof(uint32_t);
   // Each source's ids are increasing; the queue wants them all in pixel order.

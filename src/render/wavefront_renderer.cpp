@@ -317,7 +317,11 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     // Many ranks: the traversal says which pixels' paths are this rank's
     // (proxy-guided, one collective), then their camera rays go into the
     // queue in pixel order.
+    // (The owners' collectives count as wait and exchange, not as generate.)
+    const double elsewhere = stats.times.wait + stats.times.exchange;
     traversal_.primaryPixels(first, last, cameraRays(sampleIndex), ws.primaryPixels, stats);
+    start += std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(stats.times.wait + stats.times.exchange - elsewhere));
     const std::vector<uint32_t>& mine = ws.primaryPixels;
     rays.resize(mine.size());
     makeCameraPaths(sampleIndex, mine, rays.data());

@@ -86,6 +86,18 @@ ShapeSurface Spheres::surface(uint32_t p, Vec2f uv) const {
   return {centers_[p] + n * radii_[p], n, n, uv};
 }
 
+std::shared_ptr<const Shape> Spheres::subset(std::span<const uint32_t> primitives) const {
+  std::vector<Vec3f> centers;
+  std::vector<float> radii;
+  centers.reserve(primitives.size());
+  radii.reserve(primitives.size());
+  for (uint32_t p : primitives) {
+    centers.push_back(centers_.at(p));
+    radii.push_back(radii_[p]);
+  }
+  return std::make_shared<Spheres>(std::move(centers), std::move(radii));
+}
+
 void Spheres::write(RecordWriter& record) const {
   record.array<Vec3f>(centers_);
   record.array<float>(radii_);

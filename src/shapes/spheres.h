@@ -25,6 +25,7 @@ class Spheres final : public Shape {
   bool intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
                  float& t, Vec2f& uv) const override;
   ShapeSurface surface(uint32_t primitive, Vec2f uv) const override;
+  std::shared_ptr<const Shape> subset(std::span<const uint32_t> primitives) const override;
   void write(RecordWriter& record) const override;
   std::string describe() const override;
   static std::shared_ptr<const Shape> read(RecordReader& record);

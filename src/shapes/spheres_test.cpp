@@ -18,6 +18,7 @@
 #include "material/models/conductor.h"
 #include "material/models/dielectric.h"
 #include "partition/partitioner.h"
+#include "partition/scene_split.h"
 #include "render/render_test_util.h"
 #include "scene/memory_cost.h"
 #include "session/render_session.h"
@@ -188,6 +189,40 @@ TEST(Spheres, TheImageIsTheSameOnOneAndThreeRanks) {
     });
     EXPECT_TRUE(three == one) << partitioner->name();
   }
+}
+
+// Particles (builtin:particles): the best partitioner cuts the one large
+// sphere set into spatial pieces that keep every sphere, and the image on 3
+// ranks is the 1-rank image.
+TEST(Spheres, ALargeSetIsCutIntoPiecesAndTheImageStaysTheSame) {
+  const Scene scene = loadScene("builtin:particles?count=20000");
+  Scene cut = scene;
+  SceneSplitOptions options;
+  options.maxPieceBytes = 20000 * 16 / 5;
+  splitForPartitioning(cut, options);
+  uint64_t spheres = 0, pieces = 0;
+  for (const Geometry& g : cut.geometries)
+    if (dynamic_cast<const Spheres*>(g.shape.get())) {
+      spheres += g.shape->primitiveCount();
+      ++pieces;
+    }
+  EXPECT_EQ(spheres, 20000u);
+  EXPECT_GE(pieces, 5u);
+  SessionSettings settings;
+  settings.render.width = 40;
+  settings.render.height = 30;
+  settings.render.samplesPerPixel = 2;
+  settings.render.maxDepth = 3;
+  settings.render.frames = 1;
+  const std::vector<Vec3f> one = render(scene, settings, oneRank());
+  std::vector<Vec3f> three;
+  runRanks(3, [&](const Communicator& comm) {
+    SessionSettings s = settings;
+    s.partitioner = &bestPartitioner();
+    std::vector<Vec3f> image = render(scene, s, comm);
+    if (comm.isRoot()) three = std::move(image);
+  });
+  EXPECT_TRUE(three == one);
 }
 
 TEST(Spheres, APartFileStoresThemByKindAndTheMemoryModelCountsThem) {

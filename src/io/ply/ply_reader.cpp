@@ -13,6 +13,7 @@
 
 #include "core/error.h"
 #include "io/default_lighting.h"
+#include "shapes/spheres.h"
 
 namespace ferry {
 namespace {
@@ -232,7 +233,7 @@ double decode(Type t, const unsigned char* p, bool swap) {
 
 // Where each used vertex property lands; -1: not used.
 struct VertexSlots {
-  int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1, u = -1, v = -1;
+  int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1, u = -1, v = -1, radius = -1;
 };
 
 VertexSlots findVertexSlots(const Element& e) {
@@ -245,6 +246,7 @@ VertexSlots findVertexSlots(const Element& e) {
   s.x = find("x");
   s.y = find("y");
   s.z = find("z");
+  s.radius = find("radius");
   s.nx = find("nx");
   s.ny = find("ny");
   s.nz = find("nz");
@@ -271,7 +273,7 @@ class BodyReader {
         line_(header.lines + 1),
         progress_(options, in.name(), in.size()) {}
 
-  Mesh read() {
+  PlyContents read() {
     checkSizes();
     const Element* vertex = nullptr;
     for (const Element& e : header_.elements)
@@ -289,6 +291,7 @@ class BodyReader {
     mesh_.positions.reserve(size_t(vertexCount_) + 1);  // Mesh::hasVertexSlack
     if (slots_.nx >= 0) mesh_.normals.reserve(size_t(vertexCount_));
     if (slots_.u >= 0) mesh_.uvs.reserve(size_t(vertexCount_));
+    if (slots_.radius >= 0) radii_.reserve(size_t(vertexCount_));
     for (const Element& e : header_.elements) {
       if (&e == vertex) {
         readVertices(e);
@@ -298,10 +301,14 @@ class BodyReader {
         skipElement(e);
       }
     }
-    if (mesh_.indices.empty())
-      throw InputError(fmt::format("{}: no faces: nothing to render", in_.name()));
+    if (mesh_.indices.empty() && slots_.radius < 0)
+      throw InputError(fmt::format(
+          "{}: no faces and no vertex radius: nothing to render (a vertex-only file is particles "
+          "when its vertices have a \"radius\")",
+          in_.name()));
+    if (!mesh_.indices.empty()) radii_.clear();  // a mesh's radii are not particles
     progress_.finish();
-    return std::move(mesh_);
+    return {std::move(mesh_), std::move(radii_)};
   }
 
  private:
@@ -457,6 +464,12 @@ class BodyReader {
           fail(fmt::format("vertex {}: texture coordinate is not finite", index));
         mesh_.uvs.push_back(uv);
       }
+      if (slots_.radius >= 0) {
+        const auto radius = float(values[size_t(slots_.radius)]);
+        if (!(radius > 0) || !std::isfinite(radius))
+          fail(fmt::format("vertex {}: radius {} is not a positive number", index, radius));
+        radii_.push_back(radius);
+      }
       tick();
     }
   }
@@ -583,18 +596,26 @@ class BodyReader {
   uint64_t vertexCount_ = 0;
   VertexSlots slots_;
   Mesh mesh_;
+  std::vector<float> radii_;
   std::string text_;
   uint64_t ticks_ = 0;
 };
 
 }  // namespace
 
-Mesh readPly(ByteStream& stream, const LoadOptions& options) {
+PlyContents readPlyContents(ByteStream& stream, const LoadOptions& options) {
   Header header = readHeader(stream);
   BodyReader body(stream, header, options);
-  Mesh mesh = body.read();
-  mesh.name = std::filesystem::path(stream.name()).stem().string();
-  return mesh;
+  PlyContents contents = body.read();
+  contents.mesh.name = std::filesystem::path(stream.name()).stem().string();
+  return contents;
+}
+
+Mesh readPly(ByteStream& stream, const LoadOptions& options) {
+  PlyContents contents = readPlyContents(stream, options);
+  if (contents.mesh.indices.empty())
+    throw InputError(fmt::format("{}: no faces: nothing to render as a mesh", stream.name()));
+  return std::move(contents.mesh);
 }
 
 Mesh readPly(const std::string& path, const LoadOptions& options) {
@@ -605,11 +626,21 @@ Mesh readPly(const std::string& path, const LoadOptions& options) {
 Scene loadPlyScene(const std::string& path, const LoadOptions& options) {
   Scene scene;
   scene.name = std::filesystem::path(path).stem().string();
-  Mesh mesh = readPly(path, options);
+  ByteStream stream = ByteStream::openFile(path);
+  PlyContents contents = readPlyContents(stream, options);
   Material grey;
   grey.name = "default";
-  mesh.material = scene.addMaterial(grey);
-  scene.addSingleInstanceMesh(std::move(mesh));
+  const int32_t material = scene.addMaterial(grey);
+  if (contents.mesh.indices.empty()) {
+    // Particles: a sphere at each vertex.
+    std::vector<Vec3f> centres(contents.mesh.positions.begin(), contents.mesh.positions.end());
+    scene.addSingleInstanceGeometry(
+        {contents.mesh.name, material,
+         std::make_shared<Spheres>(std::move(centres), std::move(contents.radii))});
+  } else {
+    contents.mesh.material = material;
+    scene.addSingleInstanceMesh(std::move(contents.mesh));
+  }
   addDefaultViewAndLights(scene);
   return scene;
 }

@@ -21,11 +21,20 @@ namespace ferry {
 // never held in memory); reports progress through `options` for large files.
 // What is read and checked: docs/formats.md, "PLY".
 Mesh readPly(const std::string& path, const LoadOptions& options = {});
+
+// What a PLY file holds: a mesh, or particles (a vertex-only file whose
+// vertices have a "radius" property: the positions and the radii).
+struct PlyContents {
+  Mesh mesh;
+  std::vector<float> radii;  // particles only
+};
+PlyContents readPlyContents(ByteStream& stream, const LoadOptions& options = {});
 // The same from any stream (a fuzzer's bytes); `stream.size()` bounds the counts.
 Mesh readPly(ByteStream& stream, const LoadOptions& options = {});
 
-// A `.ply` file as a scene: its mesh as one object with one instance, a grey
-// diffuse material, and the default view and lights that OBJ files get.
+// A `.ply` file as a scene: its mesh (or its particles, as spheres) as one
+// object with one instance, a grey diffuse material, and the default view
+// and lights that OBJ files get.
 Scene loadPlyScene(const std::string& path, const LoadOptions& options = {});
 
 }  // namespace ferry

@@ -130,6 +130,30 @@ TEST(PlyReader, FromMemoryStream) {
   EXPECT_EQ(m.triangleCount(), 1u);
 }
 
+// A vertex-only file with a radius is particles: a sphere at each vertex.
+TEST(PlyReader, VerticesWithARadiusAreParticles) {
+  const std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nproperty float radius\nend_header\n"
+      "0 0 0 0.5\n2 0 0 0.25\n0 3 0 1\n";
+  ByteStream s = ByteStream::fromMemory(text, "atoms.ply");
+  const PlyContents c = readPlyContents(s);
+  EXPECT_EQ(c.mesh.triangleCount(), 0u);
+  EXPECT_EQ(c.radii, (std::vector<float>{0.5f, 0.25f, 1}));
+  ByteStream again = ByteStream::fromMemory(text, "atoms.ply");
+  EXPECT_THROW(readPly(again), InputError);  // as a mesh (pbrt's plymesh): no faces
+  const std::string bad =
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\nproperty float radius\nend_header\n0 0 0 -1\n";
+  ByteStream b = ByteStream::fromMemory(bad, "bad.ply");
+  try {
+    readPlyContents(b);
+    FAIL() << "a negative radius was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 0: radius -1"), std::string::npos) << e.what();
+  }
+}
+
 TEST(PlyReader, CrLfHeader) {
   std::string text =
       "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\nproperty float y\r\n"
