@@ -144,8 +144,10 @@ void printPartsSummary(const PartitionCommandOptions& o, const PartitionerOption
           ? fmt::format(" (merged from {}: --max-proxies)", stats.unmergedProxies)
           : "");
   if (stats.split.objectsBroken || stats.split.meshesCut)
-    fmt::print("  rewritten first: {} objects broken into meshes, {} meshes cut into {} pieces\n",
-               stats.split.objectsBroken, stats.split.meshesCut, stats.split.piecesMade);
+    fmt::print(
+        "  rewritten first: {} objects broken into meshes, {} meshes or shapes cut into {} "
+        "pieces\n",
+        stats.split.objectsBroken, stats.split.meshesCut, stats.split.piecesMade);
   if (p.chosen().tracesRays())
     fmt::print(
         "  sampled {} rays in {:.2f} s ({} pass two or more units); the splits separate {} "
