@@ -141,6 +141,9 @@ void expectSameSummary(const SceneSummary& described, const SceneSummary& made) 
   EXPECT_EQ(described.emissiveMeshes, made.emissiveMeshes);
   EXPECT_EQ(described.emissiveTriangles, made.emissiveTriangles);
   EXPECT_EQ(described.views, made.views);
+  EXPECT_EQ(described.geometries, made.geometries);
+  EXPECT_EQ(described.shapePrimitives, made.shapePrimitives);
+  EXPECT_EQ(described.shapeKinds, made.shapeKinds);
   EXPECT_EQ(described.memory.vertices, made.memory.vertices);
   EXPECT_EQ(described.memory.normals, made.memory.normals);
   EXPECT_EQ(described.memory.uvs, made.memory.uvs);

@@ -97,6 +97,7 @@ ScenePlan planFur(uint64_t strands, uint32_t seed) {
 
   ShapeRecipe fur;
   fur.name = "fur";
+  fur.kind = "curves";
   fur.material = hairMaterial;
   fur.primitives = n * kFurSegmentsPerStrand;
   fur.bytes = fur.primitives * sizeof(CurveSegment);

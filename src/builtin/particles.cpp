@@ -51,6 +51,7 @@ ScenePlan planParticles(uint64_t count, uint32_t seed) {
 
   ShapeRecipe particles;
   particles.name = "particles";
+  particles.kind = "spheres";
   particles.material = blue;
   particles.primitives = n;
   particles.bytes = n * (sizeof(Vec3f) + sizeof(float));

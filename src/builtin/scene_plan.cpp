@@ -97,6 +97,8 @@ SceneSummary describePlan(const ScenePlan& plan) {
   for (const ShapeRecipe& r : plan.shapes) {
     ++s.geometries;
     s.shapePrimitives += r.primitives;
+    ++s.shapeKinds[r.kind].geometries;
+    s.shapeKinds[r.kind].primitives += r.primitives;
     s.memory += shapeCost(r.primitives, r.bytes);
   }
   s.memory += instanceCost(s.instances);
@@ -185,7 +187,8 @@ Scene materializePlan(const ScenePlan& plan, std::shared_ptr<MeshStore> store) {
 
   for (const ShapeRecipe& r : plan.shapes) {
     std::shared_ptr<const Shape> shape = r.build();
-    if (!shape || shape->primitiveCount() != r.primitives || shape->bytes() != r.bytes)
+    if (!shape || shape->primitiveCount() != r.primitives || shape->bytes() != r.bytes ||
+        shape->kind() != r.kind)
       throw InternalError(
           fmt::format("shape '{}' came out with {} primitives / {} bytes, planned "
                       "{} / {}",

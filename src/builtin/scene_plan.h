@@ -48,6 +48,7 @@ struct ObjectRecipe {
 // of exactly `primitives` primitives and `bytes` bytes (Shape::bytes()).
 struct ShapeRecipe {
   std::string name;
+  std::string kind;  // Shape::kind() of what build makes
   int32_t material = 0;
   uint64_t primitives = 0;
   uint64_t bytes = 0;

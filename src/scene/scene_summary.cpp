@@ -25,7 +25,12 @@ SceneSummary summarize(const Scene& scene) {
   }
   s.geometries = scene.geometries.size();
   for (const Geometry& g : scene.geometries) {
-    if (g.shape) s.shapePrimitives += g.shape->primitiveCount();
+    if (g.shape) {
+      s.shapePrimitives += g.shape->primitiveCount();
+      SceneSummary::ShapeKindCount& kind = s.shapeKinds[std::string(g.shape->kind())];
+      ++kind.geometries;
+      kind.primitives += g.shape->primitiveCount();
+    }
     if (g.shape && g.shape->isVolume()) ++s.volumeBricks;
     s.memory += geometryCost(g);
   }
@@ -177,6 +182,8 @@ nlohmann::json SceneSummary::toJson() const {
   j["unique_meshes"] = uniqueMeshes;
   j["geometries"] = geometries;
   j["shape_primitives"] = shapePrimitives;
+  for (const auto& [kind, count] : shapeKinds)
+    j["shape_kinds"][kind] = {{"geometries", count.geometries}, {"primitives", count.primitives}};
   j["volume_bricks"] = volumeBricks;
   j["triangles"] = triangles;
   j["vertices"] = vertices;
@@ -232,6 +239,9 @@ std::string SceneSummary::toText() const {
   if (geometries > 0)
     row("other geometries",
         fmt::format("{} ({} primitives)", formatCount(geometries), formatCount(shapePrimitives)));
+  for (const auto& [kind, count] : shapeKinds)
+    row("  " + kind, fmt::format("{} ({} primitives)", formatCount(count.geometries),
+                                 formatCount(count.primitives)));
   row("triangles", formatCount(triangles));
   row("vertices", formatCount(vertices));
   row("objects", formatCount(objects));

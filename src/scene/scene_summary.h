@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,13 @@ struct SceneSummary {
   uint64_t uniqueMeshes = 0;
   uint64_t geometries = 0;  // of other kinds than triangle meshes (scene/shape.h)
   uint64_t shapePrimitives = 0;
+  // Per kind of geometry ("curves", "spheres", "volume-brick"): how many
+  // geometries, and their primitives (curve segments, spheres, bricks).
+  struct ShapeKindCount {
+    uint64_t geometries = 0, primitives = 0;
+    bool operator==(const ShapeKindCount&) const = default;
+  };
+  std::map<std::string, ShapeKindCount> shapeKinds;
   uint64_t volumeBricks = 0;  // geometries that are volumes (shapes/volume_brick.h)
   uint64_t triangles = 0;     // unique: each mesh counted once
   uint64_t vertices = 0;
