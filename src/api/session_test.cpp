@@ -19,6 +19,17 @@
 namespace ferry {
 namespace {
 
+// The message of the api::Error f throws, or "no error".
+template <class F>
+std::string message(F&& f) {
+  try {
+    f();
+  } catch (const api::Error& e) {
+    return std::string(e.what());
+  }
+  return std::string("no error");
+}
+
 api::Options smallOptions() {
   api::Options o;
   o.width = 48;
@@ -297,14 +308,6 @@ TEST(ApiSession, ARankThatFailsFailsTheSessionOnEveryRankWithItsMessage) {
 
 TEST(ApiSession, RefusesBadInputWithAnError) {
   api::Session session(smallOptions());
-  auto message = [](auto&& f) {
-    try {
-      f();
-    } catch (const api::Error& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
   EXPECT_NE(message([&] {
               session.addMaterial({"m", "velvet"});
             }).find("type \"velvet\""),
@@ -501,14 +504,6 @@ TEST(ApiSession, RendersCurvesFromMemoryTheSameOnAnyRankCount) {
   });
   EXPECT_EQ(rgbOf(three), rgbOf(one));
 
-  auto message = [](auto&& f) {
-    try {
-      f();
-    } catch (const api::Error& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
   api::Session bad(o);
   const float points[12] = {0, 0, 0, 1, 0, 0, 2, 0, 0, 3, 0, 0};
   const uint32_t beyond[1] = {1};

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "core/random.h"
+#include "builtin/noise.h"
 #include "material/models/diffuse.h"
 #include "material/models/hair.h"
 #include "shapes/curves.h"
@@ -15,27 +15,23 @@ constexpr float kCapBelow = 0.3f;  // roots down to y = -0.3 R
 constexpr float kRootWidth = 0.008f, kTipWidth = 0.002f;
 constexpr float kMaxLength = 2;
 
-float unit(uint32_t seed, uint64_t i, uint32_t dim) {
-  const uint32_t h =
-      hashCombine(hashCombine(hashCombine(seed, uint32_t(i)), uint32_t(i >> 32)), dim);
-  return float(h >> 8) * (1.0f / 16777216.0f);
-}
-
 // Strand i's 13 control points: a root spread evenly over the cap (a
 // golden-angle spiral, jittered), rising along the normal and bending back
 // and down.
 std::array<Vec3f, 3 * kFurSegmentsPerStrand + 1> strand(uint64_t i, uint64_t n, float radius,
                                                         float length, uint32_t seed) {
+  HashRng rng(seed, uint32_t(i), uint32_t(i >> 32));
   const float golden = 2.39996323f;
-  const float y = 1 - (1 + kCapBelow) * (float(i) + unit(seed, i, 0)) / float(n);
+  const float y = 1 - (1 + kCapBelow) * (float(i) + rng.uniform()) / float(n);
   const float ring = std::sqrt(std::max(0.0f, 1 - y * y));
-  const float phi = golden * float(i) + 0.3f * unit(seed, i, 1);
+  const float phi = golden * float(i) + 0.3f * rng.uniform();
   const Vec3f normal{ring * std::cos(phi), y, ring * std::sin(phi)};
   Vec3f comb = Vec3f(0, -0.6f, -1) - normal * dot(Vec3f(0, -0.6f, -1), normal);
   comb = dot(comb, comb) > 1e-6f ? normalize(comb) : Frame(normal).s;
   const Vec3f side = cross(normal, comb);
-  const float l = length * (0.8f + 0.4f * unit(seed, i, 2));
-  const float lift = 0.45f + 0.3f * unit(seed, i, 3), sway = 0.4f * (unit(seed, i, 4) - 0.5f);
+  const float l = length * (0.8f + 0.4f * rng.uniform());
+  const float lift = 0.45f + 0.3f * rng.uniform();
+  const float sway = 0.4f * (rng.uniform() - 0.5f);
   std::array<Vec3f, 3 * kFurSegmentsPerStrand + 1> p;
   for (size_t k = 0; k < p.size(); ++k) {
     const float s = float(k) / float(p.size() - 1);
@@ -79,21 +75,7 @@ ScenePlan planFur(uint64_t strands, uint32_t seed) {
   plan.addSingleInstanceMesh(std::move(ball));
   // A floor under the ball and a backdrop behind it, 4 radii out: they span
   // the scene's bounds (the fur stays within 1.5 radii, above -0.8 radii).
-  const float e = 4 * radius, top = 3 * radius;
-  MeshRecipe studio;
-  studio.name = "studio";
-  studio.material = grey;
-  studio.counts = {6, 4};
-  studio.hasNormals = false;
-  studio.hasUvs = false;
-  studio.build = [=] {
-    Mesh m;
-    m.positions = {{-e, -radius, e},  {e, -radius, e}, {e, -radius, -e},
-                   {-e, -radius, -e}, {e, top, -e},    {-e, top, -e}};
-    m.indices = {{0, 1, 2}, {0, 2, 3}, {3, 2, 4}, {3, 4, 5}};
-    return m;
-  };
-  plan.addSingleInstanceMesh(std::move(studio));
+  addStudio(plan, grey, 4 * radius, -radius, 3 * radius);
 
   ShapeRecipe fur;
   fur.name = "fur";
@@ -128,8 +110,6 @@ ScenePlan planFur(uint64_t strands, uint32_t seed) {
   view.at = {0, 0.1f * radius, 0};
   view.fovY = 40;
   plan.views.push_back(view);
-  plan.bounds.extend(Vec3f(-e, -radius, -e));
-  plan.bounds.extend(Vec3f(e, top, e));
   return plan;
 }
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "core/random.h"
+#include "builtin/noise.h"
 #include "shapes/spheres.h"
 
 namespace ferry::builtin {
@@ -10,15 +10,9 @@ namespace {
 
 constexpr int kClusters = 5;
 
-float unit(uint32_t seed, uint64_t i, uint32_t dim) {
-  const uint32_t h =
-      hashCombine(hashCombine(hashCombine(seed, uint32_t(i)), uint32_t(i >> 32)), dim);
-  return (float(h >> 8) + 0.5f) * (1.0f / 16777216.0f);
-}
-
-// A standard normal number (Box-Muller) from two of particle i's numbers.
-float gaussian(uint32_t seed, uint64_t i, uint32_t dim) {
-  const float u = unit(seed, i, dim), v = unit(seed, i, dim + 1);
+// A standard normal number (Box-Muller) from two of the stream's numbers.
+float gaussian(HashRng& rng) {
+  const float u = 1 - rng.uniform(), v = rng.uniform();
   return std::sqrt(-2 * std::log(u)) * std::cos(2 * kPi * v);
 }
 
@@ -34,20 +28,7 @@ ScenePlan planParticles(uint64_t count, uint32_t seed) {
 
   // A floor and a backdrop, 3 out: they span the bounds (the particles stay
   // within 1.1 of the centre).
-  MeshRecipe studio;
-  studio.name = "studio";
-  studio.material = grey;
-  studio.counts = {6, 4};
-  studio.hasNormals = false;
-  studio.hasUvs = false;
-  studio.build = [] {
-    Mesh m;
-    m.positions = {{-3, -1.2f, 3},  {3, -1.2f, 3}, {3, -1.2f, -3},
-                   {-3, -1.2f, -3}, {3, 3, -3},    {-3, 3, -3}};
-    m.indices = {{0, 1, 2}, {0, 2, 3}, {3, 2, 4}, {3, 4, 5}};
-    return m;
-  };
-  plan.addSingleInstanceMesh(std::move(studio));
+  addStudio(plan, grey, 3, -1.2f, 3);
 
   ShapeRecipe particles;
   particles.name = "particles";
@@ -60,19 +41,19 @@ ScenePlan planParticles(uint64_t count, uint32_t seed) {
     std::vector<float> radii(n);
     Vec3f clusterCentre[kClusters];
     float clusterSpread[kClusters];
+    HashRng clusters(seed, 0xc1u);
     for (int c = 0; c < kClusters; ++c) {
-      clusterCentre[c] =
-          Vec3f(unit(seed, c, 90), unit(seed, c, 91), unit(seed, c, 92)) * 1.2f - Vec3f(0.6f);
-      clusterSpread[c] = 0.12f + 0.2f * unit(seed, c, 93);
+      const float x = clusters.uniform(), y = clusters.uniform(), z = clusters.uniform();
+      clusterCentre[c] = Vec3f(x, y, z) * 1.2f - Vec3f(0.6f);
+      clusterSpread[c] = 0.12f + 0.2f * clusters.uniform();
     }
     for (uint64_t i = 0; i < n; ++i) {
-      const int c = int(unit(seed, i, 0) * kClusters) % kClusters;
-      Vec3f p = clusterCentre[c] +
-                Vec3f(gaussian(seed, i, 1), gaussian(seed, i, 3), gaussian(seed, i, 5)) *
-                    clusterSpread[c];
-      p = min(max(p, Vec3f(-1)), Vec3f(1));
-      centres[i] = p;
-      radii[i] = spacing * (0.15f + 0.2f * unit(seed, i, 7));
+      HashRng rng(seed, uint32_t(i), uint32_t(i >> 32));
+      const int c = int(rng.uniform() * kClusters) % kClusters;
+      const float gx = gaussian(rng), gy = gaussian(rng), gz = gaussian(rng);
+      const Vec3f p = clusterCentre[c] + Vec3f(gx, gy, gz) * clusterSpread[c];
+      centres[i] = min(max(p, Vec3f(-1)), Vec3f(1));
+      radii[i] = spacing * (0.15f + 0.2f * rng.uniform());
     }
     return std::make_shared<Spheres>(std::move(centres), std::move(radii));
   };
@@ -86,8 +67,6 @@ ScenePlan planParticles(uint64_t count, uint32_t seed) {
   view.at = {0, 0, 0};
   view.fovY = 40;
   plan.views.push_back(view);
-  plan.bounds.extend(Vec3f(-3, -1.2f, -3));
-  plan.bounds.extend(Vec3f(3, 3, 3));
   return plan;
 }
 

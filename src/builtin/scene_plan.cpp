@@ -73,6 +73,25 @@ void addDaylight(ScenePlan& plan, Vec3f towardsSun, Vec3f zenith, Vec3f horizon,
   plan.environmentImage = [=] { return skyGradient(zenith, horizon, below, belowFade); };
 }
 
+void addStudio(ScenePlan& plan, int32_t material, float e, float floorY, float top) {
+  MeshRecipe studio;
+  studio.name = "studio";
+  studio.material = material;
+  studio.counts = {6, 4};
+  studio.hasNormals = false;
+  studio.hasUvs = false;
+  studio.build = [=] {
+    Mesh m;
+    m.positions = {{-e, floorY, e},  {e, floorY, e}, {e, floorY, -e},
+                   {-e, floorY, -e}, {e, top, -e},   {-e, top, -e}};
+    m.indices = {{0, 1, 2}, {0, 2, 3}, {3, 2, 4}, {3, 4, 5}};
+    return m;
+  };
+  plan.addSingleInstanceMesh(std::move(studio));
+  plan.bounds.extend(Vec3f(-e, floorY, -e));
+  plan.bounds.extend(Vec3f(e, top, e));
+}
+
 SceneSummary describePlan(const ScenePlan& plan) {
   // Mirrors summarize() term by term (same per-mesh rounding of the cost
   // model), so the two agree exactly.

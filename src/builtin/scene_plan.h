@@ -103,6 +103,11 @@ struct ScenePlan {
 int32_t addDiffuseMaterial(ScenePlan& plan, const std::string& name, Vec3f colour,
                            int32_t texture = kNoTexture, bool alphaCutout = false);
 
+// A studio: a square floor at height `floorY`, `extent` out from the
+// vertical axis each way, and a backdrop rising from its far edge (z =
+// -extent) to `top`; the plan's bounds grow to span it.
+void addStudio(ScenePlan& plan, int32_t material, float extent, float floorY, float top);
+
 // Daylight: a sun of the real sun's size and clear-day irradiance towards
 // `towardsSun` (any length), and a sky of unit scale fading from `zenith` to
 // `horizon`, and to `below` over `belowFade` radians under the horizon.
