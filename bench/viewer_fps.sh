@@ -7,11 +7,13 @@
 #
 #   bash bench/viewer_fps.sh [FERRY]
 #   SCENE=builtin:island SIZE=640x360 RANKS="1 2 4" SECONDS_EACH=10 CHANGES=8 bash bench/viewer_fps.sh
+#   CONFIGS="4x1 4x2" bash bench/viewer_fps.sh     (ranks x data groups; overrides RANKS)
 set -euo pipefail
 ferry=$(realpath "${1:-build/ferry}")
 SCENE=${SCENE:-builtin:island}
 SIZE=${SIZE:-640x360}
 RANKS=${RANKS:-1 2 4}
+CONFIGS=${CONFIGS:-$(for n in $RANKS; do printf '%sx1 ' "$n"; done)}
 SECONDS_EACH=${SECONDS_EACH:-10}
 CHANGES=${CHANGES:-8}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
@@ -21,9 +23,11 @@ pid=""
 trap '[ -n "$pid" ] && kill -9 "$pid" 2> /dev/null; rm -rf "$work"' EXIT
 
 echo "machine: $(nproc) cores, load before: $(cut -d' ' -f1-3 /proc/loadavg); $SCENE, $SIZE, 1 spp per frame"
-for n in $RANKS; do
+for config in $CONFIGS; do
+  n=${config%x*}
+  groups=${config#*x}
   mpirun --oversubscribe --bind-to none -np "$n" "$ferry" view "$SCENE" --size "$SIZE" --port 0 -q \
-    > "$work/view-$n.log" 2>&1 &
+    --data-groups "$groups" > "$work/view-$n.log" 2>&1 &
   pid=$!
   url=""
   for _ in $(seq 600); do
@@ -32,9 +36,10 @@ for n in $RANKS; do
     sleep 0.1
   done
   [ -n "$url" ] || { cat "$work/view-$n.log"; exit 1; }
-  python3 - "$url" "$n" "$SECONDS_EACH" "$CHANGES" <<'EOF'
+  python3 - "$url" "$n" "$SECONDS_EACH" "$CHANGES" "$groups" <<'EOF'
 import json, statistics, sys, time, urllib.request
 base, ranks, seconds, changes = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4])
+groups = int(sys.argv[5])
 def get(path, timeout=30):
     with urllib.request.urlopen(base + path, timeout=timeout) as r:
         return r.read(), dict(r.headers)
@@ -72,7 +77,7 @@ for k in range(changes):
     latencies.append(time.time() - start)
     camera = st["camera"]
     time.sleep(0.3)
-print(f"  {ranks} rank(s): {fps:5.2f} frames/s (last frame {frame_s:.3f} s, slowest rank);"
+print(f"  {ranks} rank(s) in {groups} group(s): {fps:5.2f} frames/s (last frame {frame_s:.3f} s, slowest rank);"
       f" camera change to first new image: median {statistics.median(latencies):.3f} s"
       f" (min {min(latencies):.3f}, max {max(latencies):.3f}, {len(latencies)} changes)")
 post("quit", {})
