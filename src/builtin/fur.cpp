@@ -11,7 +11,7 @@ namespace ferry::builtin {
 namespace {
 
 constexpr float kStrandsPerCm2 = 300;
-constexpr float kCapBelow = 0.3f;  // roots down to y = -0.3 R
+constexpr float kCapBelow = 0.4f;  // roots down to y = -0.4 R
 constexpr float kRootWidth = 0.008f, kTipWidth = 0.002f;
 constexpr float kMaxLength = 2;
 
@@ -74,7 +74,7 @@ ScenePlan planFur(uint64_t strands, uint32_t seed) {
   };
   plan.addSingleInstanceMesh(std::move(ball));
   // A floor under the ball and a backdrop behind it, 4 radii out: they span
-  // the scene's bounds (the fur stays within 1.5 radii, above -0.8 radii).
+  // the scene's bounds (the fur stays within 1.5 radii, above -0.9 radii).
   addStudio(plan, grey, 4 * radius, -radius, 3 * radius);
 
   ShapeRecipe fur;

@@ -3,7 +3,7 @@
 // Bézier curve of 4 segments (a flat, ray-facing fibre; shapes/curves.h)
 // with pbrt's hair material, on a grey floor and backdrop under daylight.
 // The ratios are a groom's, in centimetres: 300 strands per cm² over the
-// ball's upper two thirds (the ball's radius follows from N: 20 cm at a
+// ball's upper 70 % (the ball's radius follows from N: 19.5 cm at a
 // million strands), strands 2 cm long (at most half the radius), 80 µm wide
 // at the root tapering to 20 µm at the tip, combed back and down. The
 // strands are one geometry (partitioning cuts it into pieces: partition/
