@@ -45,8 +45,7 @@ Mesh extractPiece(const Mesh& source, const std::vector<uint32_t>& triangles, in
 // About `want` spatially coherent pieces of the shape's primitives: the
 // primitives split at the median of their boxes' centres along the longest
 // axis, recursively; each piece lists its primitives in their original order.
-void splitPrimitives(const Shape& shape, std::vector<uint32_t> primitives,
-                     const std::vector<Vec3f>& centres, int want,
+void splitPrimitives(std::vector<uint32_t> primitives, const std::vector<Vec3f>& centres, int want,
                      std::vector<std::vector<uint32_t>>& out) {
   if (want <= 1 || primitives.size() < 2) {
     std::sort(primitives.begin(), primitives.end());
@@ -65,8 +64,8 @@ void splitPrimitives(const Shape& shape, std::vector<uint32_t> primitives,
                    });
   std::vector<uint32_t> low(primitives.begin(), primitives.begin() + std::ptrdiff_t(middle));
   primitives.erase(primitives.begin(), primitives.begin() + std::ptrdiff_t(middle));
-  splitPrimitives(shape, std::move(low), centres, left, out);
-  splitPrimitives(shape, std::move(primitives), centres, want - left, out);
+  splitPrimitives(std::move(low), centres, left, out);
+  splitPrimitives(std::move(primitives), centres, want - left, out);
 }
 
 }  // namespace
@@ -138,7 +137,7 @@ SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& opt
         all[p] = p;
       }
       std::vector<std::vector<uint32_t>> parts;
-      splitPrimitives(*shape, std::move(all), centres, want, parts);
+      splitPrimitives(std::move(all), centres, want, parts);
       std::vector<std::shared_ptr<const Shape>> made;
       for (const auto& part : parts) {
         made.push_back(shape->subset(part));

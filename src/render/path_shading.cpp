@@ -284,15 +284,16 @@ template <typename Path>
 [[gnu::always_inline]] inline PathVertex PathShading<Path>::surfaceVertex(const Path& path,
                                                                           const TraceHit& hit,
                                                                           uint32_t bounce) const {
+  const Vec3f direction = path.dir();  // decoded once: unit
   return PathVertex{path.pixel(),
                     bounce,
                     path.weight(),
-                    -path.dir(),  // decoded directions are unit
+                    -direction,
                     path.has(kPathAfterSpecular),
                     path.origin,
                     path.bsdfPdf(),
                     path.lightRatio,
-                    reconstructSurface(scene_, surfaces_, hit, path.dir())};
+                    reconstructSurface(scene_, surfaces_, hit, direction)};
 }
 
 // The AOVs of a camera path's first surface (render/aov.h). The albedo is

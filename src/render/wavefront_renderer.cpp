@@ -300,6 +300,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
       }
     }
   };
+  double collectives = 0;  // seconds of the owners' collectives, counted elsewhere
   if (chunked()) {
     // Every pixel's path is this rank's, and this chunk this thread's:
     // straight into the queue, in pixel order.
@@ -318,10 +319,9 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     // (proxy-guided, one collective), then their camera rays go into the
     // queue in pixel order.
     // (The owners' collectives count as wait and exchange, not as generate.)
-    const double elsewhere = stats.times.wait + stats.times.exchange;
+    const double before = stats.times.wait + stats.times.exchange;
     traversal_.primaryPixels(first, last, cameraRays(sampleIndex), ws.primaryPixels, stats);
-    start += std::chrono::duration_cast<Clock::duration>(
-        std::chrono::duration<double>(stats.times.wait + stats.times.exchange - elsewhere));
+    collectives = stats.times.wait + stats.times.exchange - before;
     const std::vector<uint32_t>& mine = ws.primaryPixels;
     rays.resize(mine.size());
     makeCameraPaths(sampleIndex, mine, rays.data());
@@ -329,7 +329,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     // This rank's pixels' light paths too: each index on exactly one rank.
     stats.lightPaths += appendLightPaths(sampleIndex, mine, rays);
   }
-  stats.times.generate += secondsSince(start);
+  stats.times.generate += secondsSince(start) - collectives;
 }
 
 template <typename Path>
