@@ -1,24 +1,35 @@
 #!/usr/bin/env bash
 # A volume spread over ranks in bricks (docs/volumes.md, "Bricks across
 # ranks"), measured in one run: a SIZE^3 float32 raw volume (two smooth
-# blobs, written by numpy) in BRICK^3 bricks on RANKS ranks against 1 rank
+# blobs, written by numpy) in BRICK^3 bricks (default auto: no flag, the
+# size Ferry chooses) on RANKS ranks against 1 rank
 # on the same cores (binding off), and loaded natively distributed (each
 # rank reads its own brick files, cut by scripts/cut_bricks.py) against
 # partitioning the assembled volume and loading the parts.
 #
-#   bash bench/volume_bricks.sh                       # SIZE=1024 BRICK=64 RANKS=8
+#   bash bench/volume_bricks.sh                       # SIZE=1024 BRICK=auto RANKS=8
 #   SIZE=256 bash bench/volume_bricks.sh              # a quick run
 #
 # Prints per rank estimated and resident bytes against total/RANKS, rays
 # forwarded per camera path (paths: brick crossings; shadow rays), frame
-# times, the partition step's time and peak memory, and time to first pixel
-# both ways; checks every image equals the 1-rank image. Needs about 3.2 x
+# times, the partition step's time and peak memory, time to first pixel
+# both ways, and `ferry info`'s total against the 1-rank render's resident
+# memory; checks every image equals the 1-rank image. Needs about 3.2 x
 # SIZE^3 x 4 bytes of memory (the partitioning process) and 4 x that of disk.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ferry=${FERRY:-build/ferry}
 size=${SIZE:-1024}
-brick=${BRICK:-64}
+brick=${BRICK:-auto}
+bricks_flag=""
+if [ "$brick" = auto ]; then
+  # Ferry's own choice (shapes/volume_brick.h, autoBrickVoxels), for the brick files.
+  brick=$(( size / 16 / 8 * 8 )); [ $brick -lt 32 ] && brick=32; [ $brick -gt 128 ] && brick=128
+  [ $((size * size * size)) -ge 16777216 ] \
+    || { echo "SIZE=$size: auto keeps a grid under 2^24 samples whole; give BRICK"; exit 2; }
+else
+  bricks_flag="--volume-bricks $brick"
+fi
 ranks=${RANKS:-8}
 image=${IMAGE:-480x270}
 frames=${FRAMES:-2}
@@ -28,7 +39,7 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 mpi() { mpirun --oversubscribe --bind-to none -np "$@"; }
 trap '[ -z "${KEEP:-}" ] && rm -rf "$work"' EXIT
 
-echo "volume ${size}^3 float32 ($((size * size * size * 4 / 1048576)) MiB), bricks ${brick}^3, $ranks ranks, $(nproc) cores, ferry $(git rev-parse --short HEAD 2> /dev/null || echo "(no git)")"
+echo "volume ${size}^3 float32 ($((size * size * size * 4 / 1048576)) MiB), bricks ${brick}^3 (${bricks_flag:-no flag}), $ranks ranks, $(nproc) cores, ferry $(git rev-parse --short HEAD 2> /dev/null || echo "(no git)")"
 $python - "$work/vol.raw" "$size" << 'PY'
 import sys, numpy as np
 n = int(sys.argv[2])
@@ -47,8 +58,9 @@ render="--size $image --spp 1 --frames $frames --max-depth 4 --seed 1 -q"
 # peak RSS (KiB) and wall seconds of a command, via /usr/bin/time
 timed() { /usr/bin/time -f "%e %M" -o "$work/time" "$@"; cat "$work/time"; }
 
-read -r part_s part_kib < <(timed "$ferry" partition "$raw" --volume-bricks "$brick" --ranks "$ranks" -o "$work/parts" -q)
-mpi 1 "$ferry" render "$raw" --volume-bricks "$brick" $render -o "$work/one.pfm" --stats "$work/one.json"
+read -r part_s part_kib < <(timed "$ferry" partition "$raw" $bricks_flag --ranks "$ranks" -o "$work/parts" -q)
+"$ferry" info "$raw" $bricks_flag --json > "$work/info.json"
+mpi 1 "$ferry" render "$raw" $bricks_flag $render -o "$work/one.pfm" --stats "$work/one.json"
 sync
 mpi "$ranks" "$ferry" render "$work/parts" $render -o "$work/parts.pfm" --stats "$work/parts.json"
 $python scripts/cut_bricks.py "$work/vol.raw" "$size,$size,$size" float32 "$brick" "$work/bricks" > /dev/null
@@ -66,7 +78,7 @@ done
 $python - "$work" "$ranks" "$part_s" "$part_kib" << 'PY'
 import json, sys
 work, ranks, part_s, part_kib = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), int(sys.argv[4])
-one, parts, native = (json.load(open(f"{work}/{n}.json")) for n in ("one", "parts", "native"))
+one, parts, native, info = (json.load(open(f"{work}/{n}.json")) for n in ("one", "parts", "native", "info"))
 MiB = 1 << 20
 def frame(s):
     fr = s["render"]["frames"]
@@ -92,6 +104,10 @@ print(f"largest rank: {largest:.2f} x total/{ranks} (the goal: at most 1.3)")
 print(f"\npartitioning the assembled volume: {part_s:.1f} s, peak {part_kib / 1024:.0f} MiB (one process holds it all)")
 print(f"time to first pixel: parts {fp(parts):.2f} s (largest rank peak {peak(parts):.0f} MiB); "
       f"natively distributed {fp(native):.2f} s (largest rank peak {peak(native):.0f} MiB)")
+told = info["memory_bytes"]["total"]
+held = one["memory"]["per_rank"][0]["resident_bytes"]
+print(f"ferry info's total {told / MiB:.0f} MiB against the 1-rank render's resident {held / MiB:.0f} MiB "
+      f"({told / held:.3f}; the process's own libraries are not the scene's)")
 if largest > 1.3:
     sys.exit("FAIL: the largest rank holds more than 1.3 x its share")
 PY

@@ -42,6 +42,8 @@ bench distribution_cost 'memory per rank' env SCENE="$tiny" SIZE=48x32 RANKS="1 
   EXCHANGES=overlapped bash bench/distribution_cost.sh "$ferry"
 bench viewer_fps 'frames/s' env SCENE="$tiny" SIZE=48x32 RANKS=1 SECONDS_EACH=2 \
   CHANGES=1 bash bench/viewer_fps.sh "$ferry"
+bench viewer_restyle 'restyle .* to its first frame' env SIZE=256 RANKS=2 IMAGE=48x32 CHANGES=1 \
+  bash bench/viewer_restyle.sh "$ferry"
 bench memory_vs_embree 'est/ret' bash bench/memory_vs_embree.sh "$ferry" "$tiny"
 bench part_loading 'images: bit-identical' env BASELINE="$ferry" SCENE="$tiny" RANKS=2 ROUNDS=1 SIZE=48x32 \
   THREADS=1 bash bench/part_loading.sh "$ferry"

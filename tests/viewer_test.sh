@@ -4,7 +4,7 @@
 # bad requests each gets a 4xx and the server stays up), the page in headless
 # Chromium (the image is not blank, dragging orbits the camera and restarts
 # the accumulation; the screenshot is kept), a raw volume's colour map and
-# opacity changed from the page, POST /quit and Ctrl-C end every
+# opacity changed from the page (held whole, and in bricks over the ranks), POST /quit and Ctrl-C end every
 # rank within 5 s, a long session keeps resident memory flat, a rank's
 # failure ends the viewer with its message, and a port in use is a clear
 # error.
@@ -79,6 +79,11 @@ for z in range(n):
 open(sys.argv[1], 'wb').write(out)" "$work/ball.raw"
 start volume "raw:$work/ball.raw?dims=32,32,32&format=uint8" --port 0 --size 96x64 --threads 1
 $check "$url" volume "${FERRY_VIEWER_VOLUME_SCREENSHOT:-$work/volume.png}" || fail "volume"
+$check "$url" quit
+ends_within "$pid" 5
+echo "== a bricked volume's transfer function (bricks on both ranks)"
+start bricks "raw:$work/ball.raw?dims=32,32,32&format=uint8" --volume-bricks 8 --port 0 --size 96x64 --threads 1
+$check "$url" volume "$work/bricks.png" || fail "bricked volume"
 $check "$url" quit
 ends_within "$pid" 5
 

@@ -61,6 +61,31 @@ PY
 done
 echo "  natively distributed bricks: the same image on 1 and 3 ranks, each rank a third"
 
+# Without the flag: a grid of 2^24 samples or more is bricked on any rank
+# count (auto, 32^3 bricks for 256^3), the same image on 1 and 3 ranks, no
+# rank above 1.3 x its share; --volume-bricks 0 keeps it whole.
+$python - "$work/big.raw" << 'PY'
+import sys, numpy as np
+n = 256
+c = (np.arange(n, dtype=np.float32) - n / 2) / n
+z, y, x = np.meshgrid(c, c, c, indexing="ij")
+(255 * np.exp(-(x * x + y * y + z * z) / 0.02)).astype(np.uint8).tofile(sys.argv[1])
+PY
+big="raw:$work/big.raw?dims=256,256,256&format=uint8&opacity=20"
+"$ferry" render "$big" $args -o "$work/big1.pfm" --stats "$work/big1.json" || fail "auto bricks, 1 rank"
+mpirun_n 3 "$ferry" render "$big" $args -o "$work/big3.pfm" --stats "$work/big3.json" || fail "auto bricks, 3 ranks"
+cmp -s "$work/big1.pfm" "$work/big3.pfm" || fail "auto bricks: the 3-rank image is not the 1-rank image"
+"$ferry" render "$big" $args --volume-bricks 0 -o "$work/big0.pfm" --stats "$work/big0.json" || fail "--volume-bricks 0"
+$python - "$work/big1.json" "$work/big3.json" "$work/big0.json" << 'PY' || fail "auto bricks: not bricked, or a rank above 1.3 x a third"
+import json, sys
+one, three, whole = (json.load(open(p)) for p in sys.argv[1:])
+assert one["scene"]["volume_bricks"] > 8, one["scene"]["volume_bricks"]
+assert whole["scene"]["volume_bricks"] == 0, whole["scene"]["volume_bricks"]
+per = [r["estimated_bytes"] for r in three["memory"]["per_rank"]]
+assert max(per) <= 1.3 * sum(per) / 3, per
+PY
+echo "  auto: a 256^3 grid in $($python -c "import json,sys; print(json.load(open(sys.argv[1]))['scene']['volume_bricks'])" "$work/big1.json") bricks, the same image on 1 and 3 ranks"
+
 # The bench runs (a small volume): its own checks are the same images and
 # no rank above 1.3 x its share.
 FERRY=$(realpath "$ferry") SIZE=40 BRICK=16 RANKS=3 IMAGE=40x30 FRAMES=1 \

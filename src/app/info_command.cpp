@@ -4,7 +4,11 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+
+#include "flags/render_flags.h"
 #include "io/scene_loader.h"
+#include "shapes/volume_brick.h"
 
 namespace ferry {
 
@@ -22,6 +26,10 @@ void addInfoCommand(CLI::App& app, InfoOptions& options) {
   info->add_flag("--json", options.json, "Print JSON instead of a table");
   info->add_flag("--env-fallback", options.envFallback,
                  "Describe a scene whose environment map is missing (as render --env-fallback)");
+  info->add_option("--volume-bricks", options.volumeBricks,
+                   "Grid volumes counted as render holds them: auto, 0 (whole) or bricks of N\n"
+                   "voxels a side (render --volume-bricks)")
+      ->capture_default_str();
 }
 
 int runInfo(const InfoOptions& options) {
@@ -33,7 +41,14 @@ int runInfo(const InfoOptions& options) {
     last = tenth;
     fmt::print(stderr, "load: {}% of {}\n", tenth * 10, what);
   };
+  const int bricks = parseVolumeBricks(options.volumeBricks);
   SceneSummary summary = describeScene(options.scene, load);
+  // A grid medium that render would brick: described from the loaded scene, in bricks.
+  const auto grid = [](const SceneSummary::Medium& m) { return m.kind.rfind("grid", 0) == 0; };
+  if (bricks != 0 && std::any_of(summary.media.begin(), summary.media.end(), grid)) {
+    Scene scene = loadScene(options.scene, load);
+    if (brickVolumes(scene, bricks) > 0) summary = summarize(scene);
+  }
   if (options.json)
     fmt::print("{}\n", summary.toJson().dump(2));
   else

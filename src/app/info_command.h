@@ -13,6 +13,8 @@ struct InfoOptions {
   std::string scene = "builtin:island";
   bool json = false;
   bool envFallback = false;  // --env-fallback, as for render
+  // --volume-bricks, as for render: the scene described as a render holds it.
+  std::string volumeBricks = "auto";
 };
 
 void addInfoCommand(CLI::App& app, InfoOptions& options);

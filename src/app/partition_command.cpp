@@ -17,6 +17,7 @@
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/process_memory.h"
+#include "flags/render_flags.h"
 #include "io/images/image_io.h"
 #include "io/parts/part_directory.h"
 #include "io/scene_loader.h"
@@ -252,7 +253,7 @@ int writeParts(const PartitionCommandOptions& o, const PartitionerOptions& p, in
   LoadOptions load;
   if (geometryPlan.outOfCore) load.meshStore = std::make_shared<MeshStore>(spillPath(o.output));
   Scene scene = loadScene(o.scene, load);
-  if (o.volumeBricks > 0) brickVolumes(scene, o.volumeBricks);
+  if (const int bricks = parseVolumeBricks(o.volumeBricks)) brickVolumes(scene, bricks);
   if (geometryPlan.outOfCore) checkLargestMesh(scene, geometryPlan, o.scene);
   const double loadSeconds = secondsSince(start);
   // Checked before the work: a bad view or flag fails in a second, not after the write.
@@ -294,7 +295,7 @@ int writeParts(const PartitionCommandOptions& o, const PartitionerOptions& p, in
 int writeReport(const PartitionCommandOptions& o, const PartitionerOptions& p, int first,
                 int last) {
   Scene scene = loadScene(o.scene);
-  if (o.volumeBricks > 0) brickVolumes(scene, o.volumeBricks);
+  if (const int bricks = parseVolumeBricks(o.volumeBricks)) brickVolumes(scene, bricks);
   const std::string name = scene.name.empty() ? o.scene : scene.name;
   MaxPartReport report = maxPartReport(std::move(scene), name, first, last, p);
   writeMaxPartCsv(o.report, report);
@@ -334,8 +335,8 @@ void addPartitionCommand(CLI::App& app, PartitionCommandOptions& o) {
       "a plot of it as PNG (see --plot)");
   cmd->add_option("--volume-bricks", o.volumeBricks,
                   "Grid volumes split into bricks of N voxels a side, placed like meshes\n"
-                  "(0: whole; a part file cannot hold a whole medium)")
-      ->check(CLI::NonNegativeNumber);
+                  "(auto: grids of 2^24 samples or more; 0: whole, held by every rank)")
+      ->capture_default_str();
   cmd->add_option("--plot", o.plot, "PNG for --report (default: the report's name with .png)");
   cmd->add_option(
       "--memory-budget", o.memoryBudget,

@@ -41,8 +41,9 @@ struct PartitionCommandOptions {
   std::string predictSize = "2560x1080";
   int predictDepth = 5;
   CameraFlags camera;
-  // --volume-bricks N: grid volumes split into bricks of N voxels a side (0: whole).
-  int volumeBricks = 0;
+  // --volume-bricks: auto, 0 (whole) or N (bricks of N voxels a side), as
+  // for render (shapes/volume_brick.h).
+  std::string volumeBricks = "auto";
 };
 
 void addPartitionCommand(CLI::App& app, PartitionCommandOptions& options);

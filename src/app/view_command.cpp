@@ -51,11 +51,18 @@ int runView(const ViewOptions& o, const Communicator& comm) {
     loading.update(0, o.render.scene);
     session.emplace(settings, comm);
     loading.finish(setupIntervalsText(session->setupTimes(), "agree") + " s");
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (comm.agreeOnFailure(!error.empty(), error)) return 1;
+  // The look controls when any rank holds a volume they restyle (bricks may be elsewhere).
+  const bool looks = comm.sum(uint64_t(session->hasTransferFunctionVolumes())) > 0;
+  try {
     if (comm.isRoot()) {
       const Scene& scene = session->scene();
       const RenderSettings& r = session->settings().render;
       ViewLimits limits;
-      limits.volumeLook = session->hasTransferFunctionVolumes();
+      limits.volumeLook = looks;
       server.emplace(o.bind, o.port, scene.views, r.camera ? *r.camera : scene.view(r.view), r,
                      comm.size(), limits);
     }

@@ -19,6 +19,7 @@
 #include "render/camera.h"
 #include "session/image_file_sink.h"
 #include "session/render_session.h"
+#include "shapes/volume_brick.h"
 
 namespace ferry {
 namespace {
@@ -134,10 +135,7 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--color-map {}: expected one of {}", o.colorMap,
                                  fmt::join(colorMapNames(), ", ")));
   s.render.volumeLook = {o.volumeOpacity, o.colorMap};
-  if (o.volumeBricks < 0)
-    throw InputError(fmt::format("--volume-bricks {}: expected 0 (whole) or a brick size in voxels",
-                                 o.volumeBricks));
-  s.volumeBrickVoxels = o.volumeBricks;
+  s.volumeBrickVoxels = parseVolumeBricks(o.volumeBricks);
   if (o.dataGroups < 1 || comm.size() % o.dataGroups != 0)
     throw InputError(fmt::format(
         "--data-groups {}: expected a divisor of the rank count ({}): groups of equal size",
@@ -231,7 +229,9 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
       ->add_option("--volume-bricks", o.volumeBricks,
                    "Grid volumes (raw:, .vdb, builtin:volume, a pbrt grid medium filling its\n"
                    "box) split into bricks of N voxels a side, which the partitioner spreads\n"
-                   "over the ranks like meshes (0: every rank holds every volume whole)")
+                   "over the ranks like meshes. auto: grids of 2^24 samples or more, in\n"
+                   "bricks of a sixteenth of their largest side (32 to 128); 0: every rank\n"
+                   "holds every volume whole")
       ->capture_default_str();
   command
       ->add_option("--data-groups", o.dataGroups,
@@ -296,6 +296,17 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                     "Render a scene whose environment map is missing with a constant white\n"
                     "environment instead (the file is named in a warning)");
   addCameraFlags(command, o.camera);
+}
+
+int parseVolumeBricks(const std::string& value) {
+  if (value == "auto") return kAutoBricks;
+  int voxels = -1;
+  const char* end = value.data() + value.size();
+  const auto [at, error] = std::from_chars(value.data(), end, voxels);
+  if (error != std::errc() || at != end || voxels < 0)
+    throw InputError(fmt::format(
+        "--volume-bricks {}: expected auto, 0 (whole) or a brick size in voxels", value));
+  return voxels;
 }
 
 void parseImageSize(const std::string& text, int& width, int& height) {

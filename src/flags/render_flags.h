@@ -68,9 +68,9 @@ struct RenderOptions {
   // --volume-opacity, --color-map: transfer-function volumes restyled.
   float volumeOpacity = 1;
   std::string colorMap;
-  // --volume-bricks N: grid volumes split into bricks of N voxels a side,
-  // spread over the ranks (0: every rank holds them whole).
-  int volumeBricks = 0;
+  // --volume-bricks: auto (large grids bricked, shapes/volume_brick.h), 0
+  // (every rank holds every volume whole) or N (bricks of N voxels a side).
+  std::string volumeBricks = "auto";
   // --data-groups G: the ranks split into G groups that each hold the whole
   // scene and render every G-th sample.
   int dataGroups = 1;
@@ -106,6 +106,9 @@ SessionSettings sessionSettings(const RenderOptions& options, const Communicator
 
 // "1280x720" -> (1280, 720); throws InputError naming the flag.
 void parseImageSize(const std::string& text, int& width, int& height);
+// A --volume-bricks value (render, view, partition, info): "auto"
+// (kAutoBricks), 0 (whole) or a brick size in voxels; InputError otherwise.
+int parseVolumeBricks(const std::string& value);
 // --partitioner, --keep-objects-whole and --replication-budget (and the
 // seed, which the random partitioner uses) into `settings`; throws InputError.
 void applyPartitionerFlags(const RenderOptions& options, SessionSettings& settings);

@@ -84,7 +84,7 @@ PartitionedScene loadBrickPieces(const SessionSettings& settings, const Communic
   Scene piece;
   std::string error;
   try {
-    piece = loadBrickPiece(settings.scene, comm.rank(), comm.size(), settings.render.volumeLook);
+    piece = loadBrickPiece(settings.scene, comm.rank(), comm.size());  // the look: applyVolumeLook
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -112,8 +112,8 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
           ? std::move(*part)
           : loadPartitionedScene(settings, comm.size(), comm.rank(), given, [&](Scene& whole) {
               whole.view(settings.render.view);  // fail on an unknown view before building anything
-              if (settings.volumeBrickVoxels > 0)
-                brickVolumes(whole, settings.volumeBrickVoxels, settings.render.volumeLook);
+              if (settings.volumeBrickVoxels != 0)
+                brickVolumes(whole, settings.volumeBrickVoxels);  // the look: applyVolumeLook
               summary = summarize(whole);
               lap(&SetupTimes::load);
               // Light data is small and needed everywhere: take it from the scene
@@ -259,12 +259,25 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
   settings_.render.lightPaths =
       !media && settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
   for (const Medium& m : rank_->scene.media) loadedTransfers_.push_back(m.transfer);
+  // This rank's bricks, by the volume they were made from (the session owns
+  // its scene: a given one is moved in).
+  for (const Geometry& g : rank_->scene.geometries) {
+    const auto* brick = dynamic_cast<const VolumeBrick*>(g.shape.get());
+    if (!brick || !brick->volume().transfer) continue;
+    auto group = std::find_if(loadedBricks_.begin(), loadedBricks_.end(),
+                              [&](const auto& b) { return b.madeFrom == &brick->volume(); });
+    if (group == loadedBricks_.end())
+      group = loadedBricks_.insert(
+          loadedBricks_.end(),
+          {&brick->volume(), std::make_shared<const VolumeBrick::Volume>(brick->volume()), {}});
+    group->bricks.push_back(const_cast<VolumeBrick*>(brick));
+  }
   if (!settings_.render.volumeLook.isDefault()) applyVolumeLook(settings_.render.volumeLook);
 }
 
 bool RenderSession::hasTransferFunctionVolumes() const {
-  return std::any_of(loadedTransfers_.begin(), loadedTransfers_.end(),
-                     [](const auto& t) { return t != nullptr; });
+  return !loadedBricks_.empty() || std::any_of(loadedTransfers_.begin(), loadedTransfers_.end(),
+                                               [](const auto& t) { return t != nullptr; });
 }
 
 void RenderSession::applyVolumeLook(const VolumeLook& look) {
@@ -277,6 +290,17 @@ void RenderSession::applyVolumeLook(const VolumeLook& look) {
       throw InputError(
           fmt::format("{} (the colour maps: {})", e.what(), fmt::join(colorMapNames(), ", ")));
     }
+  }
+  for (LoadedBricks& group : loadedBricks_) {
+    auto volume = std::make_shared<VolumeBrick::Volume>(*group.loaded);
+    try {
+      volume->transfer =
+          std::make_shared<const TransferFunction>(restyled(*group.loaded->transfer, look));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(
+          fmt::format("{} (the colour maps: {})", e.what(), fmt::join(colorMapNames(), ", ")));
+    }
+    for (VolumeBrick* brick : group.bricks) brick->restyle(volume);
   }
 }
 

@@ -30,6 +30,7 @@
 #include "session/frame_sink.h"
 #include "session/partitioned_scene.h"
 #include "session/session_settings.h"
+#include "shapes/volume_brick.h"
 
 namespace ferry {
 
@@ -225,8 +226,9 @@ class RenderSession {
   const Scene& scene() const;
   // The whole scene, summarized before this rank released what it does not own.
   const SceneSummary& summary() const;
-  // Whether the scene has volumes drawn through a transfer function (whose
-  // look RenderSettings::volumeLook changes).
+  // Whether this rank holds volumes drawn through a transfer function (whose
+  // look RenderSettings::volumeLook changes): media, or bricks (which other
+  // ranks may hold instead: ask every rank).
   bool hasTransferFunctionVolumes() const;
   // The partitioner that made the parts: a part directory's (from its
   // manifest) or the one run on the fly.
@@ -267,6 +269,14 @@ class RenderSession {
   std::unique_ptr<Checkpoint> resume_;  // rank 0, from resumeFrom()
   // Per medium, its transfer function as loaded (null: none).
   std::vector<std::shared_ptr<const TransferFunction>> loadedTransfers_;
+  // This rank's volume bricks drawn through a transfer function, by volume
+  // as loaded (applyVolumeLook restyles them from it).
+  struct LoadedBricks {
+    const VolumeBrick::Volume* madeFrom;  // what the bricks shared when made (a key only)
+    std::shared_ptr<const VolumeBrick::Volume> loaded;
+    std::vector<VolumeBrick*> bricks;
+  };
+  std::vector<LoadedBricks> loadedBricks_;
 };
 
 }  // namespace ferry

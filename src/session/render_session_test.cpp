@@ -321,6 +321,40 @@ TEST(RenderSession, AVolumeLookRestylesTheTransferFunctionOnEveryRank) {
   EXPECT_THROW(RenderSession(volumeBall(), unknown, oneRank()), InputError);
 }
 
+// Bricks restyled after they are made (the look applied by the session, on
+// each rank to its own bricks) render what bricks made from the restyled
+// transfer function render, on 1 and 3 ranks.
+TEST(RenderSession, AVolumeLookRestylesBricksOnEveryRank) {
+  const VolumeLook look{4, "viridis"};
+  std::vector<Vec3f> restyledScene, withLook, plain;
+  for (int ranks : {1, 3})
+    for (int which = 0; which < 3; ++which)
+      runRanks(ranks, [&](const Communicator& comm) {
+        SessionSettings settings = cornellSettings();
+        settings.scene = "ball";
+        settings.load.warn = {};
+        settings.volumeBrickVoxels = 4;
+        if (which == 1) settings.render.volumeLook = look;
+        RenderSession session(
+            which == 0 ? volumeBall(restyled(TransferFunction::standard(), look)) : volumeBall(),
+            settings, comm);
+        EXPECT_EQ(comm.sum(uint64_t(session.hasTransferFunctionVolumes())), uint64_t(ranks))
+            << "every rank holds bricks";
+        RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+        session.run(sink);
+        if (!comm.isRoot()) return;
+        EXPECT_GT(session.summary().volumeBricks, 8u);
+        std::vector<Vec3f>& out = which == 0 ? restyledScene : which == 1 ? withLook : plain;
+        if (out.empty())
+          out = sink.images.at(0).linear;
+        else
+          EXPECT_TRUE(out == sink.images.at(0).linear) << which << ": " << ranks << " ranks";
+      });
+  ASSERT_TRUE(nonBlack(withLook));
+  EXPECT_TRUE(withLook == restyledScene);
+  EXPECT_FALSE(withLook == plain);
+}
+
 // The viewer restyles a volume: the accumulation restarts with the new look.
 class VolumeControl final : public InteractiveControl {
  public:

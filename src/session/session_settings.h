@@ -12,6 +12,7 @@
 #include <optional>
 #include "render/wavefront_renderer.h"
 #include "session/modes.h"
+#include "shapes/volume_brick.h"
 
 namespace ferry {
 
@@ -25,9 +26,10 @@ struct SessionSettings {
   RenderSettings render;
   int threads = 0;  // worker threads per rank (0: all cores)
   // Grid volumes that fill their box are split into bricks of this many
-  // voxels a side, spread over the ranks (shapes/volume_brick.h); 0: every
-  // rank holds every medium whole.
-  int volumeBrickVoxels = 0;
+  // voxels a side, spread over the ranks (shapes/volume_brick.h);
+  // kAutoBricks: large grids only, sized by autoBrickVoxels; 0: every rank
+  // holds every medium whole.
+  int volumeBrickVoxels = kAutoBricks;
   // Data groups (hybrid data and image parallelism): the ranks split into
   // this many groups of equal size, each holding the whole scene spread over
   // its ranks (a part directory for that many ranks) and rendering every

@@ -73,6 +73,7 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
   for (int a = 0; a < 3; ++a)
     cells[a] = (hi[a] - lo[a] + kBrickMajorantVoxels - 1) / kBrickMajorantVoxels;
   std::vector<float> majorants(size_t(cells[0]) * size_t(cells[1]) * size_t(cells[2]));
+  ranges_.resize(majorants.size());
   size_t i = 0;
   for (int cz = 0; cz < cells[2]; ++cz)
     for (int cy = 0; cy < cells[1]; ++cy)
@@ -111,11 +112,33 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
           low = std::min(low, 0.0f);
           high = std::max(high, 0.0f);
         }
-        majorants[i] = v.transfer ? v.transfer->scale() * v.transfer->opacityRange(low, high).second
-                                  : greyExtinction(v) * high;
+        ranges_[i] = {low, high};
+        majorants[i] = cellMajorant(v, low, high);
         largest_ = std::max(largest_, majorants[i]);
       }
   majorants_ = std::make_unique<MajorantGrid>(cells[0], cells[1], cells[2], std::move(majorants));
+}
+
+float VolumeBrick::cellMajorant(const Volume& v, float low, float high) {
+  return v.transfer ? v.transfer->scale() * v.transfer->opacityRange(low, high).second
+                    : greyExtinction(v) * high;
+}
+
+void VolumeBrick::restyle(std::shared_ptr<const Volume> volume) {
+  const Volume& v = *volume;
+  if (v.dims != volume_->dims || v.normalise != volume_->normalise ||
+      v.valueLo != volume_->valueLo || v.valueRange != volume_->valueRange || !v.transfer)
+    throw InputError("a volume brick restyled by another volume's grid");
+  std::vector<float> majorants(ranges_.size());
+  float largest = 0;
+  for (size_t i = 0; i < ranges_.size(); ++i) {
+    majorants[i] = cellMajorant(v, ranges_[i].first, ranges_[i].second);
+    largest = std::max(largest, majorants[i]);
+  }
+  majorants_ = std::make_unique<MajorantGrid>(majorants_->cells(0), majorants_->cells(1),
+                                              majorants_->cells(2), std::move(majorants));
+  largest_ = largest;
+  volume_ = std::move(volume);
 }
 
 std::shared_ptr<VolumeBrick> VolumeBrick::cut(std::shared_ptr<const Volume> volume,
@@ -181,7 +204,8 @@ uint64_t VolumeBrick::bytes() const {
   int cells = 1;
   for (int a = 0; a < 3; ++a)
     cells *= (hi_[a] - lo_[a] + kBrickMajorantVoxels - 1) / kBrickMajorantVoxels;
-  return sizeof(*this) + samples_.size() * sizeof(float) + size_t(cells) * sizeof(float) * 4;
+  // Per majorant cell: the majorant and control (MajorantGrid), the value range.
+  return sizeof(*this) + samples_.size() * sizeof(float) + size_t(cells) * sizeof(float) * 6;
 }
 
 bool VolumeBrick::intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear,
@@ -347,15 +371,25 @@ bool fillsItsBox(const Scene& scene, int32_t m) {
 
 }  // namespace
 
+int autoBrickVoxels(std::array<int, 3> dims) {
+  if (uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]) < kAutoBrickSamples) return 0;
+  const int side = std::max({dims[0], dims[1], dims[2]}) / 16;
+  return std::clamp(side / 8 * 8, 32, 128);
+}
+
 size_t brickVolumes(Scene& scene, int brickVoxels, const VolumeLook& look) {
-  if (brickVoxels < 1)
+  if (brickVoxels < 1 && brickVoxels != kAutoBricks)
     throw InputError(fmt::format("volume bricks of {} voxels: expected 1 or more", brickVoxels));
   std::vector<int32_t> renumbered(scene.media.size());
   std::vector<Medium> kept;
   int32_t material = -1;
   size_t bricked = 0;
   for (int32_t m = 0; m < int32_t(scene.media.size()); ++m) {
-    if (!fillsItsBox(scene, m)) {
+    const DensityGrid* density = scene.media[size_t(m)].density.get();
+    const int side = brickVoxels != kAutoBricks ? brickVoxels
+                     : density ? autoBrickVoxels({density->nx(), density->ny(), density->nz()})
+                               : 0;
+    if (side < 1 || !fillsItsBox(scene, m)) {
       renumbered[size_t(m)] = int32_t(kept.size());
       kept.push_back(std::move(scene.media[size_t(m)]));
       continue;
@@ -385,10 +419,10 @@ size_t brickVolumes(Scene& scene, int brickVoxels, const VolumeLook& look) {
       material = scene.addMaterial(none);
     }
     std::array<int, 3> lo, hi;
-    for (lo[2] = 0; lo[2] < grid.nz(); lo[2] += brickVoxels)
-      for (lo[1] = 0; lo[1] < grid.ny(); lo[1] += brickVoxels)
-        for (lo[0] = 0; lo[0] < grid.nx(); lo[0] += brickVoxels) {
-          for (int a = 0; a < 3; ++a) hi[a] = std::min(lo[a] + brickVoxels, volume->dims[a]);
+    for (lo[2] = 0; lo[2] < grid.nz(); lo[2] += side)
+      for (lo[1] = 0; lo[1] < grid.ny(); lo[1] += side)
+        for (lo[0] = 0; lo[0] < grid.nx(); lo[0] += side) {
+          for (int a = 0; a < 3; ++a) hi[a] = std::min(lo[a] + side, volume->dims[a]);
           std::shared_ptr<VolumeBrick> brick = VolumeBrick::cut(volume, grid, lo, hi);
           if (!(brick->majorant() > 0)) continue;  // it never collides
           scene.addSingleInstanceGeometry(
@@ -396,8 +430,8 @@ size_t brickVolumes(Scene& scene, int brickVoxels, const VolumeLook& look) {
                std::move(brick)});
         }
   }
+  scene.media = std::move(kept);  // (every medium was moved into `kept`)
   if (bricked == 0) return 0;
-  scene.media = std::move(kept);
   auto renumber = [&](int32_t& m) {
     if (m != kNoMedium) m = renumbered[size_t(m)];
   };

@@ -16,6 +16,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "core/shared_array.h"
@@ -91,14 +92,23 @@ class VolumeBrick final : public Shape {
   const std::array<int, 3>& hi() const { return hi_; }
   // Whether the samples are read in place from a mapping (a part file).
   bool samplesShared() const { return samples_.isShared(); }
+  // Draws the brick through `volume`'s transfer function (a copy of its own
+  // volume restyled: the same grid, placement and value mapping; throws
+  // InputError otherwise). The majorants are rebuilt from the value range
+  // kept per cell, without a pass over the samples, and equal those of a
+  // brick made with that volume. Not while a ray crosses the brick.
+  void restyle(std::shared_ptr<const Volume> volume);
 
  private:
   float sample(int x, int y, int z) const;
+  // The majorant of a cell whose lookups give values in [low, high].
+  static float cellMajorant(const Volume& v, float low, float high);
   std::shared_ptr<const Volume> volume_;
   std::array<int, 3> lo_, hi_;        // cells
   std::array<int, 3> first_, count_;  // the samples held
   SharedArray<float> samples_;
-  std::unique_ptr<MajorantGrid> majorants_;  // over the brick's cells
+  std::unique_ptr<MajorantGrid> majorants_;      // over the brick's cells
+  std::vector<std::pair<float, float>> ranges_;  // each majorant cell's values, [low, high]
   float largest_ = 0;
   Vec3f unitLo_, unitSize_;  // the brick's cells in the grid's unit cube
   uint32_t seed_ = 0;        // of its random numbers: its place in the grid
@@ -112,6 +122,17 @@ class VolumeBrick final : public Shape {
 // majorant of 0) are left out; a transfer function is restyled by `look`
 // first (a brick's look is fixed when it is made). Returns
 // the number of media bricked. Other media stay as they are.
+// `brickVoxels` kAutoBricks chooses each volume's size by autoBrickVoxels.
 size_t brickVolumes(Scene& scene, int brickVoxels, const VolumeLook& look = {});
+
+// --volume-bricks auto (the default): every grid of at least
+// kAutoBrickSamples samples is bricked, in bricks of a sixteenth of its
+// largest side (at least 32 voxels, at most 128, a multiple of 8), about
+// 4,096 bricks for a cube; smaller grids stay whole. A function of the grid
+// alone, never of the rank count: a brick's random numbers depend on its
+// cells, so the image is the same on any number of ranks.
+constexpr int kAutoBricks = -1;
+constexpr uint64_t kAutoBrickSamples = uint64_t(1) << 24;  // 64 MiB of float32
+int autoBrickVoxels(std::array<int, 3> dims);
 
 }  // namespace ferry

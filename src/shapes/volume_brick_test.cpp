@@ -14,7 +14,9 @@
 #include <filesystem>
 
 #include "comm/in_process_communicator.h"
+#include "core/error.h"
 #include "io/parts/part_file.h"
+#include "io/scene_loader.h"
 #include "partition/partitioner.h"
 #include "render/render_test_util.h"
 #include "scene/scene.h"
@@ -308,6 +310,78 @@ TEST(VolumeBrick, APartFileStoresBricks) {
       EXPECT_EQ(ta, tb);
     }
   }
+}
+
+// --volume-bricks auto: large grids only, about a sixteenth of the largest
+// side, 32 to 128 voxels, a multiple of 8; a function of the grid alone.
+TEST(VolumeBrick, AutomaticSizeDependsOnTheGridAlone) {
+  EXPECT_EQ(autoBrickVoxels({64, 64, 64}), 0);
+  EXPECT_EQ(autoBrickVoxels({255, 256, 256}), 0);  // just under 2^24 samples
+  EXPECT_EQ(autoBrickVoxels({256, 256, 256}), 32);
+  EXPECT_EQ(autoBrickVoxels({512, 512, 512}), 32);
+  EXPECT_EQ(autoBrickVoxels({1024, 1024, 1024}), 64);
+  EXPECT_EQ(autoBrickVoxels({1400, 1024, 700}), 80);
+  EXPECT_EQ(autoBrickVoxels({4096, 4096, 4096}), 128);
+  EXPECT_EQ(autoBrickVoxels({16777216, 1, 1}), 128);
+}
+
+// Auto leaves small grids whole and bricks large ones at their size.
+TEST(VolumeBrick, AutomaticBrickingSkipsSmallGrids) {
+  for (const auto& [n, bricked] : {std::pair{32, false}, std::pair{256, true}}) {
+    Scene scene = loadScene(fmt::format("builtin:volume?size={}", n));
+    const size_t geometries = scene.geometries.size();
+    EXPECT_EQ(brickVolumes(scene, kAutoBricks), bricked ? 1u : 0u) << n;
+    size_t bricks = 0;
+    for (const Geometry& g : scene.geometries) bricks += g.shape && g.shape->isVolume();
+    if (bricked) {
+      EXPECT_GT(bricks, 0u);
+      EXPECT_LE(bricks, 8u * 8u * 8u);  // 32^3 bricks of a 256^3 grid, empty ones left out
+      EXPECT_TRUE(scene.media.empty()) << "the bricked medium is gone";
+    } else {
+      EXPECT_EQ(scene.geometries.size(), geometries);
+      ASSERT_EQ(scene.media.size(), 1u);
+      EXPECT_TRUE(scene.media[0].density) << "a medium left whole is left as it was";
+    }
+  }
+}
+
+// A brick restyled after it is made crosses rays as a brick made with the
+// restyled transfer function: the same majorants (from the kept value
+// ranges) and the same collisions.
+TEST(VolumeBrick, RestyledEqualsMadeRestyled) {
+  const int n = 16;
+  std::vector<float> values(size_t(n * n * n));
+  TestRng fill(3);
+  for (float& v : values) v = fill.uniform();
+  const DensityGrid grid(n, n, n, values);
+  auto plain = std::make_shared<VolumeBrick::Volume>();
+  plain->dims = {n, n, n};
+  plain->transfer = std::make_shared<const TransferFunction>(TransferFunction::standard());
+  auto styled = std::make_shared<VolumeBrick::Volume>(*plain);
+  styled->transfer = std::make_shared<const TransferFunction>(
+      restyled(TransferFunction::standard(), VolumeLook{3, "inferno"}));
+  const std::array<int, 3> lo{4, 0, 8}, hi{12, 9, 16};
+  std::shared_ptr<VolumeBrick> a = VolumeBrick::cut(plain, grid, lo, hi);
+  const std::shared_ptr<VolumeBrick> b = VolumeBrick::cut(styled, grid, lo, hi);
+  ASSERT_NE(a->majorant(), b->majorant());
+  a->restyle(styled);
+  EXPECT_EQ(a->majorant(), b->majorant());
+  TestRng rng(4);
+  for (int k = 0; k < 200; ++k) {
+    const Vec3f o{rng.uniform(), rng.uniform(), -1};
+    const Vec3f d =
+        normalize(Vec3f(0.3f * (rng.uniform() - 0.5f), 0.3f * (rng.uniform() - 0.5f), 1));
+    float ta = -1, tb = -1;
+    Vec2f uv;
+    EXPECT_EQ(a->intersect(0, o, d, 0, kInfinity, ta, uv),
+              b->intersect(0, o, d, 0, kInfinity, tb, uv));
+    EXPECT_EQ(ta, tb);
+    const Vec3f p{0.25f + 0.5f * rng.uniform(), 0.5f * rng.uniform(), 0.5f + 0.5f * rng.uniform()};
+    EXPECT_EQ(a->volumeAlbedo(p), b->volumeAlbedo(p));
+  }
+  auto other = std::make_shared<VolumeBrick::Volume>(*styled);
+  other->dims = {n, n, n + 1};
+  EXPECT_THROW(a->restyle(other), InputError);
 }
 
 }  // namespace
