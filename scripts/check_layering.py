@@ -6,7 +6,7 @@ src/CMakeLists.txt declares them with ferry_module). Fails (exit 1, one line
 per offence, file:line) when
   - a source file includes "other/header.h" from a folder its folder does not
     declare (unit tests, *_test.cpp, are exempt: they link every library);
-  - Embree's headers appear outside src/trace/, MPI's outside src/mpi/, OpenVDB's outside src/io/
+  - Embree's headers appear outside src/trace/, MPI's outside src/mpi/, OpenVDB's and VTK's outside src/io/
     (tests included);
   - the declared dependencies form a cycle, or name an unknown folder;
   - a folder with sources is not declared.
@@ -17,7 +17,7 @@ import re
 import sys
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
-THIRD_PARTY_HOMES = {"embree": "trace", "mpi": "mpi", "httplib": "viewer", "openvdb": "io"}
+THIRD_PARTY_HOMES = {"embree": "trace", "mpi": "mpi", "httplib": "viewer", "openvdb": "io", "vtk": "io"}
 
 
 def third_party_of(header):
@@ -27,6 +27,8 @@ def third_party_of(header):
         return "httplib"
     if header.startswith("openvdb/") or header.startswith("nanovdb/"):
         return "openvdb"
+    if header.startswith("vtk") and header.endswith(".h"):
+        return "vtk"
     if header in ("mpi.h", "mpi.hpp") or header.startswith("openmpi/"):
         return "mpi"
     return None

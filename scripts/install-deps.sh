@@ -13,6 +13,7 @@ packages=(
   libopenexr-dev
   libopenvdb-dev                  # .vdb volumes (io/volumes/vdb_file.cpp)
   libnanovdb-dev zlib1g-dev       # .nvdb volumes (io/volumes/nanovdb_file.cpp)
+  libvtk9-dev                     # .vti and .vtp files (io/volumes/vtk_file.cpp)
   libgtest-dev libgmock-dev libbenchmark-dev
   clang-format                    # tests/format_test.sh keeps the tree clean under .clang-format
   libxxhash-dev                   # XXH64 digests of part files and checkpoints (core/hash64)

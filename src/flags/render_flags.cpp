@@ -28,6 +28,7 @@ namespace {
 LoadOptions sceneLoadOptions(const RenderOptions& o, const Communicator& comm) {
   LoadOptions l;
   l.envFallback = o.envFallback;
+  l.field = o.field;
   if (!comm.isRoot()) {
     l.warn = [](const std::string&) {};
   } else if (!o.quiet) {
@@ -295,6 +296,10 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
   command->add_flag("--env-fallback", o.envFallback,
                     "Render a scene whose environment map is missing with a constant white\n"
                     "environment instead (the file is named in a warning)");
+  command->add_option(
+      "--field", o.field,
+      "The array a VTK file is rendered by: a .vti's point or cell array (default:\n"
+      "its active scalars), a .vtp's radius (default: radius)");
   addCameraFlags(command, o.camera);
 }
 

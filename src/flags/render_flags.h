@@ -38,6 +38,8 @@ struct RenderOptions {
   bool quiet = false;
   // --env-fallback: a missing environment map becomes a constant light.
   bool envFallback = false;
+  // --field: the array a VTK file is rendered by (LoadOptions::field).
+  std::string field;
   // Whether --size / -o were given; if not, a scene's own (pbrt's Film) apply.
   bool sizeGiven = false;
   bool maxDepthGiven = false;  // else the scene's Integrator maxdepth, if it has one

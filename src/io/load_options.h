@@ -19,6 +19,9 @@ struct LoadOptions {
   // an error naming the file; with this set it becomes a constant white
   // environment (times the light's scale) and a warning instead.
   bool envFallback = false;
+  // The array a VTK file is rendered by (--field): a .vti's values, a .vtp's
+  // radius; empty: the file's own choice (io/volumes/volume_files.h).
+  std::string field;
   // Where warnings go; empty: "ferry: warning: ..." on stderr.
   std::function<void(const std::string&)> warn;
   // Progress on large inputs (bytes of the current file read, its size, its

@@ -49,10 +49,14 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
     scene = loadVdbScene(spec);
   } else if (ext == ".nvdb") {
     scene = loadNanoVdbScene(spec);
+  } else if (ext == ".vti") {
+    scene = loadVtkImageScene(spec, options.field);
+  } else if (ext == ".vtp") {
+    scene = loadVtkParticleScene(spec, options.field);
   } else {
     throw InputError(
         fmt::format("{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
-                    ".vdb, .nvdb, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
+                    ".vdb, .nvdb, .vti, .vtp, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
                     spec, ext));
   }
   scene.validate();

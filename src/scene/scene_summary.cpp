@@ -232,7 +232,7 @@ nlohmann::json SceneSummary::toJson() const {
 std::string SceneSummary::toText() const {
   std::string out;
   auto row = [&](const std::string& label, const std::string& value) {
-    out += fmt::format("  {:<22}{}\n", label, value);
+    out += fmt::format("  {:<21} {}\n", label, value);  // a long label keeps a space
   };
   out += fmt::format("scene {}\n", name);
   row("unique meshes", formatCount(uniqueMeshes));

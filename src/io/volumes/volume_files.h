@@ -1,5 +1,6 @@
 // Volumes as users have them: OpenVDB files (.vdb, through Debian's
-// libopenvdb, which only vdb_file.cpp includes) and raw structured grids
+// libopenvdb, which only vdb_file.cpp includes), VTK files (.vti, .vtp,
+// through Debian's VTK, only in vtk_file.cpp) and raw structured grids
 // ("raw:PATH?dims=X,Y,Z&format=uint8|uint16|float32", sci-vis style, drawn
 // through a transfer function), each loaded as a scene of its own: the grid
 // medium in its box, bounded by that box, with a default camera and light
@@ -85,6 +86,23 @@ struct NanoVdbGridToWrite {
 void writeNanoVdbFile(const std::string& path, const std::vector<NanoVdbGridToWrite>& grids);
 // `ferry render cloud.nvdb`: as loadVdbScene.
 Scene loadNanoVdbScene(const std::string& path);
+
+// ---------------------------------------------------------------------- VTK
+
+// `ferry render data.vti`: VTK image data (through Debian's VTK) as a volume
+// drawn through the standard transfer function, framed as a raw: volume:
+// the point array `field` (empty: the active scalars, else the first point
+// array; a cell array when no point array has the name or there is none),
+// each point the centre of a cell `spacing` wide (cells: their centres), a
+// vector by its magnitude, normalised by the array's range. The medium's
+// name gives the file, the array and its range. InputError naming the
+// file: unreadable, no such array (the arrays listed), a rotated image, a
+// NaN (naming the point).
+Scene loadVtkImageScene(const std::string& path, const std::string& field = "");
+// `ferry render points.vtp`: VTK poly data's points as spheres of the point
+// array `field` (empty: "radius") as radius. InputError naming the file: no
+// points, no such array (the arrays listed), a radius that is not positive.
+Scene loadVtkParticleScene(const std::string& path, const std::string& field = "");
 
 // --------------------------------------------------------------- raw grids
 

@@ -1,0 +1,208 @@
+// VTK files (.vti image data, .vtp points) through the XML readers of
+// Debian's VTK: the only file that includes VTK's headers.
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <vtkCellData.h>
+#include <vtkCommand.h>
+#include <vtkDataArray.h>
+#include <vtkImageData.h>
+#include <vtkMatrix3x3.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkXMLImageDataReader.h>
+#include <vtkXMLPolyDataReader.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "io/default_lighting.h"
+#include "io/volumes/volume_files.h"
+#include "media/medium.h"
+#include "shapes/spheres.h"
+
+namespace ferry {
+namespace {
+
+// VTK reports a reader's errors as events, not exceptions: the first kept.
+class ErrorCatcher final : public vtkCommand {
+ public:
+  static ErrorCatcher* New() { return new ErrorCatcher; }
+  void Execute(vtkObject*, unsigned long, void* data) override {
+    if (message.empty() && data) message = static_cast<const char*>(data);
+  }
+  std::string message;
+};
+
+// Reads `path` with `Reader` (a vtkXML*Reader); InputError naming the file if VTK fails.
+template <typename Reader>
+vtkSmartPointer<Reader> readVtk(const std::string& path, const char* what) {
+  if (!std::filesystem::is_regular_file(path))
+    throw InputError(fmt::format("{}: no such file", path));
+  auto reader = vtkSmartPointer<Reader>::New();
+  vtkNew<ErrorCatcher> errors;
+  reader->AddObserver(vtkCommand::ErrorEvent, errors);
+  reader->SetFileName(path.c_str());
+  if (!reader->CanReadFile(path.c_str()))
+    throw InputError(fmt::format("{}: not a VTK XML {} file", path, what));
+  // VTK's parser and pipeline print their own errors: the reader's is ours to say.
+  const bool display = vtkObject::GetGlobalWarningDisplay();
+  vtkObject::GlobalWarningDisplayOff();
+  reader->Update();
+  vtkObject::SetGlobalWarningDisplay(display);
+  if (!errors->message.empty() || reader->GetErrorCode() != 0 || !reader->GetOutput()) {
+    std::string message = errors->message;
+    while (!message.empty() && (message.back() == '\n' || message.back() == ' '))
+      message.pop_back();
+    throw InputError(
+        fmt::format("{}: VTK cannot read it ({})", path, message.empty() ? "no detail" : message));
+  }
+  return reader;
+}
+
+// The names of a point or cell data's arrays, for messages.
+std::string arrayNames(vtkFieldData* data) {
+  std::vector<std::string> names;
+  for (int i = 0; data && i < data->GetNumberOfArrays(); ++i)
+    names.push_back(data->GetArrayName(i) ? data->GetArrayName(i) : "(unnamed)");
+  return names.empty() ? "none" : fmt::format("{}", fmt::join(names, ", "));
+}
+
+// A tuple's value: itself, or a vector's magnitude.
+double tupleValue(vtkDataArray* a, vtkIdType i) {
+  const int n = a->GetNumberOfComponents();
+  if (n == 1) return a->GetComponent(i, 0);
+  double sum = 0;
+  for (int c = 0; c < n; ++c) sum += a->GetComponent(i, c) * a->GetComponent(i, c);
+  return std::sqrt(sum);
+}
+
+}  // namespace
+
+Scene loadVtkImageScene(const std::string& path, const std::string& field) {
+  auto reader = readVtk<vtkXMLImageDataReader>(path, "image data (.vti)");
+  vtkImageData* image = reader->GetOutput();
+  int extent[6];
+  image->GetExtent(extent);
+  for (int a = 0; a < 3; ++a)
+    if (extent[2 * a + 1] < extent[2 * a])
+      throw InputError(
+          fmt::format("{}: VTK read no image from it (malformed, truncated or empty: extent {})",
+                      path, fmt::join(std::vector<int>(extent, extent + 6), " ")));
+  if (vtkMatrix3x3* d = image->GetDirectionMatrix(); d && !d->IsIdentity())
+    throw InputError(fmt::format("{}: a rotated image (its direction is not the identity)", path));
+  // The array: named, or the active point scalars, or the first point array;
+  // a cell array when no point array has the name.
+  vtkPointData* points = image->GetPointData();
+  vtkCellData* cells = image->GetCellData();
+  vtkDataArray* array = nullptr;
+  bool atCells = false;
+  if (!field.empty()) {
+    array = points->GetArray(field.c_str());
+    if (!array && (array = cells->GetArray(field.c_str()))) atCells = true;
+    if (!array)
+      throw InputError(fmt::format("{}: no array '{}' (point arrays: {}; cell arrays: {})", path,
+                                   field, arrayNames(points), arrayNames(cells)));
+  } else {
+    array = points->GetScalars() ? points->GetScalars() : points->GetArray(0);
+    if (!array && (array = cells->GetScalars() ? cells->GetScalars() : cells->GetArray(0)))
+      atCells = true;
+    if (!array) throw InputError(fmt::format("{}: no point or cell array to render", path));
+  }
+  // Samples: at the points (each the centre of a cell `spacing` wide), or at
+  // the cells' centres.
+  int dims[3];
+  double origin[3], spacing[3];
+  image->GetOrigin(origin);
+  image->GetSpacing(spacing);
+  Box3f box;
+  uint64_t samples = 1;
+  for (int a = 0; a < 3; ++a) {
+    const int lo = extent[2 * a], hi = extent[2 * a + 1];
+    dims[a] = atCells ? std::max(hi - lo, 1) : hi - lo + 1;
+    if (!(spacing[a] > 0) || !std::isfinite(spacing[a]) || !std::isfinite(origin[a]))
+      throw InputError(fmt::format("{}: spacing {} along {}: expected a positive number", path,
+                                   spacing[a], "xyz"[a]));
+    const double first = atCells ? lo : lo - 0.5;
+    box.lower[a] = float(origin[a] + first * spacing[a]);
+    box.upper[a] = float(origin[a] + (first + dims[a]) * spacing[a]);
+    samples *= uint64_t(dims[a]);
+  }
+  if (uint64_t(array->GetNumberOfTuples()) != samples)
+    throw InputError(fmt::format("{}: array '{}' has {} values where the image has {}", path,
+                                 array->GetName() ? array->GetName() : "",
+                                 array->GetNumberOfTuples(), samples));
+  std::vector<float> values(samples);
+  double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
+  for (uint64_t i = 0; i < samples; ++i) {
+    const double v = tupleValue(array, vtkIdType(i));
+    if (!std::isfinite(v) || !std::isfinite(float(v)))
+      throw InputError(fmt::format("{}: array '{}' value {} (x {}, y {}, z {}) is {}", path,
+                                   array->GetName() ? array->GetName() : "", i, i % dims[0],
+                                   (i / dims[0]) % dims[1], i / (uint64_t(dims[0]) * dims[1]), v));
+    values[i] = float(v);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  const double range = hi - lo;
+  for (float& v : values) v = range > 0 ? float((double(v) - lo) / range) : 0.0f;
+  TransferFunction tf = TransferFunction::standard();
+  tf = tf.withScale(tf.scale() / maxComponent(box.size()));  // as a raw: volume's
+  // The name says which array and its range (ferry info lists it).
+  const std::string name =
+      fmt::format("{} {} '{}' [{:g}, {:g}]{}", std::filesystem::path(path).filename().string(),
+                  atCells ? "cells" : "points", array->GetName() ? array->GetName() : "", lo, hi,
+                  array->GetNumberOfComponents() > 1 ? " (magnitude)" : "");
+  auto grid = std::make_shared<DensityGrid>(dims[0], dims[1], dims[2], std::move(values));
+  return volumeScene(
+      name,
+      transferFunctionMedium(name, std::move(grid), std::make_shared<TransferFunction>(tf), box),
+      box);
+}
+
+Scene loadVtkParticleScene(const std::string& path, const std::string& field) {
+  auto reader = readVtk<vtkXMLPolyDataReader>(path, "poly data (.vtp)");
+  vtkPolyData* data = reader->GetOutput();
+  vtkPoints* points = data->GetPoints();
+  const vtkIdType n = points ? points->GetNumberOfPoints() : 0;
+  if (n == 0)
+    throw InputError(
+        fmt::format("{}: VTK read no points from it (malformed, truncated or empty)", path));
+  const std::string name = field.empty() ? "radius" : field;
+  vtkDataArray* radius = data->GetPointData()->GetArray(name.c_str());
+  if (!radius || radius->GetNumberOfComponents() != 1)
+    throw InputError(fmt::format(
+        "{}: no point array '{}' of one component to take as the particles' radius (point "
+        "arrays: {}; the field setting names another)",
+        path, name, arrayNames(data->GetPointData())));
+  std::vector<Vec3f> centres(static_cast<size_t>(n));
+  std::vector<float> radii(static_cast<size_t>(n));
+  for (vtkIdType i = 0; i < n; ++i) {
+    double p[3];
+    points->GetPoint(i, p);
+    centres[size_t(i)] = Vec3f(float(p[0]), float(p[1]), float(p[2]));
+    radii[size_t(i)] = float(radius->GetComponent(i, 0));
+  }
+  Scene scene;
+  scene.name = std::filesystem::path(path).stem().string();
+  Material grey;
+  grey.name = "default";
+  const int32_t material = scene.addMaterial(grey);
+  try {
+    scene.addSingleInstanceGeometry(
+        {scene.name, material, std::make_shared<Spheres>(std::move(centres), std::move(radii))});
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", path, e.what()));
+  }
+  addDefaultViewAndLights(scene);
+  return scene;
+}
+
+}  // namespace ferry
