@@ -86,6 +86,22 @@ assert max(per) <= 1.3 * sum(per) / 3, per
 PY
 echo "  auto: a 256^3 grid in $($python -c "import json,sys; print(json.load(open(sys.argv[1]))['scene']['volume_bricks'])" "$work/big1.json") bricks, the same image on 1 and 3 ranks"
 
+# An unstructured volume (builtin:tets, clusters of cells cut over ranks):
+# the 1-rank image on 3 ranks on the fly and from a 3-rank part directory.
+tets="builtin:tets?count=100000"
+"$ferry" render "$tets" $args -o "$work/tets1.pfm" || fail "tets, 1 rank"
+mpirun_n 3 "$ferry" render "$tets" $args -o "$work/tets3.pfm" --stats "$work/tets3.json" || fail "tets, 3 ranks"
+cmp -s "$work/tets1.pfm" "$work/tets3.pfm" || fail "tets on 3 ranks: not the 1-rank image"
+"$ferry" partition "$tets" --ranks 3 -o "$work/tetparts" -q || fail "tets, partition"
+mpirun_n 3 "$ferry" render "$work/tetparts" $args -o "$work/tetparts.pfm" || fail "tets, part directory"
+cmp -s "$work/tets1.pfm" "$work/tetparts.pfm" || fail "tets from a part directory: not the 1-rank image"
+$python - "$work/tets3.json" << 'PY' || fail "tets: a rank holds more than 1.3 x a third"
+import json, sys
+per = [r["estimated_bytes"] for r in json.load(open(sys.argv[1]))["memory"]["per_rank"]]
+assert max(per) <= 1.3 * sum(per) / 3, per
+PY
+echo "  unstructured (100 000 tetrahedra): 1 rank = 3 ranks on the fly = a 3-rank part directory"
+
 # The bench runs (a small volume): its own checks are the same images and
 # no rank above 1.3 x its share.
 FERRY=$(realpath "$ferry") SIZE=40 BRICK=16 RANKS=3 IMAGE=40x30 FRAMES=1 \

@@ -14,6 +14,7 @@
 #include "builtin/landscape.h"
 #include "builtin/particles.h"
 #include "builtin/scene_plan.h"
+#include "builtin/tets.h"
 #include "builtin/volume.h"
 #include "core/error.h"
 
@@ -23,7 +24,8 @@ namespace {
 constexpr std::string_view kPrefix = "builtin:";
 constexpr const char* kAcceptedKeys =
     "scale (a positive number), seed (an integer 0..4294967295), size (builtin:volume: samples a "
-    "side), strands (builtin:fur: hair strands), count (builtin:particles: spheres)";
+    "side), strands (builtin:fur: hair strands), count (builtin:particles: spheres; builtin:tets: "
+    "tetrahedra)";
 
 struct BuiltinEntry {
   const char* name;
@@ -52,6 +54,11 @@ constexpr BuiltinEntry kBuiltins[] = {
     {"particles",
      [](const BuiltinParams& p) {
        return builtin::planParticles(p.count.value_or(builtin::kDefaultParticles), p.seed);
+     },
+     false, false, true},
+    {"tets",
+     [](const BuiltinParams& p) {
+       return builtin::planTets(p.count.value_or(builtin::kDefaultTets), p.seed);
      },
      false, false, true},
 };
@@ -83,7 +90,8 @@ builtin::ScenePlan planFor(const BuiltinParams& params) {
   if (params.strands && !entry.hasStrands)
     throw InputError(fmt::format("{} has no strands (builtin:fur has)", what));
   if (params.count && !entry.hasCount)
-    throw InputError(fmt::format("{} has no count (builtin:particles has)", what));
+    throw InputError(
+        fmt::format("{} has no count (builtin:particles and builtin:tets have)", what));
   return entry.plan(params);
 }
 

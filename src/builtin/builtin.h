@@ -17,12 +17,13 @@
 namespace ferry {
 
 struct BuiltinParams {
-  std::string name;    // "island", "landscape", "cornell", "furnace", "volume", "fur", "particles"
+  std::string
+      name;  // "island", "landscape", "cornell", "furnace", "volume", "fur", "particles", "tets"
   double scale = 1.0;  // grows the scene; meaning per built-in (see its header)
   uint32_t seed = 1;
   std::optional<int> size;          // builtin:volume: samples a side
   std::optional<uint64_t> strands;  // builtin:fur: hair strands
-  std::optional<uint64_t> count;    // builtin:particles: spheres
+  std::optional<uint64_t> count;    // builtin:particles: spheres; builtin:tets: tetrahedra
 };
 
 bool isBuiltinSpec(const std::string& spec);  // starts with "builtin:"

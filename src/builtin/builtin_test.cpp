@@ -110,9 +110,9 @@ TEST(BuiltinSpec, RejectsBadSeeds) {
   expectThrowMessage("builtin:island?seed=1&seed=2");
 }
 
-TEST(BuiltinSpec, NamesAreTheSevenBuiltins) {
+TEST(BuiltinSpec, NamesAreTheEightBuiltins) {
   EXPECT_EQ(builtinNames(), (std::vector<std::string>{"island", "landscape", "cornell", "furnace",
-                                                      "volume", "fur", "particles"}));
+                                                      "volume", "fur", "particles", "tets"}));
 }
 
 TEST(BuiltinSpec, GenerateRejectsBadParams) {
@@ -228,7 +228,8 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values("builtin:island", "builtin:island?scale=0.1&seed=3", "builtin:landscape",
                       "builtin:landscape?scale=0.2&seed=5", "builtin:cornell",
                       "builtin:cornell?scale=3", "builtin:furnace", "builtin:furnace?scale=0.3",
-                      "builtin:fur?strands=300&seed=2", "builtin:particles?count=500"),
+                      "builtin:fur?strands=300&seed=2", "builtin:particles?count=500",
+                      "builtin:tets?count=3000"),
     [](const ::testing::TestParamInfo<std::string>& info) {
       std::string name = info.param.substr(8);
       for (char& c : name)

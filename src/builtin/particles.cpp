@@ -59,14 +59,7 @@ ScenePlan planParticles(uint64_t count, uint32_t seed) {
   };
   plan.shapes.push_back(std::move(particles));
 
-  addDaylight(plan, {0.6f, 1, 0.8f}, {0.25f, 0.45f, 0.9f}, {0.8f, 0.85f, 0.95f}, {0.3f, 0.3f, 0.3f},
-              0.3f);
-  CameraView view;
-  view.name = "default";
-  view.from = {0, 0.8f, 4.2f};
-  view.at = {0, 0, 0};
-  view.fovY = 40;
-  plan.views.push_back(view);
+  addStudioDaylightAndView(plan);
   return plan;
 }
 

@@ -73,6 +73,17 @@ void addDaylight(ScenePlan& plan, Vec3f towardsSun, Vec3f zenith, Vec3f horizon,
   plan.environmentImage = [=] { return skyGradient(zenith, horizon, below, belowFade); };
 }
 
+void addStudioDaylightAndView(ScenePlan& plan) {
+  addDaylight(plan, {0.6f, 1, 0.8f}, {0.25f, 0.45f, 0.9f}, {0.8f, 0.85f, 0.95f}, {0.3f, 0.3f, 0.3f},
+              0.3f);
+  CameraView view;
+  view.name = "default";
+  view.from = {0, 0.8f, 4.2f};
+  view.at = {0, 0, 0};
+  view.fovY = 40;
+  plan.views.push_back(view);
+}
+
 void addStudio(ScenePlan& plan, int32_t material, float e, float floorY, float top) {
   MeshRecipe studio;
   studio.name = "studio";

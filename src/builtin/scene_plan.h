@@ -114,6 +114,10 @@ void addStudio(ScenePlan& plan, int32_t material, float extent, float floorY, fl
 void addDaylight(ScenePlan& plan, Vec3f towardsSun, Vec3f zenith, Vec3f horizon, Vec3f below,
                  float belowFade);
 
+// The daylight and front view of a subject within about 1.2 of the origin
+// in a studio (builtin:particles, builtin:tets).
+void addStudioDaylightAndView(ScenePlan& plan);
+
 SceneSummary describePlan(const ScenePlan& plan);
 // Throws InternalError if a recipe makes something other than it promised.
 // With `store`, each mesh goes to it as soon as it is made (Mesh::stored):

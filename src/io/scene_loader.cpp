@@ -53,11 +53,13 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
     scene = loadVtkImageScene(spec, options.field);
   } else if (ext == ".vtp") {
     scene = loadVtkParticleScene(spec, options.field);
+  } else if (ext == ".vtu" || ext == ".vtk") {
+    scene = loadVtkUnstructuredScene(spec, options.field);
   } else {
-    throw InputError(
-        fmt::format("{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
-                    ".vdb, .nvdb, .vti, .vtp, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
-                    spec, ext));
+    throw InputError(fmt::format(
+        "{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
+        ".vdb, .nvdb, .vti, .vtp, .vtu, .vtk, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
+        spec, ext));
   }
   scene.validate();
   scene.reserveVertexSlack();  // so the trace backend shares every vertex array

@@ -7,7 +7,9 @@
 // the average density). `d` is a unit direction; distances are world lengths.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #include "core/math.h"
 #include "core/random.h"
@@ -40,6 +42,24 @@ class TrackingRandom {
   uint32_t keyHash_;
   uint32_t dimension_;
 };
+
+// A distance with density rate x exp(-rate x), from u in [0, 1).
+inline float exponentialDistance(float u, float rate) {
+  return -std::log(1 - u) / rate;
+}
+
+// The random key of a ray tracked through one piece of a volume (a brick, a
+// cluster of cells): its origin's and direction's bits and the piece's seed,
+// so the piece answers a ray the same on every rank, however often asked.
+inline uint32_t rayTrackingKey(Vec3f o, Vec3f d, uint32_t seed) {
+  uint32_t h = seed;
+  for (float f : {o.x, o.y, o.z, d.x, d.y, d.z}) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    h = hashCombine(h, bits);
+  }
+  return h;
+}
 
 struct FreeFlight {
   enum class Event : uint8_t { Passed, Scattered, Absorbed };

@@ -636,7 +636,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeVolumeCollision(
   // Where the trace found the collision, along the ray as it traced it.
   const Vec3f position = path.origin + path.dir() * hit.t;
   Path scattered = path;
-  scattered.setWeight(path.weight() * volume.volumeAlbedo(position));
+  scattered.setWeight(path.weight() * volume.volumeAlbedo(hit.primitive, position));
   return shadeMediumVertex(scattered, position, volume.volumePhaseG(), medium, sampleIndex, bounce,
                            continuation, shadowRay);
 }

@@ -78,10 +78,11 @@ class Shape {
   }
   // A volume (shapes/volume_brick.h) is crossed where a ray collides in its
   // medium; shading scatters there instead of reading a surface: the
-  // scattering albedo at `point` (the shape's space) and the phase
-  // function's asymmetry g. Surfaces answer false.
+  // scattering albedo at `point` (the shape's space) of the primitive that
+  // found the collision, and the phase function's asymmetry g. Surfaces
+  // answer false.
   virtual bool isVolume() const { return false; }
-  virtual Vec3f volumeAlbedo(Vec3f /*point*/) const { return Vec3f(0); }
+  virtual Vec3f volumeAlbedo(uint32_t /*primitive*/, Vec3f /*point*/) const { return Vec3f(0); }
   virtual float volumePhaseG() const { return 0; }
   virtual void write(RecordWriter& record) const = 0;
   // A line for people: the kind and its size.

@@ -3,6 +3,7 @@
 #include "core/registry.h"
 #include "shapes/curves.h"
 #include "shapes/spheres.h"
+#include "shapes/unstructured_volume.h"
 #include "shapes/volume_brick.h"
 
 namespace ferry {
@@ -18,6 +19,10 @@ Registry<ShapeKind>& registry() {
            Curves::read},
           {"spheres", "analytic spheres, a centre and a radius each (particles, atoms)",
            Spheres::read},
+          {"unstructured-volume",
+           "tetrahedra with a value at each point through a transfer function, in clusters of "
+           "cells; crossings are collisions in its medium",
+           UnstructuredVolume::read},
           {"volume-brick",
            "a brick of a grid volume with its ghost layer; crossings are collisions in its medium",
            VolumeBrick::read},

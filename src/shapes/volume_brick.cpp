@@ -15,24 +15,6 @@
 namespace ferry {
 namespace {
 
-// A distance with density rate x exp(-rate x), from u in [0, 1).
-float exponential(float u, float rate) {
-  return -std::log(1 - u) / rate;
-}
-
-uint32_t floatBits(float f) {
-  uint32_t b;
-  std::memcpy(&b, &f, 4);
-  return b;
-}
-
-// The random key of a ray in a brick: its origin's and direction's bits.
-uint32_t rayKey(Vec3f o, Vec3f d, uint32_t seed) {
-  uint32_t h = seed;
-  for (float f : {o.x, o.y, o.z, d.x, d.y, d.z}) h = hashCombine(h, floatBits(f));
-  return h;
-}
-
 float greyExtinction(const VolumeBrick::Volume& v) {
   return v.sigmaA.x + v.sigmaS.x;
 }
@@ -229,13 +211,13 @@ bool VolumeBrick::intersect(uint32_t, Vec3f origin, Vec3f direction, float tnear
   // tfar are the same for any tfar, so every rank finds the same collision.
   float t0 = 0, t1 = tfar;
   if (!clipToUnitCube(ol, dl, t0, t1)) return false;
-  TrackingRandom random(rayKey(origin, direction, seed_), 0);
+  TrackingRandom random(rayTrackingKey(origin, direction, seed_), 0);
   bool found = false;
   majorants_->walk(ol, dl, t0, t1, [&](float a, float b, float majorant, const Vec3f&) {
     ++work.cells;
     if (!(majorant > 0)) return true;
     for (float s = a;;) {
-      s += exponential(random.next(), majorant);
+      s += exponentialDistance(random.next(), majorant);
       if (!(s < b)) return true;
       const float sigma = extinction(lookup(og + dg * s));
       if (random.next() * majorant < sigma && s > tnear) {
@@ -256,7 +238,7 @@ ShapeSurface VolumeBrick::surface(uint32_t, Vec2f uv) const {
   return {Vec3f(0), {0, 0, 1}, {0, 0, 1}, uv};
 }
 
-Vec3f VolumeBrick::volumeAlbedo(Vec3f point) const {
+Vec3f VolumeBrick::volumeAlbedo(uint32_t, Vec3f point) const {
   const Volume& v = *volume_;
   const float value = lookup(v.gridFromWorld.transformPoint(point));
   if (v.transfer) return v.transfer->color(value);

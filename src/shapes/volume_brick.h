@@ -74,7 +74,7 @@ class VolumeBrick final : public Shape {
                  float& t, Vec2f& uv, ShapeWork& work) const override;
   ShapeSurface surface(uint32_t primitive, Vec2f uv) const override;
   bool isVolume() const override { return true; }
-  Vec3f volumeAlbedo(Vec3f point) const override;
+  Vec3f volumeAlbedo(uint32_t primitive, Vec3f point) const override;
   float volumePhaseG() const override { return volume_->g; }
   void write(RecordWriter& record) const override;
   std::string describe() const override;

@@ -377,7 +377,7 @@ TEST(VolumeBrick, RestyledEqualsMadeRestyled) {
               b->intersect(0, o, d, 0, kInfinity, tb, uv));
     EXPECT_EQ(ta, tb);
     const Vec3f p{0.25f + 0.5f * rng.uniform(), 0.5f * rng.uniform(), 0.5f + 0.5f * rng.uniform()};
-    EXPECT_EQ(a->volumeAlbedo(p), b->volumeAlbedo(p));
+    EXPECT_EQ(a->volumeAlbedo(0, p), b->volumeAlbedo(0, p));
   }
   auto other = std::make_shared<VolumeBrick::Volume>(*styled);
   other->dims = {n, n, n + 1};

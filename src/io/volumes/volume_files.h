@@ -104,6 +104,16 @@ Scene loadVtkImageScene(const std::string& path, const std::string& field = "");
 // points, no such array (the arrays listed), a radius that is not positive.
 Scene loadVtkParticleScene(const std::string& path, const std::string& field = "");
 
+// `ferry render mesh.vtu` (or a legacy `mesh.vtk`): an unstructured grid's
+// solid cells as an unstructured volume (shapes/unstructured_volume.h:
+// hexahedra, voxels, wedges and pyramids cut into tetrahedra; other cells
+// left out, counted in the name) of the point array `field` (empty: the
+// active scalars, else the first), normalised by its range, through the
+// standard transfer function, framed as a raw: volume. InputError naming
+// the file: unreadable, no such point array (the arrays listed), no solid
+// cell, a NaN (naming the point).
+Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field = "");
+
 // --------------------------------------------------------------- raw grids
 
 bool isRawVolumeSpec(const std::string& spec);  // starts with "raw:"

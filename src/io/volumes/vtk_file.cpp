@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <vtkCellData.h>
+#include <vtkCellType.h>
 #include <vtkCommand.h>
 #include <vtkDataArray.h>
 #include <vtkImageData.h>
@@ -12,14 +13,18 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkUnstructuredGridReader.h>
 #include <vtkXMLImageDataReader.h>
 #include <vtkXMLPolyDataReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
 
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/error.h"
@@ -27,6 +32,7 @@
 #include "io/volumes/volume_files.h"
 #include "media/medium.h"
 #include "shapes/spheres.h"
+#include "shapes/unstructured_volume.h"
 
 namespace ferry {
 namespace {
@@ -50,8 +56,12 @@ vtkSmartPointer<Reader> readVtk(const std::string& path, const char* what) {
   vtkNew<ErrorCatcher> errors;
   reader->AddObserver(vtkCommand::ErrorEvent, errors);
   reader->SetFileName(path.c_str());
-  if (!reader->CanReadFile(path.c_str()))
+  if constexpr (std::is_same_v<Reader, vtkUnstructuredGridReader>) {
+    if (!reader->IsFileUnstructuredGrid())
+      throw InputError(fmt::format("{}: not a legacy VTK {} file", path, what));
+  } else if (!reader->CanReadFile(path.c_str())) {
     throw InputError(fmt::format("{}: not a VTK XML {} file", path, what));
+  }
   // VTK's parser and pipeline print their own errors: the reader's is ours to say.
   const bool display = vtkObject::GetGlobalWarningDisplay();
   vtkObject::GlobalWarningDisplayOff();
@@ -202,6 +212,119 @@ Scene loadVtkParticleScene(const std::string& path, const std::string& field) {
     throw InputError(fmt::format("{}: {}", path, e.what()));
   }
   addDefaultViewAndLights(scene);
+  return scene;
+}
+
+namespace {
+
+// A VTK cell as tetrahedra that tile it (VTK's vertex orders): a hexahedron
+// in six along its 0-6 diagonal, a wedge in three, a pyramid in two.
+// False for a cell kind that is not a solid.
+bool appendTets(int type, const vtkIdType* p, std::vector<UnstructuredVolume::Tet>& out) {
+  auto tet = [&](int a, int b, int c, int d) {
+    out.push_back({uint32_t(p[a]), uint32_t(p[b]), uint32_t(p[c]), uint32_t(p[d])});
+  };
+  switch (type) {
+    case VTK_TETRA:
+      tet(0, 1, 2, 3);
+      return true;
+    case VTK_HEXAHEDRON:
+      tet(0, 1, 2, 6), tet(0, 1, 5, 6), tet(0, 3, 2, 6), tet(0, 3, 7, 6), tet(0, 4, 5, 6),
+          tet(0, 4, 7, 6);
+      return true;
+    case VTK_VOXEL:  // a hexahedron with its points in x, y, z order
+      tet(0, 1, 3, 7), tet(0, 1, 5, 7), tet(0, 2, 3, 7), tet(0, 2, 6, 7), tet(0, 4, 5, 7),
+          tet(0, 4, 6, 7);
+      return true;
+    case VTK_WEDGE:
+      tet(0, 1, 2, 3), tet(1, 2, 3, 4), tet(2, 3, 4, 5);
+      return true;
+    case VTK_PYRAMID:
+      tet(0, 1, 2, 4), tet(0, 2, 3, 4);
+      return true;
+    default:
+      return false;
+  }
+}
+
+}  // namespace
+
+Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field) {
+  const bool legacy = std::filesystem::path(path).extension() == ".vtk";
+  vtkUnstructuredGrid* grid = nullptr;
+  vtkSmartPointer<vtkXMLUnstructuredGridReader> xml;
+  vtkSmartPointer<vtkUnstructuredGridReader> old;
+  if (legacy) {
+    old = readVtk<vtkUnstructuredGridReader>(path, "unstructured grid (.vtk)");
+    grid = old->GetOutput();
+  } else {
+    xml = readVtk<vtkXMLUnstructuredGridReader>(path, "unstructured grid (.vtu)");
+    grid = xml->GetOutput();
+  }
+  const vtkIdType n = grid->GetNumberOfPoints();
+  if (n == 0 || grid->GetNumberOfCells() == 0)
+    throw InputError(
+        fmt::format("{}: VTK read no cells from it (malformed, truncated or empty)", path));
+  vtkPointData* pointData = grid->GetPointData();
+  vtkDataArray* array =
+      field.empty() ? (pointData->GetScalars() ? pointData->GetScalars() : pointData->GetArray(0))
+                    : pointData->GetArray(field.c_str());
+  if (!array)
+    throw InputError(fmt::format(
+        "{}: no point array{} to render (point arrays: {}; cell arrays: {}; a cell array becomes "
+        "point data in ParaView by Cell Data to Point Data)",
+        path, field.empty() ? "" : " '" + field + "'", arrayNames(pointData),
+        arrayNames(grid->GetCellData())));
+  std::vector<Vec3f> points(static_cast<size_t>(n));
+  std::vector<float> values(static_cast<size_t>(n));
+  double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
+  Box3f box;
+  for (vtkIdType i = 0; i < n; ++i) {
+    double p[3];
+    grid->GetPoint(i, p);
+    points[size_t(i)] = Vec3f(float(p[0]), float(p[1]), float(p[2]));
+    box.extend(points[size_t(i)]);
+    const double v = tupleValue(array, i);
+    if (!std::isfinite(v))
+      throw InputError(fmt::format("{}: array '{}' at point {} is {}", path,
+                                   array->GetName() ? array->GetName() : "", i, v));
+    values[size_t(i)] = float(v);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  const double range = hi - lo;
+  for (float& v : values) v = range > 0 ? float((double(v) - lo) / range) : 0.0f;
+  std::vector<UnstructuredVolume::Tet> tets;
+  uint64_t skipped = 0;
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    grid->GetCellPoints(c, ids);
+    if (!appendTets(grid->GetCellType(c), ids->GetPointer(0), tets)) ++skipped;
+  }
+  if (tets.empty())
+    throw InputError(fmt::format(
+        "{}: no solid cells (tetrahedra, hexahedra, voxels, wedges, pyramids) among its {}", path,
+        grid->GetNumberOfCells()));
+  if (!(maxComponent(box.size()) > 0))
+    throw InputError(fmt::format("{}: its points span no volume", path));
+  TransferFunction tf = TransferFunction::standard();
+  tf = tf.withScale(tf.scale() / maxComponent(box.size()));  // as a raw: volume's
+  const std::string name = fmt::format(
+      "{} points '{}' [{:g}, {:g}]{}{}", std::filesystem::path(path).filename().string(),
+      array->GetName() ? array->GetName() : "", lo, hi,
+      array->GetNumberOfComponents() > 1 ? " (magnitude)" : "",
+      skipped ? fmt::format(", {} cells that are not solids left out", skipped) : "");
+  std::shared_ptr<UnstructuredVolume> volume;
+  try {
+    volume = UnstructuredVolume::make(std::move(points), std::move(values), std::move(tets),
+                                      std::make_shared<const TransferFunction>(std::move(tf)));
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {}", path, e.what()));
+  }
+  Scene scene = framedVolumeScene(name, box);
+  Material none;
+  none.name = "volume";
+  scene.addSingleInstanceGeometry({name, scene.addMaterial(none), std::move(volume)});
   return scene;
 }
 

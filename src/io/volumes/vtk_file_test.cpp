@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "io/scene_loader.h"
 #include "io/volumes/volume_files.h"
+#include "shapes/unstructured_volume.h"
 
 namespace ferry {
 namespace {
@@ -127,16 +128,105 @@ TEST(VtkFile, PointsWithARadiusAreSpheres) {
 }
 
 TEST(VtkFile, BadFilesAreErrorsNamingThem) {
-  for (const auto& [name, text] : {std::pair<std::string, std::string>{"d.vti", "<VTKFile"},
-                                   {"e.vti", "not xml at all"},
-                                   {"f.vti", imageXml().substr(0, 400)},
-                                   {"g.vtp", imageXml()}}) {
+  for (const auto& [name, text] :
+       {std::pair<std::string, std::string>{"d.vti", "<VTKFile"},
+        {"e.vti", "not xml at all"},
+        {"f.vti", imageXml().substr(0, 400)},
+        {"g.vtp", imageXml()},
+        {"h.vtu", imageXml()},
+        {"i.vtk", "# vtk DataFile Version 3.0\nnot a grid\nASCII\nDATASET POLYDATA\n"}}) {
     const std::string path = tempFile(name, text);
     try {
       loadScene(path);
       ADD_FAILURE() << name << " was read";
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+    fs::remove(path);
+  }
+}
+
+// An unstructured grid of a hexahedron, a wedge, a pyramid and a line: the
+// solids cut into tetrahedra that fill them, the line left out; the values
+// normalised; read from XML (.vtu) and legacy (.vtk) files alike.
+TEST(VtkFile, UnstructuredGridsBecomeTetrahedra) {
+  // Points: a unit cube (0-7, VTK's hexahedron order), a wedge on top
+  // (4, 5, 8 / 7, 6, 9), a pyramid below (0-3, apex 10).
+  const std::string points =
+      "0 0 0  1 0 0  1 1 0  0 1 0  0 0 1  1 0 1  1 1 1  0 1 1  0.5 0 2  0.5 1 2  0.5 0.5 -1";
+  const std::string values = "0 1 2 3 4 5 6 7 8 9 10";
+  const std::string vtu = tempFile("h.vtu", fmt::format(R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="11" NumberOfCells="4">
+      <PointData Scalars="T"><DataArray type="Float32" Name="T" format="ascii">{}</DataArray></PointData>
+      <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">{}</DataArray></Points>
+      <Cells>
+        <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 4 5 6 7  4 5 8 7 6 9  0 1 2 3 10  0 6</DataArray>
+        <DataArray type="Int32" Name="offsets" format="ascii">8 14 19 21</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">12 13 14 3</DataArray>
+      </Cells>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>
+)",
+                                                        values, points));
+  const std::string vtk = tempFile("h.vtk", fmt::format(R"(# vtk DataFile Version 3.0
+three cells and a line
+ASCII
+DATASET UNSTRUCTURED_GRID
+POINTS 11 float
+{}
+CELLS 4 25
+8 0 1 2 3 4 5 6 7
+6 4 5 8 7 6 9
+5 0 1 2 3 10
+2 0 6
+CELL_TYPES 4
+12
+13
+14
+3
+POINT_DATA 11
+SCALARS T float 1
+LOOKUP_TABLE default
+{}
+)",
+                                                        points, values));
+  for (const std::string& path : {vtu, vtk}) {
+    const Scene scene = loadScene(path);
+    const UnstructuredVolume* v = nullptr;
+    for (const Geometry& g : scene.geometries)
+      if (auto* u = dynamic_cast<const UnstructuredVolume*>(g.shape.get())) v = u;
+    ASSERT_NE(v, nullptr) << path;
+    EXPECT_EQ(v->cellCount(), 6u + 3u + 2u) << path;
+    // Every point of the three solids lies in a cell; the value is linear there.
+    float sum = 0;
+    int found = 0;
+    for (const Vec3f p :
+         {Vec3f(0.3f, 0.6f, 0.4f), Vec3f(0.5f, 0.5f, 1.5f), Vec3f(0.5f, 0.4f, -0.5f)}) {
+      for (uint32_t c = 0; c < v->primitiveCount(); ++c) {
+        float value;
+        if (v->valueAt(c, p, value)) {
+          ++found;
+          sum += value;
+          EXPECT_GE(value, 0.0f);
+          EXPECT_LE(value, 1.0f);
+          break;
+        }
+      }
+    }
+    EXPECT_EQ(found, 3) << path;
+    EXPECT_NE(scene.geometries.back().name.find("1 cells that are not solids left out"),
+              std::string::npos)
+        << scene.geometries.back().name;
+    LoadOptions missing;
+    missing.field = "pressure";
+    try {
+      loadScene(path, missing);
+      ADD_FAILURE() << "an array that is not there was taken";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("point arrays: T"), std::string::npos) << e.what();
     }
     fs::remove(path);
   }
