@@ -30,6 +30,7 @@
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
 #include "session/partitioned_scene.h"
+#include "shapes/unstructured_volume.h"
 #include "shapes/volume_brick.h"
 #include "trace/embree_backend.h"
 
@@ -272,36 +273,37 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
           {&brick->volume(), std::make_shared<const VolumeBrick::Volume>(brick->volume()), {}});
     group->bricks.push_back(const_cast<VolumeBrick*>(brick));
   }
+  for (const Geometry& g : rank_->scene.geometries)
+    if (const auto* cells = dynamic_cast<const UnstructuredVolume*>(g.shape.get()))
+      loadedCells_.push_back({const_cast<UnstructuredVolume*>(cells), cells->transfer()});
   if (!settings_.render.volumeLook.isDefault()) applyVolumeLook(settings_.render.volumeLook);
 }
 
 bool RenderSession::hasTransferFunctionVolumes() const {
-  return !loadedBricks_.empty() || std::any_of(loadedTransfers_.begin(), loadedTransfers_.end(),
-                                               [](const auto& t) { return t != nullptr; });
+  return !loadedBricks_.empty() || !loadedCells_.empty() ||
+         std::any_of(loadedTransfers_.begin(), loadedTransfers_.end(),
+                     [](const auto& t) { return t != nullptr; });
 }
 
 void RenderSession::applyVolumeLook(const VolumeLook& look) {
-  for (size_t i = 0; i < loadedTransfers_.size(); ++i) {
-    if (!loadedTransfers_[i]) continue;
+  // Every rank checks the look the same way (flags and the viewer checked it first).
+  const auto restyle = [&look](const TransferFunction& loaded) {
     try {
-      setTransferFunction(rank_->scene.media[i], std::make_shared<const TransferFunction>(
-                                                     restyled(*loadedTransfers_[i], look)));
+      return std::make_shared<const TransferFunction>(restyled(loaded, look));
     } catch (const std::invalid_argument& e) {
       throw InputError(
           fmt::format("{} (the colour maps: {})", e.what(), fmt::join(colorMapNames(), ", ")));
     }
-  }
+  };
+  for (size_t i = 0; i < loadedTransfers_.size(); ++i)
+    if (loadedTransfers_[i])
+      setTransferFunction(rank_->scene.media[i], restyle(*loadedTransfers_[i]));
   for (LoadedBricks& group : loadedBricks_) {
     auto volume = std::make_shared<VolumeBrick::Volume>(*group.loaded);
-    try {
-      volume->transfer =
-          std::make_shared<const TransferFunction>(restyled(*group.loaded->transfer, look));
-    } catch (const std::invalid_argument& e) {
-      throw InputError(
-          fmt::format("{} (the colour maps: {})", e.what(), fmt::join(colorMapNames(), ", ")));
-    }
+    volume->transfer = restyle(*group.loaded->transfer);
     for (VolumeBrick* brick : group.bricks) brick->restyle(volume);
   }
+  for (const auto& [cells, loaded] : loadedCells_) cells->restyle(restyle(*loaded));
 }
 
 RenderSession::~RenderSession() = default;

@@ -30,6 +30,7 @@
 #include "session/frame_sink.h"
 #include "session/partitioned_scene.h"
 #include "session/session_settings.h"
+#include "shapes/unstructured_volume.h"
 #include "shapes/volume_brick.h"
 
 namespace ferry {
@@ -277,6 +278,8 @@ class RenderSession {
     std::vector<VolumeBrick*> bricks;
   };
   std::vector<LoadedBricks> loadedBricks_;
+  // This rank's unstructured volumes and their transfer functions as loaded.
+  std::vector<std::pair<UnstructuredVolume*, std::shared_ptr<const TransferFunction>>> loadedCells_;
 };
 
 }  // namespace ferry

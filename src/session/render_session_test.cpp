@@ -355,6 +355,32 @@ TEST(RenderSession, AVolumeLookRestylesBricksOnEveryRank) {
   EXPECT_FALSE(withLook == plain);
 }
 
+// An unstructured volume restyled by the session: the same image on 1 and 3
+// ranks, another than without the look; a restyle and its undoing give back
+// the volume's own collisions.
+TEST(RenderSession, AVolumeLookRestylesUnstructuredVolumes) {
+  std::vector<Vec3f> withLook, plain;
+  for (int ranks : {1, 3})
+    for (int which = 0; which < 2; ++which)
+      runRanks(ranks, [&](const Communicator& comm) {
+        SessionSettings settings = cornellSettings();
+        settings.scene = "builtin:tets?count=6000";
+        if (which == 1) settings.render.volumeLook = {4, "inferno"};
+        RenderSession session(settings, comm);
+        EXPECT_EQ(comm.sum(uint64_t(session.hasTransferFunctionVolumes())), uint64_t(ranks));
+        RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+        session.run(sink);
+        if (!comm.isRoot()) return;
+        std::vector<Vec3f>& out = which == 1 ? withLook : plain;
+        if (out.empty())
+          out = sink.images.at(0).linear;
+        else
+          EXPECT_TRUE(out == sink.images.at(0).linear) << which << ": " << ranks << " ranks";
+      });
+  ASSERT_TRUE(nonBlack(withLook));
+  EXPECT_FALSE(withLook == plain);
+}
+
 // The viewer restyles a volume: the accumulation restarts with the new look.
 class VolumeControl final : public InteractiveControl {
  public:

@@ -102,24 +102,36 @@ std::shared_ptr<UnstructuredVolume> UnstructuredVolume::make(
 void UnstructuredVolume::finish() {
   const size_t clusters = clusterSeed_.size();
   clusterBox_.assign(clusters, Box3f{});
-  clusterMajorant_.assign(clusters, 0.0f);
-  for (size_t c = 0; c < clusters; ++c) {
-    float lo = 1, hi = 0;
+  clusterRange_.assign(clusters, {1.0f, 0.0f});
+  for (size_t c = 0; c < clusters; ++c)
     for (uint32_t i = clusterFirst_[c]; i < clusterFirst_[c + 1]; ++i)
       for (uint32_t p : tets_[i]) {
         clusterBox_[c].extend(points_[p]);
-        lo = std::min(lo, values_[p]);
-        hi = std::max(hi, values_[p]);
+        clusterRange_[c].first = std::min(clusterRange_[c].first, values_[p]);
+        clusterRange_[c].second = std::max(clusterRange_[c].second, values_[p]);
       }
-    // Linear inside a cell: its values lie between its vertices'.
-    clusterMajorant_[c] = transfer_->scale() * transfer_->opacityRange(lo, hi).second;
-  }
+  setMajorants();
+}
+
+void UnstructuredVolume::setMajorants() {
+  // Linear inside a cell: its values lie between its vertices'.
+  clusterMajorant_.resize(clusterRange_.size());
+  for (size_t c = 0; c < clusterRange_.size(); ++c)
+    clusterMajorant_[c] =
+        transfer_->scale() *
+        transfer_->opacityRange(clusterRange_[c].first, clusterRange_[c].second).second;
+}
+
+void UnstructuredVolume::restyle(std::shared_ptr<const TransferFunction> transfer) {
+  if (!transfer) throw InputError("an unstructured volume restyled without a transfer function");
+  transfer_ = std::move(transfer);
+  setMajorants();
 }
 
 uint64_t UnstructuredVolume::bytes() const {
   return sizeof(*this) + points_.size() * (sizeof(Vec3f) + sizeof(float)) +
          tets_.size() * sizeof(Tet) +
-         clusterSeed_.size() * (2 * sizeof(uint32_t) + sizeof(Box3f) + sizeof(float));
+         clusterSeed_.size() * (4 * sizeof(uint32_t) + sizeof(Box3f) + sizeof(float));
 }
 
 bool UnstructuredVolume::valueAt(uint32_t cluster, Vec3f p, float& value) const {

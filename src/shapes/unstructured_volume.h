@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "media/transfer_function.h"
@@ -59,17 +60,23 @@ class UnstructuredVolume final : public Shape {
   uint32_t cellCount() const { return uint32_t(tets_.size()); }
   uint32_t pointCount() const { return uint32_t(points_.size()); }
   float majorant(uint32_t cluster) const { return clusterMajorant_[cluster]; }
+  const std::shared_ptr<const TransferFunction>& transfer() const { return transfer_; }
+  // Draws the volume through `transfer` instead: the majorants rebuilt from
+  // the value range kept per cluster. Not while a ray crosses it.
+  void restyle(std::shared_ptr<const TransferFunction> transfer);
 
  private:
   UnstructuredVolume() = default;
-  // Boxes and majorants of the clusters (clusterFirst_ and the cells set).
+  // Boxes, value ranges and majorants of the clusters (clusterFirst_ and the cells set).
   void finish();
+  void setMajorants();  // from the value ranges and the transfer function
   std::vector<Vec3f> points_;
   std::vector<float> values_;
   std::vector<Tet> tets_;               // cluster by cluster
   std::vector<uint32_t> clusterFirst_;  // cluster c: tets_[first[c], first[c + 1])
   std::vector<uint32_t> clusterSeed_;   // its place in the whole volume's order
   std::vector<Box3f> clusterBox_;
+  std::vector<std::pair<float, float>> clusterRange_;  // its vertices' values, [low, high]
   std::vector<float> clusterMajorant_;
   std::shared_ptr<const TransferFunction> transfer_;
 };

@@ -176,5 +176,34 @@ TEST(UnstructuredVolume, SubsetsAndRecordsCrossAsTheWhole) {
   EXPECT_GT(hits, 20);
 }
 
+// A restyle scales the majorants with the opacity; undone, the volume
+// answers every ray as before.
+TEST(UnstructuredVolume, RestylingKeepsTheCellsAndMovesTheMajorants) {
+  const Scene scene = loadScene("builtin:tets?count=6000");
+  const auto v = std::const_pointer_cast<UnstructuredVolume>(tets(scene));
+  ASSERT_NE(v, nullptr);
+  const auto loaded = v->transfer();
+  const auto copy = v->subset(std::vector<uint32_t>{10, 11, 12});
+  std::vector<float> before;
+  for (uint32_t c = 0; c < v->primitiveCount(); ++c) before.push_back(v->majorant(c));
+  v->restyle(std::make_shared<const TransferFunction>(loaded->withScale(loaded->scale() * 4)));
+  for (uint32_t c = 0; c < v->primitiveCount(); ++c)
+    EXPECT_FLOAT_EQ(v->majorant(c), 4 * before[c]) << c;
+  v->restyle(loaded);
+  testing::TestRng rng(3);
+  for (int k = 0; k < 2000; ++k) {
+    const Vec3f o{2 * rng.uniform() - 1, 2 * rng.uniform() - 1, -2};
+    const Vec3f d =
+        normalize(Vec3f(0.3f * (rng.uniform() - 0.5f), 0.3f * (rng.uniform() - 0.5f), 1));
+    for (uint32_t i = 0; i < 3; ++i) {
+      float ta = -1, tb = -1;
+      Vec2f uv;
+      EXPECT_EQ(v->intersect(10 + i, o, d, 0, kInfinity, ta, uv),
+                copy->intersect(i, o, d, 0, kInfinity, tb, uv));
+      EXPECT_EQ(ta, tb);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ferry
