@@ -8,8 +8,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
 
 #include "comm/in_process_communicator.h"
@@ -290,29 +293,46 @@ Scene volumeBall(const TransferFunction& transfer = TransferFunction::standard()
                      box);
 }
 
-TEST(RenderSession, AVolumeLookRestylesTheTransferFunctionOnEveryRank) {
-  const VolumeLook look{4, "viridis"};
-  std::vector<Vec3f> restyledScene, withLook, plain;
-  for (int ranks : {1, 2})
+// Renders the three looks of a volume (0: a scene made with the restyled
+// transfer function, 1: the plain scene with `look` set, 2: the plain scene)
+// on each rank count of `ranks`, by `settings` and `scene` (a given scene, or
+// none: settings.scene), checking that every rank holds a restylable volume
+// and that each look's image is the same on every rank count. The images, by look.
+std::array<std::vector<Vec3f>, 3> volumeLookImages(
+    std::initializer_list<int> ranks, const VolumeLook& look, const SessionSettings& base,
+    const std::function<std::optional<Scene>(bool restyledScene)>& scene) {
+  std::array<std::vector<Vec3f>, 3> images;
+  for (int n : ranks)
     for (int which = 0; which < 3; ++which)
-      runRanks(ranks, [&](const Communicator& comm) {
-        SessionSettings settings = cornellSettings();
-        settings.scene = "ball";
-        settings.load.warn = {};
+      runRanks(n, [&](const Communicator& comm) {
+        SessionSettings settings = base;
         if (which == 1) settings.render.volumeLook = look;
-        RenderSession session(
-            which == 0 ? volumeBall(restyled(TransferFunction::standard(), look)) : volumeBall(),
-            settings, comm);
-        EXPECT_TRUE(session.hasTransferFunctionVolumes());
+        std::optional<Scene> given = scene(which == 0);
+        RenderSession session = given ? RenderSession(std::move(*given), settings, comm)
+                                      : RenderSession(settings, comm);
+        EXPECT_EQ(comm.sum(uint64_t(session.hasTransferFunctionVolumes())), uint64_t(n))
+            << "every rank holds a volume to restyle";
         RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
         session.run(sink);
         if (!comm.isRoot()) return;
-        std::vector<Vec3f>& out = which == 0 ? restyledScene : which == 1 ? withLook : plain;
-        if (out.empty())
-          out = sink.images.at(0).linear;
+        if (images[size_t(which)].empty())
+          images[size_t(which)] = sink.images.at(0).linear;
         else
-          EXPECT_TRUE(out == sink.images.at(0).linear) << which << ": " << ranks << " ranks";
+          EXPECT_TRUE(images[size_t(which)] == sink.images.at(0).linear)
+              << "look " << which << ": " << n << " ranks";
       });
+  return images;
+}
+
+TEST(RenderSession, AVolumeLookRestylesTheTransferFunctionOnEveryRank) {
+  const VolumeLook look{4, "viridis"};
+  SessionSettings settings = cornellSettings();
+  settings.scene = "ball";
+  settings.load.warn = {};
+  const auto [restyledScene, withLook,
+              plain] = volumeLookImages({1, 2}, look, settings, [&](bool restyledScene) {
+    return restyledScene ? volumeBall(restyled(TransferFunction::standard(), look)) : volumeBall();
+  });
   ASSERT_TRUE(nonBlack(withLook));
   EXPECT_TRUE(withLook == restyledScene);
   EXPECT_FALSE(withLook == plain);
@@ -326,59 +346,29 @@ TEST(RenderSession, AVolumeLookRestylesTheTransferFunctionOnEveryRank) {
 // transfer function render, on 1 and 3 ranks.
 TEST(RenderSession, AVolumeLookRestylesBricksOnEveryRank) {
   const VolumeLook look{4, "viridis"};
-  std::vector<Vec3f> restyledScene, withLook, plain;
-  for (int ranks : {1, 3})
-    for (int which = 0; which < 3; ++which)
-      runRanks(ranks, [&](const Communicator& comm) {
-        SessionSettings settings = cornellSettings();
-        settings.scene = "ball";
-        settings.load.warn = {};
-        settings.volumeBrickVoxels = 4;
-        if (which == 1) settings.render.volumeLook = look;
-        RenderSession session(
-            which == 0 ? volumeBall(restyled(TransferFunction::standard(), look)) : volumeBall(),
-            settings, comm);
-        EXPECT_EQ(comm.sum(uint64_t(session.hasTransferFunctionVolumes())), uint64_t(ranks))
-            << "every rank holds bricks";
-        RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
-        session.run(sink);
-        if (!comm.isRoot()) return;
-        EXPECT_GT(session.summary().volumeBricks, 8u);
-        std::vector<Vec3f>& out = which == 0 ? restyledScene : which == 1 ? withLook : plain;
-        if (out.empty())
-          out = sink.images.at(0).linear;
-        else
-          EXPECT_TRUE(out == sink.images.at(0).linear) << which << ": " << ranks << " ranks";
-      });
+  SessionSettings settings = cornellSettings();
+  settings.scene = "ball";
+  settings.load.warn = {};
+  settings.volumeBrickVoxels = 4;
+  const auto [restyledScene, withLook,
+              plain] = volumeLookImages({1, 3}, look, settings, [&](bool restyledScene) {
+    return restyledScene ? volumeBall(restyled(TransferFunction::standard(), look)) : volumeBall();
+  });
   ASSERT_TRUE(nonBlack(withLook));
   EXPECT_TRUE(withLook == restyledScene);
   EXPECT_FALSE(withLook == plain);
 }
 
-// An unstructured volume restyled by the session: the same image on 1 and 3
-// ranks, another than without the look; a restyle and its undoing give back
-// the volume's own collisions.
+// An unstructured volume restyled by the session (each rank its own
+// clusters): the same image on 1 and 3 ranks, another than without the look.
 TEST(RenderSession, AVolumeLookRestylesUnstructuredVolumes) {
-  std::vector<Vec3f> withLook, plain;
-  for (int ranks : {1, 3})
-    for (int which = 0; which < 2; ++which)
-      runRanks(ranks, [&](const Communicator& comm) {
-        SessionSettings settings = cornellSettings();
-        settings.scene = "builtin:tets?count=6000";
-        if (which == 1) settings.render.volumeLook = {4, "inferno"};
-        RenderSession session(settings, comm);
-        EXPECT_EQ(comm.sum(uint64_t(session.hasTransferFunctionVolumes())), uint64_t(ranks));
-        RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
-        session.run(sink);
-        if (!comm.isRoot()) return;
-        std::vector<Vec3f>& out = which == 1 ? withLook : plain;
-        if (out.empty())
-          out = sink.images.at(0).linear;
-        else
-          EXPECT_TRUE(out == sink.images.at(0).linear) << which << ": " << ranks << " ranks";
-      });
+  SessionSettings settings = cornellSettings();
+  settings.scene = "builtin:tets?count=6000";
+  const auto [loaded, withLook, plain] = volumeLookImages(
+      {1, 3}, {4, "inferno"}, settings, [](bool) { return std::optional<Scene>(); });
   ASSERT_TRUE(nonBlack(withLook));
   EXPECT_FALSE(withLook == plain);
+  EXPECT_TRUE(loaded == plain);  // (no restyled scene to give: the loaded one)
 }
 
 // The viewer restyles a volume: the accumulation restarts with the new look.
