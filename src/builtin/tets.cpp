@@ -30,9 +30,7 @@ ScenePlan planTets(uint64_t count, uint32_t /*seed: the lattice has no randomnes
   volume.kind = "unstructured-volume";
   volume.material = grey;
   volume.primitives = (cells + kCellsPerCluster - 1) / kCellsPerCluster;
-  volume.bytes = sizeof(UnstructuredVolume) + points * (sizeof(Vec3f) + sizeof(float)) +
-                 cells * sizeof(UnstructuredVolume::Tet) +
-                 volume.primitives * (4 * sizeof(uint32_t) + sizeof(Box3f) + sizeof(float));
+  volume.bytes = UnstructuredVolume::bytesFor(points, cells, volume.primitives);
   volume.build = [=] {
     std::vector<Vec3f> position(points);
     std::vector<float> value(points);

@@ -27,22 +27,6 @@ uint32_t spread10(uint32_t x) {
   return x;
 }
 
-// Where o + t d enters and leaves `box` within [t0, t1]; false if it misses.
-bool clipToBox(const Box3f& box, Vec3f o, Vec3f d, float& t0, float& t1) {
-  for (int a = 0; a < 3; ++a) {
-    const float inv = 1 / d[a];
-    float tNear = (box.lower[a] - o[a]) * inv, tFar = (box.upper[a] - o[a]) * inv;
-    if (tNear > tFar) std::swap(tNear, tFar);
-    if (d[a] == 0) {
-      if (o[a] < box.lower[a] || o[a] > box.upper[a]) return false;
-      continue;
-    }
-    t0 = std::max(t0, tNear);
-    t1 = std::min(t1, tFar);
-  }
-  return t0 <= t1;
-}
-
 }  // namespace
 
 std::shared_ptr<UnstructuredVolume> UnstructuredVolume::make(
@@ -128,10 +112,14 @@ void UnstructuredVolume::restyle(std::shared_ptr<const TransferFunction> transfe
   setMajorants();
 }
 
+uint64_t UnstructuredVolume::bytesFor(uint64_t points, uint64_t cells, uint64_t clusters) {
+  // Per cluster: first cell, seed, value range, box, majorant.
+  return sizeof(UnstructuredVolume) + points * (sizeof(Vec3f) + sizeof(float)) +
+         cells * sizeof(Tet) + clusters * (4 * sizeof(uint32_t) + sizeof(Box3f) + sizeof(float));
+}
+
 uint64_t UnstructuredVolume::bytes() const {
-  return sizeof(*this) + points_.size() * (sizeof(Vec3f) + sizeof(float)) +
-         tets_.size() * sizeof(Tet) +
-         clusterSeed_.size() * (4 * sizeof(uint32_t) + sizeof(Box3f) + sizeof(float));
+  return bytesFor(points_.size(), tets_.size(), clusterSeed_.size());
 }
 
 bool UnstructuredVolume::valueAt(uint32_t cluster, Vec3f p, float& value) const {
@@ -166,7 +154,8 @@ bool UnstructuredVolume::intersect(uint32_t cluster, Vec3f origin, Vec3f directi
   // From t = 0 whatever tnear is, and only up to tfar: the decisions before
   // tfar are the same for any tfar, so every rank finds the same collision.
   float s = 0, end = tfar;
-  if (!clipToBox(clusterBox_[cluster], origin, direction, s, end)) return false;
+  const Vec3f inverse(1 / direction.x, 1 / direction.y, 1 / direction.z);
+  if (!clusterBox_[cluster].clipRay(origin, inverse, s, end)) return false;
   ++work.cells;
   TrackingRandom random(rayTrackingKey(origin, direction, clusterSeed_[cluster]), 0);
   for (;;) {

@@ -41,6 +41,8 @@ class UnstructuredVolume final : public Shape {
   uint32_t primitiveCount() const override { return uint32_t(clusterSeed_.size()); }
   Box3f primitiveBounds(uint32_t cluster) const override { return clusterBox_[cluster]; }
   uint64_t bytes() const override;
+  // What bytes() is for a volume of these counts (a plan's estimate).
+  static uint64_t bytesFor(uint64_t points, uint64_t cells, uint64_t clusters);
   bool intersect(uint32_t cluster, Vec3f origin, Vec3f direction, float tnear, float tfar, float& t,
                  Vec2f& uv) const override;
   bool intersect(uint32_t cluster, Vec3f origin, Vec3f direction, float tnear, float tfar, float& t,

@@ -94,6 +94,29 @@ double tupleValue(vtkDataArray* a, vtkIdType i) {
   return std::sqrt(sum);
 }
 
+// The first `count` values of `array` (vectors by magnitude) normalised to
+// [0, 1] by their range, which `lo` and `hi` receive. InputError naming the
+// file and, by `where(i)`, value i if one is NaN or beyond a float.
+template <typename Where>
+std::vector<float> normalisedValues(vtkDataArray* array, uint64_t count, const std::string& path,
+                                    double& lo, double& hi, Where&& where) {
+  std::vector<float> values(count);
+  lo = std::numeric_limits<double>::max();
+  hi = std::numeric_limits<double>::lowest();
+  for (uint64_t i = 0; i < count; ++i) {
+    const double v = tupleValue(array, vtkIdType(i));
+    if (!std::isfinite(v) || !std::isfinite(float(v)))
+      throw InputError(fmt::format("{}: array '{}' {} is {}", path,
+                                   array->GetName() ? array->GetName() : "", where(i), v));
+    values[i] = float(v);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  const double range = hi - lo;
+  for (float& v : values) v = range > 0 ? float((double(v) - lo) / range) : 0.0f;
+  return values;
+}
+
 }  // namespace
 
 Scene loadVtkImageScene(const std::string& path, const std::string& field) {
@@ -149,20 +172,11 @@ Scene loadVtkImageScene(const std::string& path, const std::string& field) {
     throw InputError(fmt::format("{}: array '{}' has {} values where the image has {}", path,
                                  array->GetName() ? array->GetName() : "",
                                  array->GetNumberOfTuples(), samples));
-  std::vector<float> values(samples);
-  double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
-  for (uint64_t i = 0; i < samples; ++i) {
-    const double v = tupleValue(array, vtkIdType(i));
-    if (!std::isfinite(v) || !std::isfinite(float(v)))
-      throw InputError(fmt::format("{}: array '{}' value {} (x {}, y {}, z {}) is {}", path,
-                                   array->GetName() ? array->GetName() : "", i, i % dims[0],
-                                   (i / dims[0]) % dims[1], i / (uint64_t(dims[0]) * dims[1]), v));
-    values[i] = float(v);
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-  }
-  const double range = hi - lo;
-  for (float& v : values) v = range > 0 ? float((double(v) - lo) / range) : 0.0f;
+  double lo, hi;
+  std::vector<float> values = normalisedValues(array, samples, path, lo, hi, [&](uint64_t i) {
+    return fmt::format("value {} (x {}, y {}, z {})", i, i % dims[0], (i / dims[0]) % dims[1],
+                       i / (uint64_t(dims[0]) * dims[1]));
+  });
   TransferFunction tf = TransferFunction::standard();
   tf = tf.withScale(tf.scale() / maxComponent(box.size()));  // as a raw: volume's
   // The name says which array and its range (ferry info lists it).
@@ -276,24 +290,16 @@ Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field
         path, field.empty() ? "" : " '" + field + "'", arrayNames(pointData),
         arrayNames(grid->GetCellData())));
   std::vector<Vec3f> points(static_cast<size_t>(n));
-  std::vector<float> values(static_cast<size_t>(n));
-  double lo = std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::lowest();
   Box3f box;
   for (vtkIdType i = 0; i < n; ++i) {
     double p[3];
     grid->GetPoint(i, p);
     points[size_t(i)] = Vec3f(float(p[0]), float(p[1]), float(p[2]));
     box.extend(points[size_t(i)]);
-    const double v = tupleValue(array, i);
-    if (!std::isfinite(v))
-      throw InputError(fmt::format("{}: array '{}' at point {} is {}", path,
-                                   array->GetName() ? array->GetName() : "", i, v));
-    values[size_t(i)] = float(v);
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
   }
-  const double range = hi - lo;
-  for (float& v : values) v = range > 0 ? float((double(v) - lo) / range) : 0.0f;
+  double lo, hi;
+  std::vector<float> values = normalisedValues(
+      array, uint64_t(n), path, lo, hi, [](uint64_t i) { return fmt::format("at point {}", i); });
   std::vector<UnstructuredVolume::Tet> tets;
   uint64_t skipped = 0;
   vtkNew<vtkIdList> ids;
