@@ -6,6 +6,7 @@
 
 #include <algorithm>
 
+#include "builtin/builtin.h"
 #include "flags/render_flags.h"
 #include "io/scene_loader.h"
 #include "shapes/volume_brick.h"
@@ -42,12 +43,19 @@ int runInfo(const InfoOptions& options) {
     fmt::print(stderr, "load: {}% of {}\n", tenth * 10, what);
   };
   const int bricks = parseVolumeBricks(options.volumeBricks);
-  SceneSummary summary = describeScene(options.scene, load);
-  // A grid medium that render would brick: described from the loaded scene, in bricks.
-  const auto grid = [](const SceneSummary::Medium& m) { return m.kind.rfind("grid", 0) == 0; };
-  if (bricks != 0 && std::any_of(summary.media.begin(), summary.media.end(), grid)) {
+  // A built-in is described from its plan, without making it, unless render
+  // would brick a grid of it; a file is loaded once, bricked as render would.
+  SceneSummary summary;
+  bool described = false;
+  if (isBuiltinSpec(options.scene)) {
+    summary = describeScene(options.scene, load);
+    const auto grid = [](const SceneSummary::Medium& m) { return m.kind.rfind("grid", 0) == 0; };
+    described = bricks == 0 || std::none_of(summary.media.begin(), summary.media.end(), grid);
+  }
+  if (!described) {
     Scene scene = loadScene(options.scene, load);
-    if (brickVolumes(scene, bricks) > 0) summary = summarize(scene);
+    if (bricks != 0) brickVolumes(scene, bricks);
+    summary = summarize(scene);
   }
   if (options.json)
     fmt::print("{}\n", summary.toJson().dump(2));
