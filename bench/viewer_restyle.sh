@@ -5,6 +5,7 @@
 # with another colour map and opacity to the first served frame drawn with
 # it, against the time from a camera change to its first frame (the same
 # restart without a restyle), medians of CHANGES changes each, one run.
+# Fails when the restyle median passes a second (issue 72's goal).
 #
 #   bash bench/viewer_restyle.sh [FERRY]
 #   SIZE=512 RANKS=4 IMAGE=320x180 CHANGES=8 bash bench/viewer_restyle.sh
@@ -92,6 +93,8 @@ print(f"restyle (colour map and opacity) to its first frame: median {statistics.
       f"{statistics.median(moves):.3f} s (min {min(moves):.3f}, max {max(moves):.3f}); "
       f"{changes} of each; a frame {frame:.3f} s")
 post("quit", {})
+if statistics.median(restyles) > 1.0:
+    sys.exit("FAIL: a restyle took more than a second to reach a frame (the goal)")
 PY
 wait "$pid" || true
 pid=""
