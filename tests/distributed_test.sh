@@ -39,6 +39,23 @@ run_scene() {
 
 run_scene "builtin:cornell" "--size 40x40 --spp 2 --max-depth 4"
 run_scene "builtin:island?scale=0.05" "--size 48x32 --spp 1 --max-depth 3"
+# Subsurface walks (a pbrt scene: two spheres enclosing media): each step of
+# a walk is a ray like any other, forwarded to whichever ranks hold the
+# sphere's pieces, and a piece keeps the media its mesh bounds.
+sss="$source_dir/tests/oracle/cases/v3-subsurface.pbrt"
+sss_args="--size 24x24 --spp 2 --seed 3"
+# shellcheck disable=SC2086
+"$ferry" render "$sss" $sss_args -q -o "$work/sss-ref.pfm" 2>/dev/null
+for ranks in 2 3; do
+  for variant in "--threads 1" "--exchange bulk --threads 1" "--path-layout replay --threads 1" \
+    "--partition random --threads 1"; do
+    out="$work/sss.pfm"
+    # shellcheck disable=SC2086
+    mpirun_n "$ranks" "$ferry" render "$sss" $sss_args -q $variant -o "$out" 2>/dev/null
+    echo "subsurface, ranks $ranks, $variant:"
+    $compare "$work/sss-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0
+  done
+done
 # The bulk exchange (the paper's rounds), and the overlapped one at small
 # chunks (many chunks and bounces in flight at once) and with two threads a
 # rank, and best's proxies merged to a few union boxes (more forwarding):

@@ -12,6 +12,7 @@
 #include "material/models/fresnel_blend.h"
 #include "material/models/hair.h"
 #include "material/models/layered.h"
+#include "material/models/subsurface.h"
 #include "material/models/thin_dielectric.h"
 
 namespace ferry {
@@ -44,6 +45,10 @@ Registry<MaterialModelKind>& registry() {
           {"diffuse-transmission", "a thin diffuse sheet (pbrt's translucent, diffusetransmission)",
            DiffuseTransmissionModel::read},
           {"hair", "a fibre: Chiang et al.'s R, TT, TRT lobes (pbrt's hair)", HairModel::read},
+          {"subsurface",
+           "a dielectric surface over a scattering medium, walked through (pbrt's subsurface, "
+           "kdsubsurface)",
+           SubsurfaceModel::read},
           {"fourier", "a tabulated BSDF, pbrt-v3's fourier material (.bsdf files)",
            FourierModel::read},
       });

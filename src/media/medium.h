@@ -100,6 +100,10 @@ struct Medium {
   // by temperature instead of a constant Le.
   std::shared_ptr<const DensityGrid> emissionScale;
   std::shared_ptr<const TemperatureEmission> temperature;
+  // The inside of a subsurface material (material/models/subsurface.h),
+  // homogeneous: paths walk through it without light samples, and its
+  // scattering events do not count as bounces.
+  bool subsurface = false;
 
   bool homogeneous() const { return density == nullptr && cloud == nullptr; }
   Vec3f sigmaT() const { return sigmaA + sigmaS; }

@@ -20,6 +20,7 @@ Mesh extractPiece(const Mesh& source, const std::vector<uint32_t>& triangles, in
   Mesh m;
   m.name = fmt::format("{}#{}", source.name, piece);
   m.material = source.material;
+  m.media = source.media;
   std::vector<int32_t> used;
   used.reserve(triangles.size() * 3);
   for (uint32_t t : triangles)

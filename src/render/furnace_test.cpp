@@ -22,6 +22,7 @@
 
 #include "material/models/conductor.h"
 #include "material/models/dielectric.h"
+#include "material/models/subsurface.h"
 #include "render/render_test_util.h"
 
 namespace ferry {
@@ -134,6 +135,37 @@ TEST(Furnace, LosslessSpheresAreInvisible) {
       stats.imageMean(k, mean, se);
       checks.push_back({m.name + " ch" + std::to_string(k), mean, se, 1.0, kHalfRelativeError});
     }
+  }
+  expectAll(checks);
+}
+
+// A subsurface sphere whose medium only scatters (chromatically, so the
+// walk's spectral weights are at work): every walk leaves, so it is
+// invisible too. Its walk's steps are not bounces, so a depth of 8 suffices.
+TEST(Furnace, LosslessSubsurfaceIsInvisible) {
+  std::vector<Check> checks;
+  Material m;
+  m.name = "subsurface";
+  m.baseColor = Vec3f(1);
+  m.model = std::make_shared<SubsurfaceModel>(1.33f, 0.0f, Vec3f(1));
+  Scene scene = sphereInEnvironment(m, 40, true);
+  Medium inside;
+  inside.name = "inside";
+  inside.sigmaS = Vec3f(2, 3, 4);
+  inside.g = 0.3f;
+  inside.subsurface = true;
+  scene.media.push_back(inside);
+  scene.meshes.back().media = MediumInterface{0, kNoMedium};
+  RenderSettings s;
+  s.width = s.height = 32;
+  s.samplesPerPixel = 32;
+  s.maxDepth = 8;
+  s.seed = 5;
+  PixelStatistics stats = renderStatistics(scene, s, 8);
+  for (int k = 0; k < 3; ++k) {
+    double mean, se;
+    stats.imageMean(k, mean, se);
+    checks.push_back({"subsurface ch" + std::to_string(k), mean, se, 1.0, kHalfRelativeError});
   }
   expectAll(checks);
 }

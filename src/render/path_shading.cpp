@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
+#include "core/error.h"
 #include "media/phase.h"
 #include "scene/scene.h"
 
@@ -12,6 +15,9 @@ namespace {
 // Paths whose bounce reaches this start playing Russian roulette: the
 // continuation from a path's second vertex on (pbrt-v4's rule).
 constexpr uint32_t kRouletteStartBounce = 2;
+
+// A scene with subsurface walks keeps a path's medium in 8 bits (mediumOf).
+constexpr size_t kMaxWalkSceneMedia = 254;
 
 // The least cosine between the viewer and a shading normal (shadingFrame).
 constexpr float kMinShadingCosine = 0.02f;
@@ -58,6 +64,12 @@ PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, u
     media_ = std::make_shared<MediaAlongRays>(scene);
     cameraMedium_ = scene.cameraMedium;
     lightPathCamera = nullptr;
+    for (const Medium& m : scene.media) walks_ = walks_ || m.subsurface;
+    if (walks_ && scene.media.size() > kMaxWalkSceneMedia)
+      throw InputError(
+          fmt::format("a scene with subsurface materials may hold at most {} media; "
+                      "this one has {}",
+                      kMaxWalkSceneMedia, scene.media.size()));
   }
   if (window && !window->whole()) {
     window_ = *window;
@@ -83,8 +95,8 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
     return {};
   }
   if (const Shape* volume = volumeOf(hit))
-    return shadeVolumeCollision(path, hit, *volume, kNoMedium, sampleIndex, bounce, continuation,
-                                shadowRay);
+    return shadeVolumeCollision(path, hit, *volume, kNoMedium, sampleIndex, bounce, bounce,
+                                continuation, shadowRay);
   const PathVertex vertex = surfaceVertex(path, hit, bounce);
   addEmission(vertex, hit, frameBuffer);
   const bool aovs = bounce == 0 && frameBuffer.hasAovs();
@@ -533,6 +545,8 @@ namespace {
 // decisions use the RandomDim values, all below).
 constexpr uint32_t kFlightDimension = 64;
 constexpr uint32_t kTransmittanceDimension = 1u << 30;
+// A subsurface walk still going after this many wavefront bounces ends.
+constexpr uint32_t kWalkBounceLimit = 1024;
 }  // namespace
 
 template <typename Path>
@@ -580,39 +594,49 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
       randomKeyHash(RandomKey{randomPixel(path.pixel()), sampleIndex, bounce, seed_});
   TrackingRandom random(keyHash, kFlightDimension);
   const MediaFlight f =
-      media_->flight(path.origin, d, tEnd, pathMedium(path), random, mediumCounts_.local());
+      media_->flight(path.origin, d, tEnd, mediumOf(path), random, mediumCounts_.local());
+  const uint32_t depth = depthOf(path, bounce);
   const Vec3f throughput = path.weight();
   if (const Vec3f e = throughput * f.emitted; usable(e)) frameBuffer.add(path.pixel(), e);
   if (f.event == FreeFlight::Event::Absorbed) return {};
   // The path with what the media took from it.
   Path arrived = path;
   arrived.setWeight(throughput * f.weight);
-  if (f.event == FreeFlight::Event::Scattered)
+  if (f.event == FreeFlight::Event::Scattered) {
+    if (walks_ && media_->medium(f.medium).subsurface)
+      return walkVertex(arrived, path.origin + d * f.t, f, sampleIndex, bounce, continuation);
     return shadeMediumVertex(arrived, path.origin + d * f.t, media_->medium(f.medium).g, f.medium,
-                             sampleIndex, bounce, continuation, shadowRay);
+                             sampleIndex, bounce, depth, continuation, shadowRay);
+  }
   if (!path.hasHit()) {
     addEscapedLight(arrived, frameBuffer);
     return {};
   }
   if (const Shape* volume = volumeOf(hit))
-    return shadeVolumeCollision(arrived, hit, *volume, f.medium, sampleIndex, bounce, continuation,
-                                shadowRay);
-  const PathVertex vertex = surfaceVertex(arrived, hit, bounce);
+    return shadeVolumeCollision(arrived, hit, *volume, f.medium, sampleIndex, bounce, depth,
+                                continuation, shadowRay);
+  const PathVertex vertex = surfaceVertex(arrived, hit, depth);
   addEmission(vertex, hit, frameBuffer);
   const bool aovs = bounce == 0 && frameBuffer.hasAovs();
-  if (bounce >= maxDepth_) {
+  const MediumInterface& sides = surfaceMedia(hit);
+  // A walk back at its subsurface material's surface leaves or turns back
+  // in within the bounce that entered (pbrt's BSSRDF: one bounce in and out).
+  const bool walkEnds = walks_ && sides.inside != kNoMedium &&
+                        media_->medium(sides.inside).subsurface &&
+                        dot(vertex.wo, vertex.surface.geometricNormal) < 0;
+  if (!walkEnds && depth >= maxDepth_) {
     if (aovs) addFirstSurfaceAovs(vertex, shadingFrame(vertex, sampleIndex, bounce), frameBuffer);
     return {};
   }
   const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
   if (aovs) addFirstSurfaceAovs(vertex, scattering, frameBuffer);
-  const MediumInterface& sides = surfaceMedia(hit);
   auto leaving = [&](Vec3f direction) {
     return sides.isTransition() ? sides.along(direction, vertex.surface.geometricNormal) : f.medium;
   };
   Spawned spawned;
   spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);
-  if (spawned.continuation) setPathMedium(continuation, leaving(continuation.dir()));
+  if (spawned.continuation)
+    setMediumAndDepth(continuation, leaving(continuation.dir()), walkEnds ? depth : depth + 1);
   if (!scattering.bsdf.isDelta() && strategy_ != LightStrategy::BsdfSamples)
     spawned.shadowRay = sampleLight(vertex, scattering, 0, shadowRay) &&
                         throughMedia(shadowRay, leaving(shadowRay.dir()), keyHash);
@@ -632,20 +656,21 @@ const Shape* PathShading<Path>::volumeOf(const TraceHit& hit) const {
 template <typename Path>
 typename PathShading<Path>::Spawned PathShading<Path>::shadeVolumeCollision(
     const Path& path, const TraceHit& hit, const Shape& volume, int32_t medium,
-    uint32_t sampleIndex, uint32_t bounce, Path& continuation, Path& shadowRay) const {
+    uint32_t sampleIndex, uint32_t bounce, uint32_t depth, Path& continuation,
+    Path& shadowRay) const {
   // Where the trace found the collision, along the ray as it traced it.
   const Vec3f position = path.origin + path.dir() * hit.t;
   Path scattered = path;
   scattered.setWeight(path.weight() * volume.volumeAlbedo(hit.primitive, position));
   return shadeMediumVertex(scattered, position, volume.volumePhaseG(), medium, sampleIndex, bounce,
-                           continuation, shadowRay);
+                           depth, continuation, shadowRay);
 }
 
 template <typename Path>
 typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
     const Path& path, Vec3f position, float g, int32_t medium, uint32_t sampleIndex,
-    uint32_t bounce, Path& continuation, Path& shadowRay) const {
-  if (bounce >= maxDepth_) return {};
+    uint32_t bounce, uint32_t depth, Path& continuation, Path& shadowRay) const {
+  if (depth >= maxDepth_) return {};
   const Vec3f wo = -path.dir();
   const RandomKey key{randomPixel(path.pixel()), sampleIndex, bounce, seed_};
   const RandomStream random(key, sampler_);
@@ -671,14 +696,40 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
   Vec3f wi;
   const float pdf = samplePhase(wo, g, {random(RandomDim::BsdfU), random(RandomDim::BsdfV)}, wi);
   Vec3f weight = throughput;  // the phase function over its own density
-  if (bounce + 1 >= kRouletteStartBounce) {
+  if (depth + 1 >= kRouletteStartBounce) {
     const float q = std::min(1.0f, maxComponent(weight));
     if (random(RandomDim::Roulette) >= q) return spawned;
     weight = weight * (1 / q);
   }
   if (!usable(weight) || !(pdf > 0)) return spawned;
   makeRay(continuation, position, wi, kInfinity, weight, path.pixel(), 0, pdf);
-  if (media_) setPathMedium(continuation, medium);
+  if (media_) setMediumAndDepth(continuation, medium, depth + 1);
+  spawned.continuation = true;
+  return spawned;
+}
+
+// Each step survives with the probability its flight's weight allows (the
+// single-scattering albedo for a grey medium), so the throughput a walk
+// carries stays near the one it entered with.
+template <typename Path>
+typename PathShading<Path>::Spawned PathShading<Path>::walkVertex(const Path& path, Vec3f position,
+                                                                  const MediaFlight& flight,
+                                                                  uint32_t sampleIndex,
+                                                                  uint32_t bounce,
+                                                                  Path& continuation) const {
+  if (bounce >= kWalkBounceLimit) return {};
+  const RandomStream random(RandomKey{randomPixel(path.pixel()), sampleIndex, bounce, seed_},
+                            sampler_);
+  const float q = std::min(1.0f, maxComponent(flight.weight));
+  if (!(random(RandomDim::Roulette) < q)) return {};
+  const Vec3f weight = path.weight() * (1 / q);
+  Vec3f wi;
+  const float pdf = samplePhase(-path.dir(), media_->medium(flight.medium).g,
+                                {random(RandomDim::BsdfU), random(RandomDim::BsdfV)}, wi);
+  if (!usable(weight) || !(pdf > 0)) return {};
+  makeRay(continuation, position, wi, kInfinity, weight, path.pixel(), 0, pdf);
+  setMediumAndDepth(continuation, flight.medium, depthOf(path, bounce));
+  Spawned spawned;
   spawned.continuation = true;
   return spawned;
 }

@@ -217,20 +217,42 @@ class PathShading {
                        FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const;
   // A vertex scattering by a Henyey-Greenstein phase function of asymmetry
   // `g`, in `medium` (the path's medium after it; kNoMedium without media).
+  // `depth`: the scattering events the path has made (its bounce, but for
+  // subsurface walks); `bounce` keys its random numbers.
   Spawned shadeMediumVertex(const Path& path, Vec3f position, float g, int32_t medium,
-                            uint32_t sampleIndex, uint32_t bounce, Path& continuation,
-                            Path& shadowRay) const;
+                            uint32_t sampleIndex, uint32_t bounce, uint32_t depth,
+                            Path& continuation, Path& shadowRay) const;
+  // A path scattering inside a subsurface material's medium (`flight`
+  // ended there): on by the phase function, with no light sample (the
+  // surface around it is in the way) and no bounce counted.
+  Spawned walkVertex(const Path& path, Vec3f position, const MediaFlight& flight,
+                     uint32_t sampleIndex, uint32_t bounce, Path& continuation) const;
   // The volume (scene/shape.h: isVolume) the hit is a collision in, or null.
   const Shape* volumeOf(const TraceHit& hit) const;
   // A path that collided in a volume (a brick: shapes/volume_brick.h): it
   // scatters there, weighed by the volume's albedo.
   Spawned shadeVolumeCollision(const Path& path, const TraceHit& hit, const Shape& volume,
                                int32_t medium, uint32_t sampleIndex, uint32_t bounce,
-                               Path& continuation, Path& shadowRay) const;
+                               uint32_t depth, Path& continuation, Path& shadowRay) const;
   // Multiplies a shadow ray leaving into `medium` by its transmittance to the
   // light; false if none is left.
   bool throughMedia(Path& shadowRay, int32_t medium, uint32_t keyHash) const;
   const MediumInterface& surfaceMedia(const TraceHit& hit) const;
+  // In a scene with subsurface walks the path's 16 medium bits hold its
+  // medium + 1 in the low 8 and its depth in the high 8 (a walk's steps are
+  // wavefront bounces that do not count); otherwise the depth is the bounce.
+  int32_t mediumOf(const Path& path) const {
+    return walks_ ? int32_t(path.lightRatio & 0xffu) - 1 : pathMedium(path);
+  }
+  uint32_t depthOf(const Path& path, uint32_t bounce) const {
+    return walks_ ? uint32_t(path.lightRatio >> 8) : bounce;
+  }
+  void setMediumAndDepth(Path& path, int32_t medium, uint32_t depth) const {
+    if (walks_)
+      path.lightRatio = uint16_t(uint32_t(medium + 1) | (std::min(depth, 255u) << 8));
+    else
+      setPathMedium(path, medium);
+  }
 
   const Scene& scene_;
   const LightSampler& lights_;
@@ -259,6 +281,7 @@ class PathShading {
   std::shared_ptr<const MediaAlongRays> media_;  // null: no media
   TransmittanceEstimator transmittance_ = TransmittanceEstimator::Ratio;
   int32_t cameraMedium_ = kNoMedium;
+  bool walks_ = false;  // the scene has a subsurface medium (Medium::subsurface)
   mutable tbb::enumerable_thread_specific<MediumCounts> mediumCounts_;
 };
 

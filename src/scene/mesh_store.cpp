@@ -83,6 +83,7 @@ Mesh MeshStore::load(const Mesh& stored) const {
   Mesh m;
   m.name = stored.name;
   m.material = stored.material;
+  m.media = stored.media;
   uint64_t at = s.offset;
   auto get = [&](void* data, uint64_t n) {
     transfer(::pread, fd_, data, n, at, [&](const char* why) {

@@ -38,6 +38,7 @@ TEST(MeshStore, StoredMeshesKeepCountsAndBoundsAndReadBackExactly) {
   scene.meshStore = store;
   for (int k = 0; k < 3; ++k) {
     Mesh m = triangleFan(10 + k, k != 1, k != 2);
+    m.media = MediumInterface{k, kNoMedium};
     const Mesh copy = m;
     store->store(m);
     ASSERT_TRUE(m.stored.has_value());
@@ -53,6 +54,7 @@ TEST(MeshStore, StoredMeshesKeepCountsAndBoundsAndReadBackExactly) {
     const Mesh& back = scene.geometry(int32_t(k), scratch);
     EXPECT_EQ(back.name, copy.name);
     EXPECT_EQ(back.material, copy.material);
+    EXPECT_EQ(back.media, copy.media);
     EXPECT_FALSE(back.stored.has_value());
     EXPECT_TRUE(back.hasVertexSlack());
     ASSERT_EQ(back.positions.size(), copy.positions.size());

@@ -22,7 +22,9 @@
 #include "material/models/fresnel_blend.h"
 #include "material/models/hair.h"
 #include "material/models/layered.h"
+#include "material/models/subsurface.h"
 #include "material/models/thin_dielectric.h"
+#include "media/medium_presets.h"
 
 namespace ferry {
 namespace {
@@ -36,7 +38,8 @@ constexpr uint64_t kMaxEvaluations = uint64_t(8) * kMaxBakeSide * kMaxBakeSide;
 
 struct Look {
   Material m;
-  PbrtAlpha alpha;  // from the material itself (interface, uber opacity)
+  PbrtAlpha alpha;                 // from the material itself (interface, uber opacity)
+  std::optional<Medium> interior;  // what a subsurface material encloses
 };
 
 // An image as linear float RGB (and alpha when it has one), for evaluation.
@@ -101,7 +104,9 @@ struct PbrtMaterials::Impl {
   std::map<std::string, SampledSpectrum> spectrumFiles;
   std::map<std::string, int32_t> bsdfTables;  // resolved path -> Scene::bsdfTables
   std::map<int, int32_t> constantAlpha;
-  uint64_t evaluations_ = 0;  // of the current bake or average
+  std::map<int32_t, int32_t> interiors;  // scene material -> its subsurface medium
+  bool v4File = false;                   // the file is known to be pbrt-v4's
+  uint64_t evaluations_ = 0;             // of the current bake or average
   // Definitions whose class has been warned about: a bake evaluates a
   // texture per texel, and a warning's message is formatted once per definition.
   std::set<const PbrtTextureDefinition*> classWarned_;
@@ -1061,6 +1066,84 @@ struct PbrtMaterials::Impl {
     return look;
   }
 
+  // pbrt's subsurface and kdsubsurface: a dielectric surface (its model in
+  // `m`) over the homogeneous medium returned, walked through
+  // (material/models/subsurface.h). The medium is sigma_a and sigma_s times
+  // scale: named (pbrt's measured media, g then 0), given, or (kdsubsurface's
+  // Kd, pbrt-v4's reflectance) inverted through the photon beam diffusion
+  // profile with extinction 1 / (scale mfp). pbrt-v3 is told from pbrt-v4 by
+  // the file (v4File) or by v4's names ("reflectance", "roughness").
+  Medium subsurface(const PbrtParams& p, const PbrtMaterialDefinition& def, Material& m) {
+    const bool v3 =
+        def.type == "kdsubsurface" || !(v4File || p.has("reflectance") || p.has("roughness"));
+    const float eta = std::max(scalar(p, "eta", 1.33f), 1.01f);
+    float g = std::clamp(scalar(p, "g", 0.0f), -0.99f, 0.99f);
+    const float scale = scalar(p, "scale", 1.0f);
+    Vec3f sigmaA{0.0011f, 0.0024f, 0.014f}, sigmaS{2.55f, 3.21f, 3.77f};
+    const std::string name = p.getString("name", "");
+    const bool fromReflectance =
+        def.type == "kdsubsurface" ||
+        (!v3 && name.empty() && !p.has("sigma_a") && !p.has("sigma_s") && p.has("reflectance"));
+    if (fromReflectance) {
+      const Vec3f reflectance = min(
+          max(untexturedColor(p, def.type == "kdsubsurface" ? "Kd" : "reflectance", Vec3f(0.5f)),
+              Vec3f(0)),
+          Vec3f(1));
+      const Vec3f mfp = untexturedColor(p, "mfp", Vec3f(1)) * scale;
+      if (!(std::min({mfp.x, mfp.y, mfp.z}) > 0))
+        throw InputError(def.where,
+                         fmt::format("{}: \"mfp\" times \"scale\" must be positive", def.type));
+      const Vec3f albedo = subsurfaceAlbedoFromReflectance(reflectance, g, eta);
+      const Vec3f sigmaT{1 / mfp.x, 1 / mfp.y, 1 / mfp.z};
+      sigmaS = albedo * sigmaT;
+      sigmaA = sigmaT - sigmaS;
+    } else {
+      if (!name.empty()) {
+        if (!mediumPreset(name, sigmaA, sigmaS)) {
+          if (!v3)
+            throw InputError(def.where,
+                             fmt::format("subsurface: no measured medium named \"{}\"", name));
+          warnings.once("subsurface name|" + name,
+                        fmt::format("{}: subsurface: no measured medium named \"{}\"; its "
+                                    "defaults are used (as pbrt-v3 does)",
+                                    def.where.toString(), name));
+        } else {
+          g = 0;  // pbrt: the measurements are reduced scattering coefficients
+        }
+      }
+      // pbrt-v3 lets sigma_a and sigma_s override a name; pbrt-v4 does not.
+      if (v3 || name.empty()) {
+        sigmaA = untexturedColor(p, "sigma_a", sigmaA);
+        sigmaS = untexturedColor(p, "sigma_s", sigmaS);
+      }
+      sigmaA = max(sigmaA, Vec3f(0)) * scale;
+      sigmaS = max(sigmaS, Vec3f(0)) * scale;
+    }
+    if (!isFinite(sigmaA) || !isFinite(sigmaS) || !(maxComponent(sigmaA + sigmaS) > 0))
+      throw InputError(def.where, fmt::format("{}: its medium must have a finite, positive "
+                                              "extinction",
+                                              def.type));
+    const float rough = roughness(p, "", 0.0f, v3, /*zeroIsSmooth=*/true,
+                                  v3 ? RoughnessNames::UV : RoughnessNames::Both);
+    Vec3f reflectTint{1};
+    if (v3) {
+      reflectTint = min(max(untexturedColor(p, "Kr", Vec3f(1)), Vec3f(0)), Vec3f(1));
+      const Color kt = color(p, {"Kt"}, Vec3f(1));
+      m.baseColor = kt.value;
+      m.baseColorTexture = kt.texture;
+    } else {
+      m.baseColor = Vec3f(1);
+    }
+    m.model = std::make_shared<SubsurfaceModel>(eta, rough, reflectTint);
+    Medium medium;
+    medium.name = (def.name.empty() ? def.type : def.name) + " (inside)";
+    medium.sigmaA = sigmaA;
+    medium.sigmaS = sigmaS;
+    medium.g = g;
+    medium.subsurface = true;
+    return medium;
+  }
+
   // pbrt-v3's fourier material: its "bsdffile" read once per path into
   // Scene::bsdfTables. A file that is not there is a warning naming it (the
   // material then renders grey diffuse); a file that is there but malformed
@@ -1313,6 +1396,8 @@ struct PbrtMaterials::Impl {
         hair->pheomelanin = scalar(p, "pheomelanin", 0);
       }
       m.model = hair;
+    } else if (type == "subsurface" || type == "kdsubsurface") {
+      look.interior = subsurface(p, def, m);
     } else if (type == "fourier" && fourierTable(p, def, m)) {
       // (m's model reads the table; a file that is not there falls through to
       // the grey diffuse below, with a warning naming it.)
@@ -1410,7 +1495,20 @@ int32_t PbrtMaterials::materialFor(int32_t definition, Vec3f emission, PbrtAlpha
   if (m.isEmissive()) m.name += " (emitting)";
   int32_t index = impl_->scene.addMaterial(std::move(m));
   impl_->ferryMaterials.emplace(key, index);
+  if (look.interior) {
+    impl_->scene.media.push_back(*look.interior);
+    impl_->interiors.emplace(index, int32_t(impl_->scene.media.size() - 1));
+  }
   return index;
+}
+
+int32_t PbrtMaterials::interiorMedium(int32_t material) const {
+  auto it = impl_->interiors.find(material);
+  return it == impl_->interiors.end() ? kNoMedium : it->second;
+}
+
+void PbrtMaterials::setV4File(bool v4) {
+  impl_->v4File = v4;
 }
 
 bool PbrtMaterials::isInterface(int32_t definition) const {

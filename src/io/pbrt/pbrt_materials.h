@@ -73,6 +73,12 @@ class PbrtMaterials {
   // mirroring transform).
   int32_t materialFor(int32_t definition, Vec3f emission, PbrtAlpha alpha = {},
                       bool emitsBackSide = true, bool lightSampledOnBackSide = false);
+  // The medium a subsurface material (a scene material materialFor made)
+  // encloses, kNoMedium for other materials.
+  int32_t interiorMedium(int32_t material) const;
+  // Whether the file is known to be pbrt-v4's (a subsurface material's
+  // parameters are read as its version reads them).
+  void setV4File(bool v4);
   // Whether `definition` is pbrt's Material "" / "interface" / "none": a
   // surface that only bounds media.
   bool isInterface(int32_t definition) const;

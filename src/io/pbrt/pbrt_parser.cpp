@@ -1311,7 +1311,7 @@ class Parser {
         return;
       }
       if (type == "trianglemesh") meshShapes = mesh.indices.size();
-      const MediumInterface media = shapeMedia(where);
+      MediumInterface media = shapeMedia(where);
       if (media.isTransition() && materials_.isInterface(state_.material)) {
         reportUnused(p, what);
         if (!plyPath.empty()) mesh = readPlyAt(plyPath, where);
@@ -1323,9 +1323,11 @@ class Parser {
       if (state_.areaLight && state_.areaLight->power)
         emission *= powerScale(type, mesh, shapeArea, meshShapes, where);
       const PbrtAlpha alpha = materials_.shapeAlpha(p, dialect_ == Dialect::V3);
+      materials_.setV4File(dialect_ == Dialect::V4);
       const int32_t material = materials_.materialFor(
           state_.material, emission, alpha, !state_.areaLight || state_.areaLight->twoSided,
           lightSampledOnBackSide(where));
+      media = withSubsurfaceInside(media, material, where);
       if (!plyPath.empty()) {
         p.find("displacement");
         p.find("edgelength");
@@ -1627,6 +1629,24 @@ class Parser {
                                  where.toString()));
       return {};
     }
+    return media;
+  }
+
+  // A shape of a subsurface material encloses its medium (none inside an
+  // object definition: instanced shapes bound no media).
+  MediumInterface withSubsurfaceInside(MediumInterface media, int32_t material,
+                                       const SourceLocation& where) {
+    const int32_t inside = materials_.interiorMedium(material);
+    if (inside == kNoMedium) return media;
+    if (currentObject_) {
+      warnings_.once("instanced subsurface",
+                     fmt::format("a subsurface material inside ObjectBegin has no medium "
+                                 "behind its surface: light that enters passes through (first "
+                                 "at {})",
+                                 where.toString()));
+      return media;
+    }
+    media.inside = inside;
     return media;
   }
 

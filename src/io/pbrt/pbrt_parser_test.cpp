@@ -23,7 +23,9 @@
 #include "material/models/diffuse_transmission.h"
 #include "material/models/fresnel_blend.h"
 #include "material/models/layered.h"
+#include "material/models/subsurface.h"
 #include "material/models/thin_dielectric.h"
+#include "media/medium_presets.h"
 
 namespace ferry {
 namespace {
@@ -736,6 +738,52 @@ AttributeEnd
   // The glass sphere is a surface with fog inside.
   ASSERT_EQ(s.meshes.size(), 1u);
   EXPECT_EQ(s.meshes[0].media, (MediumInterface{2, 0}));
+}
+
+// pbrt's subsurface materials: a dielectric surface enclosing a medium of
+// the named, given or inverted coefficients, times scale.
+TEST(PbrtParser, SubsurfaceEnclosesItsMedium) {
+  std::vector<std::string> w;
+  const Scene s = fromText(R"(WorldBegin
+MakeNamedMedium "haze" "string type" "homogeneous" "rgb sigma_s" [0.1 0.1 0.1]
+MediumInterface "" "haze"
+AttributeBegin
+  Material "subsurface" "string name" "Ketchup" "float scale" 10 "float g" 0.5 "float eta" 1.4
+  Shape "sphere"
+AttributeEnd
+AttributeBegin
+  Material "kdsubsurface" "rgb Kd" [0.5 0.5 0.5] "rgb mfp" [0.1 0.2 0.4] "rgb Kr" [0.5 0.5 0.5]
+  Shape "sphere"
+AttributeEnd
+Material "matte"
+Shape "sphere"
+)",
+                           &w);
+  EXPECT_TRUE(w.empty()) << w.front();
+  ASSERT_EQ(s.media.size(), 3u);
+  ASSERT_EQ(s.meshes.size(), 3u);
+  EXPECT_EQ(s.meshes[0].media, (MediumInterface{1, 0}));
+  EXPECT_EQ(s.meshes[1].media, (MediumInterface{2, 0}));
+  EXPECT_EQ(s.meshes[2].media, (MediumInterface{kNoMedium, 0}));
+  const Medium& ketchup = s.media[1];
+  EXPECT_TRUE(ketchup.subsurface);
+  Vec3f sa, ss;
+  ASSERT_TRUE(mediumPreset("Ketchup", sa, ss));
+  EXPECT_EQ(ketchup.sigmaA, sa * 10.0f);
+  EXPECT_EQ(ketchup.sigmaS, ss * 10.0f);
+  EXPECT_EQ(ketchup.g, 0.0f);  // named: pbrt sets g to 0
+  const auto* surface = modelAs<SubsurfaceModel>(s.materials.at(size_t(s.meshes[0].material)));
+  ASSERT_NE(surface, nullptr);
+  EXPECT_FLOAT_EQ(surface->ior, 1.4f);
+  EXPECT_EQ(surface->roughness, 0.0f);
+  // kdsubsurface: extinction 1 / mfp, the albedo whose diffusion reflectance is Kd.
+  const Medium& kd = s.media[2];
+  EXPECT_NEAR(kd.sigmaT().x, 10.0f, 1e-4f);
+  EXPECT_NEAR(kd.sigmaT().z, 2.5f, 1e-4f);
+  const float albedo = kd.sigmaS.x / kd.sigmaT().x;
+  EXPECT_NEAR(photonBeamDiffusionReflectance(albedo, 0, 1.33f), 0.5f, 1e-3f);
+  EXPECT_EQ(modelAs<SubsurfaceModel>(s.materials.at(size_t(s.meshes[1].material)))->reflectTint,
+            Vec3f(0.5f));
 }
 
 TEST(PbrtParser, PbrtV4GridsCloudsAndEmission) {
