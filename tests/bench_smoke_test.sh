@@ -68,11 +68,14 @@ if [ -d "$source_dir/../shared/scenes/bathroom" ]; then
     --ferry "$ferry" --step 24 --spp 4
   bench bathroom_experiments '^[|] hand mirror' /usr/bin/python3 bench/bathroom_experiments.py \
     --ferry "$ferry" --spp 1 --step 8
+  bench time_to_pbrt_error '^[|] bathroom|nothing measured' env ONLY=bathroom PBRT_SPP=2 \
+    FERRY_SPP=1 FERRY_MAX_SPP=2 OUT="$work/time-to-pbrt-error" FERRY="$ferry" \
+    IMAGE_COMPARE="$(dirname "$ferry")/bench/image_compare" bash bench/time_to_pbrt_error.sh
   bench fidelity 'against Ferry at' env ONLY=bathroom SPP=1 EQUAL_TIME=1 CONVERGED_SPP=2 \
     OUT="$work/fidelity" FERRY="$ferry" \
     IMAGE_COMPARE="$(dirname "$ferry")/bench/image_compare" bench/fidelity
 else
-  echo "  fidelity, bathroom_mirror_check, bathroom_experiments: skipped (no ../shared/scenes beside the source tree)"
+  echo "  fidelity, bathroom_mirror_check, bathroom_experiments, time_to_pbrt_error: skipped (no ../shared/scenes beside the source tree)"
 fi
 
 if ((failures > 0)); then

@@ -1,0 +1,111 @@
+#!/usr/bin/env bash
+# Time to pbrt's error (issue 73, item 4): on the shared rooms, how long
+# Ferry takes to reach the error pbrt-v3 reaches at PBRT_SPP samples a
+# pixel, both on the same cores. The error is image_compare's block relative
+# RMSE against the published reference (pbrt-v3's converged bdpt render, in
+# ../shared/references) at the bench size, with bench/fidelity's windows
+# where that reference is known to be wrong left out. pbrt-v3 renders each
+# scene file as it is (its own integrator: bdpt) at the bench size; Ferry
+# doubles its samples from FERRY_SPP until its error is at or below pbrt's.
+# Times are wall seconds of the whole run (parse, build, render), taken one
+# run after the other; a 1-sample run of each says what set-up costs.
+#
+#   bash bench/time_to_pbrt_error.sh           (a table on stdout, renders in $OUT)
+#
+# Settings (environment):
+#   PBRT=/tmp/pbrt-v3-published-build/pbrt   pbrt-v3 (PUBLISHED=1 bash ../shared/tools/pbrt-v3/build.sh);
+#                                            without it the bench says so and stops
+#   FERRY=build/ferry  IMAGE_COMPARE=build/bench/image_compare
+#   PBRT_SPP=1024                            pbrt's samples a pixel (the error to reach)
+#   FERRY_SPP=16  FERRY_MAX_SPP=8192         Ferry's first and largest sample counts
+#   THREADS=2                                threads of both
+#   ONLY=                                    scene names to run (bathroom breakfast-lamps)
+#   OUT=/tmp/ferry-time-to-pbrt-error        renders and logs
+#   SHARED=<repo>/../shared
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+PBRT=${PBRT:-/tmp/pbrt-v3-published-build/pbrt}
+FERRY=$(realpath "${FERRY:-$here/build/ferry}")
+IMAGE_COMPARE=$(realpath "${IMAGE_COMPARE:-$here/build/bench/image_compare}")
+PBRT_SPP=${PBRT_SPP:-1024}
+FERRY_SPP=${FERRY_SPP:-16}
+FERRY_MAX_SPP=${FERRY_MAX_SPP:-8192}
+THREADS=${THREADS:-2}
+ONLY=${ONLY:-}
+OUT=${OUT:-/tmp/ferry-time-to-pbrt-error}
+SHARED=$(realpath "${SHARED:-$(dirname "$here")/shared}")
+
+if [ ! -x "$PBRT" ]; then
+  echo "time_to_pbrt_error: no pbrt-v3 at $PBRT (PUBLISHED=1 bash ../shared/tools/pbrt-v3/build.sh" \
+    "prints its path; set PBRT): nothing measured"
+  exit 0
+fi
+mkdir -p "$OUT"
+
+# name | scene file (under $SHARED/scenes) | reference (under $SHARED/references) |
+# bench size | image_compare arguments (bench/fidelity's blocks and windows)
+SCENES=(
+  "bathroom|bathroom/bathroom.pbrt|bathroom.exr|300x190|--block 2 --exclude 0.315,0.35,0,0.05 --exclude 0.28,0.30,0.81,0.83 --exclude 0.33,0.39,0.08,0.10"
+  "breakfast-lamps|breakfast/breakfast-lamps.pbrt|breakfast-lamps.exr|256x256|--exclude 0.23,0.40,0.12,0.25 --exclude 0.60,0.77,0.12,0.25"
+)
+
+# Seconds of wall time that "$@" takes (its output to the log named first).
+timed() {
+  local log=$1
+  shift
+  local start end
+  start=$(date +%s.%N)
+  "$@" >"$log" 2>&1 || { echo "time_to_pbrt_error: failed, see $log" >&2; exit 1; }
+  end=$(date +%s.%N)
+  echo "$end - $start" | bc
+}
+
+# The block relative RMSE of image $1 against reference $2 at size $3.
+error_of() {
+  local image=$1 reference=$2 size=$3
+  shift 3
+  # shellcheck disable=SC2086
+  "$IMAGE_COMPARE" "$reference" "$image" --size "$size" $compare_args --json "$image.json" >/dev/null
+  python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['block_relative_rmse'])" "$image.json"
+}
+
+printf '| scene | size | pbrt-v3 spp | pbrt-v3 error | pbrt-v3 s | Ferry spp | Ferry error | Ferry s | Ferry / pbrt time | set-up s (pbrt, Ferry) |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|\n'
+for entry in "${SCENES[@]}"; do
+  IFS='|' read -r name scene reference size compare_args <<<"$entry"
+  if [ -n "$ONLY" ] && [[ " $ONLY " != *" $name "* ]]; then continue; fi
+  scene_dir=$(dirname "$SHARED/scenes/$scene")
+  work="$OUT/$name"
+  rm -rf "$work"
+  mkdir -p "$work"
+  # pbrt reads the scene's own directory: its entries linked beside a copy of
+  # the file with the bench size and sample count.
+  for f in "$scene_dir"/*; do ln -s "$f" "$work/$(basename "$f")"; done
+  top="$work/bench-$(basename "$scene")"
+  python3 - "$SHARED/scenes/$scene" "$top" "${size%x*}" "${size#*x}" "$PBRT_SPP" <<'EOF'
+import re, sys
+src, dst, w, h, spp = sys.argv[1:]
+text = open(src).read()
+for name, value in (("xresolution", w), ("yresolution", h), ("pixelsamples", spp)):
+    text, n = re.subn(r'("integer %s"\s*)\[?\s*\d+\s*\]?' % name, r'\g<1>[%s]' % value, text, count=1)
+    if n != 1:
+        sys.exit("time_to_pbrt_error: no %s in %s" % (name, src))
+open(dst, "w").write(text)
+EOF
+  sed 's/"integer pixelsamples" \[[0-9]*\]/"integer pixelsamples" [1]/' "$top" >"$work/one.pbrt"
+  pbrt_setup=$(timed "$work/pbrt-1.log" "$PBRT" --nthreads "$THREADS" --quiet --outfile "$work/pbrt-1.exr" "$work/one.pbrt")
+  pbrt_s=$(timed "$work/pbrt.log" "$PBRT" --nthreads "$THREADS" --quiet --outfile "$work/pbrt.exr" "$top")
+  pbrt_error=$(error_of "$work/pbrt.exr" "$SHARED/references/$reference" "$size")
+  ferry_setup=$(timed "$work/ferry-1.log" "$FERRY" render "$top" --size "$size" --spp 1 --threads "$THREADS" -q -o "$work/ferry-1.exr")
+  spp=$FERRY_SPP
+  while :; do
+    ferry_s=$(timed "$work/ferry-$spp.log" "$FERRY" render "$top" --size "$size" --spp "$spp" --threads "$THREADS" -q -o "$work/ferry-$spp.exr")
+    ferry_error=$(error_of "$work/ferry-$spp.exr" "$SHARED/references/$reference" "$size")
+    reached=$(python3 -c "print(int($ferry_error <= $pbrt_error))")
+    if ((reached)) || ((spp * 2 > FERRY_MAX_SPP)); then break; fi
+    spp=$((spp * 2))
+  done
+  verdict=$(python3 -c "print('%.2f' % ($ferry_s / $pbrt_s) if $reached else 'not reached by %d spp' % $spp)")
+  printf '| %s | %s | %d | %.4f | %.1f | %d | %.4f | %.1f | %s | %.1f, %.1f |\n' "$name" "$size" "$PBRT_SPP" \
+    "$pbrt_error" "$pbrt_s" "$spp" "$ferry_error" "$ferry_s" "$verdict" "$pbrt_setup" "$ferry_setup"
+done
