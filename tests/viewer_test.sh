@@ -87,6 +87,12 @@ $check "$url" volume "$work/bricks.png" || fail "bricked volume"
 $check "$url" quit
 ends_within "$pid" 5
 
+echo "== AOVs shown instead of the colour"
+start display builtin:cornell --aov albedo,normal --port 0 --size 64x48 --threads 1
+$check "$url" display || fail "display"
+$check "$url" quit
+ends_within "$pid" 5
+
 echo "== a long session"
 start memory builtin:cornell --port 0 --size 16x16 --max-depth 2 --threads 1
 $check "$url" memory 1000 || fail "memory"

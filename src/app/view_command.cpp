@@ -26,10 +26,13 @@ void addViewCommand(CLI::App& app, ViewOptions& o) {
       "API: GET / (the page), GET /frame.png, GET /stats (JSON), POST /camera\n"
       "{\"from\":[x,y,z],\"at\":[x,y,z],\"up\":[x,y,z],\"fov\":deg}, POST /settings "
       "{\"width\",\"height\",\n"
-      "\"spp\",\"max_depth\",\"exposure\",\"view\"}, POST /quit. Ctrl-C also quits.");
+      "\"spp\",\"max_depth\",\"exposure\",\"view\",\"display\"}, POST /quit. Ctrl-C also quits.");
   o.render.size = "640x360";
   o.render.writesImage = false;
   addRenderingOptions(view, o.render);
+  view->add_option("--aov", o.render.aov,
+                   "AOVs the page (and POST /settings {\"display\":NAME}) can show instead of the\n"
+                   "colour: a comma list of albedo, normal, geometric-normal, depth, position, uv");
   view->add_option("--port", o.port, "Port of the HTTP server on rank 0 (0: any free port)")
       ->capture_default_str();
   view->add_option("--bind", o.bind,
@@ -63,6 +66,7 @@ int runView(const ViewOptions& o, const Communicator& comm) {
       const RenderSettings& r = session->settings().render;
       ViewLimits limits;
       limits.volumeLook = looks;
+      limits.aovs = r.aovs;
       server.emplace(o.bind, o.port, scene.views, r.camera ? *r.camera : scene.view(r.view), r,
                      comm.size(), limits);
     }

@@ -51,6 +51,15 @@ std::vector<Aov> parseAovList(const std::string& text);
 std::string aovListText(const std::vector<Aov>& aovs);
 // Channels a pixel has for `aovs`, all together.
 int aovChannelCount(const std::vector<Aov>& aovs);
+// The Aov named `name`, false if none is.
+bool aovNamed(const std::string& name, Aov& out);
+
+// One AOV of `values` (aovChannelCount(aovs) floats a pixel, the AOVs in
+// order; `shown` must be among them) as an RGBA8 picture to look at:
+// albedo and uv as colours (sRGB), normals as 0.5 + 0.5 n, depth and
+// position scaled by their range over the image (depth: near is bright).
+std::vector<uint8_t> aovPicture(const std::vector<float>& values, const std::vector<Aov>& aovs,
+                                Aov shown, size_t pixels);
 
 // What one camera sample's first surface gives the AOVs.
 struct SurfaceAovs {

@@ -141,5 +141,25 @@ TEST(Aovs, TheColourIsTheSameBitForBitWithOrWithoutThem) {
   EXPECT_TRUE(with.colour == without.colour);
 }
 
+// The viewer's picture of one AOV: normals as 0.5 + 0.5 n, albedo in sRGB,
+// depth scaled by its range with near bright and misses black.
+TEST(Aovs, PicturesShowOneAovOfSeveral) {
+  const std::vector<Aov> aovs = {Aov::Albedo, Aov::Normal, Aov::Depth};
+  // Two pixels, 7 floats each: albedo (3), normal (3), depth (1).
+  const std::vector<float> values = {1, 0, 0.5f, 0,  0, 1, 2,   // near
+                                     0, 0, 0,    -1, 0, 0, 6};  // far
+  const std::vector<uint8_t> normal = aovPicture(values, aovs, Aov::Normal, 2);
+  EXPECT_EQ(std::vector<uint8_t>(normal.begin(), normal.begin() + 8),
+            (std::vector<uint8_t>{128, 128, 255, 255, 0, 128, 128, 255}));
+  const std::vector<uint8_t> albedo = aovPicture(values, aovs, Aov::Albedo, 2);
+  EXPECT_EQ(albedo[0], 255);
+  EXPECT_EQ(albedo[1], 0);
+  EXPECT_EQ(albedo[2], 188);  // sRGB of 0.5
+  const std::vector<uint8_t> depth = aovPicture(values, aovs, Aov::Depth, 2);
+  EXPECT_EQ(depth[0], 255);  // the nearest
+  EXPECT_EQ(depth[4], 0);    // the farthest
+  EXPECT_EQ(depth[1], depth[0]);
+}
+
 }  // namespace
 }  // namespace ferry

@@ -142,6 +142,10 @@ class FrameBuffer {
 struct ToneMapping {
   float exposure = 0;
   bool filmic = true;
+  // The picture shows this AOV of the frame buffer instead of the colour
+  // (an Aov's value; render/aov.h, aovPicture); -1, or one the buffer does
+  // not have: the colour.
+  int32_t aov = -1;
 };
 uint8_t toneMapChannel(float linear, const ToneMapping& toneMapping);
 std::vector<uint8_t> toneMapToRgba8(const std::vector<Vec3f>& linear,

@@ -26,6 +26,7 @@
 #include "media/volume_look.h"
 #include "partition/partition.h"
 #include "path/path.h"
+#include "render/aov.h"
 #include "render/camera.h"
 #include "render/lights.h"
 #include "render/wavefront_renderer.h"
@@ -190,11 +191,20 @@ FrameImage composite(const Communicator& comm, const FrameBuffer& frameBuffer, f
   FrameImage image;
   image.width = frameBuffer.width();
   image.height = frameBuffer.height();
-  if (pixels == FrameSink::Pixels::ToneMapped)
+  const std::vector<Aov>& aovs = frameBuffer.aovs();
+  const bool showsAov = pixels == FrameSink::Pixels::ToneMapped && toneMapping.aov >= 0 &&
+                        std::find(aovs.begin(), aovs.end(), Aov(toneMapping.aov)) != aovs.end();
+  if (showsAov) {
+    const std::vector<float> values = compositeAovs(comm, frameBuffer, scale, bytesSent);
+    if (comm.isRoot())
+      image.rgba = aovPicture(values, aovs, Aov(toneMapping.aov),
+                              size_t(image.width) * size_t(image.height));
+  } else if (pixels == FrameSink::Pixels::ToneMapped) {
     image.rgba = compositeToneMapped(comm, frameBuffer, scale, toneMapping, bytesSent);
-  else
+  } else {
     image.linear = compositeLinear(comm, frameBuffer, scale, bytesSent);
-  image.aovs = frameBuffer.aovs();
+  }
+  image.aovs = aovs;
   if (pixels == FrameSink::Pixels::Linear && frameBuffer.hasAovs())
     image.aovValues = compositeAovs(comm, frameBuffer, scale, bytesSent);
   return image;
@@ -528,6 +538,7 @@ void ViewChange::applyTo(CameraView& camera, RenderSettings& settings) const {
     settings.maxDepth = maxDepth;
   }
   if (flags & kExposure) settings.toneMapping.exposure = exposure;
+  if (flags & kDisplay) settings.toneMapping.aov = display;
   if (flags & kVolume) {
     settings.volumeLook.opacity = volumeOpacity;
     settings.volumeLook.colorMap = colorMap >= 0 && size_t(colorMap) < colorMapNames().size()

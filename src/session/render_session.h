@@ -111,7 +111,8 @@ struct ViewChange {
     kExposure = 4,
     kQuit = 8,
     kVolume = 16,
-    kFocus = 32
+    kFocus = 32,
+    kDisplay = 64  // what the picture shows: the colour or an AOV (no restart)
   };
   uint32_t flags = 0;
   float from[3], at[3], up[3];
@@ -123,6 +124,7 @@ struct ViewChange {
   float focusX, focusY;
   int32_t width, height, samplesPerPixel, maxDepth;
   float exposure;
+  int32_t display;  // kDisplay: an Aov's value, -1 the colour (ToneMapping::aov)
   float volumeOpacity;
   int32_t colorMap;  // into colorMapNames(); -1: each volume's own colours
   // The change made to a camera and settings (only the parts its flags name).

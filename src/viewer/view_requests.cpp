@@ -118,7 +118,7 @@ void applySettingsRequest(const std::string& body, const RenderSettings& current
                           const std::vector<CameraView>& views, const ViewLimits& limits,
                           ViewChange& change) {
   const nlohmann::json j = parseObject(body, {"width", "height", "spp", "max_depth", "exposure",
-                                              "view", "volume_opacity", "color_map"});
+                                              "view", "volume_opacity", "color_map", "display"});
   int width = current.width, height = current.height;
   int spp = current.samplesPerPixel, depth = current.maxDepth;
   if (j.contains("width")) width = integerIn(j, "width", 1, limits.maxSide);
@@ -130,6 +130,23 @@ void applySettingsRequest(const std::string& body, const RenderSettings& current
     if (std::abs(exposure) > 30) throw RequestError("'exposure' must be between -30 and 30 stops");
     change.exposure = float(exposure);
     change.flags |= ViewChange::kExposure;
+  }
+  if (j.contains("display")) {
+    if (!j.at("display").is_string()) throw RequestError("'display' must be a string");
+    const std::string name = j.at("display").get<std::string>();
+    Aov aov;
+    if (name == "color") {
+      change.display = -1;
+    } else if (aovNamed(name, aov) &&
+               std::find(limits.aovs.begin(), limits.aovs.end(), aov) != limits.aovs.end()) {
+      change.display = int32_t(aov);
+    } else {
+      throw RequestError(fmt::format(
+          "'display' {}: the frames hold {}", name,
+          limits.aovs.empty() ? std::string("the colour only (the viewer was started without AOVs)")
+                              : "color, " + aovListText(limits.aovs)));
+    }
+    change.flags |= ViewChange::kDisplay;
   }
   if (j.contains("view")) {
     if (!j.at("view").is_string()) throw RequestError("'view' must be a string");

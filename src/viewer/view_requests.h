@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "render/aov.h"
 #include "scene/scene.h"
 #include "session/render_session.h"
 
@@ -28,6 +29,8 @@ struct ViewLimits {
   // The scene has volumes drawn through a transfer function: "volume_opacity"
   // and "color_map" may restyle them.
   bool volumeLook = false;
+  // The AOVs the frames hold (--aov): "display" may show one of them.
+  std::vector<Aov> aovs;
 };
 
 // {"from":[x,y,z],"at":[x,y,z],"up":[x,y,z],"fov":degrees}: from and at are
@@ -39,10 +42,12 @@ void applyCameraRequest(const std::string& body, const CameraView& current, View
 void applyFocusRequest(const std::string& body, ViewChange& change);
 
 // {"width":W,"height":H,"spp":N,"max_depth":D,"exposure":stops,"view":"name",
-// "volume_opacity":scale,"color_map":"name"}: every field optional; a field
-// absent keeps `current`'s. "view" moves the camera to that named view of
-// the scene (`views`); "color_map" is a colorMapNames() entry or "" (each
-// volume's own). Adds kSettings, kExposure, kCamera or kVolume to `change`.
+// "volume_opacity":scale,"color_map":"name","display":"name"}: every field
+// optional; a field absent keeps `current`'s. "view" moves the camera to
+// that named view of the scene (`views`); "color_map" is a colorMapNames()
+// entry or "" (each volume's own); "display" is "color" or one of
+// `limits.aovs` by name. Adds kSettings, kExposure, kCamera, kVolume or
+// kDisplay to `change`.
 void applySettingsRequest(const std::string& body, const RenderSettings& current,
                           const std::vector<CameraView>& views, const ViewLimits& limits,
                           ViewChange& change);

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <tuple>
+
 #include <string>
 #include <vector>
 
@@ -165,6 +167,39 @@ TEST(ViewRequests, SettingsChangeOnlyWhatTheyName) {
   ViewChange same;  // asking for what is already there changes nothing
   applySettingsRequest(R"({"width":64,"height":48})", settings(), views(), {}, same);
   EXPECT_EQ(same.flags, 0u);
+}
+
+// "display": the colour or an AOV the frames hold, by name; anything else
+// (an AOV not held, an unknown name, a number) is refused, naming what is held.
+TEST(ViewRequests, DisplayShowsAnAovTheFramesHold) {
+  ViewLimits limits;
+  limits.aovs = {Aov::Albedo, Aov::Depth};
+  ViewChange depth;
+  applySettingsRequest(R"({"display":"depth"})", settings(), views(), limits, depth);
+  EXPECT_EQ(depth.flags, ViewChange::kDisplay);
+  EXPECT_EQ(depth.display, int32_t(Aov::Depth));
+  ViewChange color;
+  applySettingsRequest(R"({"display":"color"})", settings(), views(), limits, color);
+  EXPECT_EQ(color.flags, ViewChange::kDisplay);
+  EXPECT_EQ(color.display, -1);
+  RenderSettings applied = settings();
+  CameraView camera;
+  depth.applyTo(camera, applied);
+  EXPECT_EQ(applied.toneMapping.aov, int32_t(Aov::Depth));
+  for (const auto& [body, reason, held] : std::vector<std::tuple<std::string, std::string, bool>>{
+           {R"({"display":"normal"})", "the frames hold color, albedo,depth", true},
+           {R"({"display":"glow"})", "the frames hold color, albedo,depth", true},
+           {R"({"display":3})", "'display' must be a string", true},
+           {R"({"display":"albedo"})", "the colour only", false}}) {
+    ViewChange change;
+    try {
+      applySettingsRequest(body, settings(), views(), held ? limits : ViewLimits{}, change);
+      ADD_FAILURE() << "accepted: " << body;
+    } catch (const RequestError& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos)
+          << body << " -> " << e.what();
+    }
+  }
 }
 
 TEST(ViewRequests, AVolumesLookBecomesTheChange) {

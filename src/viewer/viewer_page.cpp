@@ -44,6 +44,7 @@ const std::string& viewerPage() {
   <label>samples per frame <input id="spp" type="number" min="1"></label>
   <label>max depth <input id="depth" type="number" min="0"></label>
   <label>exposure (stops) <input id="exposure" type="number" step="0.25"></label>
+  <label id="displayRow" hidden>show <select id="display"></select></label>
   <button id="apply">Apply</button><button id="quit">Quit</button>
   <h2>Depth of field</h2>
   <label>lens radius <input id="lens" type="number" min="0" step="0.01"></label>
@@ -205,6 +206,8 @@ $("opacity").addEventListener("change", () => {
   post("/settings", { volume_opacity: 2 ** Number($("opacity").value) });
 });
 $("colormap").addEventListener("change", () => post("/settings", { color_map: $("colormap").value }));
+// The colour or one of the AOVs the frames hold (the accumulation goes on).
+$("display").addEventListener("change", () => post("/settings", { display: $("display").value }));
 // The thin lens travels with the camera (radius 0: a pinhole).
 function showLens() {
   $("lens").value = camera.lens_radius; $("focus").value = Number(camera.focal_distance.toPrecision(6));
@@ -251,6 +254,11 @@ function showStats(s) {
     $("depth").value = st.max_depth; $("exposure").value = st.exposure;
     const select = $("views");
     select.replaceChildren(...s.views.map((v) => new Option(v, v)));
+    if (s.displays) {
+      $("displayRow").hidden = false;
+      $("display").replaceChildren(...s.displays.map((d) => new Option(d, d)));
+      $("display").value = st.display;
+    }
     if (s.color_maps) {
       $("volume").hidden = false;
       $("colormap").replaceChildren(new Option("(the volume's own)", ""),

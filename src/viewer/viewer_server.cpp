@@ -49,6 +49,7 @@ nlohmann::json settingsJson(const RenderSettings& s) {
           {"spp", s.samplesPerPixel},
           {"max_depth", s.maxDepth},
           {"exposure", s.toneMapping.exposure},
+          {"display", s.toneMapping.aov >= 0 ? aovSpec(Aov(s.toneMapping.aov)).name : "color"},
           {"volume_opacity", s.volumeLook.opacity},
           {"color_map", s.volumeLook.colorMap}};
 }
@@ -189,6 +190,11 @@ void ViewerServer::State::routes() {
     for (const CameraView& v : views) names.push_back(v.name);
     j["views"] = names;
     if (limits.volumeLook) j["color_maps"] = colorMapNames();
+    if (!limits.aovs.empty()) {
+      nlohmann::json shown = nlohmann::json::array({"color"});
+      for (Aov a : limits.aovs) shown.push_back(aovSpec(a).name);
+      j["displays"] = shown;
+    }
     j["limits"] = {{"max_side", limits.maxSide},
                    {"max_spp", limits.maxSamplesPerPixel},
                    {"max_depth", limits.maxDepth}};

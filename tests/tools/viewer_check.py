@@ -6,6 +6,7 @@ chromium and chromium-driver).
 
   viewer_check.py URL api                      the API: frames, PNGs, camera changes, bad requests
   viewer_check.py URL browser SCREENSHOT.png   load the page, check the image, drag to orbit
+  viewer_check.py URL display                  AOVs shown instead of the colour (ferry view --aov albedo,normal)
   viewer_check.py URL memory FRAMES            let FRAMES frames pass; resident memory must stay flat
   viewer_check.py URL volume SCREENSHOT.png    a transfer-function volume restyled from the page and the API
   viewer_check.py URL quit
@@ -321,6 +322,35 @@ def check_volume(base, screenshot):
           f"(frames restart, image changes); an unknown map is a 400; screenshot {screenshot}")
 
 
+def check_display(base):
+    """`ferry view --aov albedo,normal`: "display" shows an AOV without
+    restarting the frames, an AOV not held is a 400, "color" comes back."""
+    s = wait_for("a first frame", lambda: (lambda s: s["frames"] >= 2 and s)(stats(base)))
+    if s.get("displays") != ["color", "albedo", "normal"]:
+        fail(f"/stats displays: {s.get('displays')!r}, expected color, albedo, normal")
+    if s["requested"]["settings"]["display"] != "color":
+        fail(f"the first display is {s['requested']['settings']['display']!r}, not color")
+    _, _, color_png = request(base + "frame.png")
+    for name in ("normal", "albedo"):
+        status, _, body = request(base + "settings", "POST", json.dumps({"display": name}))
+        if status != 200:
+            fail(f"POST /settings display {name}: {status} {body!r}")
+        before = stats(base)["frames"]
+        shown = wait_for(f"a frame showing {name}",
+                         lambda: (lambda s: s["settings"]["display"] == name and s)(stats(base)))
+        if shown["frames"] < before:
+            fail(f"showing {name} restarted the frames ({before} -> {shown['frames']})")
+        _, _, png = request(base + "frame.png")
+        if png == color_png:
+            fail(f"the {name} picture is the colour picture")
+    status, _, body = request(base + "settings", "POST", json.dumps({"display": "depth"}))
+    if status != 400 or b"the frames hold color, albedo,normal" not in body:
+        fail(f"an AOV not held: {status} {body!r}")
+    status, _, _ = request(base + "settings", "POST", json.dumps({"display": "color"}))
+    wait_for("the colour again", lambda: stats(base)["settings"]["display"] == "color")
+    print("  display: albedo and normal shown without restarting the frames; an AOV not held is a 400")
+
+
 def check_memory(base, frames):
     def resident():
         s = stats(base)
@@ -346,6 +376,8 @@ def main():
     base, what = sys.argv[1].rstrip("/") + "/", sys.argv[2]
     if what == "api":
         check_api(base)
+    elif what == "display":
+        check_display(base)
     elif what == "browser":
         check_browser(base, sys.argv[3])
     elif what == "volume":
