@@ -298,8 +298,8 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                     "environment instead (the file is named in a warning)");
   command->add_option(
       "--field", o.field,
-      "The array a VTK file is rendered by: a .vti's point or cell array (default:\n"
-      "its active scalars), a .vtp's radius (default: radius)");
+      "The array a VTK file is rendered by: a .vti's, .vtu's or .vts's point or cell\n"
+      "array (default: its active scalars), a .vtp's radius (default: radius)");
   addCameraFlags(command, o.camera);
 }
 

@@ -53,12 +53,12 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
     scene = loadVtkImageScene(spec, options.field);
   } else if (ext == ".vtp") {
     scene = loadVtkParticleScene(spec, options.field);
-  } else if (ext == ".vtu" || ext == ".vtk") {
+  } else if (ext == ".vtu" || ext == ".vtk" || ext == ".vts") {
     scene = loadVtkUnstructuredScene(spec, options.field);
   } else {
     throw InputError(fmt::format(
         "{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
-        ".vdb, .nvdb, .vti, .vtp, .vtu, .vtk, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
+        ".vdb, .nvdb, .vti, .vtp, .vtu, .vtk, .vts, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
         spec, ext));
   }
   scene.validate();

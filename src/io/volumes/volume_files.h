@@ -104,14 +104,15 @@ Scene loadVtkImageScene(const std::string& path, const std::string& field = "");
 // points, no such array (the arrays listed), a radius that is not positive.
 Scene loadVtkParticleScene(const std::string& path, const std::string& field = "");
 
-// `ferry render mesh.vtu` (or a legacy `mesh.vtk`): an unstructured grid's
-// solid cells as an unstructured volume (shapes/unstructured_volume.h:
+// `ferry render mesh.vtu` (a legacy `mesh.vtk`, a curvilinear `grid.vts`):
+// the solid cells as an unstructured volume (shapes/unstructured_volume.h:
 // hexahedra, voxels, wedges and pyramids cut into tetrahedra; other cells
-// left out, counted in the name) of the point array `field` (empty: the
-// active scalars, else the first), normalised by its range, through the
-// standard transfer function, framed as a raw: volume. InputError naming
-// the file: unreadable, no such point array (the arrays listed), no solid
-// cell, a NaN (naming the point).
+// left out, counted in the name) of the array `field` (a point array, else
+// a cell array, constant over its cells; empty: the active point scalars,
+// else the first point array, else the same of the cells), normalised by
+// its range, through the standard transfer function, framed as a raw:
+// volume. InputError naming the file: unreadable, no such array (the
+// arrays listed), no solid cell, a NaN (naming the point or cell).
 Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field = "");
 
 // --------------------------------------------------------------- raw grids

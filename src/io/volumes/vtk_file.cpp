@@ -13,10 +13,12 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
+#include <vtkStructuredGrid.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkUnstructuredGridReader.h>
 #include <vtkXMLImageDataReader.h>
 #include <vtkXMLPolyDataReader.h>
+#include <vtkXMLStructuredGridReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include <cmath>
@@ -264,13 +266,20 @@ bool appendTets(int type, const vtkIdType* p, std::vector<UnstructuredVolume::Te
 }  // namespace
 
 Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field) {
-  const bool legacy = std::filesystem::path(path).extension() == ".vtk";
-  vtkUnstructuredGrid* grid = nullptr;
+  // Any of the three as a data set of cells: a structured grid's cells are
+  // hexahedra (quadrilaterals or lines where a side is one point thick,
+  // which are not solids).
+  const std::string extension = std::filesystem::path(path).extension().string();
+  vtkDataSet* grid = nullptr;
   vtkSmartPointer<vtkXMLUnstructuredGridReader> xml;
   vtkSmartPointer<vtkUnstructuredGridReader> old;
-  if (legacy) {
+  vtkSmartPointer<vtkXMLStructuredGridReader> curvilinear;
+  if (extension == ".vtk") {
     old = readVtk<vtkUnstructuredGridReader>(path, "unstructured grid (.vtk)");
     grid = old->GetOutput();
+  } else if (extension == ".vts") {
+    curvilinear = readVtk<vtkXMLStructuredGridReader>(path, "structured grid (.vts)");
+    grid = curvilinear->GetOutput();
   } else {
     xml = readVtk<vtkXMLUnstructuredGridReader>(path, "unstructured grid (.vtu)");
     grid = xml->GetOutput();
@@ -279,33 +288,65 @@ Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field
   if (n == 0 || grid->GetNumberOfCells() == 0)
     throw InputError(
         fmt::format("{}: VTK read no cells from it (malformed, truncated or empty)", path));
+  // The array: a point array by name, else a cell array by name; without a
+  // name the active point scalars, the first point array, else the same of
+  // the cells. A cell array is constant over each cell: every cell gets
+  // points of its own carrying its value (so those points are not shared).
   vtkPointData* pointData = grid->GetPointData();
-  vtkDataArray* array =
-      field.empty() ? (pointData->GetScalars() ? pointData->GetScalars() : pointData->GetArray(0))
-                    : pointData->GetArray(field.c_str());
+  vtkCellData* cellData = grid->GetCellData();
+  auto firstOf = [](vtkDataSetAttributes* d) {
+    return d->GetScalars() ? d->GetScalars() : d->GetArray(0);
+  };
+  vtkDataArray* array = field.empty() ? firstOf(pointData) : pointData->GetArray(field.c_str());
+  bool atCells = false;
+  if (!array && (array = field.empty() ? firstOf(cellData) : cellData->GetArray(field.c_str())))
+    atCells = true;
   if (!array)
-    throw InputError(fmt::format(
-        "{}: no point array{} to render (point arrays: {}; cell arrays: {}; a cell array becomes "
-        "point data in ParaView by Cell Data to Point Data)",
-        path, field.empty() ? "" : " '" + field + "'", arrayNames(pointData),
-        arrayNames(grid->GetCellData())));
-  std::vector<Vec3f> points(static_cast<size_t>(n));
+    throw InputError(
+        fmt::format("{}: no point or cell array{} to render (point arrays: {}; cell "
+                    "arrays: {})",
+                    path, field.empty() ? "" : " '" + field + "'", arrayNames(pointData),
+                    arrayNames(cellData)));
+  const vtkIdType cells = grid->GetNumberOfCells();
+  double lo, hi;
+  const std::vector<float> arrayValues = normalisedValues(
+      array, uint64_t(atCells ? cells : n), path, lo, hi,
+      [&](uint64_t i) { return fmt::format("at {} {}", atCells ? "cell" : "point", i); });
+  std::vector<Vec3f> points;
+  std::vector<float> values;
   Box3f box;
-  for (vtkIdType i = 0; i < n; ++i) {
+  auto addPoint = [&](vtkIdType i, float value) {
     double p[3];
     grid->GetPoint(i, p);
-    points[size_t(i)] = Vec3f(float(p[0]), float(p[1]), float(p[2]));
-    box.extend(points[size_t(i)]);
-  }
-  double lo, hi;
-  std::vector<float> values = normalisedValues(
-      array, uint64_t(n), path, lo, hi, [](uint64_t i) { return fmt::format("at point {}", i); });
+    points.push_back(Vec3f(float(p[0]), float(p[1]), float(p[2])));
+    values.push_back(value);
+    box.extend(points.back());
+  };
+  if (!atCells)
+    for (vtkIdType i = 0; i < n; ++i) addPoint(i, arrayValues[size_t(i)]);
   std::vector<UnstructuredVolume::Tet> tets;
   uint64_t skipped = 0;
   vtkNew<vtkIdList> ids;
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+  std::vector<vtkIdType> own;
+  for (vtkIdType c = 0; c < cells; ++c) {
     grid->GetCellPoints(c, ids);
-    if (!appendTets(grid->GetCellType(c), ids->GetPointer(0), tets)) ++skipped;
+    const vtkIdType* cellPoints = ids->GetPointer(0);
+    if (atCells) {
+      own.resize(size_t(ids->GetNumberOfIds()));
+      for (size_t k = 0; k < own.size(); ++k) {
+        own[k] = vtkIdType(points.size());
+        addPoint(cellPoints[k], arrayValues[size_t(c)]);
+      }
+      cellPoints = own.data();
+    }
+    const size_t before = points.size() - own.size() * (atCells ? 1 : 0);
+    if (!appendTets(grid->GetCellType(c), cellPoints, tets)) {
+      ++skipped;
+      if (atCells) {  // a cell that is not a solid keeps no points
+        points.resize(before);
+        values.resize(before);
+      }
+    }
   }
   if (tets.empty())
     throw InputError(fmt::format(
@@ -315,11 +356,11 @@ Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field
     throw InputError(fmt::format("{}: its points span no volume", path));
   TransferFunction tf = TransferFunction::standard();
   tf = tf.withScale(tf.scale() / maxComponent(box.size()));  // as a raw: volume's
-  const std::string name = fmt::format(
-      "{} points '{}' [{:g}, {:g}]{}{}", std::filesystem::path(path).filename().string(),
-      array->GetName() ? array->GetName() : "", lo, hi,
-      array->GetNumberOfComponents() > 1 ? " (magnitude)" : "",
-      skipped ? fmt::format(", {} cells that are not solids left out", skipped) : "");
+  const std::string name =
+      fmt::format("{} {} '{}' [{:g}, {:g}]{}{}", std::filesystem::path(path).filename().string(),
+                  atCells ? "cells" : "points", array->GetName() ? array->GetName() : "", lo, hi,
+                  array->GetNumberOfComponents() > 1 ? " (magnitude)" : "",
+                  skipped ? fmt::format(", {} cells that are not solids left out", skipped) : "");
   std::shared_ptr<UnstructuredVolume> volume;
   try {
     volume = UnstructuredVolume::make(std::move(points), std::move(values), std::move(tets),

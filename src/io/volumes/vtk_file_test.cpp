@@ -232,5 +232,99 @@ LOOKUP_TABLE default
   }
 }
 
+// A curvilinear grid (.vts): its hexahedra, here two stacked and sheared,
+// with the point array linear in each tetrahedron.
+TEST(VtkFile, StructuredGridsAreHexahedra) {
+  const std::string vts = tempFile("s.vts", R"(<?xml version="1.0"?>
+<VTKFile type="StructuredGrid" version="0.1" byte_order="LittleEndian">
+  <StructuredGrid WholeExtent="0 1 0 1 0 2">
+    <Piece Extent="0 1 0 1 0 2">
+      <PointData Scalars="h"><DataArray type="Float32" Name="h" format="ascii">0 0 0 0 1 1 1 1 2 2 2 2</DataArray></PointData>
+      <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">
+        0 0 0  1 0 0  0 1 0  1 1 0  0.5 0 1  1.5 0 1  0.5 1 1  1.5 1 1  1 0 2  2 0 2  1 1 2  2 1 2
+      </DataArray></Points>
+    </Piece>
+  </StructuredGrid>
+</VTKFile>
+)");
+  const Scene scene = loadScene(vts);
+  const UnstructuredVolume* v = nullptr;
+  for (const Geometry& g : scene.geometries)
+    if (auto* u = dynamic_cast<const UnstructuredVolume*>(g.shape.get())) v = u;
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(v->cellCount(), 12u);
+  // h is z / 2 here (normalised over [0, 2]); sheared x follows z / 2.
+  for (const Vec3f p : {Vec3f(0.5f, 0.5f, 0.5f), Vec3f(1.2f, 0.3f, 1.5f)}) {
+    bool found = false;
+    for (uint32_t c = 0; c < v->primitiveCount() && !found; ++c) {
+      float value;
+      if (v->valueAt(c, p, value)) {
+        found = true;
+        EXPECT_NEAR(value, p.z / 2, 1e-5f);
+      }
+    }
+    EXPECT_TRUE(found) << p.z;
+  }
+  fs::remove(vts);
+}
+
+// A cell array is constant over each cell (its points duplicated per cell),
+// chosen by name beside a point array, or taken when there is no point array.
+TEST(VtkFile, UnstructuredCellArraysAreConstantOverEachCell) {
+  const std::string points =
+      "0 0 0  1 0 0  1 1 0  0 1 0  0 0 1  1 0 1  1 1 1  0 1 1  0.5 0 2  0.5 1 2  0.5 0.5 -1";
+  for (const bool withPointArray : {true, false}) {
+    const std::string pointData =
+        withPointArray ? R"(<PointData><DataArray type="Float32" Name="T" format="ascii">)"
+                         "0 1 2 3 4 5 6 7 8 9 10</DataArray></PointData>"
+                       : "";
+    const std::string vtu = tempFile("c.vtu", fmt::format(R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="11" NumberOfCells="4">
+      {}
+      <CellData><DataArray type="Float32" Name="P" format="ascii">10 20 30 40</DataArray></CellData>
+      <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">{}</DataArray></Points>
+      <Cells>
+        <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 4 5 6 7  4 5 8 7 6 9  0 1 2 3 10  0 6</DataArray>
+        <DataArray type="Int32" Name="offsets" format="ascii">8 14 19 21</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">12 13 14 3</DataArray>
+      </Cells>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>
+)",
+                                                          pointData, points));
+    LoadOptions options;
+    if (withPointArray) options.field = "P";
+    const Scene scene = loadScene(vtu, options);
+    const UnstructuredVolume* v = nullptr;
+    for (const Geometry& g : scene.geometries)
+      if (auto* u = dynamic_cast<const UnstructuredVolume*>(g.shape.get())) v = u;
+    ASSERT_NE(v, nullptr);
+    EXPECT_EQ(v->cellCount(), 11u);
+    EXPECT_NE(scene.geometries.back().name.find("cells 'P' [10, 40]"), std::string::npos)
+        << scene.geometries.back().name;
+    // The hexahedron's value (10) everywhere in it, the wedge's (20) and the
+    // pyramid's (30), normalised over [10, 40].
+    const std::pair<Vec3f, float> expected[] = {{Vec3f(0.3f, 0.6f, 0.4f), 0.0f},
+                                                {Vec3f(0.9f, 0.2f, 0.1f), 0.0f},
+                                                {Vec3f(0.5f, 0.5f, 1.5f), 1 / 3.0f},
+                                                {Vec3f(0.5f, 0.4f, -0.5f), 2 / 3.0f}};
+    for (const auto& [p, want] : expected) {
+      bool found = false;
+      for (uint32_t c = 0; c < v->primitiveCount() && !found; ++c) {
+        float value;
+        if (v->valueAt(c, p, value)) {
+          found = true;
+          EXPECT_NEAR(value, want, 1e-6f) << p.x << " " << p.y << " " << p.z;
+        }
+      }
+      EXPECT_TRUE(found);
+    }
+    fs::remove(vtu);
+  }
+}
+
 }  // namespace
 }  // namespace ferry
