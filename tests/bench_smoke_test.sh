@@ -69,7 +69,7 @@ if [ -d "$source_dir/../shared/scenes/bathroom" ]; then
   bench bathroom_experiments '^[|] hand mirror' /usr/bin/python3 bench/bathroom_experiments.py \
     --ferry "$ferry" --spp 1 --step 8
   bench time_to_pbrt_error '^[|] bathroom|nothing measured' env ONLY=bathroom PBRT_SPP=2 \
-    FERRY_SPP=1 FERRY_MAX_SPP=2 OUT="$work/time-to-pbrt-error" FERRY="$ferry" \
+    REF_SPP=4 FERRY_SPP=1 FERRY_MAX_SPP=2 OUT="$work/time-to-pbrt-error" FERRY="$ferry" \
     IMAGE_COMPARE="$(dirname "$ferry")/bench/image_compare" bash bench/time_to_pbrt_error.sh
   bench fidelity 'against Ferry at' env ONLY=bathroom SPP=1 EQUAL_TIME=1 CONVERGED_SPP=2 \
     OUT="$work/fidelity" FERRY="$ferry" \

@@ -10,18 +10,10 @@
 
 #include <cmath>
 
-#include "core/random.h"
+#include "render/render_test_util.h"
 
 namespace ferry {
 namespace {
-
-struct Uniform {
-  uint32_t state;
-  float operator()() {
-    state = hashMix(state + 0x9e3779b9u);
-    return float(state >> 8) * (1.0f / 16777216.0f);
-  }
-};
 
 TEST(Subsurface, FromInsideAWalkIsMirroredOrLeavesWithAllItCarries) {
   const SubsurfaceModel model(1.33f, 0, Vec3f(1));
@@ -30,7 +22,8 @@ TEST(Subsurface, FromInsideAWalkIsMirroredOrLeavesWithAllItCarries) {
   for (float cosInside : {0.95f, 0.6f, 0.3f}) {
     const Vec3f wo{std::sqrt(1 - cosInside * cosInside), 0, -cosInside};
     const float reflectance = fresnelDielectric(cosInside, 1 / 1.33f);
-    Uniform u{uint32_t(cosInside * 1000)};
+    testing::TestRng rng(uint64_t(cosInside * 1000));
+    auto u = [&] { return rng.uniform(); };
     constexpr int n = 200000;
     double weight = 0, mirrored = 0, worst = 0;
     for (int i = 0; i < n; ++i) {
