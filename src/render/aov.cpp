@@ -26,14 +26,13 @@ std::vector<Aov> parseAovList(const std::string& text) {
   while (start <= text.size() && !text.empty()) {
     const size_t comma = std::min(text.find(',', start), text.size());
     const std::string name = text.substr(start, comma - start);
-    const auto spec = std::find_if(kAovSpecs.begin(), kAovSpecs.end(),
-                                   [&](const AovSpec& s) { return name == s.name; });
-    if (spec == kAovSpecs.end())
+    Aov aov;
+    if (!aovNamed(name, aov))
       throw InputError(
           fmt::format("unknown AOV '{}' in '{}' (known: {})", name, text, knownNames()));
-    if (std::find(aovs.begin(), aovs.end(), spec->aov) != aovs.end())
+    if (std::find(aovs.begin(), aovs.end(), aov) != aovs.end())
       throw InputError(fmt::format("AOV '{}' named twice in '{}'", name, text));
-    aovs.push_back(spec->aov);
+    aovs.push_back(aov);
     start = comma + 1;
   }
   return aovs;

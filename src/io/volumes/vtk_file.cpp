@@ -331,6 +331,7 @@ Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field
   for (vtkIdType c = 0; c < cells; ++c) {
     grid->GetCellPoints(c, ids);
     const vtkIdType* cellPoints = ids->GetPointer(0);
+    const size_t before = points.size();
     if (atCells) {
       own.resize(size_t(ids->GetNumberOfIds()));
       for (size_t k = 0; k < own.size(); ++k) {
@@ -339,7 +340,6 @@ Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field
       }
       cellPoints = own.data();
     }
-    const size_t before = points.size() - own.size() * (atCells ? 1 : 0);
     if (!appendTets(grid->GetCellType(c), cellPoints, tets)) {
       ++skipped;
       if (atCells) {  // a cell that is not a solid keeps no points

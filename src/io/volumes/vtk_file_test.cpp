@@ -146,20 +146,19 @@ TEST(VtkFile, BadFilesAreErrorsNamingThem) {
   }
 }
 
-// An unstructured grid of a hexahedron, a wedge, a pyramid and a line: the
-// solids cut into tetrahedra that fill them, the line left out; the values
-// normalised; read from XML (.vtu) and legacy (.vtk) files alike.
-TEST(VtkFile, UnstructuredGridsBecomeTetrahedra) {
-  // Points: a unit cube (0-7, VTK's hexahedron order), a wedge on top
-  // (4, 5, 8 / 7, 6, 9), a pyramid below (0-3, apex 10).
-  const std::string points =
-      "0 0 0  1 0 0  1 1 0  0 1 0  0 0 1  1 0 1  1 1 1  0 1 1  0.5 0 2  0.5 1 2  0.5 0.5 -1";
-  const std::string values = "0 1 2 3 4 5 6 7 8 9 10";
-  const std::string vtu = tempFile("h.vtu", fmt::format(R"(<?xml version="1.0"?>
+// Points: a unit cube (0-7, VTK's hexahedron order), a wedge on top
+// (4, 5, 8 / 7, 6, 9), a pyramid below (0-3, apex 10).
+constexpr const char* kThreeCellPoints =
+    "0 0 0  1 0 0  1 1 0  0 1 0  0 0 1  1 0 1  1 1 1  0 1 1  0.5 0 2  0.5 1 2  0.5 0.5 -1";
+
+// A .vtu named `name` of those points as a hexahedron, a wedge, a pyramid
+// and a line, with `data` (its PointData and CellData elements).
+std::string threeCellsAndALine(const std::string& name, const std::string& data) {
+  return tempFile(name, fmt::format(R"(<?xml version="1.0"?>
 <VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
   <UnstructuredGrid>
     <Piece NumberOfPoints="11" NumberOfCells="4">
-      <PointData Scalars="T"><DataArray type="Float32" Name="T" format="ascii">{}</DataArray></PointData>
+      {}
       <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">{}</DataArray></Points>
       <Cells>
         <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 4 5 6 7  4 5 8 7 6 9  0 1 2 3 10  0 6</DataArray>
@@ -170,7 +169,18 @@ TEST(VtkFile, UnstructuredGridsBecomeTetrahedra) {
   </UnstructuredGrid>
 </VTKFile>
 )",
-                                                        values, points));
+                                    data, kThreeCellPoints));
+}
+
+// An unstructured grid of a hexahedron, a wedge, a pyramid and a line: the
+// solids cut into tetrahedra that fill them, the line left out; the values
+// normalised; read from XML (.vtu) and legacy (.vtk) files alike.
+TEST(VtkFile, UnstructuredGridsBecomeTetrahedra) {
+  const std::string points = kThreeCellPoints;
+  const std::string values = "0 1 2 3 4 5 6 7 8 9 10";
+  const std::string vtu = threeCellsAndALine(
+      "h.vtu", R"(<PointData Scalars="T"><DataArray type="Float32" Name="T" format="ascii">)" +
+                   values + "</DataArray></PointData>");
   const std::string vtk = tempFile("h.vtk", fmt::format(R"(# vtk DataFile Version 3.0
 three cells and a line
 ASCII
@@ -271,30 +281,14 @@ TEST(VtkFile, StructuredGridsAreHexahedra) {
 // A cell array is constant over each cell (its points duplicated per cell),
 // chosen by name beside a point array, or taken when there is no point array.
 TEST(VtkFile, UnstructuredCellArraysAreConstantOverEachCell) {
-  const std::string points =
-      "0 0 0  1 0 0  1 1 0  0 1 0  0 0 1  1 0 1  1 1 1  0 1 1  0.5 0 2  0.5 1 2  0.5 0.5 -1";
   for (const bool withPointArray : {true, false}) {
     const std::string pointData =
         withPointArray ? R"(<PointData><DataArray type="Float32" Name="T" format="ascii">)"
                          "0 1 2 3 4 5 6 7 8 9 10</DataArray></PointData>"
                        : "";
-    const std::string vtu = tempFile("c.vtu", fmt::format(R"(<?xml version="1.0"?>
-<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
-  <UnstructuredGrid>
-    <Piece NumberOfPoints="11" NumberOfCells="4">
-      {}
-      <CellData><DataArray type="Float32" Name="P" format="ascii">10 20 30 40</DataArray></CellData>
-      <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">{}</DataArray></Points>
-      <Cells>
-        <DataArray type="Int32" Name="connectivity" format="ascii">0 1 2 3 4 5 6 7  4 5 8 7 6 9  0 1 2 3 10  0 6</DataArray>
-        <DataArray type="Int32" Name="offsets" format="ascii">8 14 19 21</DataArray>
-        <DataArray type="UInt8" Name="types" format="ascii">12 13 14 3</DataArray>
-      </Cells>
-    </Piece>
-  </UnstructuredGrid>
-</VTKFile>
-)",
-                                                          pointData, points));
+    const std::string vtu = threeCellsAndALine(
+        "c.vtu", pointData + R"(<CellData><DataArray type="Float32" Name="P" format="ascii">)"
+                             "10 20 30 40</DataArray></CellData>");
     LoadOptions options;
     if (withPointArray) options.field = "P";
     const Scene scene = loadScene(vtu, options);

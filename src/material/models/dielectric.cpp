@@ -8,11 +8,7 @@
 namespace ferry {
 
 Bsdf dielectricBsdf(float ior, float roughness, Vec3f tint) {
-  DielectricLobe lobe;
-  lobe.alpha = std::max(roughness * roughness, 0.0f);
-  lobe.smooth = lobe.alpha < microfacet::kSmoothAlpha;
-  lobe.ior = ior > 0 ? ior : 1.5f;
-  lobe.tint = tint;
+  const DielectricLobe lobe = DielectricLobe::make(ior, roughness, tint);
   return Bsdf(lobe, lobe.smooth, true);
 }
 

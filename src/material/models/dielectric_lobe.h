@@ -13,6 +13,17 @@ struct DielectricLobe {
   float ior;
   bool smooth;
 
+  // `roughness`: Ferry's (GGX alpha = roughness^2), smooth below
+  // kSmoothAlpha; an ior <= 0 is 1.5.
+  static DielectricLobe make(float ior, float roughness, Vec3f tint) {
+    DielectricLobe lobe;
+    lobe.alpha = std::max(roughness * roughness, 0.0f);
+    lobe.smooth = lobe.alpha < microfacet::kSmoothAlpha;
+    lobe.ior = ior > 0 ? ior : 1.5f;
+    lobe.tint = tint;
+    return lobe;
+  }
+
   Vec3f eval(Vec3f wo, Vec3f wi) const {
     if (smooth || wo.z == 0 || wi.z == 0) return Vec3f(0);
     // Work on the side of wo.

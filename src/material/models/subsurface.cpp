@@ -4,7 +4,6 @@
 
 #include <cmath>
 
-#include "material/microfacet.h"
 #include "material/models/dielectric_lobe.h"
 
 namespace ferry {
@@ -175,10 +174,7 @@ SubsurfaceModel::SubsurfaceModel(float ior, float roughness, Vec3f reflectTint)
 
 Bsdf SubsurfaceModel::bsdf(Vec3f color, const MaterialResources&) const {
   SubsurfaceLobe lobe;
-  lobe.surface.alpha = std::max(roughness * roughness, 0.0f);
-  lobe.surface.smooth = lobe.surface.alpha < microfacet::kSmoothAlpha;
-  lobe.surface.ior = ior;
-  lobe.surface.tint = color;
+  lobe.surface = DielectricLobe::make(ior, roughness, color);
   lobe.reflectTint = reflectTint;
   lobe.exitNormalization = exitNormalization_;
   return Bsdf(lobe, false, true);
