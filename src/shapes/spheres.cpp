@@ -54,8 +54,10 @@ bool roots(Vec3f f, Vec3f d, float r, float& t0, float& t1) {
 
 }  // namespace
 
-// The nearer root in (tnear, tfar), refined by solving again from the point
-// it gives (far from the centre, |f|^2 - r^2 keeps few of r's bits).
+// The nearer root beyond tnear, refined by solving again from the point it
+// gives (far from the centre, |f|^2 - r^2 keeps few of r's bits), if in
+// (tnear, tfar). tfar only accepts or rejects: a rank that searches less far
+// (another rank's hit is nearer) finds the same t or nothing.
 bool Spheres::intersect(uint32_t p, Vec3f origin, Vec3f direction, float tnear, float tfar,
                         float& t, Vec2f& uv) const {
   const Vec3f f = origin - centers_[p];
@@ -63,12 +65,13 @@ bool Spheres::intersect(uint32_t p, Vec3f origin, Vec3f direction, float tnear, 
   float t0, t1;
   if (!roots(f, direction, r, t0, t1)) return false;
   float hit = t0 > tnear ? t0 : t1;
-  if (!(hit > tnear && hit < tfar)) return false;
+  if (!(hit > tnear)) return false;
   const Vec3f near = f + direction * hit;
   if (float s0, s1; roots(near, direction, r, s0, s1)) {
     const float step = std::abs(s0) < std::abs(s1) ? s0 : s1;
-    if (hit + step > tnear && hit + step < tfar) hit += step;
+    if (hit + step > tnear) hit += step;
   }
+  if (!(hit < tfar)) return false;
   t = hit;
   const Vec3f n = (f + direction * hit) * (1 / r);
   float phi = std::atan2(n.y, n.x);

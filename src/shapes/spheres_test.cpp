@@ -225,6 +225,38 @@ TEST(Spheres, ALargeSetIsCutIntoPiecesAndTheImageStaysTheSame) {
   EXPECT_TRUE(three == one);
 }
 
+// A rank searches only as far as the nearest hit the others found: a nearer
+// tfar must give the same t or nothing, never another t.
+TEST(Spheres, TheCrossingDoesNotDependOnHowFarTheRaySearches) {
+  TestRng rng(5);
+  int crossings = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const Vec3f centre = Vec3f(rng.uniform(), rng.uniform(), rng.uniform()) * 200.0f;
+    const float r = 0.01f + rng.uniform();
+    const Spheres sphere({centre}, {r});
+    const Vec3f origin = centre + normalize(Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f,
+                                                  rng.uniform() - 0.5f)) *
+                                      (50 * r);
+    const Vec3f target =
+        centre +
+        Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f) * (2.2f * r);
+    const Vec3f direction = target - origin;
+    float t;
+    Vec2f uv;
+    if (!sphere.intersect(0, origin, direction, 0, kInfinity, t, uv)) continue;
+    ++crossings;
+    for (float tfar : {t * 0.9999f, t * 0.99999f, t * 0.999999f, t}) {
+      float s;
+      EXPECT_FALSE(sphere.intersect(0, origin, direction, 0, tfar, s, uv) && s != t)
+          << k << ": t " << t << " searched to " << tfar << " gave " << s;
+    }
+    float s = 0;
+    EXPECT_TRUE(sphere.intersect(0, origin, direction, 0, std::nextafter(t, kInfinity), s, uv));
+    EXPECT_EQ(s, t);
+  }
+  EXPECT_GT(crossings, 5000);
+}
+
 TEST(Spheres, APartFileStoresThemByKindAndTheMemoryModelCountsThem) {
   const Scene scene = cornellWithSpheres();
   const Geometry& white = scene.geometries[0];
