@@ -82,6 +82,7 @@ ScenePlan planFur(uint64_t strands, uint32_t seed) {
   fur.kind = "curves";
   fur.material = hairMaterial;
   fur.primitives = n * kFurSegmentsPerStrand;
+  fur.piecesPerPrimitive = Curves::traversalPiecesFor(fur.primitives);
   fur.bytes = fur.primitives * sizeof(CurveSegment);
   fur.build = [=] {
     std::vector<CurveSegment> segments(n * kFurSegmentsPerStrand);

@@ -51,6 +51,7 @@ struct ShapeRecipe {
   std::string kind;  // Shape::kind() of what build makes
   int32_t material = 0;
   uint64_t primitives = 0;
+  uint32_t piecesPerPrimitive = 1;  // Shape::piecesPerPrimitive() of what build makes
   uint64_t bytes = 0;
   std::function<std::shared_ptr<const Shape>()> build;
 };

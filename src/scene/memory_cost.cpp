@@ -78,13 +78,15 @@ MemoryCost instanceCost(uint64_t instanceCount) {
 
 MemoryCost geometryCost(const Geometry& geometry) {
   if (!geometry.shape) return {};
-  return shapeCost(geometry.shape->primitiveCount(), geometry.shape->bytes());
+  return shapeCost(
+      uint64_t(geometry.shape->primitiveCount()) * geometry.shape->piecesPerPrimitive(),
+      geometry.shape->bytes());
 }
 
-MemoryCost shapeCost(uint64_t primitives, uint64_t bytes) {
+MemoryCost shapeCost(uint64_t boxes, uint64_t bytes) {
   MemoryCost c;
   c.shapes = bytes;
-  c.accel = static_cast<uint64_t>(double(primitives) * MemoryModel::kAccelBytesPerTriangle +
+  c.accel = static_cast<uint64_t>(double(boxes) * MemoryModel::kAccelBytesPerShapeBox +
                                   MemoryModel::kAccelBytesPerMesh);
   return c;
 }

@@ -44,6 +44,9 @@ struct MemoryCost {
 struct MemoryModel {
   // BVH nodes and triangle leaves per triangle.
   static constexpr double kAccelBytesPerTriangle = 64.0;
+  // BVH nodes and leaf references per box of a user geometry (a shape's
+  // piece; builtin:fur measured).
+  static constexpr double kAccelBytesPerShapeBox = 84.0;
   // Fixed BVH bytes per mesh: Embree allocates in blocks, so even a
   // two-triangle mesh retains about one block. Matters only for scenes of many
   // small meshes.
@@ -62,12 +65,12 @@ MemoryCost textureCost(const Texture& texture);
 struct FourierBsdfTable;
 MemoryCost bsdfTableCost(const FourierBsdfTable& table);
 MemoryCost instanceCost(uint64_t instanceCount);
-// A geometry of another kind: its shape's bytes, and a BVH estimated as for
-// triangles, per primitive (not calibrated: Embree builds it over the
-// primitives' boxes). A released one costs nothing.
+// A geometry of another kind: its shape's bytes, and a BVH per traversal box
+// (a primitive's pieces; Embree builds it over the pieces' boxes). A
+// released one costs nothing.
 MemoryCost geometryCost(const Geometry& geometry);
-// A geometry of `primitives` primitives whose shape holds `bytes` (with its BVH).
-MemoryCost shapeCost(uint64_t primitives, uint64_t bytes);
+// A geometry of `boxes` traversal boxes whose shape holds `bytes` (with its BVH).
+MemoryCost shapeCost(uint64_t boxes, uint64_t bytes);
 // The scene's media and medium boundaries (the boundaries' triangles as a
 // mesh's, with their BVH).
 struct Scene;

@@ -176,7 +176,8 @@ TEST_P(EmbreeMemory, AccelAndInstanceEstimateIsWithinAFactorOfEmbree) {
 INSTANTIATE_TEST_SUITE_P(Builtins, EmbreeMemory,
                          ::testing::Values("builtin:cornell", "builtin:furnace",
                                            "builtin:island?scale=0.1",
-                                           "builtin:landscape?scale=0.1"),
+                                           "builtin:landscape?scale=0.1",
+                                           "builtin:fur?strands=20000"),
                          [](const auto& info) {
                            std::string name = info.param.substr(info.param.find(':') + 1);
                            return name.substr(0, name.find('?'));

@@ -64,6 +64,18 @@ class Shape {
                          float& t, Vec2f& uv, ShapeWork& /*work*/) const {
     return intersect(primitive, origin, direction, tnear, tfar, t, uv);
   }
+  // Traversal bounds tighter than primitiveBounds: each primitive cut into
+  // piecesPerPrimitive() pieces (a power of two), each with its own box.
+  // intersectPiece finds the crossings inside its piece's box; the nearest
+  // over a primitive's pieces is intersect's answer, bit for bit.
+  virtual uint32_t piecesPerPrimitive() const { return 1; }
+  virtual Box3f pieceBounds(uint32_t primitive, uint32_t /*piece*/) const {
+    return primitiveBounds(primitive);
+  }
+  virtual bool intersectPiece(uint32_t primitive, uint32_t /*piece*/, Vec3f origin, Vec3f direction,
+                              float tnear, float tfar, float& t, Vec2f& uv, ShapeWork& work) const {
+    return intersect(primitive, origin, direction, tnear, tfar, t, uv, work);
+  }
   virtual ShapeSurface surface(uint32_t primitive, Vec2f uv) const = 0;
   // The same, seen along `direction` (object space, the ray that hit it):
   // for kinds whose surface faces the ray (flat curves).

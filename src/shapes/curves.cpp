@@ -113,26 +113,43 @@ struct Crossing {
 
   float widthAt(float t) const { return lerp(t, segment->width0, segment->width1); }
 
+  // Half `half` of the piece cp spanning [t0, t1]: its control points and
+  // span; false when its box (widened by its width) misses the ray.
+  bool half(const std::array<Vec3f, 7>& split, const float (&t)[3], int half, Points& piece) const {
+    piece = {split[3 * half], split[3 * half + 1], split[3 * half + 2], split[3 * half + 3]};
+    const float w = 0.5f * std::max(widthAt(t[half]), widthAt(t[half + 1]));
+    if (maxOf(piece[0].y, piece[1].y, piece[2].y, piece[3].y) + w < 0 ||
+        minOf(piece[0].y, piece[1].y, piece[2].y, piece[3].y) - w > 0)
+      return false;
+    if (maxOf(piece[0].x, piece[1].x, piece[2].x, piece[3].x) + w < 0 ||
+        minOf(piece[0].x, piece[1].x, piece[2].x, piece[3].x) - w > 0)
+      return false;
+    return !(maxOf(piece[0].z, piece[1].z, piece[2].z, piece[3].z) + w < zMin ||
+             minOf(piece[0].z, piece[1].z, piece[2].z, piece[3].z) - w > zMax);
+  }
+
+  // test() over the leaves that overlap (lo, hi) only: the same halvings,
+  // so the same leaves (a leaf across lo or hi is tested by both pieces,
+  // which then find the same crossing).
+  void testRange(const Points& cp, float t0, float t1, int depth, float lo, float hi) {
+    if (depth == 0 || (t0 >= lo && t1 <= hi)) return test(cp, t0, t1, depth);
+    std::array<Vec3f, 7> split;
+    subdivide(cp, split);
+    const float t[3] = {t0, (t0 + t1) * 0.5f, t1};
+    Points piece;
+    for (int h = 0; h < 2; ++h)
+      if (t[h + 1] > lo && t[h] < hi && half(split, t, h, piece))
+        testRange(piece, t[h], t[h + 1], depth - 1, lo, hi);
+  }
+
   void test(const Points& cp, float t0, float t1, int depth) {
     if (depth > 0) {
       std::array<Vec3f, 7> split;
       subdivide(cp, split);
       const float t[3] = {t0, (t0 + t1) * 0.5f, t1};
-      for (int half = 0; half < 2; ++half) {
-        const Points piece{split[3 * half], split[3 * half + 1], split[3 * half + 2],
-                           split[3 * half + 3]};
-        const float w = 0.5f * std::max(widthAt(t[half]), widthAt(t[half + 1]));
-        if (maxOf(piece[0].y, piece[1].y, piece[2].y, piece[3].y) + w < 0 ||
-            minOf(piece[0].y, piece[1].y, piece[2].y, piece[3].y) - w > 0)
-          continue;
-        if (maxOf(piece[0].x, piece[1].x, piece[2].x, piece[3].x) + w < 0 ||
-            minOf(piece[0].x, piece[1].x, piece[2].x, piece[3].x) - w > 0)
-          continue;
-        if (maxOf(piece[0].z, piece[1].z, piece[2].z, piece[3].z) + w < zMin ||
-            minOf(piece[0].z, piece[1].z, piece[2].z, piece[3].z) - w > zMax)
-          continue;
-        test(piece, t[half], t[half + 1], depth - 1);
-      }
+      Points piece;
+      for (int h = 0; h < 2; ++h)
+        if (half(split, t, h, piece)) test(piece, t[h], t[h + 1], depth - 1);
       return;
     }
     // The ray must pass between the planes perpendicular to the curve at
@@ -192,7 +209,10 @@ void appendCurveSegments(const Points& points, float width0, float width1,
 
 Curves::Curves(CurveType type, std::vector<CurveSegment> segments,
                std::vector<CurveNormals> normals)
-    : type_(type), segments_(std::move(segments)), normals_(std::move(normals)) {
+    : type_(type),
+      pieces_(traversalPiecesFor(segments.size())),
+      segments_(std::move(segments)),
+      normals_(std::move(normals)) {
   if (segments_.size() > UINT32_MAX)
     throw InputError(fmt::format("curves: {} segments is more than 2^32 - 1", segments_.size()));
   if (type_ == CurveType::Ribbon && normals_.size() != segments_.size())
@@ -231,8 +251,38 @@ uint64_t Curves::bytes() const {
   return segments_.capacity() * sizeof(CurveSegment) + normals_.capacity() * sizeof(CurveNormals);
 }
 
+uint32_t Curves::traversalPiecesFor(uint64_t segments) {
+  return segments <= UINT32_MAX / kTraversalPieces ? kTraversalPieces : 1;
+}
+
+Box3f Curves::pieceBounds(uint32_t primitive, uint32_t piece) const {
+  const CurveSegment& s = segments_[primitive];
+  const float u0 = float(piece) / float(pieces_), u1 = float(piece + 1) / float(pieces_);
+  Box3f b;
+  for (const Vec3f& p : {blossom(s.points, u0, u0, u0), blossom(s.points, u0, u0, u1),
+                         blossom(s.points, u0, u1, u1), blossom(s.points, u1, u1, u1)})
+    b.extend(p);
+  // Half the piece's width, and a margin for the crossing's rounding.
+  const Vec3f size = b.upper - b.lower;
+  const float r = 0.5f * std::max(lerp(u0, s.width0, s.width1), lerp(u1, s.width0, s.width1)) +
+                  1e-5f * std::max({size.x, size.y, size.z, std::abs(b.lower.x),
+                                    std::abs(b.lower.y), std::abs(b.lower.z), std::abs(b.upper.x),
+                                    std::abs(b.upper.y), std::abs(b.upper.z)});
+  return {b.lower - Vec3f(r), b.upper + Vec3f(r)};
+}
+
 bool Curves::intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
                        float& t, Vec2f& uv) const {
+  return crossPiece(primitive, 0, 1, origin, direction, tnear, tfar, t, uv);
+}
+
+bool Curves::intersectPiece(uint32_t primitive, uint32_t piece, Vec3f origin, Vec3f direction,
+                            float tnear, float tfar, float& t, Vec2f& uv, ShapeWork&) const {
+  return crossPiece(primitive, piece, pieces_, origin, direction, tnear, tfar, t, uv);
+}
+
+bool Curves::crossPiece(uint32_t primitive, uint32_t piece, uint32_t pieces, Vec3f origin,
+                        Vec3f direction, float tnear, float tfar, float& t, Vec2f& uv) const {
   const CurveSegment& s = segments_[primitive];
   const float rayLength = length(direction);
   if (!(rayLength > 0)) return false;
@@ -270,7 +320,8 @@ bool Curves::intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float 
   Crossing crossing{&s,        type_ == CurveType::Ribbon ? &normals_[primitive] : nullptr,
                     direction, rayLength,
                     zMin,      zMax};
-  crossing.test(cp, 0, 1, depth);
+  crossing.testRange(cp, 0, 1, depth, float(piece) / float(pieces),
+                     float(piece + 1) / float(pieces));
   if (!crossing.found) return false;
   t = crossing.z / rayLength;
   if (!(t > tnear && t < tfar)) return false;

@@ -55,6 +55,14 @@ class Curves final : public Shape {
                  float& t, Vec2f& uv) const override;
   ShapeSurface surface(uint32_t primitive, Vec2f uv) const override;
   ShapeSurface surface(uint32_t primitive, Vec2f uv, Vec3f direction) const override;
+  // Each segment is bounded for traversal in kTraversalPieces pieces along
+  // its length (fewer when there are too many segments to number them).
+  static constexpr uint32_t kTraversalPieces = 3;
+  static uint32_t traversalPiecesFor(uint64_t segments);
+  uint32_t piecesPerPrimitive() const override { return pieces_; }
+  Box3f pieceBounds(uint32_t primitive, uint32_t piece) const override;
+  bool intersectPiece(uint32_t primitive, uint32_t piece, Vec3f origin, Vec3f direction,
+                      float tnear, float tfar, float& t, Vec2f& uv, ShapeWork& work) const override;
   std::shared_ptr<const Shape> subset(std::span<const uint32_t> primitives) const override;
   void write(RecordWriter& record) const override;
   std::string describe() const override;
@@ -65,7 +73,12 @@ class Curves final : public Shape {
   const std::vector<CurveNormals>& normals() const { return normals_; }
 
  private:
+  // The nearest crossing in piece `piece` of `pieces` (1: the whole).
+  bool crossPiece(uint32_t primitive, uint32_t piece, uint32_t pieces, Vec3f origin,
+                  Vec3f direction, float tnear, float tfar, float& t, Vec2f& uv) const;
+
   CurveType type_;
+  uint32_t pieces_ = 1;
   std::vector<CurveSegment> segments_;
   std::vector<CurveNormals> normals_;
 };

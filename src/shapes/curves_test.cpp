@@ -117,6 +117,72 @@ const Communicator& oneRank() {
   return group.communicator(0);
 }
 
+// Embree bounds and tests each segment in pieces (Shape::pieceBounds); the
+// nearest of the pieces' crossings must be the whole segment's, bit for bit,
+// and lie in the box of the piece that found it.
+TEST(Curves, ThePiecesOfASegmentAnswerAsTheWholeSegment) {
+  TestRng rng(11);
+  int crossings = 0;
+  for (CurveType type : {CurveType::Flat, CurveType::Cylinder, CurveType::Ribbon}) {
+    for (int k = 0; k < 40; ++k) {
+      CurveSegment s;
+      for (Vec3f& p : s.points) p = Vec3f(rng.uniform(), rng.uniform(), rng.uniform()) * 4.0f;
+      s.width0 = 0.02f + 0.3f * rng.uniform();
+      s.width1 = 0.3f * rng.uniform();
+      std::vector<CurveNormals> normals;
+      if (type == CurveType::Ribbon) normals.push_back({Vec3f(0, 0, 1), Vec3f(1, 0, 0)});
+      const Curves curves(type, {s}, normals);
+      ASSERT_EQ(curves.piecesPerPrimitive(), Curves::kTraversalPieces);
+      for (int r = 0; r < 200; ++r) {
+        // Aimed at a point near the curve, from anywhere around it.
+        const float u = rng.uniform();
+        const Vec3f target =
+            s.points[0] * ((1 - u) * (1 - u) * (1 - u)) +
+            s.points[1] * (3 * u * (1 - u) * (1 - u)) + s.points[2] * (3 * u * u * (1 - u)) +
+            s.points[3] * (u * u * u) +
+            Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f) * 0.3f;
+        const Vec3f origin = target + normalize(Vec3f(rng.uniform() - 0.5f, rng.uniform() - 0.5f,
+                                                      rng.uniform() - 0.5f)) *
+                                          10.0f;
+        const Vec3f direction = (target - origin) * 0.37f;
+        float t = 0;
+        Vec2f uv;
+        const bool whole = curves.intersect(0, origin, direction, 0, 1e30f, t, uv);
+        // Embree's way: the pieces in some order, each under the nearest so far.
+        float tfar = 1e30f, tp = 0;
+        Vec2f uvp;
+        bool found = false;
+        ShapeWork work;
+        const uint32_t pieces = curves.piecesPerPrimitive();
+        for (uint32_t i = 0; i < pieces; ++i) {
+          const uint32_t j = pieces - 1 - i;  // last first, not the order test() takes
+          float tj;
+          Vec2f uvj;
+          if (!curves.intersectPiece(0, j, origin, direction, 0, tfar, tj, uvj, work)) continue;
+          // In the box of the piece its u lies in (either, on a boundary).
+          const Vec3f hit = origin + direction * tj;
+          const float at = uvj.x * float(pieces);
+          const auto below = uint32_t(std::clamp(std::ceil(at) - 1, 0.0f, float(pieces - 1)));
+          const auto above = uint32_t(std::clamp(std::floor(at), 0.0f, float(pieces - 1)));
+          EXPECT_TRUE(curves.pieceBounds(0, below).contains(Box3f{hit, hit}) ||
+                      curves.pieceBounds(0, above).contains(Box3f{hit, hit}))
+              << k << " " << r;
+          found = true;
+          tfar = tp = tj;
+          uvp = uvj;
+        }
+        ASSERT_EQ(found, whole) << int(type) << " " << k << " " << r;
+        if (!whole) continue;
+        ++crossings;
+        EXPECT_EQ(tp, t);
+        EXPECT_EQ(uvp.x, uv.x);
+        EXPECT_EQ(uvp.y, uv.y);
+      }
+    }
+  }
+  EXPECT_GT(crossings, 2000);
+}
+
 TEST(Curves, BothBackendsFindTheSameFibres) {
   const Scene scene = generateBuiltin(parseBuiltinSpec("builtin:fur?strands=2000"));
   const auto embree = makeEmbreeBackend(scene), reference = makeReferenceBackend(scene);

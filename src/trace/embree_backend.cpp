@@ -196,8 +196,11 @@ struct TraceContext {
 // A geometry of another kind (scene/shape.h) as an Embree user geometry:
 // Embree builds its BVH over the primitives' boxes and asks the shape for
 // each crossing.
+// Embree's primitive id is primitive * piecesPerPrimitive() + piece.
 void shapeBounds(const RTCBoundsFunctionArguments* args) {
-  const Box3f b = static_cast<const Shape*>(args->geometryUserPtr)->primitiveBounds(args->primID);
+  const Shape& shape = *static_cast<const Shape*>(args->geometryUserPtr);
+  const uint32_t pieces = shape.piecesPerPrimitive();
+  const Box3f b = shape.pieceBounds(args->primID / pieces, args->primID % pieces);
   RTCBounds* out = args->bounds_o;
   out->lower_x = b.lower.x;
   out->lower_y = b.lower.y;
@@ -207,7 +210,8 @@ void shapeBounds(const RTCBoundsFunctionArguments* args) {
   out->upper_z = b.upper.z;
 }
 
-// Ray i of a stream's packet: its origin, direction and t range.
+// Ray i of a stream's packet against the piece Embree names: its origin,
+// direction and t range.
 template <typename Args>
 bool shapeCrossing(const Args* args, RTCRayN* ray, unsigned i, float& t, Vec2f& uv) {
   const unsigned n = args->N;
@@ -216,11 +220,11 @@ bool shapeCrossing(const Args* args, RTCRayN* ray, unsigned i, float& t, Vec2f& 
                         RTCRayN_dir_z(ray, n, i)};
   const Shape& shape = *static_cast<const Shape*>(args->geometryUserPtr);
   ShapeWork* work = reinterpret_cast<const TraceContext*>(args->context)->work;
-  if (!work)
-    return shape.intersect(args->primID, origin, direction, RTCRayN_tnear(ray, n, i),
-                           RTCRayN_tfar(ray, n, i), t, uv);
-  return shape.intersect(args->primID, origin, direction, RTCRayN_tnear(ray, n, i),
-                         RTCRayN_tfar(ray, n, i), t, uv, *work);
+  ShapeWork unused;
+  const uint32_t pieces = shape.piecesPerPrimitive();
+  return shape.intersectPiece(args->primID / pieces, args->primID % pieces, origin, direction,
+                              RTCRayN_tnear(ray, n, i), RTCRayN_tfar(ray, n, i), t, uv,
+                              work ? *work : unused);
 }
 
 void shapeIntersect(const RTCIntersectFunctionNArguments* args) {
@@ -238,7 +242,8 @@ void shapeIntersect(const RTCIntersectFunctionNArguments* args) {
     RTCHitN_Ng_z(hit, n, i) = 1;
     RTCHitN_u(hit, n, i) = uv.x;
     RTCHitN_v(hit, n, i) = uv.y;
-    RTCHitN_primID(hit, n, i) = args->primID;
+    RTCHitN_primID(hit, n, i) =
+        args->primID / static_cast<const Shape*>(args->geometryUserPtr)->piecesPerPrimitive();
     RTCHitN_geomID(hit, n, i) = args->geomID;
     RTCHitN_instID(hit, n, i, 0) = args->context->instID[0];
   }
@@ -500,7 +505,7 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
     const Shape* shape = scene_.geometries[object.geometries[k]].shape.get();
     if (!shape || shape->primitiveCount() == 0) continue;
     RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_USER);
-    rtcSetGeometryUserPrimitiveCount(g, shape->primitiveCount());
+    rtcSetGeometryUserPrimitiveCount(g, shape->primitiveCount() * shape->piecesPerPrimitive());
     // Embree only passes the pointer back to the callbacks, which read it as const.
     rtcSetGeometryUserData(g, const_cast<Shape*>(shape));
     rtcSetGeometryBoundsFunction(g, shapeBounds, nullptr);
