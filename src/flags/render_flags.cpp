@@ -298,7 +298,7 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
                     "environment instead (the file is named in a warning)");
   command->add_option(
       "--field", o.field,
-      "The array a VTK file is rendered by: a .vti's, .vtu's or .vts's point or cell\n"
+      "The array a VTK file is rendered by: a .vti's, .vtu's, .pvtu's or .vts's point or cell\n"
       "array (default: its active scalars), a .vtp's radius (default: radius)");
   addCameraFlags(command, o.camera);
 }

@@ -55,11 +55,18 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
     scene = loadVtkParticleScene(spec, options.field);
   } else if (ext == ".vtu" || ext == ".vtk" || ext == ".vts") {
     scene = loadVtkUnstructuredScene(spec, options.field);
+  } else if (ext == ".pvtu") {  // every piece (a session on many ranks reads its own)
+    scene = loadVtkPiecesScene(spec, options.field, 0, 1,
+                               [](const PieceSummary& mine, const std::string& error) {
+                                 if (!error.empty()) throw InputError(error);
+                                 return mine;
+                               });
   } else {
-    throw InputError(fmt::format(
-        "{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
-        ".vdb, .nvdb, .vti, .vtp, .vtu, .vtk, .vts, raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
-        spec, ext));
+    throw InputError(
+        fmt::format("{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
+                    ".vdb, .nvdb, .vti, .vtp, .vtu, .pvtu, .vtk, .vts, "
+                    "raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
+                    spec, ext));
   }
   scene.validate();
   scene.reserveVertexSlack();  // so the trace backend shares every vertex array

@@ -95,6 +95,45 @@ PartitionedScene loadBrickPieces(const SessionSettings& settings, const Communic
   return distributedPiece(std::move(piece), comm);
 }
 
+// A .pvtu on this rank: its own pieces only, normalised and framed by what
+// every rank read (collective, as loadBrickPieces).
+bool isPvtuSpec(const std::string& spec) {
+  return spec.size() > 5 && spec.compare(spec.size() - 5, 5, ".pvtu") == 0;
+}
+PartitionedScene loadPvtuPieces(const SessionSettings& settings, const Communicator& comm) {
+  const PieceAgreement agree = [&](const PieceSummary& mine, const std::string& readError) {
+    if (const std::string failure = comm.failureMessage(!readError.empty(), readError);
+        !failure.empty())
+      throw InputError(failure);
+    const double extremes[8] = {-mine.lo,          mine.hi,           -mine.box.lower.x,
+                                -mine.box.lower.y, -mine.box.lower.z, mine.box.upper.x,
+                                mine.box.upper.y,  mine.box.upper.z};
+    const std::vector<double> all = comm.max(std::span<const double>(extremes));
+    const uint64_t counts[2] = {mine.cells, mine.skipped};
+    const std::vector<uint64_t> sums = comm.sum(std::span<const uint64_t>(counts));
+    PieceSummary out;
+    out.lo = -all[0];
+    out.hi = all[1];
+    out.box.lower = Vec3f(float(-all[2]), float(-all[3]), float(-all[4]));
+    out.box.upper = Vec3f(float(all[5]), float(all[6]), float(all[7]));
+    out.cells = sums[0];
+    out.skipped = sums[1];
+    return out;
+  };
+  // Every rank meets every collective: the agreement's, then this one.
+  Scene piece;
+  std::string error;
+  try {
+    piece =
+        loadVtkPiecesScene(settings.scene, settings.load.field, comm.rank(), comm.size(), agree);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (const std::string failure = comm.failureMessage(!error.empty(), error); !failure.empty())
+    throw InputError(failure);
+  return distributedPiece(std::move(piece), comm);
+}
+
 }  // namespace
 
 RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm, Scene* given,
@@ -107,6 +146,9 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
   PartitionedScene fromBricks;
   if (!part && !given && isBrickManifestSpec(settings.scene)) {
     fromBricks = loadBrickPieces(settings, comm);
+    part = &fromBricks;
+  } else if (!part && !given && isPvtuSpec(settings.scene)) {
+    fromBricks = loadPvtuPieces(settings, comm);
     part = &fromBricks;
   }
   PartitionedScene loaded =

@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <optional>
 #include <string>
@@ -25,6 +26,7 @@
 #include "render/camera.h"
 #include "scene/light_scene.h"
 #include "session/session_stats.h"
+#include "shapes/unstructured_volume.h"
 #include "trace/reference_backend.h"
 
 namespace ferry {
@@ -567,6 +569,124 @@ TEST(RenderSession, AFocusPickFocusesOnTheNearestSurfaceOverEveryRank) {
     EXPECT_EQ(control.published[2], control.published[1]);
     EXPECT_EQ(control.accumulated, (std::vector<int>{1, 1, 2}));  // the pick restarts
   }
+}
+
+// A ParaView .pvtu of `pieces` ASCII .vtu pieces beside it in `dir`, each
+// 2 x 2 x 2 hexahedra, side by side along x, of the point array
+// T = x + y / 2 + z / 4 (continuous across the seams).
+std::string writePvtu(const fs::path& dir, int pieces) {
+  fs::create_directories(dir);
+  std::string list;
+  for (int k = 0; k < pieces; ++k) {
+    std::string points, values, connectivity, offsets, types;
+    for (int z = 0; z < 3; ++z)
+      for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 3; ++x) {
+          const float px = float(2 * k + x), py = float(y), pz = float(z);
+          points += fmt::format("{} {} {} ", px, py, pz);
+          values += fmt::format("{} ", px + py / 2 + pz / 4);
+        }
+    auto id = [](int x, int y, int z) { return x + 3 * y + 9 * z; };
+    int cell = 0;
+    for (int z = 0; z < 2; ++z)
+      for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 2; ++x, ++cell) {
+          connectivity +=
+              fmt::format("{} {} {} {} {} {} {} {} ", id(x, y, z), id(x + 1, y, z),
+                          id(x + 1, y + 1, z), id(x, y + 1, z), id(x, y, z + 1),
+                          id(x + 1, y, z + 1), id(x + 1, y + 1, z + 1), id(x, y + 1, z + 1));
+          offsets += fmt::format("{} ", 8 * (cell + 1));
+          types += "12 ";
+        }
+    std::ofstream(dir / fmt::format("piece_{}.vtu", k)) << fmt::format(
+        R"(<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <UnstructuredGrid><Piece NumberOfPoints="27" NumberOfCells="8">
+    <PointData Scalars="T"><DataArray type="Float32" Name="T" format="ascii">{}</DataArray></PointData>
+    <Points><DataArray type="Float32" NumberOfComponents="3" format="ascii">{}</DataArray></Points>
+    <Cells>
+      <DataArray type="Int64" Name="connectivity" format="ascii">{}</DataArray>
+      <DataArray type="Int64" Name="offsets" format="ascii">{}</DataArray>
+      <DataArray type="UInt8" Name="types" format="ascii">{}</DataArray>
+    </Cells>
+  </Piece></UnstructuredGrid>
+</VTKFile>
+)",
+        values, points, connectivity, offsets, types);
+    list += fmt::format("    <Piece Source=\"piece_{}.vtu\"/>\n", k);
+  }
+  const fs::path path = dir / "data.pvtu";
+  std::ofstream(path) << fmt::format(R"(<?xml version="1.0"?>
+<VTKFile type="PUnstructuredGrid" version="0.1" byte_order="LittleEndian">
+  <PUnstructuredGrid GhostLevel="0">
+    <PPointData Scalars="T"><PDataArray type="Float32" Name="T"/></PPointData>
+    <PPoints><PDataArray type="Float32" NumberOfComponents="3"/></PPoints>
+{}  </PUnstructuredGrid>
+</VTKFile>
+)",
+                                     list);
+  return path.string();
+}
+
+// A .pvtu is read piece by piece: each rank its own run of pieces, every
+// piece a volume of its own normalised by the range over all of them, so the
+// image is the same on any rank count, a rank with no piece included.
+TEST(RenderSession, APvtuIsReadPieceByPieceAndTheImageIsTheSameOnAnyRankCount) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("ferry-pvtu-{}", getpid());
+  const std::string pvtu = writePvtu(dir, 3);
+  EXPECT_EQ(readPvtuPieces(pvtu).size(), 3u);
+  EXPECT_EQ(pieceRanks(3, 2, 0), (std::pair<size_t, size_t>(0, 1)));
+  EXPECT_EQ(pieceRanks(3, 2, 1), (std::pair<size_t, size_t>(1, 3)));
+  EXPECT_EQ(pieceRanks(3, 4, 0), (std::pair<size_t, size_t>(0, 0)));
+  // Loaded whole: three volumes, the first piece's values in the low part of [0, 1].
+  const Scene whole = loadScene(pvtu);
+  ASSERT_EQ(whole.geometries.size(), 3u);
+  EXPECT_NE(whole.name.find("[0, 7.5], 3 pieces"), std::string::npos) << whole.name;
+  float value = -1;
+  const auto* first = dynamic_cast<const UnstructuredVolume*>(whole.geometries[0].shape.get());
+  ASSERT_NE(first, nullptr);
+  for (uint32_t c = 0; c < first->primitiveCount() && value < 0; ++c)
+    if (!first->valueAt(c, Vec3f(1.5f, 1, 1), value)) value = -1;
+  EXPECT_NEAR(value, (1.5f + 0.5f + 0.25f) / 7.5f, 1e-5f);
+
+  SessionSettings settings;
+  settings.scene = pvtu;
+  settings.render.width = 32;
+  settings.render.height = 24;
+  settings.render.samplesPerPixel = 2;
+  settings.render.maxDepth = 4;
+  std::vector<Vec3f> one;
+  runRanks(1, [&](const Communicator& comm) {
+    RenderSession session(settings, comm);
+    RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+    session.run(sink);
+    if (comm.isRoot()) one = sink.images.back().linear;
+  });
+  ASSERT_FALSE(one.empty());
+  const auto byRed = [](Vec3f a, Vec3f b) { return a.x < b.x; };
+  EXPECT_LT(std::min_element(one.begin(), one.end(), byRed)->x,
+            std::max_element(one.begin(), one.end(), byRed)->x);  // the volume is in the picture
+  for (int ranks : {2, 3, 4}) {
+    std::vector<Vec3f> image;
+    runRanks(ranks, [&](const Communicator& comm) {
+      RenderSession session(settings, comm);
+      RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+      session.run(sink);
+      if (comm.isRoot()) image = sink.images.back().linear;
+    });
+    EXPECT_TRUE(image == one) << ranks << " ranks";
+  }
+  // A missing piece: every rank fails with the file named.
+  fs::remove(dir / "piece_2.vtu");
+  runRanks(2, [&](const Communicator& comm) {
+    try {
+      RenderSession session(settings, comm);
+      ADD_FAILURE() << "rank " << comm.rank() << " went on without piece 2";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("piece_2.vtu"), std::string::npos) << e.what();
+    }
+  });
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -31,7 +31,7 @@ uint32_t spread10(uint32_t x) {
 
 std::shared_ptr<UnstructuredVolume> UnstructuredVolume::make(
     std::vector<Vec3f> points, std::vector<float> values, std::vector<Tet> tets,
-    std::shared_ptr<const TransferFunction> transfer) {
+    std::shared_ptr<const TransferFunction> transfer, uint32_t firstSeed) {
   if (!transfer) throw InputError("an unstructured volume without a transfer function");
   if (tets.empty()) throw InputError("an unstructured volume without cells");
   if (values.size() != points.size())
@@ -73,7 +73,7 @@ std::shared_ptr<UnstructuredVolume> UnstructuredVolume::make(
   for (uint32_t c : order) v->tets_.push_back(tets[c]);
   for (uint32_t first = 0; first < tets.size(); first += kCellsPerCluster) {
     v->clusterFirst_.push_back(first);
-    v->clusterSeed_.push_back(uint32_t(v->clusterSeed_.size()));
+    v->clusterSeed_.push_back(firstSeed + uint32_t(v->clusterSeed_.size()));
   }
   v->clusterFirst_.push_back(uint32_t(tets.size()));
   v->points_ = std::move(points);

@@ -30,12 +30,14 @@ class UnstructuredVolume final : public Shape {
  public:
   using Tet = std::array<uint32_t, 4>;  // indices of its points
   // `values` one per point in [0, 1]; `tets` index `points`. Clusters the
-  // cells; throws InputError for an index out of range, a value outside
-  // [0, 1] or not finite, a point not finite, no cells, or no transfer
-  // function.
+  // cells (cluster k's tracking seeded by firstSeed + k: volumes that meet
+  // take seeds of their own); throws InputError for an index out of range,
+  // a value outside [0, 1] or not finite, a point not finite, no cells, or
+  // no transfer function.
   static std::shared_ptr<UnstructuredVolume> make(std::vector<Vec3f> points,
                                                   std::vector<float> values, std::vector<Tet> tets,
-                                                  std::shared_ptr<const TransferFunction> transfer);
+                                                  std::shared_ptr<const TransferFunction> transfer,
+                                                  uint32_t firstSeed = 0);
 
   std::string_view kind() const override { return "unstructured-volume"; }
   uint32_t primitiveCount() const override { return uint32_t(clusterSeed_.size()); }

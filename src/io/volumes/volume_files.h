@@ -9,6 +9,8 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -114,6 +116,33 @@ Scene loadVtkParticleScene(const std::string& path, const std::string& field = "
 // volume. InputError naming the file: unreadable, no such array (the
 // arrays listed), no solid cell, a NaN (naming the point or cell).
 Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field = "");
+// ParaView's parallel unstructured grid (.pvtu): a manifest of .vtu pieces,
+// each a file beside it. The piece files it lists, in order; InputError
+// naming the file: unreadable, not a .pvtu, no pieces, a piece without a
+// Source.
+std::vector<std::string> readPvtuPieces(const std::string& path);
+// The pieces [first, second) of `pieces` that rank `rank` of `ranks` reads
+// (contiguous runs, as ParaView deals them; none when there are more ranks).
+std::pair<size_t, size_t> pieceRanks(size_t pieces, int ranks, int rank);
+// What a rank read of a .pvtu: the array's range, the box, the cells (and
+// those left out); PieceAgreement combines every rank's (a collective on
+// many ranks; the identity on one), or throws InputError on every rank if
+// any rank's reading failed (the error given, empty if none).
+struct PieceSummary {
+  double lo = std::numeric_limits<double>::max();
+  double hi = std::numeric_limits<double>::lowest();
+  Box3f box;
+  uint64_t cells = 0, skipped = 0;
+};
+using PieceAgreement = std::function<PieceSummary(const PieceSummary&, const std::string& error)>;
+// `ferry render data.pvtu`: rank `rank` of `ranks` reads its pieces only,
+// each an unstructured volume of its own (as loadVtkUnstructuredScene
+// reads a .vtu) normalised by the range over all pieces and framed by
+// their box, so the image is the same on any rank count. A rank with no
+// pieces has no geometry. Errors as readPvtuPieces and
+// loadVtkUnstructuredScene, naming the piece's file.
+Scene loadVtkPiecesScene(const std::string& path, const std::string& field, int rank, int ranks,
+                         const PieceAgreement& agree);
 
 // --------------------------------------------------------------- raw grids
 

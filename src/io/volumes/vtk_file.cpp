@@ -16,6 +16,8 @@
 #include <vtkStructuredGrid.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkUnstructuredGridReader.h>
+#include <vtkXMLDataElement.h>
+#include <vtkXMLDataParser.h>
 #include <vtkXMLImageDataReader.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLStructuredGridReader.h>
@@ -96,12 +98,12 @@ double tupleValue(vtkDataArray* a, vtkIdType i) {
   return std::sqrt(sum);
 }
 
-// The first `count` values of `array` (vectors by magnitude) normalised to
-// [0, 1] by their range, which `lo` and `hi` receive. InputError naming the
-// file and, by `where(i)`, value i if one is NaN or beyond a float.
+// The first `count` values of `array` (vectors by magnitude), their range
+// in `lo` and `hi`. InputError naming the file and, by `where(i)`, value i
+// if one is NaN or beyond a float.
 template <typename Where>
-std::vector<float> normalisedValues(vtkDataArray* array, uint64_t count, const std::string& path,
-                                    double& lo, double& hi, Where&& where) {
+std::vector<float> finiteValues(vtkDataArray* array, uint64_t count, const std::string& path,
+                                double& lo, double& hi, Where&& where) {
   std::vector<float> values(count);
   lo = std::numeric_limits<double>::max();
   hi = std::numeric_limits<double>::lowest();
@@ -114,8 +116,21 @@ std::vector<float> normalisedValues(vtkDataArray* array, uint64_t count, const s
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
+  return values;
+}
+
+// `values` mapped to [0, 1] by the range [lo, hi].
+void normalise(std::vector<float>& values, double lo, double hi) {
   const double range = hi - lo;
   for (float& v : values) v = range > 0 ? float((double(v) - lo) / range) : 0.0f;
+}
+
+// Values of `array` (vectors by magnitude) normalised to [0, 1] by their range.
+template <typename Where>
+std::vector<float> normalisedValues(vtkDataArray* array, uint64_t count, const std::string& path,
+                                    double& lo, double& hi, Where&& where) {
+  std::vector<float> values = finiteValues(array, count, path, lo, hi, std::forward<Where>(where));
+  normalise(values, lo, hi);
   return values;
 }
 
@@ -265,25 +280,50 @@ bool appendTets(int type, const vtkIdType* p, std::vector<UnstructuredVolume::Te
 
 }  // namespace
 
-Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field) {
+namespace {
+
+// An unstructured grid's solid cells as tetrahedra, with the array's values
+// per point as read (not yet normalised) and their range.
+struct UnstructuredCells {
+  std::vector<Vec3f> points;
+  std::vector<float> values;
+  std::vector<UnstructuredVolume::Tet> tets;
+  uint64_t cells = 0, skipped = 0;
+  std::string array;  // "points 'NAME'" or "cells 'NAME'", " (magnitude)" for vectors
+  double lo = 0, hi = 0;
+  Box3f box;
+};
+
+// The grid in the file at `path` (.vtk legacy, .vts, else .vtu).
+struct ReadGrid {
+  vtkDataSet* grid = nullptr;
+  vtkSmartPointer<vtkObject> reader;
+};
+ReadGrid readGrid(const std::string& path) {
   // Any of the three as a data set of cells: a structured grid's cells are
   // hexahedra (quadrilaterals or lines where a side is one point thick,
   // which are not solids).
   const std::string extension = std::filesystem::path(path).extension().string();
-  vtkDataSet* grid = nullptr;
-  vtkSmartPointer<vtkXMLUnstructuredGridReader> xml;
-  vtkSmartPointer<vtkUnstructuredGridReader> old;
-  vtkSmartPointer<vtkXMLStructuredGridReader> curvilinear;
+  ReadGrid out;
   if (extension == ".vtk") {
-    old = readVtk<vtkUnstructuredGridReader>(path, "unstructured grid (.vtk)");
-    grid = old->GetOutput();
+    auto r = readVtk<vtkUnstructuredGridReader>(path, "unstructured grid (.vtk)");
+    out.grid = r->GetOutput();
+    out.reader = r;
   } else if (extension == ".vts") {
-    curvilinear = readVtk<vtkXMLStructuredGridReader>(path, "structured grid (.vts)");
-    grid = curvilinear->GetOutput();
+    auto r = readVtk<vtkXMLStructuredGridReader>(path, "structured grid (.vts)");
+    out.grid = r->GetOutput();
+    out.reader = r;
   } else {
-    xml = readVtk<vtkXMLUnstructuredGridReader>(path, "unstructured grid (.vtu)");
-    grid = xml->GetOutput();
+    auto r = readVtk<vtkXMLUnstructuredGridReader>(path, "unstructured grid (.vtu)");
+    out.grid = r->GetOutput();
+    out.reader = r;
   }
+  return out;
+}
+
+UnstructuredCells readCells(const std::string& path, const std::string& field) {
+  const ReadGrid read = readGrid(path);
+  vtkDataSet* grid = read.grid;
   const vtkIdType n = grid->GetNumberOfPoints();
   if (n == 0 || grid->GetNumberOfCells() == 0)
     throw InputError(
@@ -307,72 +347,164 @@ Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field
                     "arrays: {})",
                     path, field.empty() ? "" : " '" + field + "'", arrayNames(pointData),
                     arrayNames(cellData)));
+  UnstructuredCells out;
+  out.cells = uint64_t(grid->GetNumberOfCells());
+  out.array = fmt::format("{} '{}'{}", atCells ? "cells" : "points",
+                          array->GetName() ? array->GetName() : "",
+                          array->GetNumberOfComponents() > 1 ? " (magnitude)" : "");
   const vtkIdType cells = grid->GetNumberOfCells();
-  double lo, hi;
-  const std::vector<float> arrayValues = normalisedValues(
-      array, uint64_t(atCells ? cells : n), path, lo, hi,
+  const std::vector<float> arrayValues = finiteValues(
+      array, uint64_t(atCells ? cells : n), path, out.lo, out.hi,
       [&](uint64_t i) { return fmt::format("at {} {}", atCells ? "cell" : "point", i); });
-  std::vector<Vec3f> points;
-  std::vector<float> values;
-  Box3f box;
   auto addPoint = [&](vtkIdType i, float value) {
     double p[3];
     grid->GetPoint(i, p);
-    points.push_back(Vec3f(float(p[0]), float(p[1]), float(p[2])));
-    values.push_back(value);
-    box.extend(points.back());
+    out.points.push_back(Vec3f(float(p[0]), float(p[1]), float(p[2])));
+    out.values.push_back(value);
+    out.box.extend(out.points.back());
   };
   if (!atCells)
     for (vtkIdType i = 0; i < n; ++i) addPoint(i, arrayValues[size_t(i)]);
-  std::vector<UnstructuredVolume::Tet> tets;
-  uint64_t skipped = 0;
   vtkNew<vtkIdList> ids;
   std::vector<vtkIdType> own;
   for (vtkIdType c = 0; c < cells; ++c) {
     grid->GetCellPoints(c, ids);
     const vtkIdType* cellPoints = ids->GetPointer(0);
-    const size_t before = points.size();
+    const size_t before = out.points.size();
     if (atCells) {
       own.resize(size_t(ids->GetNumberOfIds()));
       for (size_t k = 0; k < own.size(); ++k) {
-        own[k] = vtkIdType(points.size());
+        own[k] = vtkIdType(out.points.size());
         addPoint(cellPoints[k], arrayValues[size_t(c)]);
       }
       cellPoints = own.data();
     }
-    if (!appendTets(grid->GetCellType(c), cellPoints, tets)) {
-      ++skipped;
+    if (!appendTets(grid->GetCellType(c), cellPoints, out.tets)) {
+      ++out.skipped;
       if (atCells) {  // a cell that is not a solid keeps no points
-        points.resize(before);
-        values.resize(before);
+        out.points.resize(before);
+        out.values.resize(before);
       }
     }
   }
-  if (tets.empty())
+  if (out.tets.empty())
     throw InputError(fmt::format(
         "{}: no solid cells (tetrahedra, hexahedra, voxels, wedges, pyramids) among its {}", path,
-        grid->GetNumberOfCells()));
+        out.cells));
+  return out;
+}
+
+// The transfer function of a volume framed by `box`: as a raw: volume's.
+std::shared_ptr<const TransferFunction> framedTransfer(const std::string& path, const Box3f& box) {
   if (!(maxComponent(box.size()) > 0))
     throw InputError(fmt::format("{}: its points span no volume", path));
   TransferFunction tf = TransferFunction::standard();
-  tf = tf.withScale(tf.scale() / maxComponent(box.size()));  // as a raw: volume's
-  const std::string name =
-      fmt::format("{} {} '{}' [{:g}, {:g}]{}{}", std::filesystem::path(path).filename().string(),
-                  atCells ? "cells" : "points", array->GetName() ? array->GetName() : "", lo, hi,
-                  array->GetNumberOfComponents() > 1 ? " (magnitude)" : "",
-                  skipped ? fmt::format(", {} cells that are not solids left out", skipped) : "");
+  return std::make_shared<const TransferFunction>(
+      tf.withScale(tf.scale() / maxComponent(box.size())));
+}
+
+// `cells` normalised by [lo, hi] as a volume geometry of `scene`.
+void addVolume(Scene& scene, const std::string& path, const std::string& name,
+               UnstructuredCells cells, double lo, double hi,
+               std::shared_ptr<const TransferFunction> transfer, uint32_t firstSeed) {
+  normalise(cells.values, lo, hi);
   std::shared_ptr<UnstructuredVolume> volume;
   try {
-    volume = UnstructuredVolume::make(std::move(points), std::move(values), std::move(tets),
-                                      std::make_shared<const TransferFunction>(std::move(tf)));
+    volume = UnstructuredVolume::make(std::move(cells.points), std::move(cells.values),
+                                      std::move(cells.tets), std::move(transfer), firstSeed);
   } catch (const InputError& e) {
     throw InputError(fmt::format("{}: {}", path, e.what()));
   }
-  Scene scene = framedVolumeScene(name, box);
   Material none;
   none.name = "volume";
   scene.addSingleInstanceGeometry({name, scene.addMaterial(none), std::move(volume)});
+}
+
+}  // namespace
+
+Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field) {
+  UnstructuredCells cells = readCells(path, field);
+  const std::string name = fmt::format(
+      "{} {} [{:g}, {:g}]{}", std::filesystem::path(path).filename().string(), cells.array,
+      cells.lo, cells.hi,
+      cells.skipped ? fmt::format(", {} cells that are not solids left out", cells.skipped) : "");
+  auto transfer = framedTransfer(path, cells.box);
+  Scene scene = framedVolumeScene(name, cells.box);
+  const double lo = cells.lo, hi = cells.hi;
+  addVolume(scene, path, name, std::move(cells), lo, hi, std::move(transfer), 0);
   return scene;
+}
+
+std::vector<std::string> readPvtuPieces(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path))
+    throw InputError(fmt::format("{}: no such file", path));
+  vtkNew<vtkXMLDataParser> parser;
+  vtkNew<ErrorCatcher> errors;
+  parser->AddObserver(vtkCommand::ErrorEvent, errors);
+  parser->SetFileName(path.c_str());
+  const bool display = vtkObject::GetGlobalWarningDisplay();
+  vtkObject::GlobalWarningDisplayOff();
+  const int parsed = parser->Parse();
+  vtkObject::SetGlobalWarningDisplay(display);
+  vtkXMLDataElement* root = parser->GetRootElement();
+  if (!parsed || !root || !errors->message.empty())
+    throw InputError(fmt::format("{}: not an XML file VTK can parse", path));
+  vtkXMLDataElement* grid = root->FindNestedElementWithName("PUnstructuredGrid");
+  if (std::string_view(root->GetName() ? root->GetName() : "") != "VTKFile" || !grid)
+    throw InputError(fmt::format("{}: not a VTK parallel unstructured grid (.pvtu) file", path));
+  std::vector<std::string> pieces;
+  const std::filesystem::path directory = std::filesystem::path(path).parent_path();
+  for (int i = 0; i < grid->GetNumberOfNestedElements(); ++i) {
+    vtkXMLDataElement* e = grid->GetNestedElement(i);
+    if (std::string_view(e->GetName() ? e->GetName() : "") != "Piece") continue;
+    const char* source = e->GetAttribute("Source");
+    if (!source || !*source)
+      throw InputError(fmt::format("{}: piece {} names no Source file", path, pieces.size()));
+    pieces.push_back((directory / source).string());
+  }
+  if (pieces.empty()) throw InputError(fmt::format("{}: lists no pieces", path));
+  return pieces;
+}
+
+Scene loadVtkPiecesScene(const std::string& path, const std::string& field, int rank, int ranks,
+                         const PieceAgreement& agree) {
+  std::vector<std::string> pieces;
+  std::vector<std::pair<size_t, UnstructuredCells>> mine;
+  PieceSummary summary;
+  std::string error;
+  try {
+    pieces = readPvtuPieces(path);
+    const auto [first, end] = pieceRanks(pieces.size(), ranks, rank);
+    for (size_t k = first; k < end; ++k) {
+      UnstructuredCells cells = readCells(pieces[k], field);
+      summary.lo = std::min(summary.lo, cells.lo);
+      summary.hi = std::max(summary.hi, cells.hi);
+      summary.box.extend(cells.box);
+      summary.cells += cells.cells;
+      summary.skipped += cells.skipped;
+      mine.emplace_back(k, std::move(cells));
+    }
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  summary = agree(summary, error);  // every rank's, so that all normalise and frame alike
+  const std::string name = fmt::format(
+      "{} [{:g}, {:g}], {} pieces{}", std::filesystem::path(path).filename().string(), summary.lo,
+      summary.hi, pieces.size(),
+      summary.skipped ? fmt::format(", {} cells that are not solids left out", summary.skipped)
+                      : "");
+  auto transfer = framedTransfer(path, summary.box);
+  Scene scene = framedVolumeScene(name, summary.box);
+  for (auto& [k, cells] : mine)
+    addVolume(
+        scene, pieces[k],
+        fmt::format("{} {}", std::filesystem::path(pieces[k]).filename().string(), cells.array),
+        std::move(cells), summary.lo, summary.hi, transfer, uint32_t(k) * 0x9E3779B1u);
+  return scene;
+}
+
+std::pair<size_t, size_t> pieceRanks(size_t pieces, int ranks, int rank) {
+  return {pieces * size_t(rank) / size_t(ranks), pieces * size_t(rank + 1) / size_t(ranks)};
 }
 
 }  // namespace ferry

@@ -134,13 +134,22 @@ TEST(VtkFile, BadFilesAreErrorsNamingThem) {
         {"f.vti", imageXml().substr(0, 400)},
         {"g.vtp", imageXml()},
         {"h.vtu", imageXml()},
-        {"i.vtk", "# vtk DataFile Version 3.0\nnot a grid\nASCII\nDATASET POLYDATA\n"}}) {
+        {"i.vtk", "# vtk DataFile Version 3.0\nnot a grid\nASCII\nDATASET POLYDATA\n"},
+        {"j.pvtu", "<VTKFile type=\"PUnstructuredGrid\"><PUnstructuredGrid>"},
+        {"k.pvtu", imageXml()},
+        {"l.pvtu", "<VTKFile><PUnstructuredGrid></PUnstructuredGrid></VTKFile>"},
+        {"m.pvtu", "<VTKFile><PUnstructuredGrid><Piece/></PUnstructuredGrid></VTKFile>"},
+        {"n.pvtu",
+         "<VTKFile><PUnstructuredGrid><Piece "
+         "Source=\"nowhere.vtu\"/></PUnstructuredGrid></VTKFile>"}}) {
     const std::string path = tempFile(name, text);
     try {
       loadScene(path);
       ADD_FAILURE() << name << " was read";
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      // (A .pvtu's missing piece is named by the piece's file.)
+      const std::string named = name == "n.pvtu" ? "nowhere.vtu" : path;
+      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
     }
     fs::remove(path);
   }
