@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <iterator>
 #include <numeric>
 #include <span>
@@ -98,7 +99,10 @@ PartitionedScene loadBrickPieces(const SessionSettings& settings, const Communic
 // A .pvtu on this rank: its own pieces only, normalised and framed by what
 // every rank read (collective, as loadBrickPieces).
 bool isPvtuSpec(const std::string& spec) {
-  return spec.size() > 5 && spec.compare(spec.size() - 5, 5, ".pvtu") == 0;
+  std::string extension = std::filesystem::path(spec).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  return extension == ".pvtu";
 }
 PartitionedScene loadPvtuPieces(const SessionSettings& settings, const Communicator& comm) {
   const PieceAgreement agree = [&](const PieceSummary& mine, const std::string& readError) {

@@ -1,6 +1,7 @@
 // Volumes as users have them: OpenVDB files (.vdb, through Debian's
 // libopenvdb, which only vdb_file.cpp includes), VTK files (.vti, .vtp,
-// through Debian's VTK, only in vtk_file.cpp) and raw structured grids
+// .vtu, .vts, .pvtu, legacy .vtk, through Debian's VTK, only in
+// vtk_file.cpp) and raw structured grids
 // ("raw:PATH?dims=X,Y,Z&format=uint8|uint16|float32", sci-vis style, drawn
 // through a transfer function), each loaded as a scene of its own: the grid
 // medium in its box, bounded by that box, with a default camera and light
