@@ -53,6 +53,7 @@ struct PathCore {
   // the emission against the light sample that could also have found it
   // (MIS). Unused (0) for camera rays, delta lobes (kPathAfterSpecular) and
   // shadow rays.
+  // Its sign bit (densities are positive) is kSkyByMis.
   uint16_t bsdfDensity;
   half throughput[3];
   float tmax;
@@ -70,7 +71,13 @@ struct PathCore {
 
   [[gnu::always_inline]] Vec3f dir() const { return decodeOctahedral(direction); }
   [[gnu::always_inline]] Vec3f weight() const { return unpack(offsetof(PathCore, throughput)); }
-  float bsdfPdf() const { return unpackDensity(bsdfDensity); }
+  float bsdfPdf() const { return unpackDensity(bsdfDensity & uint16_t(~kSkyByMis)); }
+  // The previous vertex's light sample drew a constant environment over the
+  // whole sphere (the vertex transmits, or lies in a medium) and weighed it
+  // by MIS: an escaped path then weighs the sky against that sample.
+  static constexpr uint16_t kSkyByMis = 0x8000;
+  bool skyByMis() const { return (bsdfDensity & kSkyByMis) != 0; }
+  void setSkyByMis() { bsdfDensity |= kSkyByMis; }
   // The direction is quantized here, when the ray is made, so every rank
   // traces exactly the same ray whatever the rank count; returns dir().
   [[gnu::always_inline]] Vec3f setDir(Vec3f d) {

@@ -377,7 +377,7 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
   if (chosen == envIndex) {
     if (!sampleEnvironment(frame, twoSided, u, out)) return false;
     out.pdf *= selection;
-    out.mis = environmentTakesPartInMis();
+    out.mis = environmentTakesPartInMis() || twoSided;  // (see constantEnvironmentPdf)
     return true;
   }
   const int pointBase = triangleBase + int(groups_.empty() ? triangles_.size() : groups_.size());
@@ -482,6 +482,13 @@ float LightSampler::emitterPdf(Vec3f from, uint32_t index, Vec3f point) const {
                 groups_[group].byPower.discreteProbability(int(index % kTrianglesPerGroup));
   }
   return selection * dist2 / (cosLight * t.area);
+}
+
+float LightSampler::constantEnvironmentPdf(Vec3f from) const {
+  if (environment_.image || environment_.isBlack()) return 0;
+  const float total = selectionTotal(from);
+  if (!(total > 0)) return 0;
+  return environmentWeight_ / total / (4 * kPi);
 }
 
 float LightSampler::environmentPdf(Vec3f from, Vec3f direction) const {

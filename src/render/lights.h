@@ -7,9 +7,11 @@
 // function of the path's random key. The emitters' and an environment map's
 // share depends only on the shading point, not on its normal, so a path that
 // finds one by BSDF sampling can recompute the light sample's density there
-// (emitterPdf, environmentPdf): the other half of the MIS weight. Suns and a
-// constant environment are left to the light sample alone; at a surface that
-// only reflects they share their part by the normal. docs/path-tracer.md,
+// (emitterPdf, environmentPdf): the other half of the MIS weight. Suns are
+// left to the light sample alone, and so is a constant environment at a
+// surface that only reflects (there they share their part by the normal);
+// where light arrives from both sides it is drawn over the sphere and
+// weighed by MIS (constantEnvironmentPdf). docs/path-tracer.md,
 // "Light sampling".
 #pragma once
 
@@ -97,8 +99,14 @@ class LightSampler {
   // emitter `index` (selection included); 0 where it never does.
   float emitterPdf(Vec3f from, uint32_t index, Vec3f point) const;
   // Whether escaped paths weigh the environment against light samples: true
-  // for an environment map (a constant one is sampled about the normal).
+  // for an environment map (a constant one is sampled about the normal,
+  // except where light arrives from both sides: constantEnvironmentPdf).
   bool environmentTakesPartInMis() const { return environment_.image != nullptr; }
+  // The density with which sample(from, ...) at a two-sided point (one that
+  // transmits, or in a medium) picks `direction` of a constant environment,
+  // which it draws uniformly over the sphere, selection included; 0 for an
+  // environment map or none.
+  float constantEnvironmentPdf(Vec3f from) const;
   // The environment alone (no suns) along `direction`, and the density with
   // which sample(from, ...) picks that direction (selection included).
   Vec3f environmentAlong(Vec3f direction) const { return environmentRadiance(direction); }

@@ -275,7 +275,8 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
 }
 
 // Escaped: light from infinity counts in full after a delta vertex (no light
-// sample covered it); otherwise only an environment map's, MIS-weighted.
+// sample covered it); otherwise only an environment map's, MIS-weighted, or
+// a constant one's after a vertex that sampled it over the sphere.
 template <typename Path>
 [[gnu::always_inline]] inline void PathShading<Path>::addEscapedLight(
     const Path& path, FrameBuffer& frameBuffer) const {
@@ -285,6 +286,10 @@ template <typename Path>
   } else if (strategy_ == LightStrategy::Mis && lights_.environmentTakesPartInMis()) {
     const Vec3f d = path.dir();
     const float weight = misWeight(path.bsdfPdf(), lights_.environmentPdf(path.origin, d));
+    l = path.weight() * lights_.environmentAlong(d) * weight;
+  } else if (strategy_ == LightStrategy::Mis && path.skyByMis()) {
+    const Vec3f d = path.dir();
+    const float weight = misWeight(path.bsdfPdf(), lights_.constantEnvironmentPdf(path.origin));
     l = path.weight() * lights_.environmentAlong(d) * weight;
   } else {
     return;
@@ -466,6 +471,8 @@ template <typename Path>
   }
   makeRay(continuation, origin, wi, kInfinity, weight, vertex.pixel,
           bs.delta ? uint32_t(kPathAfterSpecular) : 0u, bs.delta ? 0.0f : bs.pdf, lightRatio);
+  if (!bs.delta && scattering.bsdf.transmits() && strategy_ != LightStrategy::BsdfSamples)
+    continuation.setSkyByMis();  // its light sample drew a constant sky over the sphere
   return true;
 }
 
@@ -703,6 +710,7 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeMediumVertex(
   }
   if (!usable(weight) || !(pdf > 0)) return spawned;
   makeRay(continuation, position, wi, kInfinity, weight, path.pixel(), 0, pdf);
+  if (strategy_ != LightStrategy::BsdfSamples) continuation.setSkyByMis();  // (as a surface's)
   if (media_) setMediumAndDepth(continuation, medium, depth + 1);
   spawned.continuation = true;
   return spawned;

@@ -86,7 +86,9 @@ TEST(AovSession, TheAovsAreTheSameBitForBitOnAnyRankCount) {
                  << c.ranks << " ranks, exchange " << int(c.exchange) << ", layout "
                  << int(c.layout) << ", " << c.groups << " groups, light paths " << c.lightPaths);
     EXPECT_TRUE(many.aovValues == one.aovValues);
-    if (!c.lightPaths) EXPECT_TRUE(many.linear == one.linear);
+    if (!c.lightPaths) {
+      EXPECT_TRUE(many.linear == one.linear);
+    }
   }
 }
 
