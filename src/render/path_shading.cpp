@@ -283,14 +283,13 @@ template <typename Path>
   Vec3f l;
   if (path.has(kPathAfterSpecular) || strategy_ == LightStrategy::BsdfSamples) {
     l = path.weight() * lights_.background(path.dir());
-  } else if (strategy_ == LightStrategy::Mis && lights_.environmentTakesPartInMis()) {
+  } else if (strategy_ == LightStrategy::Mis &&
+             (lights_.environmentTakesPartInMis() || path.skyByMis())) {
     const Vec3f d = path.dir();
-    const float weight = misWeight(path.bsdfPdf(), lights_.environmentPdf(path.origin, d));
-    l = path.weight() * lights_.environmentAlong(d) * weight;
-  } else if (strategy_ == LightStrategy::Mis && path.skyByMis()) {
-    const Vec3f d = path.dir();
-    const float weight = misWeight(path.bsdfPdf(), lights_.constantEnvironmentPdf(path.origin));
-    l = path.weight() * lights_.environmentAlong(d) * weight;
+    const float lightPdf = lights_.environmentTakesPartInMis()
+                               ? lights_.environmentPdf(path.origin, d)
+                               : lights_.constantEnvironmentPdf(path.origin);
+    l = path.weight() * lights_.environmentAlong(d) * misWeight(path.bsdfPdf(), lightPdf);
   } else {
     return;
   }

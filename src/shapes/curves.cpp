@@ -113,11 +113,12 @@ struct Crossing {
 
   float widthAt(float t) const { return lerp(t, segment->width0, segment->width1); }
 
-  // Half `half` of the piece cp spanning [t0, t1]: its control points and
-  // span; false when its box (widened by its width) misses the ray.
-  bool half(const std::array<Vec3f, 7>& split, const float (&t)[3], int half, Points& piece) const {
-    piece = {split[3 * half], split[3 * half + 1], split[3 * half + 2], split[3 * half + 3]};
-    const float w = 0.5f * std::max(widthAt(t[half]), widthAt(t[half + 1]));
+  // Half h of a subdivided piece (`split`, spanning t[h] to t[h + 1]): its
+  // control points; false when its box (widened by its width) misses the ray.
+  bool halfMeetsRay(const std::array<Vec3f, 7>& split, const float (&t)[3], int h,
+                    Points& piece) const {
+    piece = {split[3 * h], split[3 * h + 1], split[3 * h + 2], split[3 * h + 3]};
+    const float w = 0.5f * std::max(widthAt(t[h]), widthAt(t[h + 1]));
     if (maxOf(piece[0].y, piece[1].y, piece[2].y, piece[3].y) + w < 0 ||
         minOf(piece[0].y, piece[1].y, piece[2].y, piece[3].y) - w > 0)
       return false;
@@ -138,7 +139,7 @@ struct Crossing {
     const float t[3] = {t0, (t0 + t1) * 0.5f, t1};
     Points piece;
     for (int h = 0; h < 2; ++h)
-      if (t[h + 1] > lo && t[h] < hi && half(split, t, h, piece))
+      if (t[h + 1] > lo && t[h] < hi && halfMeetsRay(split, t, h, piece))
         testRange(piece, t[h], t[h + 1], depth - 1, lo, hi);
   }
 
@@ -149,7 +150,7 @@ struct Crossing {
       const float t[3] = {t0, (t0 + t1) * 0.5f, t1};
       Points piece;
       for (int h = 0; h < 2; ++h)
-        if (half(split, t, h, piece)) test(piece, t[h], t[h + 1], depth - 1);
+        if (halfMeetsRay(split, t, h, piece)) test(piece, t[h], t[h + 1], depth - 1);
       return;
     }
     // The ray must pass between the planes perpendicular to the curve at
@@ -263,11 +264,9 @@ Box3f Curves::pieceBounds(uint32_t primitive, uint32_t piece) const {
                          blossom(s.points, u0, u1, u1), blossom(s.points, u1, u1, u1)})
     b.extend(p);
   // Half the piece's width, and a margin for the crossing's rounding.
-  const Vec3f size = b.upper - b.lower;
-  const float r = 0.5f * std::max(lerp(u0, s.width0, s.width1), lerp(u1, s.width0, s.width1)) +
-                  1e-5f * std::max({size.x, size.y, size.z, std::abs(b.lower.x),
-                                    std::abs(b.lower.y), std::abs(b.lower.z), std::abs(b.upper.x),
-                                    std::abs(b.upper.y), std::abs(b.upper.z)});
+  const float scale = std::max(maxComponent(b.size()), maxComponent(max(-b.lower, b.upper)));
+  const float r =
+      0.5f * std::max(lerp(u0, s.width0, s.width1), lerp(u1, s.width0, s.width1)) + 1e-5f * scale;
   return {b.lower - Vec3f(r), b.upper + Vec3f(r)};
 }
 
