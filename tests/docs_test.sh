@@ -180,11 +180,17 @@ for block in "$work"/blocks/*.sh; do
     continue
   fi
   start=$SECONDS
-  if (cd "$run" && timeout 120 bash "$block") > "$work/block.log" 2>&1; then
+  (cd "$run" && timeout 120 bash "$block") > "$work/block.log" 2>&1
+  status=$?
+  if ((status == 0)); then
     echo "  $where: ran in $((SECONDS - start)) s"
   else
     tail -25 "$work/block.log"
-    fail "the commands at $where"
+    if ((status == 124)); then
+      fail "the commands at $where (still running after 120 s: stopped)"
+    else
+      fail "the commands at $where (exit status $status)"
+    fi
   fi
 done
 

@@ -274,6 +274,9 @@ ViewerServer::ViewerServer(const std::string& bind, int port, std::vector<Camera
                     "machine)",
                     bind, port));
   s.thread = std::thread([&s] { s.server.listen_after_bind(); });
+  // httplib's stop() does nothing until its loop has begun: wait for it, so
+  // that a server destroyed at once still stops.
+  while (!s.server.is_running()) std::this_thread::sleep_for(std::chrono::microseconds(100));
 }
 
 ViewerServer::~ViewerServer() {
