@@ -44,6 +44,7 @@ enum class RandomDim : uint32_t {
   MaterialSelect,  // which material of a mix shades the vertex
   LensU,           // the thin lens point of a camera ray or a connection to the camera
   LensV,
+  Time,  // when a camera ray is, within the shutter (scene/motion.h)
   Count
 };
 
@@ -136,8 +137,8 @@ class RandomStream {
  private:
   // 1 for the second number of a pair (its pair key is the dimension before).
   static constexpr uint8_t kSecondOfPair[uint32_t(RandomDim::Count)] = {0, 1, 0, 0, 1, 0, 0,
-                                                                        1, 0, 0, 0, 0, 1};
-  static_assert(uint32_t(RandomDim::Count) == 13, "pair each new dimension in kSecondOfPair");
+                                                                        1, 0, 0, 0, 0, 1, 0};
+  static_assert(uint32_t(RandomDim::Count) == 14, "pair each new dimension in kSecondOfPair");
   uint32_t keyHash_ = 0;
   uint32_t reversedSample_ = 0;
   bool sobol_;

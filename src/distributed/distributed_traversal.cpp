@@ -277,7 +277,7 @@ void DistributedTraversal<Path>::trace(PathQueue<Path>& rays, FrameStats& stats,
   }
   if (hits) hits->resize(rays.size());
   traceCounted(geometry_, rays, rank, instanceOwners_,
-               hits ? std::span<TraceHit>(*hits) : std::span<TraceHit>(), stats);
+               hits ? std::span<TraceHit>(*hits) : std::span<TraceHit>(), this->times_, stats);
 }
 
 template <typename Path>

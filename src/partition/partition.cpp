@@ -194,6 +194,7 @@ void Partition::checkCovers(const Scene& scene) const {
   };
   auto coveredByInstanced = [&](size_t i, const RankSet& owners) {
     const Instance& inst = scene.instances[i];
+    if (inst.motion) return false;  // placed proxies are static
     for (uint32_t k : tree.overlapping(bounds[i])) {
       const Proxy& p = proxies[k];
       if (p.shape < 0 || !p.owners.isSubsetOf(owners) ||
@@ -229,9 +230,19 @@ void Partition::checkCovers(const Scene& scene) const {
     // triangle by triangle. An instanced object's trees are made once, in
     // object space, and shared by its instances.
     const Instance& inst = scene.instances[i];
+    if (inst.motion) {  // its proxies are its meshes' and geometries' swept boxes
+      for (int32_t m : scene.objects[inst.object].meshes) {
+        if (scene.meshes[m].triangleCount() == 0) continue;
+        const Box3f box = inst.placeBox(scene.meshes[m].bounds());
+        if (!covered(box, eligible(box, owners), 1000000))
+          throw InternalError(fmt::format(
+              "moving instance {} (object '{}') is not covered by proxies of its owners {}", i,
+              scene.objects[inst.object].name, owners.toString()));
+      }
+    }
     const bool shared = placements[inst.object] > 1;
     for (int32_t m : scene.objects[inst.object].meshes) {
-      if (scene.meshes[m].triangleCount() == 0) continue;
+      if (scene.meshes[m].triangleCount() == 0 || inst.motion) continue;
       if (!shared) {  // (a shared mesh's box is its tree's root, made once)
         const Box3f meshBox = inst.transform.transformBox(scene.meshes[m].bounds());
         if (covered(meshBox, eligible(meshBox, owners), 2000)) continue;
@@ -290,7 +301,7 @@ void Partition::checkCovers(const Scene& scene) const {
     for (int32_t g : scene.objects[inst.object].geometries) {
       const Shape* shape = scene.geometries[g].shape.get();
       if (!shape || shape->bounds().empty()) continue;
-      const Box3f box = inst.transform.transformBox(shape->bounds());
+      const Box3f box = inst.placeBox(shape->bounds());
       if (!covered(box, eligible(box, owners), 1000000))
         throw InternalError(fmt::format(
             "instance {} (object '{}', geometry '{}') is not covered by proxies of its owners {}",

@@ -41,7 +41,8 @@ uint64_t instancedInstanceCount(const Scene& scene, const UnitSet& units) {
   const std::vector<uint32_t> placements = scene.instanceCountPerObject();
   uint64_t count = 0;
   for (const Unit& unit : units.units)
-    for (int32_t i : unit.instances) count += placements[size_t(scene.instances[i].object)] > 1;
+    for (int32_t i : unit.instances)
+      count += placements[size_t(scene.instances[i].object)] > 1 && !scene.instances[i].motion;
   return count;
 }
 
@@ -63,6 +64,7 @@ void addInstancedProxies(const Scene& scene, const UnitSet& units,
       const Instance& inst = scene.instances[i];
       std::vector<Box3f>& boxes = objectBoxes[size_t(inst.object)];
       if (boxes.empty()) continue;  // placed once (a box proxy), or no triangles
+      if (inst.motion) continue;    // swept boxes in the world (unitProxyBoxes)
       int32_t& shape = shapeOf[size_t(inst.object)];
       if (shape < 0) {
         Box3f all;
@@ -103,7 +105,7 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
   for (const Unit& unit : units.units)
     for (int32_t i : unit.instances) {
       const int32_t o = scene.instances[i].object;
-      if (placements[o] > 1) {
+      if (placements[o] > 1 && !scene.instances[i].motion) {
         count += objectBoxes[o].size();  // none when !instancedToo
         continue;
       }
@@ -116,6 +118,16 @@ std::vector<UnitBox> unitProxyBoxes(const Scene& scene, const UnitSet& units, in
   for (uint32_t u = 0; u < units.units.size(); ++u) {
     for (int32_t i : units.units[u].instances) {
       const Instance& inst = scene.instances[i];
+      if (inst.motion) {  // a moving instance: each mesh's and geometry's swept box
+        for (int32_t m : scene.objects[inst.object].meshes)
+          if (scene.meshes[m].triangleCount() > 0)
+            boxes.push_back({u, inst.placeBox(scene.meshes[m].bounds())});
+        for (int32_t g : scene.objects[inst.object].geometries)
+          if (const Shape* shape = scene.geometries[g].shape.get();
+              shape && !shape->bounds().empty())
+            boxes.push_back({u, inst.placeBox(shape->bounds())});
+        continue;
+      }
       if (placements[inst.object] > 1) {
         for (const Box3f& objectBox : objectBoxes[inst.object]) {
           Box3f b = inst.transform.transformBox(objectBox);

@@ -233,7 +233,7 @@ SceneSplitReport splitForPartitioning(Scene& scene, const SceneSplitOptions& opt
       continue;
     }
     for (int32_t object : replacement[inst.object]) {
-      instances.push_back({object, inst.transform});
+      instances.push_back({object, inst.transform, inst.motion});
       report.originalInstance.push_back(int32_t(i));
     }
   }

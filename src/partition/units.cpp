@@ -13,7 +13,7 @@ std::vector<Box3f> instanceWorldBounds(const Scene& scene) {
     objectBounds[o] = scene.objectBounds(int32_t(o));
   std::vector<Box3f> bounds(scene.instances.size());
   for (size_t i = 0; i < scene.instances.size(); ++i)
-    bounds[i] = scene.instances[i].transform.transformBox(objectBounds[scene.instances[i].object]);
+    bounds[i] = scene.instances[i].placeBox(objectBounds[scene.instances[i].object]);
   return bounds;
 }
 

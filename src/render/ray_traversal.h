@@ -100,15 +100,21 @@ class RayTraversal {
     (void)values;
     return true;
   }
+  // When the rays traced next are (scene/motion.h): the renderer sets it
+  // before each sample.
+  void setPathTimes(const PathTimes& times) { times_ = times; }
+
+ protected:
+  PathTimes times_;
 };
 
 // TraceBackend::trace on this rank, its queries and time added to `stats`.
 template <typename Path>
 void traceCounted(const TraceBackend& backend, PathQueue<Path>& rays, int rank,
                   std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept,
-                  FrameStats& stats) {
+                  const PathTimes& times, FrameStats& stats) {
   const auto start = Clock::now();
-  const TraceCounts counts = backend.trace(rays, rank, instanceOwners, kept);
+  const TraceCounts counts = backend.trace(rays, rank, instanceOwners, kept, times);
   stats.closestTraces += counts.closest;
   stats.occlusionTraces += counts.occlusion;
   // Volumes' tracking happens in the trace (shapes/volume_brick.h).
@@ -127,8 +133,8 @@ class LocalTraversal final : public RayTraversal<Path> {
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters&,
                 FrameStats& stats) override {
     pathHits.resize(rays.paths.size());
-    traceCounted(backend_, rays.paths, 0, {}, pathHits, stats);
-    traceCounted(backend_, rays.shadowRays, 0, {}, {}, stats);
+    traceCounted(backend_, rays.paths, 0, {}, pathHits, this->times_, stats);
+    traceCounted(backend_, rays.shadowRays, 0, {}, {}, this->times_, stats);
   }
   bool anyRaysLeft(size_t localRays) override { return localRays > 0; }
 

@@ -178,19 +178,27 @@ inline SurfaceTable::MeshArrays geometryArrays(const Scene& scene, const Geometr
 inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
                                        const std::vector<Affine3f>* inverses, Vec3f direction) {
   const Instance& inst = scene.instances[hit.instance];
-  const Affine3f inv = inverses ? (*inverses)[hit.instance] : inst.transform.inverse();
+  const Affine3f transform = inst.transformAt(hit.time);
+  const Affine3f inv = inverses && !inst.motion ? (*inverses)[hit.instance] : transform.inverse();
   const Object& object = scene.objects[inst.object];
   const size_t slot = size_t(hit.slot);
   const SurfaceTable::MeshArrays arrays =
       slot < object.meshes.size()
           ? meshArrays(scene, scene.meshes[object.meshes[slot]])
           : geometryArrays(scene, scene.geometries[object.geometries[slot - object.meshes.size()]]);
-  return surfaceAt(scene, inst.transform, inv, arrays, hit, direction);
+  return surfaceAt(scene, transform, inv, arrays, hit, direction);
 }
 
 inline SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table,
                                        const TraceHit& hit, Vec3f direction) {
-  return surfaceAt(scene, scene.instances[hit.instance].transform, table.inverses[hit.instance],
+  const Instance& inst = scene.instances[hit.instance];
+  if (inst.motion) {  // where it was when the ray met it
+    const Affine3f transform = inst.motion->at(hit.time);
+    return surfaceAt(scene, transform, transform.inverse(),
+                     table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)], hit,
+                     direction);
+  }
+  return surfaceAt(scene, inst.transform, table.inverses[hit.instance],
                    table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)], hit,
                    direction);
 }

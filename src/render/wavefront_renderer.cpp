@@ -49,6 +49,12 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
                        camera_.direction(x0, y0 + float(window_.height))};
   const int sizes[] = {window_.x0, window_.y0, window_.width, window_.height};
   viewKey_ = hash64(sizes, sizeof sizes, hash64(key, sizeof key));
+  moves_ = scene.moves();
+  clock_ = {scene.shutterOpen,       scene.shutterClose,
+            scene.motionStart,       scene.motionEnd,
+            settings.seed,           settings.sampler,
+            uint32_t(window_.width), uint32_t(window_.filmWidth),
+            uint32_t(window_.x0),    uint32_t(window_.y0)};
 }
 
 template <typename Path>
@@ -103,6 +109,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
       first = firstPixel + uint32_t(n * j / takers);
       last = firstPixel + uint32_t(n * (j + 1) / takers);
     }
+    traversal_.setPathTimes(pathTimes(sampleIndex));
     if (traversal_.runsSamples()) {
       // The traversal runs the sample (the overlapped distributed exchange):
       // it calls back for camera paths and shading as rays become ready.
@@ -445,7 +452,8 @@ typename WavefrontRenderer<Path>::ShadeCounts WavefrontRenderer<Path>::shadePath
   RetraceBatch batch;
   for (size_t first = begin; first < end; first += RetraceBatch::kCapacity) {
     const size_t m = std::min(RetraceBatch::kCapacity, end - first);
-    if (mayRetrace) counts.retraced += retraceBatch(&paths[first], &kept[first], m, batch);
+    if (mayRetrace)
+      counts.retraced += retraceBatch(&paths[first], &kept[first], m, sampleIndex, batch);
     for (size_t i = 0; i < m; ++i) {
       const Path& path = paths[first + i];
       const TraceHit& hit = batch.hitOf(i, kept[first + i]);
@@ -465,13 +473,14 @@ typename WavefrontRenderer<Path>::ShadeCounts WavefrontRenderer<Path>::shadePath
 
 template <typename Path>
 size_t WavefrontRenderer<Path>::retraceBatch(const Path* paths, const TraceHit* kept, size_t count,
-                                             RetraceBatch& batch) const {
+                                             uint32_t sampleIndex, RetraceBatch& batch) const {
+  const PathTimes times = pathTimes(sampleIndex);
   size_t needed = 0;
   for (size_t i = 0; i < count; ++i) {
     const Path& p = paths[i];
     const bool retrace = p.hasHit() && (settings_.retraceAll || !kept[i].valid());
     batch.slot[i] = retrace ? uint16_t(needed) : RetraceBatch::kKept;
-    if (retrace) batch.queries[needed++] = {p.origin, p.dir(), p.tmax};
+    if (retrace) batch.queries[needed++] = {p.origin, p.dir(), p.tmax, times.of(p.pixel())};
   }
   if (needed) geometry_.retrace(std::span(batch.queries, needed), std::span(batch.found, needed));
   batch.retraced = needed;

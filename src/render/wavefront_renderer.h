@@ -177,8 +177,12 @@ class WavefrontRenderer {
   // Re-traces, as one batched query, each of paths[0, count) that hit
   // something whose hit this rank does not keep (every one that hit, with
   // --retrace all); returns how many. The one call shading makes to the trace.
-  size_t retraceBatch(const Path* paths, const TraceHit* kept, size_t count,
+  size_t retraceBatch(const Path* paths, const TraceHit* kept, size_t count, uint32_t sampleIndex,
                       RetraceBatch& batch) const;
+  // The motion times of sample `sampleIndex`'s rays (none when nothing moves).
+  PathTimes pathTimes(uint32_t sampleIndex) const {
+    return moves_ ? PathTimes{&clock_, sampleIndex} : PathTimes{};
+  }
 
   const TraceBackend& geometry_;  // shading's re-traces
   RayTraversal<Path>& traversal_;
@@ -186,6 +190,8 @@ class WavefrontRenderer {
   FilmWindow window_;  // the part of the film the image is
   Camera camera_;
   uint64_t viewKey_ = 0;  // CameraRays::view of this camera and window
+  MotionClock clock_;     // when rays are (scene/motion.h)
+  bool moves_ = false;    // whether anything in the scene moves
   PathShading<Path> shading_;
   Workspace workspace_;  // many ranks: the one whole-image wavefront
   tbb::enumerable_thread_specific<Workspace> chunkWorkspaces_;  // one rank: one per thread

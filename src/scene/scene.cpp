@@ -100,12 +100,17 @@ Box3f Scene::objectBounds(int32_t object) const {
   return b;
 }
 
+bool Scene::moves() const {
+  for (const Instance& inst : instances)
+    if (inst.motion) return true;
+  return false;
+}
+
 Box3f Scene::worldBounds() const {
   std::vector<Box3f> perObject(objects.size());
   for (size_t i = 0; i < objects.size(); ++i) perObject[i] = objectBounds(int32_t(i));
   Box3f b;
-  for (const Instance& inst : instances)
-    b.extend(inst.transform.transformBox(perObject[inst.object]));
+  for (const Instance& inst : instances) b.extend(inst.placeBox(perObject[inst.object]));
   return b;
 }
 

@@ -19,6 +19,7 @@
 #include "material/fourier_bsdf_table.h"
 #include "material/material_model.h"
 #include "media/medium.h"
+#include "scene/motion.h"
 #include "scene/shape.h"
 #include "scene/texture.h"
 
@@ -159,7 +160,15 @@ struct Object {
 
 struct Instance {
   int32_t object = 0;
-  Affine3f transform;
+  Affine3f transform;  // where it is; a moving instance's start (u = 0)
+  // Set when it moves while the shutter is open (scene/motion.h).
+  std::shared_ptr<const InstanceMotion> motion;
+
+  Affine3f transformAt(float u) const { return motion ? motion->at(u) : transform; }
+  // The world box of `objectBox` placed here, over the whole shutter if it moves.
+  Box3f placeBox(const Box3f& objectBox) const {
+    return motion ? motion->sweptBox(objectBox) : transform.transformBox(objectBox);
+  }
 };
 
 // Sun / directional light: radiance arriving from a small cone around `direction`.
@@ -278,6 +287,11 @@ struct Scene {
   // pbrt's Film clamp of each camera sample (render/frame_buffer.h's
   // SampleClamp): v3's "maxsampleluminance", v4's "maxcomponentvalue"; 0: none.
   float filmMaxSampleLuminance = 0, filmMaxComponentValue = 0;
+  // Motion blur (scene/motion.h): the camera's shutter, and the times the
+  // moving instances' start and end transforms hold (pbrt's TransformTimes).
+  float shutterOpen = 0, shutterClose = 1;
+  float motionStart = 0, motionEnd = 1;
+  bool moves() const;  // whether any instance moves
   // pbrt's Integrator, as named ("bdpt", "path", ...; empty: none): a
   // bidirectional one turns light paths on (render/path_shading.h).
   std::string integrator;

@@ -36,6 +36,7 @@ SceneSummary summarize(const Scene& scene) {
   }
   s.objects = scene.objects.size();
   s.instances = scene.instances.size();
+  for (const Instance& inst : scene.instances) s.movingInstances += inst.motion != nullptr;
   std::vector<uint64_t> trianglesPerObject(scene.objects.size(), 0);
   for (size_t o = 0; o < scene.objects.size(); ++o)
     for (int32_t m : scene.objects[o].meshes)
@@ -189,6 +190,7 @@ nlohmann::json SceneSummary::toJson() const {
   j["vertices"] = vertices;
   j["objects"] = objects;
   j["instances"] = instances;
+  if (movingInstances) j["moving_instances"] = movingInstances;
   j["instanced_triangles"] = instancedTriangles;
   j["textures"] = textures;
   j["texels"] = texels;
@@ -245,7 +247,9 @@ std::string SceneSummary::toText() const {
   row("triangles", formatCount(triangles));
   row("vertices", formatCount(vertices));
   row("objects", formatCount(objects));
-  row("instances", formatCount(instances));
+  row("instances", movingInstances ? fmt::format("{} ({} moving)", formatCount(instances),
+                                                 formatCount(movingInstances))
+                                   : formatCount(instances));
   row("instanced triangles", formatCount(instancedTriangles));
   row("textures", fmt::format("{} ({} texels)", textures, formatCount(texels)));
   row("lights", fmt::format("{} ({} sun, {} point or spot, {} environment, {} emissive meshes / {} "

@@ -34,6 +34,7 @@ struct SceneSummary {
   uint64_t vertices = 0;
   uint64_t objects = 0;
   uint64_t instances = 0;
+  uint64_t movingInstances = 0;     // that move while the shutter is open (scene/motion.h)
   uint64_t instancedTriangles = 0;  // every instance's triangles
   uint64_t textures = 0;
   uint64_t texels = 0;

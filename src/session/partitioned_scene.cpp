@@ -115,7 +115,8 @@ SceneSummary wholeSummary(const SceneSummary& piece, const Communicator& comm) {
       &whole.textures,          &whole.texels,           &whole.emissiveMeshes,
       &whole.emissiveTriangles, &whole.memory.vertices,  &whole.memory.normals,
       &whole.memory.uvs,        &whole.memory.indices,   &whole.memory.texels,
-      &whole.memory.shapes,     &whole.memory.instances, &whole.memory.accel};
+      &whole.memory.shapes,     &whole.memory.instances, &whole.memory.accel,
+      &whole.movingInstances};
   std::vector<uint64_t> counts;
   for (uint64_t* f : fields) counts.push_back(*f);
   counts = comm.sum(std::span<const uint64_t>(counts));
@@ -183,6 +184,8 @@ PartitionedScene distributedPiece(Scene piece, const Communicator& comm) {
   manifest.filmCrop = piece.filmCrop;
   manifest.integrator = piece.integrator;
   manifest.integratorMaxDepth = piece.integratorMaxDepth;
+  manifest.shutterOpen = piece.shutterOpen, manifest.shutterClose = piece.shutterClose;
+  manifest.motionStart = piece.motionStart, manifest.motionEnd = piece.motionEnd;
   out.partitioner = manifest.partitioner;
   out.manifest = std::move(manifest);
   out.scene = std::move(piece);

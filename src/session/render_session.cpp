@@ -182,6 +182,8 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
     scene.filmCrop = manifest->filmCrop;
     scene.integrator = manifest->integrator;
     scene.integratorMaxDepth = manifest->integratorMaxDepth;
+    scene.shutterOpen = manifest->shutterOpen, scene.shutterClose = manifest->shutterClose;
+    scene.motionStart = manifest->motionStart, scene.motionEnd = manifest->motionEnd;
     owned.resize(scene.instances.size());
     std::iota(owned.begin(), owned.end(), 0);
     ownedEstimate = ownedMemory(scene, owned);
@@ -313,8 +315,17 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
         fmt::format("light paths were asked for, but scene '{}' has participating media, which "
                     "light paths do not cross; render it without them",
                     rank_->scene.name));
+  // Nor do they move: a light path's connection to the camera is keyed by
+  // the pixel it lands on, not by the light path's own time.
+  const bool moves = rank_->summary.movingInstances > 0;
+  if (moves && settings_.lightPaths.value_or(false))
+    throw InputError(
+        fmt::format("light paths were asked for, but scene '{}' has moving instances (motion "
+                    "blur), which light paths do not follow; render it without them",
+                    rank_->scene.name));
   settings_.render.lightPaths =
-      !media && settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
+      !media && !moves &&
+      settings_.lightPaths.value_or(integratorWantsLightPaths(rank_->scene.integrator));
   for (const Medium& m : rank_->scene.media) loadedTransfers_.push_back(m.transfer);
   // This rank's bricks, by the volume they were made from (the session owns
   // its scene: a given one is moved in).

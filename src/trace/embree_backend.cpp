@@ -37,13 +37,13 @@ class RayBatch {
     work_ = {};
   }
   ShapeWork shapeWork() const { return work_; }
-  void addClosest(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float tnear = 0) {
+  void addClosest(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float time = 0) {
     closestIndex_[closestCount_] = index;
-    closest_[closestCount_++].set(origin, direction, tnear, tmax);
+    closest_[closestCount_++].set(origin, direction, 0, tmax, time);
   }
-  void addOccluded(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float tnear = 0) {
+  void addOccluded(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float time = 0) {
     occludedIndex_[occludedCount_] = index;
-    occluded_[occludedCount_++].set(origin, direction, tnear, tmax);
+    occluded_[occludedCount_++].set(origin, direction, 0, tmax, time);
   }
 
   size_t closestCount() const { return closestCount_; }
@@ -56,7 +56,7 @@ class RayBatch {
   TraceHit hit(size_t k) const {
     const EmbreeRay& r = closest_[k];
     if (r.geomID == kNoGeometry) return {};
-    return {r.tfar, int32_t(r.instID), int32_t(r.geomID), r.primID, r.u, r.v};
+    return {r.tfar, int32_t(r.instID), int32_t(r.geomID), r.primID, r.u, r.v, r.time};
   }
   bool isOccluded(size_t k) const { return occluded_[k].tfar < 0; }  // Embree sets tfar = -inf
 
@@ -72,9 +72,9 @@ class RayBatch {
     uint32_t mask, id, flags;
     float ngX, ngY, ngZ, u, v;
     uint32_t primID, geomID, instID;
-    void set(Vec3f o, Vec3f d, float tmin, float tmax) {
+    void set(Vec3f o, Vec3f d, float tmin, float tmax, float when) {
       orgX = o.x, orgY = o.y, orgZ = o.z, tnear = tmin;
-      dirX = d.x, dirY = d.y, dirZ = d.z, time = 0;
+      dirX = d.x, dirY = d.y, dirZ = d.z, time = when;
       tfar = tmax, mask = 0xffffffffu, id = 0, flags = 0;
       geomID = kNoGeometry, instID = kNoGeometry;
     }
@@ -269,6 +269,7 @@ RTCRayHit toEmbree(const TraceRay& r) {
   rh.ray.dir_z = r.direction.z;
   rh.ray.tnear = r.tnear;
   rh.ray.tfar = r.tmax;
+  rh.ray.time = r.time;
   rh.ray.mask = 0xffffffffu;
   rh.ray.flags = 0;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -284,7 +285,7 @@ RTCRayHit toEmbree(const TraceRay& r) {
 TraceRay retraceQuery(const RetraceRay& r) {
   const Vec3f o = r.origin;
   const float scale = std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z), 1.0f});
-  return {o, r.direction, 0, r.tmax * 1.001f + 1e-4f * scale};
+  return {o, r.direction, 0, r.tmax * 1.001f + 1e-4f * scale, r.time};
 }
 
 // Embree's handles, released when the backend goes (or its build throws).
@@ -309,16 +310,16 @@ class EmbreeBackend final : public TraceBackend {
   EmbreeBackend(const Scene& scene, std::span<const int32_t> ownedInstances, Instancing instancing);
 
   TraceCounts trace(PathQueue<Path8>& paths, int rank, std::span<const uint64_t> owners,
-                    std::span<TraceHit> kept) const override {
-    return traceQueue(paths, rank, owners, kept);
+                    std::span<TraceHit> kept, const PathTimes& times) const override {
+    return traceQueue(paths, rank, owners, kept, times);
   }
   TraceCounts trace(PathQueue<Path64>& paths, int rank, std::span<const uint64_t> owners,
-                    std::span<TraceHit> kept) const override {
-    return traceQueue(paths, rank, owners, kept);
+                    std::span<TraceHit> kept, const PathTimes& times) const override {
+    return traceQueue(paths, rank, owners, kept, times);
   }
   TraceCounts trace(PathQueue<PathReplay>& paths, int rank, std::span<const uint64_t> owners,
-                    std::span<TraceHit> kept) const override {
-    return traceQueue(paths, rank, owners, kept);
+                    std::span<TraceHit> kept, const PathTimes& times) const override {
+    return traceQueue(paths, rank, owners, kept, times);
   }
   void retrace(std::span<const RetraceRay> rays, std::span<TraceHit> hits) const override;
   TraceHit intersect(const TraceRay& ray) const override;
@@ -332,9 +333,9 @@ class EmbreeBackend final : public TraceBackend {
  private:
   template <typename Path>
   TraceCounts traceQueue(PathQueue<Path>& paths, int rank, std::span<const uint64_t> owners,
-                         std::span<TraceHit> kept) const {
+                         std::span<TraceHit> kept, const PathTimes& times) const {
     TraceCounts counts = traceQueueInBatches<RayBatch>(
-        paths, rank, owners, kept, [this](RayBatch& batch) { traceBatch(batch); });
+        paths, rank, owners, kept, times, [this](RayBatch& batch) { traceBatch(batch); });
     errors_.throwIfFailed("tracing a wavefront");
     return counts;
   }
@@ -406,7 +407,7 @@ EmbreeBackend::EmbreeBackend(const Scene& scene, std::span<const int32_t> ownedI
   for (int32_t instanceId : ownedInstances) ++placements[scene.instances[instanceId].object];
   auto atTopLevel = [&](const Instance& inst) {
     return instancing == Instancing::Shared && placements[inst.object] == 1 &&
-           inst.transform.isIdentity();
+           inst.transform.isIdentity() && !inst.motion;
   };
   topLevelBase_ = uint32_t(scene.instances.size());  // instances keep their own ids below
 
@@ -434,12 +435,30 @@ EmbreeBackend::EmbreeBackend(const Scene& scene, std::span<const int32_t> ownedI
     }
     RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_INSTANCE);
     rtcSetGeometryInstancedScene(g, objectScene(inst.object));
-    float xfm[12];
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) xfm[r * 4 + c] = inst.transform.l[r][c];
-      xfm[r * 4 + 3] = inst.transform.t[r];
+    if (inst.motion) {  // its keys, spread evenly over the ray's time [0, 1]
+      const std::vector<MotionKey>& keys = inst.motion->keys();
+      rtcSetGeometryTimeStepCount(g, unsigned(keys.size()));
+      for (size_t k = 0; k < keys.size(); ++k) {
+        const MotionKey& key = keys[k];
+        RTCQuaternionDecomposition q;
+        rtcInitQuaternionDecomposition(&q);
+        rtcQuaternionDecompositionSetQuaternion(&q, key.rotation[3], key.rotation[0],
+                                                key.rotation[1], key.rotation[2]);
+        rtcQuaternionDecompositionSetScale(&q, key.scaleX, key.scaleY, key.scaleZ);
+        rtcQuaternionDecompositionSetSkew(&q, key.skewXY, key.skewXZ, key.skewYZ);
+        rtcQuaternionDecompositionSetShift(&q, key.shift.x, key.shift.y, key.shift.z);
+        rtcQuaternionDecompositionSetTranslation(&q, key.translation.x, key.translation.y,
+                                                 key.translation.z);
+        rtcSetGeometryTransformQuaternion(g, unsigned(k), &q);
+      }
+    } else {
+      float xfm[12];
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) xfm[r * 4 + c] = inst.transform.l[r][c];
+        xfm[r * 4 + 3] = inst.transform.t[r];
+      }
+      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
     }
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(embree_.top, g, static_cast<unsigned>(instanceId));
     rtcReleaseGeometry(g);
@@ -601,7 +620,7 @@ void EmbreeBackend::retrace(std::span<const RetraceRay> rays, std::span<TraceHit
     batch.clear();
     for (size_t i = begin; i < begin + n; ++i) {
       const TraceRay q = retraceQuery(rays[i]);
-      batch.addClosest(uint32_t(i), q.origin, q.direction, q.tmax);
+      batch.addClosest(uint32_t(i), q.origin, q.direction, q.tmax, q.time);
     }
     traceBatch(batch);
     for (size_t k = 0; k < batch.closestCount(); ++k) hits[batch.closestIndex(k)] = batch.hit(k);

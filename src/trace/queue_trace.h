@@ -7,7 +7,7 @@
 // A backend supplies its Batch type (its ray layout: each ray is written once,
 // in the form its tracer reads, and answered in place) with
 //   kCapacity, clear(),
-//   addClosest(index, origin, direction, tmax), addOccluded(...),
+//   addClosest(index, origin, direction, tmax, time), addOccluded(...),
 //   closestCount(), occludedCount(), closestIndex(k), occludedIndex(k),
 //   hitFound(k), hitDistance(k), hit(k) (a TraceHit), isOccluded(k),
 //   shapeWork() (what its shapes' crossings cost since clear()),
@@ -30,7 +30,7 @@ namespace ferry {
 template <typename Batch, typename Path, typename TraceBatch>
 TraceCounts traceQueueInBatches(PathQueue<Path>& paths, int rank,
                                 std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept,
-                                const TraceBatch& traceBatch) {
+                                const PathTimes& times, const TraceBatch& traceBatch) {
   FERRY_CHECK(kept.empty() || kept.size() == paths.size());
   TraceHit* found = kept.empty() ? nullptr : kept.data();
   constexpr size_t kBatch = Batch::kCapacity;
@@ -49,10 +49,11 @@ TraceCounts traceQueueInBatches(PathQueue<Path>& paths, int rank,
                           Path& p = paths[i];
                           p.markTraced(rank);
                           if (found) found[i] = TraceHit{};
+                          const float time = times.of(p.pixel());
                           if (!p.isShadow())
-                            batch.addClosest(uint32_t(i), p.origin, p.dir(), p.tmax);
+                            batch.addClosest(uint32_t(i), p.origin, p.dir(), p.tmax, time);
                           else if (!p.has(kPathOccluded))  // else already decided elsewhere
-                            batch.addOccluded(uint32_t(i), p.origin, p.dir(), p.tmax);
+                            batch.addOccluded(uint32_t(i), p.origin, p.dir(), p.tmax, time);
                         }
                         traceBatch(batch);
                         mine.add(batch.shapeWork());

@@ -221,6 +221,7 @@ struct Placement {
   bool transformed = false;  // else entered as is (the top level, or an identity transform)
   Affine3f toObject;         // world to object space
   Affine3f toWorld;          // object to world space
+  const InstanceMotion* motion = nullptr;  // moving: its transform at the ray's time
   const Affine3f* transform() const { return transformed ? &toWorld : nullptr; }
 };
 
@@ -230,16 +231,16 @@ class ReferenceBackend final : public TraceBackend {
                    Instancing instancing);
 
   TraceCounts trace(PathQueue<Path8>& paths, int rank, std::span<const uint64_t> owners,
-                    std::span<TraceHit> kept) const override {
-    return traceQueue(paths, rank, owners, kept);
+                    std::span<TraceHit> kept, const PathTimes& times) const override {
+    return traceQueue(paths, rank, owners, kept, times);
   }
   TraceCounts trace(PathQueue<Path64>& paths, int rank, std::span<const uint64_t> owners,
-                    std::span<TraceHit> kept) const override {
-    return traceQueue(paths, rank, owners, kept);
+                    std::span<TraceHit> kept, const PathTimes& times) const override {
+    return traceQueue(paths, rank, owners, kept, times);
   }
   TraceCounts trace(PathQueue<PathReplay>& paths, int rank, std::span<const uint64_t> owners,
-                    std::span<TraceHit> kept) const override {
-    return traceQueue(paths, rank, owners, kept);
+                    std::span<TraceHit> kept, const PathTimes& times) const override {
+    return traceQueue(paths, rank, owners, kept, times);
   }
   // The recorded distance is a float rounded from this backend's double
   // one: searching to the next float up always reaches the recorded hit, and
@@ -247,8 +248,8 @@ class ReferenceBackend final : public TraceBackend {
   void retrace(std::span<const RetraceRay> rays, std::span<TraceHit> hits) const override {
     FERRY_CHECK_EQ(rays.size(), hits.size());
     for (size_t i = 0; i < rays.size(); ++i)
-      hits[i] = intersect(
-          {rays[i].origin, rays[i].direction, 0, std::nextafter(rays[i].tmax, kInfinity)});
+      hits[i] = intersect({rays[i].origin, rays[i].direction, 0,
+                           std::nextafter(rays[i].tmax, kInfinity), rays[i].time});
   }
   TraceHit intersect(const TraceRay& ray) const override;
   bool occluded(const TraceRay& ray) const override;
@@ -265,13 +266,13 @@ class ReferenceBackend final : public TraceBackend {
     static constexpr size_t kCapacity = 256;
     void clear() { closestCount_ = occludedCount_ = 0; }
     ShapeWork shapeWork() const { return {}; }  // (the reference counts no work)
-    void addClosest(uint32_t index, Vec3f origin, Vec3f direction, float tmax) {
+    void addClosest(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float time) {
       closestIndex_[closestCount_] = index;
-      closest_[closestCount_++] = {origin, direction, 0, tmax};
+      closest_[closestCount_++] = {origin, direction, 0, tmax, time};
     }
-    void addOccluded(uint32_t index, Vec3f origin, Vec3f direction, float tmax) {
+    void addOccluded(uint32_t index, Vec3f origin, Vec3f direction, float tmax, float time) {
       occludedIndex_[occludedCount_] = index;
-      occluded_[occludedCount_++] = {origin, direction, 0, tmax};
+      occluded_[occludedCount_++] = {origin, direction, 0, tmax, time};
     }
     size_t closestCount() const { return closestCount_; }
     size_t occludedCount() const { return occludedCount_; }
@@ -297,8 +298,8 @@ class ReferenceBackend final : public TraceBackend {
 
   template <typename Path>
   TraceCounts traceQueue(PathQueue<Path>& paths, int rank, std::span<const uint64_t> owners,
-                         std::span<TraceHit> kept) const {
-    return traceQueueInBatches<Batch>(paths, rank, owners, kept,
+                         std::span<TraceHit> kept, const PathTimes& times) const {
+    return traceQueueInBatches<Batch>(paths, rank, owners, kept, times,
                                       [this](Batch& batch) { batch.answer(*this); });
   }
 
@@ -308,6 +309,11 @@ class ReferenceBackend final : public TraceBackend {
   void forPlacements(const TraceRay& ray, const float& tfar, const Visit& visit) const {
     instanceBvh_.traverse(boxRay(ray.origin, ray.direction, ray.tnear), tfar, [&](uint32_t p) {
       const Placement& placement = placements_[p];
+      if (placement.motion) {
+        const Affine3f toObject = placement.motion->at(ray.time).inverse();
+        return visit(placement, toObject.transformPoint(ray.origin),
+                     toObject.transformVector(ray.direction));
+      }
       if (!placement.transformed) return visit(placement, ray.origin, ray.direction);
       return visit(placement, placement.toObject.transformPoint(ray.origin),
                    placement.toObject.transformVector(ray.direction));
@@ -376,13 +382,14 @@ ReferenceBackend::ReferenceBackend(const Scene& scene, std::span<const int32_t> 
     p.instance = id;
     p.object = objectGeometry(inst.object);
     const bool topLevel = instancing == Instancing::Shared && placements[inst.object] == 1 &&
-                          inst.transform.isIdentity();
+                          inst.transform.isIdentity() && !inst.motion;
     topLevelObjects_ += topLevel;
     p.transformed = !inst.transform.isIdentity();
     p.toObject = inst.transform.inverse();
     p.toWorld = inst.transform;
+    p.motion = inst.motion.get();
     placements_.push_back(p);
-    worldBoxes.push_back(inst.transform.transformBox(objects_[p.object].bounds));
+    worldBoxes.push_back(inst.placeBox(objects_[p.object].bounds));
     bounds_.extend(worldBoxes.back());
   }
   instanceBvh_.build(worldBoxes);
@@ -404,7 +411,8 @@ TraceHit ReferenceBackend::intersect(const TraceRay& ray) const {
       if (g.isHole(tri, u, v, placement.transform(), hash, false)) return true;
       bestT = t;
       prune = float(t);
-      best = {float(t), placement.instance, int32_t(tri.slot), tri.primitive, float(u), float(v)};
+      best = {float(t), placement.instance, int32_t(tri.slot), tri.primitive,
+              float(u), float(v),           ray.time};
       return true;
     });
     return true;

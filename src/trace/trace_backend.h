@@ -16,6 +16,7 @@
 
 #include "core/math.h"
 #include "path/path.h"
+#include "scene/motion.h"
 #include "scene/shape.h"
 
 namespace ferry {
@@ -25,6 +26,7 @@ struct TraceRay {
   Vec3f direction;
   float tnear = 0;
   float tmax = kInfinity;
+  float time = 0;  // motion time u in [0, 1] (scene/motion.h)
 };
 
 struct TraceHit {
@@ -33,6 +35,7 @@ struct TraceHit {
   int32_t slot = -1;       // in the instance's object: its meshes, then its geometries
   uint32_t primitive = 0;  // triangle within the mesh, or the shape's primitive
   float u = 0, v = 0;      // barycentrics of vertices 1 and 2, or the shape's (u, v)
+  float time = 0;          // the ray's motion time (where a moving instance was)
 
   bool valid() const { return instance >= 0; }
 };
@@ -43,6 +46,7 @@ struct RetraceRay {
   Vec3f origin;
   Vec3f direction;
   float tmax = 0;
+  float time = 0;  // motion time u
 };
 
 // Queries one trace of a queue made, for FrameStats (trace/ knows no render stats).
@@ -98,17 +102,17 @@ class TraceBackend {
   // replay layout records the rank); a shadow ray not yet kPathOccluded gets
   // kPathOccluded when anything blocks it. With `kept` (paths.size()
   // entries), kept[i] becomes the hit that set path i's tmax in this call,
-  // else an invalid hit. Throws TraceError, after the whole queue, when the
-  // tracer reported an error.
+  // else an invalid hit. A path's motion time is times.of(pixel). Throws
+  // TraceError, after the whole queue, when the tracer reported an error.
   virtual TraceCounts trace(PathQueue<Path8>& paths, int rank,
-                            std::span<const uint64_t> instanceOwners,
-                            std::span<TraceHit> kept = {}) const = 0;
+                            std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept = {},
+                            const PathTimes& times = {}) const = 0;
   virtual TraceCounts trace(PathQueue<Path64>& paths, int rank,
-                            std::span<const uint64_t> instanceOwners,
-                            std::span<TraceHit> kept = {}) const = 0;
+                            std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept = {},
+                            const PathTimes& times = {}) const = 0;
   virtual TraceCounts trace(PathQueue<PathReplay>& paths, int rank,
-                            std::span<const uint64_t> instanceOwners,
-                            std::span<TraceHit> kept = {}) const = 0;
+                            std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept = {},
+                            const PathTimes& times = {}) const = 0;
 
   // Shading's re-trace, on the calling thread: hits[i] becomes the hit whose
   // distance rays[i].tmax records (the same hit, bit for bit, that the trace

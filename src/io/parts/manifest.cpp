@@ -60,6 +60,8 @@ nlohmann::json Manifest::toJson() const {
   if (filmCrop) j["film_crop"] = *filmCrop;
   if (!integrator.empty()) j["integrator"] = integrator;
   if (integratorMaxDepth) j["integrator_max_depth"] = *integratorMaxDepth;
+  j["shutter"] = {shutterOpen, shutterClose};
+  j["motion_times"] = {motionStart, motionEnd};
   j["input_bytes"] = inputBytes;
   j["replicated_bytes"] = replicatedBytes;
   j["proxies"] = proxies;
@@ -144,6 +146,17 @@ Manifest readManifest(const std::string& directory) {
         throw InputError(
             fmt::format("{}: bad integrator_max_depth {}", path, *m.integratorMaxDepth));
     }
+    auto pair = [&](const char* key, float& a, float& b) {  // absent in older directories
+      if (!j.contains(key)) return;
+      const nlohmann::json& v = j.at(key);
+      if (!v.is_array() || v.size() != 2)
+        throw InputError(fmt::format("{}: bad {} (expected two numbers)", path, key));
+      a = checkedNumber<float>(v[0]), b = checkedNumber<float>(v[1]);
+      if (!std::isfinite(a) || !std::isfinite(b) || a > b)
+        throw InputError(fmt::format("{}: bad {} ({} to {})", path, key, a, b));
+    };
+    pair("shutter", m.shutterOpen, m.shutterClose);
+    pair("motion_times", m.motionStart, m.motionEnd);
     m.inputBytes = checkedNumberOr(j, "input_bytes", uint64_t(0));
     m.replicatedBytes = checkedNumberOr(j, "replicated_bytes", uint64_t(0));
     m.proxies = checkedNumberOr(j, "proxies", uint64_t(0));
@@ -187,6 +200,7 @@ SceneSummary summaryFromJson(const nlohmann::json& j) {
   s.vertices = count(j, "vertices");
   s.objects = count(j, "objects");
   s.instances = count(j, "instances");
+  s.movingInstances = count(j, "moving_instances");
   s.instancedTriangles = count(j, "instanced_triangles");
   s.textures = count(j, "textures");
   s.texels = count(j, "texels");

@@ -50,6 +50,8 @@ struct Manifest {
   float filmMaxSampleLuminance = 0, filmMaxComponentValue = 0;  // Scene's, 0: none
   std::string integrator;                                       // Scene::integrator
   std::optional<int> integratorMaxDepth;                        // Scene::integratorMaxDepth
+  // Scene's shutter and motion times (motion blur).
+  float shutterOpen = 0, shutterClose = 1, motionStart = 0, motionEnd = 1;
   ManifestFile shared;
   std::vector<ManifestPart> parts;
   // `ferry partition --predict-forwards`: ForwardPrediction::toJson() per

@@ -126,6 +126,8 @@ Manifest writeParts(const std::string& directory, const Scene& scene, const Part
   m.filmCrop = scene.filmCrop;
   m.integrator = scene.integrator;
   m.integratorMaxDepth = scene.integratorMaxDepth;
+  m.shutterOpen = scene.shutterOpen, m.shutterClose = scene.shutterClose;
+  m.motionStart = scene.motionStart, m.motionEnd = scene.motionEnd;
   for (int r = 0; r < partition.ranks; ++r) {
     const std::vector<int32_t> owned = partition.instancesOf(r);
     ManifestPart p;
@@ -231,7 +233,7 @@ Scene loadAllParts(const std::string& directory, Partition& partition) {
       all.objects.push_back(std::move(o));
     }
     for (const Instance& inst : part.scene.instances)
-      all.instances.push_back({inst.object + objects, inst.transform});
+      all.instances.push_back({inst.object + objects, inst.transform, inst.motion});
     partition.instanceOwners.insert(partition.instanceOwners.end(), part.owners.begin(),
                                     part.owners.end());
   }

@@ -316,6 +316,16 @@ void writeContent(FileWriter& w, const Scene& scene, const std::vector<int32_t>&
   w.array(instanceObjects);
   w.array(transforms);
   w.array(masks);
+  // Format 14: each instance's motion keys (a count, 0 when it does not move).
+  std::vector<uint32_t> keyCounts;
+  std::vector<MotionKey> keys;
+  for (int32_t i : instances) {
+    const auto& motion = scene.instances[i].motion;
+    keyCounts.push_back(motion ? uint32_t(motion->keys().size()) : 0);
+    if (motion) keys.insert(keys.end(), motion->keys().begin(), motion->keys().end());
+  }
+  w.array(keyCounts);
+  w.array(keys);
 }
 
 void writeLights(FileWriter& w, const Scene& lights) {
@@ -768,6 +778,21 @@ void readContent(FileReader& r, Scene& scene, std::vector<RankSet>& owners, size
     owners.push_back(RankSet::fromWords(words.data() + i * ownerWords, ownerWords));
   scene.instances.resize(objects.size());
   for (size_t i = 0; i < objects.size(); ++i) scene.instances[i] = {objects[i], transforms[i]};
+  if (r.version() >= 14) {  // older: nothing moves
+    const std::vector<uint32_t> keyCounts = r.array<uint32_t>();
+    const std::vector<MotionKey> keys = r.array<MotionKey>();
+    if (keyCounts.size() != objects.size()) r.fail("instance arrays differ in size");
+    size_t next = 0;
+    for (size_t i = 0; i < objects.size(); ++i) {
+      const uint32_t n = keyCounts[i];
+      if (n == 0) continue;
+      if (n < 2 || n > keys.size() - next) r.fail("bad motion key counts");
+      scene.instances[i].motion = std::make_shared<const InstanceMotion>(
+          std::vector<MotionKey>(keys.begin() + long(next), keys.begin() + long(next + n)));
+      next += n;
+    }
+    if (next != keys.size()) r.fail("more motion keys than moving instances");
+  }
 }
 
 void readLights(FileReader& r, Scene& lights) {

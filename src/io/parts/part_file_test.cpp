@@ -337,6 +337,42 @@ TEST(PartFiles, PointLightsSurviveTheTrip) {
   EXPECT_EQ(part.lights.pointLights[0].falloff, PointLight::Falloff::None);
 }
 
+// Moving instances (format 14) keep their motion keys; the manifest the
+// shutter and the transforms' times.
+TEST(PartFiles, MotionSurvivesTheTrip) {
+  TempDir dir;
+  Scene scene = island();
+  scene.shutterOpen = 0.25f, scene.shutterClose = 0.75f;
+  scene.motionStart = 0.1f, scene.motionEnd = 0.9f;
+  Affine3f sheared = Affine3f::rotate({0, 1, 0}, 1.0f);
+  sheared.l[0][1] = 0.5f;
+  for (size_t i = 0; i < scene.instances.size(); i += 3)
+    scene.instances[i].motion = std::make_shared<const InstanceMotion>(
+        scene.instances[i].transform, Affine3f::translate({1, 0, 0}) *
+                                          (i % 2 ? sheared : Affine3f::identity()) *
+                                          scene.instances[i].transform);
+  PartDirectoryInfo info;
+  writePartDirectory(dir.path.string(), scene, roundRobinPartition(scene, 1), lightScene(scene),
+                     info);
+  const RankPart part = loadRankPart(dir.path.string(), 0, 1);
+  EXPECT_EQ(part.manifest.shutterOpen, 0.25f);
+  EXPECT_EQ(part.manifest.shutterClose, 0.75f);
+  EXPECT_EQ(part.manifest.motionStart, 0.1f);
+  EXPECT_EQ(part.manifest.motionEnd, 0.9f);
+  ASSERT_EQ(part.scene.instances.size(), scene.instances.size());
+  for (size_t i = 0; i < scene.instances.size(); ++i) {
+    const auto& written = scene.instances[i].motion;
+    const auto& read = part.scene.instances[i].motion;
+    ASSERT_EQ(written == nullptr, read == nullptr) << i;
+    if (!written) continue;
+    ASSERT_EQ(read->keys().size(), written->keys().size()) << i;
+    EXPECT_EQ(std::memcmp(read->keys().data(), written->keys().data(),
+                          written->keys().size() * sizeof(MotionKey)),
+              0)
+        << i;
+  }
+}
+
 TEST(PartFiles, OneRankHoldsTheWholeSceneBitForBit) {
   TempDir dir;
   Scene scene = island();

@@ -91,7 +91,8 @@ struct AreaLight {
 };
 
 struct GraphicsState {
-  Affine3f ctm;
+  Affine3f ctm;     // the current transform at the start time
+  Affine3f ctmEnd;  // and at the end time (pbrt's ActiveTransform): equal unless it moves
   bool reverseOrientation = false;
   int32_t material = -1;  // definition id; -1: pbrt's default diffuse
   std::optional<AreaLight> areaLight;
@@ -125,6 +126,7 @@ struct Block {
 
 struct CameraDefinition {
   Affine3f cameraFromWorld;
+  float shutterOpen = 0, shutterClose = 1;
   float fov = 90;
   float lensRadius = 0, focalDistance = 1e6f;  // camera space
   SourceLocation where;
@@ -217,6 +219,7 @@ class Parser {
     setSpotFalloff();
     makeEnvironment();
     makeCamera();
+    pivotObjectInstancesAtTheCamera();
     if (scene_.meshes.empty() && scene_.geometries.empty() && scene_.suns.empty())
       warnings_.once("empty", fmt::format("{}: the scene has no shapes", name));
     return std::move(scene_);
@@ -400,6 +403,7 @@ class Parser {
     }
     if (b.kind == BlockKind::Transform) {
       state_.ctm = b.saved.ctm;
+      state_.ctmEnd = b.saved.ctmEnd;
     } else {
       state_ = std::move(b.saved);
     }
@@ -410,10 +414,39 @@ class Parser {
 
   void applyTransform(const Affine3f& t) {
     if (activeStart_) state_.ctm = state_.ctm * t;
+    if (activeEnd_) state_.ctmEnd = state_.ctmEnd * t;
   }
 
   void setTransform(const Affine3f& t) {
     if (activeStart_) state_.ctm = t;
+    if (activeEnd_) state_.ctmEnd = t;
+  }
+
+  bool moving() const { return !sameTransform(state_.ctm, state_.ctmEnd); }
+
+  // The motion of what is placed now (null: it does not move). Motion
+  // inside an object definition is not kept (one instance level): its
+  // start transform is, with one warning.
+  std::shared_ptr<const InstanceMotion> placedMotion(const SourceLocation& where) {
+    if (!moving()) return nullptr;
+    if (currentObject_) {
+      warnings_.once("object motion",
+                     fmt::format("a moving transform inside ObjectBegin is not supported: its "
+                                 "start transform is used (first at {}); move the "
+                                 "ObjectInstance instead",
+                                 where.toString()));
+      return nullptr;
+    }
+    if (!lastMotion_ || !sameTransform(lastMotionFrom_, state_.ctm) ||
+        !sameTransform(lastMotionTo_, state_.ctmEnd)) {
+      const float det = state_.ctmEnd.determinant();
+      if (!std::isfinite(det) || det == 0)
+        fail(where, "the end transform is singular (a zero scale?) or not finite");
+      lastMotion_ = std::make_shared<const InstanceMotion>(state_.ctm, state_.ctmEnd);
+      lastMotionFrom_ = state_.ctm;
+      lastMotionTo_ = state_.ctmEnd;
+    }
+    return lastMotion_;
   }
 
   Affine3f matrixFrom(const std::vector<float>& m, const SourceLocation& where) {
@@ -488,14 +521,17 @@ class Parser {
     } else if (name == "Transform") {
       setTransform(matrixFrom(numbers(in, 16, n), where));
     } else if (name == "CoordinateSystem") {
-      coordinateSystems_[string(in, n)] = state_.ctm;
+      coordinateSystems_[string(in, n)] = {state_.ctm, state_.ctmEnd};
     } else if (name == "CoordSysTransform") {
       coordSysTransform(in, where);
     } else if (name == "ActiveTransform") {
-      activeTransform(in, where);
+      activeTransform(in);
     } else if (name == "TransformTimes") {
-      numbers(in, 2, n);
-      skipped(name, PbrtParams(), where, "no motion blur");
+      auto v = numbers(in, 2, n);
+      if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || v[0] > v[1])
+        fail(where, fmt::format("TransformTimes: start {} must not be after end {}", v[0], v[1]));
+      scene_.motionStart = v[0];
+      scene_.motionEnd = v[1];
     } else {
       return false;
     }
@@ -511,10 +547,11 @@ class Parser {
       fail(where, fmt::format("CoordSysTransform: no coordinate system \"{}\" (defined: {})",
                               system, known.empty() ? "none" : known));
     }
-    setTransform(it->second);
+    if (activeStart_) state_.ctm = it->second.first;
+    if (activeEnd_) state_.ctmEnd = it->second.second;
   }
 
-  void activeTransform(Input& in, const SourceLocation& where) {
+  void activeTransform(Input& in) {
     const PbrtToken& t = in.tokens.next();
     if (t.kind != PbrtToken::Kind::Word ||
         (t.text != "StartTime" && t.text != "EndTime" && t.text != "All"))
@@ -522,10 +559,7 @@ class Parser {
            fmt::format("ActiveTransform: expected StartTime, EndTime or All, found {}",
                        describe(t)));
     activeStart_ = t.text != "EndTime";
-    if (t.text != "StartTime")
-      warnings_.once("motion", fmt::format("motion blur is not supported: only the start "
-                                           "transform is used (first at {})",
-                                           where.toString()));
+    activeEnd_ = t.text != "StartTime";
   }
 
   // Attribute blocks and defaults, and object definitions and instances;
@@ -857,8 +891,8 @@ class Parser {
   bool optionDirective(Input& in, const std::string& name, const SourceLocation& where) {
     const char* n = name.c_str();
     if (name == "WorldBegin") {
-      state_.ctm = Affine3f::identity();
-      coordinateSystems_["world"] = state_.ctm;
+      state_.ctm = state_.ctmEnd = Affine3f::identity();
+      coordinateSystems_["world"] = {state_.ctm, state_.ctmEnd};
       inWorld_ = true;
     } else if (name == "WorldEnd") {
       worldEnd(in, where);
@@ -938,6 +972,18 @@ class Parser {
     CameraDefinition c;
     c.cameraFromWorld = state_.ctm;
     c.where = where;
+    if (moving())
+      warnings_.once("camera motion",
+                     fmt::format("a moving camera is not supported: its start transform is "
+                                 "used (at {})",
+                                 where.toString()));
+    c.shutterOpen = p.getFloat("shutteropen", 0);
+    c.shutterClose = p.getFloat("shutterclose", 1);
+    if (!std::isfinite(c.shutterOpen) || !std::isfinite(c.shutterClose) ||
+        c.shutterClose < c.shutterOpen)
+      fail(where, fmt::format("Camera: \"float shutterclose\" {} must not be before "
+                              "\"float shutteropen\" {}",
+                              c.shutterClose, c.shutterOpen));
     if (type == "perspective") {
       c.fov = p.getFloat("fov", 90);
       if (!(c.fov > 0 && c.fov < 180))
@@ -960,8 +1006,8 @@ class Parser {
     reportUnused(p, fmt::format("Camera \"{}\"", type));
     scene_.cameraMedium = mediumOf(state_.mediumOutside, where);
     camera_ = c;
-    coordinateSystems_["camera"] =
-        state_.ctm.determinant() != 0 ? state_.ctm.inverse() : state_.ctm;
+    auto inverse = [](const Affine3f& m) { return m.determinant() != 0 ? m.inverse() : m; };
+    coordinateSystems_["camera"] = {inverse(state_.ctm), inverse(state_.ctmEnd)};
   }
 
   void film(const std::string& type, const PbrtParams& p, const SourceLocation& where) {
@@ -987,8 +1033,8 @@ class Parser {
     std::string file = p.getString("filename", "");
     if (!file.empty()) scene_.filmFilename = file;
     // pbrt-v3 multiplies the radiance by "scale"; pbrt-v4's sensor by its
-    // imaging ratio, exposure time x ISO / 100 (Ferry's camera has no
-    // shutter: a 1 s exposure, pbrt-v4's default).
+    // imaging ratio, exposure time x ISO / 100 (the exposure time, from the
+    // camera's shutter, is applied with the camera: makeCamera).
     float filmScale = 1;
     if (p.find("scale")) {
       const float scale = p.getFloat("scale", 1);
@@ -1080,7 +1126,23 @@ class Parser {
       fail(where, fmt::format("ObjectInstance: no object named \"{}\"", name));
     if (scene_.objects[size_t(it->second)].slots() == 0) return;
     checkInvertible(where);
-    scene_.instances.push_back({it->second, state_.ctm});
+    scene_.instances.push_back({it->second, state_.ctm, placedMotion(where)});
+    if (scene_.instances.back().motion)
+      movingObjectInstances_.push_back({scene_.instances.size() - 1, state_.ctm, state_.ctmEnd});
+  }
+
+  // pbrt-v4 interpolates a moving ObjectInstance's transform in its render
+  // space, whose origin is the camera: the rotation turns about the camera
+  // (pbrt-v3's, about the world's origin). Known once the file is read.
+  void pivotObjectInstancesAtTheCamera() {
+    if (dialect_ != Dialect::V4 || movingObjectInstances_.empty()) return;
+    const CameraDefinition c = camera_.value_or(CameraDefinition{});
+    const float det = c.cameraFromWorld.determinant();
+    if (!std::isfinite(det) || det == 0) return;  // makeCamera says so
+    const Vec3f camera = c.cameraFromWorld.inverse().transformPoint(Vec3f(0));
+    for (const MovingObjectInstance& m : movingObjectInstances_)
+      scene_.instances[m.instance].motion =
+          std::make_shared<const InstanceMotion>(m.start, m.end, camera);
   }
 
   void checkInvertible(const SourceLocation& where) {
@@ -1225,6 +1287,23 @@ class Parser {
   void shape(const std::string& type, const PbrtParams& p, const SourceLocation& where) {
     const std::string what = fmt::format("Shape \"{}\"", type);
     if (!currentObject_) checkInvertible(where);
+    shapeWhere_ = where;
+    // pbrt ignores the area light of a moving shape (with a warning): so does Ferry.
+    struct LightAside {
+      std::optional<AreaLight>& light;
+      std::optional<AreaLight> kept;
+      ~LightAside() {
+        if (kept) light = std::move(kept);
+      }
+    } aside{state_.areaLight, std::nullopt};
+    if (state_.areaLight && moving() && !currentObject_) {
+      warnings_.once("moving light",
+                     fmt::format("an area light on a moving shape is ignored, as pbrt ignores "
+                                 "it (first at {})",
+                                 where.toString()));
+      aside.kept = std::move(state_.areaLight);
+      state_.areaLight.reset();
+    }
     try {
       if (type == "curve") {
         curves(p, where);
@@ -1464,10 +1543,12 @@ class Parser {
     const bool reuse = curveBatch_ && curveBatch_->material == material &&
                        curveBatch_->object == currentObject_.value_or(-1) &&
                        curveBatch_->type == c.type && sameTransform(curveBatch_->ctm, state_.ctm) &&
+                       curveBatch_->motion == placedMotion(where) &&
                        curveBatch_->segments.size() < (size_t(1) << 24);
     if (!reuse) {
       flushCurves();
-      curveBatch_ = CurveBatch{material, currentObject_.value_or(-1), c.type, state_.ctm, {}, {}};
+      curveBatch_ = CurveBatch{
+          material, currentObject_.value_or(-1), c.type, state_.ctm, placedMotion(where), {}, {}};
     }
     if (currentObject_ && !sameTransform(state_.ctm, Affine3f::identity())) {
       // In an object, the transform is baked: points and normals moved,
@@ -1507,7 +1588,7 @@ class Parser {
     o.name = "curves";
     o.geometries.push_back(index);
     scene_.objects.push_back(std::move(o));
-    scene_.instances.push_back({int32_t(scene_.objects.size() - 1), batch.ctm});
+    scene_.instances.push_back({int32_t(scene_.objects.size() - 1), batch.ctm, batch.motion});
   }
 
   static void bake(Mesh& mesh, const Affine3f& t) {
@@ -1654,6 +1735,11 @@ class Parser {
   // as pbrt orients its normal (the outside), in world space.
   void addMediumBoundary(Mesh mesh, const MediumInterface& media) {
     if (mesh.indices.empty()) return;
+    if (moving())
+      warnings_.once("moving boundary",
+                     fmt::format("a moving medium boundary is not supported: it stays at its "
+                                 "start transform (first at {})",
+                                 shapeWhere_.toString()));
     orientToPbrtNormal(mesh);
     bake(mesh, state_.ctm);
     // Baking through a mirror turns the winding's normal around.
@@ -1693,7 +1779,8 @@ class Parser {
     o.name = scene_.meshes.back().name;
     o.meshes.push_back(index);
     scene_.objects.push_back(std::move(o));
-    scene_.instances.push_back({int32_t(scene_.objects.size() - 1), state_.ctm});
+    scene_.instances.push_back(
+        {int32_t(scene_.objects.size() - 1), state_.ctm, placedMotion(shapeWhere_)});
     return index;
   }
 
@@ -1707,7 +1794,7 @@ class Parser {
       auto key = std::make_tuple(path, material, orientation, media.inside, media.outside);
       auto it = topLevelPly_.find(key);
       if (it != topLevelPly_.end()) {
-        scene_.instances.push_back({it->second, state_.ctm});
+        scene_.instances.push_back({it->second, state_.ctm, placedMotion(where)});
         return;
       }
       Mesh mesh = readPlyAt(path, where);
@@ -1902,6 +1989,16 @@ class Parser {
     view.lensRadius = c.lensRadius * length(right);
     view.focalDistance = c.focalDistance * length(forward);
     scene_.views.push_back(view);
+    scene_.shutterOpen = c.shutterOpen;
+    scene_.shutterClose = c.shutterClose;
+    // pbrt-v4's sensor integrates over the exposure (its imaging ratio is
+    // the exposure time x ISO / 100); pbrt-v3's film does not.
+    if (dialect_ == Dialect::V4) {
+      const float exposure = c.shutterClose - c.shutterOpen;
+      if (!(exposure > 0))
+        fail(c.where, "Camera: the shutter never opens (shutterclose equals shutteropen)");
+      scene_.filmScale *= exposure;
+    }
   }
 
   const LoadOptions& options_;
@@ -1914,10 +2011,20 @@ class Parser {
   std::vector<Block> blocks_;
   GraphicsState state_;
   bool activeStart_ = true;
+  bool activeEnd_ = true;
   bool inWorld_ = false;
   Dialect dialect_ = Dialect::Unknown;
   bool ended_ = false;
-  std::map<std::string, Affine3f> coordinateSystems_;
+  std::map<std::string, std::pair<Affine3f, Affine3f>> coordinateSystems_;  // start, end
+  SourceLocation shapeWhere_;                                               // the shape being read
+  struct MovingObjectInstance {
+    size_t instance;
+    Affine3f start, end;
+  };
+  std::vector<MovingObjectInstance> movingObjectInstances_;
+  // The last motion made, shared by what is placed under the same transforms.
+  std::shared_ptr<const InstanceMotion> lastMotion_;
+  Affine3f lastMotionFrom_, lastMotionTo_;
   std::map<std::string, int32_t> objects_;
   std::optional<int32_t> currentObject_;
   std::map<std::tuple<std::string, int32_t, int, int32_t, int32_t>, int32_t> topLevelPly_;
@@ -1926,6 +2033,7 @@ class Parser {
     int32_t material, object;
     CurveType type;
     Affine3f ctm;
+    std::shared_ptr<const InstanceMotion> motion;
     std::vector<CurveSegment> segments;
     std::vector<CurveNormals> normals;
   };
