@@ -39,45 +39,40 @@ run_scene() {
 
 run_scene "builtin:cornell" "--size 40x40 --spp 2 --max-depth 4"
 run_scene "builtin:island?scale=0.05" "--size 48x32 --spp 1 --max-depth 3"
+# same_on_ranks LABEL SCENE ARGS: a pbrt scene on 2 and 3 ranks, both
+# exchanges, the replay layout and a random partition, against its 1-rank
+# image (no tie pixels: every pixel equal). Leaves the 1-rank image in
+# $work/LABEL-ref.pfm.
+same_on_ranks() {
+  local label=$1 scene=$2 args=$3
+  # shellcheck disable=SC2086
+  "$ferry" render "$scene" $args -q -o "$work/$label-ref.pfm" 2>/dev/null
+  for ranks in 2 3; do
+    for variant in "--threads 1" "--exchange bulk --threads 1" "--path-layout replay --threads 1" \
+      "--partition random --threads 1"; do
+      # shellcheck disable=SC2086
+      mpirun_n "$ranks" "$ferry" render "$scene" $args -q $variant -o "$work/$label.pfm" 2>/dev/null
+      echo "$label, ranks $ranks, $variant:"
+      $compare "$work/$label-ref.pfm" "$work/$label.pfm" --rel 0 --abs 0 --outliers 0
+    done
+  done
+}
 # Subsurface walks (a pbrt scene: two spheres enclosing media): each step of
 # a walk is a ray like any other, forwarded to whichever ranks hold the
 # sphere's pieces, and a piece keeps the media its mesh bounds.
-sss="$source_dir/tests/oracle/cases/v3-subsurface.pbrt"
-sss_args="--size 24x24 --spp 2 --seed 3"
-# shellcheck disable=SC2086
-"$ferry" render "$sss" $sss_args -q -o "$work/sss-ref.pfm" 2>/dev/null
-for ranks in 2 3; do
-  for variant in "--threads 1" "--exchange bulk --threads 1" "--path-layout replay --threads 1" \
-    "--partition random --threads 1"; do
-    out="$work/sss.pfm"
-    # shellcheck disable=SC2086
-    mpirun_n "$ranks" "$ferry" render "$sss" $sss_args -q $variant -o "$out" 2>/dev/null
-    echo "subsurface, ranks $ranks, $variant:"
-    $compare "$work/sss-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0
-  done
-done
+same_on_ranks subsurface "$source_dir/tests/oracle/cases/v3-subsurface.pbrt" "--size 24x24 --spp 2 --seed 3"
 # Motion blur (a pbrt scene with moving instances): every rank finds a ray's
 # time from its pixel and sample, and proxies bound the swept boxes, so
 # forwarding finds moving content wherever it is when the ray passes; a part
 # directory keeps both transforms.
 motion="$source_dir/tests/oracle/cases/v3-motion.pbrt"
 motion_args="--size 32x24 --spp 2 --seed 3"
-# shellcheck disable=SC2086
-"$ferry" render "$motion" $motion_args -q -o "$work/motion-ref.pfm" 2>/dev/null
-for ranks in 2 3; do
-  for variant in "--threads 1" "--exchange bulk --threads 1" "--path-layout replay --threads 1" \
-    "--partition random --threads 1"; do
-    out="$work/motion.pfm"
-    # shellcheck disable=SC2086
-    mpirun_n "$ranks" "$ferry" render "$motion" $motion_args -q $variant -o "$out" 2>/dev/null
-    echo "motion blur, ranks $ranks, $variant:"
-    $compare "$work/motion-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0
-  done
-done
+same_on_ranks motion "$motion" "$motion_args"
+same_on_ranks motion-camera "$source_dir/tests/oracle/cases/v3-motion-camera.pbrt" "$motion_args"
 "$ferry" partition "$motion" --ranks 3 -o "$work/motion-parts" -q 2>/dev/null
 # shellcheck disable=SC2086
 mpirun_n 3 "$ferry" render "$work/motion-parts" $motion_args -q --threads 1 -o "$work/motion.pfm"
-echo "motion blur, a part directory on 3 ranks:"
+echo "motion, a part directory on 3 ranks:"
 $compare "$work/motion-ref.pfm" "$work/motion.pfm" --rel 0 --abs 0 --outliers 0
 # The bulk exchange (the paper's rounds), and the overlapped one at small
 # chunks (many chunks and bounces in flight at once) and with two threads a

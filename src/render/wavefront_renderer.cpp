@@ -49,7 +49,12 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
                        camera_.direction(x0, y0 + float(window_.height))};
   const int sizes[] = {window_.x0, window_.y0, window_.width, window_.height};
   viewKey_ = hash64(sizes, sizeof sizes, hash64(key, sizeof key));
-  moves_ = scene.moves();
+  const CameraView view = settings.cameraIn(scene);
+  if (view.motion) {
+    cameraMotion_ = view.motion;
+    cameraStartInverse_ = view.motion->at(0).inverse();
+  }
+  moves_ = scene.moves() || cameraMotion_;
   clock_ = {scene.shutterOpen,       scene.shutterClose,
             scene.motionStart,       scene.motionEnd,
             settings.seed,           settings.sampler,
@@ -61,7 +66,7 @@ template <typename Path>
 CameraRays WavefrontRenderer<Path>::cameraRays(uint32_t sampleIndex) const {
   CameraRays rays;
   rays.sample = [this, sampleIndex](uint32_t pixel) { return cameraTraceRay(sampleIndex, pixel); };
-  if (!camera_.hasLens()) {
+  if (!camera_.hasLens() && !cameraMotion_) {
     rays.through = [this](uint32_t pixel, float dx, float dy) {
       const float x = float(pixel % width() + uint32_t(window_.x0)) + dx;
       const float y = float(pixel / width() + uint32_t(window_.y0)) + dy;
@@ -209,6 +214,11 @@ template <typename Path>
     camera_.ray(x, y, {random(RandomDim::LensU), random(RandomDim::LensV)}, origin, direction);
   else
     direction = camera_.planePoint(x, y);  // makeRay's encoding normalizes it
+  if (cameraMotion_) {                     // where the camera is at this path's time
+    const Affine3f moved = cameraMotion_->at(clock_.u(pixel, sampleIndex)) * cameraStartInverse_;
+    origin = moved.transformPoint(origin);
+    direction = moved.transformVector(direction);
+  }
   makeRay(path, origin, direction, kInfinity, Vec3f(1), pixel, kPathAfterSpecular);
   if (shading_.cameraMedium() != kNoMedium) setPathMedium(path, shading_.cameraMedium());
 }

@@ -191,7 +191,10 @@ class WavefrontRenderer {
   Camera camera_;
   uint64_t viewKey_ = 0;  // CameraRays::view of this camera and window
   MotionClock clock_;     // when rays are (scene/motion.h)
-  bool moves_ = false;    // whether anything in the scene moves
+  // A moving camera: its motion, and its start pose's inverse.
+  std::shared_ptr<const InstanceMotion> cameraMotion_;
+  Affine3f cameraStartInverse_;
+  bool moves_ = false;  // whether anything in the scene moves
   PathShading<Path> shading_;
   Workspace workspace_;  // many ranks: the one whole-image wavefront
   tbb::enumerable_thread_specific<Workspace> chunkWorkspaces_;  // one rank: one per thread

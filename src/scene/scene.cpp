@@ -103,6 +103,8 @@ Box3f Scene::objectBounds(int32_t object) const {
 bool Scene::moves() const {
   for (const Instance& inst : instances)
     if (inst.motion) return true;
+  for (const CameraView& v : views)
+    if (v.motion) return true;
   return false;
 }
 

@@ -229,6 +229,10 @@ struct CameraView {
   // and meet on the plane focalDistance ahead. Radius 0: a pinhole.
   float lensRadius = 0;
   float focalDistance = 1e6f;
+  // A moving camera (motion blur): its world-from-camera transform over the
+  // shutter (scene/motion.h); a ray at time u is the start camera's ray
+  // moved by motion(u) motion(0)^-1. Null: it stays put.
+  std::shared_ptr<const InstanceMotion> motion;
 };
 
 class MeshStore;
@@ -291,7 +295,7 @@ struct Scene {
   // moving instances' start and end transforms hold (pbrt's TransformTimes).
   float shutterOpen = 0, shutterClose = 1;
   float motionStart = 0, motionEnd = 1;
-  bool moves() const;  // whether any instance moves
+  bool moves() const;  // whether any instance or view moves
   // pbrt's Integrator, as named ("bdpt", "path", ...; empty: none): a
   // bidirectional one turns light paths on (render/path_shading.h).
   std::string integrator;

@@ -317,11 +317,13 @@ RenderSession::RenderSession(const SessionSettings& settings, const Communicator
                     rank_->scene.name));
   // Nor do they move: a light path's connection to the camera is keyed by
   // the pixel it lands on, not by the light path's own time.
-  const bool moves = rank_->summary.movingInstances > 0;
+  const bool moves = rank_->summary.movingInstances > 0 ||
+                     std::any_of(rank_->scene.views.begin(), rank_->scene.views.end(),
+                                 [](const CameraView& v) { return v.motion != nullptr; });
   if (moves && settings_.lightPaths.value_or(false))
     throw InputError(
-        fmt::format("light paths were asked for, but scene '{}' has moving instances (motion "
-                    "blur), which light paths do not follow; render it without them",
+        fmt::format("light paths were asked for, but scene '{}' moves (motion blur), which "
+                    "light paths do not follow; render it without them",
                     rank_->scene.name));
   settings_.render.lightPaths =
       !media && !moves &&

@@ -50,8 +50,12 @@ static_assert(sizeof(Material) == 112,
 // fields; Texture is 296 with its combination.
 // Mesh::media is not written either: part files refuse scenes with media.)
 static_assert(sizeof(Mesh) == 400, "Mesh changed: update part_file.cpp and kPartFormatVersion");
-static_assert(sizeof(CameraView) == 88,
+static_assert(sizeof(CameraView) == 104,  // 88 before its motion (format 14)
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(Instance) == 72,  // 52 before its motion (format 14)
+              "Instance changed: update part_file.cpp and kPartFormatVersion");
+static_assert(sizeof(MotionKey) == 64,
+              "MotionKey changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Texture) == 296,
               "Texture changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(Affine3f) == 48,
@@ -909,6 +913,11 @@ WrittenFile writeSharedFile(const std::string& path, const SharedData& shared) {
       w.pod(uint8_t(v.leftHanded));
       w.pod(v.lensRadius);
       w.pod(v.focalDistance);
+      // Format 14: a moving camera's keys (a count, 0 when it stays put).
+      const std::vector<MotionKey> none;
+      const std::vector<MotionKey>& keys = v.motion ? v.motion->keys() : none;
+      w.pod(uint32_t(keys.size()));
+      for (const MotionKey& k : keys) w.pod(k);
     }
     w.pod(uint8_t(shared.filmWidth.has_value()));
     w.pod(int32_t(shared.filmWidth.value_or(0)));
@@ -995,6 +1004,15 @@ SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
     if (r.version() >= 10) {  // older: pinholes
       v.lensRadius = r.pod<float>();
       v.focalDistance = r.pod<float>();
+    }
+    if (r.version() >= 14) {  // older: still cameras
+      const uint32_t keys = r.pod<uint32_t>();
+      if (keys == 1 || keys > 1024) r.fail("bad camera motion key count");
+      if (keys > 0) {
+        std::vector<MotionKey> motion(keys);
+        for (MotionKey& k : motion) k = r.pod<MotionKey>();
+        v.motion = std::make_shared<const InstanceMotion>(std::move(motion));
+      }
     }
     shared.views.push_back(std::move(v));
   }

@@ -337,8 +337,8 @@ TEST(PartFiles, PointLightsSurviveTheTrip) {
   EXPECT_EQ(part.lights.pointLights[0].falloff, PointLight::Falloff::None);
 }
 
-// Moving instances (format 14) keep their motion keys; the manifest the
-// shutter and the transforms' times.
+// Moving instances and cameras (format 14) keep their motion keys; the
+// manifest the shutter and the transforms' times.
 TEST(PartFiles, MotionSurvivesTheTrip) {
   TempDir dir;
   Scene scene = island();
@@ -351,10 +351,16 @@ TEST(PartFiles, MotionSurvivesTheTrip) {
         scene.instances[i].transform, Affine3f::translate({1, 0, 0}) *
                                           (i % 2 ? sheared : Affine3f::identity()) *
                                           scene.instances[i].transform);
+  scene.views[0].motion = std::make_shared<const InstanceMotion>(Affine3f::translate({0, 1, 0}),
+                                                                 Affine3f::rotate({0, 1, 0}, 0.2f));
   PartDirectoryInfo info;
   writePartDirectory(dir.path.string(), scene, roundRobinPartition(scene, 1), lightScene(scene),
                      info);
   const RankPart part = loadRankPart(dir.path.string(), 0, 1);
+  ASSERT_NE(part.scene.views[0].motion, nullptr);
+  EXPECT_EQ(part.scene.views[0].motion->keys().size(), 2u);
+  for (size_t v = 1; v < part.scene.views.size(); ++v)
+    EXPECT_EQ(part.scene.views[v].motion, nullptr);
   EXPECT_EQ(part.manifest.shutterOpen, 0.25f);
   EXPECT_EQ(part.manifest.shutterClose, 0.75f);
   EXPECT_EQ(part.manifest.motionStart, 0.1f);

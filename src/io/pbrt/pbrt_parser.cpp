@@ -126,6 +126,7 @@ struct Block {
 
 struct CameraDefinition {
   Affine3f cameraFromWorld;
+  std::shared_ptr<const InstanceMotion> motion;  // world from camera, when it moves
   float shutterOpen = 0, shutterClose = 1;
   float fov = 90;
   float lensRadius = 0, focalDistance = 1e6f;  // camera space
@@ -972,11 +973,13 @@ class Parser {
     CameraDefinition c;
     c.cameraFromWorld = state_.ctm;
     c.where = where;
-    if (moving())
-      warnings_.once("camera motion",
-                     fmt::format("a moving camera is not supported: its start transform is "
-                                 "used (at {})",
-                                 where.toString()));
+    if (moving()) {  // pbrt's camera-to-world, animated
+      const float det = state_.ctmEnd.determinant();
+      if (!std::isfinite(det) || det == 0 || state_.ctm.determinant() == 0)
+        fail(where, "Camera: the camera transform is singular");
+      c.motion =
+          std::make_shared<const InstanceMotion>(state_.ctm.inverse(), state_.ctmEnd.inverse());
+    }
     c.shutterOpen = p.getFloat("shutteropen", 0);
     c.shutterClose = p.getFloat("shutterclose", 1);
     if (!std::isfinite(c.shutterOpen) || !std::isfinite(c.shutterClose) ||
@@ -1139,7 +1142,9 @@ class Parser {
     const CameraDefinition c = camera_.value_or(CameraDefinition{});
     const float det = c.cameraFromWorld.determinant();
     if (!std::isfinite(det) || det == 0) return;  // makeCamera says so
-    const Vec3f camera = c.cameraFromWorld.inverse().transformPoint(Vec3f(0));
+    // pbrt-v4's render space: centred where the camera is halfway through its motion.
+    const Vec3f camera = c.motion ? c.motion->at(0.5f).transformPoint(Vec3f(0))
+                                  : c.cameraFromWorld.inverse().transformPoint(Vec3f(0));
     for (const MovingObjectInstance& m : movingObjectInstances_)
       scene_.instances[m.instance].motion =
           std::make_shared<const InstanceMotion>(m.start, m.end, camera);
@@ -1988,6 +1993,7 @@ class Parser {
     // space lengths scaled as the camera transform scales those axes.
     view.lensRadius = c.lensRadius * length(right);
     view.focalDistance = c.focalDistance * length(forward);
+    view.motion = c.motion;
     scene_.views.push_back(view);
     scene_.shutterOpen = c.shutterOpen;
     scene_.shutterClose = c.shutterClose;
