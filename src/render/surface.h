@@ -192,15 +192,12 @@ inline SurfacePoint reconstructSurface(const Scene& scene, const TraceHit& hit,
 inline SurfacePoint reconstructSurface(const Scene& scene, const SurfaceTable& table,
                                        const TraceHit& hit, Vec3f direction) {
   const Instance& inst = scene.instances[hit.instance];
-  if (inst.motion) {  // where it was when the ray met it
-    const Affine3f transform = inst.motion->at(hit.time);
-    return surfaceAt(scene, transform, transform.inverse(),
-                     table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)], hit,
-                     direction);
-  }
-  return surfaceAt(scene, inst.transform, table.inverses[hit.instance],
-                   table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)], hit,
-                   direction);
+  const SurfaceTable::MeshArrays& arrays =
+      table.meshes[table.instanceMeshes[hit.instance] + uint32_t(hit.slot)];
+  if (!inst.motion)
+    return surfaceAt(scene, inst.transform, table.inverses[hit.instance], arrays, hit, direction);
+  const Affine3f transform = inst.motion->at(hit.time);  // where it was when the ray met it
+  return surfaceAt(scene, transform, transform.inverse(), arrays, hit, direction);
 }
 
 inline std::array<Vec3f, 3> worldCorners(const Scene& scene, const SurfaceTable& table,

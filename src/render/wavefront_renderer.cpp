@@ -54,7 +54,7 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
     cameraMotion_ = view.motion;
     cameraStartInverse_ = view.motion->at(0).inverse();
   }
-  moves_ = scene.moves() || cameraMotion_;
+  moves_ = scene.moves();  // (a moving view included)
   clock_ = {scene.shutterOpen,       scene.shutterClose,
             scene.motionStart,       scene.motionEnd,
             settings.seed,           settings.sampler,

@@ -136,8 +136,10 @@ Polar polar(const Affine3f& a) {
 bool diagonal(const Mat3& s) {
   double largest = 0, off = 0;
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      (i == j ? largest : off) = std::max(i == j ? largest : off, std::abs(s[i][j]));
+    for (int j = 0; j < 3; ++j) {
+      double& slot = i == j ? largest : off;
+      slot = std::max(slot, std::abs(s[i][j]));
+    }
   return off <= 1e-6 * largest;
 }
 
@@ -273,11 +275,10 @@ Box3f InstanceMotion::sweptBox(const Box3f& box) const {
     speed += angle * reach + change;
     const float pad = float(speed / (2 * samples)) * 1.0001f + 1e-6f * float(reach);
     for (int k = 0; k <= samples; ++k) {
-      Box3f b =
-          keyTransform(lerpKey(a, this->keys_[s + 1], float(k) / float(samples))).transformBox(box);
-      b.lower = b.lower - Vec3f(pad);
-      b.upper = b.upper + Vec3f(pad);
-      swept.extend(b);
+      Box3f pose = keyTransform(lerpKey(a, b, float(k) / float(samples))).transformBox(box);
+      pose.lower = pose.lower - Vec3f(pad);
+      pose.upper = pose.upper + Vec3f(pad);
+      swept.extend(pose);
     }
   }
   return swept;

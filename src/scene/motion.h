@@ -30,7 +30,6 @@ struct MotionKey {
 
 class InstanceMotion {
  public:
-  InstanceMotion() = default;
   // pbrt's motion from `start` (u = 0) to `end` (u = 1), interpolated in a
   // space whose origin is `pivot` (pbrt-v4 interpolates an instance's
   // transform in its render space, centred on the camera).

@@ -913,11 +913,8 @@ WrittenFile writeSharedFile(const std::string& path, const SharedData& shared) {
       w.pod(uint8_t(v.leftHanded));
       w.pod(v.lensRadius);
       w.pod(v.focalDistance);
-      // Format 14: a moving camera's keys (a count, 0 when it stays put).
-      const std::vector<MotionKey> none;
-      const std::vector<MotionKey>& keys = v.motion ? v.motion->keys() : none;
-      w.pod(uint32_t(keys.size()));
-      for (const MotionKey& k : keys) w.pod(k);
+      // Format 14: a moving camera's keys (none when it stays put).
+      w.array(v.motion ? v.motion->keys() : std::vector<MotionKey>());
     }
     w.pod(uint8_t(shared.filmWidth.has_value()));
     w.pod(int32_t(shared.filmWidth.value_or(0)));
@@ -1006,13 +1003,9 @@ SharedData readSharedFile(const std::string& path, uint64_t expectedHash) {
       v.focalDistance = r.pod<float>();
     }
     if (r.version() >= 14) {  // older: still cameras
-      const uint32_t keys = r.pod<uint32_t>();
-      if (keys == 1 || keys > 1024) r.fail("bad camera motion key count");
-      if (keys > 0) {
-        std::vector<MotionKey> motion(keys);
-        for (MotionKey& k : motion) k = r.pod<MotionKey>();
-        v.motion = std::make_shared<const InstanceMotion>(std::move(motion));
-      }
+      std::vector<MotionKey> keys = r.array<MotionKey>();
+      if (keys.size() == 1) r.fail("bad camera motion key count");
+      if (!keys.empty()) v.motion = std::make_shared<const InstanceMotion>(std::move(keys));
     }
     shared.views.push_back(std::move(v));
   }
