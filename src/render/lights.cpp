@@ -323,9 +323,10 @@ bool LightSampler::sample(Vec3f p, const Frame& frame, bool twoSided, float uSel
   float running = 0, chosenWeight = 0;
   int chosen = -1;
   float selection = 0;
-  // The suns and a constant environment come first and take no part in MIS:
-  // for a surface that only reflects, their share (distantWeight_, the same
-  // as without `facing`) goes among them by what each can give there.
+  // The suns and a constant environment come first. At a diffuse surface
+  // (`facing`, not `twoSided`), where neither takes part in MIS, their share
+  // (distantWeight_, the same as without `facing`) goes among them by what
+  // each can give there.
   if (!twoSided && !(facing == Vec3f(0)) && target < distantWeight_) {
     auto facingWeight = [&](int i) {
       if (i == envIndex) return environmentWeight_;

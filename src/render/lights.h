@@ -9,10 +9,9 @@
 // finds one by BSDF sampling can recompute the light sample's density there
 // (emitterPdf, environmentPdf): the other half of the MIS weight. Suns are
 // left to the light sample alone, and so is a constant environment at a
-// surface that only reflects (there they share their part by the normal);
-// where light arrives from both sides it is drawn over the sphere and
-// weighed by MIS (constantEnvironmentPdf). docs/path-tracer.md,
-// "Light sampling".
+// diffuse surface (there they share their part by the normal); elsewhere
+// (`twoSided`) it is drawn over the sphere and weighed by MIS
+// (constantEnvironmentPdf). docs/path-tracer.md, "Light sampling".
 #pragma once
 
 #include <array>
@@ -61,8 +60,9 @@ class LightSampler {
   explicit LightSampler(const Scene& scene, LightChoice choice = LightChoice::Near);
 
   // Samples a light as seen from `p` (with normal `n` for the selection
-  // weights). `twoSided` surfaces (dielectrics) receive light from both
-  // hemispheres. False when the scene has no light or the sample is useless.
+  // weights). `twoSided`: a constant environment is drawn over the whole
+  // sphere (dielectrics, media, glossy lobes: render/path_shading.h).
+  // False when the scene has no light or the sample is useless.
   bool sample(Vec3f p, Vec3f n, bool twoSided, float uSelect, Vec2f u, LightSample& out) const {
     return sample(p, Frame(n), twoSided, uSelect, u, out);
   }

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "material/models/diffuse.h"
 #include "media/phase.h"
 #include "scene/scene.h"
 
@@ -470,9 +471,15 @@ template <typename Path>
   }
   makeRay(continuation, origin, wi, kInfinity, weight, vertex.pixel,
           bs.delta ? uint32_t(kPathAfterSpecular) : 0u, bs.delta ? 0.0f : bs.pdf, lightRatio);
-  if (!bs.delta && scattering.bsdf.transmits() && strategy_ != LightStrategy::BsdfSamples)
+  if (!bs.delta && skyOverSphere(scattering.bsdf))
     continuation.setSkyByMis();  // its light sample drew a constant sky over the sphere
   return true;
+}
+
+template <typename Path>
+[[gnu::always_inline]] inline bool PathShading<Path>::skyOverSphere(const Bsdf& bsdf) const {
+  return bsdf.transmits() ||
+         (strategy_ == LightStrategy::Mis && !bsdf.isDelta() && !bsdf.as<DiffuseLobe>());
 }
 
 // Russian roulette from kRouletteStartBounce on: a path survives with
@@ -498,8 +505,9 @@ template <typename Path>
   const Vec3f position = vertex.surface.position;
   LightSample ls;
   const Vec2f u{random(RandomDim::LightSampleU), random(RandomDim::LightSampleV)};
-  if (!lights_.sample(position, scattering.frame, bsdf.transmits(), random(RandomDim::LightSelect),
-                      u, ls, bsdf.transmits() ? Vec3f(0) : scattering.ng))
+  const bool overSphere = skyOverSphere(bsdf);
+  if (!lights_.sample(position, scattering.frame, overSphere, random(RandomDim::LightSelect), u, ls,
+                      overSphere ? Vec3f(0) : scattering.ng))
     return false;
   const Vec3f wiLocal = scattering.frame.toLocal(ls.direction);
   const Vec3f f = bsdf.eval(scattering.woLocal, wiLocal);

@@ -202,6 +202,12 @@ class PathShading {
                                  float lightBase, Path& continuation) const;
   inline bool survivesRoulette(const PathVertex& vertex, const VertexScattering& scattering,
                                Vec3f& weight) const;
+  // Whether a vertex's light sample draws a constant sky uniformly over the
+  // sphere, weighed by MIS against its BSDF sample: where light arrives from
+  // both sides, and (under MIS) wherever the BSDF is not diffuse, whose
+  // glossy lobe a sky sample about the normal would find only by chance.
+  // A diffuse surface's sky sample is cosine-weighted and needs no MIS.
+  inline bool skyOverSphere(const Bsdf& bsdf) const;
   inline bool sampleLight(const PathVertex& vertex, const VertexScattering& scattering,
                           float lightBase, Path& shadowRay) const;
   // Light paths: the camera path's ratio at its vertex (see lightRatio).
