@@ -4,7 +4,8 @@
 # bad requests each gets a 4xx and the server stays up), the page in headless
 # Chromium (the image is not blank, dragging orbits the camera and restarts
 # the accumulation; the screenshot is kept), a raw volume's colour map and
-# opacity changed from the page (held whole, and in bricks over the ranks), POST /quit and Ctrl-C end every
+# opacity changed from the page (held whole, and in bricks over the ranks),
+# another array of a .vti chosen on the page, POST /quit and Ctrl-C end every
 # rank within 5 s, a long session keeps resident memory flat, a rank's
 # failure ends the viewer with its message, and a port in use is a clear
 # error.
@@ -86,6 +87,30 @@ start bricks "raw:$work/ball.raw?dims=32,32,32&format=uint8" --volume-bricks 8 -
 $check "$url" volume "$work/bricks.png" || fail "bricked volume"
 $check "$url" quit
 ends_within "$pid" 5
+
+echo "== another field of VTK data, chosen on the page (the ranks read it again)"
+python3 -c "
+import sys
+n = 16
+ball, shell = [], []
+for z in range(n):
+    for y in range(n):
+        for x in range(n):
+            r = ((x - n / 2) ** 2 + (y - n / 2) ** 2 + (z - n / 2) ** 2) ** 0.5 / (n / 2)
+            ball.append(max(0.0, 1 - r))
+            shell.append(max(0.0, 1 - abs(r - 0.6) * 5))
+array = lambda name, v: '<DataArray type=\"Float32\" Name=\"%s\" format=\"ascii\">%s</DataArray>' % (
+    name, ' '.join('%.4f' % x for x in v))
+e = '0 %d 0 %d 0 %d' % (n - 1, n - 1, n - 1)
+open(sys.argv[1], 'w').write('<?xml version=\"1.0\"?><VTKFile type=\"ImageData\" version=\"0.1\">'
+    '<ImageData WholeExtent=\"%s\" Origin=\"0 0 0\" Spacing=\"1 1 1\"><Piece Extent=\"%s\">'
+    '<PointData Scalars=\"ball\">%s%s</PointData></Piece></ImageData></VTKFile>'
+    % (e, e, array('ball', ball), array('shell', shell)))" "$work/two.vti"
+start field "$work/two.vti" --port 0 --size 96x64 --threads 1
+$check "$url" field shell || fail "field"
+$check "$url" quit
+ends_within "$pid" 5
+grep -q "reading .*two.vti again for its field 'shell'" "$work/field.log" || fail "no reading-again line"
 
 echo "== AOVs shown instead of the colour"
 start display builtin:cornell --aov albedo,normal --port 0 --size 64x48 --threads 1

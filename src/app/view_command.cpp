@@ -3,8 +3,11 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <optional>
+#include <span>
+#include <string>
 
 #include "app/progress.h"
 #include "comm/communicator.h"
@@ -47,13 +50,18 @@ int runView(const ViewOptions& o, const Communicator& comm) {
   std::optional<RenderSession> session;
   std::optional<ViewerServer> server;
   std::string error;
-  try {
-    const SessionSettings settings = sessionSettings(o.render, comm);
-    const bool talk = comm.isRoot() && !o.render.quiet;
+  SessionSettings settings;
+  const bool talk = comm.isRoot() && !o.render.quiet;
+  // Reads the scene (again, for another field) into `session`.
+  auto load = [&] {
     Progress loading("load", 1, talk);
     loading.update(0, o.render.scene);
     session.emplace(settings, comm);
     loading.finish(setupIntervalsText(session->setupTimes(), "agree") + " s");
+  };
+  try {
+    settings = sessionSettings(o.render, comm);
+    load();
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -67,6 +75,8 @@ int runView(const ViewOptions& o, const Communicator& comm) {
       ViewLimits limits;
       limits.volumeLook = looks;
       limits.aovs = r.aovs;
+      limits.fields = scene.volumeFields;
+      limits.field = scene.volumeField;
       server.emplace(o.bind, o.port, scene.views, r.camera ? *r.camera : scene.view(r.view), r,
                      comm.size(), limits);
     }
@@ -81,10 +91,39 @@ int runView(const ViewOptions& o, const Communicator& comm) {
                comm.size(), comm.size() == 1 ? "" : "s");
     std::fflush(stdout);
   }
-  try {
-    session->runInteractive(server ? &*server : nullptr, o.frames);
-  } catch (const std::exception& e) {
-    comm.abortAll(e.what());
+  uint64_t frames = 0;
+  for (;;) {
+    InteractiveEnd end;
+    try {
+      end = session->runInteractive(server ? &*server : nullptr,
+                                    o.frames > 0 ? o.frames - std::min(frames, o.frames) : 0);
+    } catch (const std::exception& e) {
+      comm.abortAll(e.what());
+    }
+    frames += end.frames;
+    if (end.field < 0 || (o.frames > 0 && frames >= o.frames)) break;
+    // Another array of the VTK data: the scene is read again rendering it,
+    // from the view and settings the session had.
+    // Rank 0's scene names it (a rank of a .pvtu may hold no piece).
+    std::string field =
+        comm.isRoot() ? session->scene().volumeFields.at(size_t(end.field)).name : std::string();
+    uint64_t length = field.size();
+    comm.broadcast(length);
+    field.resize(length);
+    comm.broadcast(std::span<char>(field.data(), field.size()));
+    if (talk)
+      fmt::print("ferry view: reading {} again for its field '{}'\n", o.render.scene, field);
+    settings.load.field = field;
+    settings.render = end.render;
+    settings.render.camera = end.camera;
+    session.reset();  // the old scene's memory first
+    try {
+      load();
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    if (comm.agreeOnFailure(!error.empty(), error)) return 1;
+    if (server) server->setFields(session->scene().volumeFields, session->scene().volumeField);
   }
   if (comm.isRoot() && !o.render.quiet) fmt::print("ferry view: stopped\n");
   return 0;

@@ -254,6 +254,15 @@ inline bool integratorWantsLightPaths(const std::string& type) {
   return type == "bdpt" || type == "mlt" || type == "lightpath" || type == "vcm";
 }
 
+// An array of the VTK data a volume was read from (io/volumes/vtk_file.cpp):
+// any of them can be the one rendered (--field, the viewer's field choice).
+struct VolumeField {
+  std::string name;
+  bool atCells = false;   // a cell array, else a point array
+  int components = 1;     // more than 1: rendered by magnitude
+  double lo = 0, hi = 0;  // its range (vectors: of the magnitude)
+};
+
 struct Scene {
   std::string name;
   std::vector<Mesh> meshes;
@@ -291,6 +300,10 @@ struct Scene {
   // pbrt's Film clamp of each camera sample (render/frame_buffer.h's
   // SampleClamp): v3's "maxsampleluminance", v4's "maxcomponentvalue"; 0: none.
   float filmMaxSampleLuminance = 0, filmMaxComponentValue = 0;
+  // The arrays the scene's VTK data holds, and which one its volumes render
+  // (an index into them; -1: none, or not VTK data).
+  std::vector<VolumeField> volumeFields;
+  int32_t volumeField = -1;
   // Motion blur (scene/motion.h): the camera's shutter, and the times the
   // moving instances' start and end transforms hold (pbrt's TransformTimes).
   float shutterOpen = 0, shutterClose = 1;

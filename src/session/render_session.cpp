@@ -109,9 +109,10 @@ PartitionedScene loadPvtuPieces(const SessionSettings& settings, const Communica
     if (const std::string failure = comm.failureMessage(!readError.empty(), readError);
         !failure.empty())
       throw InputError(failure);
-    const double extremes[8] = {-mine.lo,          mine.hi,           -mine.box.lower.x,
-                                -mine.box.lower.y, -mine.box.lower.z, mine.box.upper.x,
-                                mine.box.upper.y,  mine.box.upper.z};
+    std::vector<double> extremes = {-mine.lo,          mine.hi,           -mine.box.lower.x,
+                                    -mine.box.lower.y, -mine.box.lower.z, mine.box.upper.x,
+                                    mine.box.upper.y,  mine.box.upper.z,  double(mine.field)};
+    for (const VolumeField& f : mine.fields) extremes.insert(extremes.end(), {-f.lo, f.hi});
     const std::vector<double> all = comm.max(std::span<const double>(extremes));
     const uint64_t counts[2] = {mine.cells, mine.skipped};
     const std::vector<uint64_t> sums = comm.sum(std::span<const uint64_t>(counts));
@@ -122,6 +123,10 @@ PartitionedScene loadPvtuPieces(const SessionSettings& settings, const Communica
     out.box.upper = Vec3f(float(all[5]), float(all[6]), float(all[7]));
     out.cells = sums[0];
     out.skipped = sums[1];
+    out.field = int32_t(all[8]);
+    out.fields = mine.fields;
+    for (size_t i = 0; i < out.fields.size(); ++i)
+      out.fields[i].lo = -all[9 + 2 * i], out.fields[i].hi = all[10 + 2 * i];
     return out;
   };
   // Every rank meets every collective: the agreement's, then this one.
@@ -884,8 +889,16 @@ class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy
         maxFrames_(maxFrames),
         sliceSeconds_(sliceSeconds) {}
 
+  // How the render ended (after it has).
+  InteractiveEnd end() const {
+    InteractiveEnd e = end_;
+    e.frames = frames_;
+    return e;
+  }
+
   bool next(Frames& frames) override {
-    if (maxFrames_ > 0 && frames_++ >= maxFrames_) return false;
+    if (maxFrames_ > 0 && frames_ >= maxFrames_) return false;
+    ++frames_;
     ViewChange change;
     if (comm_.isRoot()) change = control_->takeChange();
     comm_.broadcast(change);
@@ -893,6 +906,12 @@ class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy
     RenderSettings& render = frames.render;
     const int oldWidth = render.imageWidth(), oldHeight = render.imageHeight();
     change.applyTo(*render.camera, render);
+    if (change.flags & ViewChange::kField) {
+      end_.field = change.field;
+      end_.camera = *render.camera;
+      end_.render = render;
+      return false;
+    }
     if (change.flags & ViewChange::kVolume) session_.applyVolumeLook(render.volumeLook);
     if (change.flags & ViewChange::kFocus) focusAt(change.focusX, change.focusY, render);
     constexpr uint32_t kRestart =
@@ -983,19 +1002,21 @@ class RenderSession::InteractiveFrames final : public RenderSession::FramePolicy
   const uint64_t maxFrames_;
   const double sliceSeconds_;
   uint64_t frames_ = 0;  // frames begun, abandoned ones too
+  InteractiveEnd end_;   // a field change ends the render (InteractiveEnd)
   int accumulated_ = 0;
   uint64_t compositeBytes_ = 0, abandoned_ = 0;
   double lastFrameSeconds_ = 0;  // the slowest rank's, of the last whole frame
 };
 
-void RenderSession::runInteractive(InteractiveControl* control, uint64_t maxFrames,
-                                   double sliceSeconds) {
+InteractiveEnd RenderSession::runInteractive(InteractiveControl* control, uint64_t maxFrames,
+                                             double sliceSeconds) {
   FERRY_CHECK(!comm_.isRoot() || control);
   InteractiveFrames policy(*this, control, maxFrames, sliceSeconds);
   RenderSettings render = settings_.render;
   render.frames = 1;
   render.camera = render.cameraIn(rank_->scene);
   withPathLayout([&]<typename Path>() { renderFrames<Path>(policy, render); });
+  return policy.end();
 }
 
 }  // namespace ferry

@@ -112,7 +112,8 @@ struct ViewChange {
     kQuit = 8,
     kVolume = 16,
     kFocus = 32,
-    kDisplay = 64  // what the picture shows: the colour or an AOV (no restart)
+    kDisplay = 64,  // what the picture shows: the colour or an AOV (no restart)
+    kField = 128    // render another array of the VTK data: the scene is read again
   };
   uint32_t flags = 0;
   float from[3], at[3], up[3];
@@ -127,6 +128,7 @@ struct ViewChange {
   int32_t display;  // kDisplay: an Aov's value, -1 the colour (ToneMapping::aov)
   float volumeOpacity;
   int32_t colorMap;  // into colorMapNames(); -1: each volume's own colours
+  int32_t field;     // kField: into Scene::volumeFields
   // The change made to a camera and settings (only the parts its flags name).
   void applyTo(CameraView& camera, RenderSettings& settings) const;
 };
@@ -140,6 +142,17 @@ struct InteractiveFrame {
   RankMemory memory;        // now, per rank
   CameraView camera;        // what the image shows
   RenderSettings settings;  // size, samples per frame, depth, exposure
+};
+
+// How an interactive render ended: asked to quit or its frames done, or
+// asked to render another array of the scene's VTK data (ViewChange::kField):
+// then the caller reads the scene again with that array and goes on from
+// `camera` and `render`, where the changes so far left them.
+struct InteractiveEnd {
+  int32_t field = -1;   // >= 0: read again rendering Scene::volumeFields[field]
+  uint64_t frames = 0;  // frames begun (a frame limit spans the readings)
+  CameraView camera;
+  RenderSettings render;
 };
 
 // Drives an interactive render (the viewer, rank 0): asked for changes
@@ -192,8 +205,9 @@ class RenderSession {
   // only (may be null elsewhere). A frame longer than `sliceSeconds` goes
   // through in slices, between which a waiting change abandons it (0: as
   // many slices as the image allows, for tests).
-  void runInteractive(InteractiveControl* control, uint64_t maxFrames = 0,
-                      double sliceSeconds = 0.2);
+  // Returns how it ended (InteractiveEnd).
+  InteractiveEnd runInteractive(InteractiveControl* control, uint64_t maxFrames = 0,
+                                double sliceSeconds = 0.2);
 
   // Before run(): renders at this size instead (a scene's own, pbrt's Film).
   void setImageSize(int width, int height);

@@ -670,6 +670,15 @@ TEST(RenderSession, APvtuIsReadPieceByPieceAndTheImageIsTheSameOnAnyRankCount) {
     std::vector<Vec3f> image;
     runRanks(ranks, [&](const Communicator& comm) {
       RenderSession session(settings, comm);
+      // Every rank lists the manifest's array with its range over all pieces.
+      const Scene& scene = session.scene();
+      EXPECT_EQ(scene.volumeField, 0) << "rank " << comm.rank();
+      EXPECT_EQ(scene.volumeFields.size(), 1u) << "rank " << comm.rank();
+      if (!scene.volumeFields.empty()) {
+        EXPECT_EQ(scene.volumeFields[0].name, "T");
+        EXPECT_EQ(scene.volumeFields[0].lo, 0);
+        EXPECT_EQ(scene.volumeFields[0].hi, 7.5);
+      }
       RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
       session.run(sink);
       if (comm.isRoot()) image = sink.images.back().linear;

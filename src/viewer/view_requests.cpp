@@ -117,8 +117,9 @@ void applyFocusRequest(const std::string& body, ViewChange& change) {
 void applySettingsRequest(const std::string& body, const RenderSettings& current,
                           const std::vector<CameraView>& views, const ViewLimits& limits,
                           ViewChange& change) {
-  const nlohmann::json j = parseObject(body, {"width", "height", "spp", "max_depth", "exposure",
-                                              "view", "volume_opacity", "color_map", "display"});
+  const nlohmann::json j =
+      parseObject(body, {"width", "height", "spp", "max_depth", "exposure", "view",
+                         "volume_opacity", "color_map", "display", "field"});
   int width = current.width, height = current.height;
   int spp = current.samplesPerPixel, depth = current.maxDepth;
   if (j.contains("width")) width = integerIn(j, "width", 1, limits.maxSide);
@@ -189,6 +190,27 @@ void applySettingsRequest(const std::string& body, const RenderSettings& current
     change.volumeOpacity = opacity;
     change.colorMap = map;
     change.flags |= ViewChange::kVolume;
+  }
+  if (j.contains("field")) {
+    if (!j.at("field").is_string()) throw RequestError("'field' must be a string");
+    const std::string name = j.at("field").get<std::string>();
+    std::vector<std::string> names;
+    int32_t found = -1;
+    for (size_t i = 0; i < limits.fields.size(); ++i) {
+      names.push_back(limits.fields[i].name);
+      if (limits.fields[i].name == name) found = int32_t(i);
+    }
+    if (names.empty())
+      throw RequestError("the scene was not read from VTK data with arrays to choose from");
+    if (found < 0)
+      throw RequestError(
+          fmt::format("no array named '{}' (the data holds {})", name, fmt::join(names, ", ")));
+    if (found != limits.field) {
+      change.field = found;
+      change.flags |= ViewChange::kField;
+    } else {
+      change.flags &= ~uint32_t(ViewChange::kField);  // back to the one shown
+    }
   }
   if (width != current.width || height != current.height || spp != current.samplesPerPixel ||
       depth != current.maxDepth) {

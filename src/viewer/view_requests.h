@@ -31,6 +31,10 @@ struct ViewLimits {
   bool volumeLook = false;
   // The AOVs the frames hold (--aov): "display" may show one of them.
   std::vector<Aov> aovs;
+  // The arrays of the VTK data the scene was read from, and the one shown:
+  // "field" may choose another (the scene is read again).
+  std::vector<VolumeField> fields;
+  int32_t field = -1;
 };
 
 // {"from":[x,y,z],"at":[x,y,z],"up":[x,y,z],"fov":degrees}: from and at are
@@ -42,12 +46,12 @@ void applyCameraRequest(const std::string& body, const CameraView& current, View
 void applyFocusRequest(const std::string& body, ViewChange& change);
 
 // {"width":W,"height":H,"spp":N,"max_depth":D,"exposure":stops,"view":"name",
-// "volume_opacity":scale,"color_map":"name","display":"name"}: every field
-// optional; a field absent keeps `current`'s. "view" moves the camera to
-// that named view of the scene (`views`); "color_map" is a colorMapNames()
-// entry or "" (each volume's own); "display" is "color" or one of
-// `limits.aovs` by name. Adds kSettings, kExposure, kCamera, kVolume or
-// kDisplay to `change`.
+// "volume_opacity":scale,"color_map":"name","display":"name","field":"name"}:
+// every field optional; a field absent keeps `current`'s. "view" moves the
+// camera to that named view of the scene (`views`); "color_map" is a
+// colorMapNames() entry or "" (each volume's own); "display" is "color" or
+// one of `limits.aovs` by name; "field" one of `limits.fields` by name.
+// Adds kSettings, kExposure, kCamera, kVolume, kDisplay or kField to `change`.
 void applySettingsRequest(const std::string& body, const RenderSettings& current,
                           const std::vector<CameraView>& views, const ViewLimits& limits,
                           ViewChange& change);

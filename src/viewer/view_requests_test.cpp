@@ -247,6 +247,27 @@ TEST(ViewRequests, MalformedVolumeLooksAreRefusedWithAReason) {
                RequestError);
 }
 
+TEST(ViewRequests, AnotherFieldOfTheDataBecomesTheChange) {
+  ViewLimits limits;
+  limits.fields = {{"density", false, 1, 0, 1}, {"velocity", false, 3, 0, 11}};
+  limits.field = 0;
+  ViewChange change;
+  applySettingsRequest(R"({"field":"velocity"})", settings(), views(), limits, change);
+  EXPECT_EQ(change.flags, ViewChange::kField);
+  EXPECT_EQ(change.field, 1);
+  // Asking for the one shown again takes a pending change back.
+  applySettingsRequest(R"({"field":"density"})", settings(), views(), limits, change);
+  EXPECT_EQ(change.flags, 0u);
+  const std::vector<std::pair<std::string, std::string>> corpus = {
+      {R"({"field":"pressure"})", "no array named 'pressure' (the data holds density, velocity)"},
+      {R"({"field":2})", "'field' must be a string"},
+  };
+  expectSettingsRefused(corpus, limits);
+  // A scene not read from VTK data has no field to choose.
+  EXPECT_THROW(applySettingsRequest(R"({"field":"density"})", settings(), views(), {}, change),
+               RequestError);
+}
+
 TEST(ViewRequests, MalformedSettingsAreRefusedWithAReason) {
   const std::vector<std::pair<std::string, std::string>> corpus = {
       {"nonsense", "not valid JSON"},

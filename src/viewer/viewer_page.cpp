@@ -56,6 +56,11 @@ const std::string& viewerPage() {
       <span id="opacityValue">1</span></span></label>
     <label>colour map <select id="colormap"></select></label>
   </div>
+  <div id="fieldBox" hidden>
+    <h2>Data</h2>
+    <label>field <select id="field"></select></label>
+    <div id="fieldState"></div>
+  </div>
   <div id="error"></div>
   <h2>Stats</h2>
   <table id="stats"></table>
@@ -206,6 +211,8 @@ $("opacity").addEventListener("change", () => {
   post("/settings", { volume_opacity: 2 ** Number($("opacity").value) });
 });
 $("colormap").addEventListener("change", () => post("/settings", { color_map: $("colormap").value }));
+// Another array of the VTK data: the ranks read the scene again.
+$("field").addEventListener("change", () => post("/settings", { field: $("field").value }));
 // The colour or one of the AOVs the frames hold (the accumulation goes on).
 $("display").addEventListener("change", () => post("/settings", { display: $("display").value }));
 // The thin lens travels with the camera (radius 0: a pinhole).
@@ -268,6 +275,19 @@ function showStats(s) {
       $("opacityValue").textContent = st.volume_opacity.toPrecision(3);
     }
     settingsShown = true;
+  }
+  // The arrays with their ranges; the one shown, or the one being read.
+  if (s.fields) {
+    $("fieldBox").hidden = false;
+    const text = (f) => `${f.name} (${f.at}${f.components > 1 ? ", magnitude" : ""}) ` +
+                        `[${f.range[0].toPrecision(4)}, ${f.range[1].toPrecision(4)}]`;
+    const key = JSON.stringify(s.fields);
+    if ($("field").dataset.key !== key) {
+      $("field").replaceChildren(...s.fields.map((f) => new Option(text(f), f.name)));
+      $("field").dataset.key = key;
+    }
+    if (document.activeElement !== $("field")) $("field").value = s.loading_field || s.field;
+    $("fieldState").textContent = s.loading_field ? `reading '${s.loading_field}'...` : "";
   }
   const f = s.frame || {}, ex = f.exchange || {}, st = f.stage_seconds || {}, tr = f.traces || {};
   const mem = s.memory_per_rank || [];

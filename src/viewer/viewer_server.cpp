@@ -77,6 +77,8 @@ struct ViewerServer::State {
   // A focus pick was taken: the next published frame's focal distance
   // becomes the requested one (only the session knows what the pick found).
   bool focusTaken = false;
+  // A field change was taken: the scene is being read again (-1: none).
+  int32_t loadingField = -1;
   // The last published frame.
   std::string png;
   uint64_t frameId = 0;
@@ -190,6 +192,21 @@ void ViewerServer::State::routes() {
     for (const CameraView& v : views) names.push_back(v.name);
     j["views"] = names;
     if (limits.volumeLook) j["color_maps"] = colorMapNames();
+    if (!limits.fields.empty()) {
+      nlohmann::json fields = nlohmann::json::array();
+      for (const VolumeField& f : limits.fields)
+        fields.push_back({{"name", f.name},
+                          {"at", f.atCells ? "cells" : "points"},
+                          {"components", f.components},
+                          {"range", {f.lo, f.hi}}});
+      j["fields"] = fields;
+      j["field"] = limits.field >= 0 ? limits.fields[size_t(limits.field)].name : "";
+      // A field asked for and not yet shown (the scene is being read again).
+      if (pending.flags & ViewChange::kField)
+        j["loading_field"] = limits.fields[size_t(pending.field)].name;
+      else if (loadingField >= 0)
+        j["loading_field"] = limits.fields[size_t(loadingField)].name;
+    }
     if (!limits.aovs.empty()) {
       nlohmann::json shown = nlohmann::json::array({"color"});
       for (Aov a : limits.aovs) shown.push_back(aovSpec(a).name);
@@ -304,10 +321,18 @@ void ViewerServer::requestQuit() {
   state_->pending.flags |= ViewChange::kQuit;
 }
 
+void ViewerServer::setFields(std::vector<VolumeField> fields, int32_t field) {
+  std::lock_guard lock(state_->mutex);
+  state_->limits.fields = std::move(fields);
+  state_->limits.field = field;
+  state_->loadingField = -1;
+}
+
 ViewChange ViewerServer::takeChange() {
   std::lock_guard lock(state_->mutex);
   ViewChange change = state_->pending;
   if (gQuitSignal) change.flags |= ViewChange::kQuit;
+  if (change.flags & ViewChange::kField) state_->loadingField = change.field;
   if (change.flags & ViewChange::kFocus) state_->focusTaken = true;
   state_->pending.flags = 0;
   return change;
@@ -315,8 +340,8 @@ ViewChange ViewerServer::takeChange() {
 
 bool ViewerServer::restartPending() {
   std::lock_guard lock(state_->mutex);
-  constexpr uint32_t kRestart =
-      ViewChange::kCamera | ViewChange::kSettings | ViewChange::kQuit | ViewChange::kFocus;
+  constexpr uint32_t kRestart = ViewChange::kCamera | ViewChange::kSettings | ViewChange::kQuit |
+                                ViewChange::kFocus | ViewChange::kField;
   return gQuitSignal || (state_->pending.flags & kRestart) != 0;
 }
 

@@ -7,7 +7,7 @@
 //   GET  /frame.png   the image, tone mapped (?after=ID: waits up to 2 s for a newer frame)
 //   GET  /stats       JSON: frames, camera, settings, views, stats, colour maps
 //   POST /camera      {"from":[x,y,z],"at":[x,y,z],"up":[x,y,z],"fov":deg}
-//   POST /settings    {"width","height","spp","max_depth","exposure","view",...}
+//   POST /settings    {"width","height","spp","max_depth","exposure","view","field",...}
 //   POST /quit        ends every rank at the next frame boundary
 // Requests are checked (view_requests.h): a bad one gets a 4xx with the
 // reason and changes nothing. The server runs on its own threads; the render
@@ -40,6 +40,8 @@ class ViewerServer final : public InteractiveControl {
   std::string url() const;
   // Ends the session at the next frame boundary (POST /quit, Ctrl-C).
   void requestQuit();
+  // The scene was read again for another field: its arrays and the one shown.
+  void setFields(std::vector<VolumeField> fields, int32_t field);
 
   ViewChange takeChange() override;
   bool restartPending() override;

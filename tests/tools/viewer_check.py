@@ -9,6 +9,7 @@ chromium and chromium-driver).
   viewer_check.py URL display                  AOVs shown instead of the colour (ferry view --aov albedo,normal)
   viewer_check.py URL memory FRAMES            let FRAMES frames pass; resident memory must stay flat
   viewer_check.py URL volume SCREENSHOT.png    a transfer-function volume restyled from the page and the API
+  viewer_check.py URL field FIELD              the page renders another array of the VTK data (FIELD)
   viewer_check.py URL quit
 
 Exits non-zero with a message on the first failed check. Every wait is bounded.
@@ -322,6 +323,45 @@ def check_volume(base, screenshot):
           f"(frames restart, image changes); an unknown map is a 400; screenshot {screenshot}")
 
 
+def check_field(base, field):
+    """A .vti with several arrays: /stats lists them with their ranges, the
+    page's field choice reads the scene again rendering FIELD (the image
+    changes, frames go on), an unknown array is a 400."""
+    s = wait_for("a first frame", lambda: (lambda s: s["frames"] >= 2 and s)(stats(base)))
+    fields = {f["name"]: f for f in s.get("fields", [])}
+    if field not in fields or s.get("field") == field or len(fields) < 2:
+        fail(f"/stats fields {s.get('fields')!r}, shown {s.get('field')!r}: expected {field} among "
+             "several, not shown yet")
+    for f in fields.values():
+        if not (f["range"][0] <= f["range"][1]):
+            fail(f"field {f['name']}: range {f['range']}")
+    _, _, before = request(base + "frame.png")
+    driver = WebDriver()
+    try:
+        driver.call("POST", "/url", {"url": base})
+        wait_for("the page's field choice",
+                 lambda: driver.script("return !document.getElementById('fieldBox').hidden"), 20)
+        options = driver.script(
+            "return [...document.getElementById('field').options].map((o) => o.text)")
+        if not any(o.startswith(field + " (points) [") for o in options):
+            fail(f"the page's fields {options!r} do not show {field} with its range")
+        driver.script("const f = document.getElementById('field'); f.value = arguments[0];"
+                      "f.dispatchEvent(new Event('change'));", field)
+        wait_for(f"the scene read again for {field}",
+                 lambda: (lambda s: s.get("field") == field and "loading_field" not in s
+                          and s["frames"] >= 2)(stats(base)), 60)
+        wait_for("the other field's image", lambda: request(base + "frame.png")[2] != before, 20)
+        wait_for(f"the page to show {field} as the field",
+                 lambda: driver.script("return document.getElementById('field').value") == field, 20)
+    finally:
+        driver.close()
+    status, _, body = request(base + "settings", "POST", json.dumps({"field": "no-such-array"}))
+    if status != 400 or b"no array named" not in body:
+        fail(f"an unknown field: {status} {body!r}")
+    print(f"  field: {sorted(fields)} listed with ranges; the page chose {field}, the ranks read "
+          "the data again and the image changed; an unknown array is a 400")
+
+
 def check_display(base):
     """`ferry view --aov albedo,normal`: "display" shows an AOV without
     restarting the frames, an AOV not held is a 400, "color" comes back."""
@@ -382,6 +422,8 @@ def main():
         check_browser(base, sys.argv[3])
     elif what == "volume":
         check_volume(base, sys.argv[3])
+    elif what == "field":
+        check_field(base, sys.argv[3])
     elif what == "memory":
         check_memory(base, int(sys.argv[3]))
     elif what == "quit":

@@ -134,6 +134,11 @@ struct PieceSummary {
   double hi = std::numeric_limits<double>::lowest();
   Box3f box;
   uint64_t cells = 0, skipped = 0;
+  // The manifest's arrays (the same list on every rank), each with its range
+  // over the rank's pieces (lowest above highest: none), and the one read
+  // (-1: no piece here).
+  std::vector<VolumeField> fields;
+  int32_t field = -1;
 };
 using PieceAgreement = std::function<PieceSummary(const PieceSummary&, const std::string& error)>;
 // `ferry render data.pvtu`: rank `rank` of `ranks` reads its pieces only,

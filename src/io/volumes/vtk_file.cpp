@@ -119,6 +119,36 @@ std::vector<float> finiteValues(vtkDataArray* array, uint64_t count, const std::
   return values;
 }
 
+// Every named point and cell array of `data` with its finite range (vectors
+// by magnitude): what could be rendered instead. A cell array named as a
+// point array is left out (the name chooses the point array).
+std::vector<VolumeField> fieldsOf(vtkDataSet* data) {
+  std::vector<VolumeField> out;
+  auto add = [&](vtkDataSetAttributes* d, bool atCells) {
+    for (int i = 0; d && i < d->GetNumberOfArrays(); ++i) {
+      vtkDataArray* a = d->GetArray(i);
+      if (!a || !a->GetName() || !*a->GetName()) continue;
+      if (atCells && data->GetPointData()->GetArray(a->GetName())) continue;
+      VolumeField f{a->GetName(), atCells, a->GetNumberOfComponents(), 0, 0};
+      double range[2];
+      a->GetFiniteRange(range, f.components > 1 ? -1 : 0);
+      if (range[0] <= range[1]) f.lo = range[0], f.hi = range[1];
+      out.push_back(std::move(f));
+    }
+  };
+  add(data->GetPointData(), false);
+  add(data->GetCellData(), true);
+  return out;
+}
+
+// The index of `array` among `fields` (-1: not there).
+int32_t fieldIndex(const std::vector<VolumeField>& fields, vtkDataArray* array, bool atCells) {
+  for (size_t i = 0; i < fields.size(); ++i)
+    if (array->GetName() && fields[i].name == array->GetName() && fields[i].atCells == atCells)
+      return int32_t(i);
+  return -1;
+}
+
 // `values` mapped to [0, 1] by the range [lo, hi].
 void normalise(std::vector<float>& values, double lo, double hi) {
   const double range = hi - lo;
@@ -202,10 +232,13 @@ Scene loadVtkImageScene(const std::string& path, const std::string& field) {
                   atCells ? "cells" : "points", array->GetName() ? array->GetName() : "", lo, hi,
                   array->GetNumberOfComponents() > 1 ? " (magnitude)" : "");
   auto grid = std::make_shared<DensityGrid>(dims[0], dims[1], dims[2], std::move(values));
-  return volumeScene(
+  Scene scene = volumeScene(
       name,
       transferFunctionMedium(name, std::move(grid), std::make_shared<TransferFunction>(tf), box),
       box);
+  scene.volumeFields = fieldsOf(image);
+  scene.volumeField = fieldIndex(scene.volumeFields, array, atCells);
+  return scene;
 }
 
 Scene loadVtkParticleScene(const std::string& path, const std::string& field) {
@@ -292,6 +325,8 @@ struct UnstructuredCells {
   std::string array;  // "points 'NAME'" or "cells 'NAME'", " (magnitude)" for vectors
   double lo = 0, hi = 0;
   Box3f box;
+  std::vector<VolumeField> fields;  // every array the grid holds
+  int32_t field = -1;               // the one read, among them
 };
 
 // The grid in the file at `path` (.vtk legacy, .vts, else .vtu).
@@ -348,6 +383,8 @@ UnstructuredCells readCells(const std::string& path, const std::string& field) {
                     path, field.empty() ? "" : " '" + field + "'", arrayNames(pointData),
                     arrayNames(cellData)));
   UnstructuredCells out;
+  out.fields = fieldsOf(grid);
+  out.field = fieldIndex(out.fields, array, atCells);
   out.cells = uint64_t(grid->GetNumberOfCells());
   out.array = fmt::format("{} '{}'{}", atCells ? "cells" : "points",
                           array->GetName() ? array->GetName() : "",
@@ -430,12 +467,22 @@ Scene loadVtkUnstructuredScene(const std::string& path, const std::string& field
       cells.skipped ? fmt::format(", {} cells that are not solids left out", cells.skipped) : "");
   auto transfer = framedTransfer(path, cells.box);
   Scene scene = framedVolumeScene(name, cells.box);
+  scene.volumeFields = cells.fields;
+  scene.volumeField = cells.field;
   const double lo = cells.lo, hi = cells.hi;
   addVolume(scene, path, name, std::move(cells), lo, hi, std::move(transfer), 0);
   return scene;
 }
 
-std::vector<std::string> readPvtuPieces(const std::string& path) {
+namespace {
+
+// A .pvtu's pieces and the arrays it declares (ranges unknown: lowest above highest).
+struct PvtuManifest {
+  std::vector<std::string> pieces;
+  std::vector<VolumeField> fields;
+};
+
+PvtuManifest readPvtu(const std::string& path) {
   if (!std::filesystem::is_regular_file(path))
     throw InputError(fmt::format("{}: no such file", path));
   vtkNew<vtkXMLDataParser> parser;
@@ -452,18 +499,45 @@ std::vector<std::string> readPvtuPieces(const std::string& path) {
   vtkXMLDataElement* grid = root->FindNestedElementWithName("PUnstructuredGrid");
   if (std::string_view(root->GetName() ? root->GetName() : "") != "VTKFile" || !grid)
     throw InputError(fmt::format("{}: not a VTK parallel unstructured grid (.pvtu) file", path));
-  std::vector<std::string> pieces;
+  PvtuManifest out;
+  std::vector<VolumeField> cellFields;
   const std::filesystem::path directory = std::filesystem::path(path).parent_path();
   for (int i = 0; i < grid->GetNumberOfNestedElements(); ++i) {
     vtkXMLDataElement* e = grid->GetNestedElement(i);
-    if (std::string_view(e->GetName() ? e->GetName() : "") != "Piece") continue;
+    const std::string_view kind = e->GetName() ? e->GetName() : "";
+    if (kind == "PPointData" || kind == "PCellData") {
+      for (int k = 0; k < e->GetNumberOfNestedElements(); ++k) {
+        vtkXMLDataElement* a = e->GetNestedElement(k);
+        const char* name = a->GetAttribute("Name");
+        if (std::string_view(a->GetName() ? a->GetName() : "") != "PDataArray" || !name || !*name)
+          continue;
+        int components = 1;
+        a->GetScalarAttribute("NumberOfComponents", components);
+        VolumeField f{name, kind == "PCellData", std::max(components, 1),
+                      std::numeric_limits<double>::max(), std::numeric_limits<double>::lowest()};
+        (f.atCells ? cellFields : out.fields).push_back(std::move(f));
+      }
+      continue;
+    }
+    if (kind != "Piece") continue;
     const char* source = e->GetAttribute("Source");
     if (!source || !*source)
-      throw InputError(fmt::format("{}: piece {} names no Source file", path, pieces.size()));
-    pieces.push_back((directory / source).string());
+      throw InputError(fmt::format("{}: piece {} names no Source file", path, out.pieces.size()));
+    out.pieces.push_back((directory / source).string());
   }
-  if (pieces.empty()) throw InputError(fmt::format("{}: lists no pieces", path));
-  return pieces;
+  if (out.pieces.empty()) throw InputError(fmt::format("{}: lists no pieces", path));
+  for (VolumeField& f : cellFields) {  // as fieldsOf: a point array's name chooses the point array
+    bool shadowed = false;
+    for (const VolumeField& p : out.fields) shadowed |= p.name == f.name;
+    if (!shadowed) out.fields.push_back(std::move(f));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> readPvtuPieces(const std::string& path) {
+  return readPvtu(path).pieces;
 }
 
 Scene loadVtkPiecesScene(const std::string& path, const std::string& field, int rank, int ranks,
@@ -473,10 +547,20 @@ Scene loadVtkPiecesScene(const std::string& path, const std::string& field, int 
   PieceSummary summary;
   std::string error;
   try {
-    pieces = readPvtuPieces(path);
+    PvtuManifest manifest = readPvtu(path);
+    pieces = std::move(manifest.pieces);
+    summary.fields = std::move(manifest.fields);
     const auto [first, end] = pieceRanks(pieces.size(), ranks, rank);
     for (size_t k = first; k < end; ++k) {
       UnstructuredCells cells = readCells(pieces[k], field);
+      for (VolumeField& f : summary.fields)
+        for (size_t i = 0; i < cells.fields.size(); ++i) {
+          const VolumeField& c = cells.fields[i];
+          if (c.name != f.name || c.atCells != f.atCells) continue;
+          f.lo = std::min(f.lo, c.lo);
+          f.hi = std::max(f.hi, c.hi);
+          if (int32_t(i) == cells.field) summary.field = int32_t(&f - summary.fields.data());
+        }
       summary.lo = std::min(summary.lo, cells.lo);
       summary.hi = std::max(summary.hi, cells.hi);
       summary.box.extend(cells.box);
@@ -495,6 +579,10 @@ Scene loadVtkPiecesScene(const std::string& path, const std::string& field, int 
                       : "");
   auto transfer = framedTransfer(path, summary.box);
   Scene scene = framedVolumeScene(name, summary.box);
+  scene.volumeFields = summary.fields;
+  for (VolumeField& f : scene.volumeFields)
+    if (!(f.lo <= f.hi)) f.lo = f.hi = 0;  // in no piece
+  scene.volumeField = summary.field;
   for (auto& [k, cells] : mine)
     addVolume(
         scene, pieces[k],

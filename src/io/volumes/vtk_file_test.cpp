@@ -101,6 +101,32 @@ TEST(VtkFile, ArraysAreChosenByNameOrTheActiveScalars) {
   fs::remove(vti);
 }
 
+TEST(VtkFile, TheSceneListsEveryArrayWithItsRangeAndTheOneRendered) {
+  const std::string vti = tempFile("f.vti", imageXml());
+  LoadOptions velocity;
+  velocity.field = "velocity";
+  const Scene byDefault = loadScene(vti), byName = loadScene(vti, velocity);
+  fs::remove(vti);
+  ASSERT_EQ(byDefault.volumeFields.size(), 3u);
+  const VolumeField& density = byDefault.volumeFields[0];
+  const VolumeField& speed = byDefault.volumeFields[1];
+  const VolumeField& material = byDefault.volumeFields[2];
+  EXPECT_EQ(density.name, "density");
+  EXPECT_FALSE(density.atCells);
+  EXPECT_EQ(density.lo, -2);
+  EXPECT_EQ(density.hi, 9);
+  EXPECT_EQ(speed.name, "velocity");
+  EXPECT_EQ(speed.components, 3);
+  EXPECT_EQ(speed.lo, 0);  // by magnitude
+  EXPECT_EQ(speed.hi, 11);
+  EXPECT_EQ(material.name, "material");
+  EXPECT_TRUE(material.atCells);
+  EXPECT_EQ(material.lo, 4);
+  EXPECT_EQ(material.hi, 8);
+  EXPECT_EQ(byDefault.volumeField, 0);
+  EXPECT_EQ(byName.volumeField, 1);
+}
+
 TEST(VtkFile, PointsWithARadiusAreSpheres) {
   const std::string vtp = tempFile("c.vtp", R"(<?xml version="1.0"?>
 <VTKFile type="PolyData" version="0.1" byte_order="LittleEndian">
