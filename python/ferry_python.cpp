@@ -309,6 +309,27 @@ PYBIND11_MODULE(ferry, m) {
           "set_spp", [](PySession& s, int spp) { s.session->setSamplesPerPixel(spp); },
           py::arg("spp"))
       .def(
+          "fields",
+          [](const PySession& s) {
+            py::list out;
+            for (const Field& f : s.session->fields()) {
+              py::dict d;
+              d["name"] = f.name;
+              d["at"] = f.atCells ? "cells" : "points";
+              d["components"] = f.components;
+              d["range"] = py::make_tuple(f.lo, f.hi);
+              d["shown"] = f.shown;
+              out.append(d);
+            }
+            return out;
+          },
+          "After prepare() or render(): the arrays of the VTK data the scene was read from, "
+          "each a dict (name, at, components, range, shown); empty for other scenes.")
+      .def(
+          "set_field", [](PySession& s, const std::string& name) { s.session->setField(name); },
+          py::arg("name"),
+          "Renders another array of the VTK data from the next render on (read again).")
+      .def(
           "render",
           [](PySession& s, int frames) -> py::object {
             Image image;

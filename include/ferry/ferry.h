@@ -177,6 +177,15 @@ struct Image {
   }
 };
 
+// An array of the VTK data a scene was read from (Session::fields).
+struct Field {
+  std::string name;
+  bool atCells = false;   // a cell array, else a point array
+  int components = 1;     // more than 1: rendered by its magnitude
+  double lo = 0, hi = 0;  // its range (of the magnitude)
+  bool shown = false;     // the array the volumes render
+};
+
 // What the last render() counted, summed over ranks.
 struct Stats {
   uint64_t raysTraced = 0;     // closest-hit and shadow rays
@@ -239,6 +248,14 @@ class FERRY_API Session {
   // After prepare() or render(): the image file the scene names for itself
   // (pbrt's Film "filename"), or empty.
   std::string filmFilename() const;
+  // After prepare() or render(): the arrays of the VTK data the scene was
+  // read from (.vti, .vtu, .vts, .pvtu), each with its range; empty for any
+  // other scene.
+  std::vector<Field> fields() const;
+  // Renders the array `name` of that data from the next render on (the data
+  // is read again; before the first, the setting "field"). An Error naming
+  // the arrays if the loaded data has none by that name.
+  void setField(const std::string& name);
 
   // Renders `frames` frames, accumulated. Collective.
   Image render(int frames = 1);

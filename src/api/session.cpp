@@ -642,6 +642,35 @@ std::string Session::filmFilename() const {
   return impl_->session ? impl_->session->scene().filmFilename : std::string();
 }
 
+std::vector<Field> Session::fields() const {
+  std::vector<Field> out;
+  if (!impl_->session) return out;
+  const ferry::Scene& scene = impl_->session->scene();
+  for (size_t i = 0; i < scene.volumeFields.size(); ++i) {
+    const VolumeField& f = scene.volumeFields[i];
+    out.push_back({f.name, f.atCells, f.components, f.lo, f.hi, int32_t(i) == scene.volumeField});
+  }
+  return out;
+}
+
+void Session::setField(const std::string& name) {
+  if (impl_->session) {
+    const std::vector<Field> known = fields();
+    std::string names;
+    bool found = false;
+    for (const Field& f : known) {
+      names += (names.empty() ? "" : ", ") + f.name;
+      found |= f.name == name;
+    }
+    if (!found)
+      throw Error(known.empty()
+                      ? fmt::format("setField \"{}\": the scene was not read from VTK data", name)
+                      : fmt::format("setField \"{}\": the data holds {}", name, names));
+  }
+  impl_->flags.field = name;
+  impl_->changing();
+}
+
 Image Session::render(int frames) {
   return impl_->render(frames);
 }

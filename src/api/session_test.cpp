@@ -2,11 +2,14 @@
 // renders, bit for bit; the same scene handed over from memory (borrowed
 // arrays) renders the same image; in-process ranks give the 1-rank image;
 // errors are api::Error on every rank, with the failing rank's message.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 
@@ -455,6 +458,49 @@ TEST(ApiSession, RendersAVolumeFromMemory) {
   const size_t middle = size_t(18 * 48 + 24) * 4, corner = 0;
   EXPECT_NE(image.rgba[middle], image.rgba[corner]);
   EXPECT_GT(session.stats().raysTraced, 0u);
+}
+
+// VTK data lists its arrays with their ranges; setField renders another
+// (the data read again), as --field would; an unknown name is an Error.
+TEST(ApiSession, VtkDataListsItsArraysAndRendersTheOneChosen) {
+  const std::string vti =
+      (std::filesystem::temp_directory_path() / fmt::format("ferry-api-{}.vti", getpid())).string();
+  std::string ramp, flat;
+  for (int i = 0; i < 64; ++i) {
+    ramp += fmt::format("{} ", i % 4);
+    flat += "1 ";
+  }
+  std::ofstream(vti) << fmt::format(
+      R"(<?xml version="1.0"?><VTKFile type="ImageData" version="0.1">
+<ImageData WholeExtent="0 3 0 3 0 3" Origin="0 0 0" Spacing="1 1 1"><Piece Extent="0 3 0 3 0 3">
+<PointData Scalars="ramp"><DataArray type="Float32" Name="ramp" format="ascii">{}</DataArray>
+<DataArray type="Float32" Name="flat" format="ascii">{}</DataArray></PointData>
+</Piece></ImageData></VTKFile>)",
+      ramp, flat);
+  api::Session session(smallOptions());
+  session.load(vti);
+  const api::Image first = session.render(1);
+  std::vector<api::Field> fields = session.fields();
+  ASSERT_EQ(fields.size(), 2u);
+  EXPECT_EQ(fields[0].name, "ramp");
+  EXPECT_TRUE(fields[0].shown);
+  EXPECT_EQ(fields[0].hi, 3);
+  EXPECT_EQ(fields[1].name, "flat");
+  EXPECT_FALSE(fields[1].shown);
+  EXPECT_THROW(session.setField("pressure"), api::Error);
+  session.setField("flat");
+  const api::Image second = session.render(1);
+  fields = session.fields();
+  ASSERT_EQ(fields.size(), 2u);
+  EXPECT_TRUE(fields[1].shown);
+  EXPECT_NE(first.rgba, second.rgba);
+  // As a fresh session told {"field", "flat"} renders it.
+  api::Options o = smallOptions();
+  o.settings["field"] = "flat";
+  api::Session direct(o);
+  direct.load(vti);
+  EXPECT_EQ(direct.render(1).rgba, second.rgba);
+  std::filesystem::remove(vti);
 }
 
 // Curves from memory (placeCurves): strands of Bezier segments appear in

@@ -170,6 +170,28 @@ def single(binary):
     print("  session.aov(): albedo, normal, depth as (H, W, C) arrays; the albedo is the "
           "command's aov.albedo.pfm")
 
+    # VTK data: its arrays with their ranges, and set_field renders another.
+    vti = os.path.join(work, "two.vti")
+    with open(vti, "w") as f:
+        ramp = " ".join(str(i % 4) for i in range(64))
+        f.write('<?xml version="1.0"?><VTKFile type="ImageData" version="0.1">'
+                '<ImageData WholeExtent="0 3 0 3 0 3" Origin="0 0 0" Spacing="1 1 1">'
+                '<Piece Extent="0 3 0 3 0 3"><PointData Scalars="ramp">'
+                f'<DataArray type="Float32" Name="ramp" format="ascii">{ramp}</DataArray>'
+                f'<DataArray type="Float32" Name="flat" format="ascii">{"1 " * 64}</DataArray>'
+                '</PointData></Piece></ImageData></VTKFile>')
+    d = ferry.Session(size=(32, 24), spp=1, threads=1)
+    d.load(vti)
+    first = d.render()
+    fields = d.fields()
+    if [(f["name"], f["range"], f["shown"]) for f in fields] != [
+            ("ramp", (0.0, 3.0), True), ("flat", (1.0, 1.0), False)]:
+        fail(f"session.fields(): {fields}")
+    d.set_field("flat")
+    if np.array_equal(first, d.render()) or not d.fields()[1]["shown"]:
+        fail("set_field('flat') did not render the other array")
+    print("  session.fields() lists a .vti's arrays with their ranges; set_field renders another")
+
     # Errors are ferry.Error, with the reason.
     for call, expected in [
         (lambda: ferry.render("/nonexistent/scene.pbrt"), "/nonexistent/scene.pbrt"),
