@@ -299,7 +299,8 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
   command->add_option(
       "--field", o.field,
       "The array a VTK file is rendered by: a .vti's, .vtu's, .pvtu's or .vts's point or cell\n"
-      "array (default: its active scalars), a .vtp's radius (default: radius)");
+      "array, a .pvti's point array (default: its active scalars), a .vtp's radius (default:\n"
+      "radius)");
   addCameraFlags(command, o.camera);
 }
 

@@ -55,16 +55,17 @@ Scene loadScene(const std::string& spec, const LoadOptions& options) {
     scene = loadVtkParticleScene(spec, options.field);
   } else if (ext == ".vtu" || ext == ".vtk" || ext == ".vts") {
     scene = loadVtkUnstructuredScene(spec, options.field);
-  } else if (ext == ".pvtu") {  // every piece (a session on many ranks reads its own)
-    scene = loadVtkPiecesScene(spec, options.field, 0, 1,
-                               [](const PieceSummary& mine, const std::string& error) {
-                                 if (!error.empty()) throw InputError(error);
-                                 return mine;
-                               });
+  } else if (ext == ".pvtu" || ext == ".pvti") {  // every piece (many ranks: each its own)
+    const PieceAgreement alone = [](const PieceSummary& mine, const std::string& error) {
+      if (!error.empty()) throw InputError(error);
+      return mine;
+    };
+    scene = ext == ".pvtu" ? loadVtkPiecesScene(spec, options.field, 0, 1, alone)
+                           : loadVtkImagePiecesScene(spec, options.field, 0, 1, alone);
   } else {
     throw InputError(
         fmt::format("{}: unsupported scene format '{}' (supported: .obj, .ply, .pbrt, .gltf, .glb, "
-                    ".vdb, .nvdb, .vti, .vtp, .vtu, .pvtu, .vtk, .vts, "
+                    ".vdb, .nvdb, .vti, .pvti, .vtp, .vtu, .pvtu, .vtk, .vts, "
                     "raw:PATH?dims=X,Y,Z&format=F, builtin:NAME)",
                     spec, ext));
   }

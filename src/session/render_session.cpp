@@ -96,15 +96,19 @@ PartitionedScene loadBrickPieces(const SessionSettings& settings, const Communic
   return distributedPiece(std::move(piece), comm);
 }
 
-// A .pvtu on this rank: its own pieces only, normalised and framed by what
-// every rank read (collective, as loadBrickPieces).
-bool isPvtuSpec(const std::string& spec) {
+// A .pvtu or .pvti on this rank: its own pieces only, normalised and framed
+// by what every rank read (collective, as loadBrickPieces).
+std::string lowerExtension(const std::string& spec) {
   std::string extension = std::filesystem::path(spec).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return char(std::tolower(c)); });
-  return extension == ".pvtu";
+  return extension;
 }
-PartitionedScene loadPvtuPieces(const SessionSettings& settings, const Communicator& comm) {
+bool isPiecesSpec(const std::string& spec) {
+  const std::string extension = lowerExtension(spec);
+  return extension == ".pvtu" || extension == ".pvti";
+}
+PartitionedScene loadPieces(const SessionSettings& settings, const Communicator& comm) {
   const PieceAgreement agree = [&](const PieceSummary& mine, const std::string& readError) {
     if (const std::string failure = comm.failureMessage(!readError.empty(), readError);
         !failure.empty())
@@ -133,8 +137,11 @@ PartitionedScene loadPvtuPieces(const SessionSettings& settings, const Communica
   Scene piece;
   std::string error;
   try {
-    piece =
-        loadVtkPiecesScene(settings.scene, settings.load.field, comm.rank(), comm.size(), agree);
+    piece = lowerExtension(settings.scene) == ".pvti"
+                ? loadVtkImagePiecesScene(settings.scene, settings.load.field, comm.rank(),
+                                          comm.size(), agree)
+                : loadVtkPiecesScene(settings.scene, settings.load.field, comm.rank(), comm.size(),
+                                     agree);
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -156,8 +163,8 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
   if (!part && !given && isBrickManifestSpec(settings.scene)) {
     fromBricks = loadBrickPieces(settings, comm);
     part = &fromBricks;
-  } else if (!part && !given && isPvtuSpec(settings.scene)) {
-    fromBricks = loadPvtuPieces(settings, comm);
+  } else if (!part && !given && isPiecesSpec(settings.scene)) {
+    fromBricks = loadPieces(settings, comm);
     part = &fromBricks;
   }
   PartitionedScene loaded =

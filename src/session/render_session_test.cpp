@@ -4,6 +4,7 @@
 // the first pixel.
 #include "session/render_session.h"
 
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -695,6 +696,127 @@ TEST(RenderSession, APvtuIsReadPieceByPieceAndTheImageIsTheSameOnAnyRankCount) {
       EXPECT_NE(std::string(e.what()).find("piece_2.vtu"), std::string::npos) << e.what();
     }
   });
+  fs::remove_all(dir);
+}
+
+// A .vti of n^3 points (`extent`: the points written, within the whole
+// image's), density a ball plus a ripple, velocity (x/10, y/5, 0).
+void writeVti(const fs::path& path, int n, std::array<int, 6> extent) {
+  std::string density, velocity;
+  for (int z = extent[4]; z <= extent[5]; ++z)
+    for (int y = extent[2]; y <= extent[3]; ++y)
+      for (int x = extent[0]; x <= extent[1]; ++x) {
+        const float r = std::sqrt(float((x - n / 2) * (x - n / 2) + (y - n / 2) * (y - n / 2) +
+                                        (z - n / 2) * (z - n / 2))) /
+                        float(n / 2);
+        density += fmt::format("{} ", std::max(0.0f, 1 - r) * 5 + 0.1f * std::sin(float(x)));
+        velocity += fmt::format("{} {} 0 ", x * 0.1f, y * 0.2f);
+      }
+  std::string ids;  // one per cell
+  for (int c = 0; c < (extent[1] - extent[0]) * (extent[3] - extent[2]) * (extent[5] - extent[4]);
+       ++c)
+    ids += "1 ";
+  const std::string e = fmt::format("{}", fmt::join(extent, " "));
+  std::ofstream(path) << fmt::format(
+      R"(<?xml version="1.0"?>
+<VTKFile type="ImageData" version="0.1" byte_order="LittleEndian">
+<ImageData WholeExtent="{0}" Origin="0.5 -1 2" Spacing="0.25 0.25 0.5"><Piece Extent="{0}">
+<PointData Scalars="density"><DataArray type="Float32" Name="density" format="ascii">{1}</DataArray>
+<DataArray type="Float32" Name="velocity" NumberOfComponents="3" format="ascii">{2}</DataArray></PointData>
+<CellData><DataArray type="Int32" Name="id" format="ascii">{3}</DataArray></CellData>
+</Piece></ImageData></VTKFile>)",
+      e, density, velocity, ids);
+}
+
+// whole.vti (n^3 points) and p.pvti: its eight pieces split at point
+// `split` on each axis (sharing that point), in `dir`.
+std::string writePvti(const fs::path& dir, int n, int split, int overlap = 0) {
+  fs::create_directories(dir);
+  writeVti(dir / "whole.vti", n, {0, n - 1, 0, n - 1, 0, n - 1});
+  std::string list;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        auto range = [&](int t) {
+          return t == 0 ? std::pair{0, split + overlap} : std::pair{split, n - 1};
+        };
+        const std::array<int, 6> e = {range(i).first,  range(i).second, range(j).first,
+                                      range(j).second, range(k).first,  range(k).second};
+        const std::string name = fmt::format("p_{}{}{}.vti", i, j, k);
+        writeVti(dir / name, n, e);
+        list += fmt::format("<Piece Extent=\"{}\" Source=\"{}\"/>\n", fmt::join(e, " "), name);
+      }
+  const fs::path path = dir / "p.pvti";
+  std::ofstream(path) << fmt::format(
+      R"(<?xml version="1.0"?>
+<VTKFile type="PImageData" version="0.1" byte_order="LittleEndian">
+<PImageData WholeExtent="0 {0} 0 {0} 0 {0}" GhostLevel="0" Origin="0.5 -1 2" Spacing="0.25 0.25 0.5">
+<PPointData Scalars="density"><PDataArray type="Float32" Name="density"/>
+<PDataArray type="Float32" Name="velocity" NumberOfComponents="3"/></PPointData>
+<PCellData><PDataArray type="Int32" Name="id"/></PCellData>
+{1}</PImageData></VTKFile>)",
+      n - 1, list);
+  return path.string();
+}
+
+// A .pvti: each piece a brick of the cells its points start, read by the
+// ranks piece by piece with the neighbours' layer its lookups need; the
+// same volume as the whole .vti, so the image equals the .vti bricked along
+// the same cells, on any rank count; arrays listed with their ranges.
+TEST(RenderSession, APvtiIsTheWholeImageInBricksOfItsPiecesOnAnyRankCount) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("ferry-pvti-{}", getpid());
+  const std::string pvti = writePvti(dir, 20, 12);
+  const Scene pieces = loadScene(pvti), whole = loadScene((dir / "whole.vti").string());
+  ASSERT_EQ(pieces.volumeFields.size(), 2u);  // the cell array is not offered
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(pieces.volumeFields[i].name, whole.volumeFields[i].name);
+    EXPECT_EQ(pieces.volumeFields[i].lo, whole.volumeFields[i].lo);
+    EXPECT_EQ(pieces.volumeFields[i].hi, whole.volumeFields[i].hi);
+  }
+  EXPECT_EQ(pieces.volumeField, 0);
+  for (const std::string field : {"", "velocity"}) {
+    SessionSettings settings;
+    settings.scene = (dir / "whole.vti").string();
+    settings.load.field = field;
+    settings.volumeBrickVoxels = 12;
+    settings.render.width = 32;
+    settings.render.height = 24;
+    settings.render.samplesPerPixel = 2;
+    std::vector<Vec3f> reference;
+    runRanks(1, [&](const Communicator& comm) {
+      RenderSession session(settings, comm);
+      RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+      session.run(sink);
+      reference = sink.images.back().linear;
+    });
+    settings.scene = pvti;
+    for (int ranks : {1, 2, 3}) {
+      std::vector<Vec3f> image;
+      runRanks(ranks, [&](const Communicator& comm) {
+        RenderSession session(settings, comm);
+        RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+        session.run(sink);
+        if (comm.isRoot()) image = sink.images.back().linear;
+      });
+      EXPECT_TRUE(image == reference) << "field '" << field << "', " << ranks << " ranks";
+    }
+  }
+  // Errors name the file: a cell array, pieces overlapping (ghost levels), a missing piece.
+  LoadOptions cells;
+  cells.field = "id";
+  auto refused = [&](const std::string& path, const LoadOptions& options, const std::string& what) {
+    try {
+      loadScene(path, options);
+      ADD_FAILURE() << "no error for " << what;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  refused(pvti, cells, "'id' is a cell array");
+  const std::string overlapping = writePvti(dir / "overlap", 20, 12, /*overlap=*/1);
+  refused(overlapping, {}, "overlap by more than their shared boundary");
+  fs::remove(dir / "p_111.vti");
+  refused(pvti, {}, "p_111.vti");
   fs::remove_all(dir);
 }
 

@@ -149,6 +149,18 @@ using PieceAgreement = std::function<PieceSummary(const PieceSummary&, const std
 // loadVtkUnstructuredScene, naming the piece's file.
 Scene loadVtkPiecesScene(const std::string& path, const std::string& field, int rank, int ranks,
                          const PieceAgreement& agree);
+// ParaView's parallel image data (.pvti): a manifest of .vti pieces whose
+// point extents share their boundary points. Each piece is a brick of the
+// cells its points start (shapes/volume_brick.h), the last along an axis
+// to the image's end, so the pieces must tile the image (no ghost levels).
+// Rank `rank` of `ranks` reads its contiguous run of pieces (as .pvtu)
+// through VTK's parallel reader, with the one-sample layer of the next
+// pieces its lookups need; the point array `field` (empty: the active
+// scalars, else the first), normalised by the range over all pieces, as
+// a .vti of the whole would be: the same volume, and with bricks of the
+// same cells the same image. InputError naming the file or piece.
+Scene loadVtkImagePiecesScene(const std::string& path, const std::string& field, int rank,
+                              int ranks, const PieceAgreement& agree);
 
 // --------------------------------------------------------------- raw grids
 

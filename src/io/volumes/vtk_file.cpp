@@ -37,6 +37,7 @@
 #include "media/medium.h"
 #include "shapes/spheres.h"
 #include "shapes/unstructured_volume.h"
+#include "shapes/volume_brick.h"
 
 namespace ferry {
 namespace {
@@ -588,6 +589,293 @@ Scene loadVtkPiecesScene(const std::string& path, const std::string& field, int 
         scene, pieces[k],
         fmt::format("{} {}", std::filesystem::path(pieces[k]).filename().string(), cells.array),
         std::move(cells), summary.lo, summary.hi, transfer, uint32_t(k) * 0x9E3779B1u);
+  return scene;
+}
+
+namespace {
+
+// A .pvti: the whole image's point extent and placement, its point arrays
+// (and the one to render), and its pieces' point extents and files.
+struct PvtiManifest {
+  std::array<int, 6> whole{};
+  std::array<double, 3> origin{}, spacing{};
+  std::vector<VolumeField> fields;  // point arrays (ranges unknown)
+  int32_t field = -1;
+  std::vector<std::array<int, 6>> extents;
+  std::vector<std::string> pieces;
+};
+
+PvtiManifest readPvti(const std::string& path, const std::string& field) {
+  if (!std::filesystem::is_regular_file(path))
+    throw InputError(fmt::format("{}: no such file", path));
+  vtkNew<vtkXMLDataParser> parser;
+  vtkNew<ErrorCatcher> errors;
+  parser->AddObserver(vtkCommand::ErrorEvent, errors);
+  parser->SetFileName(path.c_str());
+  const bool display = vtkObject::GetGlobalWarningDisplay();
+  vtkObject::GlobalWarningDisplayOff();
+  const int parsed = parser->Parse();
+  vtkObject::SetGlobalWarningDisplay(display);
+  vtkXMLDataElement* root = parser->GetRootElement();
+  if (!parsed || !root || !errors->message.empty())
+    throw InputError(fmt::format("{}: not an XML file VTK can parse", path));
+  vtkXMLDataElement* image = root->FindNestedElementWithName("PImageData");
+  if (std::string_view(root->GetName() ? root->GetName() : "") != "VTKFile" || !image)
+    throw InputError(fmt::format("{}: not a VTK parallel image data (.pvti) file", path));
+  PvtiManifest out;
+  if (image->GetVectorAttribute("WholeExtent", 6, out.whole.data()) != 6)
+    throw InputError(fmt::format("{}: no WholeExtent (six point indices)", path));
+  for (int a = 0; a < 3; ++a)
+    if (out.whole[2 * a + 1] < out.whole[2 * a])
+      throw InputError(fmt::format("{}: WholeExtent {} is empty", path, fmt::join(out.whole, " ")));
+  out.spacing = {1, 1, 1};
+  image->GetVectorAttribute("Origin", 3, out.origin.data());
+  image->GetVectorAttribute("Spacing", 3, out.spacing.data());
+  for (int a = 0; a < 3; ++a)
+    if (!(out.spacing[a] > 0) || !std::isfinite(out.spacing[a]) || !std::isfinite(out.origin[a]))
+      throw InputError(fmt::format("{}: spacing {} along {}: expected a positive number", path,
+                                   out.spacing[a], "xyz"[a]));
+  if (const char* direction = image->GetAttribute("Direction")) {
+    double d[9];
+    if (image->GetVectorAttribute("Direction", 9, d) != 9 ||
+        !(d[0] == 1 && d[4] == 1 && d[8] == 1 && d[1] == 0 && d[2] == 0 && d[3] == 0 && d[5] == 0 &&
+          d[6] == 0 && d[7] == 0))
+      throw InputError(fmt::format("{}: a rotated image (its Direction {} is not the identity)",
+                                   path, direction));
+  }
+  std::vector<std::string> cellArrays;
+  const char* active = nullptr;
+  const std::filesystem::path directory = std::filesystem::path(path).parent_path();
+  for (int i = 0; i < image->GetNumberOfNestedElements(); ++i) {
+    vtkXMLDataElement* e = image->GetNestedElement(i);
+    const std::string_view kind = e->GetName() ? e->GetName() : "";
+    if (kind == "PPointData" || kind == "PCellData") {
+      if (kind == "PPointData") active = e->GetAttribute("Scalars");
+      for (int k = 0; k < e->GetNumberOfNestedElements(); ++k) {
+        vtkXMLDataElement* a = e->GetNestedElement(k);
+        const char* name = a->GetAttribute("Name");
+        if (std::string_view(a->GetName() ? a->GetName() : "") != "PDataArray" || !name || !*name)
+          continue;
+        if (kind == "PCellData") {
+          cellArrays.push_back(name);
+          continue;
+        }
+        int components = 1;
+        a->GetScalarAttribute("NumberOfComponents", components);
+        out.fields.push_back({name, false, std::max(components, 1),
+                              std::numeric_limits<double>::max(),
+                              std::numeric_limits<double>::lowest()});
+      }
+    } else if (kind == "Piece") {
+      const char* source = e->GetAttribute("Source");
+      std::array<int, 6> extent;
+      if (!source || !*source)
+        throw InputError(fmt::format("{}: piece {} names no Source file", path, out.pieces.size()));
+      if (e->GetVectorAttribute("Extent", 6, extent.data()) != 6)
+        throw InputError(fmt::format("{}: piece {} has no Extent", path, out.pieces.size()));
+      for (int a = 0; a < 3; ++a)
+        if (extent[2 * a] < out.whole[2 * a] || extent[2 * a + 1] > out.whole[2 * a + 1] ||
+            extent[2 * a + 1] < extent[2 * a])
+          throw InputError(fmt::format("{}: piece {} extent {} is empty or outside the whole {}",
+                                       path, out.pieces.size(), fmt::join(extent, " "),
+                                       fmt::join(out.whole, " ")));
+      out.extents.push_back(extent);
+      out.pieces.push_back((directory / source).string());
+    }
+  }
+  if (out.pieces.empty()) throw InputError(fmt::format("{}: lists no pieces", path));
+  // The array: named, else the active point scalars, else the first point array.
+  const std::string want = !field.empty() ? field : active ? active : "";
+  for (size_t i = 0; i < out.fields.size(); ++i)
+    if (out.fields[i].name == want) out.field = int32_t(i);
+  if (want.empty() && !out.fields.empty()) out.field = 0;
+  if (out.field < 0) {
+    std::vector<std::string> points;
+    for (const VolumeField& f : out.fields) points.push_back(f.name);
+    if (std::find(cellArrays.begin(), cellArrays.end(), want) != cellArrays.end())
+      throw InputError(fmt::format(
+          "{}: '{}' is a cell array; a .pvti is read by its point arrays ({}; ParaView's Cell "
+          "Data to Point Data makes one)",
+          path, want,
+          points.empty() ? std::string("none") : fmt::format("{}", fmt::join(points, ", "))));
+    throw InputError(fmt::format(
+        "{}: no point array{} to render (point arrays: {})", path,
+        want.empty() ? "" : " '" + want + "'",
+        points.empty() ? std::string("none") : fmt::format("{}", fmt::join(points, ", "))));
+  }
+  return out;
+}
+
+}  // namespace
+
+Scene loadVtkImagePiecesScene(const std::string& path, const std::string& field, int rank,
+                              int ranks, const PieceAgreement& agree) {
+  PvtiManifest manifest;
+  PieceSummary summary;
+  std::array<int, 3> dims{};
+  Box3f box;
+  // This rank's bricks: the cells each piece covers and their samples with
+  // the ghost layer, as read (normalised once the ranks agree on the range).
+  struct Piece {
+    size_t index;
+    std::array<int, 3> lo, hi;
+    std::vector<float> samples;
+  };
+  std::vector<Piece> mine;
+  std::string error;
+  try {
+    manifest = readPvti(path, field);
+    summary.fields = manifest.fields;
+    for (int a = 0; a < 3; ++a) {
+      dims[a] = manifest.whole[2 * a + 1] - manifest.whole[2 * a] + 1;
+      // As a .vti: each point the centre of a cell `spacing` wide.
+      box.lower[a] =
+          float(manifest.origin[a] + (manifest.whole[2 * a] - 0.5) * manifest.spacing[a]);
+      box.upper[a] =
+          float(manifest.origin[a] + (manifest.whole[2 * a] - 0.5 + dims[a]) * manifest.spacing[a]);
+    }
+    summary.box = box;
+    // A piece of points [a, b] (sharing b with the next piece) is the brick
+    // of cells [a, b), the last along an axis [a, n): the pieces must tile.
+    std::vector<std::array<int, 6>> cells(manifest.pieces.size());
+    uint64_t covered = 0;
+    for (size_t k = 0; k < cells.size(); ++k) {
+      uint64_t count = 1;
+      for (int a = 0; a < 3; ++a) {
+        const int first = manifest.extents[k][2 * a] - manifest.whole[2 * a];
+        const int last = manifest.extents[k][2 * a + 1] - manifest.whole[2 * a];
+        cells[k][2 * a] = first;
+        cells[k][2 * a + 1] = last == dims[a] - 1 ? dims[a] : last;
+        count *= uint64_t(std::max(cells[k][2 * a + 1] - first, 0));
+      }
+      covered += count;
+    }
+    for (size_t p = 0; p < cells.size(); ++p)
+      for (size_t q = p + 1; q < cells.size(); ++q) {
+        bool overlap = true;
+        for (int a = 0; a < 3; ++a)
+          overlap = overlap && cells[p][2 * a] < cells[q][2 * a + 1] &&
+                    cells[q][2 * a] < cells[p][2 * a + 1];
+        if (overlap)
+          throw InputError(fmt::format(
+              "{}: pieces {} and {} overlap by more than their shared boundary points (ghost "
+              "levels are not read)",
+              path, p, q));
+      }
+    const uint64_t all = uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]);
+    if (covered != all)
+      throw InputError(
+          fmt::format("{}: the pieces cover {} of the image's {} cells", path, covered, all));
+    const auto [first, end] = pieceRanks(manifest.pieces.size(), ranks, rank);
+    // The points each brick's lookups read: its cells' and the layer below
+    // them, which the previous pieces hold (absolute VTK point indices).
+    std::vector<std::array<int, 6>> needs;
+    for (size_t k = first; k < end; ++k) {
+      Piece piece{k, {}, {}, {}};
+      std::array<int, 6> need;
+      uint64_t samples = 1;
+      bool empty = false;
+      for (int a = 0; a < 3; ++a) {
+        piece.lo[a] = cells[k][2 * a];
+        piece.hi[a] = cells[k][2 * a + 1];
+        empty = empty || piece.lo[a] >= piece.hi[a];
+        need[2 * a] = manifest.whole[2 * a] + std::max(piece.lo[a] - 1, 0);
+        need[2 * a + 1] = manifest.whole[2 * a] + std::min(piece.hi[a], dims[a] - 1);
+        samples *= uint64_t(std::max(need[2 * a + 1] - need[2 * a] + 1, 0));
+      }
+      if (empty) continue;  // a piece one point thick inside the image: no cells of its own
+      piece.samples.assign(samples, std::numeric_limits<float>::quiet_NaN());
+      summary.cells += uint64_t(piece.hi[0] - piece.lo[0]) * uint64_t(piece.hi[1] - piece.lo[1]) *
+                       uint64_t(piece.hi[2] - piece.lo[2]);
+      mine.push_back(std::move(piece));
+      needs.push_back(need);
+    }
+    // Each piece file that holds some of those points, read once.
+    const std::string& name = manifest.fields[size_t(manifest.field)].name;
+    for (size_t q = 0; q < manifest.pieces.size() && !mine.empty(); ++q) {
+      const std::array<int, 6>& has = manifest.extents[q];
+      auto overlaps = [&](const std::array<int, 6>& need) {
+        for (int a = 0; a < 3; ++a)
+          if (has[2 * a] > need[2 * a + 1] || need[2 * a] > has[2 * a + 1]) return false;
+        return true;
+      };
+      if (std::none_of(needs.begin(), needs.end(), overlaps)) continue;
+      const std::string& file = manifest.pieces[q];
+      auto reader = readVtk<vtkXMLImageDataReader>(file, "image data (.vti)");
+      vtkImageData* image = reader->GetOutput();
+      int extent[6];
+      image->GetExtent(extent);
+      if (!std::equal(extent, extent + 6, has.begin()))
+        throw InputError(fmt::format("{}: extent {}, where {} says {}", file,
+                                     fmt::join(extent, extent + 6, " "), path,
+                                     fmt::join(has, " ")));
+      vtkDataArray* array = image->GetPointData()->GetArray(name.c_str());
+      if (!array)
+        throw InputError(fmt::format("{}: no point array '{}' (point arrays: {})", file, name,
+                                     arrayNames(image->GetPointData())));
+      for (const VolumeField& f : fieldsOf(image))
+        for (VolumeField& s : summary.fields)
+          if (s.name == f.name && !f.atCells)
+            s.lo = std::min(s.lo, f.lo), s.hi = std::max(s.hi, f.hi);
+      const int nx = has[1] - has[0] + 1, ny = has[3] - has[2] + 1;
+      for (size_t b = 0; b < mine.size(); ++b) {
+        const std::array<int, 6>& need = needs[b];
+        if (!overlaps(need)) continue;
+        const int bx = need[1] - need[0] + 1, by = need[3] - need[2] + 1;
+        for (int z = std::max(has[4], need[4]); z <= std::min(has[5], need[5]); ++z)
+          for (int y = std::max(has[2], need[2]); y <= std::min(has[3], need[3]); ++y)
+            for (int x = std::max(has[0], need[0]); x <= std::min(has[1], need[1]); ++x) {
+              const vtkIdType from =
+                  vtkIdType(x - has[0]) +
+                  vtkIdType(nx) * (vtkIdType(y - has[2]) + vtkIdType(ny) * vtkIdType(z - has[4]));
+              const double v = tupleValue(array, from);
+              if (!std::isfinite(v) || !std::isfinite(float(v)))
+                throw InputError(fmt::format("{}: array '{}' at point ({}, {}, {}) is {}", file,
+                                             name, x, y, z, v));
+              mine[b]
+                  .samples[size_t(x - need[0]) +
+                           size_t(bx) * (size_t(y - need[2]) + size_t(by) * size_t(z - need[4]))] =
+                  float(v);
+              summary.lo = std::min(summary.lo, v);
+              summary.hi = std::max(summary.hi, v);
+            }
+      }
+    }
+    if (!mine.empty()) summary.field = manifest.field;
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  summary = agree(summary, error);  // every rank's, so that all normalise alike
+  const VolumeField& chosen = summary.fields[size_t(manifest.field)];
+  const std::string name =
+      fmt::format("{} points '{}' [{:g}, {:g}]{}, {} pieces",
+                  std::filesystem::path(path).filename().string(), chosen.name, summary.lo,
+                  summary.hi, chosen.components > 1 ? " (magnitude)" : "", manifest.pieces.size());
+  TransferFunction tf = TransferFunction::standard();
+  tf = tf.withScale(tf.scale() / maxComponent(box.size()));  // as a .vti's
+  auto volume = std::make_shared<VolumeBrick::Volume>();
+  volume->dims = dims;
+  const Vec3f size = box.size();
+  volume->gridFromWorld =
+      Affine3f::scale({1 / size.x, 1 / size.y, 1 / size.z}) * Affine3f::translate(-box.lower);
+  volume->transfer = std::make_shared<const TransferFunction>(std::move(tf));
+  Scene scene = framedVolumeScene(name, box);
+  scene.volumeFields = summary.fields;
+  for (VolumeField& f : scene.volumeFields)
+    if (!(f.lo <= f.hi)) f.lo = f.hi = 0;
+  scene.volumeField = manifest.field;
+  Material none;
+  none.name = "volume";
+  const int32_t material = scene.addMaterial(none);
+  for (Piece& piece : mine) {
+    normalise(piece.samples, summary.lo, summary.hi);  // as a .vti's values
+    auto brick = std::make_shared<VolumeBrick>(volume, piece.lo, piece.hi,
+                                               SharedArray<float>(std::move(piece.samples)));
+    if (!(brick->majorant() > 0)) continue;  // it never collides: nothing to hold
+    scene.addSingleInstanceGeometry(
+        {fmt::format("{} brick {},{},{}", name, piece.lo[0], piece.lo[1], piece.lo[2]), material,
+         std::move(brick)});
+  }
   return scene;
 }
 

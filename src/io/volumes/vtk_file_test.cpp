@@ -167,14 +167,47 @@ TEST(VtkFile, BadFilesAreErrorsNamingThem) {
         {"m.pvtu", "<VTKFile><PUnstructuredGrid><Piece/></PUnstructuredGrid></VTKFile>"},
         {"n.pvtu",
          "<VTKFile><PUnstructuredGrid><Piece "
-         "Source=\"nowhere.vtu\"/></PUnstructuredGrid></VTKFile>"}}) {
+         "Source=\"nowhere.vtu\"/></PUnstructuredGrid></VTKFile>"},
+        {"o.pvti", "<VTKFile type=\"PImageData\"><PImageData>"},
+        {"p.pvti", imageXml()},
+        {"q.pvti",
+         "<VTKFile><PImageData><Piece Extent=\"0 1 0 1 0 1\" Source=\"a.vti\"/>"
+         "</PImageData></VTKFile>"},
+        {"r.pvti",
+         "<VTKFile><PImageData WholeExtent=\"0 1 0 1 0 1\"><PPointData>"
+         "<PDataArray Name=\"T\"/></PPointData></PImageData></VTKFile>"},
+        {"s.pvti",
+         "<VTKFile><PImageData WholeExtent=\"0 1 0 1 0 1\"><PPointData>"
+         "<PDataArray Name=\"T\"/></PPointData><Piece Extent=\"0 1 0 1 0 1\"/>"
+         "</PImageData></VTKFile>"},
+        {"t.pvti",
+         "<VTKFile><PImageData WholeExtent=\"0 1 0 1 0 1\"><PPointData>"
+         "<PDataArray Name=\"T\"/></PPointData><Piece Extent=\"0 2 0 1 0 1\" "
+         "Source=\"a.vti\"/></PImageData></VTKFile>"},
+        {"u.pvti",
+         "<VTKFile><PImageData WholeExtent=\"0 1 0 1 0 1\" Spacing=\"1 0 1\">"
+         "<PPointData><PDataArray Name=\"T\"/></PPointData><Piece "
+         "Extent=\"0 1 0 1 0 1\" Source=\"a.vti\"/></PImageData></VTKFile>"},
+        {"v.pvti",
+         "<VTKFile><PImageData WholeExtent=\"0 1 0 1 0 1\"><Piece "
+         "Extent=\"0 1 0 1 0 1\" Source=\"a.vti\"/></PImageData></VTKFile>"},
+        {"w.pvti",
+         "<VTKFile><PImageData WholeExtent=\"0 3 0 1 0 1\"><PPointData>"
+         "<PDataArray Name=\"T\"/></PPointData><Piece Extent=\"0 1 0 1 0 1\" "
+         "Source=\"a.vti\"/></PImageData></VTKFile>"},
+        {"x.pvti",
+         "<VTKFile><PImageData WholeExtent=\"0 1 0 1 0 1\"><PPointData>"
+         "<PDataArray Name=\"T\"/></PPointData><Piece Extent=\"0 1 0 1 0 1\" "
+         "Source=\"nowhere.vti\"/></PImageData></VTKFile>"}}) {
     const std::string path = tempFile(name, text);
     try {
       loadScene(path);
       ADD_FAILURE() << name << " was read";
     } catch (const InputError& e) {
       // (A .pvtu's missing piece is named by the piece's file.)
-      const std::string named = name == "n.pvtu" ? "nowhere.vtu" : path;
+      const std::string named = name == "n.pvtu"   ? "nowhere.vtu"
+                                : name == "x.pvti" ? "nowhere.vti"
+                                                   : path;
       EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
     }
     fs::remove(path);
