@@ -309,6 +309,14 @@ PYBIND11_MODULE(ferry, m) {
           "set_spp", [](PySession& s, int spp) { s.session->setSamplesPerPixel(spp); },
           py::arg("spp"))
       .def(
+          "set_volume_look",
+          [](PySession& s, const std::string& colorMap, float opacity) {
+            s.session->setVolumeLook(colorMap, opacity);
+          },
+          py::arg("color_map") = "", py::arg("opacity") = 1.0f,
+          "Restyles the volumes drawn through a colour map (whole or in bricks), between "
+          "renders without reloading: a map name (\"\": each volume's own) and an opacity scale.")
+      .def(
           "fields",
           [](const PySession& s) {
             py::list out;

@@ -241,6 +241,11 @@ class FERRY_API Session {
   void setCamera(const Camera& camera);
   void setImageSize(int width, int height);
   void setSamplesPerPixel(int samples);
+  // Restyles the volumes drawn through a colour map (whole or in bricks
+  // over the ranks): `colorMap` one of Ferry's maps ("viridis", ...; ""
+  // each volume's own), `opacity` a scale of their extinction (1: as
+  // loaded). Between renders, without reloading; an Error for an unknown map.
+  void setVolumeLook(const std::string& colorMap, float opacity = 1);
 
   // Loads and spreads the scene now (else the next render does): errors in
   // it surface here. Collective.

@@ -1,5 +1,6 @@
 // ferry::api::Session (include/ferry/ferry.h) over a RenderSession.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -147,6 +148,7 @@ struct Session::Impl {
   ferry::Scene scene;
   std::optional<CameraView> camera;
   std::optional<RenderSession> session;  // built at the first render after a scene change
+  bool lookChanged = false;              // setVolumeLook since the session was built
   Stats stats;
 
   Impl(const Communicator& c, std::shared_ptr<const void> k, const Options& o)
@@ -293,6 +295,8 @@ struct Session::Impl {
       session->setSamples(options.samplesPerPixel, frames);
       if (options.width > 0) session->setImageSize(options.width, options.height);
       session->setView(session->settings().render.view, camera);
+      if (lookChanged) session->setVolumeLook({flags.volumeOpacity, flags.colorMap});
+      lookChanged = false;
       if (resumePending && comm->isRoot()) session->resumeFrom(flags.resume);
     } catch (const std::exception& e) {
       error = e.what();
@@ -632,6 +636,18 @@ void Session::setImageSize(int width, int height) {
 void Session::setSamplesPerPixel(int samples) {
   if (samples < 1) throw Error(fmt::format("samplesPerPixel {}: must be at least 1", samples));
   impl_->options.samplesPerPixel = samples;
+}
+
+void Session::setVolumeLook(const std::string& colorMap, float opacity) {
+  if (!(opacity > 0) || !std::isfinite(opacity))
+    throw Error(fmt::format("volume opacity {}: expected a positive scale", opacity));
+  const auto& maps = colorMapNames();
+  if (!colorMap.empty() && std::find(maps.begin(), maps.end(), colorMap) == maps.end())
+    throw Error(fmt::format("colour map \"{}\": expected one of {} (or \"\": each volume's own)",
+                            colorMap, fmt::join(maps, ", ")));
+  impl_->flags.volumeOpacity = opacity;
+  impl_->flags.colorMap = colorMap;
+  impl_->lookChanged = true;
 }
 
 void Session::prepare() {

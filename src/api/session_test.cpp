@@ -503,6 +503,49 @@ TEST(ApiSession, VtkDataListsItsArraysAndRendersTheOneChosen) {
   std::filesystem::remove(vti);
 }
 
+// setVolumeLook restyles a volume between renders, whole or in bricks on
+// several ranks: the image a session told the look from the start makes.
+TEST(ApiSession, AVolumeIsRestyledBetweenRendersWholeOrInBricks) {
+  std::vector<float> values(16 * 16 * 16);
+  for (int z = 0; z < 16; ++z)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) values[size_t((z * 16 + y) * 16 + x)] = float(x + y + z) / 45;
+  api::VolumeData volume;
+  volume.name = "ramp";
+  volume.dims = {16, 16, 16};
+  volume.values = values;
+  volume.colorMap = "viridis";
+  for (const char* bricks : {"0", "8"}) {
+    for (int ranks : {1, 2}) {
+      std::vector<float> restyled, direct;
+      runRanks(ranks, [&](const Communicator& comm) {
+        api::Options o = smallOptions();
+        o.settings["volume-bricks"] = bricks;
+        api::Session session = sessionOn(comm, nullptr, o);
+        session.addVolume(volume);
+        session.setEnvironment({0.8f, 0.8f, 0.8f});
+        const api::Image before = session.render(1);
+        EXPECT_THROW(session.setVolumeLook("jet"), api::Error);
+        session.setVolumeLook("inferno", 4);
+        const api::Image after = session.render(1);
+        if (comm.isRoot()) {
+          EXPECT_NE(before.rgba, after.rgba);
+          restyled = after.rgba;
+        }
+        o.settings["color-map"] = "inferno";
+        o.settings["volume-opacity"] = "4";
+        api::Session fresh = sessionOn(comm, nullptr, o);
+        fresh.addVolume(volume);
+        fresh.setEnvironment({0.8f, 0.8f, 0.8f});
+        const api::Image told = fresh.render(1);
+        if (comm.isRoot()) direct = told.rgba;
+      });
+      EXPECT_FALSE(restyled.empty());
+      EXPECT_EQ(restyled, direct) << "bricks " << bricks << ", " << ranks << " ranks";
+    }
+  }
+}
+
 // Curves from memory (placeCurves): strands of Bezier segments appear in
 // the picture, the same on 1 and 3 ranks; bad arrays are errors naming them.
 TEST(ApiSession, RendersCurvesFromMemoryTheSameOnAnyRankCount) {

@@ -366,6 +366,13 @@ bool RenderSession::hasTransferFunctionVolumes() const {
                      [](const auto& t) { return t != nullptr; });
 }
 
+void RenderSession::setVolumeLook(const VolumeLook& look) {
+  if (!(look.opacity > 0) || !std::isfinite(look.opacity))
+    throw InputError(fmt::format("volume opacity {}: expected a positive scale", look.opacity));
+  applyVolumeLook(look);
+  settings_.render.volumeLook = look;
+}
+
 void RenderSession::applyVolumeLook(const VolumeLook& look) {
   // Every rank checks the look the same way (flags and the viewer checked it first).
   const auto restyle = [&look](const TransferFunction& loaded) {

@@ -226,6 +226,10 @@ class RenderSession {
   // throws InputError for an unknown name. run() may be called again
   // after it (the bandwidth predictor renders several views from one load).
   void setView(const std::string& view, const std::optional<CameraView>& camera);
+  // Before run(): restyles every volume drawn through a transfer function
+  // (whole or in bricks, on every rank) by `look`, from its loaded transfer
+  // function; InputError for an unknown colour map or a bad opacity.
+  void setVolumeLook(const VolumeLook& look);
   // Rank 0, before run() (not collective): continues the render held in a
   // checkpoint (io/checkpoints/checkpoint_file.h): run() starts after its frames, with
   // its image. Throws InputError naming the file if it cannot be read, or

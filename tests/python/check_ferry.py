@@ -124,6 +124,9 @@ def single(binary):
     volume = v.render()
     if not np.isfinite(volume).all() or volume[12, 16].tolist() == volume[0, 0].tolist():
         fail("the volume is not in the image")
+    v.set_volume_look("inferno", 4)
+    if np.array_equal(v.render(), volume):
+        fail("set_volume_look('inferno', 4) did not restyle the volume")
 
     # Curves from numpy: 12 strands of 2 Bezier segments across the view.
     c = ferry.Session(size=(32, 24), spp=1, threads=1)
