@@ -572,6 +572,18 @@ TEST(RenderSession, AFocusPickFocusesOnTheNearestSurfaceOverEveryRank) {
   }
 }
 
+// The final linear image of `settings` rendered on `ranks` in-process ranks.
+std::vector<Vec3f> renderedOn(int ranks, const SessionSettings& settings) {
+  std::vector<Vec3f> image;
+  runRanks(ranks, [&](const Communicator& comm) {
+    RenderSession session(settings, comm);
+    RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
+    session.run(sink);
+    if (comm.isRoot()) image = sink.images.back().linear;
+  });
+  return image;
+}
+
 // A ParaView .pvtu of `pieces` ASCII .vtu pieces beside it in `dir`, each
 // 2 x 2 x 2 hexahedra, side by side along x, of the point array
 // T = x + y / 2 + z / 4 (continuous across the seams).
@@ -656,13 +668,7 @@ TEST(RenderSession, APvtuIsReadPieceByPieceAndTheImageIsTheSameOnAnyRankCount) {
   settings.render.height = 24;
   settings.render.samplesPerPixel = 2;
   settings.render.maxDepth = 4;
-  std::vector<Vec3f> one;
-  runRanks(1, [&](const Communicator& comm) {
-    RenderSession session(settings, comm);
-    RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
-    session.run(sink);
-    if (comm.isRoot()) one = sink.images.back().linear;
-  });
+  const std::vector<Vec3f> one = renderedOn(1, settings);
   ASSERT_FALSE(one.empty());
   const auto byRed = [](Vec3f a, Vec3f b) { return a.x < b.x; };
   EXPECT_LT(std::min_element(one.begin(), one.end(), byRed)->x,
@@ -782,24 +788,11 @@ TEST(RenderSession, APvtiIsTheWholeImageInBricksOfItsPiecesOnAnyRankCount) {
     settings.render.width = 32;
     settings.render.height = 24;
     settings.render.samplesPerPixel = 2;
-    std::vector<Vec3f> reference;
-    runRanks(1, [&](const Communicator& comm) {
-      RenderSession session(settings, comm);
-      RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
-      session.run(sink);
-      reference = sink.images.back().linear;
-    });
+    const std::vector<Vec3f> reference = renderedOn(1, settings);
     settings.scene = pvti;
-    for (int ranks : {1, 2, 3}) {
-      std::vector<Vec3f> image;
-      runRanks(ranks, [&](const Communicator& comm) {
-        RenderSession session(settings, comm);
-        RecordingSink sink(FrameSink::Frames::Last, FrameSink::Pixels::Linear);
-        session.run(sink);
-        if (comm.isRoot()) image = sink.images.back().linear;
-      });
-      EXPECT_TRUE(image == reference) << "field '" << field << "', " << ranks << " ranks";
-    }
+    for (int ranks : {1, 2, 3})
+      EXPECT_TRUE(renderedOn(ranks, settings) == reference)
+          << "field '" << field << "', " << ranks << " ranks";
   }
   // Errors name the file: a cell array, pieces overlapping (ghost levels), a missing piece.
   LoadOptions cells;

@@ -483,10 +483,12 @@ struct PvtuManifest {
   std::vector<VolumeField> fields;
 };
 
-PvtuManifest readPvtu(const std::string& path) {
+// A manifest's `element` (PUnstructuredGrid, PImageData), parsed by
+// `parser` (which owns it); InputError naming the file, `what` it should be.
+vtkXMLDataElement* manifestElement(const std::string& path, vtkXMLDataParser* parser,
+                                   const char* element, const char* what) {
   if (!std::filesystem::is_regular_file(path))
     throw InputError(fmt::format("{}: no such file", path));
-  vtkNew<vtkXMLDataParser> parser;
   vtkNew<ErrorCatcher> errors;
   parser->AddObserver(vtkCommand::ErrorEvent, errors);
   parser->SetFileName(path.c_str());
@@ -497,9 +499,16 @@ PvtuManifest readPvtu(const std::string& path) {
   vtkXMLDataElement* root = parser->GetRootElement();
   if (!parsed || !root || !errors->message.empty())
     throw InputError(fmt::format("{}: not an XML file VTK can parse", path));
-  vtkXMLDataElement* grid = root->FindNestedElementWithName("PUnstructuredGrid");
-  if (std::string_view(root->GetName() ? root->GetName() : "") != "VTKFile" || !grid)
-    throw InputError(fmt::format("{}: not a VTK parallel unstructured grid (.pvtu) file", path));
+  vtkXMLDataElement* found = root->FindNestedElementWithName(element);
+  if (std::string_view(root->GetName() ? root->GetName() : "") != "VTKFile" || !found)
+    throw InputError(fmt::format("{}: not a VTK {} file", path, what));
+  return found;
+}
+
+PvtuManifest readPvtu(const std::string& path) {
+  vtkNew<vtkXMLDataParser> parser;
+  vtkXMLDataElement* grid =
+      manifestElement(path, parser, "PUnstructuredGrid", "parallel unstructured grid (.pvtu)");
   PvtuManifest out;
   std::vector<VolumeField> cellFields;
   const std::filesystem::path directory = std::filesystem::path(path).parent_path();
@@ -606,22 +615,9 @@ struct PvtiManifest {
 };
 
 PvtiManifest readPvti(const std::string& path, const std::string& field) {
-  if (!std::filesystem::is_regular_file(path))
-    throw InputError(fmt::format("{}: no such file", path));
   vtkNew<vtkXMLDataParser> parser;
-  vtkNew<ErrorCatcher> errors;
-  parser->AddObserver(vtkCommand::ErrorEvent, errors);
-  parser->SetFileName(path.c_str());
-  const bool display = vtkObject::GetGlobalWarningDisplay();
-  vtkObject::GlobalWarningDisplayOff();
-  const int parsed = parser->Parse();
-  vtkObject::SetGlobalWarningDisplay(display);
-  vtkXMLDataElement* root = parser->GetRootElement();
-  if (!parsed || !root || !errors->message.empty())
-    throw InputError(fmt::format("{}: not an XML file VTK can parse", path));
-  vtkXMLDataElement* image = root->FindNestedElementWithName("PImageData");
-  if (std::string_view(root->GetName() ? root->GetName() : "") != "VTKFile" || !image)
-    throw InputError(fmt::format("{}: not a VTK parallel image data (.pvti) file", path));
+  vtkXMLDataElement* image =
+      manifestElement(path, parser, "PImageData", "parallel image data (.pvti)");
   PvtiManifest out;
   if (image->GetVectorAttribute("WholeExtent", 6, out.whole.data()) != 6)
     throw InputError(fmt::format("{}: no WholeExtent (six point indices)", path));
