@@ -15,6 +15,7 @@
 //
 //   build/bench/curves_bench                       (100 000 strands, 3 repetitions)
 //   STRANDS=1000000 build/bench/curves_bench
+//   MAX_BYTES_RATIO=2 build/bench/curves_bench     (exit 1 above that curves/embree bytes)
 #include <benchmark/benchmark.h>
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
@@ -211,6 +212,8 @@ class Ratios : public benchmark::ConsoleReporter {
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
+    if (bytes_.count("Curves") && bytes_.count("EmbreeCurves"))
+      bytesRatio = bytes_["Curves"] / bytes_["EmbreeCurves"];
     if (rate_.count("Curves") && rate_.count("Triangles") && rate_.count("EmbreeCurves"))
       std::printf(
           "curves/triangles rays/s %.3f  curves/embree-curves rays/s %.3f  "
@@ -220,6 +223,8 @@ class Ratios : public benchmark::ConsoleReporter {
           bytes_["Curves"], bytes_["Triangles"], bytes_["EmbreeCurves"],
           bytes_["Curves"] / bytes_["EmbreeCurves"]);
   }
+
+  double bytesRatio = 0;  // Ferry's bytes per segment over Embree's curves' (0: not run)
 
  private:
   std::map<std::string, double> rate_, bytes_;
@@ -233,4 +238,14 @@ int main(int argc, char** argv) {
   ferry::Ratios reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
+  // The memory gate (bytes are counted, not timed): issue 71's 2x.
+  if (const char* limit = std::getenv("MAX_BYTES_RATIO"); limit && reporter.bytesRatio > 0) {
+    if (reporter.bytesRatio > std::atof(limit)) {
+      std::printf("FAIL: curves hold %.2fx the bytes per segment of Embree's curves (gate %s)\n",
+                  reporter.bytesRatio, limit);
+      return 1;
+    }
+    std::printf("bytes gate: %.2fx Embree's curves, at most %s\n", reporter.bytesRatio, limit);
+  }
+  return 0;
 }
