@@ -214,27 +214,76 @@ Affine3f keyTransform(const MotionKey& key) {
   return a;
 }
 
+// pbrt's animated transform from `start` to `end`: T, S by lerp, R by slerp
+// of their decompositions.
+struct PbrtMotion {
+  Polar p0, p1;
+  Quat r1;
+  PbrtMotion(const Affine3f& start, const Affine3f& end)
+      : p0(polar(start)), p1(polar(end)), r1(p1.rotation) {
+    if (dot4(p0.rotation, r1) < 0)
+      for (double& c : r1) c = -c;
+  }
+  bool sheared() const { return !diagonal(p0.stretch) || !diagonal(p1.stretch); }
+  // At t: the translation and the linear part.
+  std::pair<Vec3f, Mat3> at(double t) const {
+    const Mat3 r = rotationOf(slerp(p0.rotation, r1, t));
+    Mat3 s;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) s[i][j] = (1 - t) * p0.stretch[i][j] + t * p1.stretch[i][j];
+    return {p0.translation * float(1 - t) + p1.translation * float(t), multiply(r, s)};
+  }
+};
+
+// Sheared motions are sampled with this many segments.
+constexpr int kShearSegments = 16;
+
 InstanceMotion::InstanceMotion(const Affine3f& start, const Affine3f& end, Vec3f pivot) {
   // In the pivot's space: x - pivot -> M (x) - pivot.
   auto centred = [&](Affine3f m) {
     m.t = m.transformPoint(pivot) - pivot;
     return m;
   };
-  const Polar p0 = polar(centred(start)), p1 = polar(centred(end));
-  Quat r1 = p1.rotation;
-  if (dot4(p0.rotation, r1) < 0)
-    for (double& c : r1) c = -c;
-  // pbrt's interpolation at t: T, S by lerp, R by slerp.
-  auto pbrtAt = [&](double t) {
-    const Mat3 r = rotationOf(slerp(p0.rotation, r1, t));
-    Mat3 s;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) s[i][j] = (1 - t) * p0.stretch[i][j] + t * p1.stretch[i][j];
-    return keyOf(p0.translation * float(1 - t) + p1.translation * float(t), multiply(r, s), pivot);
-  };
-  const int segments = diagonal(p0.stretch) && diagonal(p1.stretch) ? 1 : 16;
-  for (int k = 0; k <= segments; ++k) keys_.push_back(pbrtAt(double(k) / segments));
+  const PbrtMotion motion(centred(start), centred(end));
+  const int segments = motion.sheared() ? kShearSegments : 1;
+  for (int k = 0; k <= segments; ++k) {
+    const auto [translation, linear] = motion.at(double(k) / segments);
+    keys_.push_back(keyOf(translation, linear, pivot));
+  }
   alignRotations(keys_);
+}
+
+InstanceMotion InstanceMotion::nested(const Affine3f& outerStart, const Affine3f& outerEnd,
+                                      const Affine3f& innerStart, const Affine3f& innerEnd) {
+  // A still outer similarity (rotation, uniform scale, translation) keeps
+  // pbrt's interpolation of the products: two keys are exact.
+  const Mat3 o = linearOf(outerStart);
+  Mat3 gram{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) gram[i][j] += o[k][i] * o[k][j];
+  bool similarity = true;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      similarity =
+          similarity && std::abs(gram[i][j] - (i == j ? gram[0][0] : 0.0)) <= 1e-6 * gram[0][0];
+  bool still = outerStart.t == outerEnd.t;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) still = still && outerStart.l[i][j] == outerEnd.l[i][j];
+  if (still && similarity) return InstanceMotion(outerStart * innerStart, outerStart * innerEnd);
+  const PbrtMotion outer(outerStart, outerEnd), inner(innerStart, innerEnd);
+  std::vector<MotionKey> keys;
+  for (int k = 0; k <= kShearSegments; ++k) {
+    const double t = double(k) / kShearSegments;
+    const auto [to, lo] = outer.at(t);
+    const auto [ti, li] = inner.at(t);
+    const Vec3f translation(float(lo[0][0] * ti.x + lo[0][1] * ti.y + lo[0][2] * ti.z) + to.x,
+                            float(lo[1][0] * ti.x + lo[1][1] * ti.y + lo[1][2] * ti.z) + to.y,
+                            float(lo[2][0] * ti.x + lo[2][1] * ti.y + lo[2][2] * ti.z) + to.z);
+    keys.push_back(keyOf(translation, multiply(lo, li), Vec3f(0)));
+  }
+  alignRotations(keys);
+  return InstanceMotion(std::move(keys));
 }
 
 InstanceMotion::InstanceMotion(std::vector<MotionKey> keys) : keys_(std::move(keys)) {

@@ -59,6 +59,35 @@ TEST(InstanceMotion, RotationIsSlerpedAndScaleAndTranslationLerped) {
   EXPECT_GT(length(m.at(0.5f).transformPoint(pivot) - (pivot + a) * 0.5f), 1.0f);
 }
 
+// pbrt-v3's motion inside ObjectBegin: the part's motion, then the
+// instance's. A still instance that turns and scales evenly keeps two keys
+// and is exact; otherwise the product is sampled, exact at the samples and
+// close between them.
+TEST(InstanceMotion, APartMovingInsideAnInstanceMovesByBoth) {
+  const Affine3f partStart = turned(0), partEnd = turned(90);
+  const InstanceMotion part(partStart, partEnd);
+  const Affine3f similar = Affine3f::translate({-2, 1, 0}) * Affine3f::rotate({0, 1, 0}, 0.5f) *
+                           Affine3f::scale({1.5f, 1.5f, 1.5f});
+  const InstanceMotion still = InstanceMotion::nested(similar, similar, partStart, partEnd);
+  EXPECT_EQ(still.keys().size(), 2u);
+  for (float u : {0.0f, 0.3f, 0.5f, 1.0f}) expectNear(still.at(u), similar * part.at(u), 1e-4f);
+  const Affine3f uneven = Affine3f::scale({0.8f, 1.4f, 1});
+  const InstanceMotion stretched = InstanceMotion::nested(uneven, uneven, partStart, partEnd);
+  EXPECT_GT(stretched.keys().size(), 2u);
+  const Affine3f outerEnd = Affine3f::translate({0, -0.8f, 0}) * Affine3f::rotate({0, 0, 1}, -0.8f);
+  const InstanceMotion outer(Affine3f::identity(), outerEnd);
+  const InstanceMotion both =
+      InstanceMotion::nested(Affine3f::identity(), outerEnd, partStart, partEnd);
+  for (float u : {0.0f, 0.25f, 0.5f, 1.0f}) {  // samples: exact
+    expectNear(stretched.at(u), uneven * part.at(u), 1e-4f);
+    expectNear(both.at(u), outer.at(u) * part.at(u), 1e-4f);
+  }
+  for (float u : {0.03f, 0.47f, 0.91f}) {  // between samples: within 0.2 % of the scale
+    expectNear(stretched.at(u), uneven * part.at(u), 5e-3f);
+    expectNear(both.at(u), outer.at(u) * part.at(u), 5e-3f);
+  }
+}
+
 TEST(InstanceMotion, TheSweptBoxHoldsEveryPoseAndLittleMore) {
   const Box3f box{{-1, -0.5f, -0.2f}, {1, 0.5f, 0.2f}};
   Affine3f sheared = turned(200);

@@ -426,15 +426,15 @@ class Parser {
   bool moving() const { return !sameTransform(state_.ctm, state_.ctmEnd); }
 
   // The motion of what is placed now (null: it does not move). Motion
-  // inside an object definition is not kept (one instance level): its
-  // start transform is, with one warning.
+  // inside an object definition is pbrt-v3's moving parts (addMesh); for
+  // pbrt-v4 files and curves its start transform is kept, with one warning.
   std::shared_ptr<const InstanceMotion> placedMotion(const SourceLocation& where) {
     if (!moving()) return nullptr;
     if (currentObject_) {
       warnings_.once("object motion",
-                     fmt::format("a moving transform inside ObjectBegin is not supported: its "
-                                 "start transform is used (first at {}); move the "
-                                 "ObjectInstance instead",
+                     fmt::format("a moving transform inside ObjectBegin is not supported "
+                                 "for pbrt-v4 files and curves: its start transform is used "
+                                 "(first at {}); move the ObjectInstance instead",
                                  where.toString()));
       return nullptr;
     }
@@ -1114,7 +1114,8 @@ class Parser {
     if (!currentObject_) fail(where, "ObjectEnd without ObjectBegin");
     popBlock(BlockKind::Object, where);
     flushCurves();
-    if (scene_.objects[size_t(*currentObject_)].slots() == 0)
+    if (scene_.objects[size_t(*currentObject_)].slots() == 0 &&
+        !movingParts_.count(*currentObject_))
       warnings_.once("empty object|" + scene_.objects[size_t(*currentObject_)].name,
                      fmt::format("{}: object \"{}\" has no shapes", where.toString(),
                                  scene_.objects[size_t(*currentObject_)].name));
@@ -1127,11 +1128,24 @@ class Parser {
     auto it = objects_.find(name);
     if (it == objects_.end())
       fail(where, fmt::format("ObjectInstance: no object named \"{}\"", name));
-    if (scene_.objects[size_t(it->second)].slots() == 0) return;
     checkInvertible(where);
-    scene_.instances.push_back({it->second, state_.ctm, placedMotion(where)});
-    if (scene_.instances.back().motion)
-      movingObjectInstances_.push_back({scene_.instances.size() - 1, state_.ctm, state_.ctmEnd});
+    if (scene_.objects[size_t(it->second)].slots() > 0) {
+      scene_.instances.push_back({it->second, state_.ctm, placedMotion(where)});
+      if (scene_.instances.back().motion)
+        movingObjectInstances_.push_back({scene_.instances.size() - 1, state_.ctm, state_.ctmEnd});
+    }
+    // Its moving parts, each moved by the part's motion, then the instance's.
+    if (auto parts = movingParts_.find(it->second); parts != movingParts_.end()) {
+      if (moving()) {
+        const float det = state_.ctmEnd.determinant();
+        if (!std::isfinite(det) || det == 0)
+          fail(where, "the end transform is singular (a zero scale?) or not finite");
+      }
+      for (const MovingPart& part : parts->second)
+        scene_.instances.push_back({part.object, state_.ctm * part.start,
+                                    std::make_shared<const InstanceMotion>(InstanceMotion::nested(
+                                        state_.ctm, state_.ctmEnd, part.start, part.end))});
+    }
   }
 
   // pbrt-v4 interpolates a moving ObjectInstance's transform in its render
@@ -1771,7 +1785,24 @@ class Parser {
     storeFinishedMeshes();
     orientEmitter(mesh);
     orientSidedSurface(mesh);
+    if (currentObject_ && moving() && dialect_ != Dialect::V4) {
+      // pbrt-v3's motion inside ObjectBegin: the mesh is an object of its
+      // own, which each instance of this one places moving (objectInstance).
+      const float det = state_.ctmEnd.determinant();
+      if (!std::isfinite(det) || det == 0)
+        fail(shapeWhere_, "the end transform is singular (a zero scale?) or not finite");
+      scene_.meshes.push_back(std::move(mesh));
+      const int32_t index = int32_t(scene_.meshes.size() - 1);
+      Object part;
+      part.name = scene_.meshes.back().name;
+      part.meshes.push_back(index);
+      scene_.objects.push_back(std::move(part));
+      movingParts_[*currentObject_].push_back(
+          {int32_t(scene_.objects.size() - 1), state_.ctm, state_.ctmEnd});
+      return index;
+    }
     if (currentObject_) {
+      if (moving()) placedMotion(shapeWhere_);  // pbrt-v4: the start transform, one warning
       if (!sameTransform(state_.ctm, Affine3f::identity())) bake(mesh, state_.ctm);
       scene_.meshes.push_back(std::move(mesh));
       int32_t index = int32_t(scene_.meshes.size() - 1);
@@ -1814,14 +1845,16 @@ class Parser {
     std::string key = fmt::format("{}|{}|{}|", path, material, orientation);
     key.append(reinterpret_cast<const char*>(&state_.ctm), sizeof(Affine3f));
     auto it = objectPly_.find(key);
-    if (it != objectPly_.end()) {
+    if (it != objectPly_.end() && !moving()) {
       scene_.objects[size_t(*currentObject_)].meshes.push_back(it->second);
       return;
     }
     Mesh mesh = readPlyAt(path, where);
     mesh.material = material;
     mesh.media = media;
-    objectPly_.emplace(key, addMesh(std::move(mesh)));
+    const bool movingPart = moving();
+    const int32_t added = addMesh(std::move(mesh));
+    if (!movingPart) objectPly_.emplace(key, added);
   }
 
   Mesh readPlyAt(const std::string& path, const SourceLocation& where) {
@@ -2023,6 +2056,13 @@ class Parser {
   bool ended_ = false;
   std::map<std::string, std::pair<Affine3f, Affine3f>> coordinateSystems_;  // start, end
   SourceLocation shapeWhere_;                                               // the shape being read
+  // pbrt-v3's shapes moving inside an object definition, by object: each
+  // an object of its own with its motion in the object's space.
+  struct MovingPart {
+    int32_t object;
+    Affine3f start, end;
+  };
+  std::map<int32_t, std::vector<MovingPart>> movingParts_;
   struct MovingObjectInstance {
     size_t instance;
     Affine3f start, end;
