@@ -29,7 +29,8 @@ void addViewCommand(CLI::App& app, ViewOptions& o) {
       "API: GET / (the page), GET /frame.png, GET /stats (JSON), POST /camera\n"
       "{\"from\":[x,y,z],\"at\":[x,y,z],\"up\":[x,y,z],\"fov\":deg}, POST /settings "
       "{\"width\",\"height\",\n"
-      "\"spp\",\"max_depth\",\"exposure\",\"view\",\"display\"}, POST /quit. Ctrl-C also quits.");
+      "\"spp\",\"max_depth\",\"exposure\",\"view\",\"display\",\"field\"}, POST /quit. Ctrl-C also "
+      "quits.");
   o.render.size = "640x360";
   o.render.writesImage = false;
   addRenderingOptions(view, o.render);
