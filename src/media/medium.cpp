@@ -57,15 +57,10 @@ Vec3f Medium::emittedAt(Vec3f unit) const {
   return e;
 }
 
-namespace {
-
-// The box's corners to the unit cube's.
 Affine3f unitFromBox(const Box3f& box) {
   const Vec3f size = box.size();
   return Affine3f::scale({1 / size.x, 1 / size.y, 1 / size.z}) * Affine3f::translate(-box.lower);
 }
-
-}  // namespace
 
 namespace {
 

@@ -140,6 +140,8 @@ size_t gridMediumBytes(int nx, int ny, int nz);
 Medium gridMedium(std::string name, Vec3f sigmaA, Vec3f sigmaS, float g,
                   std::shared_ptr<const DensityGrid> density, const Affine3f& worldFromMedium,
                   const Box3f& box);
+// The box's corners to the unit cube's (a grid's gridFromWorld over `box`).
+Affine3f unitFromBox(const Box3f& box);
 // A sci-vis volume: values in [0, 1] over `box` (world space), rendered
 // through `transfer` (isotropic scattering).
 Medium transferFunctionMedium(std::string name, std::shared_ptr<const DensityGrid> values,

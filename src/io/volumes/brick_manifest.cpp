@@ -176,9 +176,7 @@ Scene loadBrickPiece(const std::string& spec, int rank, int ranks, const VolumeL
     if (!look.isDefault()) tf = restyled(tf, look);
     auto volume = std::make_shared<VolumeBrick::Volume>();
     volume->dims = {int(dims[0]), int(dims[1]), int(dims[2])};
-    volume->gridFromWorld =
-        Affine3f::scale({1 / box.size().x, 1 / box.size().y, 1 / box.size().z}) *
-        Affine3f::translate(-box.lower);
+    volume->gridFromWorld = unitFromBox(box);
     volume->transfer = std::make_shared<const TransferFunction>(std::move(tf));
     if (format == "float32") {
       volume->normalise = true;

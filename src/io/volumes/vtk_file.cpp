@@ -505,6 +505,23 @@ vtkXMLDataElement* manifestElement(const std::string& path, vtkXMLDataParser* pa
   return found;
 }
 
+// The named arrays a manifest's PPointData or PCellData element declares
+// (ranges unknown: lowest above highest).
+std::vector<VolumeField> declaredArrays(vtkXMLDataElement* data, bool atCells) {
+  std::vector<VolumeField> out;
+  for (int k = 0; k < data->GetNumberOfNestedElements(); ++k) {
+    vtkXMLDataElement* a = data->GetNestedElement(k);
+    const char* name = a->GetAttribute("Name");
+    if (std::string_view(a->GetName() ? a->GetName() : "") != "PDataArray" || !name || !*name)
+      continue;
+    int components = 1;
+    a->GetScalarAttribute("NumberOfComponents", components);
+    out.push_back({name, atCells, std::max(components, 1), std::numeric_limits<double>::max(),
+                   std::numeric_limits<double>::lowest()});
+  }
+  return out;
+}
+
 PvtuManifest readPvtu(const std::string& path) {
   vtkNew<vtkXMLDataParser> parser;
   vtkXMLDataElement* grid =
@@ -516,17 +533,9 @@ PvtuManifest readPvtu(const std::string& path) {
     vtkXMLDataElement* e = grid->GetNestedElement(i);
     const std::string_view kind = e->GetName() ? e->GetName() : "";
     if (kind == "PPointData" || kind == "PCellData") {
-      for (int k = 0; k < e->GetNumberOfNestedElements(); ++k) {
-        vtkXMLDataElement* a = e->GetNestedElement(k);
-        const char* name = a->GetAttribute("Name");
-        if (std::string_view(a->GetName() ? a->GetName() : "") != "PDataArray" || !name || !*name)
-          continue;
-        int components = 1;
-        a->GetScalarAttribute("NumberOfComponents", components);
-        VolumeField f{name, kind == "PCellData", std::max(components, 1),
-                      std::numeric_limits<double>::max(), std::numeric_limits<double>::lowest()};
-        (f.atCells ? cellFields : out.fields).push_back(std::move(f));
-      }
+      const bool atCells = kind == "PCellData";
+      for (VolumeField& f : declaredArrays(e, atCells))
+        (atCells ? cellFields : out.fields).push_back(std::move(f));
       continue;
     }
     if (kind != "Piece") continue;
@@ -645,23 +654,11 @@ PvtiManifest readPvti(const std::string& path, const std::string& field) {
   for (int i = 0; i < image->GetNumberOfNestedElements(); ++i) {
     vtkXMLDataElement* e = image->GetNestedElement(i);
     const std::string_view kind = e->GetName() ? e->GetName() : "";
-    if (kind == "PPointData" || kind == "PCellData") {
-      if (kind == "PPointData") active = e->GetAttribute("Scalars");
-      for (int k = 0; k < e->GetNumberOfNestedElements(); ++k) {
-        vtkXMLDataElement* a = e->GetNestedElement(k);
-        const char* name = a->GetAttribute("Name");
-        if (std::string_view(a->GetName() ? a->GetName() : "") != "PDataArray" || !name || !*name)
-          continue;
-        if (kind == "PCellData") {
-          cellArrays.push_back(name);
-          continue;
-        }
-        int components = 1;
-        a->GetScalarAttribute("NumberOfComponents", components);
-        out.fields.push_back({name, false, std::max(components, 1),
-                              std::numeric_limits<double>::max(),
-                              std::numeric_limits<double>::lowest()});
-      }
+    if (kind == "PPointData") {
+      active = e->GetAttribute("Scalars");
+      for (VolumeField& f : declaredArrays(e, false)) out.fields.push_back(std::move(f));
+    } else if (kind == "PCellData") {
+      for (const VolumeField& f : declaredArrays(e, true)) cellArrays.push_back(f.name);
     } else if (kind == "Piece") {
       const char* source = e->GetAttribute("Source");
       std::array<int, 6> extent;
@@ -713,7 +710,6 @@ Scene loadVtkImagePiecesScene(const std::string& path, const std::string& field,
   // This rank's bricks: the cells each piece covers and their samples with
   // the ghost layer, as read (normalised once the ranks agree on the range).
   struct Piece {
-    size_t index;
     std::array<int, 3> lo, hi;
     std::vector<float> samples;
   };
@@ -767,7 +763,7 @@ Scene loadVtkImagePiecesScene(const std::string& path, const std::string& field,
     // them, which the previous pieces hold (absolute VTK point indices).
     std::vector<std::array<int, 6>> needs;
     for (size_t k = first; k < end; ++k) {
-      Piece piece{k, {}, {}, {}};
+      Piece piece;
       std::array<int, 6> need;
       uint64_t samples = 1;
       bool empty = false;
@@ -847,14 +843,10 @@ Scene loadVtkImagePiecesScene(const std::string& path, const std::string& field,
       fmt::format("{} points '{}' [{:g}, {:g}]{}, {} pieces",
                   std::filesystem::path(path).filename().string(), chosen.name, summary.lo,
                   summary.hi, chosen.components > 1 ? " (magnitude)" : "", manifest.pieces.size());
-  TransferFunction tf = TransferFunction::standard();
-  tf = tf.withScale(tf.scale() / maxComponent(box.size()));  // as a .vti's
   auto volume = std::make_shared<VolumeBrick::Volume>();
   volume->dims = dims;
-  const Vec3f size = box.size();
-  volume->gridFromWorld =
-      Affine3f::scale({1 / size.x, 1 / size.y, 1 / size.z}) * Affine3f::translate(-box.lower);
-  volume->transfer = std::make_shared<const TransferFunction>(std::move(tf));
+  volume->gridFromWorld = unitFromBox(box);  // as a .vti's medium
+  volume->transfer = framedTransfer(path, box);
   Scene scene = framedVolumeScene(name, box);
   scene.volumeFields = summary.fields;
   for (VolumeField& f : scene.volumeFields)
