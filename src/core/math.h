@@ -127,6 +127,9 @@ inline Vec3f max(Vec3f a, Vec3f b) {
 inline float maxComponent(Vec3f a) {
   return std::max(a.x, std::max(a.y, a.z));
 }
+inline float minComponent(Vec3f a) {
+  return std::min(a.x, std::min(a.y, a.z));
+}
 inline float luminance(Vec3f c) {
   return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
 }

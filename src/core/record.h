@@ -83,6 +83,8 @@ class RecordReader {
   float number();
   // A finite colour or point.
   Vec3f color();
+  // Whether every byte has been read (a record may end before optional fields).
+  bool atEnd() const { return at_ == bytes_.size(); }
   // After the reader has read its fields: the record must be used up.
   void finish() const;
   [[noreturn]] void fail(const std::string& what) const;

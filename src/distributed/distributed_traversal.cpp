@@ -551,5 +551,6 @@ void DistributedTraversal<Path>::traverseBroadcast(PathQueue<Path> rays, RayQueu
 template class DistributedTraversal<Path8>;
 template class DistributedTraversal<Path64>;
 template class DistributedTraversal<PathReplay>;
+template class DistributedTraversal<PathProbe>;
 
 }  // namespace ferry

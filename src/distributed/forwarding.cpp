@@ -191,6 +191,7 @@ ReplayResult replayWalk(const ProxyBvh& proxies, const Path& ray, int generating
 FERRY_INSTANTIATE(Path8)
 FERRY_INSTANTIATE(Path64)
 FERRY_INSTANTIATE(PathReplay)
+FERRY_INSTANTIATE(PathProbe)
 template ForwardDecision forwardByProxies<Path8>(const ProxyBvh&, const Path8&, int);
 template ForwardDecision forwardByProxies<Path64>(const ProxyBvh&, const Path64&, int);
 #undef FERRY_INSTANTIATE

@@ -364,5 +364,7 @@ template void DistributedTraversal<Path64>::runSample(uint32_t, uint32_t, uint32
                                                       SampleShading<Path64>&, FrameStats&);
 template void DistributedTraversal<PathReplay>::runSample(uint32_t, uint32_t, uint32_t,
                                                           SampleShading<PathReplay>&, FrameStats&);
+template void DistributedTraversal<PathProbe>::runSample(uint32_t, uint32_t, uint32_t,
+                                                         SampleShading<PathProbe>&, FrameStats&);
 
 }  // namespace ferry

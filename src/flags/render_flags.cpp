@@ -125,6 +125,10 @@ SessionSettings sessionSettings(const RenderOptions& o, const Communicator& comm
     throw InputError(fmt::format("--transmittance {}: expected ratio or delta", o.transmittance));
   s.render.transmittance =
       o.transmittance == "ratio" ? TransmittanceEstimator::Ratio : TransmittanceEstimator::Delta;
+  if (o.subsurface != "probe" && o.subsurface != "walk")
+    throw InputError(fmt::format("--subsurface {}: expected probe or walk", o.subsurface));
+  s.render.subsurface =
+      o.subsurface == "probe" ? SubsurfaceMethod::Probes : SubsurfaceMethod::Walks;
   const std::optional<SamplerKind> sampler = samplerNamed(o.sampler);
   if (!sampler)
     throw InputError(fmt::format("--sampler {}: expected sobol or independent", o.sampler));
@@ -211,6 +215,11 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
       ->add_option("--transmittance", o.transmittance,
                    "How shadow rays through participating media estimate transmittance: ratio\n"
                    "(ratio tracking) or delta (delta tracking: 0 or 1, a baseline to compare)")
+      ->capture_default_str();
+  command
+      ->add_option("--subsurface", o.subsurface,
+                   "Where light entering a subsurface material leaves: probe (pbrt's BSSRDF,\n"
+                   "found by probe rays) or walk (a random walk through the medium inside)")
       ->capture_default_str();
   command
       ->add_option("--sampler", o.sampler,

@@ -66,6 +66,7 @@ struct RenderOptions {
   std::string lightChoice = "near";     // --light-choice: near or power
   std::string lightPaths = "auto";      // --light-paths: auto, on or off
   std::string transmittance = "ratio";  // --transmittance: ratio or delta
+  std::string subsurface = "probe";     // --subsurface: probe or walk
   std::string sampler = "sobol";        // --sampler: sobol or independent
   // --volume-opacity, --color-map: transfer-function volumes restyled.
   float volumeOpacity = 1;

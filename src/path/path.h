@@ -120,6 +120,7 @@ struct PathT : PathCore {
 
   using Mask = RankMask;
   static constexpr bool kReplay = false;
+  static constexpr bool kProbes = false;
 
   bool hasHit() const { return hitOwners != 0; }
   void clearHistory() {
@@ -154,6 +155,7 @@ struct PathReplay : PathCore {
   uint16_t lightRatio;      // see PathCore
 
   static constexpr bool kReplay = true;
+  static constexpr bool kProbes = false;
 
   bool hasHit() const { return hitRank != kNoRank; }
   void clearHistory() {
@@ -167,6 +169,37 @@ struct PathReplay : PathCore {
   void setHit(int rank, uint64_t) { hitRank = uint16_t(rank); }
 };
 
+// The probe layout, for scenes whose subsurface materials are sampled by
+// pbrt's BSSRDF (render/path_shading.cpp, "Subsurface probes"): the replay
+// layout and what a probe needs on its way from the point where light
+// entered the material to the point where it leaves, through ranks that may
+// not hold the material: the entry point and its normal (the probe's
+// frame), the segment, the material's probe id, and how many of its
+// surfaces the probe has found (80 bytes).
+struct PathProbe : PathReplay {
+  enum Phase : uint8_t {
+    kNotProbing = 0,  // an ordinary path
+    kCounting = 1,    // crossing the probe segment, counting the material's surfaces
+    kReturning = 2,   // crossing it again to the surface chosen among them
+  };
+  Vec3f probeEntry;        // where light entered
+  uint32_t probeNormal;    // the entry's shading normal, octahedral
+  Vec3f probeStart;        // the segment: its start, and its end at probeStart +
+  float probeLength;       // dir() * probeLength (the first ray's tmax)
+  uint32_t probeMaterial;  // the material's SubsurfaceModel::probeId
+  uint8_t probePhase;
+  uint8_t probeFound;  // surfaces of the material found (counting), or in all (returning)
+  uint8_t probeSkip;   // returning: surfaces to pass before the chosen one
+  uint8_t probeUnused;
+
+  static constexpr bool kProbes = true;
+  bool probing() const { return probePhase != kNotProbing; }
+  void clearHistory() {
+    PathReplay::clearHistory();
+    probePhase = kNotProbing;
+  }
+};
+
 using Path8 = PathT<uint8_t>;
 using Path64 = PathT<uint64_t>;
 static_assert(sizeof(Path8) == 36, "the paper's compact path is 36 bytes up to 8 ranks");
@@ -174,8 +207,10 @@ static_assert(sizeof(Path64) == 56, "the wide path (up to 64 ranks) is 56 bytes"
 static_assert(sizeof(PathReplay) == 40,
               "the replay path (any rank count) is 40 bytes: two 16-bit rank ids instead of "
               "masks, and lightRatio (docs/architecture.md: the path's size)");
+static_assert(sizeof(PathProbe) == 80, "the probe path is the replay path and 40 bytes");
 static_assert(std::is_trivially_copyable_v<Path8> && std::is_trivially_copyable_v<Path64> &&
-                  std::is_trivially_copyable_v<PathReplay>,
+                  std::is_trivially_copyable_v<PathReplay> &&
+                  std::is_trivially_copyable_v<PathProbe>,
               "paths are sent over MPI as bytes");
 
 // The medium a camera path travels in: in a scene with participating media

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "material/models/diffuse.h"
+#include "material/models/subsurface.h"
 #include "media/phase.h"
 #include "scene/scene.h"
 
@@ -51,7 +52,8 @@ template <typename Path>
 PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth,
                                uint32_t seed, LightStrategy strategy, const Camera* lightPathCamera,
                                const FilmWindow* window, TransmittanceEstimator transmittance,
-                               MisHeuristic heuristic, SamplerKind sampler)
+                               MisHeuristic heuristic, SamplerKind sampler,
+                               SubsurfaceMethod subsurface)
     : scene_(scene),
       lights_(lights),
       surfaces_(scene),
@@ -61,12 +63,24 @@ PathShading<Path>::PathShading(const Scene& scene, const LightSampler& lights, u
       strategy_(strategy),
       heuristic_(heuristic),
       transmittance_(transmittance) {
+  if (Path::kProbes && subsurface == SubsurfaceMethod::Probes) {
+    probes_ = true;
+    probeModels_.resize(scene.materials.size());
+    for (size_t i = 0; i < scene.materials.size(); ++i) {
+      const auto* model = dynamic_cast<const SubsurfaceModel*>(scene.materials[i].model.get());
+      if (model && model->hasMedium) probeModels_[i] = model;
+    }
+    lightPathCamera = nullptr;
+  }
   if (scene.hasMedia()) {
     media_ = std::make_shared<MediaAlongRays>(scene);
     cameraMedium_ = scene.cameraMedium;
     lightPathCamera = nullptr;
     for (const Medium& m : scene.media) walks_ = walks_ || m.subsurface;
-    if (walks_ && scene.media.size() > kMaxWalkSceneMedia)
+  }
+  depthOnPath_ = walks_ || probes_;
+  if (depthOnPath_) {
+    if (scene.media.size() > kMaxWalkSceneMedia)
       throw InputError(
           fmt::format("a scene with subsurface materials may hold at most {} media; "
                       "this one has {}",
@@ -89,7 +103,9 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadePath(
     FrameBuffer& frameBuffer, Path& continuation, Path& shadowRay) const {
   if (path.has(kPathLight))
     return shadeLightPath(path, hit, sampleIndex, bounce, continuation, shadowRay);
-  if (media_)
+  if constexpr (Path::kProbes)
+    if (path.probing()) return shadeProbe(path, hit, sampleIndex, bounce, continuation, shadowRay);
+  if (media_ || probes_)
     return shadeInMedia(path, hit, sampleIndex, bounce, frameBuffer, continuation, shadowRay);
   if (!path.hasHit()) {
     addEscapedLight(path, frameBuffer);
@@ -607,8 +623,11 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
   const uint32_t keyHash =
       randomKeyHash(RandomKey{randomPixel(path.pixel()), sampleIndex, bounce, seed_});
   TrackingRandom random(keyHash, kFlightDimension);
-  const MediaFlight f =
-      media_->flight(path.origin, d, tEnd, mediumOf(path), random, mediumCounts_.local());
+  MediaFlight f;
+  if (media_)
+    f = media_->flight(path.origin, d, tEnd, mediumOf(path), random, mediumCounts_.local());
+  else
+    f.medium = mediumOf(path);
   const uint32_t depth = depthOf(path, bounce);
   const Vec3f throughput = path.weight();
   if (const Vec3f e = throughput * f.emitted; usable(e)) frameBuffer.add(path.pixel(), e);
@@ -649,11 +668,20 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
   };
   Spawned spawned;
   spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);
-  if (spawned.continuation)
-    setMediumAndDepth(continuation, leaving(continuation.dir()), walkEnds ? depth : depth + 1);
+  if (spawned.continuation) {
+    const SubsurfaceModel* model = probes_ ? probeModel(vertex.surface) : nullptr;
+    const Vec3f n = vertex.surface.geometricNormal;
+    if (model && dot(continuation.dir(), n) * dot(vertex.wo, n) < 0) {
+      // Into a probed material: the BSSRDF finds where the light leaves.
+      spawned.continuation = startProbe(vertex, *model, sampleIndex, depth, continuation);
+      if (spawned.continuation) setMediumAndDepth(continuation, f.medium, depth);
+    } else {
+      setMediumAndDepth(continuation, leaving(continuation.dir()), walkEnds ? depth : depth + 1);
+    }
+  }
   if (!scattering.bsdf.isDelta() && strategy_ != LightStrategy::BsdfSamples)
     spawned.shadowRay = sampleLight(vertex, scattering, 0, shadowRay) &&
-                        throughMedia(shadowRay, leaving(shadowRay.dir()), keyHash);
+                        (!media_ || throughMedia(shadowRay, leaving(shadowRay.dir()), keyHash));
   return spawned;
 }
 
@@ -749,8 +777,190 @@ typename PathShading<Path>::Spawned PathShading<Path>::walkVertex(const Path& pa
   return spawned;
 }
 
+// ------------------------------------------------------ subsurface probes
+//
+// pbrt's BSSRDF (material/models/subsurface.h). A BSDF sample that enters a
+// probed material becomes a probe: rays along a segment drawn about the
+// entry point, each an ordinary closest-hit ray (so forwarded to whichever
+// ranks hold what it meets), that count the material's surfaces along the
+// segment (kCounting). At the segment's end one of the n found is chosen
+// uniformly, and the probe crosses the segment again, ray for ray the same,
+// to that surface (kReturning). There the path's weight takes Sp / (pdf / n),
+// and light leaves by the exit lobe Sw, with a light sample, as one bounce
+// with the entry. The probe carries its segment and the material's probe
+// id, so ranks that do not hold the material pass it on.
+
+namespace {
+// A probe's random key: the path's depth offset by this.
+constexpr uint32_t kProbeKey = 0x20000000u;
+}  // namespace
+
+bool sceneTakesProbes(const Scene& scene, SubsurfaceMethod method) {
+  if (method != SubsurfaceMethod::Probes) return false;
+  for (const Material& m : scene.materials)
+    if (const auto* model = dynamic_cast<const SubsurfaceModel*>(m.model.get());
+        model && model->hasMedium)
+      return true;
+  return false;
+}
+
+template <typename Path>
+const SubsurfaceModel* PathShading<Path>::probeModel(const SurfacePoint& surface) const {
+  const size_t i = size_t(surface.material - scene_.materials.data());
+  return i < probeModels_.size() ? probeModels_[i] : nullptr;
+}
+
+template <typename Path>
+bool PathShading<Path>::startProbe(const PathVertex& vertex, const SubsurfaceModel& model,
+                                   uint32_t sampleIndex, uint32_t depth, Path& continuation) const {
+  if constexpr (!Path::kProbes) {
+    return false;
+  } else {
+    const uint32_t normal = encodeOctahedral(vertex.surface.shadingNormal);
+    const RandomStream random(
+        RandomKey{randomPixel(vertex.pixel), sampleIndex, kProbeKey + depth, seed_}, sampler_);
+    ProbeSegment segment;
+    if (!sampleProbeSegment(model.profile(), vertex.surface.position,
+                            Frame(normalize(decodeOctahedral(normal))), random(RandomDim::BsdfLobe),
+                            {random(RandomDim::BsdfU), random(RandomDim::BsdfV)}, segment))
+      return false;
+    const Vec3f d = segment.end - segment.start;
+    const Vec3f stored = makeRay(continuation, segment.start, normalize(d), 0,
+                                 continuation.weight(), vertex.pixel, 0);
+    continuation.tmax = dot(d, stored) / dot(stored, stored);
+    continuation.probeEntry = vertex.surface.position;
+    continuation.probeNormal = normal;
+    continuation.probeStart = segment.start;
+    continuation.probeLength = continuation.tmax;
+    continuation.probeMaterial = model.probeId;
+    continuation.probePhase = PathProbe::kCounting;
+    continuation.probeFound = 0;
+    continuation.probeSkip = 0;
+    return true;
+  }
+}
+
+template <typename Path>
+typename PathShading<Path>::Spawned PathShading<Path>::shadeProbe(
+    const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
+    Path& continuation, Path& shadowRay) const {
+  if constexpr (!Path::kProbes) {
+    return {};
+  } else {
+    if (bounce >= kWalkBounceLimit) return {};
+    const bool counting = path.probePhase == PathProbe::kCounting;
+    uint32_t found = path.probeFound;
+    Spawned spawned;
+    // The next ray along the segment starts at `origin`.
+    auto onwards = [&](Vec3f origin, float tmax) {
+      continuation = path;
+      continuation.origin = origin;
+      continuation.tmax = tmax;
+      continuation.setPixelAndFlags(path.pixel(), 0);
+      continuation.PathReplay::clearHistory();
+      spawned.continuation = true;
+    };
+    if (path.hasHit()) {
+      const Vec3f d = path.dir();
+      bool same = false;
+      Vec3f next;
+      if (volumeOf(hit)) {
+        next = path.origin + d * hit.t;  // a collision in a volume: not a surface
+      } else {
+        const SurfacePoint surface = reconstructSurface(scene_, surfaces_, hit, d);
+        const SubsurfaceModel* model = probeModel(surface);
+        same = model && model->probeId == path.probeMaterial;
+        if (same && !counting && path.probeSkip == 0)
+          return leaveProbe(path, hit, surface, *model, sampleIndex, bounce, continuation,
+                            shadowRay);
+        const Vec3f n = dot(d, surface.geometricNormal) > 0 ? surface.geometricNormal
+                                                            : -surface.geometricNormal;
+        next = offsetRayOrigin(surface.position + n * surface.originOffset, n);
+      }
+      if (same && counting) found = std::min(found + 1, 255u);
+      const Vec3f end = path.probeStart + d * path.probeLength;
+      const float tmax = dot(end - next, d) / dot(d, d);
+      if (tmax > 0) {
+        onwards(next, tmax);
+        continuation.probeFound = uint8_t(found);
+        if (same && !counting) --continuation.probeSkip;
+        return spawned;
+      }
+    }
+    // The segment's end. (Returning, the chosen surface was not found again.)
+    if (!counting || found == 0) return spawned;
+    const RandomStream random(
+        RandomKey{randomPixel(path.pixel()), sampleIndex, kProbeKey + depthOf(path, bounce), seed_},
+        sampler_);
+    const uint32_t chosen =
+        std::min(uint32_t(random(RandomDim::MaterialSelect) * float(found)), found - 1);
+    // Back to the start: the first ray again, bit for bit.
+    onwards(path.probeStart, path.probeLength);
+    continuation.probePhase = PathProbe::kReturning;
+    continuation.probeFound = uint8_t(found);
+    continuation.probeSkip = uint8_t(chosen);
+    return spawned;
+  }
+}
+
+// At the exit point p_i of a probe from p_o: the weight takes Sp(|p_i -
+// p_o|) over the probe's density of p_i (over n, the surfaces it chose
+// from); the vertex scatters by Sw about its shading normal (pbrt's wo is
+// that normal), with a light sample, and the path's depth counts the entry
+// and the exit as one bounce.
+template <typename Path>
+typename PathShading<Path>::Spawned PathShading<Path>::leaveProbe(
+    const Path& path, const TraceHit& hit, const SurfacePoint& surface,
+    const SubsurfaceModel& model, uint32_t sampleIndex, uint32_t bounce, Path& continuation,
+    Path& shadowRay) const {
+  if constexpr (!Path::kProbes) {
+    return {};
+  } else {
+    const SubsurfaceProfile profile = model.profile();
+    const Frame entryFrame(normalize(decodeOctahedral(path.probeNormal)));
+    const float density = probeDensity(profile, path.probeEntry, entryFrame, surface.position,
+                                       surface.geometricNormal) /
+                          float(path.probeFound);
+    if (!(density > 0)) return {};
+    const Vec3f throughput =
+        path.weight() * profile.sr(length(surface.position - path.probeEntry)) * (1 / density);
+    if (!usable(throughput)) return {};
+    const uint32_t depth = depthOf(path, bounce);
+    const Vec3f ns = surface.shadingNormal;
+    const Vec3f ng =
+        dot(surface.geometricNormal, ns) < 0 ? -surface.geometricNormal : surface.geometricNormal;
+    const PathVertex vertex{path.pixel(),    depth, throughput,      ns,     false,
+                            path.probeEntry, 0.0f,  path.lightRatio, surface};
+    const RandomKey key{randomPixel(path.pixel()), sampleIndex, bounce, seed_};
+    const Frame frame(ns);
+    const VertexScattering scattering{
+        Bsdf(model.exitLobe(), false, false),
+        ng,
+        frame,
+        frame.toLocal(ns),
+        RandomStream(key, sampler_),
+        offsetRayOrigin(surface.position + ng * surface.originOffset, ng),
+        surface.originOffset};
+    const MediumInterface& sides = surfaceMedia(hit);
+    auto leaving = [&](Vec3f direction) {
+      return sides.isTransition() ? sides.along(direction, surface.geometricNormal)
+                                  : mediumOf(path);
+    };
+    Spawned spawned;
+    spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);
+    if (spawned.continuation)
+      setMediumAndDepth(continuation, leaving(continuation.dir()), depth + 1);
+    if (strategy_ != LightStrategy::BsdfSamples)
+      spawned.shadowRay =
+          sampleLight(vertex, scattering, 0, shadowRay) &&
+          (!media_ || throughMedia(shadowRay, leaving(shadowRay.dir()), randomKeyHash(key)));
+    return spawned;
+  }
+}
+
 template class PathShading<Path8>;
 template class PathShading<Path64>;
 template class PathShading<PathReplay>;
+template class PathShading<PathProbe>;
 
 }  // namespace ferry

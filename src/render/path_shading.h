@@ -37,6 +37,7 @@
 namespace ferry {
 
 struct Scene;
+struct SubsurfaceModel;
 
 // A light path's shadow ray to the camera stops this fraction of the way to
 // the camera's lens point (so that it never finds the lens as a surface).
@@ -112,6 +113,18 @@ inline const char* lightStrategyName(LightStrategy s) {
   return s == LightStrategy::Mis ? "mis" : s == LightStrategy::LightSamples ? "light" : "bsdf";
 }
 
+// How light that enters a subsurface material finds where it leaves
+// (--subsurface; material/models/subsurface.h): pbrt's BSSRDF sampled by
+// probe rays (the default: it needs the probe path layout, PathProbe), or a
+// random walk through the medium inside.
+enum class SubsurfaceMethod { Probes, Walks };
+inline const char* subsurfaceMethodName(SubsurfaceMethod m) {
+  return m == SubsurfaceMethod::Probes ? "probe" : "walk";
+}
+// Whether rendering `scene` by `method` takes probe paths (a subsurface
+// material with its medium, and probes asked for).
+bool sceneTakesProbes(const Scene& scene, SubsurfaceMethod method);
+
 // How MIS weighs strategies (--mis-heuristic): Veach's power heuristic
 // (beta = 2, the default, pbrt's path integrator's) or the balance heuristic
 // (beta = 1, pbrt's bdpt's). Either is unbiased; they differ only in noise,
@@ -134,12 +147,15 @@ class PathShading {
   // participating media takes no light paths (its camera paths carry their
   // medium where light paths keep a ratio: path/path.h, pathMedium).
   // `sampler`: how a vertex's random numbers are drawn (core/random.h).
+  // `subsurface`: probes need the probe layout (Path::kProbes); with
+  // another layout subsurface materials are walked.
   PathShading(const Scene& scene, const LightSampler& lights, uint32_t maxDepth, uint32_t seed,
               LightStrategy strategy = LightStrategy::Mis, const Camera* lightPathCamera = nullptr,
               const FilmWindow* window = nullptr,
               TransmittanceEstimator transmittance = TransmittanceEstimator::Ratio,
               MisHeuristic heuristic = MisHeuristic::Power,
-              SamplerKind sampler = SamplerKind::Sobol);
+              SamplerKind sampler = SamplerKind::Sobol,
+              SubsurfaceMethod subsurface = SubsurfaceMethod::Probes);
 
   // The pixel index random numbers of image pixel `pixel` are keyed by:
   // its index in the whole film.
@@ -233,6 +249,21 @@ class PathShading {
   // surface around it is in the way) and no bounce counted.
   Spawned walkVertex(const Path& path, Vec3f position, const MediaFlight& flight,
                      uint32_t sampleIndex, uint32_t bounce, Path& continuation) const;
+  // Subsurface probes (path_shading.cpp, "Subsurface probes"). The model
+  // whose BSSRDF light entering `surface` samples, or null.
+  const SubsurfaceModel* probeModel(const SurfacePoint& surface) const;
+  // Turns `continuation`, which a BSDF sample sent into the probe material
+  // at `vertex`, into a probe ray; false if the probe draws no segment.
+  bool startProbe(const PathVertex& vertex, const SubsurfaceModel& model, uint32_t sampleIndex,
+                  uint32_t depth, Path& continuation) const;
+  // A probe ray's trace: counts the material's surfaces, or returns to the
+  // chosen one and leaves there.
+  Spawned shadeProbe(const Path& path, const TraceHit& hit, uint32_t sampleIndex, uint32_t bounce,
+                     Path& continuation, Path& shadowRay) const;
+  // Light leaving the probe material at its chosen surface.
+  Spawned leaveProbe(const Path& path, const TraceHit& hit, const SurfacePoint& surface,
+                     const SubsurfaceModel& model, uint32_t sampleIndex, uint32_t bounce,
+                     Path& continuation, Path& shadowRay) const;
   // The volume (scene/shape.h: isVolume) the hit is a collision in, or null.
   const Shape* volumeOf(const TraceHit& hit) const;
   // A path that collided in a volume (a brick: shapes/volume_brick.h): it
@@ -247,14 +278,15 @@ class PathShading {
   // In a scene with subsurface walks the path's 16 medium bits hold its
   // medium + 1 in the low 8 and its depth in the high 8 (a walk's steps are
   // wavefront bounces that do not count); otherwise the depth is the bounce.
+  // So do scenes with probes (a probe's rays are not bounces either).
   int32_t mediumOf(const Path& path) const {
-    return walks_ ? int32_t(path.lightRatio & 0xffu) - 1 : pathMedium(path);
+    return depthOnPath_ ? int32_t(path.lightRatio & 0xffu) - 1 : pathMedium(path);
   }
   uint32_t depthOf(const Path& path, uint32_t bounce) const {
-    return walks_ ? uint32_t(path.lightRatio >> 8) : bounce;
+    return depthOnPath_ ? uint32_t(path.lightRatio >> 8) : bounce;
   }
   void setMediumAndDepth(Path& path, int32_t medium, uint32_t depth) const {
-    if (walks_)
+    if (depthOnPath_)
       path.lightRatio = uint16_t(uint32_t(medium + 1) | (std::min(depth, 255u) << 8));
     else
       setPathMedium(path, medium);
@@ -288,6 +320,10 @@ class PathShading {
   TransmittanceEstimator transmittance_ = TransmittanceEstimator::Ratio;
   int32_t cameraMedium_ = kNoMedium;
   bool walks_ = false;  // the scene has a subsurface medium (Medium::subsurface)
+  // Per material: the subsurface model probes sample (null: none, or no probes).
+  std::vector<const SubsurfaceModel*> probeModels_;
+  bool probes_ = false;       // some material is probed
+  bool depthOnPath_ = false;  // walks_ || probes_
   mutable tbb::enumerable_thread_specific<MediumCounts> mediumCounts_;
 };
 

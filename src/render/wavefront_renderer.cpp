@@ -37,7 +37,8 @@ WavefrontRenderer<Path>::WavefrontRenderer(const Scene& scene, const TraceBacken
       camera_(settings.cameraIn(scene), window_),
       shading_(scene, lights, uint32_t(std::max(settings.maxDepth, 0)), settings.seed,
                settings.lightStrategy, settings.lightPaths ? &camera_ : nullptr, &window_,
-               settings.transmittance, settings.misHeuristic, settings.sampler) {
+               settings.transmittance, settings.misHeuristic, settings.sampler,
+               settings.subsurface) {
   if (uint64_t(window_.width) * uint64_t(window_.height) > kMaxPixels)
     throw InputError(fmt::format("image of {}x{} has more than {} pixels", window_.width,
                                  window_.height, kMaxPixels));
@@ -500,5 +501,6 @@ size_t WavefrontRenderer<Path>::retraceBatch(const Path* paths, const TraceHit* 
 template class WavefrontRenderer<Path8>;
 template class WavefrontRenderer<Path64>;
 template class WavefrontRenderer<PathReplay>;
+template class WavefrontRenderer<PathProbe>;
 
 }  // namespace ferry

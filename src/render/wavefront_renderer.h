@@ -81,6 +81,10 @@ struct RenderSettings {
   // How shadow rays through participating media estimate their
   // transmittance (--transmittance): ratio tracking, or delta tracking (a baseline).
   TransmittanceEstimator transmittance = TransmittanceEstimator::Ratio;
+  // Where light entering a subsurface material leaves (--subsurface): pbrt's
+  // BSSRDF by probes (the session then takes the probe path layout), or a
+  // random walk.
+  SubsurfaceMethod subsurface = SubsurfaceMethod::Probes;
   // Volumes drawn through a transfer function: opacity scale and colour map
   // (--volume-opacity, --color-map, the viewer); the session applies it.
   VolumeLook volumeLook;

@@ -272,7 +272,9 @@ FrameImage composite(const Communicator& comm, const FrameBuffer& frameBuffer, f
 
 template <typename Path>
 std::string layoutName() {
-  if constexpr (Path::kReplay)
+  if constexpr (Path::kProbes)
+    return "probe";
+  else if constexpr (Path::kReplay)
     return "replay";
   else
     return sizeof(typename Path::Mask) == 1 ? "mask8" : "mask64";
@@ -429,6 +431,7 @@ std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
            ? std::string("; light-choice=") + lightChoiceName(r.lightChoice)
            : std::string()) +
       (r.transmittance == TransmittanceEstimator::Delta ? "; transmittance=delta" : "") +
+      (r.subsurface == SubsurfaceMethod::Walks ? "; subsurface=walk" : "") +
       // Checkpoints from before --sampler drew independent numbers and name no sampler.
       (r.sampler != SamplerKind::Independent ? std::string("; sampler=") + samplerName(r.sampler)
                                              : std::string()) +
@@ -742,8 +745,11 @@ template <typename F>
 void RenderSession::withPathLayout(F&& f) {
   // Masks while they fit (8 then 64 ranks), else replay (or as forced).
   const int ranks = group().size();
-  if (settings_.pathLayout == PathLayout::Replay ||
-      (settings_.pathLayout == PathLayout::Auto && ranks > 64))
+  // (Parts hold only the materials they use: the ranks agree.)
+  if (group().sum(uint64_t(sceneTakesProbes(scene(), settings_.render.subsurface))) > 0)
+    f.template operator()<PathProbe>();
+  else if (settings_.pathLayout == PathLayout::Replay ||
+           (settings_.pathLayout == PathLayout::Auto && ranks > 64))
     f.template operator()<PathReplay>();
   else if (ranks <= 8)
     f.template operator()<Path8>();

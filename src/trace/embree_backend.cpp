@@ -321,6 +321,10 @@ class EmbreeBackend final : public TraceBackend {
                     std::span<TraceHit> kept, const PathTimes& times) const override {
     return traceQueue(paths, rank, owners, kept, times);
   }
+  TraceCounts trace(PathQueue<PathProbe>& paths, int rank, std::span<const uint64_t> owners,
+                    std::span<TraceHit> kept, const PathTimes& times) const override {
+    return traceQueue(paths, rank, owners, kept, times);
+  }
   void retrace(std::span<const RetraceRay> rays, std::span<TraceHit> hits) const override;
   TraceHit intersect(const TraceRay& ray) const override;
   bool occluded(const TraceRay& ray) const override;

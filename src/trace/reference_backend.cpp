@@ -242,6 +242,10 @@ class ReferenceBackend final : public TraceBackend {
                     std::span<TraceHit> kept, const PathTimes& times) const override {
     return traceQueue(paths, rank, owners, kept, times);
   }
+  TraceCounts trace(PathQueue<PathProbe>& paths, int rank, std::span<const uint64_t> owners,
+                    std::span<TraceHit> kept, const PathTimes& times) const override {
+    return traceQueue(paths, rank, owners, kept, times);
+  }
   // The recorded distance is a float rounded from this backend's double
   // one: searching to the next float up always reaches the recorded hit, and
   // nothing closer exists.

@@ -113,6 +113,9 @@ class TraceBackend {
   virtual TraceCounts trace(PathQueue<PathReplay>& paths, int rank,
                             std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept = {},
                             const PathTimes& times = {}) const = 0;
+  virtual TraceCounts trace(PathQueue<PathProbe>& paths, int rank,
+                            std::span<const uint64_t> instanceOwners, std::span<TraceHit> kept = {},
+                            const PathTimes& times = {}) const = 0;
 
   // Shading's re-trace, on the calling thread: hits[i] becomes the hit whose
   // distance rays[i].tmax records (the same hit, bit for bit, that the trace

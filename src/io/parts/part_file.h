@@ -18,7 +18,7 @@
 namespace ferry {
 
 // The format written; every format from kOldestPartFormatVersion on is read.
-constexpr uint32_t kPartFormatVersion = 14;
+constexpr uint32_t kPartFormatVersion = 15;
 constexpr uint32_t kOldestPartFormatVersion = 1;
 
 struct WrittenFile {

@@ -860,10 +860,22 @@ struct PbrtMaterials::Impl {
     return index;
   }
 
+  // pbrt-v3 reads a colour only from a spectrum type (rgb, spectrum, xyz,
+  // blackbody) or a texture: a "float" of that name is not read, with a
+  // warning, as pbrt-v3 leaves it unused.
+  bool v3IgnoresFloat(const PbrtParam& p) {
+    if (v4File || (p.type != "float" && p.type != "integer")) return false;
+    warnings.once("float colour|" + p.name,
+                  fmt::format("{}: \"{}\" is a colour; pbrt-v3 does not read it from a float, "
+                              "so neither does Ferry (its default is used)",
+                              p.where.toString(), p.declaration()));
+    return true;
+  }
+
   Color color(const PbrtParams& params, std::initializer_list<const char*> names, Vec3f fallback) {
     for (const char* name : names) {
       const PbrtParam* p = params.find(name);
-      if (!p) continue;
+      if (!p || v3IgnoresFloat(*p)) continue;
       if (p->type == "texture") {
         const PbrtTextureDefinition& t = textureOf(*p, false);
         if (t.className == "constant") {
@@ -914,7 +926,7 @@ struct PbrtMaterials::Impl {
   // A colour that Ferry does not texture (a coat's tint): a texture is averaged.
   Vec3f untexturedColor(const PbrtParams& params, const char* name, Vec3f fallback) {
     const PbrtParam* p = params.find(name);
-    if (!p) return fallback;
+    if (!p || v3IgnoresFloat(*p)) return fallback;
     if (p->type == "texture") return Vec3f(averageTexture(*p, false));
     return colorValue(*p, SpectrumUse::Reflectance);
   }
@@ -1134,7 +1146,9 @@ struct PbrtMaterials::Impl {
     } else {
       m.baseColor = Vec3f(1);
     }
-    m.model = std::make_shared<SubsurfaceModel>(eta, rough, reflectTint);
+    // The definition is what pbrt's material object is: its index is the probe id.
+    m.model = std::make_shared<SubsurfaceModel>(eta, rough, reflectTint, sigmaA, sigmaS, g,
+                                                uint32_t(&def - definitions.data()));
     Medium medium;
     medium.name = (def.name.empty() ? def.type : def.name) + " (inside)";
     medium.sigmaA = sigmaA;

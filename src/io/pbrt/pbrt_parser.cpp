@@ -1739,11 +1739,12 @@ class Parser {
     const int32_t inside = materials_.interiorMedium(material);
     if (inside == kNoMedium) return media;
     if (currentObject_) {
-      warnings_.once("instanced subsurface",
-                     fmt::format("a subsurface material inside ObjectBegin has no medium "
-                                 "behind its surface: light that enters passes through (first "
-                                 "at {})",
-                                 where.toString()));
+      warnings_.once(
+          "instanced subsurface",
+          fmt::format("a subsurface material inside ObjectBegin has no medium "
+                      "behind its surface: when walked (the subsurface setting), light that enters "
+                      "passes through (first at {})",
+                      where.toString()));
       return media;
     }
     media.inside = inside;

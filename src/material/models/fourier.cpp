@@ -5,28 +5,13 @@
 
 #include <fmt/format.h>
 
+#include "core/catmull_rom.h"
 #include "material/models/diffuse.h"
 
 namespace ferry {
 namespace {
 
 constexpr int32_t kMaxChannels = 3;
-
-// The largest i in [0, size - 2] with pred(i) true (pred true, then false).
-template <typename Pred>
-int32_t findInterval(int32_t size, Pred pred) {
-  int32_t first = 0, length = size;
-  while (length > 0) {
-    const int32_t half = length >> 1, middle = first + half;
-    if (pred(middle)) {
-      first = middle + 1;
-      length -= half + 1;
-    } else {
-      length = half;
-    }
-  }
-  return std::clamp(first - 1, 0, size - 2);
-}
 
 // Cosine of the azimuth between -wi (written `wiNeg`) and wo. Where wo has
 // no azimuth (normal incidence) it is measured from +x, as the sampler
@@ -54,8 +39,8 @@ int32_t interpolate(const FourierBsdfTable& t, float muI, float muO, int32_t cha
                     int32_t& offsetO, float weightsO[4]) {
   int32_t offsetI;
   float weightsI[4];
-  if (!fourier::catmullRomWeights(t.mu.data(), t.nMu, muI, offsetI, weightsI) ||
-      !fourier::catmullRomWeights(t.mu.data(), t.nMu, muO, offsetO, weightsO))
+  if (!catmullRomWeights(t.mu.data(), t.nMu, muI, offsetI, weightsI) ||
+      !catmullRomWeights(t.mu.data(), t.nMu, muO, offsetO, weightsO))
     return -1;
   std::fill(ak, ak + size_t(channels) * size_t(t.mMax), 0.0f);
   int32_t longest = 0;
@@ -96,53 +81,10 @@ Vec3f value(const FourierBsdfTable& t, const float* ak, int32_t m, float y, floa
 }
 
 // mu_i with density proportional to the spline of a0 over mu_i at mu_o
-// (pbrt-v3's SampleCatmullRom2D over the table's cdf): the cdf row
-// interpolated at mu_o picks the segment, Newton's method with bisection
-// inverts the segment's integral.
+// (pbrt-v3's SampleCatmullRom2D over the table's cdf).
 bool sampleMuI(const FourierBsdfTable& t, float muO, float u, float& muI) {
-  const int32_t n = t.nMu;
-  int32_t offset;
-  float w[4];
-  if (!fourier::catmullRomWeights(t.mu.data(), n, muO, offset, w)) return false;
-  auto at = [&](const std::vector<float>& array, int32_t i) {
-    float v = 0;
-    for (int32_t k = 0; k < 4; ++k)
-      if (w[k] != 0) v += array[size_t(offset + k) * size_t(n) + size_t(i)] * w[k];
-    return v;
-  };
-  const float total = at(t.cdf, n - 1);
-  if (!(total > 0)) return false;
-  u *= total;
-  const int32_t i = findInterval(n, [&](int32_t j) { return at(t.cdf, j) <= u; });
-  const float f0 = at(t.a0, i), f1 = at(t.a0, i + 1);
-  const float x0 = t.mu[i], x1 = t.mu[i + 1], width = x1 - x0;
-  if (!(width > 0)) {  // a repeated node (the horizon's 0, held twice)
-    muI = x0;
-    return true;
-  }
-  u = (u - at(t.cdf, i)) / width;
-  const float d0 = i > 0 ? width * (f1 - at(t.a0, i - 1)) / (x1 - t.mu[i - 1]) : f1 - f0;
-  const float d1 = i + 2 < n ? width * (at(t.a0, i + 2) - f0) / (t.mu[i + 2] - x0) : f1 - f0;
-  // First guess: invert the linear interpolant's integral.
-  float s =
-      f0 != f1 ? (f0 - std::sqrt(std::max(0.0f, f0 * f0 + 2 * u * (f1 - f0)))) / (f0 - f1) : u / f0;
-  float lo = 0, hi = 1;
-  for (int iteration = 0; iteration < 100; ++iteration) {
-    if (!(s >= lo && s <= hi)) s = 0.5f * (lo + hi);
-    // The Hermite cubic's integral from 0 to s (F) and the cubic (f).
-    const float F = s * (f0 + s * (0.5f * d0 + s * ((1.0f / 3.0f) * (-2 * d0 - d1) + f1 - f0 +
-                                                    s * (0.25f * (d0 + d1) + 0.5f * (f0 - f1)))));
-    const float f =
-        f0 + s * (d0 + s * (-2 * d0 - d1 + 3 * (f1 - f0) + s * (d0 + d1 + 2 * (f0 - f1))));
-    if (std::abs(F - u) < 1e-6f || hi - lo < 1e-6f) break;
-    if (F - u < 0)
-      lo = s;
-    else
-      hi = s;
-    s -= (F - u) / f;
-  }
-  muI = x0 + width * std::clamp(s, 0.0f, 1.0f);
-  return true;
+  return sampleCatmullRom2D(t.mu.data(), t.nMu, t.mu.data(), t.nMu, t.a0.data(), t.cdf.data(), muO,
+                            u, muI);
 }
 
 // phi in [0, 2 pi) with density proportional to the series (pbrt-v3's
@@ -184,39 +126,6 @@ float sampleAzimuth(const float* ak, const float* recip, int32_t m, float u, dou
 }  // namespace
 
 namespace fourier {
-
-bool catmullRomWeights(const float* nodes, int32_t n, float x, int32_t& offset, float weights[4]) {
-  if (!(x >= nodes[0] && x <= nodes[n - 1])) return false;
-  const int32_t i = findInterval(n, [&](int32_t j) { return nodes[j] <= x; });
-  offset = i - 1;
-  const float x0 = nodes[i], x1 = nodes[i + 1];
-  const float t = (x - x0) / (x1 - x0), t2 = t * t, t3 = t2 * t;
-  // The Hermite basis, the derivatives at x0 and x1 taken as finite
-  // differences over the neighbours (one-sided at the ends), folded into
-  // the four nodes' weights.
-  weights[1] = 2 * t3 - 3 * t2 + 1;
-  weights[2] = -2 * t3 + 3 * t2;
-  const float h10 = t3 - 2 * t2 + t, h11 = t3 - t2;
-  if (i > 0) {
-    const float w0 = h10 * (x1 - x0) / (x1 - nodes[i - 1]);
-    weights[0] = -w0;
-    weights[2] += w0;
-  } else {
-    weights[0] = 0;
-    weights[1] -= h10;
-    weights[2] += h10;
-  }
-  if (i + 2 < n) {
-    const float w3 = h11 * (x1 - x0) / (nodes[i + 2] - x0);
-    weights[1] -= w3;
-    weights[3] = w3;
-  } else {
-    weights[1] -= h11;
-    weights[2] += h11;
-    weights[3] = 0;
-  }
-  return true;
-}
 
 float series(const float* a, int32_t m, double cosPhi) {
   double sum = 0, cosPrev = cosPhi, cosCur = 1;

@@ -40,10 +40,6 @@ bool fourierSample(const FourierBsdfTable& table, Vec3f wo, Vec2f u, BsdfSample&
 
 // The spline and series pieces, exposed for tests.
 namespace fourier {
-// Catmull-Rom weights of the 4 nodes from `offset` for x (pbrt's
-// CatmullRomWeights: finite-difference derivatives, end nodes clamped);
-// false when x is outside the nodes.
-bool catmullRomWeights(const float* nodes, int32_t n, float x, int32_t& offset, float weights[4]);
 // sum_k a[k] cos(k phi).
 float series(const float* a, int32_t m, double cosPhi);
 }  // namespace fourier

@@ -3,7 +3,10 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <map>
+#include <mutex>
 
+#include "core/catmull_rom.h"
 #include "material/models/dielectric_lobe.h"
 
 namespace ferry {
@@ -167,9 +170,178 @@ Vec3f subsurfaceAlbedoFromReflectance(Vec3f reflectance, float g, float eta) {
   return {invert(reflectance.x), invert(reflectance.y), invert(reflectance.z)};
 }
 
+std::shared_ptr<const BssrdfTable> beamDiffusionTable(float g, float eta) {
+  static std::mutex mutex;
+  static std::map<std::pair<float, float>, std::shared_ptr<const BssrdfTable>> made;
+  const std::lock_guard lock(mutex);
+  auto& slot = made[{g, eta}];
+  if (slot) return slot;
+  auto t = std::make_shared<BssrdfTable>();
+  constexpr int32_t na = BssrdfTable::kAlbedos, nr = BssrdfTable::kRadii;
+  t->g = g;
+  t->eta = eta;
+  t->albedo.resize(na);
+  t->radius.resize(nr);
+  t->profile.resize(size_t(na) * nr);
+  t->cdf.resize(size_t(na) * nr);
+  t->effectiveAlbedo.resize(na);
+  // Radii from 0.0025 growing by 1.2 (to about 2000 mean free paths);
+  // albedos crowded towards 1, where the profile changes fastest.
+  t->radius[0] = 0;
+  t->radius[1] = 2.5e-3f;
+  for (int32_t j = 2; j < nr; ++j) t->radius[j] = t->radius[j - 1] * 1.2f;
+  for (int32_t i = 0; i < na; ++i)
+    t->albedo[i] = float((1 - std::exp(-8.0 * i / (na - 1))) / (1 - std::exp(-8.0)));
+  const BeamDiffusion diffusion = beamDiffusion(g, eta);
+  for (int32_t i = 0; i < na; ++i) {
+    float* row = &t->profile[size_t(i) * nr];
+    for (int32_t j = 0; j < nr; ++j) {
+      const double r = t->radius[j];
+      row[j] = float(2 * kPi * r *
+                     (diffusion.single(t->albedo[i], r) + diffusion.multiple(t->albedo[i], r)));
+    }
+    t->effectiveAlbedo[i] = integrateCatmullRom(t->radius.data(), nr, row, &t->cdf[size_t(i) * nr]);
+  }
+  slot = t;
+  return slot;
+}
+
+namespace {
+
+// The table's profile at (albedo, optical radius) and, optionally, the
+// effective albedo at `albedo`; false outside the table.
+bool interpolateProfile(const BssrdfTable& t, float albedo, float rOptical, float& profile,
+                        float* effectiveAlbedo = nullptr) {
+  int32_t ao, ro;
+  float aw[4], rw[4];
+  if (!catmullRomWeights(t.albedo.data(), BssrdfTable::kAlbedos, albedo, ao, aw) ||
+      !catmullRomWeights(t.radius.data(), BssrdfTable::kRadii, rOptical, ro, rw))
+    return false;
+  float sum = 0, rhoEff = 0;
+  for (int32_t i = 0; i < 4; ++i) {
+    if (aw[i] == 0) continue;
+    rhoEff += t.effectiveAlbedo[size_t(ao + i)] * aw[i];
+    for (int32_t j = 0; j < 4; ++j)
+      if (rw[j] != 0)
+        sum += aw[i] * rw[j] * t.profile[size_t(ao + i) * BssrdfTable::kRadii + size_t(ro + j)];
+  }
+  // The table holds 2 pi r S(r).
+  if (rOptical != 0) sum /= 2 * kPi * rOptical;
+  profile = sum;
+  if (effectiveAlbedo) *effectiveAlbedo = rhoEff;
+  return true;
+}
+
+}  // namespace
+
+Vec3f SubsurfaceProfile::sr(float r) const {
+  Vec3f out(0);
+  for (int ch = 0; ch < 3; ++ch) {
+    float v;
+    if (!interpolateProfile(*table, albedo[ch], r * sigmaT[ch], v)) continue;
+    out[ch] = std::max(0.0f, v * sigmaT[ch] * sigmaT[ch]);
+  }
+  return out;
+}
+
+float SubsurfaceProfile::sampleSr(int ch, float u) const {
+  if (!(sigmaT[ch] > 0)) return -1;
+  float x;
+  if (!sampleCatmullRom2D(table->albedo.data(), BssrdfTable::kAlbedos, table->radius.data(),
+                          BssrdfTable::kRadii, table->profile.data(), table->cdf.data(), albedo[ch],
+                          u, x))
+    return -1;
+  return x / sigmaT[ch];
+}
+
+float SubsurfaceProfile::pdfSr(int ch, float r) const {
+  float v, rhoEff;
+  if (!interpolateProfile(*table, albedo[ch], r * sigmaT[ch], v, &rhoEff) || !(rhoEff > 0))
+    return 0;
+  return std::max(0.0f, v * sigmaT[ch] * sigmaT[ch] / rhoEff);
+}
+
+bool sampleProbeSegment(const SubsurfaceProfile& profile, Vec3f entry, const Frame& frame,
+                        float uAxis, Vec2f u, ProbeSegment& out) {
+  Vec3f vx, vy, vz;
+  float uChannel;
+  if (uAxis < 0.5f) {
+    vx = frame.s, vy = frame.t, vz = frame.n;
+    uChannel = uAxis * 2;
+  } else if (uAxis < 0.75f) {
+    vx = frame.t, vy = frame.n, vz = frame.s;
+    uChannel = (uAxis - 0.5f) * 4;
+  } else {
+    vx = frame.n, vy = frame.s, vz = frame.t;
+    uChannel = (uAxis - 0.75f) * 4;
+  }
+  const int ch = std::clamp(int(uChannel * 3), 0, 2);
+  const float r = profile.sampleSr(ch, u.x);
+  if (!(r >= 0)) return false;
+  const float rMax = profile.sampleSr(ch, 0.999f);
+  if (!(r < rMax)) return false;
+  const float phi = 2 * kPi * u.y;
+  const float length = 2 * std::sqrt(rMax * rMax - r * r);
+  out.start = entry + (vx * std::cos(phi) + vy * std::sin(phi)) * r - vz * (0.5f * length);
+  out.end = out.start + vz * length;
+  return true;
+}
+
+float probeDensity(const SubsurfaceProfile& profile, Vec3f entry, const Frame& frame, Vec3f exit,
+                   Vec3f exitNormal) {
+  const Vec3f d = frame.toLocal(exit - entry);
+  const Vec3f n = frame.toLocal(exitNormal);
+  const float rProjected[3] = {std::sqrt(d.y * d.y + d.z * d.z), std::sqrt(d.z * d.z + d.x * d.x),
+                               std::sqrt(d.x * d.x + d.y * d.y)};
+  const float axisProbability[3] = {0.25f, 0.25f, 0.5f};
+  float pdf = 0;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int ch = 0; ch < 3; ++ch)
+      pdf += profile.pdfSr(ch, rProjected[axis]) * std::abs(n[axis]) * (1.0f / 3) *
+             axisProbability[axis];
+  return pdf;
+}
+
+Vec3f SubsurfaceExitLobe::eval(Vec3f, Vec3f wi) const {
+  if (!(wi.z > 0)) return Vec3f(0);
+  return Vec3f((1 - fresnelDielectric(wi.z, ior)) / exitNormalization * wi.z * (1 / kPi));
+}
+
+float SubsurfaceExitLobe::pdf(Vec3f, Vec3f wi) const {
+  return wi.z > 0 ? wi.z * (1 / kPi) : 0.0f;
+}
+
+bool SubsurfaceExitLobe::sample(Vec3f, float, Vec2f u, BsdfSample& out) const {
+  out.wi = sampleCosineHemisphere(u);
+  if (!(out.wi.z > 0)) return false;
+  out.pdf = out.wi.z * (1 / kPi);
+  out.weight = Vec3f((1 - fresnelDielectric(out.wi.z, ior)) / exitNormalization);
+  out.delta = false;
+  return out.pdf > 0;
+}
+
 SubsurfaceModel::SubsurfaceModel(float ior, float roughness, Vec3f reflectTint)
     : ior(ior), roughness(roughness), reflectTint(reflectTint) {
   exitNormalization_ = subsurfaceExitNormalization(ior);
+}
+
+SubsurfaceModel::SubsurfaceModel(float ior, float roughness, Vec3f reflectTint, Vec3f sigmaA,
+                                 Vec3f sigmaS, float g, uint32_t probeId)
+    : SubsurfaceModel(ior, roughness, reflectTint) {
+  hasMedium = true;
+  this->probeId = probeId;
+  this->sigmaA = sigmaA;
+  this->sigmaS = sigmaS;
+  this->g = g;
+  table_ = beamDiffusionTable(g, ior);
+}
+
+SubsurfaceProfile SubsurfaceModel::profile() const {
+  SubsurfaceProfile p;
+  p.sigmaT = sigmaA + sigmaS;
+  for (int ch = 0; ch < 3; ++ch) p.albedo[ch] = p.sigmaT[ch] > 0 ? sigmaS[ch] / p.sigmaT[ch] : 0;
+  p.table = table_.get();
+  return p;
 }
 
 Bsdf SubsurfaceModel::bsdf(Vec3f color, const MaterialResources&) const {
@@ -184,6 +356,11 @@ void SubsurfaceModel::write(MaterialRecordWriter& record) const {
   record.pod(ior);
   record.pod(roughness);
   record.pod(reflectTint);
+  if (!hasMedium) return;
+  record.pod(sigmaA);
+  record.pod(sigmaS);
+  record.pod(g);
+  record.pod(probeId);
 }
 
 std::shared_ptr<const MaterialModel> SubsurfaceModel::read(MaterialRecordReader& record) {
@@ -192,14 +369,29 @@ std::shared_ptr<const MaterialModel> SubsurfaceModel::read(MaterialRecordReader&
   const Vec3f tint = record.pod<Vec3f>();
   if (!(ior > 1) || !(roughness >= 0) || !isFinite(tint))
     record.fail("subsurface: ior must exceed 1, roughness must not be negative");
-  return std::make_shared<SubsurfaceModel>(ior, roughness, tint);
+  if (record.atEnd()) return std::make_shared<SubsurfaceModel>(ior, roughness, tint);
+  const Vec3f sigmaA = record.color(), sigmaS = record.color();
+  const float g = record.number();
+  const auto probeId = record.pod<uint32_t>();
+  if (!(minComponent(sigmaA) >= 0) || !(minComponent(sigmaS) >= 0) ||
+      !(maxComponent(sigmaA + sigmaS) > 0) || !(std::abs(g) < 1))
+    record.fail(
+        "subsurface: its medium needs sigma_a, sigma_s >= 0, a positive extinction and "
+        "|g| < 1");
+  return std::make_shared<SubsurfaceModel>(ior, roughness, tint, sigmaA, sigmaS, g, probeId);
 }
 
 std::string SubsurfaceModel::describe() const {
+  if (!hasMedium)
+    return fmt::format(
+        "subsurface (ior {:g}, roughness {:g}, Kr {:g} {:g} {:g}; a random walk through the "
+        "medium inside)",
+        ior, roughness, reflectTint.x, reflectTint.y, reflectTint.z);
   return fmt::format(
-      "subsurface (ior {:g}, roughness {:g}, Kr {:g} {:g} {:g}; a random walk "
-      "through the medium inside)",
-      ior, roughness, reflectTint.x, reflectTint.y, reflectTint.z);
+      "subsurface (ior {:g}, roughness {:g}, Kr {:g} {:g} {:g}, sigma_a {:g} {:g} {:g}, sigma_s "
+      "{:g} {:g} {:g}, g {:g})",
+      ior, roughness, reflectTint.x, reflectTint.y, reflectTint.z, sigmaA.x, sigmaA.y, sigmaA.z,
+      sigmaS.x, sigmaS.y, sigmaS.z, g);
 }
 
 }  // namespace ferry
