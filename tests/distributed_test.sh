@@ -61,6 +61,7 @@ same_on_ranks() {
 # a walk is a ray like any other, forwarded to whichever ranks hold the
 # sphere's pieces, and a piece keeps the media its mesh bounds.
 same_on_ranks subsurface "$source_dir/tests/oracle/cases/v3-subsurface.pbrt" "--size 24x24 --spp 2 --seed 3"
+same_on_ranks subsurface-shared "$source_dir/tests/oracle/cases/v3-subsurface-shared.pbrt" "--size 24x24 --spp 2 --seed 3"
 # Motion blur (a pbrt scene with moving instances): every rank finds a ray's
 # time from its pixel and sample, and proxies bound the swept boxes, so
 # forwarding finds moving content wherever it is when the ray passes; a part

@@ -419,8 +419,10 @@ template <typename Path>
                             sampler_);
   const SurfacePoint& surface = vertex.surface;
   const Material* chosen = surface.material;
+  const SubsurfaceModel* probed = probes_ ? probeModel(surface) : nullptr;
   const Bsdf bsdf =
-      chosen->mixedWith < 0
+      probed ? probed->probedBsdf(surface.baseColor)
+      : chosen->mixedWith < 0
           ? chosen->model->bsdfAt(surface.baseColor, surface.uv, scene_.materialResources())
           : mixedBsdf(surface, random(RandomDim::MaterialSelect), chosen);
   Vec3f ng = surface.geometricNormal, ns = surface.shadingNormal;
@@ -654,7 +656,8 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
   const MediumInterface& sides = surfaceMedia(hit);
   // A walk back at its subsurface material's surface leaves or turns back
   // in within the bounce that entered (pbrt's BSSRDF: one bounce in and out).
-  const bool walkEnds = walks_ && sides.inside != kNoMedium &&
+  const SubsurfaceModel* probed = probes_ ? probeModel(vertex.surface) : nullptr;
+  const bool walkEnds = walks_ && !probed && sides.inside != kNoMedium &&
                         media_->medium(sides.inside).subsurface &&
                         dot(vertex.wo, vertex.surface.geometricNormal) < 0;
   if (!walkEnds && depth >= maxDepth_) {
@@ -663,17 +666,21 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
   }
   const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
   if (aovs) addFirstSurfaceAovs(vertex, scattering, frameBuffer);
+  // Under probes the inside of a subsurface material is empty, as in pbrt
+  // (its medium is the walks'): light reflected back in there flies free.
   auto leaving = [&](Vec3f direction) {
-    return sides.isTransition() ? sides.along(direction, vertex.surface.geometricNormal) : f.medium;
+    const int32_t m =
+        sides.isTransition() ? sides.along(direction, vertex.surface.geometricNormal) : f.medium;
+    return probes_ && m != kNoMedium && media_->medium(m).subsurface ? kNoMedium : m;
   };
   Spawned spawned;
   spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);
   if (spawned.continuation) {
-    const SubsurfaceModel* model = probes_ ? probeModel(vertex.surface) : nullptr;
     const Vec3f n = vertex.surface.geometricNormal;
-    if (model && dot(continuation.dir(), n) * dot(vertex.wo, n) < 0) {
-      // Into a probed material: the BSSRDF finds where the light leaves.
-      spawned.continuation = startProbe(vertex, *model, sampleIndex, depth, continuation);
+    if (probed && dot(continuation.dir(), n) * dot(vertex.wo, n) < 0) {
+      // Through a probed material's surface (either way, as pbrt): the
+      // BSSRDF finds where the light leaves.
+      spawned.continuation = startProbe(vertex, *probed, sampleIndex, depth, continuation);
       if (spawned.continuation) setMediumAndDepth(continuation, f.medium, depth);
     } else {
       setMediumAndDepth(continuation, leaving(continuation.dir()), walkEnds ? depth : depth + 1);
@@ -824,9 +831,17 @@ bool PathShading<Path>::startProbe(const PathVertex& vertex, const SubsurfaceMod
                             Frame(normalize(decodeOctahedral(normal))), random(RandomDim::BsdfLobe),
                             {random(RandomDim::BsdfU), random(RandomDim::BsdfV)}, segment))
       return false;
+    // pbrt scales radiance by eta^2 through the refraction out and again at
+    // Sw; from outside the refraction in takes 1 / eta^2 and they cancel
+    // (Ferry's dielectrics scale by neither), but light that the material
+    // reflected back inside (or that left another surface inside it) and
+    // now refracts out keeps both: eta^4.
+    Vec3f weight = continuation.weight();
+    if (dot(vertex.wo, vertex.surface.shadingNormal) < 0)
+      weight = weight * square(square(model.ior));
     const Vec3f d = segment.end - segment.start;
-    const Vec3f stored = makeRay(continuation, segment.start, normalize(d), 0,
-                                 continuation.weight(), vertex.pixel, 0);
+    const Vec3f stored =
+        makeRay(continuation, segment.start, normalize(d), 0, weight, vertex.pixel, 0);
     continuation.tmax = dot(d, stored) / dot(stored, stored);
     continuation.probeEntry = vertex.surface.position;
     continuation.probeNormal = normal;
@@ -942,9 +957,10 @@ typename PathShading<Path>::Spawned PathShading<Path>::leaveProbe(
         offsetRayOrigin(surface.position + ng * surface.originOffset, ng),
         surface.originOffset};
     const MediumInterface& sides = surfaceMedia(hit);
-    auto leaving = [&](Vec3f direction) {
-      return sides.isTransition() ? sides.along(direction, surface.geometricNormal)
-                                  : mediumOf(path);
+    auto leaving = [&](Vec3f direction) {  // (as shadeInMedia's)
+      const int32_t m =
+          sides.isTransition() ? sides.along(direction, surface.geometricNormal) : mediumOf(path);
+      return m != kNoMedium && media_->medium(m).subsurface ? kNoMedium : m;
     };
     Spawned spawned;
     spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);

@@ -65,6 +65,25 @@ struct SubsurfaceLobe {
   }
 };
 
+// Under probes: pbrt's dielectric interface from either side, reflection
+// tinted by Kr and transmission by Kt (the lobe's colour). A transmission
+// either way is where the BSSRDF takes over.
+struct ProbedSurfaceLobe {
+  DielectricLobe surface;
+  Vec3f reflectTint;
+
+  Vec3f eval(Vec3f wo, Vec3f wi) const {
+    const Vec3f f = surface.eval(wo, wi);
+    return wo.z * wi.z > 0 ? f * reflectTint : f;
+  }
+  float pdf(Vec3f wo, Vec3f wi) const { return surface.pdf(wo, wi); }
+  bool sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const {
+    if (!surface.sample(wo, uLobe, u, out)) return false;
+    if (wo.z * out.wi.z > 0) out.weight = out.weight * reflectTint;
+    return true;
+  }
+};
+
 // The i-th Fresnel moment of light inside a medium of index `eta` meeting
 // its boundary: the integral over mu in [0, 1] of F(mu, 1 / eta) mu^i.
 float fresnelMoment(float eta, int i) {
@@ -350,6 +369,13 @@ Bsdf SubsurfaceModel::bsdf(Vec3f color, const MaterialResources&) const {
   lobe.reflectTint = reflectTint;
   lobe.exitNormalization = exitNormalization_;
   return Bsdf(lobe, false, true);
+}
+
+Bsdf SubsurfaceModel::probedBsdf(Vec3f color) const {
+  ProbedSurfaceLobe lobe;
+  lobe.surface = DielectricLobe::make(ior, roughness, color);
+  lobe.reflectTint = reflectTint;
+  return Bsdf(lobe, lobe.surface.smooth, true);
 }
 
 void SubsurfaceModel::write(MaterialRecordWriter& record) const {

@@ -99,6 +99,9 @@ struct SubsurfaceModel final : MaterialModel {
   // The BSSRDF (hasMedium only).
   SubsurfaceProfile profile() const;
   SubsurfaceExitLobe exitLobe() const { return {ior, exitNormalization_}; }
+  // The surface under probes: the dielectric interface from either side
+  // (bsdf() is the walks', whose inside is the exit lobe).
+  Bsdf probedBsdf(Vec3f color) const;
 
  private:
   float exitNormalization_ = 1;  // c = 1 - 2 FM1: Sw's cosine integral is 1
