@@ -61,7 +61,21 @@ same_on_ranks() {
 # a walk is a ray like any other, forwarded to whichever ranks hold the
 # sphere's pieces, and a piece keeps the media its mesh bounds.
 same_on_ranks subsurface "$source_dir/tests/oracle/cases/v3-subsurface.pbrt" "--size 24x24 --spp 2 --seed 3"
-same_on_ranks subsurface-shared "$source_dir/tests/oracle/cases/v3-subsurface-shared.pbrt" "--size 24x24 --spp 2 --seed 3"
+# Subsurface probes cross ranks that may not hold the material; a part
+# directory keeps the materials' coefficients (and drops the walks' media).
+shared="$source_dir/tests/oracle/cases/v3-subsurface-shared.pbrt"
+same_on_ranks subsurface-shared "$shared" "--size 24x24 --spp 2 --seed 3"
+"$ferry" partition "$shared" --ranks 3 --partitioner random -o "$work/shared-parts" -q 2>/dev/null
+mpirun_n 3 "$ferry" render "$work/shared-parts" --size 24x24 --spp 2 --seed 3 -q --threads 1 \
+  -o "$work/shared.pfm"
+echo "subsurface-shared, a part directory on 3 ranks:"
+$compare "$work/subsurface-shared-ref.pfm" "$work/shared.pfm" --rel 0 --abs 0 --outliers 0
+if mpirun_n 3 "$ferry" render "$work/shared-parts" --size 24x24 --spp 2 --subsurface walk -q \
+  --threads 1 -o "$work/walked.pfm" 2>"$work/walked.err"; then
+  echo "walking a part directory should fail" >&2
+  exit 1
+fi
+grep -q "part files do not keep" "$work/walked.err"
 # Motion blur (a pbrt scene with moving instances): every rank finds a ray's
 # time from its pixel and sample, and proxies bound the swept boxes, so
 # forwarding finds moving content wherever it is when the ray passes; a part

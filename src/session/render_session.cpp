@@ -746,7 +746,15 @@ void RenderSession::withPathLayout(F&& f) {
   // Masks while they fit (8 then 64 ranks), else replay (or as forced).
   const int ranks = group().size();
   // (Parts hold only the materials they use: the ranks agree.)
-  if (group().sum(uint64_t(sceneTakesProbes(scene(), settings_.render.subsurface))) > 0)
+  const bool probed =
+      group().sum(uint64_t(sceneTakesProbes(scene(), SubsurfaceMethod::Probes))) > 0;
+  if (probed && settings_.render.subsurface == SubsurfaceMethod::Walks &&
+      group().sum(uint64_t(std::any_of(scene().media.begin(), scene().media.end(),
+                                       [](const Medium& m) { return m.subsurface; }))) == 0)
+    throw InputError(
+        "walking subsurface materials needs the media inside them, which part files do not "
+        "keep: render the scene file, or probe them (the subsurface setting)");
+  if (probed && settings_.render.subsurface == SubsurfaceMethod::Probes)
     f.template operator()<PathProbe>();
   else if (settings_.pathLayout == PathLayout::Replay ||
            (settings_.pathLayout == PathLayout::Auto && ranks > 64))

@@ -48,7 +48,8 @@ static_assert(sizeof(Material) == 112,
 // (Mesh::stored is not written: a part holds its meshes' arrays; 136 before
 // it; the arrays became SharedArrays at 392, and 192 for Texture, same
 // fields; Texture is 296 with its combination.
-// Mesh::media is not written either: part files refuse scenes with media.)
+// Mesh::media is not written either: part files refuse scenes with media,
+// but for the media inside subsurface materials, which they drop.)
 static_assert(sizeof(Mesh) == 400, "Mesh changed: update part_file.cpp and kPartFormatVersion");
 static_assert(sizeof(CameraView) == 104,  // 88 before its motion (format 14)
               "CameraView changed: update part_file.cpp and kPartFormatVersion");
@@ -857,7 +858,11 @@ WrittenFile writePartFile(const std::string& path, const Scene& scene,
                           int rank, int ranks) {
   FERRY_CHECK_EQ(owners.size(), scene.instances.size());
   FERRY_CHECK(std::is_sorted(instances.begin(), instances.end()));
-  if (scene.hasMedia())
+  // The media inside subsurface materials go (their models keep the
+  // coefficients the probes need; walks need the scene file); others are
+  // refused.
+  if (std::any_of(scene.media.begin(), scene.media.end(),
+                  [](const Medium& m) { return !m.subsurface; }))
     throw InputError(
         fmt::format("{}: scene '{}' has participating media, which part files do "
                     "not store yet: render the scene file itself",
