@@ -254,7 +254,8 @@ InstanceMotion::InstanceMotion(const Affine3f& start, const Affine3f& end, Vec3f
 }
 
 InstanceMotion InstanceMotion::nested(const Affine3f& outerStart, const Affine3f& outerEnd,
-                                      const Affine3f& innerStart, const Affine3f& innerEnd) {
+                                      const Affine3f& innerStart, const Affine3f& innerEnd,
+                                      Vec3f pivot) {
   // A still outer similarity (rotation, uniform scale, translation) keeps
   // pbrt's interpolation of the products: two keys are exact.
   const Mat3 o = linearOf(outerStart);
@@ -271,15 +272,23 @@ InstanceMotion InstanceMotion::nested(const Affine3f& outerStart, const Affine3f
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) still = still && outerStart.l[i][j] == outerEnd.l[i][j];
   if (still && similarity) return InstanceMotion(outerStart * innerStart, outerStart * innerEnd);
-  const PbrtMotion outer(outerStart, outerEnd), inner(innerStart, innerEnd);
+  // The outer motion in the pivot's space (x - pivot -> M (x) - pivot), so
+  // x -> pivot + Lo (Li x + ti - pivot) + to.
+  auto centred = [&](Affine3f m) {
+    m.t = m.transformPoint(pivot) - pivot;
+    return m;
+  };
+  const PbrtMotion outer(centred(outerStart), centred(outerEnd)), inner(innerStart, innerEnd);
   std::vector<MotionKey> keys;
   for (int k = 0; k <= kShearSegments; ++k) {
     const double t = double(k) / kShearSegments;
     const auto [to, lo] = outer.at(t);
-    const auto [ti, li] = inner.at(t);
-    const Vec3f translation(float(lo[0][0] * ti.x + lo[0][1] * ti.y + lo[0][2] * ti.z) + to.x,
-                            float(lo[1][0] * ti.x + lo[1][1] * ti.y + lo[1][2] * ti.z) + to.y,
-                            float(lo[2][0] * ti.x + lo[2][1] * ti.y + lo[2][2] * ti.z) + to.z);
+    const auto [tInner, li] = inner.at(t);
+    const Vec3f ti = tInner - pivot;
+    const Vec3f translation(
+        float(lo[0][0] * ti.x + lo[0][1] * ti.y + lo[0][2] * ti.z) + to.x + pivot.x,
+        float(lo[1][0] * ti.x + lo[1][1] * ti.y + lo[1][2] * ti.z) + to.y + pivot.y,
+        float(lo[2][0] * ti.x + lo[2][1] * ti.y + lo[2][2] * ti.z) + to.z + pivot.z);
     keys.push_back(keyOf(translation, multiply(lo, li), Vec3f(0)));
   }
   alignRotations(keys);

@@ -37,11 +37,13 @@ class InstanceMotion {
   // From stored keys (part files); at least two.
   explicit InstanceMotion(std::vector<MotionKey> keys);
   // A part moving from `innerStart` to `innerEnd` inside an instance moving
-  // from `outerStart` to `outerEnd` (pbrt-v3's motion inside ObjectBegin):
-  // x -> outer(u) (inner(u) x), each pbrt's interpolation. Exact (two keys)
-  // when the instance is still and a similarity, else sampled.
+  // from `outerStart` to `outerEnd` (pbrt's motion inside ObjectBegin):
+  // x -> outer(u) (inner(u) x), each pbrt's interpolation, the outer one
+  // about `pivot` (pbrt-v4's render space, as above). Exact (two keys) when
+  // the instance is still and a similarity, else sampled.
   static InstanceMotion nested(const Affine3f& outerStart, const Affine3f& outerEnd,
-                               const Affine3f& innerStart, const Affine3f& innerEnd);
+                               const Affine3f& innerStart, const Affine3f& innerEnd,
+                               Vec3f pivot = Vec3f(0));
 
   Affine3f at(float u) const;
   // Every point of `objectBox` moved over u in [0, 1] lies inside (sampled

@@ -86,6 +86,20 @@ TEST(InstanceMotion, APartMovingInsideAnInstanceMovesByBoth) {
     expectNear(stretched.at(u), uneven * part.at(u), 5e-3f);
     expectNear(both.at(u), outer.at(u) * part.at(u), 5e-3f);
   }
+  // pbrt-v4's: the instance turns about a pivot (the camera), the part as before.
+  const Vec3f camera(0.5f, 1, 8);
+  const InstanceMotion outerAbout(Affine3f::identity(), outerEnd, camera);
+  const InstanceMotion bothAbout =
+      InstanceMotion::nested(Affine3f::identity(), outerEnd, partStart, partEnd, camera);
+  for (float u : {0.0f, 0.25f, 0.5f, 1.0f})
+    expectNear(bothAbout.at(u), outerAbout.at(u) * part.at(u), 1e-3f);
+  for (float u : {0.03f, 0.47f, 0.91f})
+    expectNear(bothAbout.at(u), outerAbout.at(u) * part.at(u), 2e-2f);
+  // (About the origin it is another motion: the pivot is not ignored.)
+  float apart = 0;
+  for (int i = 0; i < 3; ++i)
+    apart = std::max(apart, std::abs(bothAbout.at(0.5f).t[i] - both.at(0.5f).t[i]));
+  EXPECT_GT(apart, 0.05f);
 }
 
 TEST(InstanceMotion, TheSweptBoxHoldsEveryPoseAndLittleMore) {

@@ -425,15 +425,15 @@ class Parser {
 
   bool moving() const { return !sameTransform(state_.ctm, state_.ctmEnd); }
 
-  // The motion of what is placed now (null: it does not move). Motion
-  // inside an object definition is pbrt-v3's moving parts (addMesh); for
-  // pbrt-v4 files and curves its start transform is kept, with one warning.
+  // The motion of what is placed now (null: it does not move). Motion of a
+  // mesh inside an object definition is a moving part (addMesh); a curve's
+  // keeps its start transform, with one warning.
   std::shared_ptr<const InstanceMotion> placedMotion(const SourceLocation& where) {
     if (!moving()) return nullptr;
     if (currentObject_) {
       warnings_.once("object motion",
                      fmt::format("a moving transform inside ObjectBegin is not supported "
-                                 "for pbrt-v4 files and curves: its start transform is used "
+                                 "for curves: their start transform is used "
                                  "(first at {}); move the ObjectInstance instead",
                                  where.toString()));
       return nullptr;
@@ -1141,10 +1141,14 @@ class Parser {
         if (!std::isfinite(det) || det == 0)
           fail(where, "the end transform is singular (a zero scale?) or not finite");
       }
-      for (const MovingPart& part : parts->second)
+      for (const MovingPart& part : parts->second) {
         scene_.instances.push_back({part.object, state_.ctm * part.start,
                                     std::make_shared<const InstanceMotion>(InstanceMotion::nested(
                                         state_.ctm, state_.ctmEnd, part.start, part.end))});
+        // (pbrt-v4 turns the instance about the camera: made again at the end.)
+        movingPartInstances_.push_back(
+            {scene_.instances.size() - 1, state_.ctm, state_.ctmEnd, part.start, part.end});
+      }
     }
   }
 
@@ -1152,7 +1156,8 @@ class Parser {
   // space, whose origin is the camera: the rotation turns about the camera
   // (pbrt-v3's, about the world's origin). Known once the file is read.
   void pivotObjectInstancesAtTheCamera() {
-    if (dialect_ != Dialect::V4 || movingObjectInstances_.empty()) return;
+    if (dialect_ != Dialect::V4 || (movingObjectInstances_.empty() && movingPartInstances_.empty()))
+      return;
     const CameraDefinition c = camera_.value_or(CameraDefinition{});
     const float det = c.cameraFromWorld.determinant();
     if (!std::isfinite(det) || det == 0) return;  // makeCamera says so
@@ -1162,6 +1167,9 @@ class Parser {
     for (const MovingObjectInstance& m : movingObjectInstances_)
       scene_.instances[m.instance].motion =
           std::make_shared<const InstanceMotion>(m.start, m.end, camera);
+    for (const MovingPartInstance& m : movingPartInstances_)
+      scene_.instances[m.instance].motion = std::make_shared<const InstanceMotion>(
+          InstanceMotion::nested(m.start, m.end, m.partStart, m.partEnd, camera));
   }
 
   void checkInvertible(const SourceLocation& where) {
@@ -1786,9 +1794,9 @@ class Parser {
     storeFinishedMeshes();
     orientEmitter(mesh);
     orientSidedSurface(mesh);
-    if (currentObject_ && moving() && dialect_ != Dialect::V4) {
-      // pbrt-v3's motion inside ObjectBegin: the mesh is an object of its
-      // own, which each instance of this one places moving (objectInstance).
+    if (currentObject_ && moving()) {
+      // Motion inside ObjectBegin: the mesh is an object of its own, which
+      // each instance of this one places moving (objectInstance).
       const float det = state_.ctmEnd.determinant();
       if (!std::isfinite(det) || det == 0)
         fail(shapeWhere_, "the end transform is singular (a zero scale?) or not finite");
@@ -1803,7 +1811,6 @@ class Parser {
       return index;
     }
     if (currentObject_) {
-      if (moving()) placedMotion(shapeWhere_);  // pbrt-v4: the start transform, one warning
       if (!sameTransform(state_.ctm, Affine3f::identity())) bake(mesh, state_.ctm);
       scene_.meshes.push_back(std::move(mesh));
       int32_t index = int32_t(scene_.meshes.size() - 1);
@@ -2069,6 +2076,12 @@ class Parser {
     Affine3f start, end;
   };
   std::vector<MovingObjectInstance> movingObjectInstances_;
+  // Each instance of a moving part, and what it was made from.
+  struct MovingPartInstance {
+    size_t instance;
+    Affine3f start, end, partStart, partEnd;
+  };
+  std::vector<MovingPartInstance> movingPartInstances_;
   // The last motion made, shared by what is placed under the same transforms.
   std::shared_ptr<const InstanceMotion> lastMotion_;
   Affine3f lastMotionFrom_, lastMotionTo_;
