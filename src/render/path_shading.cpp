@@ -666,12 +666,8 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeInMedia(
   }
   const VertexScattering scattering = shadingFrame(vertex, sampleIndex, bounce);
   if (aovs) addFirstSurfaceAovs(vertex, scattering, frameBuffer);
-  // Under probes the inside of a subsurface material is empty, as in pbrt
-  // (its medium is the walks'): light reflected back in there flies free.
   auto leaving = [&](Vec3f direction) {
-    const int32_t m =
-        sides.isTransition() ? sides.along(direction, vertex.surface.geometricNormal) : f.medium;
-    return probes_ && m != kNoMedium && media_->medium(m).subsurface ? kNoMedium : m;
+    return mediumLeaving(sides, vertex.surface.geometricNormal, direction, f.medium);
   };
   Spawned spawned;
   spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);
@@ -957,10 +953,8 @@ typename PathShading<Path>::Spawned PathShading<Path>::leaveProbe(
         offsetRayOrigin(surface.position + ng * surface.originOffset, ng),
         surface.originOffset};
     const MediumInterface& sides = surfaceMedia(hit);
-    auto leaving = [&](Vec3f direction) {  // (as shadeInMedia's)
-      const int32_t m =
-          sides.isTransition() ? sides.along(direction, surface.geometricNormal) : mediumOf(path);
-      return m != kNoMedium && media_->medium(m).subsurface ? kNoMedium : m;
+    auto leaving = [&](Vec3f direction) {
+      return mediumLeaving(sides, surface.geometricNormal, direction, mediumOf(path));
     };
     Spawned spawned;
     spawned.continuation = sampleContinuation(vertex, scattering, 0, continuation);

@@ -275,6 +275,15 @@ class PathShading {
   // light; false if none is left.
   bool throughMedia(Path& shadowRay, int32_t medium, uint32_t keyHash) const;
   const MediumInterface& surfaceMedia(const TraceHit& hit) const;
+  // The medium a ray leaving a surface of media `sides` (geometric normal
+  // `ng`) along `direction` enters; `current` where the surface is no
+  // transition. Under probes the inside of a subsurface material is empty,
+  // as in pbrt (its medium is the walks').
+  int32_t mediumLeaving(const MediumInterface& sides, Vec3f ng, Vec3f direction,
+                        int32_t current) const {
+    const int32_t m = sides.isTransition() ? sides.along(direction, ng) : current;
+    return probes_ && m != kNoMedium && media_->medium(m).subsurface ? kNoMedium : m;
+  }
   // In a scene with subsurface walks the path's 16 medium bits hold its
   // medium + 1 in the low 8 and its depth in the high 8 (a walk's steps are
   // wavefront bounces that do not count); otherwise the depth is the bounce.
