@@ -1,7 +1,7 @@
 // Curves against triangles and against Embree's own curves, on builtin:fur
 // (shapes/curves.h, builtin/fur.h), in one run:
-//   Curves        the fur's segments as Ferry traces them (pbrt's crossing
-//                 test in an Embree user geometry, the Embree backend)
+//   Curves        the fur's segments as Ferry traces them (Embree's flat
+//                 curves from the shape's buffers, through the Embree backend)
 //   Triangles     the same segments as triangles (each a quad of 2 facing
 //                 the camera, the same widths): equal segment count
 //   EmbreeCurves  the same segments as Embree's native flat Bézier curves

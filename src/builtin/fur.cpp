@@ -82,8 +82,8 @@ ScenePlan planFur(uint64_t strands, uint32_t seed) {
   fur.kind = "curves";
   fur.material = hairMaterial;
   fur.primitives = n * kFurSegmentsPerStrand;
-  fur.piecesPerPrimitive = Curves::traversalPiecesFor(fur.primitives);
-  fur.bytes = fur.primitives * sizeof(CurveSegment);
+  fur.piecesPerPrimitive = Curves::traversalPiecesFor(CurveType::Flat, fur.primitives);
+  fur.bytes = fur.primitives * Curves::bytesPerSegment(CurveType::Flat);
   fur.build = [=] {
     std::vector<CurveSegment> segments(n * kFurSegmentsPerStrand);
     for (uint64_t i = 0; i < n; ++i) {

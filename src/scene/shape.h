@@ -76,6 +76,17 @@ class Shape {
                               float tnear, float tfar, float& t, Vec2f& uv, ShapeWork& work) const {
     return intersect(primitive, origin, direction, tnear, tfar, t, uv, work);
   }
+  // Flat cubic Bézier curves that Embree traces as its own geometry: four
+  // control points (x, y, z, radius) a primitive, the index of each
+  // primitive's first, and the straight pieces each is cut into. Empty for
+  // other kinds. For them intersect() follows Embree's rule for its flat
+  // curves, so both backends find the same crossings.
+  struct FlatCurves {
+    std::span<const Vec4f> points;
+    std::span<const uint32_t> first;
+    int tessellation = 0;
+  };
+  virtual FlatCurves flatCurves() const { return {}; }
   virtual ShapeSurface surface(uint32_t primitive, Vec2f uv) const = 0;
   // The same, seen along `direction` (object space, the ray that hit it):
   // for kinds whose surface faces the ray (flat curves).

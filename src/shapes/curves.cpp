@@ -211,7 +211,7 @@ void appendCurveSegments(const Points& points, float width0, float width1,
 Curves::Curves(CurveType type, std::vector<CurveSegment> segments,
                std::vector<CurveNormals> normals)
     : type_(type),
-      pieces_(traversalPiecesFor(segments.size())),
+      pieces_(traversalPiecesFor(type, segments.size())),
       segments_(std::move(segments)),
       normals_(std::move(normals)) {
   if (segments_.size() > UINT32_MAX)
@@ -238,6 +238,22 @@ Curves::Curves(CurveType type, std::vector<CurveSegment> segments,
       if (!(len > 0)) throw InputError(fmt::format("curves: segment {} has a zero normal", k));
       n = n * (1 / len);
     }
+  if (type_ == CurveType::Ribbon) return;
+  if (segments_.size() > UINT32_MAX / 4)
+    throw InputError(fmt::format("curves: {} flat segments is more than 2^30, Embree's index",
+                                 segments_.size()));
+  // The radius along a segment is linear: its cubic control values are the
+  // line's, raised to degree 3.
+  points_.resize(4 * segments_.size());
+  first_.resize(segments_.size());
+  for (size_t k = 0; k < segments_.size(); ++k) {
+    const CurveSegment& s = segments_[k];
+    const float r[4] = {0.5f * s.width0, (2 * s.width0 + s.width1) / 6,
+                        (s.width0 + 2 * s.width1) / 6, 0.5f * s.width1};
+    for (int j = 0; j < 4; ++j)
+      points_[4 * k + size_t(j)] = {s.points[j].x, s.points[j].y, s.points[j].z, r[j]};
+    first_[k] = uint32_t(4 * k);
+  }
 }
 
 Box3f Curves::primitiveBounds(uint32_t primitive) const {
@@ -249,11 +265,23 @@ Box3f Curves::primitiveBounds(uint32_t primitive) const {
 }
 
 uint64_t Curves::bytes() const {
-  return segments_.capacity() * sizeof(CurveSegment) + normals_.capacity() * sizeof(CurveNormals);
+  return segments_.capacity() * sizeof(CurveSegment) + normals_.capacity() * sizeof(CurveNormals) +
+         points_.capacity() * sizeof(Vec4f) + first_.capacity() * sizeof(uint32_t);
 }
 
-uint32_t Curves::traversalPiecesFor(uint64_t segments) {
+uint64_t Curves::bytesPerSegment(CurveType type) {
+  return sizeof(CurveSegment) +
+         (type == CurveType::Ribbon ? sizeof(CurveNormals) : 4 * sizeof(Vec4f) + sizeof(uint32_t));
+}
+
+uint32_t Curves::traversalPiecesFor(CurveType type, uint64_t segments) {
+  if (type != CurveType::Ribbon) return 1;
   return segments <= UINT32_MAX / kTraversalPieces ? kTraversalPieces : 1;
+}
+
+Shape::FlatCurves Curves::flatCurves() const {
+  if (type_ == CurveType::Ribbon) return {};
+  return {points_, first_, kTessellation};
 }
 
 Box3f Curves::pieceBounds(uint32_t primitive, uint32_t piece) const {
@@ -272,12 +300,133 @@ Box3f Curves::pieceBounds(uint32_t primitive, uint32_t piece) const {
 
 bool Curves::intersect(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
                        float& t, Vec2f& uv) const {
+  if (type_ != CurveType::Ribbon)
+    return crossFlat(primitive, origin, direction, tnear, tfar, t, uv);
   return crossPiece(primitive, 0, 1, origin, direction, tnear, tfar, t, uv);
 }
 
 bool Curves::intersectPiece(uint32_t primitive, uint32_t piece, Vec3f origin, Vec3f direction,
                             float tnear, float tfar, float& t, Vec2f& uv, ShapeWork&) const {
+  if (type_ != CurveType::Ribbon)
+    return crossFlat(primitive, origin, direction, tnear, tfar, t, uv);
   return crossPiece(primitive, piece, pieces_, origin, direction, tnear, tfar, t, uv);
+}
+
+namespace {
+
+using Point4 = std::array<float, 4>;  // x, y, z, radius
+
+// The cubic at u, each of the four coordinates, from Bernstein weights.
+Point4 bezierAt(const std::array<Point4, 4>& q, float u) {
+  const float s = 1 - u;
+  const float b[4] = {s * s * s, 3 * s * s * u, 3 * s * u * u, u * u * u};
+  Point4 p{};
+  for (int c = 0; c < 4; ++c)
+    p[c] = b[0] * q[0][c] + b[1] * q[1][c] + b[2] * q[2][c] + b[3] * q[3][c];
+  return p;
+}
+
+// dp/du at u (x, y, z).
+Vec3f bezierDerivativeAt(const std::array<Point4, 4>& q, float u) {
+  const float s = 1 - u;
+  const float b[4] = {-3 * s * s, 3 * s * s - 6 * s * u, 6 * s * u - 3 * u * u, 3 * u * u};
+  Vec3f d;
+  for (int k = 0; k < 4; ++k) d = d + Vec3f(q[k][0], q[k][1], q[k][2]) * b[k];
+  return d;
+}
+
+// The quad a, b, c, d (a to b along the curve, a to d across) against the
+// ray from the origin along +z, as two triangles split by b-d; Embree's
+// test, which accepts the quad seen from one side only: false, or its t and
+// (u, v) across the quad.
+bool crossQuad(Vec3f a, Vec3f b, Vec3f c, Vec3f d, float tnear, float tfar, float& t, float& u,
+               float& v) {
+  const auto crossZ = [](Vec3f p, Vec3f q) { return p.x * q.y - p.y * q.x; };
+  const float ww = crossZ(d, b - d);
+  const bool first = ww <= 0;
+  const Vec3f v0 = first ? a : c, v1 = first ? b : d, v2 = first ? d : b;
+  const Vec3f e0 = v2 - v0, e1 = v0 - v1;
+  const float uu = crossZ(v0, e0), vv = crossZ(v1, e1);
+  if (!(std::max(uu, vv) <= 0)) return false;
+  const Vec3f ng = cross(e1, e0);
+  const float den = ng.z;
+  if (den == 0) return false;
+  t = dot(v0, ng) / den;
+  if (!(tnear <= t && t <= tfar)) return false;
+  u = uu / den;
+  v = vv / den;
+  if (!first) {
+    u = 1 - u;
+    v = 1 - v;
+  }
+  return true;
+}
+
+// Embree's self-intersection avoidance for flat curves (its build's
+// EMBREE_CURVE_SELF_INTERSECTION_AVOIDANCE_FACTOR, 2 in Debian's): a crossing
+// nearer the ray's origin than this many radii is not one.
+constexpr float kSelfAvoidance = 2.0f;
+
+}  // namespace
+
+// Embree's rule for its flat Bézier curves: in the ray's space (z along the
+// ray, in units of t), the curve is cut into kTessellation straight pieces;
+// each is a quad its radius wide on either side, across the piece's ends'
+// tangents as the ray sees them; the nearest quad crossed wins.
+bool Curves::crossFlat(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
+                       float& t, Vec2f& uv) const {
+  const float dd = dot(direction, direction);
+  if (!(dd > 0)) return false;
+  const float depthScale = 1 / std::sqrt(dd);
+  const Vec3f n = direction * depthScale;
+  const Vec3f dx0(0, n.z, -n.y), dx1(-n.z, 0, n.x);
+  const Vec3f dx = normalize(dot(dx0, dx0) > dot(dx1, dx1) ? dx0 : dx1);
+  const Vec3f dy = normalize(cross(n, dx));
+  const Vec3f dz = n * depthScale;
+  std::array<Point4, 4> q;
+  float largest = 0;
+  for (int k = 0; k < 4; ++k) {
+    const Vec4f& p = points_[4 * size_t(primitive) + size_t(k)];
+    const Vec3f r = p.xyz() - origin;
+    q[k] = {dot(r, dx), dot(r, dy), dot(r, dz), p.w};
+    for (float c : q[k]) largest = std::max(largest, std::abs(c));
+  }
+  const float eps = 4 * std::numeric_limits<float>::epsilon() * largest;
+  const auto tangent = [&](float u, const Point4& p0, const Point4& p1) {
+    Vec3f d = bezierDerivativeAt(q, u);
+    if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) < eps)
+      d = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    return normalize(Vec3f(d.y, -d.x, 0));
+  };
+  bool found = false;
+  float bestT = kInfinity, bestU = 0, bestV = 0;
+  constexpr float kStep = 1.0f / kTessellation;
+  for (int i = 0; i < kTessellation; ++i) {
+    const float u0 = float(i) * kStep, u1 = float(i + 1) * kStep;
+    const Point4 p0 = bezierAt(q, u0), p1 = bezierAt(q, u1);
+    // Cull: the ray must pass within the larger radius of the piece's line.
+    const float ax = p1[0] - p0[0], ay = p1[1] - p0[1];
+    const float num = ax * p0[1] - ay * p0[0];
+    const float r = std::max(p0[3], p1[3]);
+    if (!(num * num <= r * r * (ax * ax + ay * ay))) continue;
+    const Vec3f n0 = tangent(u0, p0, p1), n1 = tangent(u1, p0, p1);
+    const Vec3f c0(p0[0], p0[1], p0[2]), c1(p1[0], p1[1], p1[2]);
+    float ti, ui, vi;
+    if (!crossQuad(c0 + n0 * p0[3], c1 + n1 * p1[3], c1 - n1 * p1[3], c0 - n0 * p0[3], tnear, tfar,
+                   ti, ui, vi))
+      continue;
+    const float radius = p0[3] + (p1[3] - p0[3]) * ui;
+    if (!(ti > kSelfAvoidance * radius * depthScale)) continue;
+    if (found && !(ti < bestT)) continue;
+    found = true;
+    bestT = ti;
+    bestU = (float(i) + ui) * kStep;
+    bestV = 2 * vi - 1;
+  }
+  if (!found || !(bestT > tnear && bestT < tfar)) return false;
+  t = bestT;
+  uv = {bestU, bestV};
+  return true;
 }
 
 bool Curves::crossPiece(uint32_t primitive, uint32_t piece, uint32_t pieces, Vec3f origin,
@@ -324,7 +473,7 @@ bool Curves::crossPiece(uint32_t primitive, uint32_t piece, uint32_t pieces, Vec
   if (!crossing.found) return false;
   t = crossing.z / rayLength;
   if (!(t > tnear && t < tfar)) return false;
-  uv = {lerp(crossing.u, s.u0, s.u1), crossing.v};
+  uv = {crossing.u, 2 * crossing.v - 1};
   return true;
 }
 
@@ -340,27 +489,31 @@ ShapeSurface Curves::surface(uint32_t primitive, Vec2f uv) const {
 ShapeSurface Curves::surface(uint32_t primitive, Vec2f uv, Vec3f direction) const {
   const CurveSegment& s = segments_[primitive];
   const float span = s.u1 - s.u0;
-  const float t = span != 0 ? std::clamp((uv.x - s.u0) / span, 0.0f, 1.0f) : 0.0f;
+  const float t = std::clamp(uv.x, 0.0f, 1.0f);
+  const float across = std::clamp(0.5f * (uv.y + 1), 0.0f, 1.0f);  // 0 to 1
   Vec3f derivative;
   const Vec3f p = evaluate(s.points, t, derivative);
   const Vec3f dpdu = span != 0 ? derivative * (1 / span) : derivative;
   const float width = lerp(t, s.width0, s.width1);
   const float dirLength = length(direction);
   const Vec3f d = dirLength > 0 ? direction * (1 / dirLength) : Frame(normalize(dpdu)).s;
-  Vec3f across, dpdv;
+  Vec3f side, dpdv;
   if (type_ == CurveType::Ribbon) {
     const Vec3f n = slerpNormal(normals_[primitive], t);
-    across = normalize(cross(n, dpdu));
-    dpdv = across * (width * std::abs(dot(n, d)));
+    side = normalize(cross(n, dpdu));
+    dpdv = side * (width * std::abs(dot(n, d)));
+    // v runs across the ribbon as the ray sees it (as for flat curves): the
+    // side that looks like cross(d, dp/du).
+    if (dot(side, cross(d, dpdu)) < 0) side = -side;
   } else {
     // Facing the ray: across the ray and the tangent.
-    across = cross(d, dpdu);
-    const float len = length(across);
-    across = len > 0 ? across * (1 / len) : Frame(d).s;
-    dpdv = across * width;
+    side = cross(d, dpdu);
+    const float len = length(side);
+    side = len > 0 ? side * (1 / len) : Frame(d).s;
+    dpdv = side * width;
     if (type_ == CurveType::Cylinder) {
       // Turned about the tangent, -90 to 90 degrees across the width: shaded as a tube.
-      const float theta = lerp(uv.y, -0.5f * kPi, 0.5f * kPi);
+      const float theta = lerp(across, -0.5f * kPi, 0.5f * kPi);
       dpdv = Affine3f::rotate(dpdu, -theta).transformVector(dpdv);
     }
   }
@@ -368,10 +521,10 @@ ShapeSurface Curves::surface(uint32_t primitive, Vec2f uv, Vec3f direction) cons
   const float len = length(n);
   n = len > 0 && std::isfinite(len) ? n * (1 / len) : -d;
   ShapeSurface out;
-  out.position = p + across * ((uv.y - 0.5f) * width);
+  out.position = p + side * ((across - 0.5f) * width);
   out.geometricNormal = n;
   out.shadingNormal = n;
-  out.uv = uv;
+  out.uv = {lerp(t, s.u0, s.u1), across};
   out.tangent = dpdu;
   out.originOffset = 2 * width;
   return out;

@@ -1,10 +1,13 @@
 // Curves (pbrt's "curve" shape; fur, hair, grass): cubic Bézier segments
-// with a width at each end, intersected as pbrt defines them. A `flat`
-// segment is a ribbon that always faces the ray; a `cylinder` segment is the
-// same ribbon shaded as a tube (its normal turned about the tangent across
-// the width); a `ribbon` segment is oriented by a normal at each end. The
-// hit's (u, v): u along the whole curve (pbrt's u), v across the width, 0 to
-// 1; surface() gives the tangent dp/du for hair shading.
+// with a width at each end. A `flat` segment is a ribbon that always faces
+// the ray; a `cylinder` segment is the same ribbon shaded as a tube (its
+// normal turned about the tangent across the width); a `ribbon` segment is
+// oriented by a normal at each end. Flat and cylinder segments are Embree's
+// flat Bézier curves, crossed by Embree's rule (each cut into kTessellation
+// straight pieces facing the ray) in both backends; ribbons are crossed by
+// pbrt's recursive test. A hit's (u, v): u along the segment, v across the
+// width from -1 to 1 (Embree's); surface() gives pbrt's (u along the whole
+// curve, v from 0 to 1) and the tangent dp/du for hair shading.
 #pragma once
 
 #include <array>
@@ -55,10 +58,17 @@ class Curves final : public Shape {
                  float& t, Vec2f& uv) const override;
   ShapeSurface surface(uint32_t primitive, Vec2f uv) const override;
   ShapeSurface surface(uint32_t primitive, Vec2f uv, Vec3f direction) const override;
-  // Each segment is bounded for traversal in kTraversalPieces pieces along
-  // its length (fewer when there are too many segments to number them).
+  FlatCurves flatCurves() const override;
+  // The straight pieces Embree cuts a flat or cylinder segment into (its
+  // tessellation rate).
+  static constexpr int kTessellation = 4;
+  // A ribbon segment is bounded for traversal in kTraversalPieces pieces
+  // along its length (fewer when there are too many segments to number
+  // them); Embree bounds the others itself.
   static constexpr uint32_t kTraversalPieces = 3;
-  static uint32_t traversalPiecesFor(uint64_t segments);
+  static uint32_t traversalPiecesFor(CurveType type, uint64_t segments);
+  // Bytes a segment of the type holds (bytes() over the segment count).
+  static uint64_t bytesPerSegment(CurveType type);
   uint32_t piecesPerPrimitive() const override { return pieces_; }
   Box3f pieceBounds(uint32_t primitive, uint32_t piece) const override;
   bool intersectPiece(uint32_t primitive, uint32_t piece, Vec3f origin, Vec3f direction,
@@ -77,10 +87,18 @@ class Curves final : public Shape {
   bool crossPiece(uint32_t primitive, uint32_t piece, uint32_t pieces, Vec3f origin,
                   Vec3f direction, float tnear, float tfar, float& t, Vec2f& uv) const;
 
+  // Embree's rule for a flat segment (its control points in points_).
+  bool crossFlat(uint32_t primitive, Vec3f origin, Vec3f direction, float tnear, float tfar,
+                 float& t, Vec2f& uv) const;
+
   CurveType type_;
   uint32_t pieces_ = 1;
   std::vector<CurveSegment> segments_;
   std::vector<CurveNormals> normals_;
+  // Flat and cylinder segments as Embree takes them: 4 control points each
+  // (x, y, z, radius), and the index of each segment's first.
+  std::vector<Vec4f> points_;
+  std::vector<uint32_t> first_;
 };
 
 }  // namespace ferry

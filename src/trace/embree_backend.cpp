@@ -527,6 +527,22 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
   for (size_t k = 0; k < object.geometries.size(); ++k) {
     const Shape* shape = scene_.geometries[object.geometries[k]].shape.get();
     if (!shape || shape->primitiveCount() == 0) continue;
+    if (const Shape::FlatCurves curves = shape->flatCurves(); !curves.points.empty()) {
+      // Embree's own flat curves: its hit (u along the segment, v across
+      // from -1 to 1) is the shape's.
+      RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE);
+      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                                 const_cast<Vec4f*>(curves.points.data()), 0, sizeof(Vec4f),
+                                 curves.points.size());
+      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT,
+                                 const_cast<uint32_t*>(curves.first.data()), 0, sizeof(uint32_t),
+                                 curves.first.size());
+      rtcSetGeometryTessellationRate(g, float(curves.tessellation));
+      rtcCommitGeometry(g);
+      rtcAttachGeometryByID(target, g, idForSlot(int32_t(object.meshes.size() + k)));
+      rtcReleaseGeometry(g);
+      continue;
+    }
     RTCGeometry g = rtcNewGeometry(embree_.device, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, shape->primitiveCount() * shape->piecesPerPrimitive());
     // Embree only passes the pointer back to the callbacks, which read it as const.
