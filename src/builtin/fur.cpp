@@ -84,6 +84,7 @@ ScenePlan planFur(uint64_t strands, uint32_t seed) {
   fur.primitives = n * kFurSegmentsPerStrand;
   fur.piecesPerPrimitive = Curves::traversalPiecesFor(CurveType::Flat, fur.primitives);
   fur.bytes = fur.primitives * Curves::bytesPerSegment(CurveType::Flat);
+  fur.accelBytesPerBox = MemoryModel::kAccelBytesPerFlatCurve;
   fur.build = [=] {
     std::vector<CurveSegment> segments(n * kFurSegmentsPerStrand);
     for (uint64_t i = 0; i < n; ++i) {

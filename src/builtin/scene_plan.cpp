@@ -129,7 +129,7 @@ SceneSummary describePlan(const ScenePlan& plan) {
     s.shapePrimitives += r.primitives;
     ++s.shapeKinds[r.kind].geometries;
     s.shapeKinds[r.kind].primitives += r.primitives;
-    s.memory += shapeCost(r.primitives * r.piecesPerPrimitive, r.bytes);
+    s.memory += shapeCost(r.primitives * r.piecesPerPrimitive, r.bytes, r.accelBytesPerBox);
   }
   s.memory += instanceCost(s.instances);
   s.textures = plan.textures.size();

@@ -53,6 +53,7 @@ struct ShapeRecipe {
   uint64_t primitives = 0;
   uint32_t piecesPerPrimitive = 1;  // Shape::piecesPerPrimitive() of what build makes
   uint64_t bytes = 0;
+  double accelBytesPerBox = MemoryModel::kAccelBytesPerShapeBox;  // see geometryCost
   std::function<std::shared_ptr<const Shape>()> build;
 };
 

@@ -78,16 +78,17 @@ MemoryCost instanceCost(uint64_t instanceCount) {
 
 MemoryCost geometryCost(const Geometry& geometry) {
   if (!geometry.shape) return {};
-  return shapeCost(
-      uint64_t(geometry.shape->primitiveCount()) * geometry.shape->piecesPerPrimitive(),
-      geometry.shape->bytes());
+  const Shape& shape = *geometry.shape;
+  if (!shape.flatCurves().points.empty())
+    return shapeCost(shape.primitiveCount(), shape.bytes(), MemoryModel::kAccelBytesPerFlatCurve);
+  return shapeCost(uint64_t(shape.primitiveCount()) * shape.piecesPerPrimitive(), shape.bytes());
 }
 
-MemoryCost shapeCost(uint64_t boxes, uint64_t bytes) {
+MemoryCost shapeCost(uint64_t boxes, uint64_t bytes, double accelBytesPerBox) {
   MemoryCost c;
   c.shapes = bytes;
-  c.accel = static_cast<uint64_t>(double(boxes) * MemoryModel::kAccelBytesPerShapeBox +
-                                  MemoryModel::kAccelBytesPerMesh);
+  c.accel =
+      static_cast<uint64_t>(double(boxes) * accelBytesPerBox + MemoryModel::kAccelBytesPerMesh);
   return c;
 }
 

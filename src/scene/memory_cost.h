@@ -47,6 +47,9 @@ struct MemoryModel {
   // BVH nodes and leaf references per box of a user geometry (a shape's
   // piece; builtin:fur measured).
   static constexpr double kAccelBytesPerShapeBox = 84.0;
+  // Embree's BVH per flat curve segment it traces as its own (oriented
+  // boxes; builtin:fur measured, 119.7).
+  static constexpr double kAccelBytesPerFlatCurve = 120.0;
   // Fixed BVH bytes per mesh: Embree allocates in blocks, so even a
   // two-triangle mesh retains about one block. Matters only for scenes of many
   // small meshes.
@@ -70,7 +73,10 @@ MemoryCost instanceCost(uint64_t instanceCount);
 // released one costs nothing.
 MemoryCost geometryCost(const Geometry& geometry);
 // A geometry of `boxes` traversal boxes whose shape holds `bytes` (with its BVH).
-MemoryCost shapeCost(uint64_t boxes, uint64_t bytes);
+// `boxes` what Embree bounds (user geometry pieces, or flat curve segments
+// at kAccelBytesPerFlatCurve a box).
+MemoryCost shapeCost(uint64_t boxes, uint64_t bytes,
+                     double accelBytesPerBox = MemoryModel::kAccelBytesPerShapeBox);
 // The scene's media and medium boundaries (the boundaries' triangles as a
 // mesh's, with their BVH).
 struct Scene;
