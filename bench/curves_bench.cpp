@@ -16,6 +16,7 @@
 //   build/bench/curves_bench                       (100 000 strands, 3 repetitions)
 //   STRANDS=1000000 build/bench/curves_bench
 //   MAX_BYTES_RATIO=2 build/bench/curves_bench     (exit 1 above that curves/embree bytes)
+//   MIN_RAYS_RATIO=0.5 build/bench/curves_bench    (exit 1 below that curves/triangles rays/s)
 #include <benchmark/benchmark.h>
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
@@ -214,6 +215,8 @@ class Ratios : public benchmark::ConsoleReporter {
     ConsoleReporter::Finalize();
     if (bytes_.count("Curves") && bytes_.count("EmbreeCurves"))
       bytesRatio = bytes_["Curves"] / bytes_["EmbreeCurves"];
+    if (rate_.count("Curves") && rate_.count("Triangles"))
+      raysRatio = rate_["Curves"] / rate_["Triangles"];
     if (rate_.count("Curves") && rate_.count("Triangles") && rate_.count("EmbreeCurves"))
       std::printf(
           "curves/triangles rays/s %.3f  curves/embree-curves rays/s %.3f  "
@@ -225,6 +228,7 @@ class Ratios : public benchmark::ConsoleReporter {
   }
 
   double bytesRatio = 0;  // Ferry's bytes per segment over Embree's curves' (0: not run)
+  double raysRatio = 0;   // Ferry's curves' rays/s over the triangles' (0: not run)
 
  private:
   std::map<std::string, double> rate_, bytes_;
@@ -246,6 +250,15 @@ int main(int argc, char** argv) {
       return 1;
     }
     std::printf("bytes gate: %.2fx Embree's curves, at most %s\n", reporter.bytesRatio, limit);
+  }
+  // The speed gate (one run, side by side): issue 71's 0.5x the triangles' rays/s.
+  if (const char* limit = std::getenv("MIN_RAYS_RATIO"); limit && reporter.raysRatio > 0) {
+    if (reporter.raysRatio < std::atof(limit)) {
+      std::printf("FAIL: curves trace %.2fx the triangles' rays/s (gate %s)\n", reporter.raysRatio,
+                  limit);
+      return 1;
+    }
+    std::printf("rays gate: %.2fx the triangles' rays/s, at least %s\n", reporter.raysRatio, limit);
   }
   return 0;
 }

@@ -52,8 +52,9 @@ bench instanced_shapes 'instanced_shapes.csv' env SCENES="$tiny" RANKS=2 ROUNDS=
 bench memory_bandwidth 'memory_bandwidth.csv' env SCENES=island SCALE=0.05 RANKS=2 CAPS=2 \
   OUT="$work/bandwidth" bash bench/memory_bandwidth.sh "$ferry"
 bench trace_ceiling_bench 'render/trace-stream' "$(dirname "$ferry")/bench/trace_ceiling_bench" --benchmark_min_time=0.01
-bench curves_bench 'bytes gate' env STRANDS=2000 MAX_BYTES_RATIO=2 "$(dirname "$ferry")/bench/curves_bench" \
-  --benchmark_min_time=0.01
+bench curves_bench 'rays gate' env STRANDS=20000 MAX_BYTES_RATIO=2 MIN_RAYS_RATIO=0.5 \
+  "$(dirname "$ferry")/bench/curves_bench" --benchmark_min_time=0.05 --benchmark_repetitions=3 \
+  --benchmark_enable_random_interleaving=true
 bench distribution_profile 'the 1-rank CPU time per frame' env SCENE="$tiny" SIZE=48x32 RANKS=2 \
   FRAMES=2 bash bench/distribution_profile.sh "$ferry"
 if command -v pathtracer > /dev/null; then
