@@ -40,6 +40,8 @@ bench() {
 tiny="builtin:island?scale=0.05"
 bench distribution_cost 'memory per rank' env SCENE="$tiny" SIZE=48x32 RANKS="1 2" FRAMES=1 ROUNDS=1 \
   EXCHANGES=overlapped bash bench/distribution_cost.sh "$ferry"
+bench stage_times 'stage seconds' env SCENE="$tiny" SIZE=96x54 RANKS="1 2" FRAMES=2 TOLERANCE=0.25 \
+  bash bench/stage_times.sh "$ferry"
 bench viewer_fps 'frames/s' env SCENE="$tiny" SIZE=48x32 RANKS=1 SECONDS_EACH=2 \
   CHANGES=1 bash bench/viewer_fps.sh "$ferry"
 bench viewer_restyle 'restyle .* to its first frame' env SIZE=256 RANKS=2 IMAGE=48x32 CHANGES=1 \

@@ -173,15 +173,26 @@ class DistributedTraversal<Path>::OverlappedSample {
 
   // The first work there is here, deepest bounce first: shade ready rays,
   // else trace rays, else start camera paths. False when there is none.
+  // A step's whole time is in the stage times: what its parts do not time
+  // themselves (moving rays between queues, growing them) counts to the
+  // step's stage (shade; exchange; generate).
   bool doNextWork() {
-    if (auto b = deepest([](const BounceRays<Path>& r) { return r.ready.size() > 0; }))
+    const auto start = Clock::now();
+    const double timed = stats_.times.total();
+    double StageTimes::*stage = nullptr;
+    if (auto b = deepest([](const BounceRays<Path>& r) { return r.ready.size() > 0; })) {
       shadeReady(*b);
-    else if (auto t = deepest([](const BounceRays<Path>& r) { return r.hasTraceWork(); }))
+      stage = &StageTimes::shade;
+    } else if (auto t = deepest([](const BounceRays<Path>& r) { return r.hasTraceWork(); })) {
       traceBatch(*t);
-    else if (nextPixel_ < mine_.size())
+      stage = &StageTimes::exchange;
+    } else if (nextPixel_ < mine_.size()) {
       startCameraPaths();
-    else
+      stage = &StageTimes::generate;
+    } else {
       return false;
+    }
+    stats_.times.*stage += std::max(0.0, secondsSince(start) - (stats_.times.total() - timed));
     return true;
   }
 

@@ -47,8 +47,8 @@ struct ExchangeCounters {
 // Seconds per stage: summed over ranks when merged; on one rank the chunks
 // run in parallel, so there they are summed over threads too.
 struct StageTimes {
-  double generate = 0;   // camera rays, and their owners' proxy queries
-                         // (the owners' collectives: wait, then exchange)
+  double generate = 0;   // the frame's set-up (its frame buffer), camera rays, and their
+                         // owners' proxy queries (the owners' collectives: wait, then exchange)
   double trace = 0;      // local traces inside traversal
   double exchange = 0;   // forwarding decisions, compaction, MPI
   double shade = 0;      // shadow-ray contributions, re-trace, BSDF and light sampling, spawning

@@ -98,6 +98,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   if (shading_.lightPaths()) frameBuffer.setAtomicAdds(true);
   frameBuffer.setSampleClamp(settings_.sampleClamp);
   frameBuffer.setAovs(settings_.aovs);
+  stats.times.generate += secondsSince(frameStart);  // (the frame buffer, sized at the first)
   const uint32_t spp = uint32_t(settings_.samplesPerPixel), groups = settings_.dataGroups;
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);

@@ -70,10 +70,14 @@ struct RenderSession::Rank {
     setup.*field = std::chrono::duration<double>(now - lapStart).count();
     lapStart = now;
   }
-  // Called just before the first frame's camera rays: ends the set-up.
-  void reachFirstPixel() {
-    lap(&SetupTimes::renderer);
+  // Called just before the first frame's camera rays: ends the set-up, once
+  // every rank is there (so that a frame's time is the same span on every
+  // rank, and its stage times add up to it).
+  void reachFirstPixel(const Communicator& comm) {
     if (firstPixel) return;
+    lap(&SetupTimes::renderer);
+    comm.barrier();
+    lap(&SetupTimes::ready);
     setup.firstPixel = std::chrono::duration<double>(lapStart - processStart()).count();
     firstPixel = true;
   }
@@ -720,7 +724,7 @@ void RenderSession::renderFrames(FramePolicy& policy, const RenderSettings& rend
   policy.start(frames);
   while (policy.next(frames)) {
     const uint32_t pixels = frames.pixels(), slices = policy.slices(frames);
-    rank.reachFirstPixel();
+    rank.reachFirstPixel(comm_);
     const auto start = Clock::now();
     FrameStats mine;
     bool abandon = false;

@@ -62,6 +62,7 @@ struct SetupTimes {
                           // rank waiting for the slowest), the image sink, a checkpoint read
   double proxies = 0;     // the traversal: on many ranks the proxy BVH and owner masks
   double renderer = 0;    // the renderer (camera, light tables) and the frame buffer
+  double ready = 0;       // waiting for the slowest rank, so that the first frame starts together
   double firstPixel = 0;  // all of the above: process start to the first camera ray
 };
 inline constexpr StatsField<SetupTimes, double> kSetupTimes[] = {
@@ -73,6 +74,7 @@ inline constexpr StatsField<SetupTimes, double> kSetupTimes[] = {
     {nullptr, "agree", &SetupTimes::agree},
     {nullptr, "proxies", &SetupTimes::proxies},
     {nullptr, "renderer", &SetupTimes::renderer},
+    {nullptr, "ready", &SetupTimes::ready},
     {nullptr, "first_pixel", &SetupTimes::firstPixel},
 };
 
