@@ -223,7 +223,16 @@ EOF
       [ "$spp" = "$REFERENCE_SPP" ] ||
         pathtracer "${dim[@]}" --spp "$spp" --benchmark 1 2 > "$work/embree-$spp.txt" 2>&1
     done
-    /usr/bin/python3 - "$work" "$scene" "$REFERENCE_SPP" "$samplers" $ERROR_SPP <<'EOF'
+    # The same scene? Both converged with direct light only (depth 1), where
+    # Embree's tutorial counts each light once: beyond it, a ray that leaves
+    # the scene adds the ambient light again after the vertex's light sample
+    # took it (no MIS), so its image is brighter by the sky's share.
+    direct=("${embree_args[@]}")
+    direct[1]="$work/$scene-dim.obj"
+    "$ferry" render "$work/$scene-dim.obj" --size "$SIZE" --spp "$REFERENCE_SPP" --max-depth 1 --seed 7 \
+      "${ferry_extra[@]}" "${thread_args[@]}" -q -o "$work/ferry-direct.pfm"
+    pathtracer "${direct[@]}" --spp "$REFERENCE_SPP" --max-path-length 1 -o "$work/embree-direct.pfm" > /dev/null 2>&1
+    DEPTH=$DEPTH /usr/bin/python3 - "$work" "$scene" "$REFERENCE_SPP" "$samplers" $ERROR_SPP <<'EOF'
 import json, os, statistics, sys
 import numpy as np
 work, scene, ref_spp, samplers, spps = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4].split(), sys.argv[5:]
@@ -265,6 +274,12 @@ for sampler in samplers:
           f"(< 1: Ferry first)")
 print(f"{scene:8} equal error: the converged images differ by {rmse(refs['ferry'], refs['embree']):.4f} "
       f"(relative RMSE, {ref_spp} spp each)")
+for name, ferry, embree in (("depth 1 (direct light)", pfm(f"{work}/ferry-direct.pfm"),
+                             pfm(f"{work}/embree-direct.pfm")),
+                            (f"depth {os.environ['DEPTH']}", refs["ferry"], refs["embree"])):
+    ratio = ferry.mean(axis=(0, 1)) / embree.mean(axis=(0, 1)) - 1
+    print(f"{scene:8} same scene: converged at {name}, Ferry / Embree - 1 per channel "
+          + " / ".join(f"{100 * r:+.2f} %" for r in ratio))
 gate = os.environ.get("MAX_ERROR_TIME")
 time_sobol = (statistics.median(constants["sobol"]) / ce) ** 2
 if gate and scene in os.environ["ERROR_GATE_SCENES"].split() and time_sobol > float(gate):
