@@ -60,7 +60,7 @@ bench curves_bench 'rays gate' env STRANDS=20000 MAX_BYTES_RATIO=2 MIN_RAYS_RATI
 bench distribution_profile 'the 1-rank CPU time per frame' env SCENE="$tiny" SIZE=48x32 RANKS=2 \
   FRAMES=2 bash bench/distribution_profile.sh "$ferry"
 if command -v pathtracer > /dev/null; then
-  bench pathtracer_vs_embree 'Ferry/Embree paths/s' env SIZE=32x32 SPP=1 FRAMES=1 WARMUP=0 ROUNDS=1 \
+  bench pathtracer_vs_embree 'same scene: converged at depth 1' env SIZE=32x32 SPP=1 FRAMES=1 WARMUP=0 ROUNDS=1 \
     ERROR_SPP=1 REFERENCE_SPP=2 bash bench/pathtracer_vs_embree.sh "$ferry"
 else
   echo "FAIL: pathtracer_vs_embree: Embree's tutorial (embree-tools) is missing"
