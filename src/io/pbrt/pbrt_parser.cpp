@@ -425,19 +425,11 @@ class Parser {
 
   bool moving() const { return !sameTransform(state_.ctm, state_.ctmEnd); }
 
-  // The motion of what is placed now (null: it does not move). Motion of a
-  // mesh inside an object definition is a moving part (addMesh); a curve's
-  // keeps its start transform, with one warning.
+  // The motion of what is placed now at the top level (null: it does not
+  // move). Motion inside an object definition makes a moving part instead
+  // (addMesh, flushCurves).
   std::shared_ptr<const InstanceMotion> placedMotion(const SourceLocation& where) {
-    if (!moving()) return nullptr;
-    if (currentObject_) {
-      warnings_.once("object motion",
-                     fmt::format("a moving transform inside ObjectBegin is not supported "
-                                 "for curves: their start transform is used "
-                                 "(first at {}); move the ObjectInstance instead",
-                                 where.toString()));
-      return nullptr;
-    }
+    if (!moving() || currentObject_) return nullptr;
     if (!lastMotion_ || !sameTransform(lastMotionFrom_, state_.ctm) ||
         !sameTransform(lastMotionTo_, state_.ctmEnd)) {
       const float det = state_.ctmEnd.determinant();
@@ -1570,14 +1562,22 @@ class Parser {
     const bool reuse = curveBatch_ && curveBatch_->material == material &&
                        curveBatch_->object == currentObject_.value_or(-1) &&
                        curveBatch_->type == c.type && sameTransform(curveBatch_->ctm, state_.ctm) &&
+                       sameTransform(curveBatch_->ctmEnd, state_.ctmEnd) &&
                        curveBatch_->motion == placedMotion(where) &&
                        curveBatch_->segments.size() < (size_t(1) << 24);
     if (!reuse) {
       flushCurves();
-      curveBatch_ = CurveBatch{
-          material, currentObject_.value_or(-1), c.type, state_.ctm, placedMotion(where), {}, {}};
+      if (currentObject_ && moving()) {
+        const float det = state_.ctmEnd.determinant();
+        if (!std::isfinite(det) || det == 0)
+          fail(where, "the end transform is singular (a zero scale?) or not finite");
+      }
+      curveBatch_ = CurveBatch{material,      currentObject_.value_or(-1), c.type, state_.ctm,
+                               state_.ctmEnd, placedMotion(where),         {},     {}};
     }
-    if (currentObject_ && !sameTransform(state_.ctm, Affine3f::identity())) {
+    // In an object, a still transform is baked; a moving one makes the
+    // curves a part of their own in their own space (flushCurves).
+    if (currentObject_ && !moving() && !sameTransform(state_.ctm, Affine3f::identity())) {
       // In an object, the transform is baked: points and normals moved,
       // widths scaled by the transform's mean scale.
       const float scale = std::cbrt(std::abs(state_.ctm.determinant()));
@@ -1607,8 +1607,20 @@ class Parser {
         std::make_shared<Curves>(batch.type, std::move(batch.segments), std::move(batch.normals));
     scene_.geometries.push_back(std::move(g));
     const auto index = int32_t(scene_.geometries.size() - 1);
-    if (batch.object >= 0) {
+    const bool movingPart = batch.object >= 0 && !sameTransform(batch.ctm, batch.ctmEnd);
+    if (batch.object >= 0 && !movingPart) {
       scene_.objects[size_t(batch.object)].geometries.push_back(index);
+      return;
+    }
+    if (movingPart) {
+      // Moving inside ObjectBegin: an object of its own, which each instance
+      // of the definition places moving (objectInstance).
+      Object part;
+      part.name = "curves";
+      part.geometries.push_back(index);
+      scene_.objects.push_back(std::move(part));
+      movingParts_[batch.object].push_back(
+          {int32_t(scene_.objects.size() - 1), batch.ctm, batch.ctmEnd});
       return;
     }
     Object o;
@@ -2092,7 +2104,7 @@ class Parser {
   struct CurveBatch {
     int32_t material, object;
     CurveType type;
-    Affine3f ctm;
+    Affine3f ctm, ctmEnd;
     std::shared_ptr<const InstanceMotion> motion;
     std::vector<CurveSegment> segments;
     std::vector<CurveNormals> normals;

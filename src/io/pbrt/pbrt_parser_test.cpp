@@ -903,6 +903,40 @@ TEST(PbrtParser, ObjectsOfManyCurvesShareOneGeometry) {
   EXPECT_EQ(s.instances.size(), 2u);
 }
 
+// pbrt-v3: curves moving inside ObjectBegin are a part of their own, which
+// each instance places moving by the part's motion, then its own.
+TEST(PbrtParser, CurvesMovingInsideAnObjectMoveWithEachInstance) {
+  const std::string text =
+      "WorldBegin\nObjectBegin \"tuft\"\n"
+      "Shape \"curve\" \"point3 P\" [0 0 0 0 1 0 0 2 0 0 3 0] \"float width\" 0.1\n"
+      "ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n"
+      "Shape \"curve\" \"point3 P\" [0 0 0 0 1 0 0 2 0 0 3 0] \"float width\" 0.1\n"
+      "ObjectEnd\n"
+      "ObjectInstance \"tuft\"\nTranslate 0 0 5\nScale 2 2 2\nObjectInstance \"tuft\"\n";
+  std::vector<std::string> warnings;
+  Scene s = fromText(text, &warnings);
+  for (const std::string& w : warnings)
+    EXPECT_EQ(w.find("start transform"), std::string::npos) << w;
+  int moving = 0, still = 0;
+  for (const Instance& instance : s.instances) {
+    const Object& o = s.objects[size_t(instance.object)];
+    ASSERT_EQ(o.geometries.size(), 1u);
+    if (!instance.motion) {
+      ++still;
+      continue;
+    }
+    ++moving;
+    // The curve's first control point (the origin) at the start and end of the shutter.
+    const Vec3f start = instance.motion->at(0).transformPoint(Vec3f(0)),
+                end = instance.motion->at(1).transformPoint(Vec3f(0));
+    const bool second = start.z > 1;  // under Translate 0 0 5, Scale 2
+    EXPECT_NEAR(end.x - start.x, second ? 2.0f : 1.0f, 1e-4f);
+    EXPECT_NEAR(start.z, second ? 5.0f : 0.0f, 1e-4f);
+  }
+  EXPECT_EQ(moving, 2);
+  EXPECT_EQ(still, 2);
+}
+
 TEST(PbrtParser, ExponentialTextureTreesFailInsteadOfHanging) {
   // Each level mixes the level below with itself: 2^30 evaluations per texel.
   std::string text = "WorldBegin\nTexture \"t0\" \"spectrum\" \"checkerboard\"\n";
