@@ -86,6 +86,7 @@ same_on_ranks motion "$motion" "$motion_args"
 same_on_ranks motion-camera "$source_dir/tests/oracle/cases/v3-motion-camera.pbrt" "$motion_args"
 same_on_ranks motion-object "$source_dir/tests/oracle/cases/v3-motion-object.pbrt" "$motion_args"
 same_on_ranks motion-object-v4 "$source_dir/tests/oracle/cases/v4-motion-object.pbrt" "$motion_args"
+same_on_ranks motion-curves-object "$source_dir/tests/oracle/cases/v3-motion-curves-object.pbrt" "$motion_args"
 "$ferry" partition "$motion" --ranks 3 -o "$work/motion-parts" -q 2>/dev/null
 # shellcheck disable=SC2086
 mpirun_n 3 "$ferry" render "$work/motion-parts" $motion_args -q --threads 1 -o "$work/motion.pfm"
