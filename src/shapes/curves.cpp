@@ -392,7 +392,10 @@ bool Curves::crossFlat(uint32_t primitive, Vec3f origin, Vec3f direction, float 
     for (float c : q[k]) largest = std::max(largest, std::abs(c));
   }
   const float eps = 4 * std::numeric_limits<float>::epsilon() * largest;
-  const auto tangent = [&](float u, const Point4& p0, const Point4& p1) {
+  // The unit direction across the curve at u as the ray sees it (its
+  // tangent turned a right angle in the ray's plane); a vanishing tangent
+  // is taken from the piece's chord.
+  const auto across = [&](float u, const Point4& p0, const Point4& p1) {
     Vec3f d = bezierDerivativeAt(q, u);
     if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) < eps)
       d = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
@@ -409,7 +412,7 @@ bool Curves::crossFlat(uint32_t primitive, Vec3f origin, Vec3f direction, float 
     const float num = ax * p0[1] - ay * p0[0];
     const float r = std::max(p0[3], p1[3]);
     if (!(num * num <= r * r * (ax * ax + ay * ay))) continue;
-    const Vec3f n0 = tangent(u0, p0, p1), n1 = tangent(u1, p0, p1);
+    const Vec3f n0 = across(u0, p0, p1), n1 = across(u1, p0, p1);
     const Vec3f c0(p0[0], p0[1], p0[2]), c1(p1[0], p1[1], p1[2]);
     float ti, ui, vi;
     if (!crossQuad(c0 + n0 * p0[3], c1 + n1 * p1[3], c1 - n1 * p1[3], c0 - n0 * p0[3], tnear, tfar,
