@@ -76,7 +76,14 @@ struct RenderSession::Rank {
   void reachFirstPixel(const Communicator& comm) {
     if (firstPixel) return;
     lap(&SetupTimes::renderer);
-    comm.barrier();
+    // A non-blocking sum waited for with naps, not a barrier: Open MPI's
+    // blocking wait spins, and on an oversubscribed machine the ranks still
+    // setting up need the cores.
+    const SumHandle together = comm.startSum({1});
+    std::vector<uint64_t> ranks;
+    for (auto nap = std::chrono::microseconds(10); !comm.sumDone(together, ranks);
+         nap = std::min(nap * 2, std::chrono::microseconds(500)))
+      comm.waitForMessage(nap);
     lap(&SetupTimes::ready);
     setup.firstPixel = std::chrono::duration<double>(lapStart - processStart()).count();
     firstPixel = true;
