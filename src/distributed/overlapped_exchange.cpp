@@ -31,6 +31,7 @@
 
 #include <fmt/format.h>
 
+#include "comm/idle_backoff.h"
 #include "core/clock.h"
 #include "core/error.h"
 #include "core/fault_injection.h"
@@ -54,23 +55,6 @@ struct BounceRays {
   RayQueues<Path> ready;            // traversal ended here: to shade
   std::vector<TraceHit> readyHits;  // per ready.paths entry
   bool hasTraceWork() const { return !made.empty() || !arrived.empty(); }
-};
-
-// How long an idle rank waits for a message before it looks again: short at
-// first (a reply is often on its way), longer while nothing comes, so that
-// ranks outnumbering cores leave them to the ranks that have work.
-class IdleBackoff {
- public:
-  std::chrono::microseconds next() {
-    const auto wait = current_;
-    current_ = std::min(current_ * 2, kLongest);
-    return wait;
-  }
-  void reset() { current_ = kShortest; }
-
- private:
-  static constexpr std::chrono::microseconds kShortest{10}, kLongest{500};
-  std::chrono::microseconds current_ = kShortest;
 };
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <fmt/ranges.h>
 #include <tbb/global_control.h>
 
+#include "comm/idle_backoff.h"
 #include "compositing/compositor.h"
 #include "core/clock.h"
 #include "core/error.h"
@@ -81,9 +82,7 @@ struct RenderSession::Rank {
     // setting up need the cores.
     const SumHandle together = comm.startSum({1});
     std::vector<uint64_t> ranks;
-    for (auto nap = std::chrono::microseconds(10); !comm.sumDone(together, ranks);
-         nap = std::min(nap * 2, std::chrono::microseconds(500)))
-      comm.waitForMessage(nap);
+    for (IdleBackoff backoff; !comm.sumDone(together, ranks);) comm.waitForMessage(backoff.next());
     lap(&SetupTimes::ready);
     setup.firstPixel = std::chrono::duration<double>(lapStart - processStart()).count();
     firstPixel = true;

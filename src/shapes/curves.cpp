@@ -314,27 +314,6 @@ bool Curves::intersectPiece(uint32_t primitive, uint32_t piece, Vec3f origin, Ve
 
 namespace {
 
-using Point4 = std::array<float, 4>;  // x, y, z, radius
-
-// The cubic at u, each of the four coordinates, from Bernstein weights.
-Point4 bezierAt(const std::array<Point4, 4>& q, float u) {
-  const float s = 1 - u;
-  const float b[4] = {s * s * s, 3 * s * s * u, 3 * s * u * u, u * u * u};
-  Point4 p{};
-  for (int c = 0; c < 4; ++c)
-    p[c] = b[0] * q[0][c] + b[1] * q[1][c] + b[2] * q[2][c] + b[3] * q[3][c];
-  return p;
-}
-
-// dp/du at u (x, y, z).
-Vec3f bezierDerivativeAt(const std::array<Point4, 4>& q, float u) {
-  const float s = 1 - u;
-  const float b[4] = {-3 * s * s, 3 * s * s - 6 * s * u, 6 * s * u - 3 * u * u, 3 * u * u};
-  Vec3f d;
-  for (int k = 0; k < 4; ++k) d = d + Vec3f(q[k][0], q[k][1], q[k][2]) * b[k];
-  return d;
-}
-
 // The quad a, b, c, d (a to b along the curve, a to d across) against the
 // ray from the origin along +z, as two triangles split by b-d; Embree's
 // test, which accepts the quad seen from one side only: false, or its t and
@@ -383,22 +362,23 @@ bool Curves::crossFlat(uint32_t primitive, Vec3f origin, Vec3f direction, float 
   const Vec3f dx = normalize(dot(dx0, dx0) > dot(dx1, dx1) ? dx0 : dx1);
   const Vec3f dy = normalize(cross(n, dx));
   const Vec3f dz = n * depthScale;
-  std::array<Point4, 4> q;
+  Points q;
   float largest = 0;
   for (int k = 0; k < 4; ++k) {
     const Vec4f& p = points_[4 * size_t(primitive) + size_t(k)];
     const Vec3f r = p.xyz() - origin;
-    q[k] = {dot(r, dx), dot(r, dy), dot(r, dz), p.w};
-    for (float c : q[k]) largest = std::max(largest, std::abs(c));
+    q[k] = {dot(r, dx), dot(r, dy), dot(r, dz)};
+    largest = std::max({largest, maxComponent(max(q[k], -q[k])), p.w});
   }
   const float eps = 4 * std::numeric_limits<float>::epsilon() * largest;
-  // The unit direction across the curve at u as the ray sees it (its
-  // tangent turned a right angle in the ray's plane); a vanishing tangent
-  // is taken from the piece's chord.
-  const auto across = [&](float u, const Point4& p0, const Point4& p1) {
-    Vec3f d = bezierDerivativeAt(q, u);
-    if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) < eps)
-      d = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+  // The radius is linear along the segment (its control values are the
+  // line's raised to degree 3).
+  const float r0 = points_[4 * size_t(primitive)].w, r3 = points_[4 * size_t(primitive) + 3].w;
+  // The unit direction across the curve as the ray sees it (the tangent
+  // turned a right angle in the ray's plane); a vanishing tangent is taken
+  // from the piece's chord.
+  const auto across = [&](Vec3f d, Vec3f chord) {
+    if (maxComponent(max(d, -d)) < eps) d = chord;
     return normalize(Vec3f(d.y, -d.x, 0));
   };
   bool found = false;
@@ -406,19 +386,19 @@ bool Curves::crossFlat(uint32_t primitive, Vec3f origin, Vec3f direction, float 
   constexpr float kStep = 1.0f / kTessellation;
   for (int i = 0; i < kTessellation; ++i) {
     const float u0 = float(i) * kStep, u1 = float(i + 1) * kStep;
-    const Point4 p0 = bezierAt(q, u0), p1 = bezierAt(q, u1);
+    Vec3f d0, d1;
+    const Vec3f c0 = evaluate(q, u0, d0), c1 = evaluate(q, u1, d1);
+    const float w0 = lerp(u0, r0, r3), w1 = lerp(u1, r0, r3);
     // Cull: the ray must pass within the larger radius of the piece's line.
-    const float ax = p1[0] - p0[0], ay = p1[1] - p0[1];
-    const float num = ax * p0[1] - ay * p0[0];
-    const float r = std::max(p0[3], p1[3]);
+    const float ax = c1.x - c0.x, ay = c1.y - c0.y;
+    const float num = ax * c0.y - ay * c0.x;
+    const float r = std::max(w0, w1);
     if (!(num * num <= r * r * (ax * ax + ay * ay))) continue;
-    const Vec3f n0 = across(u0, p0, p1), n1 = across(u1, p0, p1);
-    const Vec3f c0(p0[0], p0[1], p0[2]), c1(p1[0], p1[1], p1[2]);
+    const Vec3f n0 = across(d0, c1 - c0), n1 = across(d1, c1 - c0);
     float ti, ui, vi;
-    if (!crossQuad(c0 + n0 * p0[3], c1 + n1 * p1[3], c1 - n1 * p1[3], c0 - n0 * p0[3], tnear, tfar,
-                   ti, ui, vi))
+    if (!crossQuad(c0 + n0 * w0, c1 + n1 * w1, c1 - n1 * w1, c0 - n0 * w0, tnear, tfar, ti, ui, vi))
       continue;
-    const float radius = p0[3] + (p1[3] - p0[3]) * ui;
+    const float radius = lerp(ui, w0, w1);
     if (!(ti > kSelfAvoidance * radius * depthScale)) continue;
     if (found && !(ti < bestT)) continue;
     found = true;

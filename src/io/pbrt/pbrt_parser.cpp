@@ -432,9 +432,7 @@ class Parser {
     if (!moving() || currentObject_) return nullptr;
     if (!lastMotion_ || !sameTransform(lastMotionFrom_, state_.ctm) ||
         !sameTransform(lastMotionTo_, state_.ctmEnd)) {
-      const float det = state_.ctmEnd.determinant();
-      if (!std::isfinite(det) || det == 0)
-        fail(where, "the end transform is singular (a zero scale?) or not finite");
+      checkEndInvertible(where);
       lastMotion_ = std::make_shared<const InstanceMotion>(state_.ctm, state_.ctmEnd);
       lastMotionFrom_ = state_.ctm;
       lastMotionTo_ = state_.ctmEnd;
@@ -1128,11 +1126,7 @@ class Parser {
     }
     // Its moving parts, each moved by the part's motion, then the instance's.
     if (auto parts = movingParts_.find(it->second); parts != movingParts_.end()) {
-      if (moving()) {
-        const float det = state_.ctmEnd.determinant();
-        if (!std::isfinite(det) || det == 0)
-          fail(where, "the end transform is singular (a zero scale?) or not finite");
-      }
+      if (moving()) checkEndInvertible(where);
       for (const MovingPart& part : parts->second) {
         scene_.instances.push_back({part.object, state_.ctm * part.start,
                                     std::make_shared<const InstanceMotion>(InstanceMotion::nested(
@@ -1162,6 +1156,12 @@ class Parser {
     for (const MovingPartInstance& m : movingPartInstances_)
       scene_.instances[m.instance].motion = std::make_shared<const InstanceMotion>(
           InstanceMotion::nested(m.start, m.end, m.partStart, m.partEnd, camera));
+  }
+
+  void checkEndInvertible(const SourceLocation& where) {
+    const float det = state_.ctmEnd.determinant();
+    if (!std::isfinite(det) || det == 0)
+      fail(where, "the end transform is singular (a zero scale?) or not finite");
   }
 
   void checkInvertible(const SourceLocation& where) {
@@ -1567,11 +1567,7 @@ class Parser {
                        curveBatch_->segments.size() < (size_t(1) << 24);
     if (!reuse) {
       flushCurves();
-      if (currentObject_ && moving()) {
-        const float det = state_.ctmEnd.determinant();
-        if (!std::isfinite(det) || det == 0)
-          fail(where, "the end transform is singular (a zero scale?) or not finite");
-      }
+      if (currentObject_ && moving()) checkEndInvertible(where);
       curveBatch_ = CurveBatch{material,      currentObject_.value_or(-1), c.type, state_.ctm,
                                state_.ctmEnd, placedMotion(where),         {},     {}};
     }
@@ -1809,9 +1805,7 @@ class Parser {
     if (currentObject_ && moving()) {
       // Motion inside ObjectBegin: the mesh is an object of its own, which
       // each instance of this one places moving (objectInstance).
-      const float det = state_.ctmEnd.determinant();
-      if (!std::isfinite(det) || det == 0)
-        fail(shapeWhere_, "the end transform is singular (a zero scale?) or not finite");
+      checkEndInvertible(shapeWhere_);
       scene_.meshes.push_back(std::move(mesh));
       const int32_t index = int32_t(scene_.meshes.size() - 1);
       Object part;
