@@ -78,6 +78,8 @@ class RayBatch {
       tfar = tmax, mask = 0xffffffffu, id = 0, flags = 0;
       geomID = kNoGeometry, instID = kNoGeometry;
     }
+    // A query Embree skips (tnear > tfar), answered with no hit and not occluded.
+    void setDead() { set({0, 0, 0}, {0, 0, 1}, 1, 0, 0); }
     void hashRay() { id = alphaRayHash({orgX, orgY, orgZ}, {dirX, dirY, dirZ}); }
   };
   EmbreeRay closest_[kCapacity];
@@ -617,10 +619,15 @@ void EmbreeBackend::traceBatch(RayBatch& batch) const {
     for (size_t k = 0; k < batch.closestCount_; ++k) batch.closest_[k].hashRay();
     for (size_t k = 0; k < batch.occludedCount_; ++k) batch.occluded_[k].hashRay();
   }
+  // A lone query gets a dead companion: Embree traces one ray by its
+  // single-ray kernels and more by its packet kernels, whose curve crossings
+  // differ in the last bits, and a hit must not depend on its neighbours.
+  if (batch.closestCount_ == 1) batch.closest_[1].setDead();
+  if (batch.occludedCount_ == 1) batch.occluded_[1].setDead();
   if (batch.closestCount_) {
     TraceContext context(&batch.work_);
     rtcIntersect1M(embree_.top, &context.embree, reinterpret_cast<RTCRayHit*>(batch.closest_),
-                   unsigned(batch.closestCount_), sizeof(RTCRayHit));
+                   unsigned(std::max<size_t>(batch.closestCount_, 2)), sizeof(RTCRayHit));
     if (!topLevelMeshes_.empty())
       for (size_t k = 0; k < batch.closestCount_; ++k)
         nameHit(batch.closest_[k].geomID, batch.closest_[k].instID);
@@ -628,7 +635,7 @@ void EmbreeBackend::traceBatch(RayBatch& batch) const {
   if (batch.occludedCount_) {
     TraceContext context(&batch.work_);
     rtcOccluded1M(embree_.top, &context.embree, reinterpret_cast<RTCRay*>(batch.occluded_),
-                  unsigned(batch.occludedCount_), sizeof(RTCRayHit));
+                  unsigned(std::max<size_t>(batch.occludedCount_, 2)), sizeof(RTCRayHit));
   }
 }
 
