@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Distribution and data groups (docs/data-parallel.md, "Data groups") on the
 # same cores, in one run: frame time against 1 rank (binding off; N ranks
-# get max(1, CORES / N) threads each), rays forwarded per frame and per
+# get max(1, CORES / N) threads each), CPU seconds a frame against 1 rank's
+# (every rank's threads summed: on shared cores the frame ratio cannot fall
+# below it while the 1-rank frame keeps the cores busy), rays forwarded per frame and per
 # camera path, proxy queries per camera path, where the ranks' stage time
 # goes (shares summed over ranks: generate, trace, exchange, shade, wait)
 # and the largest rank's estimated memory. NxG is N ranks in G groups: NxN
@@ -64,13 +66,16 @@ def load(b, c):
     return [json.load(open(f"{work}/{b}.{c}.{r}.json")) for r in range(1, rounds + 1)]
 def frame(runs):
     return statistics.median(f["seconds"] for s in runs for f in s["render"]["frames"])
+def cpu(runs):  # CPU seconds a frame, every rank's threads summed
+    return statistics.median(f["cpu_seconds"] for s in runs for f in s["render"]["frames"])
 base = frame(load("this", "1x1"))
+base_cpu = cpu(load("this", "1x1"))
 stages = ["generate", "trace", "exchange", "shade", "wait"]
-print("\n| ranks | groups | ranks a group | frame (s) | x 1 rank |"
+print("\n| ranks | groups | ranks a group | frame (s) | x 1 rank | CPU x 1 rank |"
       + (" x baseline |" if "base" in builds else "")
       + " forwards / frame | forwards / camera path | proxy queries / camera path | "
       + " / ".join(stages) + " (% of stage time) | largest rank (MiB, estimated) |")
-print("|---:|---:|---:|---:|---:|" + ("---:|" if "base" in builds else "") + "---:|---:|---:|---|---:|")
+print("|---:|---:|---:|---:|---:|---:|" + ("---:|" if "base" in builds else "") + "---:|---:|---:|---|---:|")
 for c in configs:
     runs = load("this", c)
     n, g = (int(v) for v in c.split("x"))
@@ -84,7 +89,8 @@ for c in configs:
     shares = " / ".join(f"{100 * seconds[k] / total:.0f}" for k in stages)
     mem = runs[0]["memory"]["max_estimated_bytes"] / 2**20
     versus = f" {frame(runs) / frame(load('base', c)):.2f} |" if "base" in builds else ""
-    print(f"| {n} | {g} | {n // g} | {frame(runs):.3f} | {frame(runs) / base:.2f} |{versus}"
+    print(f"| {n} | {g} | {n // g} | {frame(runs):.3f} | {frame(runs) / base:.2f} |"
+          f" {cpu(runs) / base_cpu:.2f} |{versus}"
           f" {fwd / frames:,.0f} | {fwd / paths:.2f} | {queries / paths:.2f} | {shares} | {mem:.0f} |")
 print("\nevery image equals the 1-rank image")
 PY

@@ -11,8 +11,8 @@
 # the Cornell box's corners) gets whichever the traversal order finds first,
 # and that order depends on how the content is split over ranks.
 # Also: no ray ever visits a rank twice, and rays forwarded (counted by the
-# senders) equal rays received (counted by the receivers). Rank counts 2, 3
-# and 8 here; 4 ranks in replay_test.sh (every forwarding mode, both path layouts).
+# senders) equal rays received (counted by the receivers). Rank counts 2, 3,
+# 5 and 8 here; 4 ranks in replay_test.sh (every forwarding mode, both path layouts).
 set -euo pipefail
 ferry=$1
 source_dir=$2
@@ -24,7 +24,9 @@ run_scene() {
   echo "== $scene"
   "$ferry" render "$scene" $args --seed 3 -q -o "$work/ref.pfm"
   for ranks in 2 3 8; do
-    for forwarding in proxies ring broadcast; do
+    forwardings="proxies ring broadcast"
+    [ "$ranks" = 8 ] && forwardings=proxies  # ring and broadcast visit every rank alike
+    for forwarding in $forwardings; do
       for partition in round-robin random; do
         out="$work/r${ranks}-${forwarding}-${partition}.pfm"
         mpirun_n "$ranks" "$ferry" render "$scene" $args --seed 3 -q --threads 1 \
@@ -39,22 +41,21 @@ run_scene() {
 
 run_scene "builtin:cornell" "--size 40x40 --spp 2 --max-depth 4"
 run_scene "builtin:island?scale=0.05" "--size 48x32 --spp 1 --max-depth 3"
-# same_on_ranks LABEL SCENE ARGS: a pbrt scene on 2 and 3 ranks, both
-# exchanges, the replay layout and a random partition, against its 1-rank
-# image (no tie pixels: every pixel equal). Leaves the 1-rank image in
-# $work/LABEL-ref.pfm.
+# same_on_ranks LABEL SCENE ARGS: a pbrt scene on 2 and 3 ranks (the
+# overlapped exchange on both, the bulk one, the replay layout and a random
+# partition on one each) against its 1-rank image (no tie pixels: every pixel
+# equal). Leaves the 1-rank image in $work/LABEL-ref.pfm.
 same_on_ranks() {
   local label=$1 scene=$2 args=$3
   # shellcheck disable=SC2086
   "$ferry" render "$scene" $args -q -o "$work/$label-ref.pfm" 2>/dev/null
-  for ranks in 2 3; do
-    for variant in "--threads 1" "--exchange bulk --threads 1" "--path-layout replay --threads 1" \
-      "--partition random --threads 1"; do
-      # shellcheck disable=SC2086
-      mpirun_n "$ranks" "$ferry" render "$scene" $args -q $variant -o "$work/$label.pfm" 2>/dev/null
-      echo "$label, ranks $ranks, $variant:"
-      $compare "$work/$label-ref.pfm" "$work/$label.pfm" --rel 0 --abs 0 --outliers 0
-    done
+  for run in "2 --threads 1" "2 --partition random --threads 1" "3 --threads 1" \
+    "3 --exchange bulk --threads 1" "3 --path-layout replay --threads 1"; do
+    local ranks=${run%% *} variant=${run#* }
+    # shellcheck disable=SC2086
+    mpirun_n "$ranks" "$ferry" render "$scene" $args -q $variant -o "$work/$label.pfm" 2>/dev/null
+    echo "$label, ranks $ranks, $variant:"
+    $compare "$work/$label-ref.pfm" "$work/$label.pfm" --rel 0 --abs 0 --outliers 0
   done
 }
 # Subsurface walks (a pbrt scene: two spheres enclosing media): each step of
@@ -99,19 +100,18 @@ $compare "$work/motion-ref.pfm" "$work/motion.pfm" --rel 0 --abs 0 --outliers 0
 island="builtin:island?scale=0.05"
 island_args="--size 48x32 --spp 1 --max-depth 3 --seed 3"
 "$ferry" render "$island" $island_args -q -o "$work/island-ref.pfm"
-for ranks in 3 5; do
-  for variant in "--exchange bulk --threads 1" "--chunk 50 --threads 1" \
-    "--chunk 7 --path-layout replay --threads 1" "--chunk 300 --threads 2" \
-    "--forwarding ring --chunk 100 --threads 1" \
-    "--partition best --max-proxies 24 --threads 1"; do
-    out="$work/variant.pfm"
-    # shellcheck disable=SC2086
-    mpirun_n "$ranks" "$ferry" render "$island" $island_args -q $variant \
-      -o "$out" --stats "$out.json"
-    echo "ranks $ranks, $variant:"
-    $compare "$work/island-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0.002
-    check_stats "$out.json"
-  done
+for run in "3 --exchange bulk --threads 1" "5 --exchange bulk --threads 1" "5 --chunk 50 --threads 1" \
+  "3 --chunk 7 --path-layout replay --threads 1" "5 --chunk 7 --path-layout replay --threads 1" \
+  "3 --chunk 300 --threads 2" "5 --forwarding ring --chunk 100 --threads 1" \
+  "3 --partition best --max-proxies 24 --threads 1"; do
+  ranks=${run%% *} variant=${run#* }
+  out="$work/variant.pfm"
+  # shellcheck disable=SC2086
+  mpirun_n "$ranks" "$ferry" render "$island" $island_args -q $variant \
+    -o "$out" --stats "$out.json"
+  echo "ranks $ranks, $variant:"
+  $compare "$work/island-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0.002
+  check_stats "$out.json"
 done
 # One rank under mpirun equals the plain run, which does not start MPI
 # (mpi/launcher.h).
@@ -153,17 +153,16 @@ cornell_light="--size 40x40 --spp 2 --max-depth 4 --seed 3 --light-paths on"
 "$ferry" render "builtin:cornell" $cornell_light -q -o "$work/light-ref.pfm" --stats "$work/light-ref.json"
 python3 -c "import json,sys; t=json.load(open(sys.argv[1]))['render']['total']; assert t['light_paths'] > 0, t" \
   "$work/light-ref.json"
-for ranks in 3 5; do
-  for variant in "--threads 1" "--exchange bulk --threads 1" "--path-layout replay --chunk 60 --threads 1" \
-    "--partition random --forwarding broadcast --threads 2"; do
-    out="$work/light.pfm"
-    # shellcheck disable=SC2086
-    mpirun_n "$ranks" "$ferry" render "builtin:cornell" $cornell_light -q $variant -o "$out" \
-      --stats "$out.json"
-    echo "light paths, ranks $ranks, $variant:"
-    $compare "$work/light-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0.002
-    check_stats "$out.json"
-  done
+for run in "3 --threads 1" "5 --threads 1" "5 --exchange bulk --threads 1" \
+  "3 --path-layout replay --chunk 60 --threads 1" "3 --partition random --forwarding broadcast --threads 2"; do
+  ranks=${run%% *} variant=${run#* }
+  out="$work/light.pfm"
+  # shellcheck disable=SC2086
+  mpirun_n "$ranks" "$ferry" render "builtin:cornell" $cornell_light -q $variant -o "$out" \
+    --stats "$out.json"
+  echo "light paths, ranks $ranks, $variant:"
+  $compare "$work/light-ref.pfm" "$out" --rel 0 --abs 0 --outliers 0.002
+  check_stats "$out.json"
 done
 # A crop window (--crop) with light paths: the same part of the image on 1
 # and 3 ranks (camera paths keyed by the film's pixel, light paths splat
