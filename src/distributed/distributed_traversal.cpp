@@ -97,15 +97,16 @@ int DistributedTraversal<Path>::primaryOwner(uint32_t pixel, const TraceRay& ray
 }
 
 template <typename Path>
-void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
-                                               const CameraRays& cameraRays,
+void DistributedTraversal<Path>::primaryPixels(const PixelSet& set, const CameraRays& cameraRays,
                                                std::vector<uint32_t>& pixels, FrameStats& stats) {
   // Each pixel is decided by the rank it is dealt to (pixel % ranks) and sent
   // to its owner as a 4-byte pixel id.
-  const uint32_t ranks = uint32_t(comm_.size());
-  const uint32_t firstDealt = first + (uint32_t(comm_.rank()) + ranks - first % ranks) % ranks;
+  const uint32_t ranks = uint32_t(comm_.size()), rank = uint32_t(comm_.rank());
   std::vector<uint32_t> dealt;
-  for (uint32_t pixel = firstDealt; pixel < last; pixel += ranks) dealt.push_back(pixel);
+  set.forEachRun([&](uint32_t first, uint32_t last) {
+    const uint32_t firstDealt = first + (rank + ranks - first % ranks) % ranks;
+    for (uint32_t pixel = firstDealt; pixel < last; pixel += ranks) dealt.push_back(pixel);
+  });
   if (mode_ != ForwardingMode::Proxies) {
     // Ring and broadcast have no proxies to guide them: every rank keeps its deal.
     pixels = std::move(dealt);
@@ -120,9 +121,9 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
   // A pinhole: a pixel whose corners and centre have one owner keeps it for
   // every sample of this view from its second on; the others, a lens's
   // pixels and a view's first sample (a camera that moves every frame pays
-  // nothing more) are decided sample by sample. Kept per pixel range (the
-  // viewer renders a frame in slices), for one view at a time; every rank
-  // keeps and drops the same ones.
+  // nothing more) are decided sample by sample. Kept per pixel set (the
+  // viewer renders a frame in slices, groups take bands of it), for one view
+  // at a time; every rank keeps and drops the same ones.
   sampleView_ = nullptr;
   ViewOwnership* view = nullptr;
   if (cameraRays.through) {
@@ -130,9 +131,9 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
                                     viewOwnership_.size() >= kMaxOwnershipRanges))
       viewOwnership_.clear();
     auto known = std::find_if(viewOwnership_.begin(), viewOwnership_.end(),
-                              [&](const auto& v) { return v.first == first && v.last == last; });
+                              [&](const auto& v) { return v.set == set; });
     if (known == viewOwnership_.end())
-      known = viewOwnership_.insert(known, ViewOwnership{cameraRays.view, first, last});
+      known = viewOwnership_.insert(known, ViewOwnership{cameraRays.view, set});
     view = &*known;
   }
   if (view == nullptr || !view->seen) {
@@ -181,7 +182,7 @@ void DistributedTraversal<Path>::primaryPixels(uint32_t first, uint32_t last,
 template <typename Path>
 void DistributedTraversal<Path>::computeClearance(ViewOwnership& view,
                                                   const CameraRays& cameraRays) const {
-  view.clearance.assign(view.last - view.first, 0.0f);
+  view.clearance.assign(view.set.last - view.set.first, 0.0f);
   if constexpr (Path::kReplay) return;  // (decisions there take the visited set, not the mask)
   if (comm_.rank() >= int(8 * sizeof(RankMask))) return;  // (mask layouts have no such rank)
   const RankMask self = RankMask(1) << comm_.rank();
@@ -197,7 +198,7 @@ void DistributedTraversal<Path>::computeClearance(ViewOwnership& view,
       // are computed from coordinates as large as the eye's.
       const Vec3f e = r00.origin;
       const float scale = std::max({std::abs(e.x), std::abs(e.y), std::abs(e.z), 1.0f});
-      view.clearance[pixel - view.first] =
+      view.clearance[pixel - view.set.first] =
           std::isinf(c) ? c : std::max(0.0f, c * (1 - 1e-4f) - 1e-4f * scale);
     }
   });
@@ -443,7 +444,8 @@ void DistributedTraversal<Path>::decide(PathQueue<Path>& rays, const std::vector
     if (!cameraClearance || ray.isShadow() || ray.has(kPathLight)) return false;
     const uint32_t pixel = ray.pixel();
     const ViewOwnership& v = *cameraClearance;
-    return pixel >= v.first && pixel < v.last && ray.tmax <= v.clearance[pixel - v.first];
+    return pixel >= v.set.first && pixel < v.set.last &&
+           ray.tmax <= v.clearance[pixel - v.set.first];
   };
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const auto& range) {
     uint64_t queries = 0, replica = 0, skipped = 0;

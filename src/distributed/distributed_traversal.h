@@ -48,9 +48,9 @@ class DistributedTraversal final : public RayTraversal<Path> {
                        const Partition& partition, const ProxyBvh& proxies, ForwardingMode mode,
                        ExchangeMode exchange = ExchangeMode::Auto, uint32_t chunkPixels = 8192);
   bool runsSamples() const override { return exchange_ == ExchangeMode::Overlapped; }
-  void runSample(uint32_t sampleIndex, uint32_t first, uint32_t last, SampleShading<Path>& shading,
+  void runSample(uint32_t sampleIndex, const PixelSet& set, SampleShading<Path>& shading,
                  FrameStats& stats) override;
-  void primaryPixels(uint32_t first, uint32_t last, const CameraRays& cameraRays,
+  void primaryPixels(const PixelSet& set, const CameraRays& cameraRays,
                      std::vector<uint32_t>& pixels, FrameStats& stats) override;
   void traverse(RayQueues<Path>& rays, std::vector<TraceHit>& pathHits, ExchangeCounters& exchange,
                 FrameStats& stats) override;
@@ -135,7 +135,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   // that the forwarding decision after the camera ray's trace needs no query.
   struct ViewOwnership {
     uint64_t view = 0;
-    uint32_t first = 0, last = 0;
+    PixelSet set;  // clearance covers [set.first, set.last) (0 outside the set)
     bool seen = false, decided = false;
     std::vector<uint32_t> fixed, varying;
     std::vector<float> clearance;
@@ -144,7 +144,7 @@ class DistributedTraversal final : public RayTraversal<Path> {
   void computeClearance(ViewOwnership& view, const CameraRays& cameraRays) const;
   static constexpr int32_t kVariesBySample = -1;
   static constexpr size_t kMaxOwnershipRanges = 256;
-  std::vector<ViewOwnership> viewOwnership_;  // the current view's, per pixel range
+  std::vector<ViewOwnership> viewOwnership_;  // the current view's, per pixel set
   // The view and range of the sample primaryPixels last decided, when its
   // pixels were fixed (its clearance applies to the sample's camera rays).
   const ViewOwnership* sampleView_ = nullptr;

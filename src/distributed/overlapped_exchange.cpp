@@ -68,13 +68,12 @@ struct BounceRays {
 template <typename Path>
 class DistributedTraversal<Path>::OverlappedSample {
  public:
-  OverlappedSample(DistributedTraversal& traversal, uint32_t sampleIndex, uint32_t first,
-                   uint32_t last, SampleShading<Path>& shading, FrameStats& stats)
+  OverlappedSample(DistributedTraversal& traversal, uint32_t sampleIndex, const PixelSet& set,
+                   SampleShading<Path>& shading, FrameStats& stats)
       : traversal_(traversal),
         comm_(traversal.comm_),
         sampleIndex_(sampleIndex),
-        first_(first),
-        last_(last),
+        set_(set),
         shading_(shading),
         stats_(stats),
         rank_(comm_.rank()),
@@ -100,7 +99,7 @@ class DistributedTraversal<Path>::OverlappedSample {
   void findOwnCameraPaths() {
     auto start = Clock::now();
     const double elsewhere = stats_.times.wait + stats_.times.exchange;
-    traversal_.primaryPixels(first_, last_, shading_.cameraRays(), mine_, stats_);
+    traversal_.primaryPixels(set_, shading_.cameraRays(), mine_, stats_);
     // (The owners' collectives count as wait and exchange, not as generate.)
     stats_.times.generate +=
         secondsSince(start) - (stats_.times.wait + stats_.times.exchange - elsewhere);
@@ -319,7 +318,7 @@ class DistributedTraversal<Path>::OverlappedSample {
   DistributedTraversal& traversal_;
   const Communicator& comm_;
   const uint32_t sampleIndex_;
-  const uint32_t first_, last_;  // the sample's pixels [first, last)
+  const PixelSet set_;  // the sample's pixels
   SampleShading<Path>& shading_;
   FrameStats& stats_;
   const int rank_, ranks_;
@@ -347,19 +346,19 @@ class DistributedTraversal<Path>::OverlappedSample {
 };
 
 template <typename Path>
-void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, uint32_t first, uint32_t last,
+void DistributedTraversal<Path>::runSample(uint32_t sampleIndex, const PixelSet& set,
                                            SampleShading<Path>& shading, FrameStats& stats) {
-  OverlappedSample(*this, sampleIndex, first, last, shading, stats).run();
+  OverlappedSample(*this, sampleIndex, set, shading, stats).run();
 }
 
 // The class is instantiated in distributed_traversal.cpp; this is its one member here.
-template void DistributedTraversal<Path8>::runSample(uint32_t, uint32_t, uint32_t,
+template void DistributedTraversal<Path8>::runSample(uint32_t, const PixelSet&,
                                                      SampleShading<Path8>&, FrameStats&);
-template void DistributedTraversal<Path64>::runSample(uint32_t, uint32_t, uint32_t,
+template void DistributedTraversal<Path64>::runSample(uint32_t, const PixelSet&,
                                                       SampleShading<Path64>&, FrameStats&);
-template void DistributedTraversal<PathReplay>::runSample(uint32_t, uint32_t, uint32_t,
+template void DistributedTraversal<PathReplay>::runSample(uint32_t, const PixelSet&,
                                                           SampleShading<PathReplay>&, FrameStats&);
-template void DistributedTraversal<PathProbe>::runSample(uint32_t, uint32_t, uint32_t,
+template void DistributedTraversal<PathProbe>::runSample(uint32_t, const PixelSet&,
                                                          SampleShading<PathProbe>&, FrameStats&);
 
 }  // namespace ferry

@@ -16,6 +16,7 @@
 
 #include "core/clock.h"
 #include "path/path.h"
+#include "render/pixel_set.h"
 #include "render/render_stats.h"
 #include "trace/trace_backend.h"
 
@@ -63,24 +64,26 @@ class RayTraversal {
   // decides when rays are traced, forwarded and shaded, instead of being
   // called once per bounce of a wavefront (traverse).
   virtual bool runsSamples() const { return false; }
-  // One sample of pixels [first, last) from camera paths to the last
+  // One sample of the pixels of `set` from camera paths to the last
   // bounce, shading through `shading`. Collective when distributed.
-  virtual void runSample(uint32_t sampleIndex, uint32_t first, uint32_t last,
-                         SampleShading<Path>& shading, FrameStats& stats) {
-    (void)sampleIndex, (void)first, (void)last, (void)shading, (void)stats;
+  virtual void runSample(uint32_t sampleIndex, const PixelSet& set, SampleShading<Path>& shading,
+                         FrameStats& stats) {
+    (void)sampleIndex, (void)set, (void)shading, (void)stats;
   }
-  // Proxy-guided primary rays: sets `pixels` to the pixels of [first, last)
-  // whose camera path this rank generates for the current sample, in
-  // increasing order. Any rank may start any camera path (the image is the
-  // same); the owner of what the ray meets first saves forwards. Collective
-  // when distributed (every rank calls it with the same range and rays).
+  // Proxy-guided primary rays: sets `pixels` to the pixels of `set` whose
+  // camera path this rank generates for the current sample, in increasing
+  // order. Any rank may start any camera path (the image is the same); the
+  // owner of what the ray meets first saves forwards. Collective when
+  // distributed (every rank calls it with the same set and rays).
   // Default: every pixel is this rank's.
-  virtual void primaryPixels(uint32_t first, uint32_t last, const CameraRays& cameraRays,
+  virtual void primaryPixels(const PixelSet& set, const CameraRays& cameraRays,
                              std::vector<uint32_t>& pixels, FrameStats& stats) {
     (void)cameraRays;
     (void)stats;
-    pixels.resize(last - first);
-    for (uint32_t p = first; p != last; ++p) pixels[p - first] = p;
+    pixels.clear();
+    set.forEachRun([&](uint32_t b, uint32_t e) {
+      for (uint32_t p = b; p != e; ++p) pixels.push_back(p);
+    });
   }
   // Whether every camera path is generated here (one rank): then the renderer
   // skips primaryPixels and writes the camera rays straight into the queue.

@@ -102,30 +102,29 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   const uint32_t spp = uint32_t(settings_.samplesPerPixel), groups = settings_.dataGroups;
   for (int s = 0; s < settings_.samplesPerPixel; ++s) {
     const uint32_t sampleIndex = uint32_t(frame * settings_.samplesPerPixel + s);
-    uint32_t first = firstPixel, last = lastPixel;
+    PixelSet set = PixelSet::range(firstPixel, lastPixel);
     if (groups > 1 && spp >= groups) {
       if (sampleIndex % groups != settings_.dataGroup) continue;  // another group's
     } else if (groups > 1) {
       // Fewer samples a frame than groups: the groups g = s (mod spp) take
-      // sample s, each a slice of its pixels (every pixel sample once over
-      // the groups, and the frame buffers sum exactly: the same image).
+      // sample s, each every takers-th band of its pixels (every pixel sample
+      // once over the groups, and the frame buffers sum exactly: the same
+      // image; bands of a few rows spread the sky and the ground alike).
       const uint32_t slot = uint32_t(s), group = settings_.dataGroup;
       if (group % spp != slot) continue;
       const uint32_t takers = (groups - slot + spp - 1) / spp, j = group / spp;
-      const uint64_t n = lastPixel - firstPixel;
-      first = firstPixel + uint32_t(n * j / takers);
-      last = firstPixel + uint32_t(n * (j + 1) / takers);
+      set = PixelSet::interleaved(firstPixel, lastPixel, kGroupBandRows * width(), takers, j);
     }
     traversal_.setPathTimes(pathTimes(sampleIndex));
     if (traversal_.runsSamples()) {
       // The traversal runs the sample (the overlapped distributed exchange):
       // it calls back for camera paths and shading as rays become ready.
       SampleStages stages(*this, sampleIndex, frameBuffer);
-      traversal_.runSample(sampleIndex, first, last, stages, stats);
+      traversal_.runSample(sampleIndex, set, stages, stats);
     } else if (!chunked()) {
       // Many ranks: the whole image in one wavefront (each bounce is a
       // collective exchange), every stage parallel inside the rank.
-      runWavefront(sampleIndex, first, last, workspace_, frameBuffer, stats);
+      runWavefront(sampleIndex, set, workspace_, frameBuffer, stats);
     } else {
       // One rank: chunks of pixels, each taken from camera ray to last bounce
       // by one thread, so that its queues (paths, kept hits, spawned rays:
@@ -135,16 +134,21 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
       // and each pixel sample is the same computation, adding to the frame
       // buffer in the same order: the image does not depend on the chunks.
       // (Stage times are then summed over the threads.)
+      // (Chunks of a set's runs: a band of a split sample is one or more.)
       const uint32_t chunk = std::max(1u, settings_.chunkPixels);
-      const uint32_t chunks = (last - first + chunk - 1) / chunk;
+      std::vector<PixelSet> chunks;
+      set.forEachRun([&](uint32_t first, uint32_t last) {
+        for (uint32_t b = first; b < last; b += std::min(chunk, last - b))
+          chunks.push_back(PixelSet::range(b, b + std::min(chunk, last - b)));
+      });
       tbb::enumerable_thread_specific<FrameStats> chunkStats;
-      tbb::parallel_for(tbb::blocked_range<uint32_t>(0, chunks, 1), [&](const auto& range) {
-        for (uint32_t c = range.begin(); c != range.end(); ++c) {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks.size(), 1), [&](const auto& range) {
+        for (size_t c = range.begin(); c != range.end(); ++c) {
           // Isolated: while its stages wait, this thread takes no other chunk,
           // which would reuse its workspace.
           tbb::this_task_arena::isolate([&] {
-            runWavefront(sampleIndex, first + c * chunk, std::min(last, first + (c + 1) * chunk),
-                         chunkWorkspaces_.local(), frameBuffer, chunkStats.local());
+            runWavefront(sampleIndex, chunks[c], chunkWorkspaces_.local(), frameBuffer,
+                         chunkStats.local());
           });
         }
       });
@@ -167,10 +171,9 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
 }
 
 template <typename Path>
-void WavefrontRenderer<Path>::runWavefront(uint32_t sampleIndex, uint32_t first, uint32_t last,
-                                           Workspace& ws, FrameBuffer& frameBuffer,
-                                           FrameStats& stats) {
-  generateCameraRays(sampleIndex, first, last, ws, stats);
+void WavefrontRenderer<Path>::runWavefront(uint32_t sampleIndex, const PixelSet& set, Workspace& ws,
+                                           FrameBuffer& frameBuffer, FrameStats& stats) {
+  generateCameraRays(sampleIndex, set, ws, stats);
   for (uint32_t bounce = 0; traversal_.anyRaysLeft(ws.rays.size()); ++bounce) {
     if (stats.perBounce.size() <= bounce) stats.perBounce.resize(bounce + 1);
     traversal_.traverse(ws.rays, ws.hits, stats.perBounce[bounce], stats);
@@ -298,12 +301,11 @@ class WavefrontRenderer<Path>::SampleStages final : public SampleShading<Path> {
 };
 
 template <typename Path>
-void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t first,
-                                                 uint32_t last, Workspace& ws, FrameStats& stats) {
+void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, const PixelSet& set,
+                                                 Workspace& ws, FrameStats& stats) {
   PathQueue<Path>& rays = ws.rays.paths;
   ws.rays.shadowRays.clear();
   auto start = Clock::now();
-  const uint32_t pixels = last - first;
   const uint32_t width = this->width();
   auto cameraRay = [&](uint32_t pixel, uint32_t px, uint32_t py, Path& p) {
     makeCameraPath(sampleIndex, pixel, px, py, p);
@@ -323,14 +325,19 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
   if (chunked()) {
     // Every pixel's path is this rank's, and this chunk this thread's:
     // straight into the queue, in pixel order.
-    rays.resize(pixels);
-    forPixels(first, last, [&](uint32_t pixel, uint32_t px, uint32_t py) {
-      cameraRay(pixel, px, py, rays[pixel - first]);
+    rays.resize(set.size());
+    size_t next = 0;
+    set.forEachRun([&](uint32_t first, uint32_t last) {
+      forPixels(first, last, [&](uint32_t pixel, uint32_t px, uint32_t py) {
+        cameraRay(pixel, px, py, rays[next++]);
+      });
     });
     stats.cameraPaths += rays.size();
     if (shading_.lightPaths()) {
-      ws.primaryPixels.resize(pixels);
-      for (uint32_t i = 0; i < pixels; ++i) ws.primaryPixels[i] = first + i;
+      ws.primaryPixels.clear();
+      set.forEachRun([&](uint32_t first, uint32_t last) {
+        for (uint32_t p = first; p != last; ++p) ws.primaryPixels.push_back(p);
+      });
       stats.lightPaths += appendLightPaths(sampleIndex, ws.primaryPixels, rays);
     }
   } else {
@@ -339,7 +346,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, uint32_t 
     // queue in pixel order.
     // (The owners' collectives count as wait and exchange, not as generate.)
     const double before = stats.times.wait + stats.times.exchange;
-    traversal_.primaryPixels(first, last, cameraRays(sampleIndex), ws.primaryPixels, stats);
+    traversal_.primaryPixels(set, cameraRays(sampleIndex), ws.primaryPixels, stats);
     collectives = stats.times.wait + stats.times.exchange - before;
     const std::vector<uint32_t>& mine = ws.primaryPixels;
     rays.resize(mine.size());

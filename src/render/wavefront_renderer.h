@@ -138,8 +138,10 @@ class WavefrontRenderer {
   // chunks, each wavefront on one thread, whose stages then loop instead of
   // splitting into parallel blocks. Many ranks: one whole-image wavefront.
   bool chunked() const { return traversal_.keepsAllPrimaries(); }
-  // One sample of pixels [first, last) from camera rays to the last bounce.
-  void runWavefront(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
+  // When data groups split a sample's pixels: bands of this many rows each.
+  static constexpr uint32_t kGroupBandRows = 4;
+  // One sample of the pixels of `set` from camera rays to the last bounce.
+  void runWavefront(uint32_t sampleIndex, const PixelSet& set, Workspace& ws,
                     FrameBuffer& frameBuffer, FrameStats& stats);
   // Pixel `pixel`'s (at px, py) camera path for sample `sampleIndex`.
   void makeCameraPath(uint32_t sampleIndex, uint32_t pixel, uint32_t px, uint32_t py,
@@ -156,8 +158,8 @@ class WavefrontRenderer {
   // appended to `out`, in pixel order; returns how many.
   size_t appendLightPaths(uint32_t sampleIndex, std::span<const uint32_t> pixels,
                           PathQueue<Path>& out) const;
-  // The camera rays of pixels [first, last) for this sample, into ws.rays.
-  void generateCameraRays(uint32_t sampleIndex, uint32_t first, uint32_t last, Workspace& ws,
+  // The camera rays of the pixels of `set` for this sample, into ws.rays.
+  void generateCameraRays(uint32_t sampleIndex, const PixelSet& set, Workspace& ws,
                           FrameStats& stats);
   // Shadow rays add their light, paths are shaded; reads ws.rays and ws.hits,
   // writes the next wavefront to ws.next. Within a wavefront no pixel is

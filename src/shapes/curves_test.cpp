@@ -167,8 +167,9 @@ TEST(Curves, TheSurfaceAtACrossingIsWhereTheRayMetTheCurve) {
         const float w = std::max(s.width0, s.width1);
         const Vec3f toSurface = seen(at.position - axis), toHit = seen(hit - axis);
         // (Not opposite: a ribbon seen nearly edge-on shows little of either.)
-        if (length(toSurface) > 0.05f * w && length(toHit) > 0.05f * w)
+        if (length(toSurface) > 0.05f * w && length(toHit) > 0.05f * w) {
           EXPECT_GT(dot(normalize(toSurface), normalize(toHit)), -0.7f) << int(type) << " " << k;
+        }
         if (type == CurveType::Ribbon) continue;
         EXPECT_LT(length(seen(at.position - hit)), 0.15f * w + 0.02f)
             << int(type) << " " << k << " v " << uv.y;
