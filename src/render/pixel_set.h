@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <vector>
 
 namespace ferry {
 
@@ -35,6 +36,13 @@ struct PixelSet {
     for (uint64_t begin = uint64_t(first) + uint64_t(phase) * band; begin < last;
          begin += uint64_t(stride) * band)
       f(uint32_t(begin), uint32_t(std::min<uint64_t>(begin + band, last)));
+  }
+  // `out` replaced by the set's pixels, in order.
+  void list(std::vector<uint32_t>& out) const {
+    out.clear();
+    forEachRun([&](uint32_t b, uint32_t e) {
+      for (uint32_t p = b; p != e; ++p) out.push_back(p);
+    });
   }
   uint32_t size() const {
     uint32_t n = 0;

@@ -80,10 +80,7 @@ class RayTraversal {
                              std::vector<uint32_t>& pixels, FrameStats& stats) {
     (void)cameraRays;
     (void)stats;
-    pixels.clear();
-    set.forEachRun([&](uint32_t b, uint32_t e) {
-      for (uint32_t p = b; p != e; ++p) pixels.push_back(p);
-    });
+    set.list(pixels);
   }
   // Whether every camera path is generated here (one rank): then the renderer
   // skips primaryPixels and writes the camera rays straight into the queue.

@@ -138,7 +138,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
       const uint32_t chunk = std::max(1u, settings_.chunkPixels);
       std::vector<PixelSet> chunks;
       set.forEachRun([&](uint32_t first, uint32_t last) {
-        for (uint32_t b = first; b < last; b += std::min(chunk, last - b))
+        for (uint32_t b = first; b < last; b = chunks.back().last)
           chunks.push_back(PixelSet::range(b, b + std::min(chunk, last - b)));
       });
       tbb::enumerable_thread_specific<FrameStats> chunkStats;
@@ -334,10 +334,7 @@ void WavefrontRenderer<Path>::generateCameraRays(uint32_t sampleIndex, const Pix
     });
     stats.cameraPaths += rays.size();
     if (shading_.lightPaths()) {
-      ws.primaryPixels.clear();
-      set.forEachRun([&](uint32_t first, uint32_t last) {
-        for (uint32_t p = first; p != last; ++p) ws.primaryPixels.push_back(p);
-      });
+      set.list(ws.primaryPixels);
       stats.lightPaths += appendLightPaths(sampleIndex, ws.primaryPixels, rays);
     }
   } else {
