@@ -6,6 +6,9 @@
 //   Vec3f eval(Vec3f wo, Vec3f wi) const;   // f(wo, wi) |cos(wi)|, 0 for delta lobes
 //   float pdf(Vec3f wo, Vec3f wi) const;    // sample()'s solid-angle density, 0 for delta
 //   bool sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const;
+// and, where one pass computes both for less (a tabulated BSDF),
+//   Vec3f evalPdf(Vec3f wo, Vec3f wi, float& pdf) const;  // eval, and pdf into `pdf`
+// which must give exactly what eval and pdf give.
 // A material model (material/material_model.h) makes one per shading point.
 #pragma once
 
@@ -45,6 +48,11 @@ class Bsdf {
   Vec3f eval(Vec3f wo, Vec3f wi) const { return ops_->eval(storage_, wo, wi); }
   // Solid-angle density with which sample() picks wi; zero for delta lobes.
   float pdf(Vec3f wo, Vec3f wi) const { return ops_->pdf(storage_, wo, wi); }
+  // eval(wo, wi), and pdf(wo, wi) into `pdf` when it is not null: the same
+  // numbers, in one pass where the lobe has one.
+  Vec3f evalPdf(Vec3f wo, Vec3f wi, float* pdf) const {
+    return ops_->evalPdf(storage_, wo, wi, pdf);
+  }
   // Draws wi from (uLobe, u); false when no direction is produced.
   bool sample(Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) const {
     return ops_->sample(storage_, wo, uLobe, u, out);
@@ -61,6 +69,7 @@ class Bsdf {
     Vec3f (*eval)(const void* lobe, Vec3f wo, Vec3f wi);
     float (*pdf)(const void* lobe, Vec3f wo, Vec3f wi);
     bool (*sample)(const void* lobe, Vec3f wo, float uLobe, Vec2f u, BsdfSample& out);
+    Vec3f (*evalPdf)(const void* lobe, Vec3f wo, Vec3f wi, float* pdf);
   };
   template <class Lobe>
   static constexpr Ops kOps = {
@@ -68,6 +77,15 @@ class Bsdf {
       [](const void* l, Vec3f wo, Vec3f wi) { return static_cast<const Lobe*>(l)->pdf(wo, wi); },
       [](const void* l, Vec3f wo, float uLobe, Vec2f u, BsdfSample& out) {
         return static_cast<const Lobe*>(l)->sample(wo, uLobe, u, out);
+      },
+      [](const void* l, Vec3f wo, Vec3f wi, float* pdf) {
+        const Lobe& lobe = *static_cast<const Lobe*>(l);
+        if constexpr (requires(float& p) { lobe.evalPdf(wo, wi, p); }) {
+          if (pdf) return lobe.evalPdf(wo, wi, *pdf);
+        } else {
+          if (pdf) *pdf = lobe.pdf(wo, wi);
+        }
+        return lobe.eval(wo, wi);
       }};
 
   alignas(16) unsigned char storage_[kCapacity];

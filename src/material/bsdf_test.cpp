@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <numbers>
@@ -414,6 +415,27 @@ TEST_P(BsdfLobeTest, SamplingMatchesPdfEnergyAndEval) {
   EXPECT_NEAR(s.albedo.mean, albedoQuadrature,
               zTwo * s.albedo.standardError() + quadratureError + 1e-6)
       << c.name;
+}
+
+// evalPdf gives eval and pdf bit for bit, with or without the density
+// (a tabulated BSDF computes both from one interpolation), at directions
+// on both sides.
+TEST_P(BsdfLobeTest, EvalPdfIsEvalAndPdf) {
+  const LobeCase& c = GetParam();
+  TestRng rng(7);
+  for (int n = 0; n < 2000; ++n) {
+    const float z = 2 * rng.uniform() - 1, phi = 2 * kPi * rng.uniform();
+    const float r = std::sqrt(std::max(0.0f, 1 - z * z));
+    const Vec3f wi{r * std::cos(phi), r * std::sin(phi), z};
+    float pdf = -1;
+    const Vec3f both = c.bsdf.evalPdf(c.wo, wi, &pdf);
+    const Vec3f alone = c.bsdf.evalPdf(c.wo, wi, nullptr);
+    const Vec3f f = c.bsdf.eval(c.wo, wi);
+    const float p = c.bsdf.pdf(c.wo, wi);
+    ASSERT_EQ(std::memcmp(&both, &f, sizeof f), 0) << c.name << " n " << n;
+    ASSERT_EQ(std::memcmp(&alone, &f, sizeof f), 0) << c.name << " n " << n;
+    ASSERT_EQ(std::memcmp(&pdf, &p, sizeof p), 0) << c.name << " n " << n;
+  }
 }
 
 // Where a table's series dips below zero (paint at grazing incidence: the

@@ -234,12 +234,13 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
         // f(camera, light) |cos_s light| |cos_g camera| / |cos_g light|, times
         // the importance 1 / (area cos^4) and cos_axis / d^2.
         const float importance = 1 / (area * square(square(cosAxis)));
-        const Vec3f f = bsdf.eval(wcLocal, scattering.woLocal);
+        float forwardPdf;
+        const Vec3f f = bsdf.evalPdf(wcLocal, scattering.woLocal, &forwardPdf);
         // The camera path's density of this vertex (the image, in area
         // measure) and of the next one towards the light, over the light
         // path's; to the heuristic's beta and summed with the light sample's.
         const float cameraPdf = cosCamera / (area * cosAxis * cosAxis * cosAxis * dist2);
-        const float forward = stored(bsdf.pdf(wcLocal, scattering.woLocal));
+        const float forward = stored(forwardPdf);
         const float others =
             ratio * misPow(forward / cosIn) * misPow(cameraPdf) * withLightSample(forward);
         const float weight = 1 / (1 + others);
@@ -272,15 +273,16 @@ typename PathShading<Path>::Spawned PathShading<Path>::shadeLightPath(
   // path would see it, f(wi, wo) (not the f(wo, wi) sample() weighs with:
   // a rough dielectric's is not symmetric). Delta lobes are (Ferry's
   // dielectrics drop 1 / eta^2).
-  const Vec3f adjoint =
-      bs.delta ? bs.weight
-               : bsdf.eval(bs.wi, scattering.woLocal) * (shadingOut / (shadingIn * bs.pdf));
+  float forwardPdf = 1;
+  const Vec3f adjoint = bs.delta ? bs.weight
+                                 : bsdf.evalPdf(bs.wi, scattering.woLocal, &forwardPdf) *
+                                       (shadingOut / (shadingIn * bs.pdf));
   Vec3f weight = vertex.throughput * adjoint * (shadingIn * cosOut / (cosIn * shadingOut));
   if (!survivesRoulette(vertex, scattering, weight) || !usable(weight)) return spawned;
   // The camera path's density at this vertex towards the light, over the
   // light path's cosine here; then this direction's cosine over the light
   // path's density of it (delta lobes: density 1 both ways).
-  const float forward = bs.delta ? 1.0f : stored(bsdf.pdf(bs.wi, scattering.woLocal));
+  const float forward = bs.delta ? 1.0f : stored(forwardPdf);
   const float reverse = bs.delta ? 1.0f : stored(bs.pdf);
   float next = ratio * misPow(forward / cosIn) * misPow(cosOut / reverse);
   if (!bs.delta) next *= withLightSample(forward);
@@ -528,11 +530,12 @@ template <typename Path>
                       overSphere ? Vec3f(0) : scattering.ng))
     return false;
   const Vec3f wiLocal = scattering.frame.toLocal(ls.direction);
-  const Vec3f f = bsdf.eval(scattering.woLocal, wiLocal);
   // Weighed against the BSDF sample that could find the same light, with
   // the BSDF density as a continuation would store it.
   const bool weighed = strategy_ == LightStrategy::Mis && ls.mis;
-  const float bsdfPdf = weighed ? stored(bsdf.pdf(scattering.woLocal, wiLocal)) : 0.0f;
+  float pdf = 0;
+  const Vec3f f = bsdf.evalPdf(scattering.woLocal, wiLocal, weighed ? &pdf : nullptr);
+  const float bsdfPdf = weighed ? stored(pdf) : 0.0f;
   float weight = weighed ? misWeight(ls.pdf, bsdfPdf) : 1.0f;
   if (lightBase > 0 && ls.emitter != LightSampler::kNotAnEmitter) {
     // And against the light path that could have made it: the camera

@@ -42,19 +42,32 @@ int32_t interpolate(const FourierBsdfTable& t, float muI, float muO, int32_t cha
   if (!catmullRomWeights(t.mu.data(), t.nMu, muI, offsetI, weightsI) ||
       !catmullRomWeights(t.mu.data(), t.nMu, muO, offsetO, weightsO))
     return -1;
-  std::fill(ak, ak + size_t(channels) * size_t(t.mMax), 0.0f);
-  int32_t longest = 0;
+  // The entries with a weight, then each channel summed over them in the
+  // same order (zeros past the longest series are never read).
+  const float* series[16];
+  float weights[16];
+  int32_t orders[16];
+  int32_t n = 0, longest = 0;
   for (int32_t b = 0; b < 4; ++b)
     for (int32_t a = 0; a < 4; ++a) {
       // (A zero weight marks a node beyond the grid's end.)
       const float weight = weightsI[a] * weightsO[b];
       if (weight == 0) continue;
-      int32_t m;
-      const float* series = t.coefficientsAt(offsetI + a, offsetO + b, m);
-      longest = std::max(longest, m);
-      for (int32_t c = 0; c < channels; ++c)
-        for (int32_t k = 0; k < m; ++k) ak[c * t.mMax + k] += weight * series[c * m + k];
+      series[n] = t.coefficientsAt(offsetI + a, offsetO + b, orders[n]);
+      weights[n] = weight;
+      longest = std::max(longest, orders[n]);
+      ++n;
     }
+  for (int32_t c = 0; c < channels; ++c) {
+    float* __restrict out = ak + c * t.mMax;
+    std::fill(out, out + longest, 0.0f);
+    for (int32_t j = 0; j < n; ++j) {
+      const int32_t m = orders[j];
+      const float* __restrict in = series[j] + c * m;
+      const float weight = weights[j];
+      for (int32_t k = 0; k < m; ++k) out[k] += weight * in[k];
+    }
+  }
   return longest;
 }
 
@@ -153,6 +166,23 @@ Vec3f fourierEval(const FourierBsdfTable& t, Vec3f wo, Vec3f wi) {
   return value(t, ak, m, fourier::series(ak, m, cosPhi), cosPhi, transportScale(t, muI, muO));
 }
 
+Vec3f fourierEvalPdf(const FourierBsdfTable& t, Vec3f wo, Vec3f wi, float& pdf) {
+  const float muI = -wi.z, muO = wo.z;
+  pdf = 0;
+  float ak[kMaxChannels * FourierBsdfTable::kMaxOrder];
+  int32_t offsetO;
+  float weightsO[4];
+  // Channel 0 of the interpolated series is what fourierPdf interpolates.
+  const int32_t m = interpolate(t, muI, muO, t.nChannels, ak, offsetO, weightsO);
+  if (m < 0) return Vec3f(0);
+  const float cosPhi = cosAzimuth(wo, -wi);
+  const float y = fourier::series(ak, m, cosPhi);
+  const float rho = sampledIntegral(t, offsetO, weightsO);
+  pdf = rho > 0 && y > 0 ? y / rho : 0;
+  if (muI == 0) return Vec3f(0);
+  return value(t, ak, m, y, cosPhi, transportScale(t, muI, muO));
+}
+
 float fourierPdf(const FourierBsdfTable& t, Vec3f wo, Vec3f wi) {
   const float muI = -wi.z, muO = wo.z;
   float ak[FourierBsdfTable::kMaxOrder];
@@ -169,10 +199,12 @@ bool fourierSample(const FourierBsdfTable& t, Vec3f wo, Vec2f u, BsdfSample& out
   const float muO = wo.z;
   float muI;
   if (!sampleMuI(t, muO, u.y, muI)) return false;
-  float ak[kMaxChannels * FourierBsdfTable::kMaxOrder];
+  // The azimuth follows the luminance alone; the value is taken below, at
+  // the direction produced.
+  float ak[FourierBsdfTable::kMaxOrder];
   int32_t offsetO;
   float weightsO[4];
-  const int32_t m = interpolate(t, muI, muO, t.nChannels, ak, offsetO, weightsO);
+  const int32_t m = interpolate(t, muI, muO, 1, ak, offsetO, weightsO);
   if (m < 0) return false;
   const float rho = sampledIntegral(t, offsetO, weightsO);
   double phi;
@@ -189,9 +221,9 @@ bool fourierSample(const FourierBsdfTable& t, Vec3f wo, Vec2f u, BsdfSample& out
   out.delta = false;
   // The density Y / rho is what fourierPdf gives for this wi; taken from the
   // direction actually produced, so that MIS and the weight agree with it.
-  out.pdf = fourierPdf(t, wo, out.wi);
+  const Vec3f f = fourierEvalPdf(t, wo, out.wi, out.pdf);
   if (!(out.pdf > 0)) return false;
-  out.weight = fourierEval(t, wo, out.wi) * (1 / out.pdf);
+  out.weight = f * (1 / out.pdf);
   return true;
 }
 
@@ -201,6 +233,9 @@ struct FourierLobe {
   const FourierBsdfTable* table;
   Vec3f eval(Vec3f wo, Vec3f wi) const { return fourierEval(*table, wo, wi); }
   float pdf(Vec3f wo, Vec3f wi) const { return fourierPdf(*table, wo, wi); }
+  Vec3f evalPdf(Vec3f wo, Vec3f wi, float& pdf) const {
+    return fourierEvalPdf(*table, wo, wi, pdf);
+  }
   bool sample(Vec3f wo, float, Vec2f u, BsdfSample& out) const {
     return fourierSample(*table, wo, u, out);
   }

@@ -35,6 +35,8 @@ struct FourierModel final : MaterialModel {
 // f(wo, wi) |cos(wi)|.
 Vec3f fourierEval(const FourierBsdfTable& table, Vec3f wo, Vec3f wi);
 float fourierPdf(const FourierBsdfTable& table, Vec3f wo, Vec3f wi);
+// fourierEval, and fourierPdf into `pdf`, from one interpolation.
+Vec3f fourierEvalPdf(const FourierBsdfTable& table, Vec3f wo, Vec3f wi, float& pdf);
 // Draws wi from u; false when no direction is produced (or its value is 0).
 bool fourierSample(const FourierBsdfTable& table, Vec3f wo, Vec2f u, BsdfSample& out);
 
