@@ -237,14 +237,16 @@ import json, os, statistics, sys
 import numpy as np
 work, scene, ref_spp, samplers, spps = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4].split(), sys.argv[5:]
 
-def pfm(path):  # as Embree's tutorial stores it: clamped to [0, 1], 8 bits
+def pfm(path):  # as Embree's tutorial stores it: clamped to [0, 1], 8 bits, truncated
     with open(path, "rb") as f:
         kind = f.readline().strip()
         w, h = map(int, f.readline().split())
         scale = float(f.readline())
         data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4").astype(np.float64)
     image = data.reshape(h, w, 3 if kind == b"PF" else 1)
-    return np.round(np.clip(image, 0, 1) * 255) / 255
+    # The tutorial truncates (255 * c, cast to an integer); its own files
+    # hold k / 255 already (the 1e-3 keeps float rounding from taking k - 1).
+    return np.floor(np.clip(image, 0, 1) * 255 + 1e-3) / 255
 
 def rmse(image, reference):
     return float(np.sqrt(np.mean((image - reference) ** 2)) / np.mean(reference))
