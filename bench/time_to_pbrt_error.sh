@@ -25,6 +25,8 @@
 #   FERRY_SPP=4  FERRY_MAX_SPP=1024          Ferry's first and largest sample counts
 #   THREADS=2                                threads of both
 #   ONLY=                                    scene names to run (bathroom breakfast-lamps)
+#   MAX_TIME_RATIO=                          a gate: exit 1 when Ferry's time over pbrt-v3's
+#                                            is above it (or not reached) on a scene (issue 73: 0.25)
 #   KEEP_CONVERGED=0                         1: keep the converged renders an earlier run left in
 #                                            $OUT (same REF_SPP, size and renderers) instead of rendering them again
 #   OUT=/tmp/ferry-time-to-pbrt-error        renders and logs
@@ -41,6 +43,8 @@ FERRY_MAX_SPP=${FERRY_MAX_SPP:-1024}
 THREADS=${THREADS:-2}
 ONLY=${ONLY:-}
 KEEP_CONVERGED=${KEEP_CONVERGED:-0}
+MAX_TIME_RATIO=${MAX_TIME_RATIO:-}
+failed=0
 OUT=${OUT:-/tmp/ferry-time-to-pbrt-error}
 SHARED=$(realpath "${SHARED:-$(dirname "$here")/shared}")
 
@@ -171,4 +175,10 @@ EOF
   verdict=$(python3 -c "print('%.2f' % ($ferry_s / $pbrt_s) if $reached else 'not reached by %d spp' % $spp)")
   printf '| %s | %s | %d | %.4f | %.1f | %d | %.4f | %.1f | %s | %.1f, %.1f | %s |\n' "$name" "$size" "$PBRT_SPP" \
     "$pbrt_error" "$pbrt_s" "$spp" "$ferry_error" "$ferry_s" "$verdict" "$pbrt_setup" "$ferry_setup" "$published"
+  if [ -n "$MAX_TIME_RATIO" ] &&
+    ! python3 -c "import sys; sys.exit(0 if $reached and $ferry_s / $pbrt_s <= $MAX_TIME_RATIO else 1)"; then
+    echo "FAIL: $name: Ferry's time to pbrt-v3's error is above MAX_TIME_RATIO=$MAX_TIME_RATIO" >&2
+    failed=1
+  fi
 done
+exit "$failed"

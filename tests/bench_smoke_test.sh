@@ -61,7 +61,7 @@ bench distribution_profile 'the 1-rank CPU time per frame' env SCENE="$tiny" SIZ
   FRAMES=2 bash bench/distribution_profile.sh "$ferry"
 if command -v pathtracer > /dev/null; then
   bench pathtracer_vs_embree 'same scene: converged at depth 1' env SIZE=32x32 SPP=1 FRAMES=1 WARMUP=0 ROUNDS=1 \
-    ERROR_SPP=1 REFERENCE_SPP=2 bash bench/pathtracer_vs_embree.sh "$ferry"
+    ERROR_SPP=1 REFERENCE_SPP=2 DIRECT_SPP=1024 MAX_DIRECT_DIFFERENCE=1 bash bench/pathtracer_vs_embree.sh "$ferry"
 else
   echo "FAIL: pathtracer_vs_embree: Embree's tutorial (embree-tools) is missing"
   failures=$((failures + 1))
