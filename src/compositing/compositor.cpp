@@ -12,8 +12,10 @@ std::vector<int64_t> sumOwnSliceFixed(const Communicator& comm, const FrameBuffe
                                       const std::vector<int64_t>& sums, int values,
                                       uint64_t& bytesSent) {
   maybeInjectFailure("composite", comm.rank());
+  const int ranks = comm.size();
+  if (ranks == 1) return sums;  // the whole image is this rank's slice
   const int kPixelBytes = values * int(sizeof(int64_t));
-  const int ranks = comm.size(), width = partial.width(), height = partial.height();
+  const int width = partial.width(), height = partial.height();
   std::vector<int> sendCounts(ranks), sendOffsets(ranks), receiveCounts(ranks),
       receiveOffsets(ranks);
   int myFirst, myLast;
