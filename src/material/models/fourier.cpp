@@ -154,16 +154,9 @@ float series(const float* a, int32_t m, double cosPhi) {
 }  // namespace fourier
 
 Vec3f fourierEval(const FourierBsdfTable& t, Vec3f wo, Vec3f wi) {
-  const float muI = -wi.z, muO = wo.z;
-  if (muI == 0) return Vec3f(0);
-  float ak[kMaxChannels * FourierBsdfTable::kMaxOrder];
-  int32_t offsetO;
-  float weightsO[4];
-  const int32_t m = interpolate(t, muI, muO, t.nChannels, ak, offsetO, weightsO);
-  if (m < 0) return Vec3f(0);
-  const float cosPhi = cosAzimuth(wo, -wi);
-  // f = series / |mu_i|: times |cos(wi)| = |mu_i| leaves the series.
-  return value(t, ak, m, fourier::series(ak, m, cosPhi), cosPhi, transportScale(t, muI, muO));
+  if (wi.z == 0) return Vec3f(0);
+  float pdf;
+  return fourierEvalPdf(t, wo, wi, pdf);
 }
 
 Vec3f fourierEvalPdf(const FourierBsdfTable& t, Vec3f wo, Vec3f wi, float& pdf) {
@@ -180,6 +173,7 @@ Vec3f fourierEvalPdf(const FourierBsdfTable& t, Vec3f wo, Vec3f wi, float& pdf) 
   const float rho = sampledIntegral(t, offsetO, weightsO);
   pdf = rho > 0 && y > 0 ? y / rho : 0;
   if (muI == 0) return Vec3f(0);
+  // f = series / |mu_i|: times |cos(wi)| = |mu_i| leaves the series.
   return value(t, ak, m, y, cosPhi, transportScale(t, muI, muO));
 }
 
