@@ -99,11 +99,13 @@ for entry in "${SCENES[@]}"; do
   if [ -n "$ONLY" ] && [[ " $ONLY " != *" $name "* ]]; then continue; fi
   scene_dir=$(dirname "$SHARED/scenes/$scene")
   work="$OUT/$name"
+  keep=0
   if [ "$KEEP_CONVERGED" = 1 ] && [ -f "$work/pbrt-converged.exr" ] && [ -f "$work/ferry-converged.exr" ]; then
-    mkdir -p "$OUT/kept-$name"
-    mv "$work"/*-converged.* "$OUT/kept-$name/"
+    keep=1
+    find "$work" -mindepth 1 -maxdepth 1 ! -name '*-converged.*' -exec rm -rf {} +
+  else
+    rm -rf "$work"
   fi
-  rm -rf "$work"
   mkdir -p "$work"
   # pbrt reads the scene's own directory: its entries linked beside a copy of
   # the file with the bench size and sample count.
@@ -139,10 +141,7 @@ EOF
   sed 's/"integer pixelsamples" \[[0-9]*\]/"integer pixelsamples" ['"$REF_SPP"']/; s/Sampler "[a-z0-9]*"/Sampler "random"/' \
     "$top" >"$work/converged.pbrt"
   grep -q 'Sampler "random"' "$work/converged.pbrt" || { echo "time_to_pbrt_error: no Sampler in $scene" >&2; exit 1; }
-  if [ -d "$OUT/kept-$name" ]; then
-    mv "$OUT/kept-$name"/* "$work/"
-    rmdir "$OUT/kept-$name"
-  else
+  if ((!keep)); then
     timed "$work/pbrt-converged.log" "$PBRT" --nthreads "$THREADS" --quiet --outfile "$work/pbrt-converged.exr" "$work/converged.pbrt" >/dev/null
     timed "$work/ferry-converged.log" "$FERRY" render "$top" --size "$size" --spp "$REF_SPP" --seed 7 --threads "$THREADS" -q -o "$work/ferry-converged.exr" >/dev/null
   fi
