@@ -5,10 +5,12 @@
 # (every rank's threads summed: on shared cores the frame ratio cannot fall
 # below it while the 1-rank frame keeps the cores busy), rays forwarded per frame and per
 # camera path, proxy queries per camera path, where the ranks' stage time
-# goes (shares summed over ranks: generate, trace, exchange, shade, wait)
-# and the largest rank's estimated memory. NxG is N ranks in G groups: NxN
-# (groups of one rank: image parallel, no forwards, every rank the whole
-# scene) is what time-slicing N processes on the cores costs by itself.
+# goes (shares summed over ranks: generate, trace, exchange, shade, wait),
+# the busiest rank's CPU over the mean rank's (a rank of one thread cannot
+# take more than one core) and the largest rank's estimated memory. NxG is
+# N ranks in G groups: NxN (groups of one rank: image parallel, no forwards,
+# every rank the whole scene) is what time-slicing N processes on the cores
+# costs by itself; when it ran, "x NxN" is each N-rank row's frame over it.
 # Configurations alternate over ROUNDS; a frame's time is the slowest rank's,
 # the median over frames and rounds. With fewer samples a frame than groups
 # (SPP=1: the viewer's frames) the groups split a sample's pixels. With BASELINE=old/ferry
@@ -68,14 +70,17 @@ def frame(runs):
     return statistics.median(f["seconds"] for s in runs for f in s["render"]["frames"])
 def cpu(runs):  # CPU seconds a frame, every rank's threads summed
     return statistics.median(f["cpu_seconds"] for s in runs for f in s["render"]["frames"])
+def imbalance(runs, n):  # the busiest rank's CPU over the mean rank's, over all frames
+    frames = [f for s in runs for f in s["render"]["frames"]]
+    return n * sum(f["busiest_rank_cpu_seconds"] for f in frames) / max(1e-9, sum(f["cpu_seconds"] for f in frames))
 base = frame(load("this", "1x1"))
 base_cpu = cpu(load("this", "1x1"))
 stages = ["generate", "trace", "exchange", "shade", "wait"]
-print("\n| ranks | groups | ranks a group | frame (s) | x 1 rank | CPU x 1 rank |"
+print("\n| ranks | groups | ranks a group | frame (s) | x 1 rank | CPU x 1 rank | x NxN | busiest rank's CPU / mean |"
       + (" x baseline |" if "base" in builds else "")
       + " forwards / frame | forwards / camera path | proxy queries / camera path | "
       + " / ".join(stages) + " (% of stage time) | largest rank (MiB, estimated) |")
-print("|---:|---:|---:|---:|---:|---:|" + ("---:|" if "base" in builds else "") + "---:|---:|---:|---|---:|")
+print("|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|" if "base" in builds else "") + "---:|---:|---:|---|---:|")
 for c in configs:
     runs = load("this", c)
     n, g = (int(v) for v in c.split("x"))
@@ -89,8 +94,10 @@ for c in configs:
     shares = " / ".join(f"{100 * seconds[k] / total:.0f}" for k in stages)
     mem = runs[0]["memory"]["max_estimated_bytes"] / 2**20
     versus = f" {frame(runs) / frame(load('base', c)):.2f} |" if "base" in builds else ""
+    alone = f"{n}x{n}"
+    slicing = f"{frame(runs) / frame(load('this', alone)):.2f}" if alone in configs and alone != c else ""
     print(f"| {n} | {g} | {n // g} | {frame(runs):.3f} | {frame(runs) / base:.2f} |"
-          f" {cpu(runs) / base_cpu:.2f} |{versus}"
+          f" {cpu(runs) / base_cpu:.2f} | {slicing} | {imbalance(runs, n):.2f} |{versus}"
           f" {fwd / frames:,.0f} | {fwd / paths:.2f} | {queries / paths:.2f} | {shares} | {mem:.0f} |")
 print("\nevery image equals the 1-rank image")
 PY

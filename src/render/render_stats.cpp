@@ -46,6 +46,7 @@ ExchangeCounters FrameStats::exchangeTotal() const {
 void FrameStats::merge(const FrameStats& o) {
   seconds = std::max(seconds, o.seconds);
   cpuSeconds += o.cpuSeconds;
+  busiestRankCpuSeconds += o.busiestRankCpuSeconds;
   for (const auto& field : kFrameCounters) this->*field.member += o.*field.member;
   if (perBounce.size() < o.perBounce.size()) perBounce.resize(o.perBounce.size());
   for (size_t i = 0; i < o.perBounce.size(); ++i) perBounce[i] += o.perBounce[i];
@@ -57,6 +58,7 @@ nlohmann::json FrameStats::toJson() const {
   j["frame"] = frame;
   j["seconds"] = seconds;
   j["cpu_seconds"] = cpuSeconds;
+  j["busiest_rank_cpu_seconds"] = busiestRankCpuSeconds;
   for (const auto& field : kFrameCounters) slot(j, field) = this->*field.member;
   j["traces"]["total"] = raysTraced();
   j["rays_per_second"] = seconds > 0 ? double(raysTraced()) / seconds : 0.0;
@@ -134,6 +136,9 @@ std::string RenderStats::summaryText(int ranks) const {
   row("ranks", fmt::format("{}", ranks));
   row("CPU time", fmt::format("{:.3f} s ({:.3f} s/frame, summed over ranks and threads)",
                               t.cpuSeconds, frames.empty() ? 0.0 : t.cpuSeconds / frames.size()));
+  if (ranks > 1 && t.cpuSeconds > 0)
+    row("busiest rank's CPU",
+        fmt::format("{:.2f}x the mean rank's", t.busiestRankCpuSeconds * ranks / t.cpuSeconds));
   row("camera paths", formatCount(t.cameraPaths));
   if (t.lightPaths) row("light paths", formatCount(t.lightPaths));
   row("rays traced", fmt::format("{} ({} closest, {} shadow, {} re-trace)",

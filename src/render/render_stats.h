@@ -60,10 +60,12 @@ struct StageTimes {
 
 struct FrameStats {
   int frame = 0;
-  double seconds = 0;        // wall clock of the frame (max over ranks when merged)
-  double cpuSeconds = 0;     // CPU time of the frame, every thread (summed when merged)
-  uint64_t cameraPaths = 0;  // primary rays generated (kept by this rank)
-  uint64_t lightPaths = 0;   // light paths started at emitters (render/path_shading.h)
+  double seconds = 0;                // wall clock of the frame (max over ranks when merged)
+  double cpuSeconds = 0;             // CPU time of the frame, every thread (summed when merged)
+  double busiestRankCpuSeconds = 0;  // the largest one rank's cpuSeconds (max over ranks,
+                                     // summed over frames): with cpuSeconds, the imbalance
+  uint64_t cameraPaths = 0;          // primary rays generated (kept by this rank)
+  uint64_t lightPaths = 0;           // light paths started at emitters (render/path_shading.h)
   uint64_t continuationRays = 0;
   uint64_t shadowRays = 0;
   uint64_t closestTraces = 0;    // local closest-hit traces (a forwarded ray counts per rank)

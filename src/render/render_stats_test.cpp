@@ -19,6 +19,7 @@ FrameStats distinctStats(uint64_t base, size_t bounces) {
   s.frame = 3;
   s.seconds = double(base) / 8;
   s.cpuSeconds = double(base) / 16;
+  s.busiestRankCpuSeconds = double(base) / 32;
   uint64_t next = base;
   for (const auto& field : kFrameCounters) s.*field.member = next++;
   s.perBounce.resize(bounces);
@@ -64,11 +65,11 @@ TEST(RenderStats, EveryCounterAppearsInTheJsonUnderItsKey) {
 // The layout scripts read (bench/, tests/tools/check_stats.py): nothing more, nothing less.
 TEST(RenderStats, JsonKeysAreTheDocumentedOnes) {
   const nlohmann::json j = distinctStats(1, 1).toJson();
-  EXPECT_EQ(keysOf(j),
-            (std::set<std::string>{"frame", "seconds", "cpu_seconds", "camera_paths", "light_paths",
-                                   "continuation_rays", "shadow_rays", "traces", "rays_per_second",
-                                   "exchange", "exchange_per_bounce", "stage_seconds",
-                                   "primary_bytes_sent", "termination_waves", "media"}));
+  EXPECT_EQ(keysOf(j), (std::set<std::string>{
+                           "frame", "seconds", "cpu_seconds", "busiest_rank_cpu_seconds",
+                           "camera_paths", "light_paths", "continuation_rays", "shadow_rays",
+                           "traces", "rays_per_second", "exchange", "exchange_per_bounce",
+                           "stage_seconds", "primary_bytes_sent", "termination_waves", "media"}));
   EXPECT_EQ(keysOf(j.at("media")),
             (std::set<std::string>{"real_collisions", "null_collisions", "majorant_cells"}));
   EXPECT_EQ(keysOf(j.at("traces")),
@@ -95,6 +96,7 @@ TEST(RenderStats, MergeAddsEveryCounterAndCpuTimeAndKeepsTheSlowestSeconds) {
   a.merge(b);
   EXPECT_EQ(a.seconds, std::max(before.seconds, b.seconds));
   EXPECT_EQ(a.cpuSeconds, before.cpuSeconds + b.cpuSeconds);
+  EXPECT_EQ(a.busiestRankCpuSeconds, before.busiestRankCpuSeconds + b.busiestRankCpuSeconds);
   for (const auto& field : kFrameCounters)
     EXPECT_EQ(a.*field.member, before.*field.member + b.*field.member) << field.key;
   ASSERT_EQ(a.perBounce.size(), 3u);
@@ -118,6 +120,7 @@ TEST(RenderStats, CounterArraysRoundTrip) {
   back.frame = s.frame;
   back.seconds = s.seconds;
   back.cpuSeconds = s.cpuSeconds;
+  back.busiestRankCpuSeconds = s.busiestRankCpuSeconds;
   EXPECT_EQ(back.toJson(), s.toJson());
   EXPECT_THROW(back.setCounterValues(std::span<const uint64_t>(counters).first(2)), InternalError);
 }

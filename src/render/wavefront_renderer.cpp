@@ -167,6 +167,7 @@ FrameStats WavefrontRenderer<Path>::renderPixels(int frame, uint32_t firstPixel,
   stats.mediumMajorantCells += media.majorantCells;
   stats.seconds = secondsSince(frameStart);
   stats.cpuSeconds = processCpuSeconds() - cpuStart;
+  stats.busiestRankCpuSeconds = stats.cpuSeconds;
   return stats;
 }
 

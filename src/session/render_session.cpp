@@ -233,7 +233,8 @@ void RenderSession::Rank::buildTraceStructures(Instancing instancing) {
 
 namespace {
 
-// Sums every counter over ranks (seconds: the slowest rank; CPU seconds: the sum).
+// Sums every counter over ranks (seconds: the slowest rank; CPU seconds: the
+// sum, and the busiest rank's).
 FrameStats sumOverRanks(const Communicator& comm, const FrameStats& mine) {
   FrameStats local = mine;
   local.perBounce.resize(size_t(comm.max(double(mine.perBounce.size()))));
@@ -245,6 +246,7 @@ FrameStats sumOverRanks(const Communicator& comm, const FrameStats& mine) {
   out.setCounterValues(comm.sum(std::span<const uint64_t>(counters)));
   std::vector<double> summed = comm.sum(std::span<const double>(times));
   out.cpuSeconds = summed.back();
+  out.busiestRankCpuSeconds = comm.max(mine.cpuSeconds);
   summed.pop_back();
   out.setStageTimeValues(summed);
   out.seconds = comm.max(mine.seconds);
