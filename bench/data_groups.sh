@@ -19,10 +19,11 @@
 #
 #   bash bench/data_groups.sh [FERRY]
 #   SCENE=builtin:island SIZE=480x270 SPP=8 FRAMES=3 ROUNDS=2 BASELINE=old/ferry \
-#     bash bench/data_groups.sh build/ferry
+#     PARTITION=ray-guided bash bench/data_groups.sh build/ferry
 set -euo pipefail
 ferry=$(realpath "${1:-build/ferry}")
 SCENE=${SCENE:-builtin:island}
+PARTITION=${PARTITION:-best}
 SIZE=${SIZE:-480x270}
 SPP=${SPP:-8}
 FRAMES=${FRAMES:-3}
@@ -38,7 +39,7 @@ builds="this"
 [ -n "$BASELINE" ] && builds="this base"
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs);" \
-  "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, best, ferry $(git -C "$(dirname "$0")" rev-parse --short HEAD 2> /dev/null || echo '(no git)')" \
+  "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $PARTITION, ferry $(git -C "$(dirname "$0")" rev-parse --short HEAD 2> /dev/null || echo '(no git)')" \
   "${BASELINE:+, baseline $BASELINE}; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 for round in $(seq "$ROUNDS"); do
   for config in $CONFIGS; do
@@ -49,7 +50,7 @@ for round in $(seq "$ROUNDS"); do
       threads=$((CORES / n))
       [ "$threads" -ge 1 ] || threads=1
       mpirun --oversubscribe --bind-to none -np "$n" "$binary" render "$SCENE" --size "$SIZE" \
-        --spp "$SPP" --frames "$FRAMES" --threads "$threads" --partition best --data-groups "$g" -q \
+        --spp "$SPP" --frames "$FRAMES" --threads "$threads" --partition "$PARTITION" --data-groups "$g" -q \
         -o "$work/$build.$config.pfm" --stats "$work/$build.$config.$round.json"
     done
   done
