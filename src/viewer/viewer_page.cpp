@@ -234,7 +234,10 @@ view.addEventListener("dblclick", (e) => {
   const w = img.naturalWidth * scale, h = img.naturalHeight * scale;
   const x = (e.clientX - r.left - (r.width - w) / 2) / w, y = (e.clientY - r.top - (r.height - h) / 2) / h;
   if (x < 0 || x > 1 || y < 0 || y > 1) return;
-  post("/focus", { x, y });
+  // After the camera change still on its way (a drag's last): it carries
+  // the old focal distance, and would undo the pick if it came second.
+  const focus = () => cameraDirty ? setTimeout(focus, 10) : post("/focus", { x, y });
+  focus();
 });
 $("focusCentre").addEventListener("click", () => {
   if (!camera) return;
