@@ -246,10 +246,11 @@ FrameStats sumOverRanks(const Communicator& comm, const FrameStats& mine) {
   out.setCounterValues(comm.sum(std::span<const uint64_t>(counters)));
   std::vector<double> summed = comm.sum(std::span<const double>(times));
   out.cpuSeconds = summed.back();
-  out.busiestRankCpuSeconds = comm.max(mine.cpuSeconds);
   summed.pop_back();
   out.setStageTimeValues(summed);
-  out.seconds = comm.max(mine.seconds);
+  const std::vector<double> largest = comm.max(std::vector<double>{mine.seconds, mine.cpuSeconds});
+  out.seconds = largest[0];
+  out.busiestRankCpuSeconds = largest[1];
   return out;
 }
 
