@@ -33,10 +33,7 @@ const std::array<float, 256>& srgbTable() {
   return table;
 }
 
-struct BilinearTaps {
-  int x0, x1, y0, y1;
-  float fx, fy;
-};
+using BilinearTaps = Texture::Taps;
 
 BilinearTaps bilinearTaps(Vec2f uv, int width, int height, WrapMode wrapX, WrapMode wrapY) {
   // Texel centres sit at half-integers; v = 0 is the bottom of the image.
@@ -85,9 +82,11 @@ Vec4f Texture::sample(Vec2f uv) const {
           mix(a.w, b.w, c.w, d.w)};
 }
 
-float Texture::sampleAlpha(Vec2f uv) const {
-  if (width <= 0 || height <= 0) return 1;
-  BilinearTaps t = bilinearTaps(uv, width, height, wrap, wrap);
+Texture::Taps Texture::taps(Vec2f uv) const {
+  return bilinearTaps(uv, width, height, wrap, wrap);
+}
+
+float Texture::alphaAt(const Taps& t) const {
   auto alpha = [&](int x, int y) { return rgba[(size_t(y) * width + x) * 4 + 3] / 255.0f; };
   return (alpha(t.x0, t.y0) * (1 - t.fx) + alpha(t.x1, t.y0) * t.fx) * (1 - t.fy) +
          (alpha(t.x0, t.y1) * (1 - t.fx) + alpha(t.x1, t.y1) * t.fx) * t.fy;

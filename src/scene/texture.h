@@ -74,7 +74,18 @@ struct Texture {
   // Bilinear lookup at (u, v); v = 0 is the bottom row, as in OBJ and glTF-flipped uvs.
   Vec4f sample(Vec2f uv) const;
   // Alpha alone, cheaper than sample() for cut-out tests.
-  float sampleAlpha(Vec2f uv) const;
+  float sampleAlpha(Vec2f uv) const { return width > 0 && height > 0 ? alphaAt(taps(uv)) : 1.0f; }
+
+  // The four texels a bilinear lookup at uv blends, after wrapping (columns
+  // x0, x1, rows y0, y1), and its weights; (x0, y0) names the footprint.
+  // Only for a texture with texels.
+  struct Taps {
+    int x0, x1, y0, y1;
+    float fx, fy;
+  };
+  Taps taps(Vec2f uv) const;
+  // sampleAlpha() from its taps.
+  float alphaAt(const Taps& t) const;
 };
 
 // Linear float RGB image, e.g. an equirectangular environment.

@@ -13,6 +13,7 @@
 
 #include "core/random.h"
 #include "scene/scene.h"
+#include "trace/alpha_coverage.h"
 
 namespace ferry {
 
@@ -30,6 +31,9 @@ struct AlphaCutout {
   float cutoff = 0.5f;
   AlphaTest test = AlphaTest::Below;
   AlphaRays rays = AlphaRays::All;
+  // The texture's coverage for this test (alpha_coverage.h): most tests skip
+  // the texels. Optional (null: every test reads them); same answers.
+  const AlphaCoverage* coverage = nullptr;
 
   // The cut-out of `mesh` drawn with `material`, or none (texture null).
   static AlphaCutout of(const Scene& scene, const Mesh& mesh) {
@@ -51,9 +55,22 @@ struct AlphaCutout {
     Vec2f uv{u, v};
     if (!mesh->uvs.empty())
       uv = mesh->uvs[tri.x] * (1 - u - v) + mesh->uvs[tri.y] * u + mesh->uvs[tri.z] * v;
-    float alpha;
+    float alpha = 1;  // a texture without texels
     if (!texture->isSolid()) {
-      alpha = texture->sampleAlpha(uv);
+      if (texture->width > 0 && texture->height > 0) {
+        const Texture::Taps taps = texture->taps(uv);
+        if (coverage) {
+          switch (coverage->at(taps.x0, taps.y0)) {
+            case AlphaCoverage::Cell::Hole:
+              return true;
+            case AlphaCoverage::Cell::Solid:
+              return false;
+            case AlphaCoverage::Cell::Mixed:
+              break;
+          }
+        }
+        alpha = texture->alphaAt(taps);
+      }
     } else {
       Vec3f p = mesh->positions[tri.x] * (1 - u - v) + mesh->positions[tri.y] * u +
                 mesh->positions[tri.z] * v;

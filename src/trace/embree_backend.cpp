@@ -9,9 +9,11 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <numeric>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <vector>
 
@@ -359,6 +361,9 @@ class EmbreeBackend final : public TraceBackend {
   // The vertex array Embree reads for `mesh`: the scene's own when it has a
   // spare element, else a padded copy kept here.
   const Vec3f* sharedPositions(const Mesh& mesh);
+  // The coverage `cutout`'s tests may read, built on first use (null for a
+  // solid texture). Called with buildMutex_ held.
+  const AlphaCoverage* coverage(const AlphaCutout& cutout);
   // Embree geometries for the meshes and geometries of `object`, each attached to `target`
   // by the id idForSlot(slot) returns.
   template <typename IdForSlot>
@@ -384,9 +389,11 @@ class EmbreeBackend final : public TraceBackend {
   uint64_t topLevelObjects_ = 0;
   uint64_t instanceCount_ = 0;
   std::vector<std::unique_ptr<EmbreeCutout>> cutouts_;
+  // One per image texture and alpha test the cut-outs use.
+  std::map<std::tuple<const Texture*, float, AlphaTest>, std::unique_ptr<AlphaCoverage>> coverages_;
   bool hashesRays_ = false;  // a cut-out is stochastic: rays carry their alphaRayHash as id
   std::unordered_map<const Mesh*, std::vector<Vec3f>> paddedPositions_;
-  std::mutex buildMutex_;  // guards the three above while objects build concurrently
+  std::mutex buildMutex_;  // guards the four above while objects build concurrently
   // Last, so released first: Embree calls the counters and reads the buffers above until then.
   EmbreeHandles embree_;
 };
@@ -495,6 +502,17 @@ const Vec3f* EmbreeBackend::sharedPositions(const Mesh& mesh) {
   return it->second.data();
 }
 
+const AlphaCoverage* EmbreeBackend::coverage(const AlphaCutout& cutout) {
+  const Texture& texture = *cutout.texture;
+  if (texture.isSolid() || texture.width <= 0 || texture.height <= 0) return nullptr;
+  auto& slot = coverages_[{&texture, cutout.cutoff, cutout.test}];
+  if (!slot) {
+    slot = std::make_unique<AlphaCoverage>(texture, cutout.cutoff, cutout.test);
+    memory_.add(int64_t(slot->bytes()));
+  }
+  return slot.get();
+}
+
 template <typename IdForSlot>
 void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
                                  const IdForSlot& idForSlot) {
@@ -510,15 +528,14 @@ void EmbreeBackend::attachMeshes(const Object& object, RTCScene target,
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                const_cast<Vec3i*>(mesh.indices.data()), 0, sizeof(Vec3i),
                                mesh.indices.size());
-    const AlphaCutout cutout = AlphaCutout::of(scene_, mesh);
+    AlphaCutout cutout = AlphaCutout::of(scene_, mesh);
     if (cutout.active()) {
+      std::lock_guard lock(buildMutex_);  // objects are built concurrently
+      cutout.coverage = coverage(cutout);
       auto owned = std::make_unique<EmbreeCutout>(EmbreeCutout{cutout, &scene_.instances});
       rtcSetGeometryUserData(g, owned.get());
-      {
-        std::lock_guard lock(buildMutex_);  // objects are built concurrently
-        cutouts_.push_back(std::move(owned));
-        if (cutout.test == AlphaTest::Stochastic) hashesRays_ = true;
-      }
+      cutouts_.push_back(std::move(owned));
+      if (cutout.test == AlphaTest::Stochastic) hashesRays_ = true;
       if (cutout.cutsPaths()) rtcSetGeometryIntersectFilterFunction(g, alphaFilter);
       if (cutout.cutsShadowRays()) rtcSetGeometryOccludedFilterFunction(g, alphaFilter);
     }
