@@ -13,7 +13,7 @@
 
 #include "core/random.h"
 #include "scene/scene.h"
-#include "trace/alpha_coverage.h"
+#include "trace/alpha_cutout_coverage.h"
 
 namespace ferry {
 
@@ -31,7 +31,7 @@ struct AlphaCutout {
   float cutoff = 0.5f;
   AlphaTest test = AlphaTest::Below;
   AlphaRays rays = AlphaRays::All;
-  // The texture's coverage for this test (alpha_coverage.h): most tests skip
+  // The texture's coverage for this test (alpha_cutout_coverage.h): most tests skip
   // the texels. Optional (null: every test reads them); same answers.
   const AlphaCoverage* coverage = nullptr;
 

@@ -1,4 +1,4 @@
-#include "trace/alpha_coverage.h"
+#include "trace/alpha_cutout_coverage.h"
 
 #include <algorithm>
 

@@ -3,7 +3,7 @@
 // [0, 1] and at texel edges), the cut-out with coverage answers as the one
 // without; and it decides most footprints of a texture with large opaque
 // and clear regions.
-#include "trace/alpha_coverage.h"
+#include "trace/alpha_cutout_coverage.h"
 
 #include <gtest/gtest.h>
 
