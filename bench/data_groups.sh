@@ -15,7 +15,8 @@
 # the median over frames and rounds. With fewer samples a frame than groups
 # (SPP=1: the viewer's frames) the groups split a sample's pixels. With BASELINE=old/ferry
 # the same configurations of another build run in the same rounds, and the
-# table gives this build's frame time against it.
+# table gives this build's frame time against it. THREADS=N gives every rank
+# N threads instead (0: Ferry's default, every rank all cores).
 #
 #   bash bench/data_groups.sh [FERRY]
 #   SCENE=builtin:island SIZE=480x270 SPP=8 FRAMES=3 ROUNDS=2 BASELINE=old/ferry \
@@ -29,6 +30,7 @@ SPP=${SPP:-8}
 FRAMES=${FRAMES:-3}
 ROUNDS=${ROUNDS:-2}
 CORES=${CORES:-$(nproc)}
+THREADS=${THREADS:-}
 CONFIGS=${CONFIGS:-"1x1 2x1 4x1 8x1 8x2 8x4 2x2 4x4 8x8"}  # ranks x groups
 BASELINE=${BASELINE:-}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
@@ -39,7 +41,7 @@ builds="this"
 [ -n "$BASELINE" ] && builds="this base"
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs);" \
-  "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $PARTITION, ferry $(git -C "$(dirname "$0")" rev-parse --short HEAD 2> /dev/null || echo '(no git)')" \
+  "scene $SCENE, $SIZE, $SPP spp, $FRAMES frames, $ROUNDS rounds, $PARTITION, threads ${THREADS:-CORES/N}, ferry $(git -C "$(dirname "$0")" rev-parse --short HEAD 2> /dev/null || echo '(no git)')" \
   "${BASELINE:+, baseline $BASELINE}; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 for round in $(seq "$ROUNDS"); do
   for config in $CONFIGS; do
@@ -47,8 +49,8 @@ for round in $(seq "$ROUNDS"); do
       binary=$ferry
       [ "$build" = base ] && binary=$(realpath "$BASELINE")
       n=${config%x*} g=${config#*x}
-      threads=$((CORES / n))
-      [ "$threads" -ge 1 ] || threads=1
+      threads=${THREADS:-$((CORES / n))}
+      [ -n "$THREADS" ] || [ "$threads" -ge 1 ] || threads=1
       mpirun --oversubscribe --bind-to none -np "$n" "$binary" render "$SCENE" --size "$SIZE" \
         --spp "$SPP" --frames "$FRAMES" --threads "$threads" --partition "$PARTITION" --data-groups "$g" -q \
         -o "$work/$build.$config.pfm" --stats "$work/$build.$config.$round.json"
