@@ -66,7 +66,7 @@ float linearToSrgb(float c) {
 }
 
 Vec4f Texture::sample(Vec2f uv) const {
-  if (width <= 0 || height <= 0) return {1, 1, 1, 1};
+  if (!hasTexels()) return {1, 1, 1, 1};
   BilinearTaps t = bilinearTaps(uv, width, height, wrap, wrap);
   const auto& table = srgbTable();
   auto fetch = [&](int x, int y) {

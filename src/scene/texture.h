@@ -71,10 +71,11 @@ struct Texture {
   }
 
   uint64_t texelCount() const { return uint64_t(width) * uint64_t(height); }
+  bool hasTexels() const { return width > 0 && height > 0; }
   // Bilinear lookup at (u, v); v = 0 is the bottom row, as in OBJ and glTF-flipped uvs.
   Vec4f sample(Vec2f uv) const;
   // Alpha alone, cheaper than sample() for cut-out tests.
-  float sampleAlpha(Vec2f uv) const { return width > 0 && height > 0 ? alphaAt(taps(uv)) : 1.0f; }
+  float sampleAlpha(Vec2f uv) const { return hasTexels() ? alphaAt(taps(uv)) : 1.0f; }
 
   // The four texels a bilinear lookup at uv blends, after wrapping (columns
   // x0, x1, rows y0, y1), and its weights; (x0, y0) names the footprint.

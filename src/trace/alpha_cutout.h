@@ -57,7 +57,7 @@ struct AlphaCutout {
       uv = mesh->uvs[tri.x] * (1 - u - v) + mesh->uvs[tri.y] * u + mesh->uvs[tri.z] * v;
     float alpha = 1;  // a texture without texels
     if (!texture->isSolid()) {
-      if (texture->width > 0 && texture->height > 0) {
+      if (texture->hasTexels()) {
         const Texture::Taps taps = texture->taps(uv);
         if (coverage) {
           switch (coverage->at(taps.x0, taps.y0)) {

@@ -63,8 +63,7 @@ double AlphaCoverage::decidedShare() const {
   const size_t n = size_t(width_) * size_t(height_);
   if (n == 0) return 0;
   size_t decided = 0;
-  for (size_t i = 0; i < n; ++i)
-    decided += ((bits_[i >> 2] >> ((i & 3) * 2)) & 3) != uint8_t(Cell::Mixed);
+  for (size_t i = 0; i < n; ++i) decided += cell(i) != Cell::Mixed;
   return double(decided) / double(n);
 }
 

@@ -21,15 +21,14 @@ class AlphaCoverage {
   // For `texture` (with texels) tested as a material's alpha test does.
   AlphaCoverage(const Texture& texture, float cutoff, AlphaTest test);
 
-  Cell at(int x, int y) const {
-    const size_t i = size_t(y) * size_t(width_) + size_t(x);
-    return Cell((bits_[i >> 2] >> ((i & 3) * 2)) & 3);
-  }
+  Cell at(int x, int y) const { return cell(size_t(y) * size_t(width_) + size_t(x)); }
   uint64_t bytes() const { return bits_.size(); }
   // Footprints decided without texels (Hole or Solid), of all.
   double decidedShare() const;
 
  private:
+  Cell cell(size_t i) const { return Cell((bits_[i >> 2] >> ((i & 3) * 2)) & 3); }
+
   int width_ = 0, height_ = 0;
   std::vector<uint8_t> bits_;  // 2 bits per footprint, 4 to a byte
 };

@@ -504,7 +504,7 @@ const Vec3f* EmbreeBackend::sharedPositions(const Mesh& mesh) {
 
 const AlphaCoverage* EmbreeBackend::coverage(const AlphaCutout& cutout) {
   const Texture& texture = *cutout.texture;
-  if (texture.isSolid() || texture.width <= 0 || texture.height <= 0) return nullptr;
+  if (texture.isSolid() || !texture.hasTexels()) return nullptr;
   auto& slot = coverages_[{&texture, cutout.cutoff, cutout.test}];
   if (!slot) {
     slot = std::make_unique<AlphaCoverage>(texture, cutout.cutoff, cutout.test);
