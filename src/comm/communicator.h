@@ -76,6 +76,10 @@ class Communicator {
   // process; one rank started without a launcher, mpi/launcher.h).
   virtual const char* transport() const = 0;
   bool isRoot() const { return rank() == 0; }
+  // How many ranks of the job run on this rank's machine and share its
+  // cores (counted when the job's communicator was made); 1 for ranks that
+  // are threads of one process (they share one thread pool).
+  virtual int ranksOnThisMachine() const { return 1; }
 
   virtual void barrier() const = 0;
   virtual uint64_t sum(uint64_t value) const = 0;

@@ -252,7 +252,10 @@ void addRenderingOptions(CLI::App* command, RenderOptions& o) {
   command->add_option("--view", o.view, "Named camera view of the scene (default: its first view)");
   command->add_option("--seed", o.seed, "Seed of every random number; same seed, same image")
       ->capture_default_str();
-  command->add_option("--threads", o.threads, "Worker threads per rank (0: all cores)")
+  command
+      ->add_option(
+          "--threads", o.threads,
+          "Worker threads per rank (0: all cores; 2 x cores / ranks when ranks share a machine)")
       ->capture_default_str();
   command->add_option("--exposure", o.exposure, "Exposure in stops for the PNG tone mapping")
       ->capture_default_str();

@@ -85,6 +85,7 @@ MpiCommunicator::MpiCommunicator(int* argc, char*** argv) {
   MPI_Comm world = MPI_COMM_WORLD;
   join(&world);
   jobRank_ = rank_;
+  countRanksOnMachine();
 }
 
 MpiCommunicator::MpiCommunicator(const void* communicator, int jobRank) : jobRank_(jobRank) {
@@ -94,8 +95,10 @@ MpiCommunicator::MpiCommunicator(const void* communicator, int jobRank) : jobRan
 std::unique_ptr<Communicator> MpiCommunicator::split(int color) const {
   MPI_Comm part = MPI_COMM_NULL;
   check(MPI_Comm_split(messaging_->collective, color, rank_, &part), "MPI_Comm_split");
-  std::unique_ptr<Communicator> out(new MpiCommunicator(&part, jobRank_));
-  MPI_Comm_free(&part);  // (it joined duplicates)
+  auto* group = new MpiCommunicator(&part, jobRank_);
+  std::unique_ptr<Communicator> out(group);
+  MPI_Comm_free(&part);                      // (it joined duplicates)
+  group->ranksOnMachine_ = ranksOnMachine_;  // the job's ranks share the machine, not the group's
   return out;
 }
 
@@ -111,6 +114,7 @@ MpiCommunicator::MpiCommunicator(ApplicationCommunicator application) {
     throw CommunicationError("MpiCommunicator", -1, "the communicator given is MPI_COMM_NULL");
   join(&comm);
   jobRank_ = rank_;
+  countRanksOnMachine();
 }
 
 void MpiCommunicator::join(const void* communicator) {
@@ -124,6 +128,16 @@ void MpiCommunicator::join(const void* communicator) {
   }
   check(MPI_Comm_rank(messaging_->collective, &rank_), "MPI_Comm_rank");
   check(MPI_Comm_size(messaging_->collective, &size_), "MPI_Comm_size");
+}
+
+void MpiCommunicator::countRanksOnMachine() {
+  MPI_Comm local = MPI_COMM_NULL;
+  check(MPI_Comm_split_type(messaging_->collective, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL,
+                            &local),
+        "MPI_Comm_split_type");
+  const int status = MPI_Comm_size(local, &ranksOnMachine_);
+  MPI_Comm_free(&local);
+  check(status, "MPI_Comm_size");
 }
 
 MpiCommunicator::~MpiCommunicator() {

@@ -33,6 +33,9 @@ class MpiCommunicator final : public Communicator {
   int rank() const override { return rank_; }
   int size() const override { return size_; }
   const char* transport() const override { return "mpi"; }
+  // MPI_Comm_split_type(MPI_COMM_TYPE_SHARED) of the job's communicator;
+  // a group (split) keeps the job's count.
+  int ranksOnThisMachine() const override { return ranksOnMachine_; }
 
   void barrier() const override;
   uint64_t sum(uint64_t value) const override;
@@ -85,6 +88,8 @@ class MpiCommunicator final : public Communicator {
   // Duplicates the communicator at `communicator` (an MPI_Comm*) for the
   // collectives and the messages; learns the rank and size.
   void join(const void* communicator);
+  // Counts the ranks of the joined communicator on this machine (collective).
+  void countRanksOnMachine();
   // Throws a CommunicationError unless `code` is MPI_SUCCESS.
   void check(int code, const char* operation) const;
 
@@ -92,6 +97,7 @@ class MpiCommunicator final : public Communicator {
   int size_ = 1;
   int jobRank_ = -1;  // what messages call this rank: its rank in the whole job
   bool ownsMpi_ = false;
+  int ranksOnMachine_ = 1;
   size_t maxPieceBytes_ = size_t(1) << 30;
   std::unique_ptr<Messaging> messaging_;
 };

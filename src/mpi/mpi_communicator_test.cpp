@@ -16,6 +16,9 @@ namespace {
 TEST(MpiCommunicator, KeepsTheCommunicatorContract) {
   MpiCommunicator comm(nullptr, nullptr);
   EXPECT_GE(comm.size(), 1);
+  // The test's ranks all run on this machine; a group keeps the job's count.
+  EXPECT_EQ(comm.ranksOnThisMachine(), comm.size());
+  EXPECT_EQ(comm.split(comm.rank() % 2)->ranksOnThisMachine(), comm.size());
   testing::checkReductions(comm);
   testing::checkExchangeCounts(comm);
   testing::checkExchangeBytes(comm);

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 
 #include "comm/idle_backoff.h"
 #include "compositing/compositor.h"
@@ -42,6 +43,7 @@ namespace ferry {
 // Everything this rank holds once set up. Built in place and never moved: the
 // trace structures refer to the scene.
 struct RenderSession::Rank {
+  int threads = 0;  // worker threads (workerThreads)
   std::unique_ptr<tbb::global_control> threadLimit;
   Scene scene;
   Partition partition;  // its proxies move into `proxies` when the first run needs them
@@ -164,9 +166,11 @@ PartitionedScene loadPieces(const SessionSettings& settings, const Communicator&
 
 RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& comm, Scene* given,
                           PartitionedScene* part) {
-  if (settings.threads > 0)
+  const int cores = tbb::info::default_concurrency();
+  threads = workerThreads(settings.threads, cores, comm.ranksOnThisMachine());
+  if (settings.threads > 0 || threads < cores)
     threadLimit = std::make_unique<tbb::global_control>(
-        tbb::global_control::max_allowed_parallelism, settings.threads);
+        tbb::global_control::max_allowed_parallelism, threads);
   lap(&SetupTimes::start);
   // A volume already spread in bricks: each rank loads its own, no partitioning.
   PartitionedScene fromBricks;
@@ -410,6 +414,10 @@ void RenderSession::applyVolumeLook(const VolumeLook& look) {
 }
 
 RenderSession::~RenderSession() = default;
+
+int RenderSession::threads() const {
+  return rank_->threads;
+}
 
 std::pair<uint64_t, std::string> RenderSession::imageIdentity() const {
   const RenderSettings& r = settings_.render;

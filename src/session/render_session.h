@@ -243,6 +243,9 @@ class RenderSession {
   std::pair<uint64_t, std::string> imageIdentity() const;
   const SessionSettings& settings() const { return settings_; }
   const Communicator& communicator() const { return comm_; }
+  // The worker threads this rank runs (settings().threads, or what
+  // workerThreads chose for 0).
+  int threads() const;
   // The ranks that hold the scene together: this rank's data group, or all.
   const Communicator& group() const { return groupComm_ ? *groupComm_ : comm_; }
   // This rank's scene (its part, after partitioning): for its film settings.

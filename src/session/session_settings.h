@@ -24,7 +24,7 @@ struct SessionSettings {
   // Image size, samples, frames, depth, seed, view, tone mapping. Its
   // retraceAll is the session's to set, from `retrace`.
   RenderSettings render;
-  int threads = 0;  // worker threads per rank (0: all cores)
+  int threads = 0;  // worker threads per rank (0: workerThreads chooses)
   // Grid volumes that fill their box are split into bricks of this many
   // voxels a side, spread over the ranks (shapes/volume_brick.h);
   // kAutoBricks: large grids only, sized by autoBrickVoxels; 0: every rank
@@ -63,5 +63,12 @@ struct SessionSettings {
 
 // The partitioner options a session with `settings` partitions with on `ranks` ranks.
 PartitionerOptions partitionerOptions(const SessionSettings& settings, int ranks);
+
+// The worker threads a rank runs: `requested` when set (> 0); else all
+// `cores` it may use, unless `ranksOnMachine` ranks share them: then each
+// runs 2 * cores / ranksOnMachine (at least 1, at most `cores`), twice the
+// cores in all, so that a busy rank takes the cores an idle one leaves,
+// and no more threads wait their turn than that (docs/guide.md, --threads).
+int workerThreads(int requested, int cores, int ranksOnMachine);
 
 }  // namespace ferry

@@ -49,7 +49,7 @@ nlohmann::json sessionStatsJson(const RenderSession& session, const SessionRepor
                    {"seed", r.seed},
                    {"sampler", samplerName(r.sampler)},
                    {"view", r.view},
-                   {"threads", s.threads},
+                   {"threads", session.threads()},
                    {"ranks", ranks},
                    {"data_groups", s.dataGroups},
                    {"transport", session.communicator().transport()},
