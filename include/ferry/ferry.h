@@ -133,7 +133,7 @@ struct Options {
   int samplesPerPixel = 1;    // per frame
   int maxDepth = -1;          // -1: the scene's own (pbrt's Integrator), else 5
   uint32_t seed = 1;
-  int threads = 0;  // per rank; 0: all cores
+  int threads = 0;  // per rank; 0: all cores, shared out when ranks share a machine (--threads)
   Distribution distribution = Distribution::Replicated;
   // Replicated: the partitioner (empty: "best" on many ranks).
   std::string partitioner;

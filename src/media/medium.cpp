@@ -98,9 +98,10 @@ Medium gridMedium(std::string name, Vec3f sigmaA, Vec3f sigmaS, float g,
   m.sigmaS = sigmaS;
   m.g = g;
   const Vec3f sigmaT = sigmaA + sigmaS;
-  m.majorants = std::make_shared<MajorantGrid>(*density, [sigmaT](float lo, float hi, float mean) {
-    return std::pair{hi * maxComponent(sigmaT), sigmaT * mean};
-  });
+  m.majorants =
+      std::make_shared<MajorantGrid>(*density, [sigmaT](float /*lo*/, float hi, float mean) {
+        return std::pair{hi * maxComponent(sigmaT), sigmaT * mean};
+      });
   m.density = std::move(density);
   m.gridFromWorld = unitFromBox(box) * worldFromMedium.inverse();
   return m;

@@ -54,7 +54,8 @@ VolumeBrick::VolumeBrick(std::shared_ptr<const Volume> volume, std::array<int, 3
   int cells[3];
   for (int a = 0; a < 3; ++a)
     cells[a] = (hi[a] - lo[a] + kBrickMajorantVoxels - 1) / kBrickMajorantVoxels;
-  std::vector<float> majorants(size_t(cells[0]) * size_t(cells[1]) * size_t(cells[2]));
+  const size_t cellCount = size_t(cells[0]) * size_t(cells[1]) * size_t(cells[2]);
+  std::vector<float> majorants(cellCount);
   ranges_.resize(majorants.size());
   size_t i = 0;
   for (int cz = 0; cz < cells[2]; ++cz)

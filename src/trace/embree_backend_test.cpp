@@ -191,7 +191,9 @@ void expectAloneAsInABatch(const std::string& spec, bool trianglesOnly) {
   }
   EXPECT_GT(hits, rays.size() / 20) << spec;
   EXPECT_EQ(differ, 0u) << spec;
-  if (trianglesOnly) EXPECT_EQ(singleDiffers, 0u) << spec;
+  if (trianglesOnly) {
+    EXPECT_EQ(singleDiffers, 0u) << spec;
+  }
 }
 
 TEST(EmbreeTraceBackend, ARayAloneIsTracedAsInABatch) {
