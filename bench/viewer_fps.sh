@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The viewer's speed (issue 15): frames per second of `ferry view` on the
 # island at 640x360, 1 path per pixel per frame, on 1, 2 and 4 ranks of this
-# machine (every rank all cores' threads; --bind-to none), and the time from
+# machine (Ferry's default threads, --threads 0; --bind-to none), and the time from
 # a camera change (POST /camera) to the first image of the new camera
 # (/frame.png whose frame shows it), the median of several changes.
 #
