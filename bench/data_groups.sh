@@ -16,7 +16,7 @@
 # (SPP=1: the viewer's frames) the groups split a sample's pixels. With BASELINE=old/ferry
 # the same configurations of another build run in the same rounds, and the
 # table gives this build's frame time against it. THREADS=N gives every rank
-# N threads instead (0: Ferry's default, --threads 0: session/session_settings.h, workerThreads).
+# N threads instead (0: Ferry's default, workerThreads in session/session_settings.h).
 #
 #   bash bench/data_groups.sh [FERRY]
 #   SCENE=builtin:island SIZE=480x270 SPP=8 FRAMES=3 ROUNDS=2 BASELINE=old/ferry \

@@ -88,17 +88,17 @@ MpiCommunicator::MpiCommunicator(int* argc, char*** argv) {
   countRanksOnMachine();
 }
 
-MpiCommunicator::MpiCommunicator(const void* communicator, int jobRank) : jobRank_(jobRank) {
+MpiCommunicator::MpiCommunicator(const void* communicator, int jobRank, int ranksOnMachine)
+    : jobRank_(jobRank), ranksOnMachine_(ranksOnMachine) {
   join(communicator);
 }
 
 std::unique_ptr<Communicator> MpiCommunicator::split(int color) const {
   MPI_Comm part = MPI_COMM_NULL;
   check(MPI_Comm_split(messaging_->collective, color, rank_, &part), "MPI_Comm_split");
-  auto* group = new MpiCommunicator(&part, jobRank_);
-  std::unique_ptr<Communicator> out(group);
-  MPI_Comm_free(&part);                      // (it joined duplicates)
-  group->ranksOnMachine_ = ranksOnMachine_;  // the job's ranks share the machine, not the group's
+  // The job's ranks share the machine, not only the group's.
+  std::unique_ptr<Communicator> out(new MpiCommunicator(&part, jobRank_, ranksOnMachine_));
+  MPI_Comm_free(&part);  // (it joined duplicates)
   return out;
 }
 

@@ -79,8 +79,9 @@ class MpiCommunicator final : public Communicator {
  private:
   struct Messaging;  // MPI requests and buffers in flight (in the .cpp, with mpi.h)
   // Over the communicator at `communicator` (an MPI_Comm*, freed by the
-  // caller), part of a job whose rank `jobRank` this process is.
-  MpiCommunicator(const void* communicator, int jobRank);
+  // caller), part of a job whose rank `jobRank` this process is, with
+  // `ranksOnMachine` of its ranks on this machine.
+  MpiCommunicator(const void* communicator, int jobRank, int ranksOnMachine);
   // Tests every send in flight, releasing the completed ones.
   void progressSends() const;
   // Prints "ferry: error on rank R: message" and ends every rank (MPI_Abort).

@@ -168,7 +168,7 @@ RenderSession::Rank::Rank(const SessionSettings& settings, const Communicator& c
                           PartitionedScene* part) {
   const int cores = tbb::info::default_concurrency();
   threads = workerThreads(settings.threads, cores, comm.ranksOnThisMachine());
-  if (settings.threads > 0 || threads < cores)
+  if (threads != cores)
     threadLimit = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, threads);
   lap(&SetupTimes::start);
