@@ -34,16 +34,9 @@
 #                        geometry: each mesh its own instanced scene, the
 #                        structure of Ferry's --instancing always)
 #
-# Scenes:
-#   cornell  /usr/share/doc/embree3/models/cornell_box.obj, turned 180 degrees
-#            about y (x, z -> -x, -z) so that Ferry's default OBJ camera (on +z,
-#            looking -z, framing the bounds) looks into the open side of the box.
-#            The file has no emitter (its light quad is commented out), so both
-#            renderers get Ferry's default OBJ lights: a sun from
-#            normalize(0.4, 1, 0.6) with irradiance 3 and a constant sky of 0.5.
-#   bunny    ../shared/scenes/stanford-bunny/bun_zipper.ply (69,451 triangles; skipped
-#            when absent, or SHARED_SCENES=dir names the folder of shared scenes)
-#            converted to OBJ by bench/ply_to_obj.py, same camera rule and lights.
+# Scenes: the Cornell box and the Stanford bunny with a sun and a sky
+# (bench/embree_scenes.sh says how each is made; the bunny is skipped when
+# ../shared/scenes is absent, or SHARED_SCENES=dir names the folder of shared scenes).
 # Embree gets the same camera (--vp/--vi/--vu/--fov 45 --righthanded) and the
 # lights as --directionallight (direction of travel) and --ambientlight.
 #
@@ -114,19 +107,8 @@ height=${SIZE#*x}
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-cp /usr/share/doc/embree3/models/cornell_box.mtl "$work/"
-awk '$1 == "v" { printf "v %s %s %s\n", -$2, $3, -$4; next } { print }' \
-  /usr/share/doc/embree3/models/cornell_box.obj > "$work/cornell.obj"
-# The bunny is one of the shared scenes beside the source tree; without them
-# (a clone elsewhere) the Cornell box runs alone.
-scenes="cornell bunny"
-if [ -f "$shared/stanford-bunny/bun_zipper.ply" ]; then
-  python3 "$here/ply_to_obj.py" "$shared/stanford-bunny/bun_zipper.ply" "$work/bunny.obj" 2> /dev/null
-else
-  echo "bunny: skipped (no $shared/stanford-bunny/bun_zipper.ply; SHARED_SCENES names another folder)"
-  scenes=cornell
-  : > "$work/bunny.obj"
-fi
+source "$here/embree_scenes.sh"
+embree_scenes "$work" "$shared"
 # The equal-error scenes: every Kd a quarter (below Embree's output clamp).
 awk '$1 == "Kd" { printf "Kd %g %g %g\n", $2 / 4, $3 / 4, $4 / 4; next } { print }' \
   "$work/cornell_box.mtl" > "$work/cornell_dim.mtl"
@@ -154,16 +136,10 @@ def filtered_mean(values):
 
 for scene in $scenes; do
   obj="$work/$scene.obj"
-  # Ferry's default OBJ view (src/io/obj/obj_loader.cpp): at the bounds centre, from +z, fovY 45.
-  read -r vp vi <<< "$("$ferry" info "$obj" --json | python3 -c '
-import json, math, sys
-lo, hi = json.load(sys.stdin)["bounds"]
-c = [(a + b) / 2 for a, b in zip(lo, hi)]
-d = 0.5 * math.dist(lo, hi) / math.sin(math.radians(22.5))
-print(",".join(f"{x:.9g}" for x in (c[0], c[1], c[2] + d)), ",".join(f"{x:.9g}" for x in c))')"
+  read -r vp vi <<< "$(embree_view "$ferry" "$obj")"
   embree_args=(-i "$obj" --vp ${vp//,/ } --vi ${vi//,/ } --vu 0 1 0 --fov 45 --righthanded
                --size "$width" "$height" --spp "$SPP" --max-path-length "$DEPTH"
-               --directionallight -0.4 -1 -0.6 3 3 3 --ambientlight 0.5 0.5 0.5 "${thread_args[@]}"
+               "${embree_light_args[@]}" "${thread_args[@]}"
                "${embree_extra[@]}")
   for retrace in $modes; do : > "$work/$scene.$retrace.rounds"; done
   for round in $(seq "$ROUNDS"); do

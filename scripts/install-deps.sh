@@ -23,6 +23,7 @@ packages=(
   python3 python3-matplotlib   # python3-matplotlib: the plots of bench/paper-eval
   python3-openimageio             # bench/bathroom_*.py read the EXR reference
   linux-perf                      # bench/distribution_profile.sh: perf record of each rank
+  valgrind                        # bench/instructions_per_path.sh: callgrind's instruction counts
   pybind11-dev python3-dev python3-numpy python3-mpi4py  # the Python module (python/)
 )
 

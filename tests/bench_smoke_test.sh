@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Every bench the docs name still runs: each one once, at the smallest
 # settings it takes, must exit 0 and print its result line. The figures are
-# not checked (they mean nothing at these sizes). Run elsewhere: the benches
+# not checked (they mean nothing at these sizes), but for two that hold at
+# any size and load: the direct light against Embree's tutorial's, and
+# Ferry's own instructions a path against the tutorial's (callgrind
+# counts). Run elsewhere: the benches
 # with gates of their own (data_groups_test, partition_budget_test,
 # partition_scale_test, volume_bricks_test, paper_eval_test with
 # netns.sh, transmittance_gate, image_compare_test). Left out: same_images.sh
@@ -62,6 +65,8 @@ bench distribution_profile 'the 1-rank CPU time per frame' env SCENE="$tiny" SIZ
 if command -v pathtracer > /dev/null; then
   bench pathtracer_vs_embree 'same scene: converged at depth 1' env SIZE=32x32 SPP=1 FRAMES=1 WARMUP=0 ROUNDS=1 \
     ERROR_SPP=1 REFERENCE_SPP=2 DIRECT_SPP=1024 MAX_DIRECT_DIFFERENCE=1 bash bench/pathtracer_vs_embree.sh "$ferry"
+  bench instructions_per_path 'Ferry / tutorial' env SIZE=32x32 MAX_OWN_RATIO=1.85 \
+    bash bench/instructions_per_path.sh "$ferry"
 else
   echo "FAIL: pathtracer_vs_embree: Embree's tutorial (embree-tools) is missing"
   failures=$((failures + 1))
