@@ -5,9 +5,9 @@
 #   embree_scenes WORK SHARED   writes WORK/cornell.obj (+ .mtl) and, when
 #                               SHARED/stanford-bunny holds the bunny,
 #                               WORK/bunny.obj; sets $scenes to those it wrote
-#   embree_view FERRY OBJ       prints "vp vi": Ferry's default OBJ view
-#                               (src/io/obj/obj_loader.cpp: at the bounds'
-#                               centre, from +z, fovY 45) as Embree's --vp, --vi
+#   embree_view FERRY OBJ       sets $embree_view_args to Ferry's default OBJ
+#                               view (src/io/obj/obj_loader.cpp: at the bounds'
+#                               centre, from +z, fovY 45) as Embree's arguments
 #
 # cornell: /usr/share/doc/embree3/models/cornell_box.obj turned 180 degrees
 # about y (x, z -> -x, -z) so that Ferry's default view looks into the open
@@ -36,10 +36,12 @@ embree_scenes() {
 }
 
 embree_view() {
-  "$1" info "$2" --json | python3 -c '
+  local v
+  read -r -a v <<< "$("$1" info "$2" --json | python3 -c '
 import json, math, sys
 lo, hi = json.load(sys.stdin)["bounds"]
 c = [(a + b) / 2 for a, b in zip(lo, hi)]
 d = 0.5 * math.dist(lo, hi) / math.sin(math.radians(22.5))
-print(",".join(f"{x:.9g}" for x in (c[0], c[1], c[2] + d)), ",".join(f"{x:.9g}" for x in c))'
+print(" ".join(f"{x:.9g}" for x in (c[0], c[1], c[2] + d, *c)))')"
+  embree_view_args=(--vp "${v[@]:0:3}" --vi "${v[@]:3:3}" --vu 0 1 0 --fov 45 --righthanded)
 }

@@ -45,7 +45,7 @@ echo "settings: ${width}x${height}, $SPP spp, max path length $DEPTH, 1 thread; 
 
 for scene in $scenes; do
   obj="$work/$scene.obj"
-  read -r vp vi <<< "$(embree_view "$ferry" "$obj")"
+  embree_view "$ferry" "$obj"
   valgrind --tool=callgrind --toggle-collect='ferry::WavefrontRenderer<*>::renderPixels*' \
     --callgrind-out-file="$work/ferry.cg" "$ferry" render "$obj" --size "$SIZE" --spp "$SPP" \
     --max-depth "$DEPTH" --threads 1 --sampler independent -q -o "$work/ferry.pfm" \
@@ -53,7 +53,7 @@ for scene in $scenes; do
     { cat "$work/ferry.log" >&2; exit 1; }
   for frames in 1 3; do
     valgrind --tool=callgrind --callgrind-out-file="$work/embree$frames.cg" pathtracer -i "$obj" \
-      --vp ${vp//,/ } --vi ${vi//,/ } --vu 0 1 0 --fov 45 --righthanded --size "$width" "$height" \
+      "${embree_view_args[@]}" --size "$width" "$height" \
       --spp "$SPP" --max-path-length "$DEPTH" "${embree_light_args[@]}" --threads 1 \
       --benchmark 0 "$frames" > "$work/embree$frames.log" 2>&1 ||
       { cat "$work/embree$frames.log" >&2; exit 1; }
@@ -72,7 +72,7 @@ def costs(path):
     ob = fl = callee = None
     skip = False
     for line in open(path):
-        m = re.match(r"(c?ob|fl|fi|fe|c?f[il]|c?fn)=\((\d+)\)(?: (.*))?", line)
+        m = re.match(r"(c?ob|c?fl|c?fi|fe|c?fn)=\((\d+)\)(?: (.*))?", line)
         if m:
             kind, ident, name = m.groups()
             names[table[kind]].setdefault(ident, name)
@@ -105,7 +105,7 @@ three, three_calls = costs(f"{work}/embree3.cg")
 e1, e3 = split(one), split(three)
 embree_all, embree_embree = (e3[0] - e1[0]) / 2, (e3[1] - e1[1]) / 2
 def per_frame(name):
-    return sum((three_calls[k] - one_calls[k]) / 2 for k in three_calls if k and k.startswith(name))
+    return (three_calls[name] - one_calls[name]) / 2
 
 rows = [("Ferry", ferry_all, ferry_embree, traces["closest"], traces["occlusion"]),
         ("Embree's tutorial", embree_all, embree_embree, per_frame("rtcIntersect1"), per_frame("rtcOccluded1"))]

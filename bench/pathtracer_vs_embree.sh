@@ -136,8 +136,8 @@ def filtered_mean(values):
 
 for scene in $scenes; do
   obj="$work/$scene.obj"
-  read -r vp vi <<< "$(embree_view "$ferry" "$obj")"
-  embree_args=(-i "$obj" --vp ${vp//,/ } --vi ${vi//,/ } --vu 0 1 0 --fov 45 --righthanded
+  embree_view "$ferry" "$obj"
+  embree_args=(-i "$obj" "${embree_view_args[@]}"
                --size "$width" "$height" --spp "$SPP" --max-path-length "$DEPTH"
                "${embree_light_args[@]}" "${thread_args[@]}"
                "${embree_extra[@]}")
